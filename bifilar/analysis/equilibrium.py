@@ -1,0 +1,252 @@
+"""Rest pose: static equilibrium of the body on taut wires.
+
+The rest pose minimises the potential energy ``m g z_com`` over poses in
+which no wire is longer than its length (wires can go slack, never stretch).
+It is found in three stages:
+
+1. translate the body (axes aligned with the world, as ``interface.md``
+   prescribes for the start) below the anchors;
+2. SLSQP over the 6 pose coordinates with the inequality constraints
+   ``|d_i| <= L_i``, the rotation kept within 90 degrees of the start so that
+   a body that would rather flip over is caught, not silently flipped;
+3. Newton's method on the KKT equations with every wire taut, to machine
+   precision, giving the multipliers, hence the tensions.
+
+A wire left slack by stage 2, or a negative tension in stage 3, is a
+:class:`~bifilar.errors.SlackWireError` naming the wire and by how much to
+shorten it; a reduced stiffness that is not positive definite is an
+:class:`~bifilar.errors.UnstableRestError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..errors import ConvergenceError, SlackWireError, UnstableRestError
+from ..rotations import matrix_to_quat, rotvec_to_matrix, skew
+from ..scene import Scene, lowest_point_z
+
+
+@dataclass(frozen=True)
+class RestPose:
+    """Static equilibrium of a scene (SI units, world frame).
+
+    com : (3,) CoM position, m.  R : (3, 3) rotation body -> world.
+    q : (4,) the same as a quaternion.  tensions : (n,) N.
+    wire_vectors : (n, 3) anchor -> attachment, m.
+    lowest_z : world z of the lowest body point, m; depth : ceiling height
+    minus lowest_z, m (room height needed below the ceiling at rest).
+    kkt_residual : max-norm of the equilibrium equations, N (force) scale.
+    """
+
+    com: np.ndarray
+    R: np.ndarray
+    q: np.ndarray
+    tensions: np.ndarray
+    wire_vectors: np.ndarray
+    lowest_z: float
+    depth: float
+    kkt_residual: float
+
+
+def constraint_jacobian(scene: Scene, com: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Wire vectors d (n,3), world lever arms w = R p (n,3) and the Jacobian
+    G (n, 6) of phi_i = (|d_i|^2 - L_i^2)/2 with respect to (dr, dtheta),
+    dtheta a small world-frame rotation vector (R -> exp(dtheta) R)."""
+    w = scene.attachments @ R.T
+    d = com + w - scene.anchors
+    G = np.hstack([d, np.cross(w, d)])
+    return d, w, G
+
+
+def constraint_hessians(d: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Hessians (n, 6, 6) of phi_i in the (dr, dtheta) chart at the current pose."""
+    n = d.shape[0]
+    H = np.zeros((n, 6, 6))
+    eye = np.eye(3)
+    for i in range(n):
+        W = skew(w[i])
+        H[i, :3, :3] = eye
+        H[i, :3, 3:] = -W
+        H[i, 3:, :3] = W
+        H[i, 3:, 3:] = -W @ W + 0.5 * (np.outer(d[i], w[i]) + np.outer(w[i], d[i])) - np.dot(d[i], w[i]) * eye
+    return H
+
+
+def _initial_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    a, p, L = scene.anchors, scene.attachments, scene.lengths
+    xy = np.mean(a[:, :2] - p[:, :2], axis=0)
+    horiz = np.linalg.norm(a[:, :2] - (xy + p[:, :2]), axis=1)
+    drop = np.sqrt(np.maximum(L**2 - horiz**2, (0.5 * L) ** 2))
+    z = np.min(a[:, 2] - p[:, 2] - drop)  # every wire at most its length
+    return np.array([xy[0], xy[1], z]), np.eye(3)
+
+
+def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray):
+    L = scene.lengths
+    scale = float(np.max(L))
+
+    def pose(x):
+        return com0 + scale * x[:3], rotvec_to_matrix(x[3:]) @ R0
+
+    def fun(x):
+        return x[2]
+
+    def jac_f(x):
+        g = np.zeros(6)
+        g[2] = 1.0
+        return g
+
+    def cons(x):
+        c, R = pose(x)
+        d = c + scene.attachments @ R.T - scene.anchors
+        return 0.5 * (L**2 - np.einsum("ij,ij->i", d, d)) / scale**2
+
+    def cons_jac(x):
+        c, R = pose(x)
+        _, _, G = constraint_jacobian(scene, c, R)
+        # chain rule for the scaled translation; rotation-vector chart is exact to first order at x=0
+        # and SLSQP only needs a descent-quality Jacobian (stage 3 polishes exactly).
+        Jr = -G[:, :3] * scale / scale**2
+        Jt = -G[:, 3:] / scale**2
+        return np.hstack([Jr, Jt])
+
+    bounds = [(None, None)] * 3 + [(-np.pi / 2, np.pi / 2)] * 3
+    res = minimize(
+        fun, np.zeros(6), jac=jac_f, method="SLSQP", bounds=bounds,
+        constraints=[{"type": "ineq", "fun": cons}], options={"maxiter": 500, "ftol": 1e-14},
+    )
+    c, R = pose(res.x)
+    at_bound = bool(np.any(np.abs(res.x[3:]) > np.pi / 2 - 1e-3))
+    return c, R, res, at_bound
+
+
+def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | None = None, iters: int = 60):
+    """Newton on grad V + G^T lam = 0, phi = 0.  Returns com, R, lam, residual."""
+    m, g = scene.mass, scene.gravity
+    n = scene.n_wires
+    gradV = np.array([0, 0, m * g, 0, 0, 0], float)
+    L = scene.lengths
+    d, w, G = constraint_jacobian(scene, com, R)
+    if lam is None:
+        lam = -np.linalg.lstsq(G.T, gradV, rcond=None)[0]
+    force_scale = m * g
+    for _ in range(iters):
+        d, w, G = constraint_jacobian(scene, com, R)
+        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
+        r1 = gradV + G.T @ lam
+        res = max(np.max(np.abs(r1)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
+        if res < 1e-15:
+            break
+        H = np.einsum("i,ijk->jk", lam, constraint_hessians(d, w))
+        K = np.zeros((6 + n, 6 + n))
+        K[:6, :6] = H
+        K[:6, 6:] = G.T
+        K[6:, :6] = G
+        try:
+            step = np.linalg.solve(K, -np.concatenate([r1, phi]))
+        except np.linalg.LinAlgError:
+            step = np.linalg.lstsq(K, -np.concatenate([r1, phi]), rcond=None)[0]
+        # damp huge steps (far from the solution)
+        dx = step[:6]
+        lim = 0.2 * np.max(L)
+        s = min(1.0, lim / max(np.max(np.abs(dx[:3])), 1e-300), 0.5 / max(np.max(np.abs(dx[3:])), 1e-300))
+        com = com + s * dx[:3]
+        R = rotvec_to_matrix(s * dx[3:]) @ R
+        lam = lam + s * step[6:]
+    d, w, G = constraint_jacobian(scene, com, R)
+    phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
+    res = max(np.max(np.abs(gradV + G.T @ lam)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
+    return com, R, lam, res
+
+
+def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray):
+    """Null-space basis N (6, k) of the constraint Jacobian, the reduced
+    stiffness N^T K N and mass N^T M N (k, k) at an equilibrium, in the
+    (dr, dtheta) world chart; K is the Hessian of the Lagrangian V + lam.phi."""
+    d, w, G = constraint_jacobian(scene, com, R)
+    K = np.einsum("i,ijk->jk", lam, constraint_hessians(d, w))
+    _, s, vt = np.linalg.svd(G)
+    rank = int(np.sum(s > 1e-12 * s[0]))
+    N = vt[rank:].T
+    M = np.zeros((6, 6))
+    M[:3, :3] = scene.mass * np.eye(3)
+    M[3:, 3:] = R @ scene.inertia @ R.T
+    return N, N.T @ K @ N, N.T @ M @ N, rank
+
+
+def rest_pose(scene: Scene) -> RestPose:
+    """Find the static equilibrium of ``scene`` with every wire taut.
+
+    Raises
+    ------
+    SlackWireError
+        A wire cannot be taut at rest (names it, says how much to shorten it).
+    UnstableRestError
+        The equilibrium near the start orientation is unstable (e.g. CoM
+        above the attachment points).
+    ConvergenceError
+        The solver failed.
+    """
+    com0, R0 = _initial_pose(scene)
+    c, R, res, at_bound = _slsqp(scene, com0, R0)
+    L = scene.lengths
+    d = c + scene.attachments @ R.T - scene.anchors
+    stretch = np.linalg.norm(d, axis=1) - L
+    tol = 1e-6 * np.max(L)
+    if at_bound:
+        # the body wants to turn over: find the equilibrium near the start and report it as unstable
+        c2, R2, lam2, r2 = _newton_kkt(scene, *_translate_only(scene, com0, R0))
+        raise UnstableRestError(
+            "body",
+            "the body cannot hang stably in its start orientation (it would turn over): "
+            "its centre of mass is above the suspension; move the attachment points above the CoM",
+        )
+    slack = np.where(stretch < -tol)[0]
+    if res.success is False and len(slack) == 0 and np.max(stretch) > tol:
+        raise ConvergenceError(f"rest pose search failed: {res.message}")
+    if len(slack):
+        _raise_slack(scene, slack, -stretch[slack], L)
+    c, R, lam, kkt = _newton_kkt(scene, c, R)
+    if not (kkt < 1e-9):
+        raise ConvergenceError(f"rest pose did not converge (KKT residual {kkt:.2e})")
+    d, w, G = constraint_jacobian(scene, c, R)
+    T = lam * np.linalg.norm(d, axis=1)
+    weight = scene.mass * scene.gravity
+    bad = np.where(T < 1e-9 * weight)[0]
+    if len(bad):
+        _raise_slack(scene, bad, None, L, tensions=T)
+    N, Kr, Mr, rank = reduced_stiffness(scene, c, R, lam)
+    if Kr.size:
+        ev = np.linalg.eigvalsh(0.5 * (Kr + Kr.T))
+        if ev[0] < -1e-9 * max(abs(ev[-1]), 1e-300):
+            raise UnstableRestError(
+                "body",
+                f"the rest pose is unstable: a mode has negative stiffness ({ev[0]:.3g}); "
+                "the centre of mass is probably above the suspension",
+            )
+    lz = float(lowest_point_z(scene, c, R))
+    return RestPose(
+        com=c, R=R, q=matrix_to_quat(R), tensions=T, wire_vectors=d,
+        lowest_z=lz, depth=scene.ceiling_z - lz, kkt_residual=float(kkt),
+    )
+
+
+def _translate_only(scene: Scene, com0, R0):
+    return com0, R0
+
+
+def _raise_slack(scene: Scene, idx, gap, L, tensions=None):
+    parts = []
+    for k, i in enumerate(idx):
+        if gap is not None:
+            parts.append(
+                f"wire {i + 1} is slack at rest by {gap[k] * 1000:.3g} mm: shorten it to {L[i] - gap[k]:.6g} m or less "
+                f"(or lengthen the others) to make it carry load"
+            )
+        else:
+            parts.append(f"wire {i + 1} carries no tension at rest ({tensions[i]:.3g} N): shorten it slightly")
+    raise SlackWireError([int(i) + 1 for i in idx], "; ".join(parts))

@@ -1,0 +1,300 @@
+"""Nonlinear simulation from a displaced rest pose, with its own health report.
+
+The motion is integrated with :func:`scipy.integrate.solve_ivp` (tolerances
+explicit) on the maximal-coordinate model :mod:`bifilar.models.maximal`.
+Positions are integrated relative to the rest CoM so that the relative
+tolerance applies to the oscillation, not to the distance from the ceiling.
+
+The result reports what an experimenter would measure (the period from
+successive crossings of the rest value of the dominant coordinate) beside
+the linear period, and the health of the run: constraint violation, energy
+drift, minimum wire tension (a slack wire is reported with the time it goes
+slack), and the lowest point of the body.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from ..errors import IntegrationError, InputError
+from ..models import maximal as mx
+from ..rotations import quat_multiply, quat_to_rotvec, rotvec_to_matrix, matrix_to_quat
+from ..scene import Scene, lowest_point_z
+from .equilibrium import RestPose, constraint_jacobian, rest_pose
+from .modes import COMPONENTS, Mode, ModeSet, linear_modes
+
+
+@dataclass
+class SimulationResult:
+    """Outcome of one nonlinear run (SI units, world frame).
+
+    t, y : dense samples (k,), (k, 13) of the state (positions absolute).
+    coordinate : (k,) the timed coordinate (dominant component of the mode
+        shape, relative to rest; m or rad) and ``coordinate_name``.
+    tensions : (k, n) N at the samples.
+    period : mean measured period, s (None if fewer than two crossings);
+        period_std : std of single-cycle periods, s; crossings : times, s.
+    linear_period : the mode's linear period, s.
+    max_constraint_violation : max | |d_i| - L_i | at the solver steps, m.
+    energy_drift : max |E - E0| / |E0 - E_rest| at the solver steps.
+    tension_min, tension_max : (n,) N.  slack : list of (wire 1-based, t).
+    lowest_z_min : lowest world z reached by the body, m; depth_max the
+        corresponding depth below the ceiling, m.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    coordinate: np.ndarray
+    coordinate_name: str
+    tensions: np.ndarray
+    period: float | None
+    period_std: float | None
+    crossings: np.ndarray
+    linear_period: float | None
+    max_constraint_violation: float
+    energy_drift: float
+    tension_min: np.ndarray
+    tension_max: np.ndarray
+    slack: list
+    lowest_z_min: float
+    depth_max: float
+    mode: str | None
+    amplitude: float
+    model: str
+    method: str
+    rtol: float
+    atol: float
+    nfev: int
+    runtime: float
+    warnings: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        def f(x):
+            return None if x is None else float(x)
+
+        return {
+            "period": f(self.period),
+            "linear_period": f(self.linear_period),
+            "max_constraint_violation": float(self.max_constraint_violation),
+            "energy_drift": float(self.energy_drift),
+            "tension": {"min": [float(v) for v in self.tension_min], "max": [float(v) for v in self.tension_max]},
+            "period_std": f(self.period_std),
+            "cycles": max(len(self.crossings) - 1, 0),
+            "mode": self.mode,
+            "amplitude": self.amplitude,
+            "timed_coordinate": self.coordinate_name,
+            "slack": [{"wire": w, "t": float(t)} for w, t in self.slack],
+            "lowest_point_z": float(self.lowest_z_min),
+            "depth_below_ceiling": float(self.depth_max),
+            "model": self.model,
+            "integrator": {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
+                           "runtime_s": float(self.runtime)},
+            "warnings": list(self.warnings),
+        }
+
+
+def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 50) -> tuple[np.ndarray, np.ndarray]:
+    """Closest pose (mass-weighted) on which every wire has its length.
+
+    Gauss-Newton on phi(x) = 0 with the minimum-norm correction in the metric
+    of the mass matrix; converges quadratically from any nearby pose.
+    """
+    Minv = np.concatenate([np.full(3, 1.0 / scene.mass), 1.0 / np.linalg.eigvalsh(scene.inertia).mean() * np.ones(3)])
+    L = scene.lengths
+    for _ in range(iters):
+        d, w, G = constraint_jacobian(scene, com, R)
+        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
+        if np.max(np.abs(phi)) < 1e-15 * np.max(L) ** 2:
+            break
+        GM = G * Minv
+        dx = -GM.T @ np.linalg.solve(GM @ G.T, phi)
+        com = com + dx[:3]
+        R = rotvec_to_matrix(dx[3:]) @ R
+    return com, R
+
+
+def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) -> np.ndarray:
+    """State (13,) at rest displaced by ``amplitude`` x the mode shape, projected
+    back onto the wires, zero velocity."""
+    dr = amplitude * mode.shape[:3]
+    dth = amplitude * mode.shape[3:]
+    com = rest.com + dr
+    R = rotvec_to_matrix(dth) @ rest.R
+    com, R = project_to_wires(scene, com, R)
+    return mx.pack(com, matrix_to_quat(R))
+
+
+def relative_pose(y: np.ndarray, rest: RestPose) -> np.ndarray:
+    """(k, 6) [dx, dy, dz, rx, ry, rz]: CoM displacement and world rotation
+    vector of R R_rest^T, for states y (k, 13)."""
+    q0inv = rest.q * np.array([1, -1, -1, -1])
+    dq = quat_multiply(y[:, 3:7], q0inv)
+    return np.concatenate([y[:, 0:3] - rest.com, quat_to_rotvec(dq)], axis=1)
+
+
+def crossings(t: np.ndarray, c: np.ndarray, fine) -> np.ndarray:
+    """Times of upward zero crossings of a sampled coordinate, refined with
+    Brent's method on the continuous interpolant ``fine(t) -> c``."""
+    s = np.sign(c)
+    idx = np.where((s[:-1] < 0) & (s[1:] >= 0))[0]
+    out = []
+    for i in idx:
+        a, b = t[i], t[i + 1]
+        if c[i + 1] == 0:
+            out.append(b)
+            continue
+        out.append(brentq(fine, a, b, xtol=1e-14, rtol=1e-15, maxiter=200))
+    return np.asarray(out)
+
+
+def measured_period(tc: np.ndarray) -> tuple[float | None, float | None]:
+    """Mean period and single-cycle std from successive upward crossing times."""
+    if len(tc) < 2:
+        return None, None
+    per = np.diff(tc)
+    return float((tc[-1] - tc[0]) / (len(tc) - 1)), float(per.std(ddof=1)) if len(per) > 1 else 0.0
+
+
+def simulate(
+    scene: Scene,
+    mode: str | int = 1,
+    amplitude: float = 0.05,
+    periods: float = 10.0,
+    *,
+    rest: RestPose | None = None,
+    modes: ModeSet | None = None,
+    y0: np.ndarray | None = None,
+    t_end: float | None = None,
+    method: str = "DOP853",
+    rtol: float = 1e-10,
+    atol: float | None = None,
+    samples_per_period: int = 64,
+    on_slack: str = "continue",
+    progress=None,
+) -> SimulationResult:
+    """Integrate the nonlinear motion started from ``amplitude`` x a mode shape.
+
+    Parameters
+    ----------
+    mode : label or 1-based index of the mode (see :func:`linear_modes`).
+    amplitude : scale of the normalised mode shape (rad for rotation-dominated
+        modes, m for translation-dominated ones).
+    periods : number of linear periods of that mode to integrate.
+    y0, t_end : start from an explicit state (13,) instead, for ``t_end`` s.
+    method, rtol, atol : passed to :func:`scipy.integrate.solve_ivp`; ``atol``
+        defaults to ``rtol`` times the amplitude-scaled size of each state
+        component.
+    on_slack : ``continue`` (report and go on with the bilateral model) or
+        ``stop`` (end the run when a wire goes slack).
+    progress : optional callable ``progress(t, t_end)`` called as the
+        integration advances (for progress bars).
+    """
+    if on_slack not in ("continue", "stop"):
+        raise InputError("--on-slack", "must be 'continue' or 'stop'")
+    rest = rest or rest_pose(scene)
+    modes = modes or linear_modes(scene, rest)
+    warnings: list[str] = []
+    m = modes.get(mode) if y0 is None else (modes.get(mode) if mode is not None else None)
+    if y0 is None:
+        if m.period is None:
+            raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
+        y0 = initial_state(scene, rest, m, amplitude)
+    lin_T = m.period if m is not None else None
+    T_ref = lin_T or min((x.period for x in modes.modes if x.period), default=1.0)
+    if t_end is None:
+        t_end = periods * T_ref
+    P = mx.params_from_scenes(scene)
+    # integrate relative to the rest CoM (origin shift of the anchors)
+    Pshift = mx.RigParams(**{**P.__dict__, "anchors": P.anchors - rest.com})
+    ys0 = y0.copy()
+    ys0[0:3] -= rest.com
+    omega = 2 * np.pi / T_ref
+    Lmax = float(np.max(scene.lengths))
+    amp = max(abs(amplitude), 1e-6)
+    if atol is None:
+        scale = np.concatenate([np.full(3, amp * Lmax), np.full(4, amp), np.full(3, amp * omega * Lmax), np.full(3, amp * omega)])
+        atol_v = rtol * scale
+    else:
+        atol_v = atol
+    f = mx.make_flat_rhs(Pshift)
+    if progress is not None:
+        f = _with_progress(f, t_end, progress)
+    events = None
+    if on_slack == "stop":
+        def slack_event(t, y):
+            return float(np.min(mx.tensions(y, Pshift)))
+        slack_event.terminal = True
+        slack_event.direction = -1
+        events = [slack_event]
+    t0 = time.perf_counter()
+    sol = solve_ivp(f, (0.0, t_end), ys0, method=method, rtol=rtol, atol=atol_v, dense_output=True, events=events)
+    runtime = time.perf_counter() - t0
+    if sol.status == -1:
+        raise IntegrationError(f"integrator {method} failed: {sol.message}")
+    t_stop = sol.t[-1]
+    # health at the solver's own steps (no interpolation error)
+    Ys = sol.y.T.copy()
+    Ys[:, 0:3] += rest.com
+    viol = float(np.max(mx.constraint_violation(Ys, P)))
+    E = mx.energy(Ys, P)
+    E_rest = scene.mass * scene.gravity * rest.com[2]
+    denom = abs(E[0] - E_rest)
+    drift = float(np.max(np.abs(E - E[0])) / denom) if denom > 0 else 0.0
+    # dense samples for crossings, tensions, clearance
+    k = max(int(samples_per_period * t_stop / T_ref), 200)
+    ts = np.linspace(0.0, t_stop, k + 1)
+    Y = sol.sol(ts).T
+    Y[:, 0:3] += rest.com
+    rel = relative_pose(Y, rest)
+    dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
+    c = rel[:, dom]
+
+    def fine(tt: float) -> float:
+        yy = sol.sol(tt)[None, :].copy()
+        yy[:, 0:3] += rest.com
+        return float(relative_pose(yy, rest)[0, dom])
+
+    tc = crossings(ts, c, fine)
+    period, pstd = measured_period(tc)
+    T = mx.tensions(Y, P)
+    slack = []
+    for i in range(scene.n_wires):
+        neg = np.where(T[:, i] <= 0)[0]
+        if len(neg):
+            slack.append((i + 1, float(ts[neg[0]])))
+            warnings.append(f"WIRE {i + 1} GOES SLACK at t = {ts[neg[0]]:.4g} s (tension {T[:, i].min():.3g} N): "
+                            "the motion after that is not physical; reduce the amplitude")
+    Rs = np.moveaxis(np.stack([mx.quat_to_matrix(Y[:, 3:7])]), 0, 0)[0]
+    lz = lowest_point_z(scene, Y[:, 0:3], Rs)
+    if sol.status == 1:
+        warnings.append(f"run stopped at t = {t_stop:.4g} s because a wire went slack")
+    if viol > 1e-6 * Lmax:
+        warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
+    if period is None:
+        warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
+    return SimulationResult(
+        t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
+        period=period, period_std=pstd, crossings=tc, linear_period=lin_T,
+        max_constraint_violation=viol, energy_drift=drift,
+        tension_min=T.min(axis=0), tension_max=T.max(axis=0), slack=slack,
+        lowest_z_min=float(lz.min()), depth_max=float(scene.ceiling_z - lz.min()),
+        mode=m.label if m is not None else None, amplitude=float(amplitude), model="maximal", method=method,
+        rtol=float(rtol), atol=float(np.min(atol_v)), nfev=int(sol.nfev), runtime=runtime, warnings=warnings,
+    )
+
+
+def _with_progress(f, t_end: float, progress):
+    last = [-1.0]
+
+    def g(t, y):
+        if t - last[0] >= 0.005 * t_end:
+            last[0] = t
+            progress(t, t_end)
+        return f(t, y)
+
+    return g

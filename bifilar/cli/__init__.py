@@ -1,0 +1,50 @@
+"""Command-line interface (thin: parse, call the library, render).
+
+Heavy modules (numpy, scipy, matplotlib, rich) are imported inside the
+commands so that ``bifilar --help`` starts fast.
+"""
+
+from __future__ import annotations
+
+import click
+
+from .. import __version__
+from .common import setup_logging
+
+
+class _LazyGroup(click.Group):
+    """Commands live in submodules imported only when invoked."""
+
+    _commands = {
+        "modes": ("bifilar.cli.cmd_modes", "modes"),
+        "simulate": ("bifilar.cli.cmd_simulate", "simulate"),
+    }
+
+    def list_commands(self, ctx):
+        return sorted(self._commands)
+
+    def get_command(self, ctx, name):
+        if name not in self._commands:
+            return None
+        import importlib
+
+        mod, attr = self._commands[name]
+        return getattr(importlib.import_module(mod), attr)
+
+
+@click.group(cls=_LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="bifilar")
+@click.option("--debug", is_flag=True, help="Show tracebacks instead of one-line errors.")
+@click.option("-v", "--verbose", is_flag=True, help="Log progress to stderr.")
+@click.pass_context
+def main(ctx: click.Context, debug: bool, verbose: bool) -> None:
+    """Plan, simulate and invert bifilar / multifilar pendulum experiments
+    for measuring moments of inertia.  SI units throughout."""
+    ctx.ensure_object(dict)
+    ctx.obj["debug"] = debug
+    setup_logging(verbose)
+
+
+def register(name: str, module: str, attr: str) -> None:
+    """Add a lazily imported command (used by feature modules)."""
+    _LazyGroup._commands[name] = (module, attr)

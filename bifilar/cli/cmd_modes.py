@@ -1,0 +1,73 @@
+"""`bifilar modes`: rest pose and linear modes."""
+
+from __future__ import annotations
+
+import click
+
+from .common import check_output_path, console, emit_json, fmt, handle_errors, write_csv
+
+
+def modes_document(scene, rest, ms) -> dict:
+    """The JSON document of ``interface.md`` (plus extra fields)."""
+    return {
+        "equilibrium": {
+            "com": rest.com, "rotation": rest.R, "tensions": rest.tensions,
+            "lowest_point_z": rest.lowest_z, "depth_below_ceiling": rest.depth,
+            "clearance_source": scene.support_source, "kkt_residual": rest.kkt_residual,
+        },
+        "modes": [
+            {"label": m.label, "period": m.period, "shape": m.shape,
+             "frequency": (1.0 / m.period) if m.period else None, "description": m.description}
+            for m in ms.modes
+        ],
+        "scene": {"name": scene.name, "mass": scene.mass, "wires": scene.n_wires, "dof": scene.dof},
+    }
+
+
+@click.command("modes")
+@click.argument("config", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
+@click.option("--out", type=click.Path(dir_okay=False), help="Write the modes to this CSV file.")
+@click.option("--force", is_flag=True, help="Replace an existing --out file.")
+@handle_errors
+def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
+    """Rest pose and every linear mode (period, shape, label) of CONFIG."""
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import COMPONENTS, linear_modes
+    from ..config import load_scene
+
+    out_p = check_output_path(out, force, [config], "--out")
+    scene = load_scene(config)
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    if out_p:
+        rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]
+        write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)
+    if as_json:
+        emit_json(modes_document(scene, rest, ms))
+        return
+    from rich.table import Table
+
+    con = console()
+    con.print(f"[bold]{scene.name}[/bold]: {scene.mass:.6g} kg on {scene.n_wires} wires, {scene.dof} degrees of freedom")
+    t = Table(title="Rest pose (world frame, z up)")
+    t.add_column("quantity")
+    t.add_column("value")
+    t.add_row("CoM (m)", "[" + ", ".join(f"{v:.6g}" for v in rest.com) + "]")
+    from ..rotations import matrix_to_rotvec
+    import numpy as np
+
+    t.add_row("attitude, rotation vector (deg)", "[" + ", ".join(f"{np.degrees(v):.4g}" for v in matrix_to_rotvec(rest.R)) + "]")
+    for i, T in enumerate(rest.tensions):
+        t.add_row(f"tension wire {i + 1} (N)", f"{T:.6g}")
+    t.add_row("lowest point z (m)", f"{rest.lowest_z:.6g} ({scene.support_source})")
+    t.add_row("depth below ceiling (m)", f"{rest.depth:.6g}")
+    con.print(t)
+    mt = Table(title="Linear modes (slowest first)")
+    for col in ("#", "label", "period (s)", "freq (Hz)", "kinetic energy", "shape (world; m, rad)"):
+        mt.add_column(col, justify="right" if col in ("#", "period (s)", "freq (Hz)") else "left")
+    for k, m in enumerate(ms.modes):
+        shape = " ".join(f"{c}{v:+.3f}" for c, v in zip(COMPONENTS, m.shape) if abs(v) >= 5e-4)
+        mt.add_row(str(k + 1), m.label, fmt(m.period, 8), fmt(1 / m.period if m.period else None, 4), m.description,
+                   shape)
+    con.print(mt)

@@ -1,0 +1,108 @@
+"""`bifilar simulate`: nonlinear run from a displaced rest, with health."""
+
+from __future__ import annotations
+
+import click
+
+from .common import check_output_path, console, emit_json, fmt, handle_errors, progress_bar
+
+
+@click.command("simulate")
+@click.argument("config", type=click.Path(dir_okay=False))
+@click.option("--mode", "mode", default=None, help="Mode label or 1-based index (default: torsion, else the slowest).")
+@click.option("--amplitude", type=float, default=0.05, show_default=True,
+              help="Initial displacement: this times the mode's normalised shape (rad or m).")
+@click.option("--periods", type=float, default=10.0, show_default=True, help="Number of linear periods to integrate.")
+@click.option("--model", type=click.Choice(["maximal", "kane"]), default="maximal", show_default=True,
+              help="maximal: general model (any rig); kane: the thesis's five-angle model (two wires).")
+@click.option("--theta", default=None, help="kane model: initial theta1..theta4 [rad], comma separated.")
+@click.option("--method", default="DOP853", show_default=True, help="solve_ivp method (DOP853, RK45, Radau, LSODA).")
+@click.option("--rtol", type=float, default=1e-10, show_default=True, help="Relative tolerance of the integrator.")
+@click.option("--on-slack", type=click.Choice(["continue", "stop"]), default="continue", show_default=True,
+              help="What to do when a wire goes slack during the motion.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
+@click.option("--out", type=click.Path(dir_okay=False), help="Write the time series to this CSV file.")
+@click.option("--plot", type=click.Path(dir_okay=False), help="Draw the time series to this image file (PNG, PDF, SVG).")
+@click.option("--force", is_flag=True, help="Replace existing --out/--plot files.")
+@handle_errors
+def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_slack, as_json, out, plot, force):
+    """Integrate the full nonlinear motion of CONFIG from a displaced rest pose."""
+    import math
+
+    from ..errors import InputError
+
+    for name, val in (("--amplitude", amplitude), ("--periods", periods), ("--rtol", rtol)):
+        if not math.isfinite(val):
+            raise InputError(name, f"must be finite, got {val}")
+    if periods <= 0:
+        raise InputError("--periods", f"must be positive, got {periods}")
+    if not (0 < rtol < 1e-2):
+        raise InputError("--rtol", f"must be in (0, 1e-2), got {rtol}")
+    if method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
+        raise InputError("--method", f"unknown method {method!r}; use DOP853, RK45, RK23, Radau, BDF or LSODA")
+    out_p = check_output_path(out, force, [config], "--out")
+    plot_p = check_output_path(plot, force, [config, out], "--plot")
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+    from ..analysis.simulate import simulate as run
+    from ..config import load_scene
+
+    scene = load_scene(config)
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    if model == "kane":
+        from ..analysis.kane_run import simulate_kane
+
+        with progress_bar("simulating (kane)", enabled=not as_json) as upd:
+            res = simulate_kane(scene, rest, ms, mode=mode, amplitude=amplitude, periods=periods, theta=theta,
+                                rtol=rtol, method=method, progress=upd)
+    else:
+        if theta is not None:
+            raise InputError("--theta", "only with --model kane")
+        if mode is None:
+            mode = "torsion" if "torsion" in ms.labels else 1
+        try:
+            ms.get(mode)
+        except KeyError as exc:
+            raise InputError("--mode", str(exc.args[0])) from None
+        with progress_bar("simulating", enabled=True) as upd:
+            res = run(scene, mode, amplitude, periods, rest=rest, modes=ms, method=method, rtol=rtol,
+                      on_slack=on_slack, progress=upd)
+    if out_p:
+        from ..report import write_timeseries_csv
+
+        write_timeseries_csv(out_p, scene, rest, res)
+    if plot_p:
+        from ..report import plot_simulation
+
+        plot_simulation(plot_p, scene, res)
+    if as_json:
+        emit_json(res.to_json())
+        for w in res.warnings:
+            click.echo(f"warning: {w}", err=True)
+        return
+    _render(scene, res)
+
+
+def _render(scene, res) -> None:
+    from rich.table import Table
+
+    con = console()
+    t = Table(title=f"{scene.name}: {res.model} model, mode {res.mode}, amplitude {res.amplitude:g}")
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    t.add_row("measured period (s)", fmt(res.period, 10))
+    t.add_row("linear period (s)", fmt(res.linear_period, 10))
+    if res.period and res.linear_period:
+        t.add_row("period shift vs linear", f"{(res.period / res.linear_period - 1):+.3e}")
+    t.add_row("cycles timed", str(max(len(res.crossings) - 1, 0)) + f" (coordinate {res.coordinate_name})")
+    t.add_row("max constraint violation (m)", f"{res.max_constraint_violation:.2e}")
+    t.add_row("energy drift (rel. to oscillation)", f"{res.energy_drift:.2e}")
+    for i in range(scene.n_wires):
+        t.add_row(f"tension wire {i + 1} min / max (N)", f"{res.tension_min[i]:.6g} / {res.tension_max[i]:.6g}")
+    t.add_row("lowest point z (m)", f"{res.lowest_z_min:.6g}")
+    t.add_row("depth below ceiling (m)", f"{res.depth_max:.6g}")
+    t.add_row("integrator", f"{res.method} rtol={res.rtol:g}, {res.nfev} evaluations, {res.runtime:.3g} s")
+    con.print(t)
+    for w in res.warnings:
+        con.print(f"[bold red]WARNING:[/bold red] {w}")

@@ -1,0 +1,66 @@
+"""Exceptions that carry enough context for one clear line to the user.
+
+The CLI maps :class:`InputError` (and subclasses) to exit status 2 and
+everything else derived from :class:`BifilarError` to exit status 1.
+"""
+
+from __future__ import annotations
+
+
+class BifilarError(Exception):
+    """Base class of every error the package raises on purpose."""
+
+
+class InputError(BifilarError):
+    """Invalid input: a config field, a command-line argument, a data file.
+
+    Parameters
+    ----------
+    field : str
+        Dotted path of the offending field (``rig.lengths.1``) or the
+        argument name (``--amplitude``).
+    message : str
+        What is wrong and what was expected.
+    """
+
+    def __init__(self, field: str, message: str):
+        self.field = field
+        self.message = message
+        super().__init__(f"{field}: {message}" if field else message)
+
+
+class ConfigErrors(InputError):
+    """Several :class:`InputError` found in one pass over a config."""
+
+    def __init__(self, errors: list[InputError]):
+        self.errors = list(errors)
+        first = self.errors[0]
+        super().__init__(first.field, first.message)
+
+    def __str__(self) -> str:  # one line per problem
+        return "\n".join(str(e) for e in self.errors)
+
+
+class SlackWireError(InputError):
+    """The scene cannot hang with every wire taut (a physical impossibility
+    of the input, hence exit status 2).  ``wires`` are 1-based indices."""
+
+    def __init__(self, wires: list[int], message: str):
+        self.wires = list(wires)
+        super().__init__("rig.lengths", message)
+
+
+class UnstableRestError(InputError):
+    """The rest pose exists but a mode has negative stiffness."""
+
+
+class SingularCoordinatesError(BifilarError, ArithmeticError):
+    """A coordinate chart (the thesis's angles) is singular at this pose."""
+
+
+class ConvergenceError(BifilarError):
+    """An iterative solver did not converge (rest pose, inversion, ...)."""
+
+
+class IntegrationError(BifilarError):
+    """The time integrator failed or a health tolerance was blown."""

@@ -1,0 +1,114 @@
+"""Rotation utilities, vectorised over leading axes.
+
+Quaternions are scalar-first ``[w, x, y, z]`` unit quaternions mapping
+body components to world components.  Rotation vectors are in radians.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrix: ``skew(a) @ b == cross(a, b)``; ``v`` shape (..., 3)."""
+    v = np.asarray(v, dtype=float)
+    z = np.zeros(v.shape[:-1])
+    return np.stack(
+        [
+            np.stack([z, -v[..., 2], v[..., 1]], axis=-1),
+            np.stack([v[..., 2], z, -v[..., 0]], axis=-1),
+            np.stack([-v[..., 1], v[..., 0], z], axis=-1),
+        ],
+        axis=-2,
+    )
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix (..., 3, 3) of quaternion(s) ``q`` (..., 4); q need not be unit."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def matrix_to_quat(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (..., 4), w >= 0, of rotation matrix/matrices ``R`` (..., 3, 3)."""
+    R = np.asarray(R, dtype=float)
+    flat = R.reshape(-1, 3, 3)
+    out = np.empty((flat.shape[0], 4))
+    for k, m in enumerate(flat):  # Shepperd's method; called rarely (set-up only)
+        tr = np.trace(m)
+        i = int(np.argmax([tr, m[0, 0], m[1, 1], m[2, 2]]))
+        if i == 0:
+            s = 2.0 * np.sqrt(1.0 + tr)
+            q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+        elif i == 1:
+            s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+            q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+        elif i == 2:
+            s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+            q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+        else:
+            s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+            q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+        q = np.asarray(q)
+        out[k] = q * np.sign(q[0]) if q[0] != 0 else q
+    out /= np.linalg.norm(out, axis=-1, keepdims=True)
+    return out.reshape(R.shape[:-2] + (4,))
+
+
+def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p * q`` (..., 4)."""
+    pw, px, py, pz = np.moveaxis(np.asarray(p, float), -1, 0)
+    qw, qx, qy, qz = np.moveaxis(np.asarray(q, float), -1, 0)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        axis=-1,
+    )
+
+
+def rotvec_to_quat(v: np.ndarray) -> np.ndarray:
+    """Unit quaternion of rotation vector(s) ``v`` (..., 3), radians."""
+    v = np.asarray(v, dtype=float)
+    ang = np.linalg.norm(v, axis=-1, keepdims=True)
+    half = 0.5 * ang
+    # sin(half)/ang with a series for tiny angles
+    small = ang < 1e-8
+    k = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
+    return np.concatenate([np.cos(half), k * v], axis=-1)
+
+
+def rotvec_to_matrix(v: np.ndarray) -> np.ndarray:
+    """Rotation matrix exp(skew(v)) (..., 3, 3) of rotation vector(s) ``v`` (radians)."""
+    return quat_to_matrix(rotvec_to_quat(v))
+
+
+def quat_to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Rotation vector (..., 3), radians, |v| <= pi, of quaternion(s) ``q``."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
+    w = q[..., :1]
+    xyz = q[..., 1:]
+    s = np.linalg.norm(xyz, axis=-1, keepdims=True)
+    ang = 2.0 * np.arctan2(s, w)
+    small = s < 1e-12
+    k = np.where(small, 2.0 / np.where(small, w, 1.0), ang / np.where(small, 1.0, s))
+    return k * xyz
+
+
+def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
+    """Rotation vector (..., 3), radians, of rotation matrix/matrices ``R``."""
+    return quat_to_rotvec(matrix_to_quat(R))

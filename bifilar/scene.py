@@ -1,0 +1,102 @@
+"""The scene: a rigid body and the rig of wires that holds it.
+
+Frames: world frame z up, gravity along -z (m).  Body frame with origin at
+the body's centre of mass (CoM); the body's inertia tensor and attachment
+points are given in it.  A :class:`Scene` is immutable and validated: build
+it with :func:`bifilar.config.load_scene` or :func:`bifilar.config.scene_from_dict`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Optional
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated body-and-rig description, SI units.
+
+    Attributes
+    ----------
+    name : str
+    gravity : float
+        Gravitational acceleration, m/s^2, acting along world -z.
+    mass : float
+        Body mass, kg.
+    inertia : ndarray (3, 3)
+        Inertia tensor about the CoM in body axes, kg m^2.
+    anchors : ndarray (n, 3)
+        Ceiling points, world frame, m.
+    attachments : ndarray (n, 3)
+        Body attachment points, body frame (origin at the CoM), m.
+    lengths : ndarray (n,)
+        Wire lengths, m.
+    support : callable or None
+        ``support(d) -> h``: for unit direction(s) ``d`` (k, 3) in body axes,
+        the largest ``x . d`` over all points ``x`` of the body (body frame,
+        m).  Used for the clearance (lowest point of the body).  ``None``
+        means only the attachment points are known.
+    support_source : str
+        Where ``support`` comes from: ``parts``, ``bounding_box`` or ``attachments``.
+    config : dict
+        The (normalised) config mapping the scene was built from; studies
+        edit it by dotted path and rebuild.
+    """
+
+    name: str
+    gravity: float
+    mass: float
+    inertia: np.ndarray
+    anchors: np.ndarray
+    attachments: np.ndarray
+    lengths: np.ndarray
+    support: Optional[Callable[[np.ndarray], np.ndarray]] = None
+    support_source: str = "attachments"
+    config: dict = field(default_factory=dict, compare=False, repr=False)
+    parts_com: Optional[np.ndarray] = None  # CoM in the parts' build frame, if built from parts
+
+    @property
+    def n_wires(self) -> int:
+        return int(self.lengths.shape[0])
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom of the body on taut inextensible wires (6 - n)."""
+        return 6 - self.n_wires
+
+    @property
+    def ceiling_z(self) -> float:
+        """Height of the highest anchor, m (world z)."""
+        return float(np.max(self.anchors[:, 2]))
+
+    def body_support(self, directions: np.ndarray) -> np.ndarray:
+        """Support function of the body in body axes, m (see class docstring).
+
+        Falls back to the attachment points when no shape is known.
+        """
+        d = np.atleast_2d(np.asarray(directions, dtype=float))
+        h_att = np.max(d @ self.attachments.T, axis=-1)
+        if self.support is None:
+            return h_att
+        return np.maximum(np.asarray(self.support(d), dtype=float), h_att)
+
+    def with_changes(self, **kw: Any) -> "Scene":
+        return replace(self, **kw)
+
+
+def lowest_point_z(scene: Scene, com: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """World z of the lowest point of the body, m.
+
+    Parameters
+    ----------
+    com : (..., 3) CoM position(s), world frame, m.
+    R : (..., 3, 3) rotation(s) body -> world.
+    """
+    com = np.asarray(com, float)
+    R = np.asarray(R, float)
+    down_body = -R[..., 2, :]  # world -z expressed in body axes (rows of R^T)
+    flat = down_body.reshape(-1, 3)
+    h = scene.body_support(flat).reshape(down_body.shape[:-1])
+    return com[..., 2] - h

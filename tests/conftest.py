@@ -1,0 +1,40 @@
+"""Shared fixtures: scenes of the thesis built in code (independent of the
+example files, which have their own tests)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bifilar.config import scene_from_dict
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS = ROOT / "configs"
+SHARED = ROOT.parent / "shared"
+
+# thin 100 kg plate 5 m x 2.5 m: x across the attachment line, y along it, z vertical
+PLATE_I = [100 * 5**2 / 12, 100 * 2.5**2 / 12, 100 * (5**2 + 2.5**2) / 12]
+
+
+def trapezoid(b=10.0, bp=5.0, l1=5.0, l2=None, h=0.0, inertia=PLATE_I, mass=100.0, g=9.81):
+    """Thesis-style two-wire scene: anchors b apart along y at z = 0,
+    attachments b' apart, h above the CoM (h = 0.5 for the 1 m thick plate)."""
+    l2 = l1 if l2 is None else l2
+    return scene_from_dict({
+        "gravity": g,
+        "body": {"mass": mass, "inertia": {"principal": list(inertia)}},
+        "rig": {"anchors": [[0, -b / 2, 0], [0, b / 2, 0]],
+                "attachments": [[0, -bp / 2, h], [0, bp / 2, h]],
+                "lengths": [l1, l2]},
+    })
+
+
+@pytest.fixture
+def thesis_plate():
+    return trapezoid()
+
+
+def close(a, b, rel):
+    return np.all(np.abs(np.asarray(a) - np.asarray(b)) <= rel * np.maximum(np.abs(b), 1e-300))
