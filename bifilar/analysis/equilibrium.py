@@ -178,8 +178,12 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     return N, N.T @ K @ N, N.T @ M @ N, rank
 
 
-def rest_pose(scene: Scene) -> RestPose:
+def rest_pose(scene: Scene, guess: RestPose | None = None) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.
+
+    ``guess``: the rest pose of a nearby scene (a sweep or finite-difference
+    neighbour); Newton starts from it and the global search is skipped when
+    it converges to a taut, stable pose.
 
     Raises
     ------
@@ -191,6 +195,10 @@ def rest_pose(scene: Scene) -> RestPose:
     ConvergenceError
         The solver failed.
     """
+    if guess is not None:
+        quick = _from_guess(scene, guess)
+        if quick is not None:
+            return quick
     com0, R0 = _initial_pose(scene)
     c, R, res, at_bound = _slsqp(scene, com0, R0)
     L = scene.lengths
@@ -198,8 +206,7 @@ def rest_pose(scene: Scene) -> RestPose:
     stretch = np.linalg.norm(d, axis=1) - L
     tol = 1e-6 * np.max(L)
     if at_bound:
-        # the body wants to turn over: find the equilibrium near the start and report it as unstable
-        c2, R2, lam2, r2 = _newton_kkt(scene, *_translate_only(scene, com0, R0))
+        # the body wants to turn over rather than hang in its start orientation
         raise UnstableRestError(
             "body",
             "the body cannot hang stably in its start orientation (it would turn over): "
@@ -210,9 +217,26 @@ def rest_pose(scene: Scene) -> RestPose:
         raise ConvergenceError(f"rest pose search failed: {res.message}")
     if len(slack):
         _raise_slack(scene, slack, -stretch[slack], L)
-    c, R, lam, kkt = _newton_kkt(scene, c, R)
+    return _finish(scene, *_newton_kkt(scene, c, R))
+
+
+def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
+    lam0 = guess.tensions / np.linalg.norm(guess.wire_vectors, axis=1)
+    if lam0.shape[0] != scene.n_wires:
+        return None
+    c, R, lam, kkt = _newton_kkt(scene, guess.com.copy(), guess.R.copy(), lam0.copy(), iters=30)
+    if not kkt < 1e-9 or np.any(lam <= 0):
+        return None
+    try:
+        return _finish(scene, c, R, lam, kkt)
+    except Exception:  # noqa: BLE001 - fall back to the global search
+        return None
+
+
+def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     if not (kkt < 1e-9):
         raise ConvergenceError(f"rest pose did not converge (KKT residual {kkt:.2e})")
+    L = scene.lengths
     d, w, G = constraint_jacobian(scene, c, R)
     T = lam * np.linalg.norm(d, axis=1)
     weight = scene.mass * scene.gravity
@@ -233,10 +257,6 @@ def rest_pose(scene: Scene) -> RestPose:
         com=c, R=R, q=matrix_to_quat(R), tensions=T, wire_vectors=d,
         lowest_z=lz, depth=scene.ceiling_z - lz, kkt_residual=float(kkt),
     )
-
-
-def _translate_only(scene: Scene, com0, R0):
-    return com0, R0
 
 
 def _raise_slack(scene: Scene, idx, gap, L, tensions=None):

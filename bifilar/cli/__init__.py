@@ -18,17 +18,27 @@ class _LazyGroup(click.Group):
     _commands = {
         "modes": ("bifilar.cli.cmd_modes", "modes"),
         "simulate": ("bifilar.cli.cmd_simulate", "simulate"),
+        "invert": ("bifilar.cli.cmd_invert", "invert"),
+        "period": ("bifilar.cli.cmd_period", "period"),
+        "sweep": ("bifilar.cli.cmd_sweep", "sweep"),
+        "plan": ("bifilar.cli.cmd_plan", "plan"),
+        "tensions": ("bifilar.cli.cmd_tensions", "tensions"),
     }
 
     def list_commands(self, ctx):
-        return sorted(self._commands)
+        import importlib.util
+
+        return sorted(n for n, (mod, _) in self._commands.items() if importlib.util.find_spec(mod) is not None)
 
     def get_command(self, ctx, name):
         if name not in self._commands:
             return None
         import importlib
+        import importlib.util
 
         mod, attr = self._commands[name]
+        if importlib.util.find_spec(mod) is None:  # command not built yet in this checkout
+            return None
         return getattr(importlib.import_module(mod), attr)
 
 

@@ -1,0 +1,251 @@
+"""Sensitivities of the linear mode periods to every scene input, and the
+linear uncertainty budget of an inertia estimate.
+
+The inputs an experimenter measures (SI units) are named like this:
+
+* ``Ixx Iyy Izz Ixy Ixz Iyz``: inertia tensor components, body axes, kg m^2;
+* ``mass`` (kg), ``gravity`` (m/s^2);
+* ``length.i`` wire i (1-based) length, m;
+* ``anchor.i.x`` (``.y``, ``.z``): ceiling point coordinates, world frame, m;
+* ``attachment.i.x`` ...: body point coordinates, body frame, m;
+* ``com.x`` ...: position of the CoM relative to the attachment points, m
+  (moving the CoM by +d moves every attachment by -d in the body frame).
+
+Sensitivities are central finite differences of the exact linear periods
+(:func:`bifilar.analysis.modes.linear_modes`), which are accurate to ~1e-13,
+so a relative step of ~1e-6 leaves an error of ~1e-9 in each derivative.
+Modes are tracked across a perturbation by the modal assurance criterion
+(MAC) so that two modes that swap order (torsion and roll near coincidence)
+are not confused.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from ..analysis.equilibrium import RestPose, rest_pose
+from ..analysis.modes import ModeSet, linear_modes
+from ..scene import Scene
+
+INERTIA_COMPONENTS = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+_IDX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
+_AX = {"x": 0, "y": 1, "z": 2}
+
+#: default standard uncertainties of measured inputs (stated in every output)
+DEFAULT_UNCERTAINTY = {
+    "length": 1e-3,       # m, each wire length (tape measure)
+    "position": 1e-3,     # m, each coordinate of every anchor and attachment point
+    "mass": 1e-3,         # relative (scale accuracy 0.1 %)
+    "com": 2e-3,          # m, each coordinate of the CoM relative to the attachments
+    "gravity": 0.0,       # relative; local g is usually known to 1e-4 or better
+    "timing": 1e-3,       # s, standard uncertainty of one measured period (if not given)
+}
+
+
+def perturb(scene: Scene, name: str, delta: float) -> Scene:
+    """Return ``scene`` with input ``name`` changed by ``delta`` (SI units)."""
+    if name in _IDX:
+        i, j = _IDX[name]
+        I = scene.inertia.copy()
+        I[i, j] += delta
+        if i != j:
+            I[j, i] += delta
+        return replace(scene, inertia=I)
+    if name == "mass":
+        return replace(scene, mass=scene.mass + delta)
+    if name == "gravity":
+        return replace(scene, gravity=scene.gravity + delta)
+    parts = name.split(".")
+    if parts[0] == "length":
+        L = scene.lengths.copy()
+        L[int(parts[1]) - 1] += delta
+        return replace(scene, lengths=L)
+    if parts[0] in ("anchor", "attachment"):
+        arr = (scene.anchors if parts[0] == "anchor" else scene.attachments).copy()
+        arr[int(parts[1]) - 1, _AX[parts[2]]] += delta
+        return replace(scene, **{"anchors" if parts[0] == "anchor" else "attachments": arr})
+    if parts[0] == "com":
+        arr = scene.attachments.copy()
+        arr[:, _AX[parts[1]]] -= delta
+        return replace(scene, attachments=arr)
+    raise KeyError(f"unknown input {name!r}")
+
+
+def input_value(scene: Scene, name: str) -> float:
+    """Current value of input ``name`` (0 for ``com.*``, which is a shift)."""
+    if name in _IDX:
+        return float(scene.inertia[_IDX[name]])
+    if name in ("mass", "gravity"):
+        return float(getattr(scene, name))
+    parts = name.split(".")
+    if parts[0] == "length":
+        return float(scene.lengths[int(parts[1]) - 1])
+    if parts[0] == "anchor":
+        return float(scene.anchors[int(parts[1]) - 1, _AX[parts[2]]])
+    if parts[0] == "attachment":
+        return float(scene.attachments[int(parts[1]) - 1, _AX[parts[2]]])
+    if parts[0] == "com":
+        return 0.0
+    raise KeyError(name)
+
+
+def measured_inputs(scene: Scene) -> list[str]:
+    """All geometric and mass inputs an experimenter measures."""
+    names = ["mass"]
+    n = scene.n_wires
+    names += [f"length.{i + 1}" for i in range(n)]
+    names += [f"anchor.{i + 1}.{a}" for i in range(n) for a in "xyz"]
+    names += [f"attachment.{i + 1}.{a}" for i in range(n) for a in "xyz"]
+    names += [f"com.{a}" for a in "xyz"]
+    return names
+
+
+def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
+    """Standard uncertainty of input ``name`` from a dict like :data:`DEFAULT_UNCERTAINTY`."""
+    u = {**DEFAULT_UNCERTAINTY, **(unc or {})}
+    if name == "mass":
+        return u["mass"] * scene.mass
+    if name == "gravity":
+        return u["gravity"] * scene.gravity
+    head = name.split(".")[0]
+    if head == "length":
+        return u["length"]
+    if head in ("anchor", "attachment"):
+        return u["position"]
+    if head == "com":
+        return u["com"]
+    return 0.0  # inertia components: the unknowns
+
+
+def mac_match(base: ModeSet, other: ModeSet) -> np.ndarray:
+    """Index into ``other.modes`` of the mode matching each base mode (MAC)."""
+    M = base.mass_matrix
+    A = np.array([m.shape for m in base.modes])
+    B = np.array([m.shape for m in other.modes])
+    num = (A @ M @ B.T) ** 2
+    den = np.outer(np.einsum("ij,jk,ik->i", A, M, A), np.einsum("ij,jk,ik->i", B, M, B))
+    mac = num / np.maximum(den, 1e-300)
+    _, col = linear_sum_assignment(-mac)
+    return col
+
+
+def periods_of(scene: Scene, base: ModeSet | None = None, guess: RestPose | None = None) -> np.ndarray:
+    """Linear periods (s) in the order of ``base``'s modes (NaN for neutral modes)."""
+    rest = rest_pose(scene, guess=guess)
+    ms = linear_modes(scene, rest)
+    idx = mac_match(base, ms) if base is not None else np.arange(len(ms.modes))
+    return np.array([ms.modes[i].period if ms.modes[i].period else np.nan for i in idx])
+
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """dT_k/dx_j for every mode k of ``modes`` and every input j of ``names``.
+
+    periods : (K,) s.  jacobian : (K, J) s per unit of input.
+    """
+
+    names: list[str]
+    periods: np.ndarray
+    jacobian: np.ndarray
+    modes: ModeSet
+    rest: RestPose
+
+    def column(self, name: str) -> np.ndarray:
+        return self.jacobian[:, self.names.index(name)]
+
+
+def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: float = 1e-6) -> Sensitivity:
+    """Central-difference sensitivities of all linear periods to ``names``.
+
+    Steps: relative ``rel_step`` of the input's natural scale (inertia: the
+    largest principal moment; lengths and positions: the longest wire; mass,
+    gravity: their value).
+    """
+    names = list(names if names is not None else list(INERTIA_COMPONENTS) + measured_inputs(scene))
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
+    Jac = np.zeros((len(T0), len(names)))
+    Lmax = float(np.max(scene.lengths))
+    Imax = float(np.max(np.linalg.eigvalsh(scene.inertia)))
+    for j, name in enumerate(names):
+        if name in _IDX:
+            h = rel_step * Imax
+        elif name == "mass":
+            h = rel_step * scene.mass
+        elif name == "gravity":
+            h = rel_step * scene.gravity
+        else:
+            h = rel_step * Lmax
+        Tp = periods_of(perturb(scene, name, h), ms, rest)
+        Tm = periods_of(perturb(scene, name, -h), ms, rest)
+        Jac[:, j] = (Tp - Tm) / (2 * h)
+    return Sensitivity(names, T0, Jac, ms, rest)
+
+
+@dataclass(frozen=True)
+class Budget:
+    """Linear uncertainty of an inertia component estimated from one mode.
+
+    value_sigma : standard uncertainty of the estimate, kg m^2.
+    shares : {input: fraction of the variance}; contributions : {input: sigma
+    contribution, kg m^2}; dI_dT : kg m^2 per s; rel_sensitivity : (dI/I) / (dT/T).
+    """
+
+    component: str
+    mode: str
+    value_sigma: float
+    contributions: dict
+    shares: dict
+    dI_dT: float
+    rel_sensitivity: float
+
+
+def inertia_budget(sens: Sensitivity, scene: Scene, component: str, mode_index: int, period_sigma: float,
+                   unc: dict | None = None, extra: dict | None = None) -> Budget:
+    """Propagate input uncertainties to the estimate of ``component`` from mode ``mode_index``.
+
+    The estimate solves T_k(I_c, x) = T_measured for I_c, so
+    dI_c/dT = 1 / (dT_k/dI_c) and dI_c/dx_j = -(dT_k/dx_j) / (dT_k/dI_c).
+    ``extra``: additional independent contributions {name: sigma in kg m^2}
+    (e.g. amplitude or model bias).
+    """
+    k = mode_index
+    sI = sens.column(component)[k]
+    if not np.isfinite(sI) or sI == 0:
+        raise ValueError(f"mode {sens.modes.modes[k].label} is insensitive to {component}")
+    contrib = {"timing": abs(period_sigma / sI)}
+    for j, name in enumerate(sens.names):
+        if name in _IDX:
+            continue
+        s = input_sigma(scene, name, unc)
+        if s > 0:
+            contrib[name] = abs(sens.jacobian[k, j] * s / sI)
+    for name, s in (extra or {}).items():
+        contrib[name] = abs(s)
+    var = sum(c**2 for c in contrib.values())
+    shares = {k2: (c**2 / var if var > 0 else 0.0) for k2, c in contrib.items()}
+    Ic = float(scene.inertia[_IDX[component]])
+    T = sens.periods[k]
+    rel = (T / Ic) / sI if Ic != 0 else float("nan")
+    return Budget(component, sens.modes.modes[k].label, float(np.sqrt(var)), contrib, shares, float(1 / sI), float(rel))
+
+
+def grouped_shares(b: Budget) -> dict:
+    """Variance shares grouped by kind: timing, lengths, anchors, attachments, mass, com, other."""
+    out: dict[str, float] = {}
+    for name, sh in b.shares.items():
+        head = name.split(".")[0]
+        key = {"length": "lengths", "anchor": "anchors", "attachment": "attachments"}.get(head, head)
+        out[key] = out.get(key, 0.0) + sh
+    return out
+
+
+def best_mode_for(sens: Sensitivity, component: str) -> int:
+    """Index of the mode whose period is most sensitive (relatively) to ``component``."""
+    col = np.abs(sens.column(component)) / np.where(np.isfinite(sens.periods), sens.periods, np.inf)
+    col = np.where(np.isfinite(col), col, -1)
+    return int(np.argmax(col))
