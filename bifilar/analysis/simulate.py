@@ -98,11 +98,14 @@ class SimulationResult:
         }
 
 
-def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 50) -> tuple[np.ndarray, np.ndarray]:
+def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 50,
+                     hold: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Closest pose (mass-weighted) on which every wire has its length.
 
     Gauss-Newton on phi(x) = 0 with the minimum-norm correction in the metric
     of the mass matrix; converges quadratically from any nearby pose.
+    ``hold``: index (0..5 of [dx, dy, dz, rx, ry, rz]) of a coordinate the
+    correction must not change -- the coordinate the experimenter displaced.
     """
     Minv = np.concatenate([np.full(3, 1.0 / scene.mass), 1.0 / np.linalg.eigvalsh(scene.inertia).mean() * np.ones(3)])
     L = scene.lengths
@@ -111,8 +114,11 @@ def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 
         phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
         if np.max(np.abs(phi)) < 1e-15 * np.max(L) ** 2:
             break
-        GM = G * Minv
-        dx = -GM.T @ np.linalg.solve(GM @ G.T, phi)
+        W = Minv.copy()
+        if hold is not None:
+            W[hold] = 0.0
+        GM = G * W
+        dx = -GM.T @ np.linalg.lstsq(GM @ G.T, phi, rcond=None)[0]
         com = com + dx[:3]
         R = rotvec_to_matrix(dx[3:]) @ R
     return com, R
@@ -120,12 +126,13 @@ def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 
 
 def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) -> np.ndarray:
     """State (13,) at rest displaced by ``amplitude`` x the mode shape, projected
-    back onto the wires, zero velocity."""
+    back onto the wires with the mode's dominant coordinate held at its
+    displaced value (as an experimenter sets the initial angle), zero velocity."""
     dr = amplitude * mode.shape[:3]
     dth = amplitude * mode.shape[3:]
     com = rest.com + dr
     R = rotvec_to_matrix(dth) @ rest.R
-    com, R = project_to_wires(scene, com, R)
+    com, R = project_to_wires(scene, com, R, hold=mode.dominant)
     return mx.pack(com, matrix_to_quat(R))
 
 
