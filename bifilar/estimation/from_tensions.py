@@ -1,0 +1,115 @@
+"""Moments of inertia from a motion and its wire tensions (thesis 7.2.2).
+
+Euler's equations in body axes, I alpha + w x (I w) = sum_i p_i x f_i (f_i
+the wire forces in body axes), are linear in the six tensor components.
+Stacking every time sample gives an overdetermined linear system solved by
+least squares, with the covariance from the residual variance.  The design
+matrix's conditioning says which axes the motion excites: a component whose
+relative standard uncertainty is large (or whose column is nearly dependent)
+is reported as poorly excited -- the thesis found the non-dominant axes
+inaccurate for exactly this reason.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis.tensions import wire_units
+from ..scene import Scene
+
+COMPONENTS = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+
+
+@dataclass(frozen=True)
+class TensionInertia:
+    """Least-squares inertia estimate (kg m^2) from tensions.
+
+    values, std : dict component -> value / standard uncertainty.
+    correlation : (m, m) correlation matrix of the solved components.
+    poorly_excited : components whose relative std exceeds ``threshold``.
+    residual_rms : N m.  condition : condition number of the scaled design matrix.
+    """
+
+    components: tuple
+    values: dict
+    std: dict
+    correlation: np.ndarray
+    poorly_excited: list
+    residual_rms: float
+    condition: float
+    n_samples: int
+
+
+def euler_design(omega: np.ndarray, alpha: np.ndarray, components=COMPONENTS) -> np.ndarray:
+    """Design matrix (k, 3, m): (I alpha + w x I w) = A @ [components].
+
+    omega, alpha : (k, 3) body-axes angular velocity (rad/s) and acceleration (rad/s^2).
+    """
+    k = omega.shape[0]
+    cols = []
+    for c in components:
+        E = np.zeros((3, 3))
+        i, j = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}[c]
+        E[i, j] = E[j, i] = 1.0
+        Ew = omega @ E.T
+        cols.append(alpha @ E.T + np.cross(omega, Ew))
+    return np.stack(cols, axis=-1).reshape(k, 3, len(components))
+
+
+def wire_torque_body(scene: Scene, com: np.ndarray, R: np.ndarray, tensions: np.ndarray) -> np.ndarray:
+    """Torque of the wire forces about the CoM, body axes (k, 3), N m.
+
+    tensions : (k, n) N (measured by load cells or from a model).
+    """
+    u = wire_units(scene, com, R)  # world, attachment -> anchor
+    f_world = tensions[..., None] * u
+    f_body = np.einsum("kji,knj->kni", R, f_world)  # R^T f
+    return np.cross(scene.attachments[None, :, :], f_body).sum(axis=1)
+
+
+def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.ndarray, omega: np.ndarray,
+                          tensions: np.ndarray, alpha: np.ndarray | None = None,
+                          components=("Ixx", "Iyy", "Izz"), threshold: float = 0.01) -> TensionInertia:
+    """Estimate inertia components by least squares over all samples of Euler's equations.
+
+    Parameters
+    ----------
+    t : (k,) s.  com : (k, 3) m, world.  R : (k, 3, 3) body -> world.
+    omega : (k, 3) body-axes angular velocity, rad/s.  tensions : (k, n) N.
+    alpha : (k, 3) body-axes angular acceleration, rad/s^2; if None it is
+        differentiated from ``omega`` (second-order finite differences).
+    components : the unknowns (principal moments by default; all six for the
+        full tensor).  Components not solved for are taken from ``scene``.
+    threshold : relative std above which a component is flagged poorly excited.
+    """
+    if alpha is None:
+        alpha = np.gradient(omega, t, axis=0, edge_order=2)
+    comps = tuple(components)
+    fixed = [c for c in COMPONENTS if c not in comps]
+    A = euler_design(omega, alpha, comps)
+    b = wire_torque_body(scene, com, R, tensions)
+    if fixed:
+        Af = euler_design(omega, alpha, fixed)
+        idx = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
+        xf = np.array([scene.inertia[idx[c]] for c in fixed])
+        b = b - Af @ xf
+    A2 = A.reshape(-1, len(comps))
+    b2 = b.reshape(-1)
+    scale = np.linalg.norm(A2, axis=0)
+    scale[scale == 0] = 1.0
+    x, *_ = np.linalg.lstsq(A2 / scale, b2, rcond=None)
+    x = x / scale
+    r = A2 @ x - b2
+    dof = max(len(b2) - len(comps), 1)
+    s2 = float(r @ r) / dof
+    AtA = (A2 / scale).T @ (A2 / scale)
+    cond = float(np.linalg.cond(AtA)) ** 0.5
+    cov = s2 * np.linalg.pinv(AtA) / np.outer(scale, scale)
+    std = np.sqrt(np.maximum(np.diag(cov), 0))
+    corr = cov / np.maximum(np.outer(std, std), 1e-300)
+    values = dict(zip(comps, map(float, x)))
+    stds = dict(zip(comps, map(float, std)))
+    poor = [c for c in comps if not np.isfinite(stds[c]) or stds[c] > threshold * max(abs(values[c]), 1e-300)]
+    return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)))
