@@ -1,0 +1,151 @@
+"""`bifilar tensions`: wire tensions by the thesis's methods beside the model's,
+and moments of inertia from tensions (thesis 7.2.2)."""
+
+from __future__ import annotations
+
+import click
+
+from .common import check_output_path, console, emit_json, handle_errors, progress_bar, write_csv
+
+
+@click.command("tensions")
+@click.argument("config", type=click.Path(dir_okay=False))
+@click.option("--mode", default=None, help="Mode label or 1-based index (default: torsion, else the slowest).")
+@click.option("--amplitude", type=float, default=0.05, show_default=True, help="Initial displacement x mode shape.")
+@click.option("--periods", type=float, default=4.0, show_default=True, help="Linear periods to simulate.")
+@click.option("--motion", type=click.Path(dir_okay=False), default=None,
+              help="Use a recorded motion instead: CSV with columns t, com_x..z, q_w..q_z, tension_1..n "
+                   "(the format `bifilar simulate --out` writes), e.g. load-cell rig data.")
+@click.option("--solve-for", "solve_for", multiple=True,
+              type=click.Choice(["Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"]),
+              help="Inertia components to estimate from the tensions (default: Ixx, Iyy, Izz).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
+@click.option("--out", type=click.Path(dir_okay=False), help="CSV: time, model tensions, thesis-method tensions.")
+@click.option("--force", is_flag=True, help="Replace an existing --out file.")
+@handle_errors
+def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, force):
+    """Tensions of CONFIG's wires during a motion by three methods (the model's
+    multipliers, the thesis's symmetric formula and its general least-squares
+    method), and the inertia estimated from those tensions."""
+    import numpy as np
+
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+    from ..analysis.simulate import simulate
+    from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
+    from ..config import load_scene
+    from ..errors import InputError
+    from ..estimation.from_tensions import inertia_from_tensions
+    from ..models import maximal as mx
+    from ..rotations import quat_to_matrix
+
+    out_p = check_output_path(out, force, [config, motion], "--out")
+    scene = load_scene(config)
+    comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
+    if motion is None:
+        rest = rest_pose(scene)
+        ms = linear_modes(scene, rest)
+        if mode is None:
+            mode = "torsion" if "torsion" in ms.labels else 1
+        try:
+            ms.get(mode)
+        except KeyError as exc:
+            raise InputError("--mode", str(exc.args[0])) from None
+        with progress_bar("simulating", enabled=True) as upd:
+            res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=1e-11,
+                           samples_per_period=200, progress=upd)
+        t, y, T_model = res.t, res.y, res.tensions
+        P = mx.params_from_scenes(scene)
+        accel, alpha, _, _ = mx.solve_dynamics(y, P, stabilise=False)
+        omega = y[:, 10:13]
+        source = f"simulated mode {res.mode}, amplitude {amplitude:g}"
+    else:
+        t, y, T_model, omega, accel, alpha = _read_motion(motion, scene)
+        source = f"recorded motion {motion}"
+    R = quat_to_matrix(y[:, 3:7])
+    u = wire_units(scene, y[:, 0:3], R)
+    F_gen, resid = general_tensions(scene.mass, scene.gravity, accel, u)
+    doc = {"source": source, "samples": int(len(t)),
+           "model": {"min": T_model.min(axis=0), "max": T_model.max(axis=0)},
+           "general": {"min": F_gen.min(axis=0), "max": F_gen.max(axis=0),
+                       "max_abs_difference_to_model": np.max(np.abs(F_gen - T_model), axis=0),
+                       "max_residual": float(resid.max())}}
+    F_sym = None
+    if scene.n_wires == 2:
+        F_sym = symmetric_tension(scene.mass, scene.gravity, accel[:, 2], u)
+        doc["symmetric"] = {"min": float(F_sym.min()), "max": float(F_sym.max()),
+                            "max_abs_difference_to_model": np.max(np.abs(F_sym[:, None] - T_model), axis=0),
+                            "note": "valid only for mirror-symmetric motion (thesis 7.2)"}
+    est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps)
+    doc["inertia_from_tensions"] = {
+        c: {"value": est.values[c], "std": est.std[c], "config": float(scene.inertia[_idx(c)])} for c in comps}
+    doc["inertia_from_tensions_poorly_excited"] = est.poorly_excited
+    doc["inertia_from_tensions_residual_rms"] = est.residual_rms
+    if out_p:
+        cols = [t, *T_model.T, *F_gen.T] + ([F_sym] if F_sym is not None else [])
+        hdr = ["t"] + [f"model_{i + 1}" for i in range(scene.n_wires)] + [f"general_{i + 1}" for i in range(scene.n_wires)]
+        hdr += ["symmetric"] if F_sym is not None else []
+        write_csv(out_p, hdr, np.column_stack(cols))
+    if as_json:
+        emit_json(doc)
+        return
+    from rich.table import Table
+
+    con = console()
+    tab = Table(title=f"{scene.name}: tensions, {source}")
+    for c in ("wire", "model min..max (N)", "thesis general min..max (N)", "max |general - model| (N)"):
+        tab.add_column(c, justify="right")
+    for i in range(scene.n_wires):
+        tab.add_row(str(i + 1), f"{T_model[:, i].min():.6g} .. {T_model[:, i].max():.6g}",
+                    f"{F_gen[:, i].min():.6g} .. {F_gen[:, i].max():.6g}", f"{np.max(np.abs(F_gen[:, i] - T_model[:, i])):.2e}")
+    con.print(tab)
+    if F_sym is not None:
+        con.print(f"thesis symmetric formula: {F_sym.min():.6g} .. {F_sym.max():.6g} N "
+                  f"(max difference to the model {np.max(np.abs(F_sym[:, None] - T_model)):.3g} N; valid for symmetric motion only)")
+    it = Table(title="Inertia from tensions (least squares over Euler's equations, thesis 7.2.2)")
+    for c in ("component", "estimate (kg m^2)", "std", "config value", "excited?"):
+        it.add_column(c, justify="right")
+    for c in comps:
+        it.add_row(c, f"{est.values[c]:.8g}", f"{est.std[c]:.2g}", f"{scene.inertia[_idx(c)]:.8g}",
+                   "POORLY" if c in est.poorly_excited else "yes")
+    con.print(it)
+
+
+def _idx(c):
+    return {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}[c]
+
+
+def _read_motion(path, scene):
+    """Read t, com, quaternion, tensions from CSV; derive omega, accelerations by differences."""
+    import numpy as np
+
+    from ..errors import InputError
+    from ..rotations import quat_multiply
+
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True)
+    except (OSError, ValueError) as exc:
+        raise InputError("--motion", f"cannot read {path}: {exc}") from None
+    names = data.dtype.names or ()
+    need = ["t", "com_x", "com_y", "com_z", "q_w", "q_x", "q_y", "q_z"] + [f"tension_{i + 1}" for i in range(scene.n_wires)]
+    missing = [n for n in need if n not in names]
+    if missing:
+        raise InputError("--motion", f"missing columns {', '.join(missing)} (have {', '.join(names)})")
+    if len(data) < 20:
+        raise InputError("--motion", "fewer than 20 samples")
+    t = data["t"]
+    if np.any(np.diff(t) <= 0):
+        raise InputError("--motion", "time column t must increase strictly")
+    com = np.c_[data["com_x"], data["com_y"], data["com_z"]]
+    q = np.c_[data["q_w"], data["q_x"], data["q_y"], data["q_z"]]
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    T = np.c_[tuple(data[f"tension_{i + 1}"] for i in range(scene.n_wires))]
+    qdot = np.gradient(q, t, axis=0, edge_order=2)
+    conj = q * np.array([1, -1, -1, -1])
+    omega = 2 * quat_multiply(conj, qdot)[:, 1:]
+    alpha = np.gradient(omega, t, axis=0, edge_order=2)
+    vel = np.gradient(com, t, axis=0, edge_order=2)
+    accel = np.gradient(vel, t, axis=0, edge_order=2)
+    y = np.zeros((len(t), 13))
+    y[:, 0:3], y[:, 3:7], y[:, 7:10], y[:, 10:13] = com, q, vel, omega
+    return t, y, T, omega, accel, alpha
