@@ -1,0 +1,438 @@
+#!/usr/bin/env python
+"""Fit every real recording in ../shared/data and write docs/real_data.md.
+
+Regenerates ``docs/real_data.md`` and the figures ``docs/figures/real_*.png``
+from the recordings described in ``../shared/data/README.md``:
+
+* the compound-pendulum rate-gyro trial (BicycleParameters) -- period,
+  damping, model choice, and periods in 3 s windows;
+* the 33 trifilar recordings of the KTH project (5 s, 10 s, 20 s series,
+  test mass at r = 0.25 ... 0.75 m) -- period of each, then the linear
+  relation T^2 = a + b r^2 against the small-angle trifilar prediction.
+
+Usage::
+
+    python scripts/fit_real_data.py [--data DIR] [--out docs]
+
+Runs in well under a minute.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bifilar.estimation.signal import fit_period, period_from_crossings, plot_fit, read_signal
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_DATA = REPO.parent / "shared" / "data"
+
+GYRO_REL = Path("compound-gyro-bicycleparameters") / "BrowserInsForkCompoundFirst1.mat"
+KTH_REL = Path("trifilar-kth-2014")
+SERIES = ("5s", "10s", "20s")
+RADII = (0.25, 0.30, 0.35, 0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75)
+FPS = 240.0  # camera frame rate, Hz (README); the CSVs hold no time column
+
+# trifilar constants (README), SI
+L_WIRE, R_RIG = 0.995, 1.000          # m, +-0.5 mm each
+M_PLATFORM, M_TEST = 0.848, 0.02094   # kg, platform +-0.5 g
+G = 9.81                              # m/s^2 (Stockholm: 9.818, +0.08 %)
+
+
+def fmt(x, nd=6):
+    return f"{x:.{nd}f}"
+
+
+def sci(x, nd=2):
+    return f"{x:.{nd}g}"
+
+
+def wls(X, y, sy):
+    """Weighted least squares: coefficients, covariance scaled by the Birge
+    ratio when chi^2/dof > 1, chi^2/dof, residuals."""
+    w = 1.0 / sy
+    coef, *_ = np.linalg.lstsq(X * w[:, None], y * w, rcond=None)
+    res = y - X @ coef
+    dof = max(len(y) - X.shape[1], 1)
+    chi2 = float(np.sum((res * w) ** 2)) / dof
+    cov = np.linalg.inv((X * w[:, None] ** 2).T @ X) * max(chi2, 1.0)
+    return coef, cov, chi2, res
+
+
+# ---------------------------------------------------------------------------
+# gyro
+# ---------------------------------------------------------------------------
+
+def gyro(data: Path, figdir: Path):
+    path = data / GYRO_REL
+    t, y, meta = read_signal(path)
+    cands = ("viscous", "quadratic", "quadratic+viscous")
+    fit = fit_period(t, y, model="auto", candidates=cands, trim="auto")
+    two = fit_period(t, y, model="two_mode", crossing_check=False, split_check=False)
+    plot_fit(fit, t, y, figdir / "real_gyro_fit.png",
+             title=f"Compound pendulum, rate gyro ({path.name}): {fit.model} fit")
+    windows = []
+    for a in np.arange(0.0, 30.0, 3.0):
+        w = fit_period(t, y, t_start=a, t_stop=a + 3.0, crossing_check=False, split_check=False)
+        windows.append((a, a + 3.0, w.period, w.std, float(w.envelope(a + 1.5)), w.r_squared))
+    _plot_gyro_windows(windows, fit, figdir / "real_gyro_windows.png")
+    return {"path": path, "meta": meta, "fit": fit, "two": two, "windows": windows}
+
+
+def _plot_gyro_windows(windows, fit, out):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    w = np.array([(0.5 * (a + b), T, s, A) for a, b, T, s, A, _ in windows])
+    fig = Figure(figsize=(8, 4.2), constrained_layout=True)
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    ax.errorbar(w[:, 0], w[:, 1], yerr=w[:, 2], fmt="o", color="C3", capsize=3,
+                label="3 s windows (viscous fit, 1σ)")
+    ax.axhline(fit.period, color="k", lw=1, label=f"whole record: {fit.period:.5f} ± {fit.std:.1g} s")
+    ax.axhline(fit.crossing.period, color="C0", lw=1, ls="--",
+               label=f"crossings: {fit.crossing.period:.5f} ± {fit.crossing.std:.1g} s")
+    ax.set_xlabel("window centre [s]")
+    ax.set_ylabel("period [s]")
+    ax2 = ax.twinx()
+    ax2.plot(w[:, 0], w[:, 3], "s:", color="0.5", ms=4, label="amplitude")
+    ax2.set_ylabel("amplitude [V]", color="0.4")
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="lower left")
+    ax.set_title("Gyro trial: the period shortens along the record")
+    fig.savefig(str(out), dpi=110)
+
+
+# ---------------------------------------------------------------------------
+# trifilar
+# ---------------------------------------------------------------------------
+
+def trifilar(data: Path, figdir: Path):
+    rows = []
+    for series in SERIES:
+        for r in RADII:
+            path = data / KTH_REL / series / f"{r:.2f}.csv"
+            t, y, meta = read_signal(path, column="x", sample_rate=FPS)
+            two = fit_period(t, y, model="two_mode")
+            vis = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+            cr = two.crossing if two.crossing is not None else period_from_crossings(t, y)
+            amp = float(np.sqrt(np.mean(two.envelope(two.t_used) ** 2)))
+            rows.append({"series": series, "r": r, "n": t.size, "duration": float(t[-1] - t[0]),
+                         "fit": two, "vis": vis, "cr": cr, "amp": amp, "path": path})
+            if series == "20s" and r == 0.50:
+                plot_fit(two, t, y, figdir / "real_trifilar_fit_20s_0.50.png",
+                         title="Trifilar KTH, 20 s series, r = 0.50 m: laser-dot x [px], two-mode fit")
+    return rows
+
+
+def trifilar_relation(rows):
+    """T^2 = a + b r^2 per series and pooled (common slope, one intercept
+    per series), optionally + c A^2 (amplitude in px)."""
+    out = {}
+    for series in SERIES:
+        sel = [q for q in rows if q["series"] == series]
+        r2 = np.array([q["r"] ** 2 for q in sel])
+        T = np.array([q["fit"].period for q in sel])
+        sT = np.array([q["fit"].std for q in sel])
+        X = np.vstack([np.ones_like(r2), r2]).T
+        coef, cov, chi2, res = wls(X, T ** 2, 2 * T * sT)
+        out[series] = {"coef": coef, "cov": cov, "chi2": chi2, "res": res, "r2": r2, "T2": T ** 2,
+                       "sT2": 2 * T * sT}
+    r2 = np.array([q["r"] ** 2 for q in rows])
+    T = np.array([q["fit"].period for q in rows])
+    sT = np.array([q["fit"].std for q in rows])
+    A2 = np.array([q["amp"] ** 2 for q in rows])
+    D = np.array([[q["series"] == s for s in SERIES] for q in rows], dtype=float)
+    X = np.column_stack([D, r2])
+    out["pooled"] = dict(zip(("coef", "cov", "chi2", "res"), wls(X, T ** 2, 2 * T * sT)))
+    XA = np.column_stack([D, r2, A2])
+    out["pooled_amp"] = dict(zip(("coef", "cov", "chi2", "res"), wls(XA, T ** 2, 2 * T * sT)))
+    return out
+
+
+def prediction():
+    M = M_PLATFORM + M_TEST
+    b = 4 * math.pi ** 2 * L_WIRE * M_TEST / (M * G * R_RIG ** 2)
+    rel = math.sqrt((0.5e-3 / L_WIRE) ** 2 + (2 * 0.5e-3 / R_RIG) ** 2 + (0.5e-3 / M) ** 2)
+    return b, b * rel
+
+
+def _plot_relation(rel, b_pred, out):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 6), constrained_layout=True)
+    FigureCanvasAgg(fig)
+    ax, axr = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    xx = np.linspace(0.0, 0.6, 50)
+    for k, s in enumerate(SERIES):
+        d = rel[s]
+        off = (k - 1) * 0.002  # small horizontal offsets to separate the series
+        ax.errorbar(d["r2"] + off, d["T2"], yerr=d["sT2"], fmt="o", ms=4, color=f"C{k}", capsize=2,
+                    label=f"{s}: slope {d['coef'][1]:.4f} s²/m²")
+        ax.plot(xx, d["coef"][0] + d["coef"][1] * xx, color=f"C{k}", lw=0.8)
+        axr.errorbar(d["r2"] + off, d["res"] * 1e3, yerr=d["sT2"] * 1e3, fmt="o", ms=4, color=f"C{k}",
+                     capsize=2)
+    a20 = rel["20s"]["coef"][0]
+    ax.plot(xx, a20 + b_pred * xx, "k--", lw=1, label=f"predicted slope {b_pred:.4f} s²/m² (through 20 s intercept)")
+    axr.axhline(0, color="k", lw=0.5)
+    ax.set_ylabel("T² [s²]")
+    axr.set_ylabel("residual T² [10⁻³ s²]")
+    axr.set_xlabel("r² [m²]")
+    ax.legend(fontsize=8)
+    ax.set_title("Trifilar KTH: T² against r² of the 20.94 g test mass")
+    fig.savefig(str(out), dpi=110)
+
+
+# ---------------------------------------------------------------------------
+# markdown
+# ---------------------------------------------------------------------------
+
+def write_markdown(g, rows, rel, out: Path, runtime: float):
+    fit, two, meta = g["fit"], g["two"], g["meta"]
+    b_pred, sb_pred = prediction()
+    L = []
+    a = L.append
+    a("# Period fits on real recordings")
+    a("")
+    a("Generated by `scripts/fit_real_data.py` (do not edit by hand) with "
+      "`bifilar.estimation.signal`; data from `../shared/data` (see its README). "
+      f"Run time {runtime:.0f} s.")
+    a("")
+    a("Every std below is 1σ. `std` comes from the least-squares covariance `s²(JᵀJ)⁻¹`, multiplied by "
+      "`sqrt((1+ρ)/(1−ρ))` when the residuals' lag-1 autocorrelation ρ is significant "
+      "(the factor is listed as *infl.*). It covers the noise, not a model that is wrong in "
+      "a systematic way; the *split check* fits the two halves of each record separately to "
+      "catch a period that changes along the record.")
+    a("")
+    # ---------------- gyro
+    a("## 1. Compound pendulum, rate gyro (BicycleParameters, `BrowserInsForkCompoundFirst1`)")
+    a("")
+    f = meta["fields"]
+    a(f"`{GYRO_REL.name}`: variable `{meta['column']}`, {meta['n_samples']} samples at "
+      f"{meta['sample_rate']:g} Hz (from `{meta['sample_rate_source']}`), {meta['duration']:.3f} s; "
+      f"trial fields: bicycle `{f.get('bicycle')}`, part `{f.get('part')}`, pendulum `{f.get('pendulum')}`, "
+      f"angle `{f.get('angle')}`, trial `{f.get('trial')}`. The signal is a rate-gyro voltage around "
+      f"an offset of {fit.offset:.3f} V.")
+    a("")
+    a("Model choice (`model=\"auto\"`, BIC, `trim=\"auto\"`):")
+    a("")
+    a("| model | period [s] | std [s] | r² | BIC − BIC(best) |")
+    a("|---|---|---|---|---|")
+    cand = fit.selection["candidates"]
+    bmin = min(c["bic"] for c in cand.values())
+    for name, c in cand.items():
+        a(f"| {name}{' (chosen)' if name == fit.model else ''} | {fmt(c['period'])} | {sci(c['std'])} | "
+          f"{c['r_squared']:.5f} | {c['bic'] - bmin:.1f} |")
+    a("")
+    cr = fit.crossing
+    (T1, s1), (T2, s2) = fit.half_periods
+    a("Result of the chosen fit:")
+    a("")
+    a("| quantity | value |")
+    a("|---|---|")
+    a(f"| model | {fit.model} |")
+    a(f"| period (damped) | {fmt(fit.period)} ± {sci(fit.std)} s |")
+    if fit.period_undamped is not None:
+        a(f"| undamped period 2π/ω_n | {fmt(fit.period_undamped)} s |")
+    a(f"| white-noise std, inflation, ρ | {sci(fit.std_raw)} s, ×{fit.std_inflation:.2f}, {fit.lag1_autocorr:.3f} |")
+    a(f"| damping ratio ζ | {fit.damping_ratio:.5f} ± {sci(fit.damping.get('zeta_std', float('nan')))} |")
+    a(f"| amplitude at t0, drift | {fit.amplitude:.3f} V, {fit.drift:.2e} V/s |")
+    a(f"| r², residual rms, noise (2nd differences) | {fit.r_squared:.5f}, {fit.residual_rms:.4f} V, {fit.noise_std:.4f} V |")
+    a(f"| fit window | {fit.t0:.3f} – {fit.t1:.3f} s |")
+    a(f"| crossing method (regression) | {fmt(cr.period)} ± {sci(cr.std)} s ({cr.n_periods} periods) |")
+    a(f"| crossing method (mean interval ± scatter) | {fmt(cr.mean_period)} s ± {sci(cr.scatter)} s |")
+    a(f"| fit − crossings | {(fit.period - cr.period) * 1e3:+.3f} ms ({(fit.period - cr.period) / fit.period:+.1e} relative) |")
+    a(f"| split check: first / second half | {fmt(T1)} ± {sci(s1)} s / {fmt(T2)} ± {sci(s2)} s |")
+    a("")
+    a("![gyro fit](figures/real_gyro_fit.png)")
+    a("")
+    a("Periods of 3 s windows (viscous model each):")
+    a("")
+    a("| window [s] | period [s] | std [s] | amplitude [V] | r² |")
+    a("|---|---|---|---|---|")
+    for lo, hi, T, s, A, r2 in g["windows"]:
+        a(f"| {lo:.0f}–{hi:.0f} | {fmt(T, 5)} | {sci(s)} | {A:.3f} | {r2:.5f} |")
+    a("")
+    a("![gyro windows](figures/real_gyro_windows.png)")
+    a("")
+    wT = np.array([w[2] for w in g["windows"]])
+    m1, m2 = two.modes
+    a("**Interpretation.** The record is clean (r² = "
+      f"{fit.r_squared:.4f}) and the damping is viscous: the pure quadratic (velocity²) envelope is "
+      f"far worse (ΔBIC = {cand['quadratic']['bic'] - bmin:.0f}), and the quadratic+viscous model "
+      f"drives its quadratic coefficient to zero (k = {cand_k(fit, 'quadratic+viscous'):.2g}), "
+      f"so it only pays the BIC penalty of one extra parameter. The "
+      f"crossing method agrees with the fit to {abs(fit.period - cr.period) / fit.period:.1e} "
+      "relative. The residuals, however, are not noise: they oscillate at the pendulum frequency and "
+      "grow towards both ends of the record, the signature of a frequency that changes along the "
+      f"record. The 3 s windows confirm it: the period falls from {wT[0]:.4f} s to {wT[-1]:.4f} s "
+      f"({(wT[0] - wT[-1]) * 1e3:.0f} ms, {(wT[0] - wT[-1]) / wT.mean():.1%}), tens of window stds, and the "
+      f"split check flags the halves ({fmt(T1, 5)} vs {fmt(T2, 5)} s). The fall is not a clean "
+      "T₀(1 + cA²) nonisochronism law: it stalls in mid-record "
+      f"({', '.join(f'{x:.4f}' for x in wT[4:7])} s from 12 to 21 s) while the amplitude keeps falling, "
+      f"then drops fastest at the end ({wT[-2]:.4f}, {wT[-1]:.4f} s). A two-mode fit "
+      f"reaches r² = {two.r_squared:.5f} with modes at {m1['period']:.4f} s and {m2['period']:.4f} s, "
+      f"but its second mode grows (σ = {m2['sigma']:.4f} 1/s < 0), which a freely decaying "
+      "pendulum cannot do: it mimics the changing frequency, it is not a second physical mode. "
+      f"Conclusion: the whole-record period {fmt(fit.period, 5)} s ± {sci(fit.std)} s (statistical) is the "
+      "right summary of this trial *as a constant-frequency fit*; as a value of \"the\" period of this "
+      f"pendulum, the spread of the window periods (±{(wT.max() - wT.min()) / 2 * 1e3:.1f} ms) is the "
+      f"honest uncertainty, {(wT.max() - wT.min()) / 2 / fit.std:.0f} times the statistical one. The autocorrelation inflation "
+      f"(×{fit.std_inflation:.1f}) alone does not capture this; the split check does.")
+    a("")
+    # ---------------- trifilar
+    a("## 2. Trifilar pendulum (KTH 2014): 33 recordings")
+    a("")
+    a(f"Each CSV is tab-separated with a header `x<TAB>y` (laser-dot pixel position) and no time "
+      f"column, so `read_signal(path, column=\"x\", sample_rate={FPS:g})` is used; the files hold "
+      f"{min(q['n'] for q in rows)}–{max(q['n'] for q in rows)} frames "
+      f"({min(q['duration'] for q in rows):.1f}–{max(q['duration'] for q in rows):.1f} s). "
+      "`x` carries the torsional oscillation (amplitude ~100 px, period ≈ 1.05 s); `y` is dominated "
+      "by a ≈ 2 s swing (pendulum) mode, which also leaks into `x` with a few px. That leak biases a "
+      "single-mode fit and the crossing method by up to "
+      f"{max(abs(q['vis'].period - q['fit'].period) for q in rows) * 1e3:.0f} ms (compare the columns of the "
+      "table), so every file is fitted with `model=\"two_mode\"`, the torsional mode being the dominant "
+      "one. Its BIC is lower than the single viscous mode's by "
+      f"{min(q['vis'].bic - q['fit'].bic for q in rows):.0f} to {max(q['vis'].bic - q['fit'].bic for q in rows):.0f} "
+      "(column ΔBIC), so `model=\"auto\"` with `two_mode` among its candidates prefers it to the viscous model. The residuals "
+      "of the two-mode fits (2–4 px) are mostly the 2nd and 3rd harmonics of the torsional "
+      "oscillation (the laser-dot position is not linear in the angle); harmonics are orthogonal to the "
+      "fundamental, so they hardly bias the period, but they make the residuals smooth, hence the "
+      "inflation factors of 5–15.")
+    a("")
+    a("| series | r [m] | frames | T two-mode [s] | std [s] | infl. | swing mode [s] | r² | ΔBIC | T viscous [s] | T crossings [s] | amplitude [px] |")
+    a("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for q in rows:
+        f2, v, c = q["fit"], q["vis"], q["cr"]
+        a(f"| {q['series']} | {q['r']:.2f} | {q['n']} | {fmt(f2.period)} | {sci(f2.std)} | "
+          f"×{f2.std_inflation:.1f} | {f2.modes[1]['period']:.3f} | {f2.r_squared:.5f} | {v.bic - f2.bic:.0f} | "
+          f"{fmt(v.period, 5)} ± {sci(v.std, 1)} | {fmt(c.period, 5)} ± {sci(c.std, 1)} | {q['amp']:.0f} |")
+    a("")
+    mono = {s: bool(np.all(np.diff([q["fit"].period for q in rows if q["series"] == s]) > 0)) for s in SERIES}
+    mono_v = {s: bool(np.all(np.diff([q["vis"].period for q in rows if q["series"] == s]) > 0)) for s in SERIES}
+    mono_c = {s: bool(np.all(np.diff([q["cr"].period for q in rows if q["series"] == s]) > 0)) for s in SERIES}
+    a("Period increasing monotonically with r: two-mode "
+      + ", ".join(f"{s} {'yes' if mono[s] else 'no'}" for s in SERIES)
+      + "; viscous single mode " + ", ".join(f"{s} {'yes' if mono_v[s] else 'no'}" for s in SERIES)
+      + "; crossings " + ", ".join(f"{s} {'yes' if mono_c[s] else 'no'}" for s in SERIES) + ".")
+    a("")
+    a("![trifilar example fit](figures/real_trifilar_fit_20s_0.50.png)")
+    a("")
+    a("### T² against r²")
+    a("")
+    a("Small-angle trifilar: I = M g R² T² / (4π² L) with M the hanging mass. With I = I_p + m r² "
+      "and M = M_p + m, T² = 4π² L (I_p + m r²) / ((M_p + m) g R²): linear in r² with slope")
+    a("")
+    a(f"b = 4π² L m / ((M_p + m) g R²) = {b_pred:.5f} ± {sb_pred:.5f} s²/m² "
+      f"(L = {L_WIRE} m, R = {R_RIG} m, M_p = {M_PLATFORM} kg, m = {M_TEST} kg, g = {G} m/s²; "
+      "the ± propagates ±0.5 mm on L and R and ±0.5 g on M_p).")
+    a("")
+    a("Weighted fits (weights 1/σ(T²)², σ(T²) = 2T·std; parameter errors multiplied by √(χ²/dof) when > 1):")
+    a("")
+    a("| fit | slope b [s²/m²] | b / b_pred | intercept a [s²] | I_p = a (M_p+m) g R² / (4π² L) [kg m²] | χ²/dof | rms resid. T² [10⁻³ s²] |")
+    a("|---|---|---|---|---|---|---|")
+    kI = (M_PLATFORM + M_TEST) * G * R_RIG ** 2 / (4 * math.pi ** 2 * L_WIRE)
+    for s in SERIES:
+        d = rel[s]
+        b, sb = d["coef"][1], math.sqrt(d["cov"][1, 1])
+        a_, sa = d["coef"][0], math.sqrt(d["cov"][0, 0])
+        a(f"| {s} | {b:.4f} ± {sb:.4f} | {b / b_pred:.3f} ± {sb / b_pred:.3f} | {a_:.5f} ± {sa:.5f} | "
+          f"{a_ * kI:.5f} ± {sa * kI:.5f} | {d['chi2']:.2f} | {np.sqrt(np.mean(d['res'] ** 2)) * 1e3:.2f} |")
+    P = rel["pooled"]
+    bP, sbP = P["coef"][3], math.sqrt(P["cov"][3, 3])
+    a(f"| pooled (common slope, intercept per series) | {bP:.4f} ± {sbP:.4f} | {bP / b_pred:.3f} ± {sbP / b_pred:.3f} | "
+      + ", ".join(f"{P['coef'][i]:.5f}" for i in range(3))
+      + f" | {P['coef'][2] * kI:.4f} (20 s) | {P['chi2']:.2f} | {np.sqrt(np.mean(P['res'] ** 2)) * 1e3:.2f} |")
+    PA = rel["pooled_amp"]
+    bA, sbA = PA["coef"][3], math.sqrt(PA["cov"][3, 3])
+    cA, scA = PA["coef"][4], math.sqrt(PA["cov"][4, 4])
+    a(f"| pooled + c·A² (A amplitude in px) | {bA:.4f} ± {sbA:.4f} | {bA / b_pred:.3f} ± {sbA / b_pred:.3f} | "
+      + ", ".join(f"{PA['coef'][i]:.5f}" for i in range(3))
+      + f" | {PA['coef'][2] * kI:.4f} (20 s) | {PA['chi2']:.2f} | {np.sqrt(np.mean(PA['res'] ** 2)) * 1e3:.2f} |")
+    a("")
+    a(f"Amplitude term of the last fit: c = {cA:.2e} ± {scA:.1e} s²/px², i.e. a period "
+      f"{cA * 100 ** 2 / 2 / (PA['coef'][2] + bP * 0.25) * 100:.3f} % longer at A = 100 px than at zero amplitude.")
+    a("")
+    a("![T^2 vs r^2](figures/real_trifilar_T2_r2.png)")
+    a("")
+    a("The intercept gives the inertia of the loaded platform about the axis, "
+      "I_p (which includes the test mass's own inertia about its centre).")
+    a("")
+    m_eff = bP * (M_PLATFORM + M_TEST) * G * R_RIG ** 2 / (4 * math.pi ** 2 * L_WIRE)
+    a("**Interpretation.** With the swing mode fitted out, the period rises monotonically with the "
+      "test-mass radius in all three series, as I = I_p + m r² demands, and T² is linear in r² "
+      f"(rms residual {np.sqrt(np.mean(rel['20s']['res'] ** 2)) * 1e3:.2f}×10⁻³ s² for the 20 s series, "
+      f"i.e. {np.sqrt(np.mean(rel['20s']['res'] ** 2)) / (2 * 1.05) * 1e3:.2f} ms in T; no curvature). "
+      + corr_sentence(rel, bP) + " The measured slope, pooled "
+      f"{bP:.4f} ± {sbP:.4f} s²/m², is {(1 - bP / b_pred) * 100:.0f} % below the prediction "
+      f"{b_pred:.4f} s²/m², a {abs(b_pred - bP) / math.hypot(sbP, sb_pred):.0f}σ difference; read "
+      f"the other way, the slope corresponds to a test mass of {m_eff * 1e3:.1f} g instead of "
+      f"{M_TEST * 1e3:.2f} g, or to L/R² {(1 - bP / b_pred) * 100:.0f} % smaller than the nominal "
+      "0.995 m / (1 m)². The period fits cannot be the cause (their errors are ~10⁻⁴ s, the "
+      f"missing rise of T between r = 0.25 and 0.75 m is {(b_pred - bP) * 0.5 / (2 * 1.06) * 1e3:.1f} ms); the geometry or the test-mass position/mass as used in the "
+      "recordings are the suspects. The χ²/dof above 1 (largest for the long 20 s series, "
+      "whose per-file stds are smallest) says that file-to-file reproducibility (≈ 0.2 ms in T) is "
+      "worse than the per-file statistical std even after the autocorrelation inflation; "
+      + (f"part of it is amplitude dependence (adding c·A² lowers the pooled χ²/dof from {P['chi2']:.2f} to "
+         f"{PA['chi2']:.2f}, with c > 0 as a finite-amplitude pendulum demands)"
+         if cA > 0 and PA["chi2"] < P["chi2"] else "an amplitude term does not explain it")
+      + ". For an inertia measurement, budget ~0.2 ms per recording, not the fit's std.")
+    a("")
+    out.write_text("\n".join(L) + "\n")
+
+
+def corr_sentence(rel, b):
+    """Are the T^2 residuals of two series at the same r alike?"""
+    rho = float(np.corrcoef(rel["10s"]["res"], rel["20s"]["res"])[0, 1])
+    rms = float(np.sqrt(np.mean(rel["20s"]["res"] ** 2)))
+    if rho > 0.5:
+        return (f"The residuals of the 10 s and 20 s series at the same r are correlated ({rho:.2f}): "
+                "something shared by the recordings at one radius, such as the placement of the mass "
+                f"(a {rms / (2 * b * 0.5) * 1e3:.0f} mm radial error at r = 0.5 m would explain the rms "
+                "residual), dominates over noise in the periods.")
+    return (f"The residuals of the 10 s and 20 s series at the same r are not alike (correlation {rho:.2f}), "
+            "so the scatter is recording-to-recording; a misplaced mass shared by the recordings at one "
+            "radius would have shown up in both series.")
+
+
+def cand_k(fit, name):
+    alt = fit.alternatives.get(name)
+    return alt.damping.get("k", float("nan")) if alt is not None else float("nan")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=DEFAULT_DATA, help="shared data folder")
+    ap.add_argument("--out", type=Path, default=REPO / "docs", help="docs folder")
+    args = ap.parse_args(argv)
+    if not args.data.exists():
+        print(f"data folder not found: {args.data}", file=sys.stderr)
+        return 2
+    tic = time.time()
+    figdir = args.out / "figures"
+    figdir.mkdir(parents=True, exist_ok=True)
+    print("gyro ...", flush=True)
+    g = gyro(args.data, figdir)
+    print(f"  {g['fit'].summary()}")
+    print("trifilar ...", flush=True)
+    rows = trifilar(args.data, figdir)
+    rel = trifilar_relation(rows)
+    b_pred, _ = prediction()
+    _plot_relation(rel, b_pred, figdir / "real_trifilar_T2_r2.png")
+    for s in SERIES:
+        print(f"  {s}: slope {rel[s]['coef'][1]:.4f} s^2/m^2 (predicted {b_pred:.4f}), chi2/dof {rel[s]['chi2']:.2f}")
+    runtime = time.time() - tic
+    write_markdown(g, rows, rel, args.out / "real_data.md", runtime)
+    print(f"wrote {args.out / 'real_data.md'} in {runtime:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
