@@ -211,8 +211,7 @@ def simulate(
         if m.period is None:
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
         y0 = initial_state(scene, rest, m, amplitude)
-    lin_T = m.period if m is not None else None
-    T_ref = lin_T or min((x.period for x in modes.modes if x.period), default=1.0)
+    T_ref = (m.period if m is not None else None) or min((x.period for x in modes.modes if x.period), default=1.0)
     if t_end is None:
         t_end = periods * T_ref
     P = mx.params_from_scenes(scene)
@@ -257,18 +256,37 @@ def simulate(
     ts = np.linspace(0.0, t_stop, k + 1)
     Y = sol.sol(ts).T
     Y[:, 0:3] += rest.com
+
+    def state_at(tt: float) -> np.ndarray:
+        yy = sol.sol(tt)[None, :].copy()
+        yy[:, 0:3] += rest.com
+        return yy
+
+    T = mx.tensions(Y, P)
+    if sol.status == 1:
+        warnings.append(f"run stopped at t = {t_stop:.4g} s because a wire went slack")
+    return summarise_run(scene, rest, m, amplitude, ts, Y, T, state_at, viol, drift, "maximal", method, rtol,
+                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings)
+
+
+def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,
+                  T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
+                  atol: float, nfev: int, runtime: float, warnings: list) -> SimulationResult:
+    """Measured period, slack wires, clearance and health of a run, whatever the model.
+
+    ts (k,) s and Y (k, 13) world-frame maximal states at dense samples; T (k, n)
+    tensions, N; ``state_at(t) -> (1, 13)`` the continuous solution (for
+    refining crossings); viol (m) and drift as measured by the caller.
+    """
     rel = relative_pose(Y, rest)
     dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
     c = rel[:, dom]
 
     def fine(tt: float) -> float:
-        yy = sol.sol(tt)[None, :].copy()
-        yy[:, 0:3] += rest.com
-        return float(relative_pose(yy, rest)[0, dom])
+        return float(relative_pose(state_at(tt), rest)[0, dom])
 
     tc = crossings(ts, c, fine)
     period, pstd = measured_period(tc)
-    T = mx.tensions(Y, P)
     slack = []
     for i in range(scene.n_wires):
         neg = np.where(T[:, i] <= 0)[0]
@@ -276,22 +294,20 @@ def simulate(
             slack.append((i + 1, float(ts[neg[0]])))
             warnings.append(f"WIRE {i + 1} GOES SLACK at t = {ts[neg[0]]:.4g} s (tension {T[:, i].min():.3g} N): "
                             "the motion after that is not physical; reduce the amplitude")
-    Rs = np.moveaxis(np.stack([mx.quat_to_matrix(Y[:, 3:7])]), 0, 0)[0]
-    lz = lowest_point_z(scene, Y[:, 0:3], Rs)
-    if sol.status == 1:
-        warnings.append(f"run stopped at t = {t_stop:.4g} s because a wire went slack")
+    lz = lowest_point_z(scene, Y[:, 0:3], mx.quat_to_matrix(Y[:, 3:7]))
+    Lmax = float(np.max(scene.lengths))
     if viol > 1e-6 * Lmax:
         warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
     if period is None:
         warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
     return SimulationResult(
         t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
-        period=period, period_std=pstd, crossings=tc, linear_period=lin_T,
+        period=period, period_std=pstd, crossings=tc, linear_period=m.period if m is not None else None,
         max_constraint_violation=viol, energy_drift=drift,
         tension_min=T.min(axis=0), tension_max=T.max(axis=0), slack=slack,
         lowest_z_min=float(lz.min()), depth_max=float(scene.ceiling_z - lz.min()),
-        mode=m.label if m is not None else None, amplitude=float(amplitude), model="maximal", method=method,
-        rtol=float(rtol), atol=float(np.min(atol_v)), nfev=int(sol.nfev), runtime=runtime, warnings=warnings,
+        mode=m.label if m is not None else None, amplitude=float(amplitude), model=model, method=method,
+        rtol=float(rtol), atol=float(atol), nfev=int(nfev), runtime=runtime, warnings=warnings,
     )
 
 
