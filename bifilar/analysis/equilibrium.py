@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from ..errors import ConvergenceError, SlackWireError, UnstableRestError
+from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestError
 from ..rotations import matrix_to_quat, rotvec_to_matrix, skew
 from ..scene import Scene, lowest_point_z
 
@@ -146,10 +146,13 @@ def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | 
         K[:6, :6] = H
         K[:6, 6:] = G.T
         K[6:, :6] = G
-        try:
-            step = np.linalg.solve(K, -np.concatenate([r1, phi]))
-        except np.linalg.LinAlgError:
-            step = np.linalg.lstsq(K, -np.concatenate([r1, phi]), rcond=None)[0]
+        # solved dimensionless (unknowns dr / L, dtheta, dlam L^2 / (m g); rows force / (m g), moment / (m g L),
+        # phi / L^2), by least squares: the Newton step when K is regular, the minimum-norm step when a
+        # neutral direction (CoM on the attachment line) or dependent wires make it singular
+        Ls = float(np.max(L))
+        cs = np.concatenate([np.full(3, Ls), np.ones(3), np.full(n, force_scale / Ls**2)])
+        rs = np.concatenate([np.full(3, 1 / force_scale), np.full(3, 1 / (force_scale * Ls)), np.full(n, 1 / Ls**2)])
+        step = cs * np.linalg.lstsq(rs[:, None] * K * cs[None, :], -rs * np.concatenate([r1, phi]), rcond=None)[0]
         # damp huge steps (far from the solution)
         dx = step[:6]
         lim = 0.2 * np.max(L)
@@ -178,12 +181,14 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     return N, N.T @ K @ N, N.T @ M @ N, rank
 
 
-def rest_pose(scene: Scene, guess: RestPose | None = None) -> RestPose:
+def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.
 
     ``guess``: the rest pose of a nearby scene (a sweep or finite-difference
     neighbour); Newton starts from it and the global search is skipped when
-    it converges to a taut, stable pose.
+    it converges to a taut, stable pose.  ``local_only``: with a guess, raise
+    :class:`ConvergenceError` instead of falling back to the global search
+    (finite differences want the neighbouring equilibrium or nothing).
 
     Raises
     ------
@@ -199,22 +204,22 @@ def rest_pose(scene: Scene, guess: RestPose | None = None) -> RestPose:
         quick = _from_guess(scene, guess)
         if quick is not None:
             return quick
+        if local_only:
+            raise ConvergenceError("no taut, stable rest pose near the guess")
     com0, R0 = _initial_pose(scene)
     c, R, res, at_bound = _slsqp(scene, com0, R0)
     L = scene.lengths
     d = c + scene.attachments @ R.T - scene.anchors
     stretch = np.linalg.norm(d, axis=1) - L
     tol = 1e-6 * np.max(L)
+    if np.max(stretch) > tol:  # no pose found with every wire within its length
+        _check_reach(scene, c, R, tol)  # InputError if there is none
+        raise ConvergenceError(f"rest pose search failed: {res.message}")
     if at_bound:
         # the body wants to turn over rather than hang in its start orientation
-        raise UnstableRestError(
-            "body",
-            "the body cannot hang stably in its start orientation (it would turn over): "
-            "its centre of mass is above the suspension; move the attachment points above the CoM",
-        )
+        raise UnstableRestError("rig.attachments", "the body cannot hang in its start orientation (it would turn over)"
+                                + _com_height_hint(scene, R0))
     slack = np.where(stretch < -tol)[0]
-    if res.success is False and len(slack) == 0 and np.max(stretch) > tol:
-        raise ConvergenceError(f"rest pose search failed: {res.message}")
     if len(slack):
         _raise_slack(scene, slack, -stretch[slack], L)
     return _finish(scene, *_newton_kkt(scene, c, R))
@@ -248,9 +253,9 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
         ev = np.linalg.eigvalsh(0.5 * (Kr + Kr.T))
         if ev[0] < -1e-9 * max(abs(ev[-1]), 1e-300):
             raise UnstableRestError(
-                "body",
-                f"the rest pose is unstable: a mode has negative stiffness ({ev[0]:.3g}); "
-                "the centre of mass is probably above the suspension",
+                "rig.attachments",
+                "the rest pose is unstable (a mode has negative stiffness: a small push makes the body turn over)"
+                + _com_height_hint(scene, R),
             )
     lz = float(lowest_point_z(scene, c, R))
     return RestPose(
@@ -264,9 +269,46 @@ def _raise_slack(scene: Scene, idx, gap, L, tensions=None):
     for k, i in enumerate(idx):
         if gap is not None:
             parts.append(
-                f"wire {i + 1} is slack at rest by {gap[k] * 1000:.3g} mm: shorten it to {L[i] - gap[k]:.6g} m or less "
-                f"(or lengthen the others) to make it carry load"
+                f"wire {i + 1} is slack at rest by {gap[k] * 1000:.3g} mm: shorten it by that much, to {L[i] - gap[k]:.6g} m "
+                f"(or lengthen the others), so that it carries load"
             )
         else:
-            parts.append(f"wire {i + 1} carries no tension at rest ({tensions[i]:.3g} N): shorten it slightly")
+            parts.append(f"wire {i + 1} carries no tension at rest ({tensions[i]:.3g} N; slack by less than "
+                         f"{1e-3 * np.max(L):.3g} mm): shorten it by a millimetre or so")
     raise SlackWireError([int(i) + 1 for i in idx], "; ".join(parts))
+
+
+def _com_height_hint(scene: Scene, R: np.ndarray) -> str:
+    """Message tail: where the CoM is relative to the attachment points (world z)."""
+    h = -float(np.mean(scene.attachments @ R.T, axis=0)[2])  # CoM height above the attachments' mean, m
+    if h > 0:
+        return (f": the centre of mass is {h:.3g} m above the attachment points (their mean); "
+                "attach the wires above the centre of mass")
+    return (f": the centre of mass is only {-h:.3g} m below the attachment points (their mean), too little for "
+            "this wire layout; attach the wires higher on the body or bring the anchors further apart")
+
+
+def _check_reach(scene: Scene, com: np.ndarray, R: np.ndarray, tol: float) -> None:
+    """Raise :class:`InputError` (``rig.lengths``) if no pose lets every wire
+    reach its attachment point: least squares on the excess max(|d_i| - L_i, 0)
+    (m) from the pose ``com``, ``R``; returns if the excess can vanish."""
+    from scipy.optimize import least_squares
+
+    L = scene.lengths
+    scale = float(np.max(L))
+
+    def excess(x):
+        Rx = rotvec_to_matrix(x[3:]) @ R
+        d = com + scale * x[:3] + scene.attachments @ Rx.T - scene.anchors
+        return np.maximum(np.linalg.norm(d, axis=1) - L, 0.0)
+
+    sol = least_squares(excess, np.zeros(6), xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
+    e = excess(sol.x)
+    if np.max(e) <= tol:
+        return
+    short = [f"wire {i + 1} {e[i]:.3g} m" for i in np.where(e > tol)[0]]
+    raise InputError(
+        "rig.lengths",
+        "the wires cannot all reach their attachment points at once: in the closest pose "
+        + ", ".join(short) + " short; lengthen them or match the anchor layout to the attachment layout",
+    )

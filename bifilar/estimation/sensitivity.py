@@ -134,7 +134,7 @@ def mac_match(base: ModeSet, other: ModeSet) -> np.ndarray:
 
 def periods_of(scene: Scene, base: ModeSet | None = None, guess: RestPose | None = None) -> np.ndarray:
     """Linear periods (s) in the order of ``base``'s modes (NaN for neutral modes)."""
-    rest = rest_pose(scene, guess=guess)
+    rest = rest_pose(scene, guess=guess, local_only=guess is not None)
     ms = linear_modes(scene, rest)
     idx = mac_match(base, ms) if base is not None else np.arange(len(ms.modes))
     return np.array([ms.modes[i].period if ms.modes[i].period else np.nan for i in idx])
@@ -144,7 +144,10 @@ def periods_of(scene: Scene, base: ModeSet | None = None, guess: RestPose | None
 class Sensitivity:
     """dT_k/dx_j for every mode k of ``modes`` and every input j of ``names``.
 
-    periods : (K,) s.  jacobian : (K, J) s per unit of input.
+    periods : (K,) s.  jacobian : (K, J) s per unit of input.  A scene on the
+    edge of stability (CoM exactly on the attachment line, a neutral mode) has
+    inputs whose perturbation one way makes it unable to hang: those are
+    differentiated one-sidedly and listed in ``one_sided``.
     """
 
     names: list[str]
@@ -152,6 +155,8 @@ class Sensitivity:
     jacobian: np.ndarray
     modes: ModeSet
     rest: RestPose
+    one_sided: tuple = ()  # inputs differentiated one-sidedly (one neighbour cannot hang)
+    undefined: tuple = ()  # inputs whose neighbours on both sides cannot hang (column NaN)
 
     def column(self, name: str) -> np.ndarray:
         return self.jacobian[:, self.names.index(name)]
@@ -171,6 +176,8 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
     Jac = np.zeros((len(T0), len(names)))
     Lmax = float(np.max(scene.lengths))
     Imax = float(np.max(np.linalg.eigvalsh(scene.inertia)))
+    one: list[str] = []
+    undef: list[str] = []
     for j, name in enumerate(names):
         if name in _IDX:
             h = rel_step * Imax
@@ -180,10 +187,26 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
             h = rel_step * scene.gravity
         else:
             h = rel_step * Lmax
-        Tp = periods_of(perturb(scene, name, h), ms, rest)
-        Tm = periods_of(perturb(scene, name, -h), ms, rest)
-        Jac[:, j] = (Tp - Tm) / (2 * h)
-    return Sensitivity(names, T0, Jac, ms, rest)
+        Tp = _periods_or_none(perturb(scene, name, h), ms, rest)
+        Tm = _periods_or_none(perturb(scene, name, -h), ms, rest)
+        if Tp is not None and Tm is not None:
+            Jac[:, j] = (Tp - Tm) / (2 * h)
+        elif Tp is not None or Tm is not None:
+            one.append(name)
+            Jac[:, j] = (Tp - T0) / h if Tp is not None else (T0 - Tm) / h
+        else:
+            undef.append(name)
+            Jac[:, j] = np.nan
+    return Sensitivity(names, T0, Jac, ms, rest, tuple(one), tuple(undef))
+
+
+def _periods_or_none(scene: Scene, base: ModeSet, guess: RestPose):
+    from ..errors import BifilarError
+
+    try:
+        return periods_of(scene, base, guess)
+    except BifilarError:
+        return None
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,275 @@
+"""`bifilar invert`: moments of inertia from measured periods, with the
+ladder of estimators and the uncertainty budget (docs/invert.md)."""
+
+from __future__ import annotations
+
+import click
+
+from .common import check_output_path, console, emit_json, fmt, handle_errors, progress_bar
+
+@click.command("invert")
+@click.argument("config", required=False, type=click.Path(dir_okay=False))
+@click.option("--period", "periods", multiple=True, metavar="LABEL=SECONDS[+-SIGMA]",
+              help="Measured period of a mode (label or 1-based index); repeatable.  Without +-SIGMA the "
+                   "default timing uncertainty is used.")
+@click.option("--timed", multiple=True, metavar="LABEL=CYCLES:T1,T2,...",
+              help="Timed trials: CYCLES cycles took T1, T2, ... s (e.g. torsion=10:26.81,26.79,26.84); repeatable.")
+@click.option("--signal", "signals", multiple=True, metavar="LABEL=PATH",
+              help="A recording of the mode's oscillation (CSV or .mat, see `bifilar period`); repeatable.")
+@click.option("--column", default=None, help="Signal column / MAT variable (default: first non-time one).")
+@click.option("--sample-rate", default=None, help="Signal sample rate, Hz (when the file has no time column).")
+@click.option("--signal-model", default="auto", show_default=True,
+              help="Signal fit model: viscous, quadratic, two_mode or auto.")
+@click.option("--signal-quantity", default="other", show_default=True,
+              help="What the signal is: angle (the mode's coordinate), rate (its derivative) or other; "
+                   "angle and rate give the amplitude from the fit.")
+@click.option("--signal-scale", default=None, help="Multiplier taking the signal to rad (or m), e.g. 0.0174533 for degrees.")
+@click.option("--amplitude", "amplitudes", multiple=True, metavar="[LABEL=]A[+-SIGMA]",
+              help="Oscillation amplitude (A times the mode's normalised shape, as for `simulate`); "
+                   "without LABEL it applies to every mode.")
+@click.option("--cycles", default=None, help="Cycles the nonlinear method simulates for --period measurements (default 10).")
+@click.option("--solve-for", "solve_for", multiple=True, metavar="COMPONENT",
+              help="Ixx Iyy Izz Ixy Ixz Iyz (body axes) or com.x com.y com.z; repeatable.  Default: per mode, "
+                   "the component its period is most sensitive to.")
+@click.option("--method", default=None, help="auto (default), small-angle, thesis, linear or nonlinear.")
+@click.option("--uncertainty", "uncertainty", multiple=True, metavar="KEY=VALUE",
+              help="Override an assumed input uncertainty: length, position, com (m), mass, amplitude (relative), "
+                   "timing, trial_time (s); repeatable.")
+@click.option("--monte-carlo", "monte_carlo", default=None, metavar="N",
+              help="Check the linear uncertainty with N Monte Carlo re-estimates on the full model.")
+@click.option("--seed", default=None, help="Random seed of the Monte Carlo draws.")
+@click.option("--measurements", "measurements", type=click.Path(dir_okay=False), default=None,
+              help="Measurements YAML file (several modes, hangings, recordings; docs/invert.md).")
+@click.option("--no-ladder", is_flag=True, help="Only the chosen method (skip the comparison).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
+@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+              help="Period-vs-inertia curves with the measurement marked (PNG/PDF/SVG); signal fits go to "
+                   "FILE's name + .fit-LABEL.")
+@click.option("--force", is_flag=True, help="Replace existing --plot files.")
+@handle_errors
+def invert(config, periods, timed, signals, column, sample_rate, signal_model, signal_quantity, signal_scale,
+           amplitudes, cycles, solve_for, method, uncertainty, monte_carlo, seed, measurements, no_ladder, as_json,
+           plot, force):
+    """Estimate inertia components of CONFIG's body from measured periods."""
+    from pathlib import Path
+
+    from ..errors import InputError
+    from ..estimation import measurements as mm
+
+    if method is not None and method not in mm.METHOD_NAMES:
+        raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
+    n_mc = _int(monte_carlo, "--monte-carlo", minimum=0)
+    seed_v = _int(seed, "--seed")
+    cyc = _float(cycles, "--cycles", positive=True)
+    sr = _float(sample_rate, "--sample-rate", positive=True)
+    scale = _float(signal_scale, "--signal-scale", positive=True)
+    if signal_quantity not in ("angle", "rate", "other"):
+        raise InputError("--signal-quantity", f"must be angle, rate or other, got {signal_quantity!r}")
+    unc = mm.parse_uncertainty_overrides(uncertainty)
+    amps = mm.parse_amplitudes(amplitudes)
+    bad = [s for s in solve_for if s not in mm.SOLVABLE]
+    if bad:
+        raise InputError("--solve-for", f"unknown component {bad[0]!r}; choose from {', '.join(mm.SOLVABLE)}")
+    # parse the simple specs before any work
+    p_specs = [mm.parse_period_spec(s) for s in periods]
+    t_specs = [mm.parse_timed_spec(s) for s in timed]
+    s_specs = [mm.split_label(s, "--signal", "torsion=recording.csv") for s in signals]
+    plot_p = check_output_path(plot, force, [config, measurements], "--plot")
+    if config is None and measurements is None:
+        raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
+    if measurements is not None:
+        ms = mm.load_measurements(measurements, config_override=config)
+    else:
+        from ..config import load_scene
+
+        scene = load_scene(config)
+        ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config))
+    merged = dict(unc)
+    ms.uncertainty = {**ms.uncertainty, **merged}
+    for label, T, s in p_specs:
+        ms.measurements.append(mm.Measurement(label, T, s if s is not None else mm.default_uncertainty(ms.uncertainty)["timing"],
+                                              "period", "--period", cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
+                                              std_given=s is not None))
+    for label, n, times in t_specs:
+        T, s, det = mm.period_from_trials(n, times, None, ms.uncertainty)
+        ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
+                                              details=det))
+    for label, path in s_specs:
+        ms.measurements.append(mm.signal_measurement(label, path, "--signal", column=column, sample_rate=sr,
+                                                     model=signal_model, quantity=signal_quantity, scale=scale))
+    if not ms.measurements:
+        raise InputError("--period", "no measurement: give --period, --timed or --signal (or --measurements FILE)")
+    _apply_amplitudes(ms, amps)
+    fit_paths = {}
+    if plot_p is not None:
+        for k, m in enumerate(ms.measurements):
+            if m.fit is not None:
+                q = plot_p.with_name(f"{plot_p.stem}.fit-{_safe(m.label)}-{k + 1}{plot_p.suffix or '.png'}")
+                fit_paths[k] = check_output_path(str(q), force, [config, measurements], "--plot")
+    from ..estimation.invert import invert as run, plot_inversion
+
+    slow = bool(n_mc or ms.monte_carlo) or any(m.amplitude for m in ms.measurements)
+    with progress_bar("inverting", enabled=slow) as upd:
+        res = run(ms, method=method, solve_for=list(solve_for) or None, unc=unc, monte_carlo=n_mc, seed=seed_v,
+                  ladder=not no_ladder, progress=upd)
+    if plot_p is not None:
+        from .common import atomic_write
+
+        atomic_write(plot_p, lambda tmp: plot_inversion(res, tmp))
+        from ..estimation.signal import plot_fit
+
+        for k, q in fit_paths.items():
+            m = ms.measurements[k]
+            atomic_write(q, lambda tmp, m=m: plot_fit(m.fit, m.signal[0], m.signal[1], tmp,
+                                                       title=f"{m.label}: {Path(str(m.details['signal']['path'])).name}"))
+    if as_json:
+        doc = res.to_json()
+        doc["scene"] = {"name": ms.hangings[0].scene.name, "source": ms.source}
+        if plot_p is not None:
+            doc["plots"] = [str(plot_p)] + [str(q) for q in fit_paths.values()]
+        emit_json(doc)
+        for w in res.warnings:
+            click.echo(f"warning: {w}", err=True)
+        return
+    _render(ms, res)
+
+
+def _eye():
+    import numpy as np
+
+    return np.eye(3)
+
+
+def _safe(label: str) -> str:
+    import re
+
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", label)
+
+
+def _int(v, name, minimum=None):
+    from ..errors import InputError
+
+    if v is None:
+        return None
+    try:
+        x = int(str(v))
+    except ValueError:
+        raise InputError(name, f"must be an integer, got {v!r}") from None
+    if minimum is not None and x < minimum:
+        raise InputError(name, f"must be >= {minimum}, got {x}")
+    return x
+
+
+def _float(v, name, positive=False):
+    import math
+
+    from ..errors import InputError
+
+    if v is None:
+        return None
+    try:
+        x = float(v)
+    except ValueError:
+        raise InputError(name, f"must be a number, got {v!r}") from None
+    if not math.isfinite(x) or (positive and x <= 0):
+        raise InputError(name, f"must be a {'positive ' if positive else ''}finite number, got {v!r}")
+    return x
+
+
+def _apply_amplitudes(ms, amps: dict) -> None:
+    from ..errors import InputError
+
+    labels = {m.label for m in ms.measurements}
+    for lab in amps:
+        if lab is not None and lab not in labels:
+            raise InputError("--amplitude", f"no measurement of mode '{lab}' (measured: {', '.join(sorted(labels))})")
+    for m in ms.measurements:
+        spec = amps.get(m.label, amps.get(None))
+        if spec is not None and (m.amplitude is None or m.label in amps):
+            m.amplitude, m.amplitude_std = spec
+
+
+def _render(ms, res) -> None:
+    from rich.table import Table
+
+    con = console()
+    names = ", ".join(h.scene.name for h in ms.hangings)
+    con.print(f"[bold]{names}[/bold]: {len(res.measurements)} period(s), method [bold]{res.method}[/bold] "
+              f"({res.to_json()['method_description']})")
+    t = Table(title="Estimate (reference body axes)")
+    for c in ("unknown", "estimate", "std", "rel. std", "95 % interval"):
+        t.add_column(c, justify="left" if c == "unknown" else "right")
+    mc = res.monte_carlo
+    if mc is not None:
+        t.add_column("Monte Carlo std", justify="right")
+    for i, n in enumerate(res.names):
+        v, s = res.values[i], res.std[i]
+        unit = "kg m^2" if n.startswith("I") else "m"
+        row = [f"{n} ({unit})", fmt(float(v), 8), fmt(float(s), 3), f"{s / abs(v):.2%}" if v else "-",
+               f"{v - 1.96 * s:.6g} .. {v + 1.96 * s:.6g}"]
+        if mc is not None:
+            row.append(f"{mc.std[i]:.3g} (x{mc.ratio[i]:.2f})" if mc.n_ok > 1 else "-")
+        t.add_row(*row)
+    con.print(t)
+    if len(res.ladder) > 1:
+        lt = Table(title="Ladder of estimators (what the simpler methods cost)")
+        multi = len(res.names) > 1
+        cols = ("method",) + (("unknown",) if multi else ()) + ("estimate", "vs best", "in std", "note")
+        for c in cols:
+            lt.add_column(c, justify="right" if c in ("estimate", "vs best", "in std") else "left")
+        for r in res.ladder:
+            mark = " *" if r["method"] == res.method else ""
+            if not r["applicable"]:
+                lt.add_row(r["method"], *(("-",) if multi else ()), "-", "-", "-", f"n/a: {r['note']}")
+                continue
+            note = r.get("note") or ""
+            if r.get("thesis_table"):
+                tt = r["thesis_table"]
+                note += (f" (thesis Table 7.1.1: {tt['thesis_value']} vs analytic {tt['analytic']}, "
+                         f"{tt['thesis_relative_error']:+.2%})")
+            for j, n in enumerate(res.names):
+                rel = r["relative_difference"][n]
+                ins = r["difference_in_std"][n]
+                lt.add_row(r["method"] + mark if j == 0 else "", *((n,) if multi else ()), fmt(r["values"][n], 8),
+                           f"{rel:+.3%}" if rel is not None else "-", f"{ins:+.2f}" if ins is not None else "-",
+                           note if j == 0 else "")
+        con.print(lt)
+    for i, n in enumerate(res.names):
+        bt = Table(title=f"Uncertainty budget of {n} (linear propagation)")
+        bt.add_column("source")
+        bt.add_column("share of variance", justify="right")
+        bt.add_column("std contribution", justify="right")
+        for g, (sh, c) in res.budget.grouped(i).items():
+            bt.add_row(g, f"{sh:.1%}", fmt(c, 3))
+        sh = res.budget.shares(i)
+        top = sorted(sh, key=lambda k: -sh[k])[:3]
+        bt.caption = "largest single inputs: " + ", ".join(f"{k} {sh[k]:.1%}" for k in top)
+        con.print(bt)
+    if len(res.names) > 1:
+        ct = Table(title="Correlation of the estimates")
+        ct.add_column("")
+        for n in res.names:
+            ct.add_column(n, justify="right")
+        C = res.budget.correlation
+        for i, n in enumerate(res.names):
+            ct.add_row(n, *[f"{C[i, j]:+.3f}" for j in range(len(res.names))])
+        con.print(ct)
+    mt = Table(title="Measurements (periods: undamped, as the model must reproduce them)")
+    several = len(ms.hangings) > 1
+    for c in (("hanging",) if several else ()) + ("mode", "source", "period (s)", "std (s)", "amplitude",
+                                                   "model (s)", "resid/std"):
+        mt.add_column(c, justify="left" if c in ("hanging", "mode", "source") else "right")
+    doc = res.to_json()
+    for m, r in zip(res.measurements, doc["residuals"]):
+        mt.add_row(*((r["hanging"],) if several else ()), m.label,
+                   m.source + (f" (zeta {m.damping_ratio:.3g})" if m.damping_ratio else ""),
+                   fmt(m.period, 9), fmt(m.std, 3), fmt(m.amplitude, 4), fmt(r["model"], 9),
+                   f"{r['normalised_residual']:+.2f}")
+    con.print(mt)
+    u = res.uncertainty
+    con.print("assumed standard uncertainties: " + "; ".join(f"{k} {v['value']:g} {v['unit'].split(' ')[0]}"
+                                                          for k, v in u.items()))
+    for n in res.notes:
+        con.print(f"[dim]note: {n}[/dim]")
+    for w in res.warnings:
+        con.print(f"[bold red]WARNING:[/bold red] {w}")

@@ -1,0 +1,644 @@
+"""Measured periods: command-line specs, timed trials, recorded signals and
+the measurements YAML file of ``bifilar invert --measurements``.
+
+SI units: periods and times in s, amplitudes in the unit of the mode's
+dominant coordinate (rad for rotations, m for swings), as for
+``bifilar simulate --amplitude``.
+
+Measurements file (YAML)
+------------------------
+One hanging::
+
+    config: thesis_lin1_torsion.yaml   # path relative to this file, or an inline config mapping
+    solve_for: [Izz]                   # optional; inertia components and/or com.x, com.y, com.z
+    method: auto                       # optional: auto, small-angle, thesis, linear, nonlinear
+    monte_carlo: 200                   # optional: number of Monte Carlo draws (0 = off)
+    seed: 1                            # optional
+    uncertainty:                       # optional overrides (units: see uncertainty.UNCERTAINTY_KEYS)
+      length: 0.001
+    measurements:
+      - mode: torsion                  # mode label or 1-based index
+        period: 2.6823 +- 0.0004       # s; or period: 2.6823 with std: 0.0004
+        amplitude: 0.0393              # optional, rad or m (+- sigma allowed)
+      - mode: swing-y
+        cycles: 10                     # timed trials: N cycles in each total time
+        times: [29.55, 29.57, 29.56]   # s
+        time_std: 0.05                 # optional, s per trial (default: the trials' scatter)
+      - mode: pitch
+        signal: pitch.csv              # a recording (CSV with t/time, or .mat)
+        column: angle                  # optional, as for ``bifilar period``
+        sample_rate: 240               # optional, Hz
+        quantity: angle                # angle | rate | other (amplitude from the fit if angle/rate)
+        scale: 0.0174533               # optional: multiplies the signal to rad (or m)
+        model: auto                    # viscous | quadratic | two_mode | auto
+
+Several hangings (the body re-hung in other orientations)::
+
+    hangings:
+      - name: flat
+        config: flat.yaml
+        measurements: [...]
+      - name: on-edge
+        config: edge.yaml
+        rotation: {axis: [1, 0, 0], angle_deg: 90}
+        measurements: [...]
+
+``rotation`` maps components in the reference body frame (the first
+hanging's) to this hanging's body frame: ``v_h = R v_ref``, so the inertia
+tensor in the hanging's frame is ``R I_ref R^T``.  It is a 3x3 matrix, the
+word ``identity``, ``{axis: [x, y, z], angle_deg: a}`` (or ``angle`` in rad),
+``{rotvec_deg: [...]}`` / ``{rotvec: [...]}``, or a list of elementary
+rotations about the fixed axes applied in order, e.g. ``[{x: 90}, {z: 45}]``
+(degrees).  The inertia of every hanging's config after the first is
+ignored: it follows from the reference inertia and the rotation.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigErrors, InputError
+from .sensitivity import INERTIA_COMPONENTS
+from .uncertainty import UNCERTAINTY_KEYS, default_uncertainty
+
+#: the rungs of the ladder of estimators, simplest first (see invert.py)
+METHODS = ("small-angle", "thesis", "linear", "nonlinear")
+METHOD_NAMES = ("auto",) + METHODS
+COM_UNKNOWNS = ("com.x", "com.y", "com.z")
+#: what --solve-for accepts: inertia components (body axes) and the CoM position
+SOLVABLE = INERTIA_COMPONENTS + COM_UNKNOWNS
+#: cycles simulated by the nonlinear method when a measurement does not say
+DEFAULT_CYCLES = 10
+#: the nonlinear method simulates at most this many cycles per measurement
+MAX_SIM_CYCLES = 20
+
+
+@dataclass
+class Measurement:
+    """One measured period of one mode of one hanging.
+
+    label : mode label or 1-based index (as given).
+    period : s, the undamped period the model must reproduce (a signal's
+        damped period divided by ``1/sqrt(1 - zeta^2)``).
+    std : s, its standard uncertainty.
+    source : ``period``, ``timed`` or ``signal``.
+    field : the command-line option or file field it came from (for errors).
+    amplitude, amplitude_std : rad or m (None when unknown).
+    cycles : cycles timed (length of the nonlinear simulation).
+    observed_period : s, before the damping correction.
+    damping_ratio : from a signal fit (None otherwise).
+    """
+
+    label: str
+    period: float
+    std: float
+    source: str
+    field: str
+    hanging: int = 0
+    amplitude: float | None = None
+    amplitude_std: float | None = None
+    cycles: float = DEFAULT_CYCLES
+    observed_period: float | None = None
+    damping_ratio: float | None = None
+    std_given: bool = True
+    details: dict = field(default_factory=dict)
+    fit: Any = field(default=None, repr=False)
+    signal: Any = field(default=None, repr=False)  # (t, y) of a recording, for plots
+
+    def to_json(self) -> dict:
+        d = {"mode": self.label, "hanging": self.hanging, "source": self.source, "period": self.period,
+             "std": self.std, "std_given": self.std_given, "amplitude": self.amplitude,
+             "amplitude_std": self.amplitude_std, "cycles": self.cycles}
+        if self.observed_period is not None:
+            d["observed_period"] = self.observed_period
+        if self.damping_ratio is not None:
+            d["damping_ratio"] = self.damping_ratio
+        d.update(self.details)
+        return d
+
+
+@dataclass
+class Hanging:
+    """One way of hanging the body: its scene and the rotation ``R`` from
+    the reference body frame to this scene's body frame (``v_h = R v_ref``)."""
+
+    name: str
+    scene: Any
+    rotation: np.ndarray
+    source: str = ""
+
+
+@dataclass
+class MeasurementSet:
+    """Everything ``bifilar invert`` needs besides the options."""
+
+    hangings: list
+    measurements: list
+    solve_for: list | None = None
+    method: str = "auto"
+    uncertainty: dict = field(default_factory=dict)
+    monte_carlo: int = 0
+    seed: int | None = None
+    source: str = ""
+    notes: list = field(default_factory=list)
+
+
+# ---------------------------------------------------------------------------
+# small parsers (command line and file share them)
+# ---------------------------------------------------------------------------
+
+_PM = re.compile(r"\s*(?:\+-|\+/-|±)\s*")
+
+
+def parse_value_sigma(text: Any, fld: str, what: str = "value") -> tuple[float, float | None]:
+    """``"2.68"``, ``"2.68+-0.001"``, ``"2.68 ± 0.001"`` or a number -> (value, sigma or None)."""
+    if isinstance(text, bool):
+        raise InputError(fld, f"expected a number, got {text!r}")
+    if isinstance(text, (int, float)):
+        return float(text), None
+    s = str(text).strip()
+    parts = _PM.split(s)
+    if len(parts) > 2 or not parts[0]:
+        raise InputError(fld, f"expected {what}[+-SIGMA], got {s!r}")
+    try:
+        v = float(parts[0])
+        sg = float(parts[1]) if len(parts) == 2 else None
+    except ValueError:
+        raise InputError(fld, f"expected {what}[+-SIGMA] with numbers, got {s!r}") from None
+    if not math.isfinite(v) or (sg is not None and not math.isfinite(sg)):
+        raise InputError(fld, f"must be finite, got {s!r}")
+    if sg is not None and sg < 0:
+        raise InputError(fld, f"the uncertainty after +- must not be negative, got {s!r}")
+    return v, sg
+
+
+def split_label(text: str, fld: str, example: str) -> tuple[str, str]:
+    """``LABEL=REST`` -> (label, rest)."""
+    if "=" not in str(text):
+        raise InputError(fld, f"expected LABEL=..., e.g. {example}; got {text!r}")
+    label, rest = str(text).split("=", 1)
+    label, rest = label.strip(), rest.strip()
+    if not label or not rest:
+        raise InputError(fld, f"expected LABEL=..., e.g. {example}; got {text!r}")
+    return label, rest
+
+
+def parse_period_spec(text: str, fld: str = "--period") -> tuple[str, float, float | None]:
+    """``LABEL=SECONDS[+-SIGMA]`` -> (label, period s, sigma s or None)."""
+    label, rest = split_label(text, fld, "torsion=2.681+-0.001")
+    T, s = parse_value_sigma(rest, fld, "SECONDS")
+    if T <= 0:
+        raise InputError(fld, f"the period must be positive, got {T:g} s in {text!r}")
+    if s is not None and s == 0:
+        raise InputError(fld, f"a zero uncertainty cannot be weighted; give a positive SIGMA or none in {text!r}")
+    return label, T, s
+
+
+_TIMED = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(?:cycles?|periods?|x)?\s*(?::|@|in)\s*(.+)$", re.I)
+
+
+def parse_times(text: Any, fld: str) -> list[float]:
+    """``"26.81 s, 26.79 s, 26.84"`` or a list -> [s, ...]."""
+    items = text if isinstance(text, (list, tuple)) else re.split(r"[,;\s]+", str(text).strip())
+    out = []
+    for it in items:
+        if isinstance(it, str):
+            it = it.strip()
+            if it in ("", "s"):
+                continue
+            it = re.sub(r"\s*s$", "", it)
+        try:
+            v = float(it)
+        except (TypeError, ValueError):
+            raise InputError(fld, f"not a time in seconds: {it!r}") from None
+        if not (math.isfinite(v) and v > 0):
+            raise InputError(fld, f"times must be positive, got {it!r}")
+        out.append(v)
+    if not out:
+        raise InputError(fld, "no times given")
+    return out
+
+
+def parse_timed_spec(text: str, fld: str = "--timed") -> tuple[str, float, list[float]]:
+    """``LABEL=N:T1,T2,...`` (or ``LABEL=10 cycles in 26.81 s, 26.79 s``) ->
+    (label, cycles, [total time of each trial, s])."""
+    label, rest = split_label(text, fld, "torsion=10:26.81,26.79,26.84")
+    m = _TIMED.match(rest)
+    if not m:
+        raise InputError(fld, f"expected LABEL=CYCLES:T1,T2,... (e.g. torsion=10:26.81,26.79), got {text!r}")
+    n = float(m.group(1))
+    if n <= 0:
+        raise InputError(fld, f"the number of cycles must be positive, got {m.group(1)}")
+    return label, n, parse_times(m.group(2), fld)
+
+
+def parse_amplitudes(specs: list[str] | tuple, fld: str = "--amplitude") -> dict:
+    """``["0.05"]`` (every mode) or ``["torsion=0.05+-0.005", ...]`` -> {label or None: (A, sigma or None)}."""
+    out: dict = {}
+    for s in specs or ():
+        if "=" in s:
+            label, rest = split_label(s, fld, "torsion=0.05")
+        else:
+            label, rest = None, s
+        A, sg = parse_value_sigma(rest, fld, "AMPLITUDE")
+        if A < 0:
+            raise InputError(fld, f"the amplitude must not be negative, got {s!r}")
+        if label in out:
+            raise InputError(fld, f"amplitude for {'every mode' if label is None else label} given twice")
+        out[label] = (A, sg)
+    return out
+
+
+def parse_uncertainty_overrides(specs, fld: str = "--uncertainty") -> dict:
+    """``["length=0.0005", "mass=0.002"]`` or a mapping -> {key: value}."""
+    items = specs.items() if isinstance(specs, dict) else [split_label(s, fld, "length=0.0005") for s in specs or ()]
+    out = {}
+    for k, v in items:
+        sub = f"{fld}.{k}" if isinstance(specs, dict) else fld
+        if k not in UNCERTAINTY_KEYS:
+            raise InputError(sub, f"unknown uncertainty {k!r}; known: {', '.join(UNCERTAINTY_KEYS)}")
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise InputError(sub, f"{k} must be a number ({UNCERTAINTY_KEYS[k]}), got {v!r}") from None
+        if not (math.isfinite(x) and x >= 0):
+            raise InputError(sub, f"{k} must be a non-negative number ({UNCERTAINTY_KEYS[k]}), got {v!r}")
+        out[k] = x
+    return out
+
+
+def period_from_trials(cycles: float, times: list[float], time_std: float | None = None,
+                       unc: dict | None = None) -> tuple[float, float, dict]:
+    """Period and its standard uncertainty from trials of ``cycles`` cycles.
+
+    T = mean(times) / cycles.  Each trial's total time has the standard
+    uncertainty ``time_std`` if given, else the sample std of the trials
+    (Type A, n >= 2), else ``trial_time`` of the assumed uncertainties
+    (0.1 s: a hand-timed start and stop).  sigma_T = sigma_trial / (sqrt(n) cycles).
+    """
+    u = default_uncertainty(unc)
+    t = np.asarray(times, float)
+    n = t.size
+    T = float(t.mean() / cycles)
+    if time_std is not None:
+        s, how = float(time_std), "given"
+    elif n >= 2:
+        s, how = float(t.std(ddof=1)), "scatter of the trials"
+    else:
+        s, how = float(u["trial_time"]), "assumed (one trial)"
+    if s <= 0:
+        s, how = float(u["trial_time"]) if n < 2 else 1e-3 * float(t.mean()), "floor (identical trials)"
+    sigma = s / math.sqrt(n) / cycles
+    det = {"cycles": cycles, "times": [float(x) for x in t], "trial_std": s, "trial_std_source": how,
+           "trial_periods": [float(x / cycles) for x in t]}
+    return T, sigma, det
+
+
+def period_from_signal(path, *, column=None, sample_rate=None, model: str = "auto", quantity: str = "other",
+                       scale: float | None = None, t_start=None, t_stop=None, trim=None, fld: str = "--signal"):
+    """Fit a recorded oscillation (:mod:`bifilar.estimation.signal`).
+
+    Returns a dict: ``period`` (s, undamped: the fitted damped period times
+    ``sqrt(1 - zeta^2)``), ``std`` (s, including the damping ratio's
+    uncertainty), ``observed_period``, ``damping_ratio``, ``amplitude``
+    (rad or m, None unless ``quantity`` is ``angle`` or ``rate``),
+    ``cycles``, ``fit``, ``t``, ``y``, ``meta``.
+
+    The amplitude of a decaying recording is the energy-weighted RMS of the
+    fitted envelope over the fit window, ``sqrt(sum A^4 / sum A^2)`` (the
+    frequency of a least-squares fit is weighted by the squared amplitude),
+    times ``scale``; for ``rate`` it is further divided by omega.
+    """
+    from .signal import SignalError, fit_period, read_signal
+
+    if quantity not in ("angle", "rate", "other"):
+        raise InputError(fld, f"quantity must be angle, rate or other, got {quantity!r}")
+    try:
+        t, y, meta = read_signal(path, column=column, sample_rate=sample_rate)
+        fit = fit_period(t, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
+    except SignalError as exc:
+        raise InputError(f"{fld} ({exc.field})", exc.message) from None
+    Td = float(fit.period)
+    zeta = float(fit.damping_ratio) if np.isfinite(fit.damping_ratio) else 0.0
+    zstd = 0.0
+    if fit.modes:
+        zstd = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
+        zstd = zstd if np.isfinite(zstd) else 0.0
+    zeta = min(max(zeta, 0.0), 0.999)
+    c = math.sqrt(1.0 - zeta * zeta)
+    Tn = Td * c
+    std = math.hypot(c * float(fit.std), Td * zeta / c * zstd)
+    amp = None
+    if quantity != "other" and fit.model != "crossings":
+        env = np.abs(fit.envelope(fit.t_used))
+        a_eff = float(np.sqrt(np.sum(env**4) / np.sum(env**2))) if np.sum(env**2) > 0 else 0.0
+        a_eff *= 1.0 if scale is None else float(scale)
+        if quantity == "rate":
+            a_eff /= 2 * math.pi / Td
+        amp = a_eff
+    cycles = max((fit.t1 - fit.t0) / Td, 1.0)
+    return {"period": Tn, "std": std, "observed_period": Td, "damping_ratio": zeta, "amplitude": amp,
+            "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta}
+
+
+def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_std=None, hanging: int = 0,
+                       **kw) -> Measurement:
+    """A :class:`Measurement` from a recording (see :func:`period_from_signal`)."""
+    r = period_from_signal(path, fld=fld, **kw)
+    fit = r["fit"]
+    amp = amplitude if amplitude is not None else r["amplitude"]
+    meta = {k: v for k, v in r["meta"].items() if k in ("path", "column", "n_samples", "sample_rate", "duration",
+                                                         "time_source", "warnings")}
+    meta["path"] = str(meta.get("path", path))
+    det = {"signal": meta, "fit": {"model": fit.model, "period": fit.period, "std": fit.std,
+                                    "damping_ratio": fit.damping_ratio, "r_squared": fit.r_squared,
+                                    "window": [fit.t0, fit.t1], "notes": list(fit.notes)},
+           "amplitude_source": ("given" if amplitude is not None else
+                                ("fit (energy-weighted envelope)" if r["amplitude"] is not None else None))}
+    return Measurement(label, r["period"], r["std"], "signal", fld, hanging=hanging, amplitude=amp,
+                       amplitude_std=amplitude_std, cycles=min(r["cycles"], MAX_SIM_CYCLES),
+                       observed_period=r["observed_period"], damping_ratio=r["damping_ratio"], std_given=True,
+                       details=det, fit=fit, signal=(r["t"], r["y"]))
+
+
+# ---------------------------------------------------------------------------
+# rotations
+# ---------------------------------------------------------------------------
+
+def parse_rotation(spec: Any, fld: str) -> np.ndarray:
+    """A rotation spec (module docstring) -> proper orthogonal 3x3 matrix."""
+    from ..rotations import rotvec_to_matrix
+
+    if spec is None or (isinstance(spec, str) and spec.strip().lower() == "identity"):
+        return np.eye(3)
+    if isinstance(spec, dict):
+        keys = set(spec)
+        if "axis" in keys:
+            extra = keys - {"axis", "angle_deg", "angle"}
+            if extra or len(keys & {"angle_deg", "angle"}) != 1:
+                raise InputError(fld, "axis-angle form is {axis: [x, y, z], angle_deg: A} (or angle: A in rad)")
+            ax = _vec3(spec["axis"], f"{fld}.axis")
+            nrm = np.linalg.norm(ax)
+            if nrm == 0:
+                raise InputError(f"{fld}.axis", "must not be zero")
+            ang = _num(spec.get("angle_deg", spec.get("angle")), f"{fld}.angle")
+            ang = math.radians(ang) if "angle_deg" in spec else ang
+            return rotvec_to_matrix(ax / nrm * ang)
+        if keys == {"rotvec_deg"}:
+            return rotvec_to_matrix(np.radians(_vec3(spec["rotvec_deg"], f"{fld}.rotvec_deg")))
+        if keys == {"rotvec"}:
+            return rotvec_to_matrix(_vec3(spec["rotvec"], f"{fld}.rotvec"))
+        raise InputError(fld, f"unknown rotation form {sorted(keys)}; use axis/angle_deg, rotvec_deg, a matrix or a list")
+    if isinstance(spec, (list, tuple)) and spec and all(isinstance(e, dict) for e in spec):
+        R = np.eye(3)
+        for i, e in enumerate(spec):
+            if len(e) != 1 or next(iter(e)) not in ("x", "y", "z"):
+                raise InputError(f"{fld}.{i}", "each elementary rotation is {x: DEG}, {y: DEG} or {z: DEG}")
+            (axn, deg), = e.items()
+            v = np.zeros(3)
+            v["xyz".index(axn)] = math.radians(_num(deg, f"{fld}.{i}.{axn}"))
+            R = rotvec_to_matrix(v) @ R
+        return R
+    if isinstance(spec, (list, tuple)) and len(spec) == 3:
+        try:
+            R = np.array(spec, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(fld, "a rotation matrix must be 3 rows of 3 numbers") from None
+        if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+            raise InputError(fld, "a rotation matrix must be 3 rows of 3 finite numbers")
+        err = float(np.max(np.abs(R @ R.T - np.eye(3))))
+        if err > 1e-6 or np.linalg.det(R) < 0:
+            raise InputError(fld, f"not a rotation (R R^T - 1 = {err:.2g}, det {np.linalg.det(R):.3g}); "
+                                  "give a proper orthogonal matrix")
+        U, _, Vt = np.linalg.svd(R)
+        return U @ Vt
+    raise InputError(fld, "a rotation is 'identity', a 3x3 matrix, {axis, angle_deg}, {rotvec_deg} or a list like [{x: 90}]")
+
+
+def _num(v, fld) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+        raise InputError(fld, f"must be a finite number, got {v!r}")
+    return float(v)
+
+
+def _vec3(v, fld) -> np.ndarray:
+    if not isinstance(v, (list, tuple)) or len(v) != 3:
+        raise InputError(fld, f"must be a list of 3 numbers, got {v!r}")
+    return np.array([_num(x, f"{fld}.{i}") for i, x in enumerate(v)])
+
+
+# ---------------------------------------------------------------------------
+# the measurements file
+# ---------------------------------------------------------------------------
+
+_TOP = {"name", "description", "config", "measurements", "hangings", "solve_for", "method", "monte_carlo",
+        "seed", "uncertainty"}
+_HANG = {"name", "config", "rotation", "measurements", "description"}
+_MEAS = {"mode", "period", "std", "cycles", "times", "time_std", "signal", "column", "sample_rate", "quantity",
+         "scale", "model", "t_start", "t_stop", "trim", "amplitude", "amplitude_std", "note"}
+
+
+def load_measurements(path, config_override: str | None = None) -> MeasurementSet:
+    """Read and validate a measurements file (module docstring); every
+    problem is reported at once (:class:`~bifilar.errors.ConfigErrors`),
+    fields named by their dotted path in the file.
+
+    ``config_override``: a config path given on the command line, used when
+    the file names none (a single-hanging file)."""
+    from ..config import read_yaml
+
+    p = Path(path)
+    try:
+        doc = read_yaml(p)
+    except ConfigErrors as exc:
+        raise ConfigErrors([InputError(f"--measurements {e.field}", e.message) for e in exc.errors]) from None
+    except InputError as exc:
+        raise InputError("--measurements", exc.message) from None
+    errs: list[InputError] = []
+    if not isinstance(doc, dict):
+        raise InputError("--measurements", f"{p} must be a YAML mapping (see docs/invert.md)")
+    for k in doc:
+        if k not in _TOP:
+            errs.append(InputError(str(k), f"unknown key; expected one of {', '.join(sorted(_TOP))}"))
+    base = p.parent
+    unc = {}
+    if "uncertainty" in doc:
+        try:
+            if not isinstance(doc["uncertainty"], dict):
+                raise InputError("uncertainty", "must be a mapping like {length: 0.001}")
+            unc = parse_uncertainty_overrides(doc["uncertainty"], "uncertainty")
+        except InputError as exc:
+            errs.append(exc)
+    ms = MeasurementSet([], [], source=str(p), uncertainty=unc)
+    if "method" in doc:
+        if doc["method"] not in METHOD_NAMES:
+            errs.append(InputError("method", f"must be one of {', '.join(METHOD_NAMES)}, got {doc['method']!r}"))
+        else:
+            ms.method = doc["method"]
+    if "monte_carlo" in doc:
+        v = doc["monte_carlo"]
+        if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            errs.append(InputError("monte_carlo", f"must be a non-negative integer, got {v!r}"))
+        else:
+            ms.monte_carlo = v
+    if "seed" in doc:
+        v = doc["seed"]
+        if isinstance(v, bool) or not isinstance(v, int):
+            errs.append(InputError("seed", f"must be an integer, got {v!r}"))
+        else:
+            ms.seed = v
+    if "solve_for" in doc:
+        sf = doc["solve_for"]
+        sf = [sf] if isinstance(sf, str) else sf
+        if not isinstance(sf, list) or not sf:
+            errs.append(InputError("solve_for", "must be a component or a list of them"))
+        else:
+            bad = [s for s in sf if s not in SOLVABLE]
+            if bad:
+                errs.append(InputError("solve_for", f"unknown {bad}; choose from {', '.join(SOLVABLE)}"))
+            else:
+                ms.solve_for = list(dict.fromkeys(sf))
+    if "hangings" in doc:
+        if "measurements" in doc or "config" in doc:
+            errs.append(InputError("hangings", "give either config + measurements or hangings, not both"))
+        if config_override is not None:
+            errs.append(InputError("CONFIG", "the measurements file defines hangings with their own configs; "
+                                             "drop CONFIG from the command line"))
+        hs = doc["hangings"]
+        if not isinstance(hs, list) or not hs:
+            errs.append(InputError("hangings", "must be a non-empty list"))
+            hs = []
+        for i, h in enumerate(hs):
+            fh = f"hangings.{i}"
+            if not isinstance(h, dict):
+                errs.append(InputError(fh, "must be a mapping with config and measurements"))
+                continue
+            for k in h:
+                if k not in _HANG:
+                    errs.append(InputError(f"{fh}.{k}", f"unknown key; expected one of {', '.join(sorted(_HANG))}"))
+            _hanging(ms, h.get("config"), h.get("rotation"), h.get("name") or f"hanging {i + 1}",
+                     h.get("measurements"), fh, base, errs, unc)
+    else:
+        cfg = doc.get("config")
+        if cfg is None:
+            cfg = config_override
+            if cfg is None:
+                errs.append(InputError("config", "missing: name the scene config (or give CONFIG on the command line)"))
+        elif config_override is not None:
+            errs.append(InputError("config", "the file names a config and so does the command line; give one"))
+        if cfg is not None:
+            _hanging(ms, cfg, None, doc.get("name") or "reference", doc.get("measurements", []), "", base, errs, unc,
+                     cli_config=config_override is not None and doc.get("config") is None)
+    if errs:
+        raise ConfigErrors(errs)
+    return ms
+
+
+def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs: list, unc: dict,
+             cli_config: bool = False) -> None:
+    from ..config import load_scene, scene_from_dict
+
+    pre = f"{fh}." if fh else ""
+    scene = None
+    try:
+        if isinstance(cfg, dict):
+            scene = scene_from_dict(cfg, source=f"{ms.source}:{pre}config")
+        elif isinstance(cfg, str):
+            cp = Path(cfg) if (cli_config or Path(cfg).is_absolute()) else base / cfg
+            scene = load_scene(cp)
+        else:
+            errs.append(InputError(f"{pre}config", "must be a config file path or an inline config mapping"))
+    except ConfigErrors as exc:
+        errs.extend(InputError(f"{pre}config.{e.field}", e.message) for e in exc.errors)
+    except InputError as exc:
+        errs.append(InputError(f"{pre}config", exc.message))
+    try:
+        R = parse_rotation(rot, f"{pre}rotation")
+    except InputError as exc:
+        errs.append(exc)
+        R = np.eye(3)
+    h_index = len(ms.hangings)
+    if scene is not None:
+        ms.hangings.append(Hanging(str(name), scene, R, str(cfg) if isinstance(cfg, str) else "inline"))
+    if meas is None:
+        meas = []
+    if not isinstance(meas, list):
+        errs.append(InputError(f"{pre}measurements", "must be a list of measurements"))
+        return
+    if not meas:
+        errs.append(InputError(f"{pre}measurements", "no measurements given"))
+    for j, m in enumerate(meas):
+        fm = f"{pre}measurements.{j}"
+        try:
+            mm = _measurement(m, fm, base, unc)
+            mm.hanging = h_index
+            ms.measurements.append(mm)
+        except ConfigErrors as exc:
+            errs.extend(exc.errors)
+        except InputError as exc:
+            errs.append(exc)
+
+
+def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:
+    if not isinstance(m, dict):
+        raise InputError(fm, "must be a mapping with mode and one of period, times, signal")
+    bad = [InputError(f"{fm}.{k}", f"unknown key; expected one of {', '.join(sorted(_MEAS))}") for k in m if k not in _MEAS]
+    if bad:
+        raise ConfigErrors(bad)
+    if "mode" not in m:
+        raise InputError(f"{fm}.mode", "missing: the mode label (torsion, swing-x, ...) or its 1-based index")
+    label = str(m["mode"])
+    kinds = [k for k in ("period", "times", "signal") if k in m]
+    if len(kinds) != 1:
+        raise InputError(fm, "give exactly one of period, times (with cycles) or signal")
+    amp = amp_s = None
+    if "amplitude" in m:
+        amp, amp_s = parse_value_sigma(m["amplitude"], f"{fm}.amplitude", "AMPLITUDE")
+        if amp < 0:
+            raise InputError(f"{fm}.amplitude", "must not be negative")
+    if "amplitude_std" in m:
+        amp_s = _num(m["amplitude_std"], f"{fm}.amplitude_std")
+    cycles = m.get("cycles")
+    if cycles is not None:
+        cycles = _num(cycles, f"{fm}.cycles")
+        if cycles <= 0:
+            raise InputError(f"{fm}.cycles", "must be positive")
+    kind = kinds[0]
+    if kind == "period":
+        T, s = parse_value_sigma(m["period"], f"{fm}.period", "SECONDS")
+        if "std" in m:
+            if s is not None:
+                raise InputError(f"{fm}.std", "given twice (also after +- in period)")
+            s = _num(m["std"], f"{fm}.std")
+        if T <= 0:
+            raise InputError(f"{fm}.period", f"must be positive, got {T:g}")
+        if s is not None and s <= 0:
+            raise InputError(f"{fm}.std", "must be positive")
+        given = s is not None
+        s = s if given else default_uncertainty(unc)["timing"]
+        return Measurement(label, T, s, "period", f"{fm}.period", amplitude=amp, amplitude_std=amp_s,
+                           cycles=min(cycles or DEFAULT_CYCLES, MAX_SIM_CYCLES), std_given=given)
+    if kind == "times":
+        if cycles is None:
+            raise InputError(f"{fm}.cycles", "missing: how many cycles each time covers")
+        times = parse_times(m["times"], f"{fm}.times")
+        ts = _num(m["time_std"], f"{fm}.time_std") if "time_std" in m else None
+        T, s, det = period_from_trials(cycles, times, ts, unc)
+        return Measurement(label, T, s, "timed", f"{fm}.times", amplitude=amp, amplitude_std=amp_s,
+                           cycles=min(cycles, MAX_SIM_CYCLES), std_given=True, details=det)
+    sig = m["signal"]
+    if not isinstance(sig, str):
+        raise InputError(f"{fm}.signal", "must be a file path")
+    sp = Path(sig) if Path(sig).is_absolute() else base / sig
+    kw = {k: m[k] for k in ("column", "sample_rate", "t_start", "t_stop", "trim") if k in m}
+    if "column" in kw:
+        kw["column"] = str(kw["column"])
+    return signal_measurement(label, sp, f"{fm}.signal", amplitude=amp, amplitude_std=amp_s,
+                              model=m.get("model", "auto"), quantity=m.get("quantity", "other"),
+                              scale=m.get("scale"), **kw)

@@ -1,0 +1,366 @@
+"""Uncertainty of inertia estimates: linear propagation and Monte Carlo.
+
+Linear propagation
+------------------
+An estimate ``p`` (inertia components, optionally CoM coordinates) solves the
+weighted least-squares problem ``min sum_k w_k (T_k(p, x) - T_k^meas)^2``
+with ``w_k = 1 / sigma_k^2`` (one equation per measured period ``k``; with as
+many periods as unknowns it is the exact solution ``T(p, x) = T^meas``).  To
+first order
+
+    dp = G (dT^meas - J_x dx),     G = (J_p^T W J_p)^-1 J_p^T W,
+
+with ``J_p = dT/dp`` (K x P) and ``J_x = dT/dx`` (K x J) the period
+sensitivities to the unknowns and to every measured input ``x`` (wire
+lengths, anchor and attachment coordinates, mass, CoM position; see
+:mod:`bifilar.estimation.sensitivity` for the names).  Each independent
+input ``j`` with standard uncertainty ``s_j`` contributes the vector
+``c_j = -G J_x[:, j] s_j`` (kg m^2) and each period ``k`` the vector
+``G[:, k] sigma_k``; the covariance of ``p`` is ``sum c c^T`` and the share
+of input ``j`` in the variance of ``p_i`` is ``c_ji^2 / var(p_i)``.  For one
+period and one unknown this is exactly
+:func:`bifilar.estimation.sensitivity.inertia_budget`.
+
+Degenerate scenes
+-----------------
+A body whose CoM lies on the line through two attachment points (the
+thesis's thin plate) has a neutral mode: moving an attachment point by a
+micrometre makes it turn over.  Central differences then fail on one or both
+sides; :func:`input_jacobian` falls back to a second-order one-sided
+difference and, if both sides fail, reports the input as *degenerate* and
+leaves it out of the budget (the outputs say so).
+
+Monte Carlo
+-----------
+:func:`draw_scene` draws a scene whose measured inputs are perturbed by
+independent normal errors with the standard uncertainties of
+:data:`~bifilar.estimation.sensitivity.DEFAULT_UNCERTAINTY` (or overrides);
+the inversion module re-estimates on each draw with the full (not
+linearised) model and compares the spread with the linear result.
+
+Units: SI (m, kg, s, kg m^2).  Positions: anchors in the world frame,
+attachments and the CoM shift in the body frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..analysis.equilibrium import RestPose, _from_guess, rest_pose
+from ..analysis.modes import ModeSet, linear_modes
+from ..errors import BifilarError, UnstableRestError
+from ..scene import Scene
+from .sensitivity import (
+    DEFAULT_UNCERTAINTY,
+    INERTIA_COMPONENTS,
+    Sensitivity,
+    input_sigma,
+    mac_match,
+    measured_inputs,
+    perturb,
+)
+
+#: default standard uncertainty of the oscillation amplitude, relative
+DEFAULT_AMPLITUDE_REL = 0.10
+#: default standard uncertainty of one trial's total time when a single
+#: hand-timed trial is given (reaction time at start and stop), s
+DEFAULT_TRIAL_TIME_SIGMA = 0.1
+
+#: every key an uncertainty override may set, with its unit
+UNCERTAINTY_KEYS = {
+    "length": "m (each wire length)",
+    "position": "m (each coordinate of every anchor and attachment point)",
+    "mass": "relative (fraction of the mass)",
+    "com": "m (each coordinate of the CoM relative to the attachments)",
+    "gravity": "relative",
+    "timing": "s (one period given without +-SIGMA)",
+    "amplitude": "relative (fraction of the amplitude)",
+    "trial_time": "s (total time of a single timed trial)",
+}
+
+#: budget groups, in display order
+GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "model bias")
+
+
+def default_uncertainty(overrides: dict | None = None) -> dict:
+    """The assumed standard uncertainties (see :data:`UNCERTAINTY_KEYS` for units)."""
+    u = dict(DEFAULT_UNCERTAINTY)
+    u.setdefault("amplitude", DEFAULT_AMPLITUDE_REL)
+    u.setdefault("trial_time", DEFAULT_TRIAL_TIME_SIGMA)
+    u.update(overrides or {})
+    return u
+
+
+def group_of(name: str) -> str:
+    """Budget group of an input name: ``timing``, ``lengths``, ``spacings``
+    (anchor and attachment coordinates), ``mass``, ``com``, ``gravity``,
+    ``amplitude`` or ``model bias``.  Inputs may carry a hanging prefix
+    (``"<hanging>:length.1"``); per-measurement terms a bracketed suffix
+    (``timing[<hanging>:torsion]``)."""
+    head = name.split("[", 1)[0]
+    if head in ("timing", "amplitude", "model bias"):
+        return head
+    head = name.split(":", 1)[-1].split(".")[0]
+    return {"length": "lengths", "anchor": "spacings", "attachment": "spacings"}.get(head, head)
+
+
+# ---------------------------------------------------------------------------
+# sensitivities that survive degenerate scenes
+# ---------------------------------------------------------------------------
+
+def _step(scene: Scene, name: str, rel_step: float) -> float:
+    """Finite-difference step for input ``name`` (as in sensitivity.period_sensitivity)."""
+    if name in INERTIA_COMPONENTS:
+        return rel_step * float(np.max(np.linalg.eigvalsh(scene.inertia)))
+    if name == "mass":
+        return rel_step * scene.mass
+    if name == "gravity":
+        return rel_step * scene.gravity
+    return rel_step * float(np.max(scene.lengths))
+
+
+def _neighbour_periods(scene: Scene, base: ModeSet, rest: RestPose, degenerate: bool) -> np.ndarray:
+    """Linear periods of a finite-difference neighbour in ``base``'s mode order
+    (as :func:`~bifilar.estimation.sensitivity.periods_of`).  Newton from the
+    base rest pose converges for any neighbour of a regular scene; for a
+    degenerate base (a neutral mode) a failure means the neighbour cannot
+    hang near the base pose, and the slow global search is skipped."""
+    r = _from_guess(scene, rest)
+    if r is None:
+        if degenerate:
+            raise UnstableRestError("body", "the neighbouring scene does not hang near the base pose")
+        r = rest_pose(scene, guess=rest)
+    ms = linear_modes(scene, r)
+    idx = mac_match(base, ms)
+    return np.array([ms.modes[i].period if ms.modes[i].period else np.nan for i in idx])
+
+
+def input_jacobian(scene: Scene, names: list[str], rest: RestPose, modes: ModeSet,
+                   rel_step: float = 1e-6, scheme: str = "central") -> tuple[np.ndarray, list[str]]:
+    """dT_k/dx_j (K x J, s per SI unit of the input) for the modes of ``modes``
+    (in that order, tracked by MAC), by finite differences with the steps of
+    :func:`~bifilar.estimation.sensitivity.period_sensitivity`.
+
+    ``scheme="central"``: ``(T(h) - T(-h)) / 2h`` (error ~h^2, about 1e-10
+    relative); ``"forward"``: ``(T(h) - T(0)) / h`` at half the cost (error
+    ~h, about 1e-6 relative: ample for an uncertainty budget).  Where one
+    side cannot hang (a degenerate scene, see the module docstring) the
+    other side is used (central: the second-order one-sided formula
+    ``(-3 T(0) + 4 T(h) - T(2h)) / 2h``); where both fail the column is NaN
+    and the name is returned in the second value.
+    """
+    if scheme not in ("central", "forward"):
+        raise ValueError(f"unknown scheme {scheme!r}")
+    T0 = np.array([m.period if m.period else np.nan for m in modes.modes])
+    degenerate = bool(np.any(np.isnan(T0)))
+    J = np.full((len(T0), len(names)), np.nan)
+    failed = []
+
+    def periods(name, d):
+        try:
+            return _neighbour_periods(perturb(scene, name, d), modes, rest, degenerate)
+        except BifilarError:
+            return None
+
+    for j, name in enumerate(names):
+        h = _step(scene, name, rel_step)
+        if scheme == "forward":
+            for side in (1, -1):
+                Tp = periods(name, side * h)
+                if Tp is not None:
+                    J[:, j] = (Tp - T0) / (side * h)
+                    break
+            else:
+                failed.append(name)
+            continue
+        vals = {k: periods(name, k * h) for k in (1, -1)}
+        if vals[1] is not None and vals[-1] is not None:
+            J[:, j] = (vals[1] - vals[-1]) / (2 * h)
+            continue
+        side = 1 if vals[1] is not None else (-1 if vals[-1] is not None else 0)
+        T2 = periods(name, 2 * side * h) if side else None
+        if T2 is not None:
+            J[:, j] = side * (-3 * T0 + 4 * vals[side] - T2) / (2 * h)
+        else:
+            failed.append(name)
+    return J, failed
+
+
+def robust_sensitivity(scene: Scene, rest: RestPose, modes: ModeSet, names: list[str] | None = None,
+                       rel_step: float = 1e-6, scheme: str = "central") -> tuple[Sensitivity, list[str]]:
+    """A :class:`~bifilar.estimation.sensitivity.Sensitivity` over ``names``
+    (default: the six inertia components and every measured input) that
+    survives degenerate scenes; inputs whose derivative does not exist are
+    dropped from it and returned as the second value."""
+    names = list(names if names is not None else list(INERTIA_COMPONENTS) + measured_inputs(scene))
+    J, failed = input_jacobian(scene, names, rest, modes, rel_step, scheme)
+    keep = [j for j, n in enumerate(names) if n not in failed]
+    T0 = np.array([m.period if m.period else np.nan for m in modes.modes])
+    return Sensitivity([names[j] for j in keep], T0, J[:, keep], modes, rest), failed
+
+
+# ---------------------------------------------------------------------------
+# linear propagation
+# ---------------------------------------------------------------------------
+
+@dataclass
+class LinearBudget:
+    """Linear uncertainty of the unknowns ``names`` (see module docstring).
+
+    covariance : (P, P) in SI units squared.  std : (P,).
+    contributions : {input: (P,) signed standard contribution c_j}.
+    sigmas : {input: its standard uncertainty s_j (SI)}.
+    """
+
+    names: list[str]
+    covariance: np.ndarray
+    contributions: dict
+    sigmas: dict = field(default_factory=dict)
+
+    @property
+    def std(self) -> np.ndarray:
+        return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
+
+    @property
+    def correlation(self) -> np.ndarray:
+        s = self.std
+        with np.errstate(invalid="ignore", divide="ignore"):
+            c = self.covariance / np.outer(s, s)
+        c[~np.isfinite(c)] = 0.0
+        np.fill_diagonal(c, 1.0)
+        return c
+
+    def shares(self, i: int) -> dict:
+        """{input: fraction of var(p_i)}."""
+        var = self.covariance[i, i]
+        return {k: (float(c[i] ** 2 / var) if var > 0 else 0.0) for k, c in self.contributions.items()}
+
+    def grouped(self, i: int) -> dict:
+        """{group: (share of var(p_i), standard contribution)} over :data:`GROUPS`."""
+        out: dict[str, list] = {}
+        var = self.covariance[i, i]
+        for k, c in self.contributions.items():
+            g = group_of(k)
+            out.setdefault(g, [0.0, 0.0])
+            out[g][1] += float(c[i] ** 2)
+        res = {}
+        for g in GROUPS + tuple(sorted(set(out) - set(GROUPS))):
+            if g in out:
+                res[g] = (out[g][1] / var if var > 0 else 0.0, float(np.sqrt(out[g][1])))
+        return res
+
+
+def gain_matrix(Jp: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """G = (J_p^T W J_p)^-1 J_p^T W with W = diag(1/sigma^2): dp = G dT."""
+    W = 1.0 / np.asarray(sigma, float) ** 2
+    A = Jp.T @ (W[:, None] * Jp)
+    return np.linalg.solve(A, Jp.T * W[None, :])
+
+
+def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np.ndarray,
+              input_names: list[str], input_sigmas: np.ndarray, extra: dict | None = None,
+              timing_names: list[str] | None = None) -> LinearBudget:
+    """Linear propagation (module docstring).
+
+    Parameters
+    ----------
+    names : the P unknowns.
+    Jp : (K, P) dT/dp, s per unit.
+    period_sigma : (K,) standard uncertainty of each measured period, s.
+    Jx : (K, J) dT/dx, s per unit of each input.
+    input_names, input_sigmas : the J inputs and their standard uncertainties.
+    extra : {name: (P,) signed contribution} added as independent terms
+        (amplitude effects computed elsewhere, model bias).
+    timing_names : names of the K timing terms (default ``timing[k]``).
+    """
+    Jp = np.atleast_2d(np.asarray(Jp, float))
+    K = Jp.shape[0]
+    sig = np.asarray(period_sigma, float)
+    G = gain_matrix(Jp, sig)
+    contrib: dict[str, np.ndarray] = {}
+    sigmas: dict[str, float] = {}
+    tn = timing_names or [f"timing[{k}]" for k in range(K)]
+    for k in range(K):
+        contrib[tn[k]] = G[:, k] * sig[k]
+        sigmas[tn[k]] = float(sig[k])
+    for j, n in enumerate(input_names):
+        s = float(input_sigmas[j])
+        if s > 0:
+            contrib[n] = -(G @ Jx[:, j]) * s
+            sigmas[n] = s
+    for n, c in (extra or {}).items():
+        contrib[n] = np.asarray(c, float).reshape(len(names))
+    P = len(names)
+    cov = np.zeros((P, P))
+    for c in contrib.values():
+        cov += np.outer(c, c)
+    return LinearBudget(list(names), cov, contrib, sigmas)
+
+
+# ---------------------------------------------------------------------------
+# Monte Carlo draws
+# ---------------------------------------------------------------------------
+
+def perturb_many(scene: Scene, deltas: dict) -> Scene:
+    """``scene`` with every input in ``deltas`` ({name: delta, SI}) changed."""
+    for name, d in deltas.items():
+        if d:
+            scene = perturb(scene, name, float(d))
+    return scene
+
+
+def draw_deltas(scene: Scene, names: list[str], rng: np.random.Generator, unc: dict | None = None) -> dict:
+    """Independent normal errors {name: delta} for inputs ``names`` with the
+    standard uncertainties :func:`~bifilar.estimation.sensitivity.input_sigma`."""
+    u = default_uncertainty(unc)
+    return {n: float(rng.normal(0.0, input_sigma(scene, n, u))) for n in names}
+
+
+@dataclass
+class MonteCarloSummary:
+    """Spread of ``n_ok`` re-estimates of each unknown (SI units).
+
+    mean, std, low, high (2.5 % and 97.5 % quantiles) : (P,).
+    linear_std : (P,) the linear propagation's std, for comparison;
+    ratio = std / linear_std.  failed : draws whose inversion failed.
+    """
+
+    names: list[str]
+    n: int
+    n_ok: int
+    mean: np.ndarray
+    std: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+    linear_std: np.ndarray
+    failed: int
+    samples: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def ratio(self) -> np.ndarray:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return self.std / self.linear_std
+
+    def to_json(self) -> dict:
+        return {
+            "draws": self.n, "ok": self.n_ok, "failed": self.failed,
+            "estimates": {n: {"mean": float(self.mean[i]), "std": float(self.std[i]),
+                              "interval_95": [float(self.low[i]), float(self.high[i])],
+                              "std_ratio_to_linear": float(self.ratio[i])}
+                          for i, n in enumerate(self.names)},
+        }
+
+
+def summarise(names: list[str], samples: np.ndarray, linear_std: np.ndarray, n: int) -> MonteCarloSummary:
+    """Summary statistics of Monte Carlo re-estimates ``samples`` (n_ok, P)."""
+    S = np.asarray(samples, float).reshape(-1, len(names))
+    if S.shape[0] < 2:
+        nan = np.full(len(names), np.nan)
+        return MonteCarloSummary(list(names), n, S.shape[0], nan, nan, nan, nan, np.asarray(linear_std), n - S.shape[0], S)
+    return MonteCarloSummary(
+        list(names), n, S.shape[0], S.mean(axis=0), S.std(axis=0, ddof=1),
+        np.quantile(S, 0.025, axis=0), np.quantile(S, 0.975, axis=0), np.asarray(linear_std, float),
+        n - S.shape[0], S,
+    )

@@ -1,0 +1,255 @@
+"""`bifilar invert` and `bifilar period` on the command line: the JSON of
+interface.md, exit status 2 with one line naming the argument for bad input,
+plots, the measurements file, and the start-up-excluded run time of the
+exact linear method."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from bifilar.analysis.equilibrium import rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.cli import main
+from bifilar.config import load_scene
+
+from conftest import CONFIGS, SHARED
+
+LIN1 = CONFIGS / "thesis_lin1_torsion.yaml"
+LIN2 = CONFIGS / "thesis_lin2_pitch.yaml"
+PLATE = CONFIGS / "thesis_plate_rest.yaml"
+I_B1 = 100 * (25 + 6.25) / 12
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def lines(text):
+    return [ln for ln in text.splitlines() if ln.strip()]
+
+
+def linear_period(cfg, mode):
+    s = load_scene(cfg, warn=False)
+    return linear_modes(s, rest_pose(s)).get(mode).period
+
+
+def test_invert_json_per_interface():
+    T = linear_period(LIN2, "torsion")
+    r = run("invert", LIN2, "--period", f"torsion={T!r}+-0.001", "--json")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)  # exactly one JSON document on stdout
+    assert set(doc["inertia"]) == {"Izz"}  # picked: the component torsion is most sensitive to
+    # noise-free linear period -> the config's inertia (1e-9: root finder stops at 1e-12 in T)
+    assert doc["inertia"]["Izz"]["value"] == pytest.approx(I_B1, rel=1e-9)
+    assert doc["inertia"]["Izz"]["std"] > 0
+    assert doc["method"] == "linear"
+    assert [row["method"] for row in doc["ladder"]] == ["small-angle", "thesis", "linear"]
+    shares = doc["budget"]["Izz"]["groups"]
+    assert sum(g["share"] for g in shares.values()) == pytest.approx(1.0, rel=1e-12)
+    assert doc["assumed_uncertainty"]["length"]["value"] == 1e-3
+
+
+def test_solve_for_repeats_and_several_periods():
+    s = load_scene(LIN2, warn=False)
+    ms = linear_modes(s, rest_pose(s))
+    args = []
+    for m in ("torsion", "pitch", "swing-y"):
+        args += ["--period", f"{m}={ms.get(m).period!r}+-0.0005"]
+    r = run("invert", LIN2, *args, "--solve-for", "Izz", "--solve-for", "Iyy", "--solve-for", "Ixx", "--json")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    want = {"Ixx": 100 * 25 / 12, "Iyy": 100 * 6.25 / 12, "Izz": I_B1}
+    for n, v in want.items():  # noise-free periods: Gauss-Newton to 1e-9
+        assert doc["inertia"][n]["value"] == pytest.approx(v, rel=1e-9)
+    C = np.array(doc["correlation"]["matrix"])
+    assert doc["correlation"]["names"] == ["Ixx", "Iyy", "Izz"] and C.shape == (3, 3)
+
+
+def test_timed_trials_and_uncertainty_override():
+    r = run("invert", LIN2, "--timed", "torsion=10:19.05,19.06,19.04", "--uncertainty", "mass=0.01", "--json")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    m = doc["measurements"][0]
+    assert m["source"] == "timed" and m["period"] == pytest.approx(1.905, rel=1e-12)
+    assert m["std"] == pytest.approx(0.01 / math.sqrt(3) / 10, rel=1e-12)
+    assert doc["assumed_uncertainty"]["mass"]["value"] == 0.01
+    # a 1 % mass uncertainty dominates the torsion estimate (I ~ m T^2)
+    assert doc["budget"]["Izz"]["groups"]["mass"]["share"] > 0.5
+
+
+@pytest.mark.parametrize("args,field", [
+    (["--period", "wobble=2.0"], "--period"),
+    (["--period", "torsion"], "--period"),
+    (["--period", "torsion=fast"], "--period"),
+    (["--period", "torsion=-2"], "--period"),
+    (["--period", "torsion=2+-"], "--period"),
+    (["--period", "swing-x=10"], "--period"),  # no inertia makes the swing last 10 s
+    (["--period", "torsion=1.9", "--solve-for", "Iww"], "--solve-for"),
+    (["--period", "torsion=1.9", "--method", "best"], "--method"),
+    (["--period", "torsion=1.9", "--amplitude", "pitch=0.1"], "--amplitude"),
+    (["--period", "torsion=1.9", "--monte-carlo", "many"], "--monte-carlo"),
+    (["--period", "torsion=1.9", "--uncertainty", "colour=1"], "--uncertainty"),
+    (["--period", "pitch=1.9", "--method", "small-angle"], "--method"),  # not torsion
+    ([], "--period"),
+])
+def test_bad_input_exit_2_one_line(args, field):
+    r = run("invert", LIN2, *args)
+    assert r.exit_code == 2, (r.stdout, r.stderr)
+    ls = lines(r.stderr)
+    assert len(ls) == 1 and ls[0].startswith(f"error: {field}"), ls
+    assert r.stdout == ""
+
+
+def test_unreachable_period_says_the_achievable_range():
+    r = run("invert", LIN2, "--period", "swing-x=10", "--solve-for", "Iyy")
+    assert r.exit_code == 2
+    assert "range over" in r.stderr and " s .. " in r.stderr
+
+
+def test_method_forced_and_nonlinear_needs_amplitude():
+    T = linear_period(PLATE, "torsion")
+    r = run("invert", PLATE, "--period", f"torsion={T!r}", "--method", "small-angle", "--json")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    # inclined wires: the formula gives b'/b = 1/2 of the truth, and the
+    # budget carries the difference from the best rung as model bias
+    assert doc["method"] == "small-angle"
+    assert doc["inertia"]["Izz"]["value"] == pytest.approx(I_B1 / 2, rel=1e-9)
+    assert doc["budget"]["Izz"]["groups"]["model bias"]["share"] > 0.99
+    r = run("invert", PLATE, "--period", f"torsion={T!r}", "--method", "nonlinear")
+    assert r.exit_code == 2 and "--method" in r.stderr and "amplitude" in r.stderr
+
+
+def test_plot_files_and_force(tmp_path):
+    T = linear_period(LIN2, "torsion")
+    out = tmp_path / "curve.png"
+    r = run("invert", LIN2, "--period", f"torsion={T!r}", "--plot", out)
+    assert r.exit_code == 0, r.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    r = run("invert", LIN2, "--period", f"torsion={T!r}", "--plot", out)
+    assert r.exit_code == 2 and "--force" in r.stderr
+    r = run("invert", LIN2, "--period", f"torsion={T!r}", "--plot", LIN2, "--force")
+    assert r.exit_code == 2 and "input" in r.stderr
+
+
+def test_measurements_file_and_signal(tmp_path):
+    # a recorded torsion of the thesis plate (CoM 0.5 m below CD): a damped
+    # cosine whose undamped period is the model's linear period at the truth
+    T = linear_period(LIN2, "torsion")
+    zeta, fs = 0.01, 50.0
+    wn = 2 * math.pi / T
+    wd = wn * math.sqrt(1 - zeta**2)
+    t = np.arange(0, 60, 1 / fs)
+    y = 0.01 * np.exp(-zeta * wn * t) * np.cos(wd * t) + np.random.default_rng(1).normal(0, 1e-5, t.size)
+    rec = tmp_path / "torsion.csv"
+    np.savetxt(rec, np.column_stack([t, y]), delimiter=",", header="time,angle", comments="")
+    mfile = tmp_path / "m.yaml"
+    mfile.write_text(f"config: {LIN2}\nmeasurements:\n  - mode: torsion\n    signal: torsion.csv\n"
+                     "    quantity: angle\n    model: viscous\n")
+    r = run("invert", "--measurements", mfile, "--json", "--plot", tmp_path / "p.png")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    m = doc["measurements"][0]
+    assert m["source"] == "signal" and m["damping_ratio"] == pytest.approx(zeta, rel=0.05)
+    # the damping is removed before inverting: the truth within 3 std
+    Izz = doc["inertia"]["Izz"]
+    assert abs(Izz["value"] - I_B1) < 3 * Izz["std"]
+    assert doc["method"] == "nonlinear"  # the fit gave the amplitude (quantity: angle)
+    assert len(doc["plots"]) == 2 and all(Path(p).exists() for p in doc["plots"])
+    # CLI --signal gives the same period as the file
+    r2 = run("invert", LIN2, "--signal", f"torsion={rec}", "--signal-model", "viscous", "--json")
+    assert r2.exit_code == 0, r2.stderr
+    assert json.loads(r2.stdout)["measurements"][0]["period"] == pytest.approx(m["period"], rel=1e-12)
+
+
+def test_measurements_file_errors_name_fields(tmp_path):
+    f = tmp_path / "m.yaml"
+    f.write_text(f"config: {LIN2}\nmeasurements:\n  - mode: torsion\n    period: soon\n")
+    r = run("invert", "--measurements", f)
+    assert r.exit_code == 2
+    assert lines(r.stderr) == ["error: measurements.0.period: expected SECONDS[+-SIGMA] with numbers, got 'soon'"]
+
+
+def test_example_measurements_file_cli():
+    r = run("invert", "--measurements", CONFIGS / "measurements_example.yaml", "--no-ladder")
+    assert r.exit_code == 0, r.stderr
+    for word in ("Ixx", "Iyy", "Izz", "Correlation", "budget", "assumed standard uncertainties"):
+        assert word in r.stdout
+
+
+def test_linear_inversion_is_fast():
+    # issue: < 100 ms after start-up for the exact linear method.  Timed in
+    # process (imports excluded) as the best of 3 in CPU time (other jobs on a
+    # shared machine do not count); the bound has a 3x margin for slow CI
+    # machines (a fall-back to the global rest-pose search per finite
+    # difference, which this guards against, costs ~2 s).
+    T = linear_period(LIN1, "torsion")
+    args = ["invert", str(LIN1), "--period", f"torsion={T!r}+-0.001", "--json"]
+    CliRunner().invoke(main, args)
+    best = math.inf
+    for _ in range(3):
+        t0 = time.process_time()
+        r = CliRunner().invoke(main, args)
+        best = min(best, time.process_time() - t0)
+        assert r.exit_code == 0
+    assert best < 0.3, best
+
+
+# --------------------------------------------------------------------------- bifilar period
+
+
+def test_period_json_per_interface(tmp_path):
+    T_d, zeta = 1.4811, 0.001
+    wd = 2 * math.pi / T_d
+    wn = wd / math.sqrt(1 - zeta**2)
+    t = np.arange(0, 30, 0.01)
+    y = np.exp(-zeta * wn * t) * np.sin(wd * t) + np.random.default_rng(2).normal(0, 1e-3, t.size)
+    f = tmp_path / "sig.csv"
+    np.savetxt(f, np.column_stack([t, y]), delimiter=",", header="t,gyro", comments="")
+    r = run("period", f, "--json", "--model", "viscous", "--plot", tmp_path / "fit.png")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert list(doc)[:3] == ["period", "std", "damping_ratio"]
+    assert abs(doc["period"] - T_d) < 5 * doc["std"]  # the fit's own std is the yardstick
+    assert doc["damping_ratio"] == pytest.approx(zeta, abs=5e-4)
+    assert (tmp_path / "fit.png").exists()
+    # --sample-rate instead of the time column gives the same fit
+    r2 = run("period", f, "--json", "--model", "viscous", "--sample-rate", "100", "--column", "gyro")
+    assert json.loads(r2.stdout)["period"] == pytest.approx(doc["period"], rel=1e-9)
+
+
+@pytest.mark.parametrize("args,field", [
+    (["--model", "magic"], "--model"),
+    (["--sample-rate", "fast"], "--sample-rate"),
+    (["--column", "nope"], "--column"),
+])
+def test_period_bad_input(tmp_path, args, field):
+    f = tmp_path / "sig.csv"
+    t = np.arange(0, 10, 0.01)
+    np.savetxt(f, np.column_stack([t, np.sin(t)]), delimiter=",", header="t,y", comments="")
+    r = run("period", f, *args)
+    assert r.exit_code == 2
+    ls = lines(r.stderr)
+    assert len(ls) == 1 and ls[0].startswith(f"error: {field}"), ls
+
+
+GYRO = SHARED / "data" / "compound-gyro-bicycleparameters" / "BrowserInsForkCompoundFirst1.mat"
+
+
+@pytest.mark.skipif(not GYRO.exists(), reason="shared recordings not present")
+def test_period_of_real_gyro_recording():
+    # BicycleParameters fork, compound pendulum: the crossing count of the
+    # same record (signal.py's independent method) agrees within 5 ms
+    r = run("period", GYRO, "--json")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["signal"]["sample_rate"] == 1000.0 and doc["signal"]["n_samples"] == 30000
+    assert abs(doc["period"] - doc["crossing_period"]) < 5e-3
+    assert 1.5 < doc["period"] < 1.7
