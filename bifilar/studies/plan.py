@@ -1,0 +1,252 @@
+"""Plan the experiment: the configuration that minimises the predicted
+inertia uncertainty subject to the constraints (``bifilar plan``).
+
+The search is over continuous parameters (dotted config paths or shorthands
+of :mod:`bifilar.studies.shorthands`, each within ``[lo, hi]``):
+
+1. a coarse grid (9 points for one parameter, 6 x 6 for two, 4^3, then 3^d)
+   evaluated by the sweep engine (:func:`bifilar.studies.sweep.run_sweep`,
+   so ``workers`` apply);
+2. bounded local minimisation of the objective with an exterior penalty
+   (continuous at the edge of the feasible set, so the optimum may sit on a
+   constraint: it usually does, the uncertainty falls as the wires tilt
+   while the tension rises): Nelder-Mead in the unit box from the three
+   best grid points (several parameters: mode crossings cut the feasible
+   set into islands), then Brent's method along each parameter within its
+   bracketing grid cells.  Without a target the worst of the components is
+   smoothed (a 16-norm) for the search.
+
+The answer is the best feasible point evaluated, so it is never worse than
+the grid.
+
+The objective is the relative standard uncertainty of ``target`` (or the
+worst of the components) at a point, exactly as the sweep ranks points.
+When ``lengths_available`` is given and a wire length is a search
+parameter, that parameter is searched over the available lengths within its
+bounds (discrete) and the others continuously for each of them.
+
+Deterministic: no random numbers, so the same inputs give the same plan.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..errors import InputError
+from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
+                    violations)
+
+_GRID = {1: 9, 2: 6, 3: 4}
+STARTS = 3  # local searches from the best grid points (d > 1)
+
+
+@dataclass
+class PlanResult:
+    """Outcome of :func:`plan`.
+
+    best : the point dict of the optimum (see :mod:`bifilar.studies.sweep`).
+    evaluated : every point evaluated (grid first, then the local search).
+    active : constraints within 1 % of their limit at the optimum.
+    """
+
+    best: dict
+    evaluated: list[dict]
+    target: str | None
+    constraints: Constraints
+    bounds: list[tuple[str, float, float]]
+    active: list[str] = field(default_factory=list)
+
+    def accuracy(self) -> dict:
+        """Predicted accuracy per component at the optimum (kg m^2, relative, mode, period s)."""
+        out = {}
+        for c, e in self.best["components"].items():
+            out[c] = {"value": e["value"], "sigma": e.get("sigma"), "rel_sigma": e.get("rel_sigma"),
+                      "mode": e.get("mode"), "period": e.get("period"), "identifiable": e["identifiable"],
+                      "bias": e.get("bias")}
+        return out
+
+    def to_json(self) -> dict:
+        b = self.best
+        return {
+            "optimum": {"params": b["params"], "objective": b["objective"], "accuracy": self.accuracy(),
+                        "tension": b["tension"], "depth": b["depth"], "periods": b["periods"],
+                        "active_constraints": self.active},
+            "target": self.target or "worst relative of the components",
+            "constraints": self.constraints.describe(),
+            "bounds": {n: [lo, hi] for n, lo, hi in self.bounds},
+            "evaluations": len(self.evaluated),
+        }
+
+
+def _is_length(name: str) -> bool:
+    return name == "length" or (name.startswith("rig.lengths.") and name.count(".") == 2)
+
+
+def _penalty(p: dict, c: Constraints, target: str | None) -> float:
+    """Exterior penalty, continuous at the edge of the feasible set:
+    feasible -> the relative uncertainty; infeasible -> that times
+    (1 + 100 x the relative excess over each limit); invalid or not
+    identifiable -> 1e6 (the optimum itself is always a feasible point)."""
+    if not p.get("valid"):
+        return 1e6
+    ob = objective(p, target)
+    if not math.isfinite(ob):
+        return 1e6
+    if target is None:  # the worst component, smoothed (a 16-norm) so that the simplex slides along the ridge
+        rel = np.array([e["rel_sigma"] for e in p["components"].values()], float)
+        ob = float(np.sum(rel**16) ** (1 / 16))
+    v = dict(violations(p, c, target))
+    if not v:
+        return ob
+    excess = 0.0
+    if "max_tension" in v and p["tension"].get("peak") is not None:
+        excess += p["tension"]["peak"] / c.max_tension - 1
+    if "max_depth" in v and p["depth"].get("max") is not None:
+        excess += p["depth"]["max"] / c.max_depth - 1
+    if "min_separation" in v and c.min_separation:
+        seps = [e["separation"] for e in p["components"].values() if e.get("separation") is not None]
+        excess += 1 - min(seps) / c.min_separation
+    excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v)
+    return ob * (1 + 100 * max(excess, 1e-6))
+
+
+def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
+         constraints: Constraints, target: str | None = None, *, workers: int = 1,
+         progress: Callable[[int, int], None] | None = None, max_local: int | None = None) -> PlanResult:
+    """Search ``bounds`` [(name, lo, hi)] for the feasible configuration with
+    the smallest predicted relative uncertainty (see the module docstring).
+
+    Raises :class:`InputError` naming the binding constraint's flag (e.g.
+    ``--max-tension``) when no evaluated configuration is feasible.
+    """
+    if not bounds:
+        raise InputError("--param", "give at least one --param NAME=LO:HI")
+    names = [b[0] for b in bounds]
+    if len(set(names)) != len(names):
+        raise InputError("--param", "a parameter is given twice")
+    discrete: dict[str, list[float]] = {}
+    if constraints.lengths_available is not None:
+        for n, lo, hi in bounds:
+            if _is_length(n):
+                vals = [a for a in constraints.lengths_available if lo - 1e-12 <= a <= hi + 1e-12]
+                if not vals:
+                    raise InputError("--lengths-available",
+                                     f"none of the available lengths lies in {n} = {lo:g}..{hi:g} m")
+                discrete[n] = vals
+    cont = [(n, lo, hi) for n, lo, hi in bounds if n not in discrete]
+    d = len(cont)
+    ng = _GRID.get(d, 3)
+    axes = [np.linspace(lo, hi, ng) for _, lo, hi in cont]
+    combos = [dict(zip(discrete, vals)) for vals in _product(list(discrete.values()))]
+    grid = []
+    for fixed in combos:
+        for vals in _product(axes):
+            grid.append({**{n: float(v) for (n, _, _), v in zip(cont, vals)}, **fixed})
+    grid = [{n: g[n] for n in names} for g in grid]  # keep the user's order
+    cache: dict[tuple, dict] = {}
+    local_budget = max_local if max_local is not None else (12 if d == 1 else 30 * d) * max(len(combos), 1)
+    total = len(grid) + (local_budget if d else 0)
+    done = [0]
+
+    def tick():
+        done[0] += 1
+        if progress:
+            progress(min(done[0], total), total)
+
+    pts = run_sweep(base_cfg, source, grid, settings, workers=workers,
+                    progress=(lambda k, n: progress(k, total)) if progress else None)
+    done[0] = len(grid)
+    for g, p in zip(grid, pts):
+        cache[tuple(g[n] for n in names)] = p
+
+    def evaluate(params: dict) -> dict:
+        key = tuple(float(params[n]) for n in names)
+        if key not in cache:
+            cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, settings)
+            tick()
+        return cache[key]
+
+    def score(p):
+        return _penalty(p, constraints, target)
+
+    if d:
+        from scipy.optimize import minimize, minimize_scalar
+
+        lo_v = np.array([lo for _, lo, _ in cont])
+        span = np.array([hi - lo for _, lo, hi in cont])
+        h = 1.0 / (ng - 1)
+        for fixed in combos:
+            budget = local_budget // max(len(combos), 1)
+
+            def f(x, fixed=fixed):
+                x = np.clip(np.atleast_1d(x), 0.0, 1.0)
+                params = {**{n: float(lo_v[i] + x[i] * span[i]) for i, (n, _, _) in enumerate(cont)}, **fixed}
+                return score(evaluate(params))
+
+            def best_x(fixed=fixed, rank=0):
+                sub = sorted((p for p in cache.values() if all(p["params"][n] == v for n, v in fixed.items())),
+                             key=score)
+                p0 = sub[min(rank, len(sub) - 1)]
+                return np.array([(p0["params"][n] - lo) / (hi - lo) for n, lo, hi in cont])
+
+            if d > 1:
+                # Nelder-Mead in the unit box from the best STARTS grid points (the feasible set is often
+                # cut into islands by mode-crossing bands), simplex one half-cell wide
+                starts = [best_x(rank=r) for r in range(STARTS)]
+                for x0 in starts:
+                    simplex = np.vstack([x0] + [np.clip(x0 + (0.5 * h if x0[i] + 0.5 * h <= 1 else -0.5 * h) * e, 0, 1)
+                                                for i, e in enumerate(np.eye(d))])
+                    minimize(f, x0, method="Nelder-Mead", bounds=[(0, 1)] * d,
+                             options={"initial_simplex": simplex, "maxfev": (budget - 10 * d) // STARTS,
+                                      "xatol": 1e-3, "fatol": 1e-6})
+            x0 = best_x()
+            for i in range(d):  # polish each parameter by Brent's method in its bracketing cells
+                def g(t, i=i, x0=x0):
+                    x = x0.copy()
+                    x[i] = t
+                    return f(x)
+
+                minimize_scalar(g, bounds=(max(0.0, x0[i] - h), min(1.0, x0[i] + h)), method="bounded",
+                                options={"xatol": 1e-3, "maxiter": 10 if d > 1 else budget})
+                x0 = best_x()
+    evaluated = list(cache.values())
+    feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target)
+                and math.isfinite(objective(p, target))]
+    if not feasible:
+        flag, msg = binding_constraint(evaluated, constraints, target)
+        raise InputError(flag, msg)
+    best = min(feasible, key=lambda p: objective(p, target))
+    best = dict(best)
+    best["objective"] = objective(best, target)
+    return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds))
+
+
+def _product(lists):
+    import itertools
+
+    return itertools.product(*lists) if lists else [()]
+
+
+def _active(p: dict, c: Constraints, bounds) -> list[str]:
+    """Constraints (and parameter bounds) the optimum sits on (within 1 %)."""
+    out = []
+    t, dpt = p["tension"].get("peak"), p["depth"].get("max")
+    if c.max_tension is not None and t is not None and t >= 0.99 * c.max_tension:
+        out.append(f"max tension ({t:.4g} of {c.max_tension:g} N)")
+    if c.max_depth is not None and dpt is not None and dpt >= 0.99 * c.max_depth:
+        out.append(f"max depth ({dpt:.4g} of {c.max_depth:g} m)")
+    if c.min_separation is not None:
+        seps = [e["separation"] for e in p["components"].values() if e.get("separation") is not None]
+        if seps and min(seps) <= 1.01 * c.min_separation:
+            out.append(f"min separation ({min(seps):.3g} vs {c.min_separation:g})")
+    for n, lo, hi in bounds:
+        v = p["params"][n]
+        if abs(v - lo) <= 0.01 * (hi - lo):
+            out.append(f"lower bound of {n} ({lo:g})")
+        elif abs(v - hi) <= 0.01 * (hi - lo):
+            out.append(f"upper bound of {n} ({hi:g})")
+    return out
