@@ -232,6 +232,11 @@ def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
     c, R, lam, kkt = _newton_kkt(scene, guess.com.copy(), guess.R.copy(), lam0.copy(), iters=30)
     if not kkt < 1e-9 or np.any(lam <= 0):
         return None
+    # a neutral direction (CoM on the attachment line) lets Newton wander to a far pose:
+    # that is not the neighbour's equilibrium
+    turn = np.arccos(np.clip((np.trace(R @ guess.R.T) - 1) / 2, -1, 1))
+    if turn > 0.05:
+        return None
     try:
         return _finish(scene, c, R, lam, kkt)
     except Exception:  # noqa: BLE001 - fall back to the global search
@@ -309,6 +314,6 @@ def _check_reach(scene: Scene, com: np.ndarray, R: np.ndarray, tol: float) -> No
     short = [f"wire {i + 1} {e[i]:.3g} m" for i in np.where(e > tol)[0]]
     raise InputError(
         "rig.lengths",
-        "the wires cannot all reach their attachment points at once: in the closest pose "
-        + ", ".join(short) + " short; lengthen them or match the anchor layout to the attachment layout",
+        "the wires cannot reach all their attachment points at once: even in the closest pose they are too short "
+        "by " + ", ".join(short) + "; lengthen them or match the anchor layout to the attachment layout",
     )

@@ -221,7 +221,11 @@ def simulate(
     ys0[0:3] -= rest.com
     omega = 2 * np.pi / T_ref
     Lmax = float(np.max(scene.lengths))
-    amp = max(abs(amplitude), 1e-6)
+    if m is not None and np.isfinite(amplitude) and amplitude != 0:
+        amp = max(abs(float(amplitude)), 1e-6)
+    else:  # explicit start: scale the tolerances by its displacement from rest
+        disp = relative_pose(y0[None, :], rest)[0]
+        amp = max(float(np.max(np.abs(disp[3:]))), float(np.max(np.abs(disp[:3]))) / Lmax, 1e-6)
     if atol is None:
         scale = np.concatenate([np.full(3, amp * Lmax), np.full(4, amp), np.full(3, amp * omega * Lmax), np.full(3, amp * omega)])
         atol_v = rtol * scale
