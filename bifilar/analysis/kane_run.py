@@ -101,7 +101,6 @@ def from_world(km: KaneMap, y13: np.ndarray) -> np.ndarray:
     """Thesis state (10,) of a maximal state (13,) (inverse of :func:`to_world`)."""
     com, q = y13[0:3], y13[3:7]
     R = quat_to_matrix(q)
-    pC, pD = km.Q @ np.array(kn.attachment_points_body(km.p)[0]), None
     C = com + R @ (km.Q @ kn.attachment_points_body(km.p)[0])
     BC = km.Rz.T @ (C - km.origin)
     l, bp = km.p.l, km.p.b_prime
@@ -153,12 +152,7 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
         if mode is not None:
             m = modes.get(mode)
     else:
-        if mode is None:
-            mode = "torsion" if "torsion" in modes.labels else 1
-        try:
-            m = modes.get(mode)
-        except KeyError as exc:
-            raise InputError("--mode", str(exc.args[0])) from None
+        m = modes.pick(mode)
         y0 = from_world(km, initial_state(scene, rest, m, amplitude))
         y0 = kn.complete_initial_state(y0[:4], y0[5:9], km.p, theta5_guess=y0[4])
     T_ref = (m.period if m is not None and m.period else None) or min(x.period for x in modes.modes if x.period)

@@ -72,6 +72,18 @@ class ModeSet:
             return hits[0]
         raise KeyError(f"no mode '{key}'; modes are {', '.join(m.label for m in self.modes)}")
 
+    def pick(self, key: str | int | None, option: str = "--mode") -> Mode:
+        """The mode the user asked for (default: torsion, else the slowest);
+        an unknown key is an :class:`~bifilar.errors.InputError` naming ``option``."""
+        from ..errors import InputError
+
+        if key is None:
+            key = "torsion" if "torsion" in self.labels else 1
+        try:
+            return self.get(key)
+        except KeyError as exc:
+            raise InputError(option, str(exc.args[0])) from None
+
     @property
     def labels(self) -> list[str]:
         return [m.label for m in self.modes]

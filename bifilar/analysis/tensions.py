@@ -50,8 +50,7 @@ def general_tensions(mass: float, gravity: float, accel: np.ndarray, units: np.n
     """
     rhs = mass * (accel + np.array([0.0, 0.0, gravity]))
     A = np.swapaxes(units, -1, -2)  # (k, 3, n)
-    F = np.linalg.lstsq(A[0], rhs[0], rcond=None)[0] if len(A) == 1 else None
-    # batched least squares via the normal equations' pseudo-inverse (n <= 3 for a 3-vector equation)
+    # batched least squares through the pseudo-inverse of each 3 x n system
     pinv = np.linalg.pinv(A)  # (k, n, 3)
     F = np.einsum("kni,ki->kn", pinv, rhs)
     res = np.linalg.norm(np.einsum("kin,kn->ki", A, F) - rhs, axis=-1)

@@ -59,12 +59,7 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     else:
         if theta is not None:
             raise InputError("--theta", "only with --model kane")
-        if mode is None:
-            mode = "torsion" if "torsion" in ms.labels else 1
-        try:
-            ms.get(mode)
-        except KeyError as exc:
-            raise InputError("--mode", str(exc.args[0])) from None
+        mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
             res = run(scene, mode, amplitude, periods, rest=rest, modes=ms, method=method, rtol=rtol,
                       on_slack=on_slack, progress=upd)

@@ -34,7 +34,6 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..analysis.simulate import simulate
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
     from ..config import load_scene
-    from ..errors import InputError
     from ..estimation.from_tensions import inertia_from_tensions
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
@@ -45,12 +44,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     if motion is None:
         rest = rest_pose(scene)
         ms = linear_modes(scene, rest)
-        if mode is None:
-            mode = "torsion" if "torsion" in ms.labels else 1
-        try:
-            ms.get(mode)
-        except KeyError as exc:
-            raise InputError("--mode", str(exc.args[0])) from None
+        mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=1e-11,
                            samples_per_period=200, progress=upd)
