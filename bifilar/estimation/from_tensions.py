@@ -71,7 +71,32 @@ def wire_torque_body(scene: Scene, com: np.ndarray, R: np.ndarray, tensions: np.
 
 def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.ndarray, omega: np.ndarray,
                           tensions: np.ndarray, alpha: np.ndarray | None = None,
-                          components=("Ixx", "Iyy", "Izz"), threshold: float = 0.01) -> TensionInertia:
+                          components=("Ixx", "Iyy", "Izz"), threshold: float = 0.01,
+                          fix_poorly_excited: bool = True) -> TensionInertia:
+    """Estimate inertia components by least squares over all samples of Euler's equations.
+
+    With ``fix_poorly_excited`` (default) the components the motion does not
+    excite are fixed at the scene's values and the others re-estimated: an
+    unexcited column otherwise soaks up noise and drags the well-determined
+    components with it.  The fixed ones are listed in ``poorly_excited`` and
+    reported with their first-pass value and std.
+    """
+    first = _solve(scene, t, com, R, omega, tensions, alpha, tuple(components), threshold)
+    if not fix_poorly_excited or not first.poorly_excited or len(first.poorly_excited) == len(first.components):
+        return first
+    components = tuple(components)
+    keep = tuple(c for c in components if c not in first.poorly_excited)
+    second = _solve(scene, t, com, R, omega, tensions, alpha, keep, threshold)
+    values = {**first.values, **second.values}
+    std = {**first.std, **second.std}
+    idx = [components.index(c) for c in keep]
+    corr = np.full((len(components), len(components)), np.nan)
+    corr[np.ix_(idx, idx)] = second.correlation
+    return TensionInertia(tuple(components), values, std, corr, list(first.poorly_excited),
+                          second.residual_rms, second.condition, second.n_samples)
+
+
+def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     Parameters
