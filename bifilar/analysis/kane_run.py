@@ -25,6 +25,7 @@ from scipy.integrate import solve_ivp
 
 from ..errors import InputError, IntegrationError
 from ..models import kane as kn
+from ..models import maximal as mx
 from ..rotations import matrix_to_quat, quat_to_matrix
 from ..scene import Scene
 from .equilibrium import RestPose
@@ -137,6 +138,10 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     :class:`~bifilar.models.kane.KaneSingularityError` (exit 1) at vertical wires.
     """
     km = kane_map(scene)
+    rest_theta = from_world(km, mx.pack(rest.com, rest.q))
+    if abs(np.sin(rest_theta[1])) < 1e-6:
+        raise InputError("--model", "the thesis's kane coordinates are singular for this rig: wire 1 hangs "
+                                    "vertically at rest (theta2 = 0); use --model maximal")
     m = None
     if theta is not None:
         if isinstance(theta, str):

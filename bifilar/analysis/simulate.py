@@ -128,11 +128,26 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
     """State (13,) at rest displaced by ``amplitude`` x the mode shape, projected
     back onto the wires with the mode's dominant coordinate held at its
     displaced value (as an experimenter sets the initial angle), zero velocity."""
+    if not np.isfinite(amplitude):
+        raise InputError("--amplitude", f"must be finite, got {amplitude}")
+    limit = np.pi if mode.dominant >= 3 else 2.0 * float(np.max(scene.lengths))
+    if abs(amplitude) > limit:
+        unit = "rad" if mode.dominant >= 3 else "m"
+        raise InputError("--amplitude", f"{amplitude:g} {unit} is beyond any reachable start of the {mode.label} "
+                                        f"mode (|amplitude| <= {limit:.4g} {unit})")
     dr = amplitude * mode.shape[:3]
     dth = amplitude * mode.shape[3:]
     com = rest.com + dr
     R = rotvec_to_matrix(dth) @ rest.R
     com, R = project_to_wires(scene, com, R, hold=mode.dominant)
+    d = com + scene.attachments @ R.T - scene.anchors
+    gap = float(np.max(np.abs(np.linalg.norm(d, axis=1) - scene.lengths)))
+    if not gap <= 1e-9 * float(np.max(scene.lengths)):
+        raise InputError(
+            "--amplitude",
+            f"{amplitude:g} x the {mode.label} shape cannot be reached with every wire at its length "
+            f"(closest start is {gap:.3g} m off the wires); use a smaller amplitude",
+        )
     return mx.pack(com, matrix_to_quat(R))
 
 
@@ -241,6 +256,14 @@ def simulate(
         slack_event.terminal = True
         slack_event.direction = -1
         events = [slack_event]
+    if on_slack == "stop":
+        T0 = mx.tensions(ys0, Pshift)
+        if float(np.min(T0)) <= 0.0:  # a wire is already slack at the release: nothing physical to integrate
+            Y0 = y0[None, :].copy()
+            warnings.append("run stopped at t = 0 s because a wire went slack")
+            viol0 = float(np.max(mx.constraint_violation(Y0, P)))
+            return summarise_run(scene, rest, m, amplitude, np.zeros(1), Y0, T0[None, :], lambda tt: Y0, viol0, 0.0,
+                                 "maximal", method, rtol, float(np.min(atol_v)), 0, 0.0, warnings)
     t0 = time.perf_counter()
     sol = solve_ivp(f, (0.0, t_end), ys0, method=method, rtol=rtol, atol=atol_v, dense_output=True, events=events)
     runtime = time.perf_counter() - t0
