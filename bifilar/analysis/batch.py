@@ -1,0 +1,1275 @@
+"""Batched engine: rest poses, linear modes and nonlinear runs of many scenes at once.
+
+For sweeps, Monte Carlo draws and amplitude ladders.  Every stage is
+vectorised over the scenes (numpy arrays with a leading scene axis) and
+gives the results of the single-scene functions
+(:func:`~bifilar.analysis.equilibrium.rest_pose`,
+:func:`~bifilar.analysis.modes.linear_modes`,
+:func:`~bifilar.analysis.simulate.simulate`) to rounding or to the
+integration tolerance:
+
+* :func:`rest_poses`: Newton's method on the KKT equations, all scenes at
+  once, warm-started from a guess (a neighbour's rest pose, by default the
+  first scene's); a scene whose Newton run does not end at a taut, stable
+  equilibrium falls back to :func:`rest_pose` (global search and its
+  one-line errors).
+* :func:`modes_batch`: null space of the constraint Jacobian, reduced
+  stiffness and mass, and the generalised eigenproblem by batched Cholesky
+  and ``eigh``; labels as :func:`linear_modes`.
+* :func:`simulate_batch`: the maximal-coordinate model
+  (:mod:`bifilar.models.maximal`, compiled kernel) integrated from each
+  scene's displaced rest pose, with per-scene health (constraint violation,
+  energy drift, tensions, slack wires, lowest point) and the measured
+  period (upward crossings of the dominant coordinate, as ``simulate``
+  times them).  Two engines, chosen by measurement (docs/performance.md):
+  LSODA (``scipy.integrate.odeint``: the step loop in Fortran) on one scene
+  -- on Python floats, no array overhead -- or on the whole group stacked
+  into one ODE in normalised time with tolerances divided by sqrt(B), so
+  each scene keeps the error bound it would have alone; and the project's
+  DOP853 (:mod:`bifilar.integrators`) with a step size and error test of
+  its own for every scene (crossings on its order-7 dense output), fastest
+  for large groups.
+
+How to call it (sweeps, Monte Carlo, amplitude ladders)::
+
+    from bifilar.analysis.batch import simulate_batch
+    runs = simulate_batch(scenes, "torsion", 0.05, 10, rtol=1e-10, errors="return")
+    for r in runs:  # input order
+        r.period, r.linear_period, r.max_constraint_violation, r.energy_drift,
+        r.tension_min, r.tension_max, r.depth_max, r.slack, r.error, r.to_json()
+
+``mode``, ``amplitude`` and ``periods`` may be one value or one per scene;
+``rests=``/``modes=`` reuse precomputed rest poses and mode sets
+(:func:`rest_and_modes`); ``health=False`` skips everything but the period.
+
+Units SI, world frame z up, as everywhere in the package.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .. import integrators as itg
+from ..errors import BifilarError, InputError
+from ..models import maximal as mx
+from ..rotations import matrix_to_quat, rotvec_to_matrix
+from ..scene import Scene, lowest_point_z
+from .equilibrium import RestPose, rest_pose
+from .modes import _BASE_LABEL, COMPONENTS, Mode, ModeSet, _align_degenerate
+from .simulate import measured_period
+
+__all__ = [
+    "rest_poses", "modes_batch", "rest_and_modes", "initial_states", "simulate_batch", "SceneRun", "run_one",
+]
+
+
+# --------------------------------------------------------------------------
+# geometry helpers, vectorised over scenes
+# --------------------------------------------------------------------------
+def _stack(scenes: Sequence[Scene]):
+    a = np.array([s.anchors for s in scenes])
+    p = np.array([s.attachments for s in scenes])
+    L = np.array([s.lengths for s in scenes])
+    m = np.array([s.mass for s in scenes])
+    g = np.array([s.gravity for s in scenes])
+    I = np.array([s.inertia for s in scenes])
+    return a, p, L, m, g, I
+
+
+def _groups(scenes: Sequence[Scene]) -> list[list[int]]:
+    """Indices of the scenes grouped by wire count (arrays need one count)."""
+    out: dict[int, list[int]] = {}
+    for k, s in enumerate(scenes):
+        out.setdefault(s.n_wires, []).append(k)
+    return [out[n] for n in sorted(out)]
+
+
+def _per_group(fn, scenes, *lists, **kw) -> list:
+    """Apply ``fn(sub_scenes, *sub_lists, **kw) -> list`` per wire-count group
+    and reassemble the results in input order (lists may be None)."""
+    out: list = [None] * len(scenes)
+    for ii in _groups(scenes):
+        subs = [None if x is None else [x[k] for k in ii] for x in lists]
+        for k, r in zip(ii, fn([scenes[k] for k in ii], *subs, **kw)):
+            out[k] = r
+    return out
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis (faster than np.cross on small batches)."""
+    ux, uy, uz = u[..., 0], u[..., 1], u[..., 2]
+    vx, vy, vz = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx], axis=-1)
+
+
+def _jacobian(a, p, com, R):
+    """Wire vectors d, lever arms w = R p (B, n, 3) and G = [d, w x d] (B, n, 6)."""
+    w = np.einsum("bij,bnj->bni", R, p)
+    d = com[:, None, :] + w - a
+    return d, w, np.concatenate([d, _cross(w, d)], axis=-1)
+
+
+def _constraints(a, p, L, com, R, ii):
+    """d, w, G (as :func:`_jacobian`) and phi = (|d|^2 - L^2)/2 (k, n) for the scenes ``ii``."""
+    d, w, G = _jacobian(a[ii], p[ii], com[ii], R[ii])
+    return d, w, G, 0.5 * (np.einsum("bni,bni->bn", d, d) - L[ii] ** 2)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    z = np.zeros(v.shape[:-1])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
+def _hessian(d, w, lam):
+    """sum_i lam_i H_i (B, 6, 6): the constraint Hessians of
+    :func:`~bifilar.analysis.equilibrium.constraint_hessians`, weighted."""
+    W = _skew(w)  # (B, n, 3, 3)
+    eye = np.eye(3)
+    dw = np.einsum("bni,bni->bn", d, w)
+    Hrr = -np.einsum("bnij,bnjk->bnik", W, W) + 0.5 * (d[..., :, None] * w[..., None, :] + w[..., :, None] * d[..., None, :]) \
+        - dw[..., None, None] * eye
+    H = np.empty(d.shape[:1] + (6, 6))
+    ls = lam.sum(axis=1)
+    H[:, :3, :3] = ls[:, None, None] * eye
+    H[:, :3, 3:] = -np.einsum("bn,bnij->bij", lam, W)
+    H[:, 3:, :3] = np.einsum("bn,bnij->bij", lam, W)
+    H[:, 3:, 3:] = np.einsum("bn,bnij->bij", lam, Hrr)
+    return H
+
+
+# --------------------------------------------------------------------------
+# rest poses
+# --------------------------------------------------------------------------
+def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
+    """Newton on grad V + G^T lam = 0, phi = 0 for every scene (damped like
+    the single-scene solver).  Returns com, R, lam, kkt residual (B,)."""
+    Bn, n = L.shape
+    gradV = np.zeros((Bn, 6))
+    gradV[:, 2] = m * g
+    fscale = m * g
+    Lmax = L.max(axis=1)
+    active = np.ones(Bn, bool)
+    res = np.full(Bn, np.inf)
+    for _ in range(iters):
+        ii = np.nonzero(active)[0]
+        if not len(ii):
+            break
+        d, w, G, phi = _constraints(a, p, L, com, R, ii)
+        r1 = gradV[ii] + np.einsum("bni,bn->bi", G, lam[ii])
+        res[ii] = np.maximum(np.abs(r1).max(axis=1) / fscale[ii], np.abs(phi).max(axis=1) / Lmax[ii] ** 2)
+        conv = res[ii] < 1e-15
+        active[ii[conv]] = False
+        if np.all(conv):
+            break
+        keep = ~conv
+        ii, d, w, G, phi, r1 = ii[keep], d[keep], w[keep], G[keep], phi[keep], r1[keep]
+        K = np.zeros((len(ii), 6 + n, 6 + n))
+        K[:, :6, :6] = _hessian(d, w, lam[ii])
+        K[:, :6, 6:] = np.swapaxes(G, 1, 2)
+        K[:, 6:, :6] = G
+        rhs = -np.concatenate([r1, phi], axis=1)
+        try:
+            step = np.linalg.solve(K, rhs[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            step = np.stack([np.linalg.lstsq(Kb, rb, rcond=None)[0] for Kb, rb in zip(K, rhs)])
+        dx = step[:, :6]
+        lim = 0.2 * Lmax[ii]
+        s = np.minimum(1.0, np.minimum(lim / np.maximum(np.abs(dx[:, :3]).max(axis=1), 1e-300),
+                                       0.5 / np.maximum(np.abs(dx[:, 3:]).max(axis=1), 1e-300)))
+        com[ii] = com[ii] + s[:, None] * dx[:, :3]
+        R[ii] = rotvec_to_matrix(s[:, None] * dx[:, 3:]) @ R[ii]
+        lam[ii] = lam[ii] + s[:, None] * step[:, 6:]
+    # final residual everywhere
+    d, w, G, phi = _constraints(a, p, L, com, R, slice(None))
+    r1 = gradV + np.einsum("bni,bn->bi", G, lam)
+    res = np.maximum(np.abs(r1).max(axis=1) / fscale, np.abs(phi).max(axis=1) / Lmax**2)
+    return com, R, lam, res
+
+
+def _null_space(G: np.ndarray):
+    """Orthonormal null-space bases (B, 6, 6-n) of full-rank G (B, n, 6) and
+    whether each G has full rank (tolerance of :func:`reduced_stiffness`)."""
+    _, s, vt = np.linalg.svd(G)
+    n = G.shape[1]
+    full = s[:, -1] > 1e-12 * s[:, 0]
+    return np.swapaxes(vt[:, n:, :], 1, 2), full
+
+
+def _mass_matrix(m, I, R):
+    M = np.zeros((len(m), 6, 6))
+    M[:, 0, 0] = M[:, 1, 1] = M[:, 2, 2] = m
+    M[:, 3:, 3:] = R @ I @ np.swapaxes(R, 1, 2)
+    return M
+
+
+def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | None = None, *,
+               errors: str = "raise") -> list:
+    """Rest poses of many scenes (same number of wires), vectorised.
+
+    Parameters
+    ----------
+    guess : a RestPose used as the start of every scene, or one per scene;
+        default: the rest pose of the first scene (global search).
+    errors : ``"raise"``: the first scene that cannot hang raises its
+        error (:class:`SlackWireError`, ...); ``"return"``: its entry in
+        the list is the exception instead.
+
+    Returns a list of :class:`RestPose` (or exceptions), in input order,
+    equal to :func:`rest_pose` of each scene to its convergence tolerance
+    (KKT residual < 1e-9 relative; ~1e-15 in practice).
+    """
+    scenes = list(scenes)
+    if not scenes:
+        return []
+    if len(_groups(scenes)) > 1:
+        if isinstance(guess, RestPose) or guess is None:
+            return _per_group(lambda sc: rest_poses(sc, guess, errors=errors), scenes)
+        return _per_group(lambda sc, gs: rest_poses(sc, gs, errors=errors), scenes, list(guess))
+    out = [None] * len(scenes)
+    if guess is None:
+        try:
+            g0 = rest_pose(scenes[0])
+        except BifilarError as exc:
+            if errors != "return":
+                raise
+            out[0] = exc
+            g0 = next((r for r in _first_rest(scenes[1:]) if r is not None), None)
+            if g0 is None:
+                return [_rest_or_error(s, None, errors) for s in scenes]
+        guesses = [g0] * len(scenes)
+    elif isinstance(guess, RestPose):
+        guesses = [guess] * len(scenes)
+    else:
+        guesses = list(guess)
+    a, p, L, m, g, I = _stack(scenes)
+    com = np.array([q.com for q in guesses], float)
+    R = np.array([q.R for q in guesses], float)
+    lam = np.array([q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in guesses], float)
+    com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
+    d, w, G = _jacobian(a, p, com, R)
+    T = lam * np.linalg.norm(d, axis=2)
+    ok = (kkt < 1e-9) & np.all(T > 1e-9 * (m * g)[:, None], axis=1)
+    # stability: reduced stiffness positive semi-definite (as rest_pose checks)
+    N, full = _null_space(G)
+    ok &= full
+    if N.shape[2]:
+        Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
+        ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
+        ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
+    q = matrix_to_quat(R)
+    for k, s in enumerate(scenes):
+        if out[k] is not None:
+            continue
+        if ok[k]:
+            lz = float(lowest_point_z(s, com[k], R[k]))
+            out[k] = RestPose(com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
+                              wire_vectors=d[k].copy(), lowest_z=lz, depth=s.ceiling_z - lz, kkt_residual=float(kkt[k]))
+        else:
+            out[k] = _rest_or_error(s, guesses[k], errors)
+    return out
+
+
+def _first_rest(scenes):
+    for s in scenes:
+        try:
+            yield rest_pose(s)
+        except BifilarError:
+            yield None
+
+
+def _rest_or_error(scene: Scene, guess, errors: str):
+    try:
+        return rest_pose(scene, guess=guess)
+    except BifilarError as exc:
+        if errors != "return":
+            raise
+        return exc
+
+
+# --------------------------------------------------------------------------
+# linear modes
+# --------------------------------------------------------------------------
+def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[ModeSet]:
+    """:func:`~bifilar.analysis.modes.linear_modes` of many scenes at once
+    (same number of wires).  Periods agree with the single-scene function to
+    ~1e-12 relative, shapes to ~1e-10 (both solve the same symmetric
+    generalised eigenproblem; here by Cholesky and ``numpy.linalg.eigh``)."""
+    scenes = list(scenes)
+    if not scenes:
+        return []
+    if len(_groups(scenes)) > 1:
+        return _per_group(modes_batch, scenes, list(rests))
+    a, p, L, m, g, I = _stack(scenes)
+    com = np.array([r.com for r in rests])
+    R = np.array([r.R for r in rests])
+    d, w, G = _jacobian(a, p, com, R)
+    lam = np.array([r.tensions for r in rests]) / np.linalg.norm(d, axis=2)
+    N, full = _null_space(G)
+    M = _mass_matrix(m, I, R)
+    Nt = np.swapaxes(N, 1, 2)
+    Kr = Nt @ _hessian(d, w, lam) @ N
+    Mr = Nt @ M @ N
+    Kr = 0.5 * (Kr + np.swapaxes(Kr, 1, 2))
+    Mr = 0.5 * (Mr + np.swapaxes(Mr, 1, 2))
+    k = N.shape[2]
+    if k == 0:
+        return [ModeSet([], M[b], N[b]) for b in range(len(scenes))]
+    Lc = np.linalg.cholesky(Mr)
+    Li = np.linalg.inv(Lc)
+    w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
+    Y = np.swapaxes(Li, 1, 2) @ Z
+    scale = np.maximum(np.abs(w2).max(axis=1), 1e-300)
+    out = []
+    diagM = np.diagonal(M[:, 3:, 3:], axis1=1, axis2=2)
+    for b in range(len(scenes)):
+        if not full[b]:
+            from .modes import linear_modes
+
+            out.append(linear_modes(scenes[b], rests[b]))
+            continue
+        Yb = Y[b]
+        if np.any(np.diff(w2[b]) <= 1e-8 * scale[b]):
+            Yb = _align_degenerate(N[b], Yb, w2[b], scale[b])
+        out.append(_modeset(N[b], Yb, w2[b], scale[b], m[b], diagM[b], M[b]))
+    return out
+
+
+def _modeset(N, Y, w2, scale, mass, diagM, M) -> ModeSet:
+    S = N @ Y  # (6, k) shapes
+    i = np.argmax(np.abs(S), axis=0)
+    S = S / S[i, np.arange(S.shape[1])]
+    share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
+    share = share / share.sum(axis=0)
+    zero = (np.abs(w2) <= 1e-10 * scale) | (w2 <= 0)
+    periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
+    dom_e = np.argmax(share, axis=0)
+    order = sorted(range(len(w2)), key=lambda j: -(periods[j] if not zero[j] else -1.0))
+    seen: dict[str, int] = {}
+    modes = []
+    for j in order:
+        base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
+        c = seen.get(base, 0) + 1
+        seen[base] = c
+        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
+                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
+    return ModeSet(modes, M, N)
+
+
+def rest_and_modes(scenes: Sequence[Scene], guess=None, *, errors: str = "raise"):
+    """(rests, modesets) of many scenes; failed scenes (``errors="return"``)
+    have the exception as rest and None as modes."""
+    rests = rest_poses(scenes, guess, errors=errors)
+    good = [k for k, r in enumerate(rests) if isinstance(r, RestPose)]
+    ms: list = [None] * len(rests)
+    for k, x in zip(good, modes_batch([scenes[k] for k in good], [rests[k] for k in good])):
+        ms[k] = x
+    return rests, ms
+
+
+# --------------------------------------------------------------------------
+# initial states
+# --------------------------------------------------------------------------
+def _project(a, p, L, m, I, com, R, hold=None, iters: int = 50):
+    """Mass-weighted closest poses on which every wire has its length, the
+    coordinates ``hold`` (B,) (0..5 of [dx, dy, dz, rx, ry, rz]) unchanged
+    (:func:`~bifilar.analysis.simulate.project_to_wires`, vectorised)."""
+    Minv = np.concatenate([np.repeat((1.0 / m)[:, None], 3, 1),
+                           np.repeat((1.0 / np.linalg.eigvalsh(I).mean(axis=1))[:, None], 3, 1)], axis=1)
+    if hold is not None:
+        Minv[np.arange(len(m)), np.asarray(hold)] = 0.0
+    Lm = L.max(axis=1)
+    active = np.ones(len(m), bool)
+    for _ in range(iters):
+        ii = np.nonzero(active)[0]
+        if not len(ii):
+            break
+        _, _, G, phi = _constraints(a, p, L, com, R, ii)
+        done = np.abs(phi).max(axis=1) < 1e-15 * Lm[ii] ** 2
+        active[ii[done]] = False
+        ii, G, phi = ii[~done], G[~done], phi[~done]
+        if not len(ii):
+            break
+        GM = G * Minv[ii][:, None, :]
+        S = GM @ np.swapaxes(G, 1, 2)
+        try:
+            lamb = np.linalg.solve(S, phi[..., None])
+        except np.linalg.LinAlgError:
+            lamb = np.stack([np.linalg.lstsq(Sb, pb, rcond=None)[0] for Sb, pb in zip(S, phi)])[..., None]
+        dx = -(np.swapaxes(GM, 1, 2) @ lamb)[..., 0]
+        com[ii] = com[ii] + dx[:, :3]
+        R[ii] = rotvec_to_matrix(dx[:, 3:]) @ R[ii]
+    return com, R
+
+
+def _wire_residual(a, p, L, com, R) -> np.ndarray:
+    """max_i | |d_i| - L_i | / L_max (B,) at the poses."""
+    d, _, _ = _jacobian(a, p, com, R)
+    return np.abs(np.linalg.norm(d, axis=2) - L).max(axis=1) / L.max(axis=1)
+
+
+def _start_poses(scenes, rests, modes, amplitude):
+    """Projected displaced poses: (com (B,3), R (B,3,3), wire residual (B,), amplitudes (B,))."""
+    a, p, L, m, g, I = _stack(scenes)
+    amp = np.broadcast_to(np.asarray(amplitude, float), (len(scenes),))
+    S = np.array([md.shape for md in modes])
+    com = np.array([r.com for r in rests]) + amp[:, None] * S[:, :3]
+    R = rotvec_to_matrix(amp[:, None] * S[:, 3:]) @ np.array([r.R for r in rests])
+    com, R = _project(a, p, L, m, I, com, R, hold=[md.dominant for md in modes])
+    return com, R, _wire_residual(a, p, L, com, R), amp
+
+
+def initial_states(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude) -> np.ndarray:
+    """States (B, 13) at rest displaced by ``amplitude`` (scalar or (B,)) x
+    each scene's mode shape, projected onto the wires, at rest (zero
+    velocity), the mode's dominant coordinate held at its displaced value:
+    :func:`~bifilar.analysis.simulate.initial_state` for many.  Raises
+    :class:`InputError` (``--amplitude``) when no such pose exists."""
+    com, R, res, amp = _start_poses(scenes, rests, modes, amplitude)
+    bad = np.nonzero(res > 1e-9)[0]
+    if len(bad):
+        b = int(bad[0])
+        raise InputError("--amplitude", f"amplitude {amp[b]:g} is too large for scene {b + 1} ('{scenes[b].name}'): "
+                         f"no pose with the {modes[b].label} coordinate displaced that far keeps every wire at its "
+                         "length; reduce the amplitude")
+    return np.concatenate([com, matrix_to_quat(R), np.zeros((len(scenes), 6))], axis=1)
+
+
+def feasible_amplitudes(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude
+                        ) -> np.ndarray:
+    """(B,) bool: whether each displaced start pose can be reached with every
+    wire at its length (relative residual <= 1e-9; what :func:`initial_states` needs)."""
+    return _start_poses(scenes, rests, modes, amplitude)[2] <= 1e-9
+
+
+# --------------------------------------------------------------------------
+# nonlinear runs
+# --------------------------------------------------------------------------
+@dataclass
+class SceneRun:
+    """Outcome of one scene of :func:`simulate_batch` (SI units, world frame).
+
+    The fields mean what they mean in
+    :class:`~bifilar.analysis.simulate.SimulationResult`; health figures are
+    taken at the integrator's accepted steps (10-30 per period; the
+    constraint violation and energy drift there are those of the solution,
+    not of an interpolant), tensions from the multipliers at those steps.
+
+    period : mean measured period, s (None if fewer than two upward
+        crossings); period_std : std of single cycles, s; crossings (k,) s.
+    linear_period : the mode's linear period, s.
+    max_constraint_violation : max | |d_i| - L_i |, m.
+    energy_drift : max |E - E0| / |E0 - E_rest|.
+    tension_min, tension_max : (n,) N.  slack : [(wire 1-based, t s)].
+    lowest_z_min : lowest world z of the body, m; depth_max : ceiling minus
+        that, m.  t, y : dense samples (only with ``samples_per_period``).
+    t_final, y_final : time (s) and state (13,) where the run ended.
+    error : message when the scene could not be run (``errors="return"``),
+        else None.
+    """
+
+    period: float | None
+    period_std: float | None
+    crossings: np.ndarray
+    linear_period: float | None
+    max_constraint_violation: float
+    energy_drift: float
+    tension_min: np.ndarray
+    tension_max: np.ndarray
+    slack: list
+    lowest_z_min: float
+    depth_max: float
+    mode: str | None
+    amplitude: float
+    coordinate_name: str
+    rtol: float
+    nfev: int
+    nsteps: int
+    runtime: float
+    t: np.ndarray | None = None
+    y: np.ndarray | None = None
+    t_final: float | None = None
+    y_final: np.ndarray | None = None
+    warnings: list = field(default_factory=list)
+    error: str | None = None
+    model: str = "maximal"
+    method: str = "LSODA"
+
+    def to_json(self) -> dict:
+        """The keys of :meth:`SimulationResult.to_json` (interface.md) where they apply."""
+        def f(x):
+            return None if x is None or (isinstance(x, float) and not np.isfinite(x)) else float(x)
+
+        return {
+            "period": f(self.period),
+            "linear_period": f(self.linear_period),
+            "max_constraint_violation": f(self.max_constraint_violation),
+            "energy_drift": f(self.energy_drift),
+            "tension": {"min": [float(v) for v in self.tension_min], "max": [float(v) for v in self.tension_max]},
+            "period_std": f(self.period_std),
+            "cycles": max(len(self.crossings) - 1, 0),
+            "mode": self.mode,
+            "amplitude": self.amplitude,
+            "timed_coordinate": self.coordinate_name,
+            "slack": [{"wire": w, "t": float(t)} for w, t in self.slack],
+            "lowest_point_z": f(self.lowest_z_min),
+            "depth_below_ceiling": f(self.depth_max),
+            "model": self.model,
+            "integrator": {"method": self.method, "rtol": self.rtol, "nfev": int(self.nfev), "steps": int(self.nsteps),
+                           "runtime_s": float(self.runtime)},
+            "warnings": list(self.warnings),
+            "error": self.error,
+        }
+
+
+_METHOD_NAME = {"lsoda": "LSODA (scipy odeint, batch in normalised time)",
+                "dop853": "DOP853 (bifilar.integrators, per-scene step control)"}
+
+
+def _failed(err: str, mode, amplitude, n: int, rtol: float) -> SceneRun:
+    nan = float("nan")
+    return SceneRun(period=None, period_std=None, crossings=np.zeros(0), linear_period=None,
+                    max_constraint_violation=nan, energy_drift=nan, tension_min=np.full(n, nan),
+                    tension_max=np.full(n, nan), slack=[], lowest_z_min=nan, depth_max=nan,
+                    mode=None if mode is None else str(mode), amplitude=float(amplitude), coordinate_name="",
+                    rtol=float(rtol), nfev=0, nsteps=0, runtime=0.0, error=err)
+
+
+def _coordinate_vector(dom: int, q0: np.ndarray) -> np.ndarray:
+    """e (13,) with e . y = a quantity that has the sign of the dominant
+    relative coordinate of :func:`~bifilar.analysis.simulate.relative_pose`
+    and the same zeros: the CoM offset for a translation; for a rotation the
+    vector part of q q_rest^-1 (linear in q; its zeros are those of the
+    rotation vector while the relative rotation stays below pi)."""
+    e = np.zeros(13)
+    if dom < 3:
+        e[dom] = 1.0
+        return e
+    w0, x0, y0, z0 = q0
+    rows = {
+        3: [-x0, w0, -z0, y0],  # x part of q * conj(q0), coefficients of (qw, qx, qy, qz)
+        4: [-y0, z0, w0, -x0],
+        5: [-z0, -y0, x0, w0],
+    }
+    e[3:7] = rows[dom]
+    return e
+
+
+def _refine_extremes(t: np.ndarray, T: np.ndarray):
+    """Extremes of sampled tensions refined by the parabola through each
+    interior local extremum and its two neighbours.
+
+    t (K, B) sample times, T (n, K, B).  Returns (Tmin, tmin, Tmax) each
+    (n, B) over the refined interior extremes (inf / nan where there are
+    none).  A sampled extreme is off by ~(omega dt)^2 / 8 of the tension's
+    swing; the vertex of the parabola by ~(omega dt)^3, which matters for a
+    sharp dip near slack.
+    """
+    if T.shape[1] < 3:
+        shape = (T.shape[0], T.shape[2])
+        return np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, -np.inf)
+    t0, t1, t2 = t[:-2], t[1:-1], t[2:]
+    f0, f1, f2 = T[:, :-2], T[:, 1:-1], T[:, 2:]
+    with np.errstate(all="ignore"):
+        d0 = (f1 - f0) / (t1 - t0)
+        d1 = (f2 - f1) / (t2 - t1)
+        a = (d1 - d0) / (t2 - t0)
+        b = d0 + a * (t1 - t0)
+        tv = t1 - b / (2 * a)
+        fv = f1 - b * b / (4 * a)
+    inside = (tv >= t0) & (tv <= t2) & np.isfinite(fv)
+    lo = (f1 <= f0) & (f1 <= f2) & inside & (fv <= f1)
+    hi = (f1 >= f0) & (f1 >= f2) & inside & (fv >= f1)
+    vmin = np.where(lo, fv, np.inf)
+    k = np.argmin(vmin, axis=1)  # (n, B)
+    Tmin = np.take_along_axis(vmin, k[:, None, :], 1)[:, 0]
+    tmin = np.take_along_axis(np.broadcast_to(tv, vmin.shape), k[:, None, :], 1)[:, 0]
+    Tmax = np.max(np.where(hi, fv, -np.inf), axis=1)
+    return Tmin, tmin, Tmax
+
+
+def _merge_refined(obs, idx, Tmin, tmin, Tmax, T_scale=1.0) -> None:
+    """Fold refined extremes (n, k) for scenes ``idx`` into the observer."""
+    obs.Tmin[idx] = np.minimum(obs.Tmin[idx], Tmin.T)
+    obs.Tmax[idx] = np.maximum(obs.Tmax[idx], Tmax.T)
+    neg = (Tmin.T <= 0) & np.isnan(obs.slack_t[idx])
+    if np.any(neg):
+        st = obs.slack_t[idx]
+        st[neg] = (tmin.T * T_scale)[neg] if np.ndim(T_scale) == 0 else (tmin.T * T_scale[:, None])[neg]
+        obs.slack_t[idx] = st
+
+
+class _Health(itg.BatchObserver):
+    """Per-scene crossings, constraint violation, energy, tensions, slack and
+    the states at the accepted steps (for the lowest point), gathered while
+    the batch integrates."""
+
+    def __init__(self, Bn, n, e, mass, grav, inertia, L2, on_slack: str, keep_states: bool, progress, t_end,
+                 dense_times=None):
+        self.n = n
+        self.e = e  # (13, B)
+        self.mass, self.grav, self.inertia, self.L2 = mass, grav, inertia, L2
+        self.cross: list[list] = [[] for _ in range(Bn)]
+        self.viol = np.zeros(Bn)
+        self.E0 = np.zeros(Bn)
+        self.dE = np.zeros(Bn)
+        self.Tmin = np.full((Bn, n), np.inf)
+        self.Tmax = np.full((Bn, n), -np.inf)
+        self.slack_t = np.full((Bn, n), np.nan)
+        self.stop_on_slack = on_slack == "stop"
+        self.states: list = []
+        self.keep = keep_states
+        self.progress = progress
+        self.t_end = t_end
+        self.tnow = np.zeros(Bn)
+        self.dense_times = dense_times  # list of (B) arrays of sample times, or None
+        self.next_k = np.zeros(Bn, int)  # index of each scene's next unused sample
+        self.samples: list = [[] for _ in range(Bn)] if dense_times is not None else None
+        self.lz = np.full(Bn, np.nan)
+        self.low_parts: list = []
+        self.t_final = np.zeros(Bn)
+        self.y_final = np.zeros((Bn, 13))
+
+    def _energy(self, idx, y):
+        v = y[7:10]
+        w = y[10:13]
+        Iw = np.einsum("bij,jb->ib", self.inertia[idx], w)
+        return 0.5 * self.mass[idx] * np.sum(v * v, 0) + 0.5 * np.sum(w * Iw, 0) + self.mass[idx] * self.grav[idx] * y[2]
+
+    def _tension_viol(self, idx, ext):
+        n = self.n
+        lam, phi = ext[:n], ext[n:2 * n]
+        L2 = self.L2[:, idx]
+        dl = np.sqrt(L2 + 2.0 * phi)
+        return -lam * dl, np.abs(2.0 * phi / (dl + np.sqrt(L2)))
+
+    def _next_sample(self) -> np.ndarray:
+        """(B,) time of each scene's next sample not yet taken (inf when done)."""
+        return np.array([ts[k] if k < len(ts) else np.inf for ts, k in zip(self.dense_times, self.next_k)])
+
+    def start(self, idx, y, ext):
+        self.E0[idx] = self._energy(idx, y)
+        T, v = self._tension_viol(idx, ext)
+        self.Tmin[idx] = T.T
+        self.Tmax[idx] = T.T
+        Bn = len(self.E0)
+        self.prev_t = np.full((2, Bn), np.nan)
+        self.prev_T = np.full((self.n, 2, Bn), np.nan)
+        self.prev_t[1, idx] = 0.0
+        self.prev_T[:, 1, idx] = T
+        self.viol[idx] = v.max(axis=0)
+        if self.keep:
+            self.states.append((idx.copy(), np.zeros(len(idx)), y.T.copy()))
+        if self.samples is not None:
+            for k, b in enumerate(idx):
+                if self.dense_times[b][0] == 0.0:
+                    self.samples[b].append((np.zeros(1), y[:, k][None, :].copy()))
+                    self.next_k[b] = 1
+
+    def accepted(self, idx, t_old, t_new, y_old, y_new, ext_new, dense):
+        E = self._energy(idx, y_new)
+        self.dE[idx] = np.maximum(self.dE[idx], np.abs(E - self.E0[idx]))
+        T, v = self._tension_viol(idx, ext_new)
+        self.viol[idx] = np.maximum(self.viol[idx], v.max(axis=0))
+        self.Tmin[idx] = np.minimum(self.Tmin[idx], T.T)
+        self.Tmax[idx] = np.maximum(self.Tmax[idx], T.T)
+        neg = (T.T <= 0) & np.isnan(self.slack_t[idx])
+        if np.any(neg):
+            st = self.slack_t[idx]
+            st[neg] = np.broadcast_to(t_new[:, None], st.shape)[neg]
+            self.slack_t[idx] = st
+        # refine the extremes on the last three steps (parabola through them)
+        tt = np.stack([self.prev_t[0, idx], self.prev_t[1, idx], t_new])
+        TT = np.concatenate([self.prev_T[:, :, idx], T[:, None, :]], axis=1)
+        if np.all(np.isfinite(tt[0])):
+            _merge_refined(self, idx, *_refine_extremes(tt, TT))
+        self.prev_t[0, idx] = self.prev_t[1, idx]
+        self.prev_t[1, idx] = t_new
+        self.prev_T[:, 0, idx] = self.prev_T[:, 1, idx]
+        self.prev_T[:, 1, idx] = T
+        if self.keep:
+            self.states.append((idx, t_new, y_new.T.copy()))
+        e = self.e[:, idx]
+        c_old = np.sum(e * y_old, 0)
+        c_new = np.sum(e * y_new, 0)
+        up = np.nonzero((c_old < 0) & (c_new >= 0))[0]
+        need = up
+        if self.samples is not None:
+            has = self._next_sample()[idx] <= t_new  # the next unused sample time falls in this step
+            need = np.union1d(up, np.nonzero(has)[0])
+        if len(need):
+            F = dense(need)
+            pos = {int(j): k for k, j in enumerate(need)}
+            if len(up):
+                cols = [pos[int(j)] for j in up]
+                Fc = np.einsum("kmj,mj->kj", F[:, :, cols], e[:, up])
+                x = itg.crossing_on_step(Fc, c_old[up], c_new[up])
+                tc = t_old[up] + x * (t_new[up] - t_old[up])
+                for b, tt in zip(idx[up], tc):
+                    self.cross[b].append(float(tt))
+            if self.samples is not None:
+                for j in need:
+                    b = idx[j]
+                    ts = self.dense_times[b]
+                    sel = ts[(ts > t_old[j]) & (ts <= t_new[j])]
+                    self.next_k[b] = int(np.searchsorted(ts, t_new[j], side="right"))
+                    if len(sel):
+                        x = (sel - t_old[j]) / (t_new[j] - t_old[j])
+                        Fj = F[:, :, pos[int(j)]]
+                        ys = itg.dense_eval(Fj[:, :, None], y_old[:, j][:, None], x[None, :]).T
+                        self.samples[b].append((sel, ys))
+        self.tnow[idx] = t_new
+        if self.progress is not None:
+            self.progress(float(np.mean(np.minimum(self.tnow / self.t_end, 1.0))), 1.0)
+        if self.stop_on_slack:
+            return np.any(T <= 0, axis=0)
+        return None
+
+
+def _h0(T_ref: np.ndarray, rtol: np.ndarray) -> np.ndarray:
+    """First step, s: about the step the controller settles on (DOP853 takes
+    ~15-40 steps per period at rtol 1e-8..1e-12), a little smaller."""
+    return T_ref * 0.2 * np.asarray(rtol) ** 0.125
+
+
+def simulate_batch(
+    scenes: Sequence[Scene] | Scene,
+    mode: str | int | Sequence = "torsion",
+    amplitude: float | Sequence[float] = 0.05,
+    periods: float | Sequence[float] = 10.0,
+    *,
+    rtol: float = 1e-10,
+    atol: float | None = None,
+    rests: Sequence[RestPose] | None = None,
+    modes: Sequence[ModeSet] | None = None,
+    guess: RestPose | None = None,
+    on_slack: str = "continue",
+    errors: str = "raise",
+    samples_per_period: int | None = None,
+    lowest_point: bool = True,
+    health: bool = True,
+    method: str = "auto",
+    progress: Callable | None = None,
+) -> list[SceneRun]:
+    """Integrate the nonlinear motion of many scenes, each from ``amplitude``
+    x its mode shape, for ``periods`` linear periods of that mode.
+
+    Parameters
+    ----------
+    scenes : scenes (any mix of wire counts; grouped internally).
+    mode : label or 1-based index, or one per scene.
+    amplitude, periods : scalars or one per scene (rad or m; count).
+    rtol : relative tolerance of every scene's own error test (the meaning
+        of ``simulate``'s ``rtol``; the DOP853 engine takes scipy's DOP853
+        steps).  ``atol`` defaults, as in ``simulate``, to ``rtol`` x the
+        amplitude-scaled size of each state component.  Period error
+        measured ~0.1-1 x rtol (docs/performance.md): rtol 1e-10 for a
+        period good to 1e-10.
+    rests, modes : precomputed rest poses and mode sets (else computed
+        batched; ``guess`` warm-starts the rest poses).
+    on_slack : ``continue`` or ``stop`` (end a scene's run at the first step
+        -- lsoda: sample -- with a non-positive tension).
+    errors : ``raise`` (the first bad scene raises its error, as the
+        single-scene functions do) or ``return`` (its result has
+        ``error`` set and NaN figures).
+    samples_per_period : if given, also return dense samples ``t``, ``y``
+        (absolute positions) at that rate (dop853: 3 extra evaluations on
+        the steps that hold a sample; lsoda: at max(64, rate) per period);
+        the tension extremes then use the samples too.
+    lowest_point : compute the lowest point / depth.
+    health : compute the constraint violation, energy drift, tensions and
+        lowest point (False: only the period and the crossings; faster).
+    method : ``"dop853"``: the project's DOP853 with a step size and error
+        test per scene, health at its steps, crossings on the dense output;
+        ``"lsoda"``: LSODA (``scipy.integrate.odeint``, step loop in
+        Fortran) on the whole group as one ODE in normalised time, rtol and
+        atol divided by sqrt(B) so each scene keeps its own error bound,
+        health at 64 samples per period; ``"auto"`` (default, the fastest
+        measured, docs/performance.md): LSODA, scene by scene on floats
+        below :data:`SMALL_BATCH` scenes, stacked up to :data:`LARGE_BATCH`,
+        and the DOP853 engine from there.  Results of the two agree to the
+        tolerance (~1e-11 relative in the period at rtol 1e-10).
+    progress : ``progress(done, total)`` called as the batch advances.
+
+    Returns a list of :class:`SceneRun` in input order.
+    """
+    if isinstance(scenes, Scene):
+        scenes = [scenes]
+    scenes = list(scenes)
+    Bn = len(scenes)
+    if on_slack not in ("continue", "stop"):
+        raise InputError("--on-slack", "must be 'continue' or 'stop'")
+    if errors not in ("raise", "return"):
+        raise InputError("errors", "must be 'raise' or 'return'")
+    if method not in ("auto", "lsoda", "dop853"):
+        raise InputError("--method", f"batch method must be 'auto', 'lsoda' or 'dop853', got {method!r}")
+    if not (0 < rtol < 1e-2):
+        raise InputError("--rtol", f"must be in (0, 1e-2), got {rtol}")
+    modes_in = list(mode) if isinstance(mode, (list, tuple, np.ndarray)) else [mode] * Bn
+    amps = np.broadcast_to(np.asarray(amplitude, float), (Bn,))
+    pers = np.broadcast_to(np.asarray(periods, float), (Bn,))
+    if len(modes_in) != Bn:
+        raise InputError("mode", f"got {len(modes_in)} modes for {Bn} scenes")
+    if not np.all(np.isfinite(amps)) or not np.all(np.isfinite(pers)) or np.any(pers <= 0):
+        raise InputError("--periods", "amplitudes must be finite and periods positive")
+    out: list = [None] * Bn
+    for ii in _groups(scenes):
+        nw = scenes[ii[0]].n_wires
+        sub = [scenes[k] for k in ii]
+        if rests is None:
+            rs = rest_poses(sub, guess, errors=errors)
+        else:
+            rs = [rests[k] for k in ii]
+        ms: list = [None] * len(ii)
+        good = [j for j, r in enumerate(rs) if isinstance(r, RestPose)]
+        if modes is None:
+            for j, x in zip(good, modes_batch([sub[j] for j in good], [rs[j] for j in good])):
+                ms[j] = x
+        else:
+            ms = [modes[k] for k in ii]
+        runnable = []
+        for j, k in enumerate(ii):
+            if not isinstance(rs[j], RestPose):
+                out[k] = _failed(f"{rs[j]}", modes_in[k], amps[k], nw, rtol)
+                continue
+            try:
+                md = _mode_of(ms[j], modes_in[k])
+            except InputError as exc:
+                if errors != "return":
+                    raise
+                out[k] = _failed(str(exc), modes_in[k], amps[k], nw, rtol)
+                continue
+            runnable.append((k, j, md))
+        if runnable:
+            ok = feasible_amplitudes([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],
+                                     [md for _, _, md in runnable], amps[[k for k, _, _ in runnable]])
+            if not np.all(ok):
+                if errors != "return":
+                    k0 = runnable[int(np.argmin(ok))][0]
+                    raise InputError("--amplitude", f"amplitude {amps[k0]:g} is too large for scene {k0 + 1}: no "
+                                     "start pose keeps every wire at its length; reduce the amplitude")
+                for (k, _, _), good in zip(runnable, ok):
+                    if not good:
+                        out[k] = _failed(f"--amplitude: {amps[k]:g} is too large (no start pose keeps every wire "
+                                         "at its length)", modes_in[k], amps[k], nw, rtol)
+                runnable = [x for x, good in zip(runnable, ok) if good]
+        if runnable:
+            res = _run_group([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],
+                             [md for _, _, md in runnable], amps[[k for k, _, _ in runnable]],
+                             pers[[k for k, _, _ in runnable]], rtol, atol, on_slack, samples_per_period,
+                             lowest_point, progress, method, health)
+            for (k, _, _), r in zip(runnable, res):
+                out[k] = r
+    return out
+
+
+def _mode_of(ms: ModeSet, key) -> Mode:
+    try:
+        md = ms.get(key)
+    except KeyError as exc:
+        raise InputError("--mode", str(exc.args[0])) from None
+    if md.period is None:
+        raise InputError("--mode", f"mode '{md.label}' has no restoring stiffness (no period); pick another")
+    return md
+
+
+def run_one(scene: Scene, rest: RestPose, md: Mode, amplitude: float, periods: float, rtol: float = 1e-10,
+            atol=None, samples_per_period: int | None = None, lowest_point: bool = True, health: bool = True,
+            method: str = "auto", on_slack: str = "continue") -> SceneRun:
+    """One scene through the float fast path (what :func:`simulate_batch` does
+    for a batch of one), given its rest pose and mode (no input checks)."""
+    return _run_group([scene], [rest], [md], np.array([amplitude], float), np.array([periods], float), rtol, atol,
+                      on_slack, samples_per_period, lowest_point, None, method, health)[0]
+
+
+SMALL_BATCH = 20
+"""Below this many scenes a group runs scene by scene on Python floats: numpy
+calls on arrays of a few elements cost more than the float arithmetic
+(docs/performance.md, batch-size table)."""
+LARGE_BATCH = 300
+"""From this many scenes ``method="auto"`` uses the per-scene-step DOP853
+engine, below it LSODA on the stacked system (measured crossover)."""
+
+
+def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
+               method: str = "auto", health: bool = True) -> list[SceneRun]:
+    Bn = len(scenes)
+    if method == "auto":
+        method = "lsoda" if Bn < LARGE_BATCH else "dop853"
+    if 1 < Bn < SMALL_BATCH:
+        out = []
+        for j in range(Bn):
+            out += _run_group(scenes[j:j + 1], rests[j:j + 1], mds[j:j + 1], amps[j:j + 1], pers[j:j + 1], rtol, atol,
+                              on_slack, spp, lowest_point, None, method, health)
+            if progress is not None:
+                progress((j + 1) / Bn, 1.0)
+        return out
+    t_start = time.perf_counter()
+    n = scenes[0].n_wires
+    y0 = initial_states(scenes, rests, mds, amps)
+    com0 = np.array([r.com for r in rests])
+    ys0 = y0.copy()
+    ys0[:, :3] -= com0  # integrate relative to the rest CoM (tolerances apply to the oscillation)
+    P = mx.params_from_scenes(scenes)
+    P = mx.RigParams(**{**{k: getattr(P, k) for k in P.__dataclass_fields__}, "anchors": P.anchors - com0[:, None, :]})
+    T_ref = np.array([md.period for md in mds])
+    t_end = pers * T_ref
+    omega = 2 * np.pi / T_ref
+    Lmax = P.lengths.max(axis=1)
+    amp = np.maximum(np.abs(amps), 1e-6)
+    rt = np.full(Bn, float(rtol))
+    if atol is None:
+        at = rt * np.concatenate([np.repeat((amp * Lmax)[None], 3, 0), np.repeat(amp[None], 4, 0),
+                                  np.repeat((amp * omega * Lmax)[None], 3, 0), np.repeat((amp * omega)[None], 3, 0)])
+    else:
+        at = np.broadcast_to(np.asarray(atol, float).reshape(-1, 1) if np.ndim(atol) else float(atol), (13, Bn)).copy()
+    e = np.array([_coordinate_vector(md.dominant, r.q) for md, r in zip(mds, rests)]).T  # (13, B)
+    L2 = (P.lengths**2).T
+    if method == "lsoda":
+        obs = _Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, False, progress, t_end,
+                      [None] * Bn if spp else None)
+        try:
+            nfev, nsteps, status, msgs = _lsoda(P, ys0, T_ref, pers, float(rtol), at, max(64, int(spp or 0)), obs,
+                                                scenes, com0, health, lowest_point and health, on_slack, progress)
+        except _BatchFailed:  # one scene spoils the shared run: run them one by one
+            return [_run_group([s_], [r_], [m_], amps[j:j + 1], pers[j:j + 1], rtol, atol, on_slack, spp,
+                               lowest_point, None, method, health)[0]
+                    for j, (s_, r_, m_) in enumerate(zip(scenes, rests, mds))]
+    else:
+        dense_times = None
+        if spp:
+            dense_times = [np.linspace(0.0, te, max(int(spp * te / tr), 200) + 1) for te, tr in zip(t_end, T_ref)]
+        obs = _Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest_point, progress, t_end,
+                      dense_times)
+        h0 = _h0(T_ref, rt)
+        if Bn == 1:
+            nfev, nsteps, status, msg = _single(P.take(0), ys0[0], float(t_end[0]), float(rt[0]), at[:, 0],
+                                                float(h0[0]), obs, on_slack)
+            nfev, nsteps, status, msgs = np.array([nfev]), np.array([nsteps]), np.array([status]), {0: msg} if msg else {}
+        else:
+            def make_f(idx):
+                return mx.compiled_kernel(P.take(idx), extras=True)
+
+            run = itg.integrate_batch(make_f, ys0.T, t_end, rt, at, h0, obs)
+            nfev, nsteps, status, msgs = run.nfev, run.nsteps, run.status, run.messages
+            obs.t_final[:] = run.t
+            obs.y_final[:] = run.y.T
+    if method == "dop853" and obs.samples is not None and health:
+        # tensions at the requested samples too (a finer resolution of the extremes)
+        for b in range(Bn):
+            if obs.samples[b]:
+                ts_ = np.concatenate([p_[0] for p_ in obs.samples[b]])
+                ys_ = np.concatenate([p_[1] for p_ in obs.samples[b]])
+                out_ = mx.compiled_kernel(P.take(b), extras=True)(*ys_.T)
+                lam_ = np.array(np.broadcast_arrays(*out_[13:13 + n]))
+                phi_ = np.array(np.broadcast_arrays(*out_[13 + n:13 + 2 * n]))
+                T_ = -lam_ * np.sqrt(L2[:, b:b + 1] + 2 * phi_)  # (n, k)
+                obs.Tmin[b] = np.minimum(obs.Tmin[b], T_.min(axis=1))
+                obs.Tmax[b] = np.maximum(obs.Tmax[b], T_.max(axis=1))
+                _merge_refined(obs, np.array([b]), *_refine_extremes(ts_[:, None], T_[:, :, None]))
+    runtime = (time.perf_counter() - t_start) / Bn
+    # lowest point at the stored steps
+    lz = obs.lz
+    if lowest_point and obs.states:
+        idx_all = np.concatenate([s[0] for s in obs.states])
+        Y_all = np.concatenate([s[2] for s in obs.states])
+        order = np.argsort(idx_all, kind="stable")
+        bounds = np.searchsorted(idx_all[order], np.arange(Bn + 1))
+        for b in range(Bn):
+            Yb = Y_all[order[bounds[b]:bounds[b + 1]]]
+            if len(Yb):
+                com = Yb[:, :3] + com0[b]
+                lz[b] = float(np.min(lowest_point_z(scenes[b], com, mx.quat_to_matrix(Yb[:, 3:7]))))
+    out = []
+    for b in range(Bn):
+        tc = np.array(obs.cross[b])
+        period, pstd = measured_period(tc)
+        E0 = obs.E0[b]
+        drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else 0.0
+        slack = [(i + 1, float(obs.slack_t[b, i])) for i in range(n) if np.isfinite(obs.slack_t[b, i])]
+        warnings = []
+        for w_, ts_ in slack:
+            warnings.append(f"WIRE {w_} GOES SLACK at t = {ts_:.4g} s (tension {obs.Tmin[b, w_ - 1]:.3g} N): "
+                            "the motion after that is not physical; reduce the amplitude")
+        if status[b] == 1:
+            warnings.append("run stopped because a wire went slack")
+        if status[b] == -1:
+            warnings.append(f"integration failed: {msgs.get(b, '')}")
+        if obs.viol[b] > 1e-6 * Lmax[b]:
+            warnings.append(f"constraint violation {obs.viol[b]:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
+        if period is None:
+            warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
+        t_s = y_s = None
+        if obs.samples is not None:
+            parts = obs.samples[b]
+            if parts:
+                t_s = np.concatenate([p_[0] for p_ in parts])
+                y_s = np.concatenate([p_[1] for p_ in parts])
+                y_s[:, :3] += com0[b]
+        out.append(SceneRun(
+            period=period, period_std=pstd, crossings=tc, linear_period=float(T_ref[b]),
+            max_constraint_violation=float(obs.viol[b]), energy_drift=drift,
+            tension_min=obs.Tmin[b].copy(), tension_max=obs.Tmax[b].copy(), slack=slack,
+            lowest_z_min=float(lz[b]), depth_max=float(scenes[b].ceiling_z - lz[b]),
+            mode=mds[b].label, amplitude=float(amps[b]), coordinate_name=COMPONENTS[mds[b].dominant],
+            rtol=float(rt[b]), nfev=int(nfev[b]), nsteps=int(nsteps[b]), runtime=runtime, t=t_s, y=y_s,
+            t_final=float(obs.t_final[b]), y_final=obs.y_final[b] + np.r_[com0[b], np.zeros(10)],
+            warnings=warnings, method=_METHOD_NAME[method],
+        ))
+    return out
+
+
+def _single(P1: mx.RigParams, y0, t_end, rtol, atol, h0, obs: _Health, on_slack: str):
+    """One scene on Python floats; the observer is fed afterwards, in one
+    vectorised pass over the accepted steps."""
+    k = mx.compiled_kernel(P1, extras=True)
+    n = int(P1.lengths.shape[-1])
+    stop = None
+    if on_slack == "stop":
+        L2 = P1.lengths**2
+
+        def stop(t, y, ext):
+            lam = np.asarray(ext[:n])
+            return bool(np.any(-lam * np.sqrt(L2 + 2.0 * np.asarray(ext[n:2 * n])) <= 0))
+
+    run = itg.integrate_single(k, y0, t_end, rtol, atol, h0, stop=stop)
+    idx0 = np.zeros(1, int)
+    Y = run.y.T  # (13, k+1)
+    obs.start(idx0, Y[:, :1], run.ext[:1].T)
+    if len(run.t) > 1:
+        # all steps at once: health over the steps; crossings located step by step
+        ns = len(run.t) - 1
+        idx = np.zeros(ns, int)
+        e = obs.e[:, 0]
+        c = e @ Y
+        up = np.nonzero((c[:-1] < 0) & (c[1:] >= 0))[0]
+        E = obs._energy(idx, Y[:, 1:])
+        obs.dE[0] = np.max(np.abs(E - obs.E0[0]))
+        T, v = obs._tension_viol(idx, run.ext[1:].T)
+        obs.viol[0] = max(obs.viol[0], float(v.max()))
+        obs.Tmin[0] = np.minimum(obs.Tmin[0], T.min(axis=1))
+        obs.Tmax[0] = np.maximum(obs.Tmax[0], T.max(axis=1))
+        for i in range(n):
+            neg = np.nonzero(T[i] <= 0)[0]
+            if len(neg):
+                obs.slack_t[0, i] = run.t[neg[0] + 1]
+        T_all = obs._tension_viol(np.zeros(ns + 1, int), run.ext.T)[0]  # (n, k+1) including t = 0
+        _merge_refined(obs, idx0, *_refine_extremes(run.t[:, None], T_all[:, :, None]))
+        if obs.keep:
+            obs.states.append((idx, run.t[1:], run.y[1:]))
+        steps = set(up.tolist())
+        samp_step = None
+        if obs.samples is not None:
+            ts = obs.dense_times[0]
+            ts = ts[(ts > 0) & (ts <= run.t[-1])]
+            samp_step = np.clip(np.searchsorted(run.t, ts, side="left") - 1, 0, ns - 1)
+            steps |= set(samp_step.tolist())
+        for jstep in sorted(steps):
+            F = run.dense(k, jstep)
+            if jstep in up:
+                Fc = (e @ F.reshape(7, 13).T)[:, None]
+                x = itg.crossing_on_step(Fc, np.array([c[jstep]]), np.array([c[jstep + 1]]))
+                obs.cross[0].append(float(run.t[jstep] + x[0] * (run.t[jstep + 1] - run.t[jstep])))
+            if samp_step is not None:
+                sel = ts[samp_step == jstep]
+                if len(sel):
+                    x = (sel - run.t[jstep]) / (run.t[jstep + 1] - run.t[jstep])
+                    ys = itg.dense_eval(F[:, :, None], run.y[jstep][:, None], x[None, :]).T
+                    obs.samples[0].append((sel, ys))
+        obs.cross[0].sort()
+    obs.t_final[0] = run.t[-1]
+    obs.y_final[0] = run.y[-1]
+    return run.nfev, len(run.t) - 1, run.status, run.message
+
+
+def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: _Health, scenes, com0,
+           health: bool, lowest_point: bool, on_slack: str, progress):
+    """The whole group as one ODE in normalised time tau = t / T_ref (every
+    scene oscillates at ~1 per unit tau, so one step sequence suits all),
+    integrated by LSODA (:func:`scipy.integrate.odeint`: the step loop runs in
+    Fortran, only the compiled right-hand side is Python).
+
+    Per-scene accuracy: LSODA's error test bounds the root-mean-square of
+    the weighted local errors of all 13 B components; dividing rtol and
+    atol by sqrt(B) makes every scene's own weighted RMS error obey the
+    bound it would have alone (RMS over 13 <= sqrt(B) x RMS over 13 B).
+    The state is stored scene-major, so the Jacobian is banded (12 + 12) if
+    LSODA ever switches to its stiff method.
+
+    Samples at ``spp`` per period feed the crossings (degree-7 local
+    interpolation, :func:`~bifilar.integrators.sampled_crossings`) and,
+    with ``health``, the constraint violation, energy drift, tensions and
+    lowest point.  Long runs go in windows so memory stays ~50 MB.
+    """
+    from scipy.integrate import odeint
+
+    Bn = len(T_ref)
+    n = int(P.lengths.shape[-1])
+    sq = np.sqrt(Bn)
+    rte = rtol / sq
+    ate = (at / sq).T.ravel()  # scene-major
+    if Bn == 1:
+        k1 = mx.compiled_kernel(P.take(0))
+        T1 = float(T_ref[0])
+        array = np.array
+
+        def f(y, tau):
+            return array(k1(*y.tolist())) * T1
+        kx = mx.compiled_kernel(P.take(0), extras=True)
+    else:
+        kb = mx.compiled_kernel(P)
+        Tcol = T_ref[:, None]
+
+        def f(y, tau):
+            out = kb(*y.reshape(Bn, 13).T)
+            return (np.array(out).T * Tcol).ravel()
+        kx = mx.compiled_kernel(P, extras=True)
+    tau_end = float(np.max(pers))
+    K_total = int(np.ceil(tau_end * spp - 1e-9))
+    taus = np.arange(K_total + 1) / spp
+    taus[-1] = min(taus[-1], tau_end) if K_total else tau_end
+    stop_tau = pers.astype(float).copy()  # per-scene end (earlier if a wire goes slack and on_slack == "stop")
+    chunk = max(4 * spp, int(4e6 / (13 * Bn)))
+    y = ys0.ravel().copy()
+    tail_c = None  # last 7 samples of the previous window (crossing stencils)
+    nfe = nst = 0
+    status = np.zeros(Bn, int)
+    msgs: dict = {}
+    first = True
+    k0 = 0
+    cross_cols, cross_t = [], []
+    while k0 < K_total:
+        k1_ = min(K_total, k0 + chunk)
+        tt = taus[k0:k1_ + 1]
+        Y, info = odeint(f, y, tt, rtol=rte, atol=ate, full_output=True, mxstep=100000, ml=12, mu=12)
+        if info["message"] != "Integration successful.":
+            if Bn > 1:
+                raise _BatchFailed(info["message"])
+            status[0] = -1
+            msgs[0] = f"LSODA: {info['message']}"
+            good = np.nonzero(np.all(np.isfinite(Y), axis=1))[0]
+            Y = Y[: (good[-1] + 1) if len(good) else 1]
+            tt = tt[: len(Y)]
+            stop_tau[0] = min(stop_tau[0], tt[-1])
+        nfe += int(info["nfe"][-1]) if len(info["nfe"]) else 0
+        nst += int(info["nst"][-1]) if len(info["nst"]) else 0
+        y = Y[-1].copy()
+        Ys = Y.reshape(len(tt), Bn, 13)
+        if not first:  # the window's first sample repeats the previous window's last
+            Ys, tt = Ys[1:], tt[1:]
+        # crossings of the timed coordinate
+        c = np.einsum("kbm,mb->kb", Ys, obs.e)
+        cc = c if tail_c is None else np.concatenate([tail_c, c])
+        base = 0 if tail_c is None else len(tail_c)
+        tau0 = tt[0] - base / spp
+        col, tx, kl = itg.sampled_crossings(cc, 1.0 / spp)
+        keep = kl >= base - 1  # pairs ending in this window (earlier ones were found before)
+        cross_cols.append(col[keep])
+        cross_t.append(tx[keep] + tau0)
+        tail_c = cc[-7:]
+        if health:
+            _sample_health(Ys, tt, obs, P, kx, n, scenes, com0, T_ref, stop_tau, lowest_point, on_slack, first)
+        if obs.samples is not None:
+            for b in range(Bn):
+                sel = tt <= stop_tau[b] + 1e-12
+                if np.any(sel):
+                    yy = Ys[sel, b, :].copy()
+                    yy[:, :3] += com0[b]
+                    obs.samples[b].append((tt[sel] * T_ref[b], yy))
+        if progress is not None:
+            progress(min(float(tt[-1]) / tau_end, 1.0), 1.0)
+        first = False
+        k0 = k1_
+        if status[0] == -1 and Bn == 1:
+            break
+    obs.t_final[:] = np.minimum(tt[-1], stop_tau) * T_ref
+    obs.y_final[:] = y.reshape(Bn, 13)
+    cols = np.concatenate(cross_cols) if cross_cols else np.zeros(0, int)
+    tcs = np.concatenate(cross_t) if cross_t else np.zeros(0)
+    for b in range(Bn):
+        sel = tcs[cols == b]
+        obs.cross[b] = list(np.sort(sel[sel <= stop_tau[b] + 1e-12]) * T_ref[b])
+        if stop_tau[b] < pers[b] - 1e-12 and status[b] == 0:
+            status[b] = 1
+    _finish_lowest(obs, scenes)
+    return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
+
+
+class _BatchFailed(Exception):
+    pass
+
+
+def _sample_health(Ys, tt, obs: _Health, P, kx, n, scenes, com0, T_ref, stop_tau, lowest_point, on_slack, first):
+    """Health figures at the samples of one window (blocks of ~50k values)."""
+    K, Bn, _ = Ys.shape
+    blk = max(1, int(5e4 // max(Bn, 1)))
+    for s0 in range(0, K, blk):
+        Yb = Ys[s0:s0 + blk]  # (kb, B, 13)
+        tb = tt[s0:s0 + blk]
+        valid = tb[:, None] <= stop_tau[None, :] + 1e-12  # (kb, B)
+        comps = [Yb[:, :, j] for j in range(13)]
+        if Bn == 1:
+            comps = [cmp[:, 0] for cmp in comps]
+        out = kx(*comps)
+        lam = np.array(np.broadcast_arrays(*out[13:13 + n])).reshape(n, len(tb), Bn)
+        phi = np.array(np.broadcast_arrays(*out[13 + n:13 + 2 * n])).reshape(n, len(tb), Bn)
+        L2 = obs.L2[:, None, :]
+        dl = np.sqrt(L2 + 2.0 * phi)
+        T = -lam * dl  # (n, kb, B)
+        viol = np.abs(2.0 * phi / (dl + np.sqrt(L2)))
+        if on_slack == "stop":
+            slack_now = np.any(T <= 0, axis=0) & valid  # (kb, B)
+            if np.any(slack_now):
+                kfirst = np.where(np.any(slack_now, axis=0), np.argmax(slack_now, axis=0), -1)
+                for b in np.nonzero(kfirst >= 0)[0]:
+                    stop_tau[b] = min(stop_tau[b], tb[kfirst[b]])
+                valid = tb[:, None] <= stop_tau[None, :] + 1e-12
+        if len(tb) >= 3:
+            Tv = np.where(valid[None], T, np.nan)
+            rmin, rt_, rmax = _refine_extremes(np.broadcast_to(tb[:, None], valid.shape), Tv)
+            _merge_refined(obs, np.arange(Bn), np.where(np.isfinite(rmin), rmin, np.inf), rt_,
+                           np.where(np.isfinite(rmax), rmax, -np.inf), T_ref)
+        vT = np.where(valid[None], T, np.nan)
+        with np.errstate(all="ignore"):
+            obs.Tmin = np.fmin(obs.Tmin, np.nanmin(vT, axis=1).T) if np.any(valid) else obs.Tmin
+            obs.Tmax = np.fmax(obs.Tmax, np.nanmax(vT, axis=1).T) if np.any(valid) else obs.Tmax
+            obs.viol = np.fmax(obs.viol, np.nanmax(np.where(valid[None], viol, np.nan), axis=(0, 1)))
+        neg = (T <= 0) & valid[None]
+        if np.any(neg):
+            for i, kk, b in zip(*np.nonzero(neg)):
+                if np.isnan(obs.slack_t[b, i]):
+                    obs.slack_t[b, i] = tb[kk] * T_ref[b]
+        # energy relative to the rest pose (positions are relative to the rest CoM)
+        v = Yb[:, :, 7:10]
+        w = Yb[:, :, 10:13]
+        Iw = np.einsum("bij,kbj->kbi", obs.inertia, w)
+        E = 0.5 * obs.mass * np.sum(v * v, -1) + 0.5 * np.sum(w * Iw, -1) + obs.mass * obs.grav * Yb[:, :, 2]
+        if first and s0 == 0:
+            obs.E0 = E[0].copy()
+        obs.dE = np.fmax(obs.dE, np.nanmax(np.where(valid, np.abs(E - obs.E0), np.nan), axis=0))
+        if lowest_point:
+            # third row of R (body -> world) from the quaternions: world z of the body axes
+            q = Yb[:, :, 3:7]
+            q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+            qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+            down = -np.stack([2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)], -1)
+            z = np.where(valid, Yb[:, :, 2] + com0[None, :, 2], np.inf)
+            obs.low_parts.append((z, down))
+
+
+def _finish_lowest(obs: _Health, scenes) -> None:
+    """Lowest body point over the stored samples: one support call per scene."""
+    if not obs.low_parts:
+        return
+    z = np.concatenate([p_[0] for p_ in obs.low_parts])
+    down = np.concatenate([p_[1] for p_ in obs.low_parts])
+    for b, sc in enumerate(scenes):
+        ok = np.isfinite(z[:, b])
+        if np.any(ok):
+            lz = float(np.min(z[ok, b] - sc.body_support(down[ok, b])))
+            obs.lz[b] = lz if np.isnan(obs.lz[b]) else min(obs.lz[b], lz)
+    obs.low_parts = []
