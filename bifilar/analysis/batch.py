@@ -501,29 +501,12 @@ class SceneRun:
 
     def to_json(self) -> dict:
         """The keys of :meth:`SimulationResult.to_json` (interface.md) where they apply."""
-        def f(x):
-            return None if x is None or (isinstance(x, float) and not np.isfinite(x)) else float(x)
+        from .simulate import run_json
 
-        return {
-            "period": f(self.period),
-            "linear_period": f(self.linear_period),
-            "max_constraint_violation": f(self.max_constraint_violation),
-            "energy_drift": f(self.energy_drift),
-            "tension": {"min": [float(v) for v in self.tension_min], "max": [float(v) for v in self.tension_max]},
-            "period_std": f(self.period_std),
-            "cycles": max(len(self.crossings) - 1, 0),
-            "mode": self.mode,
-            "amplitude": self.amplitude,
-            "timed_coordinate": self.coordinate_name,
-            "slack": [{"wire": w, "t": float(t)} for w, t in self.slack],
-            "lowest_point_z": f(self.lowest_z_min),
-            "depth_below_ceiling": f(self.depth_max),
-            "model": self.model,
-            "integrator": {"method": self.method, "rtol": self.rtol, "nfev": int(self.nfev), "steps": int(self.nsteps),
-                           "runtime_s": float(self.runtime)},
-            "warnings": list(self.warnings),
-            "error": self.error,
-        }
+        doc = run_json(self, {"method": self.method, "rtol": self.rtol, "nfev": int(self.nfev),
+                              "steps": int(self.nsteps), "runtime_s": float(self.runtime)})
+        doc["error"] = self.error
+        return doc
 
 
 _METHOD_NAME = {"lsoda": "LSODA (scipy odeint, batch in normalised time)",

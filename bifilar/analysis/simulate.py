@@ -74,28 +74,35 @@ class SimulationResult:
     warnings: list = field(default_factory=list)
 
     def to_json(self) -> dict:
-        def f(x):
-            return None if x is None else float(x)
+        return run_json(self, {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
+                               "runtime_s": float(self.runtime)})
 
-        return {
-            "period": f(self.period),
-            "linear_period": f(self.linear_period),
-            "max_constraint_violation": float(self.max_constraint_violation),
-            "energy_drift": float(self.energy_drift),
-            "tension": {"min": [float(v) for v in self.tension_min], "max": [float(v) for v in self.tension_max]},
-            "period_std": f(self.period_std),
-            "cycles": max(len(self.crossings) - 1, 0),
-            "mode": self.mode,
-            "amplitude": self.amplitude,
-            "timed_coordinate": self.coordinate_name,
-            "slack": [{"wire": w, "t": float(t)} for w, t in self.slack],
-            "lowest_point_z": float(self.lowest_z_min),
-            "depth_below_ceiling": float(self.depth_max),
-            "model": self.model,
-            "integrator": {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
-                           "runtime_s": float(self.runtime)},
-            "warnings": list(self.warnings),
-        }
+
+def run_json(r, integrator: dict) -> dict:
+    """The ``simulate --json`` document of interface.md (plus extras) from any
+    run result with the fields of :class:`SimulationResult`."""
+
+    def f(x):
+        return None if x is None or (isinstance(x, float) and not np.isfinite(x)) else float(x)
+
+    return {
+        "period": f(r.period),
+        "linear_period": f(r.linear_period),
+        "max_constraint_violation": f(r.max_constraint_violation),
+        "energy_drift": f(r.energy_drift),
+        "tension": {"min": [float(v) for v in r.tension_min], "max": [float(v) for v in r.tension_max]},
+        "period_std": f(r.period_std),
+        "cycles": max(len(r.crossings) - 1, 0),
+        "mode": r.mode,
+        "amplitude": r.amplitude,
+        "timed_coordinate": r.coordinate_name,
+        "slack": [{"wire": w, "t": float(t)} for w, t in r.slack],
+        "lowest_point_z": f(r.lowest_z_min),
+        "depth_below_ceiling": f(r.depth_max),
+        "model": r.model,
+        "integrator": integrator,
+        "warnings": list(r.warnings),
+    }
 
 
 def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 50,
