@@ -10,12 +10,15 @@ file unless ``--force`` is given, and never over the input config.
 from __future__ import annotations
 
 import functools
+import io
 import json
 import logging
 import math
 import os
+import stat
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any, Callable
 
@@ -24,51 +27,213 @@ import click
 log = logging.getLogger("bifilar")
 
 
+class _StderrHandler(logging.StreamHandler):
+    """Log handler writing to whatever ``sys.stderr`` is at the time of the
+    record (click's test runner and pytest swap it)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value) -> None:  # the stream is always the current sys.stderr
+        pass
+
+
+class _LowerLevelFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        return f"{record.levelname.lower()}: {_one_line(record.getMessage())}"
+
+
 def setup_logging(verbose: bool) -> None:
-    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, stream=sys.stderr,
-                        format="%(levelname)s: %(message)s")
+    """Send the package's log records (``bifilar.*``) to stderr as
+    ``warning: ...`` lines; INFO too with ``verbose``.  Idempotent."""
+    logger = logging.getLogger("bifilar")
+    for h in list(logger.handlers):
+        if isinstance(h, _StderrHandler):
+            logger.removeHandler(h)
+    handler = _StderrHandler()
+    handler.setFormatter(_LowerLevelFormatter())
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO if verbose else logging.WARNING)
+
+
+def _one_line(s: str) -> str:
+    """Collapse a message onto one line (the CLI promises one line per problem)."""
+    return " ".join(str(s).replace("\r", "\n").split("\n"))
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM turned into an exception so that ``finally`` blocks (temporary
+    files of :func:`atomic_write`) run; the CLI exits with status 143."""
+
+
+def _raise_terminated(signum, frame):  # pragma: no cover - exercised through a subprocess
+    raise Terminated()
 
 
 def handle_errors(fn: Callable) -> Callable:
-    """Turn package errors into one-line messages and exit codes."""
+    """Decorator for commands: package errors -> one-line messages and exit codes.
+
+    * :class:`~bifilar.errors.InputError` (and :class:`~bifilar.errors.ConfigErrors`,
+      one line per problem): exit 2, ``error: <field>: <message>``;
+    * any other :class:`~bifilar.errors.BifilarError`: exit 1,
+      ``error: <ClassName>: <message>``;
+    * any other exception: exit 1, ``error: internal error (...)``;
+    * Ctrl-C: exit 130, SIGTERM: exit 143 (``interrupted`` / ``terminated``),
+      after temporary output files are removed;
+    * a closed stdout pipe (``| head``): exit 141 quietly.
+
+    ``bifilar --debug CMD`` re-raises instead (a traceback, exit 1).
+    """
 
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
+        import signal
+        import threading
+
         from ..errors import BifilarError, ConfigErrors, InputError
 
         ctx = click.get_current_context()
         debug = bool((ctx.obj or {}).get("debug"))
+        old_term = None
+        if threading.current_thread() is threading.main_thread():
+            try:
+                old_term = signal.signal(signal.SIGTERM, _raise_terminated)
+            except (ValueError, OSError):  # pragma: no cover - exotic embedding
+                old_term = None
         try:
-            return fn(*args, **kwargs)
+            with warnings.catch_warnings():
+                if not debug:
+                    warnings.showwarning = _show_warning_one_line
+                return fn(*args, **kwargs)
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
             raise
         except ConfigErrors as exc:
             if debug:
                 raise
             for e in exc.errors:
-                click.echo(f"error: {e}", err=True)
+                click.echo(f"error: {_one_line(str(e))}", err=True)
             ctx.exit(2)
         except InputError as exc:
             if debug:
                 raise
-            click.echo(f"error: {exc}", err=True)
+            click.echo(f"error: {_one_line(str(exc))}", err=True)
             ctx.exit(2)
         except BifilarError as exc:
             if debug:
                 raise
-            click.echo(f"error: {type(exc).__name__}: {exc}", err=True)
+            click.echo(f"error: {type(exc).__name__}: {_one_line(str(exc))}", err=True)
             ctx.exit(1)
+        except Terminated:
+            click.echo("terminated", err=True)
+            ctx.exit(143)
         except KeyboardInterrupt:
             click.echo("interrupted", err=True)
             ctx.exit(130)
+        except BrokenPipeError:
+            _silence_stdout()
+            ctx.exit(141)
+        except OSError as exc:  # disk full, permission denied while writing an output, ...
+            if debug:
+                raise
+            where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+            click.echo(f"error: {type(exc).__name__}: {_one_line(exc.strerror or str(exc))}{where}", err=True)
+            ctx.exit(1)
         except Exception as exc:  # noqa: BLE001 - last resort, never a traceback without --debug
             if debug:
                 raise
-            click.echo(f"error: internal error ({type(exc).__name__}: {exc}); rerun with --debug for a traceback",
-                       err=True)
+            click.echo(f"error: internal error ({type(exc).__name__}: {_one_line(str(exc))}); "
+                       "rerun with --debug for a traceback", err=True)
             ctx.exit(1)
+        finally:
+            if old_term is not None:
+                signal.signal(signal.SIGTERM, old_term)
 
     return wrapper
+
+
+def _show_warning_one_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """Python warnings (numpy overflow, scipy) as one ``warning:`` line on stderr."""
+    click.echo(f"warning: {category.__name__}: {_one_line(str(message))}", err=True)
+
+
+def _silence_stdout() -> None:
+    """After EPIPE: point stdout at /dev/null so the interpreter's final flush is quiet."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        pass
+
+
+class OptionChecker:
+    """Collect command-line option problems and report them all at once.
+
+    Usage in a command (before any work)::
+
+        chk = OptionChecker()
+        chk.positive("--periods", periods)
+        chk.in_range("--rtol", rtol, 0, 1e-2, lo_open=True, hi_open=True)
+        chk.done()  # raises ConfigErrors (exit 2, one line per problem) if any failed
+
+    Each check returns True when the value passed (so later checks that
+    need a valid value can be skipped).
+    """
+
+    def __init__(self) -> None:
+        self.errors: list = []
+
+    def error(self, option: str, message: str) -> None:
+        from ..errors import InputError
+
+        self.errors.append(InputError(option, message))
+
+    def finite(self, option: str, value: float | None) -> bool:
+        if value is None:
+            return True
+        if not math.isfinite(value):
+            self.error(option, f"must be finite, got {value}")
+            return False
+        return True
+
+    def positive(self, option: str, value: float | None) -> bool:
+        if value is None or not self.finite(option, value):
+            return value is None
+        if value <= 0:
+            self.error(option, f"must be positive, got {value:g}")
+            return False
+        return True
+
+    def in_range(self, option: str, value: float | None, lo: float, hi: float, *,
+                 lo_open: bool = False, hi_open: bool = False) -> bool:
+        if value is None or not self.finite(option, value):
+            return value is None
+        ok = (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi)
+        if not ok:
+            interval = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+            self.error(option, f"must be in {interval}, got {value:g}")
+        return ok
+
+    def choice(self, option: str, value: Any, choices) -> bool:
+        if value is None or value in choices:
+            return True
+        import difflib
+
+        hint = difflib.get_close_matches(str(value), [str(c) for c in choices], n=1)
+        extra = f"; did you mean '{hint[0]}'?" if hint else ""
+        self.error(option, f"must be one of {', '.join(map(str, choices))}, got {value!r}{extra}")
+        return False
+
+    def done(self) -> None:
+        """Raise :class:`~bifilar.errors.ConfigErrors` with every problem, if any."""
+        from ..errors import ConfigErrors
+
+        if self.errors:
+            raise ConfigErrors(self.errors)
 
 
 def _clean(x: Any) -> Any:
@@ -106,33 +271,74 @@ def err_console():
     return Console(stderr=True)
 
 
+PLOT_SUFFIXES = frozenset({".png", ".pdf", ".svg", ".svgz", ".eps", ".ps", ".pgf", ".jpg", ".jpeg", ".tif", ".tiff",
+                           ".webp", ".gif"})
+"""File name endings matplotlib can draw to (``--plot`` names are checked before any work)."""
+
+
 def check_output_path(path: str | None, force: bool, protected: list[str | None], option: str) -> Path | None:
-    """Validate an output path before any work is done (exit 2 on problems)."""
+    """Validate an output path before any work is done (exit 2 on problems).
+
+    ``protected``: paths this command reads or writes through other options
+    (by convention the input config first); the output may be none of them,
+    whether or not they exist yet (symlinks and hard links included).  An
+    existing file is only replaced with ``force``; a directory never.  For
+    ``option == "--plot"`` the name must end in an image format
+    (:data:`PLOT_SUFFIXES`)."""
     from ..errors import InputError
 
     if path is None:
         return None
     p = Path(path)
-    for q in protected:
-        if q is not None and Path(q).exists() and p.exists() and p.resolve() == Path(q).resolve():
-            raise InputError(option, f"refusing to write over the input file {q}")
+    if str(path).strip() == "":
+        raise InputError(option, "must be a file name, got an empty string")
+    for k, q in enumerate(protected):
+        if q is None:
+            continue
+        if _same_file(p, Path(q)):
+            if k == 0:
+                raise InputError(option, f"refusing to write over the input file {q}")
+            raise InputError(option, f"refusing to write over {q}, which another option of this command also names")
+    if p.is_dir():
+        raise InputError(option, f"{p} is a directory")
+    if option == "--plot" and p.suffix.lower() not in PLOT_SUFFIXES:
+        raise InputError(option, f"cannot tell the image format of {p.name!r}: end the name in .png, .pdf or .svg "
+                                 f"(or {', '.join(s for s in sorted(PLOT_SUFFIXES) if s not in ('.png', '.pdf', '.svg'))})")
     if p.exists() and not force:
         raise InputError(option, f"{p} exists; choose another name or pass --force to replace it")
-    if p.exists() and p.is_dir():
-        raise InputError(option, f"{p} is a directory")
     parent = p.parent if str(p.parent) else Path(".")
-    if not parent.exists():
+    if not parent.is_dir():
         raise InputError(option, f"directory {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(option, f"directory {parent} is not writable")
     return p
 
 
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+        return a.resolve() == b.resolve()
+    except OSError:  # pragma: no cover - unreadable path components
+        return False
+
+
 def atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``."""
+    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``.
+
+    The temporary file sits in the same directory (so the rename is atomic),
+    is flushed to disk before the rename, and is removed if ``write`` fails
+    or the run is interrupted: ``path`` is either untouched or complete.
+    The new file gets the mode of the file it replaces, else the umask's."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent or "."))
+    directory = str(path.parent) if str(path.parent) else "."
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=directory)
     os.close(fd)
     try:
         write(tmp)
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.chmod(tmp, _target_mode(path))
         os.replace(tmp, path)
     except BaseException:
         try:
@@ -140,6 +346,15 @@ def atomic_write(path: Path, write: Callable[[str], None]) -> None:
         except OSError:
             pass
         raise
+
+
+def _target_mode(path: Path) -> int:
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def write_csv(path: Path, header: list[str], rows) -> None:
@@ -152,12 +367,14 @@ def write_csv(path: Path, header: list[str], rows) -> None:
 
 
 def progress_bar(description: str, enabled: bool = True):
-    """A rich progress bar on stderr; a context manager yielding ``update(done, total)``."""
+    """A rich progress bar on stderr; a context manager yielding ``update(done, total)``.
+
+    Drawn only when stderr is a terminal (a log file or a pipe gets nothing)."""
     import contextlib
 
     @contextlib.contextmanager
     def cm():
-        if not enabled:
+        if not enabled or not _stderr_is_terminal():
             yield lambda done, total: None
             return
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -172,6 +389,13 @@ def progress_bar(description: str, enabled: bool = True):
             yield update
 
     return cm()
+
+
+def _stderr_is_terminal() -> bool:
+    try:
+        return bool(sys.stderr.isatty())
+    except (AttributeError, ValueError):
+        return False
 
 
 def fmt(x: Any, digits: int = 6) -> str:
