@@ -315,8 +315,6 @@ def test_kane_on_vertical_wires_is_an_input_error(tmp_path):
     assert res.exit_code == 2 and lines(res.stderr)[-1].startswith("error: --model: ")
 
 
-@pytest.mark.xfail(strict=False, reason="bifilar/cli/cmd_simulate.py (not owned here) accepts any rtol in (0, 1e-2): "
-                                       "1e-30 (scipy raises it to 2.2e-14, the atol stays ~1e-30) runs for minutes")
 def test_absurd_rtol_is_an_input_error(monkeypatch):
     def must_not_run(*a, **k):
         raise AssertionError("the simulation started: --rtol was not validated first")

@@ -23,7 +23,7 @@ def plan(config, params, components, target, amplitude, sigmas, max_tension, max
     the predicted uncertainty of the target inertia subject to the
     constraints; report the expected accuracy of each component.  Exit 2,
     naming the binding constraint, when nothing is feasible."""
-    from ..config import read_yaml
+    from ..config import read_yaml, scene_from_dict
     from ..errors import InputError
     from ..studies.plan import plan as run_plan
     from ..studies.shorthands import check_param, parse_bounds
@@ -33,6 +33,7 @@ def plan(config, params, components, target, amplitude, sigmas, max_tension, max
     cfg = read_yaml(config)
     if not isinstance(cfg, dict):
         raise InputError("config", "must be a YAML mapping with keys body and rig")
+    scene_from_dict(cfg, config)  # the base config must be valid itself (ConfigErrors: exit 2, every problem)
     bounds = [parse_bounds(p) for p in params]
     for n, _, _ in bounds:
         check_param(cfg, n)

@@ -36,8 +36,8 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
             raise InputError(name, f"must be finite, got {val}")
     if periods <= 0:
         raise InputError("--periods", f"must be positive, got {periods}")
-    if not (0 < rtol < 1e-2):
-        raise InputError("--rtol", f"must be in (0, 1e-2), got {rtol}")
+    if not (1e-14 <= rtol < 1e-2):  # below ~100 eps the integrator cannot meet it and crawls
+        raise InputError("--rtol", f"must be in [1e-14, 1e-2), got {rtol}")
     if method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
         raise InputError("--method", f"unknown method {method!r}; use DOP853, RK45, RK23, Radau, BDF or LSODA")
     out_p = check_output_path(out, force, [config], "--out")

@@ -90,7 +90,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     point; rank the feasible points and recommend one."""
     import time
 
-    from ..config import read_yaml
+    from ..config import read_yaml, scene_from_dict
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, parse_param
@@ -102,6 +102,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     cfg = read_yaml(config)
     if not isinstance(cfg, dict):
         raise InputError("config", "must be a YAML mapping with keys body and rig")
+    scene_from_dict(cfg, config)  # the base config must be valid itself (ConfigErrors: exit 2, every problem)
     specs = [parse_param(p) for p in params]
     for s in specs:
         check_param(cfg, s.name)

@@ -535,7 +535,7 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
     amplitude = st.amplitude if amp_override is None else amp_override
     if not amplitude > 0:
         raise InputError("amplitude", f"must be positive, got {amplitude:g}")
-    scene = scene_from_dict(cfg, source)
+    scene = scene_from_dict(cfg, source, warn=False)  # the base config's warnings were shown once
     rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
     unc = st.unc
     names = list(st.components) + measured_inputs(scene)
