@@ -27,19 +27,17 @@ from .common import check_output_path, console, emit_json, fmt, handle_errors, p
 @handle_errors
 def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_slack, as_json, out, plot, force):
     """Integrate the full nonlinear motion of CONFIG from a displaced rest pose."""
-    import math
+    from .common import OptionChecker
 
-    from ..errors import InputError
-
-    for name, val in (("--amplitude", amplitude), ("--periods", periods), ("--rtol", rtol)):
-        if not math.isfinite(val):
-            raise InputError(name, f"must be finite, got {val}")
-    if periods <= 0:
-        raise InputError("--periods", f"must be positive, got {periods}")
-    if not (1e-14 <= rtol < 1e-2):  # below ~100 eps the integrator cannot meet it and crawls
-        raise InputError("--rtol", f"must be in [1e-14, 1e-2), got {rtol}")
+    chk = OptionChecker()  # every option problem at once
+    chk.finite("--amplitude", amplitude)
+    chk.positive("--periods", periods)
+    chk.in_range("--rtol", rtol, 1e-14, 1e-2, hi_open=True)  # below ~100 eps the integrator crawls
     if method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
-        raise InputError("--method", f"unknown method {method!r}; use DOP853, RK45, RK23, Radau, BDF or LSODA")
+        chk.error("--method", f"unknown method {method!r}; use DOP853, RK45, RK23, Radau, BDF or LSODA")
+    if theta is not None and model != "kane":
+        chk.error("--theta", "only with --model kane")
+    chk.done()
     out_p = check_output_path(out, force, [config], "--out")
     plot_p = check_output_path(plot, force, [config, out], "--plot")
     from ..analysis.equilibrium import rest_pose
@@ -57,8 +55,6 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
             res = simulate_kane(scene, rest, ms, mode=mode, amplitude=amplitude, periods=periods, theta=theta,
                                 rtol=rtol, method=method, progress=upd)
     else:
-        if theta is not None:
-            raise InputError("--theta", "only with --model kane")
         mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
             res = run(scene, mode, amplitude, periods, rest=rest, modes=ms, method=method, rtol=rtol,
