@@ -38,6 +38,12 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
+    from .common import OptionChecker
+
+    chk = OptionChecker()
+    chk.finite("--amplitude", amplitude)
+    chk.positive("--periods", periods)
+    chk.done()
     out_p = check_output_path(out, force, [config, motion], "--out")
     scene = load_scene(config)
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
