@@ -38,6 +38,9 @@ from .common import check_output_path, console, emit_json, fmt, handle_errors, p
 @click.option("--monte-carlo", "monte_carlo", default=None, metavar="N",
               help="Check the linear uncertainty with N Monte Carlo re-estimates on the full model.")
 @click.option("--seed", default=None, help="Random seed of the Monte Carlo draws.")
+@click.option("--journal", type=click.Path(dir_okay=False), default=None,
+              help="Run the Monte Carlo in chunks appended to this file as they finish (survives Ctrl-C).")
+@click.option("--resume", is_flag=True, help="Continue the Monte Carlo journal given by --journal.")
 @click.option("--measurements", "measurements", type=click.Path(dir_okay=False), default=None,
               help="Measurements YAML file (several modes, hangings, recordings; docs/invert.md).")
 @click.option("--no-ladder", is_flag=True, help="Only the chosen method (skip the comparison).")
@@ -48,8 +51,8 @@ from .common import check_output_path, console, emit_json, fmt, handle_errors, p
 @click.option("--force", is_flag=True, help="Replace existing --plot files.")
 @handle_errors
 def invert(config, periods, timed, signals, column, sample_rate, signal_model, signal_quantity, signal_scale,
-           amplitudes, cycles, solve_for, method, uncertainty, monte_carlo, seed, measurements, no_ladder, as_json,
-           plot, force):
+           amplitudes, cycles, solve_for, method, uncertainty, monte_carlo, seed, journal, resume, measurements,
+           no_ladder, as_json, plot, force):
     """Estimate inertia components of CONFIG's body from measured periods."""
     from pathlib import Path
 
@@ -60,6 +63,12 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
         raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
     n_mc = _int(monte_carlo, "--monte-carlo", minimum=0)
     seed_v = _int(seed, "--seed")
+    if resume and journal is None:
+        raise InputError("--resume", "needs --journal FILE")
+    if journal is not None and not n_mc:
+        raise InputError("--journal", "only with --monte-carlo N")
+    if journal is not None and Path(journal).exists() and not resume:
+        raise InputError("--journal", f"{journal} exists; pass --resume to continue it or choose another name")
     cyc = _float(cycles, "--cycles", positive=True)
     sr = _float(sample_rate, "--sample-rate", positive=True)
     scale = _float(signal_scale, "--signal-scale", positive=True)
@@ -111,7 +120,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     slow = bool(n_mc or ms.monte_carlo) or any(m.amplitude for m in ms.measurements)
     with progress_bar("inverting", enabled=slow) as upd:
         res = run(ms, method=method, solve_for=list(solve_for) or None, unc=unc, monte_carlo=n_mc, seed=seed_v,
-                  ladder=not no_ladder, progress=upd)
+                  ladder=not no_ladder, progress=upd, journal=journal, resume=resume)
     if plot_p is not None:
         from .common import atomic_write
 

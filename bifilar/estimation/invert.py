@@ -833,7 +833,8 @@ def _assumed(unc: dict) -> dict:
 
 def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | None = None,
            unc: dict | None = None, monte_carlo: int | None = None, seed: int | None = None,
-           ladder: bool = True, rtol: float = 1e-10, progress=None) -> InversionResult:
+           ladder: bool = True, rtol: float = 1e-10, progress=None, journal=None,
+           resume: bool = False) -> InversionResult:
     """Estimate the unknowns from the measurements (module docstring).
 
     Parameters
@@ -846,6 +847,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     unc : overrides of the assumed input uncertainties (see
         :data:`bifilar.estimation.uncertainty.UNCERTAINTY_KEYS`).
     monte_carlo : number of Monte Carlo re-estimates (0: none).
+    journal, resume : run the Monte Carlo in chunks journaled to this file
+        (:func:`monte_carlo_journaled`); ``resume`` continues an interrupted one.
     ladder : also compute every other applicable rung.
     rtol : integrator tolerance of the nonlinear simulations.
     progress : optional ``progress(done, total)`` for long runs.
@@ -959,8 +962,12 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           sims=(est_nl.sims if est_nl is not None else []))
     n_mc = ms.monte_carlo if monte_carlo is None else monte_carlo
     if n_mc:
-        res.monte_carlo = monte_carlo_check(res, n_mc, np.random.default_rng(seed if seed is not None else ms.seed),
-                                            progress=progress)
+        if journal is not None:
+            res.monte_carlo = monte_carlo_journaled(res, n_mc, journal, seed=seed if seed is not None else ms.seed,
+                                                    resume=resume, progress=progress)
+        else:
+            res.monte_carlo = monte_carlo_check(res, n_mc, np.random.default_rng(seed if seed is not None else ms.seed),
+                                                progress=progress)
         bad = [n for i, n in enumerate(res.names)
                if np.isfinite(res.monte_carlo.ratio[i]) and not 0.8 < res.monte_carlo.ratio[i] < 1.25]
         if bad:
@@ -1348,6 +1355,80 @@ def _modes_or_none(modes_batch, scenes, rests) -> list:
             except (np.linalg.LinAlgError, BifilarError):
                 out.append(None)
         return out
+
+
+def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | None = None, resume: bool = False,
+                          chunk: int = 100, progress=None, stop_after: int | None = None) -> MonteCarloSummary:
+    """:func:`monte_carlo_check` in chunks of ``chunk`` draws, each appended to
+    the JSON-lines file ``journal`` as it finishes, so an interrupted run keeps
+    what it finished and ``resume=True`` continues it with identical results.
+
+    Chunk c draws from its own generator, spawned from ``seed`` (stored in the
+    journal's first line with a key of the problem), so the draws do not depend
+    on which chunks ran in which session.  ``stop_after``: finish at most that
+    many chunks in this call (tests simulate an interruption with it).
+    """
+    import hashlib
+    import json
+    import os
+    from pathlib import Path
+
+    from ..errors import InputError
+
+    path = Path(journal)
+    key = hashlib.sha256(json.dumps([list(res.names), [float(v) for v in res.values], [float(v) for v in res.std],
+                                     int(n), int(chunk), res.method], sort_keys=True).encode()).hexdigest()[:16]
+    done: dict[int, np.ndarray] = {}
+    if path.exists():
+        if not resume:
+            raise InputError("--journal", f"{path} exists; pass --resume to continue it or choose another name")
+        lines = path.read_text().splitlines()
+        try:
+            head = json.loads(lines[0])
+        except (IndexError, ValueError):
+            raise InputError("--journal", f"{path} is not a bifilar Monte Carlo journal") from None
+        if head.get("kind") != "bifilar-monte-carlo" or head.get("key") != key:
+            raise InputError("--journal", f"{path} belongs to another problem or settings; it cannot be resumed here")
+        if seed is not None and seed != head["seed"]:
+            raise InputError("--seed", f"differs from the journal's seed {head['seed']}")
+        seed = int(head["seed"])
+        for line in lines[1:]:
+            try:
+                rec = json.loads(line)
+            except ValueError:  # a line torn by the interruption: redo that chunk
+                continue
+            done[int(rec["chunk"])] = np.array([[np.nan if v is None else v for v in row] for row in rec["samples"]],
+                                               float).reshape(-1, len(res.names))
+    else:
+        if resume:
+            raise InputError("--resume", f"no journal {path} to resume")
+        if seed is None:
+            seed = int(np.random.SeedSequence().entropy % 2**63)
+        with open(path, "w") as fh:
+            fh.write(json.dumps({"kind": "bifilar-monte-carlo", "key": key, "seed": seed, "n": n, "chunk": chunk}) + "\n")
+    sizes = [min(chunk, n - c * chunk) for c in range((n + chunk - 1) // chunk)]
+    children = np.random.SeedSequence(seed).spawn(len(sizes))
+    ran = 0
+    for c, size in enumerate(sizes):
+        if c in done:
+            continue
+        if stop_after is not None and ran >= stop_after:
+            break
+        draws = draw_monte_carlo(res, size, np.random.default_rng(children[c]))
+        use_batch = batched_applies(res.problem)
+        est = solve_draws_batched(res, draws, None) if use_batch else solve_draws_loop(res, draws, None)
+        done[c] = est
+        with open(path, "a") as fh:
+            rows = [[None if not np.isfinite(v) else float(v) for v in row] for row in est]
+            fh.write(json.dumps({"chunk": c, "samples": rows}) + "\n")
+            fh.flush()
+            os.fsync(fh.fileno())
+        ran += 1
+        if progress:
+            progress(sum(len(v) for v in done.values()), n)
+    est = np.concatenate([done[c] for c in sorted(done)]) if done else np.zeros((0, len(res.names)))
+    good = np.all(np.isfinite(est), axis=1)
+    return summarise(list(res.problem.unknowns), est[good], res.std, sum(len(v) for v in done.values()))
 
 
 def monte_carlo_check(res: InversionResult, n: int, rng: np.random.Generator, progress=None,
