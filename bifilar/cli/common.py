@@ -236,27 +236,11 @@ class OptionChecker:
             raise ConfigErrors(self.errors)
 
 
-def _clean(x: Any) -> Any:
-    import numpy as np
-
-    if isinstance(x, dict):
-        return {str(k): _clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_clean(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _clean(x.tolist())
-    if isinstance(x, (np.floating,)):
-        x = float(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
-
-
 def emit_json(doc: Any) -> None:
     """Print exactly one JSON document on stdout (NaN/inf become null)."""
-    click.echo(json.dumps(_clean(doc), allow_nan=False))
+    from ..jsonable import to_jsonable
+
+    click.echo(json.dumps(to_jsonable(doc), allow_nan=False))
 
 
 def console():

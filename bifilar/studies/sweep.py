@@ -65,6 +65,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..jsonable import to_jsonable
 from ..errors import BifilarError, ConvergenceError, InputError, SlackWireError, UnstableRestError
 from ..estimation.sensitivity import DEFAULT_UNCERTAINTY, INERTIA_COMPONENTS
 from .shorthands import ParamSpec, apply_params
@@ -278,23 +279,7 @@ def build_grid(params: list[ParamSpec], zip_: bool = False) -> list[dict]:
 # one point
 
 
-def _plain(x: Any) -> Any:
-    """Plain JSON-able Python (non-finite floats -> None) so that a point read
-    back from a journal equals the point computed."""
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _plain(x.tolist())
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        x = float(x)
-        return x if math.isfinite(x) else None
-    return x
+_plain = to_jsonable  # point dicts read back from a journal equal the computed ones
 
 
 def _one_line(exc: BaseException) -> str:
