@@ -35,6 +35,19 @@ def test_modes_json_on_every_example(cfg):
         assert m["period"] is None or m["period"] > 0
 
 
+@pytest.mark.parametrize("cfg", sorted(p for p in CONFIGS.glob("*.yaml") if not p.stem.startswith("measurements")),
+                         ids=lambda p: p.stem)
+def test_simulate_json_on_every_example(cfg):
+    r = run("simulate", cfg, "--periods", "2", "--json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    # default run (rtol 1e-10, amplitude 0.05): the constraint holds to ~1e-11 of the wire length and the
+    # energy of the oscillation to ~1e-8; the measured period is within a few per mille of the linear one
+    assert doc["max_constraint_violation"] < 1e-9 and doc["energy_drift"] < 1e-6
+    assert doc["period"] == pytest.approx(doc["linear_period"], rel=5e-3)
+    assert min(doc["tension"]["min"]) > 0 and not doc["slack"]
+
+
 def test_modes_thesis_plate_numbers():
     doc = json.loads(run("modes", CONFIGS / "thesis_plate_rest.yaml", "--json").stdout)
     # thesis Fig 7.2.1: 566 N per wire; 6.1: side sway 2 pi sqrt(5 cos 30 / g)
