@@ -5,7 +5,7 @@ Usage::
     python scripts/run_benchmarks.py            # full run, ~2 min on 2 cores
     python scripts/run_benchmarks.py --quick    # smoke run (fewer tolerances, repeats, scenes)
 
-Runs scripts/bench_work_precision.py and scripts/bench_targets.py in this
+Runs scripts/bench_work_precision.py, scripts/bench_targets.py and scripts/bench_monte_carlo.py in this
 process, draws the work-precision plots (CPU time, the load-robust measure) and writes the report (``--json
 FILE`` also keeps the raw results).  Every time is a median of
 repeated runs (wall clock; CPU time alongside, since other work on the
@@ -107,7 +107,7 @@ def _ms(x):
     return f"{1e3 * x:.1f}" if x < 10 else f"{x:.2f} s"
 
 
-def write_report(wp: dict, tg: dict, elapsed: float, quick: bool) -> str:
+def write_report(wp: dict, tg: dict, elapsed: float, quick: bool, mc: list | None = None) -> str:
     import numpy
     import scipy
 
@@ -234,6 +234,17 @@ def write_report(wp: dict, tg: dict, elapsed: float, quick: bool) -> str:
         L.append(f"| {x['model']} | {x.get('case', '')}, {x['amplitude']:g} | {x['tol']:.0e} | {x['est']:.1e} | "
                  f"{x['wall'] * 1e3:.2f} |")
     L.append("")
+    if mc:
+        L.append("## Monte Carlo of bifilar invert\n")
+        L.append("`python scripts/bench_monte_carlo.py`: the same drawn scenes solved draw by draw "
+                 "(`solve_draws_loop`) and batched (`solve_draws_batched`, used by `invert --monte-carlo` for one "
+                 f"hanging, one period, one inertia unknown); median of {mc[0]['repeats']} runs.\n")
+        L.append("| case | draws | loop (s) | batched (s) | speed-up | max rel. difference |")
+        L.append("| --- | --- | --- | --- | --- | --- |")
+        for r in mc:
+            L.append(f"| {r['case']} | {r['n']} | {r['loop']:.3f} | {r['batch']:.3f} | {r['speedup']:.1f}x | "
+                     f"{r['max_rel_diff']:.1e} |")
+        L.append("")
     L.append("## Reproduce\n")
     L.append("```bash\npython scripts/run_benchmarks.py          # this page and docs/figures/perf_*.png\n"
              "python scripts/bench_targets.py --quick    # just the targets, ~1 min\n```\n")
@@ -245,6 +256,7 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true", help="smoke run")
     ap.add_argument("--json", default=None, help="also write the raw results to this file")
     args = ap.parse_args(argv)
+    import bench_monte_carlo
     import bench_targets
     import bench_work_precision
 
@@ -252,6 +264,7 @@ def main(argv=None) -> None:
     flags = ["--quick"] if args.quick else []
     wp = bench_work_precision.main(flags)
     tg = bench_targets.main(flags)
+    mc = bench_monte_carlo.main(flags)
     elapsed = time.perf_counter() - t0
     FIG.mkdir(parents=True, exist_ok=True)
     for scene in wp["references"]:
@@ -260,7 +273,7 @@ def main(argv=None) -> None:
     plot_scaling(tg, FIG / "perf_batch_scaling.png")
     if args.json:
         Path(args.json).write_text(json.dumps({"work_precision": wp, "targets": tg}, indent=1, default=float))
-    DOC.write_text(write_report(wp, tg, elapsed, args.quick))
+    DOC.write_text(write_report(wp, tg, elapsed, args.quick, mc))
     print(f"wrote {DOC} and {FIG}/perf_*.png in {elapsed:.0f} s", file=sys.stderr)
 
 
