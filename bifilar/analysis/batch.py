@@ -60,7 +60,7 @@ from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
 from .equilibrium import RestPose, rest_pose
 from .modes import _BASE_LABEL, COMPONENTS, Mode, ModeSet, _align_degenerate
-from .simulate import measured_period
+from .simulate import RunSummary, measured_period
 
 __all__ = [
     "rest_poses", "modes_batch", "rest_and_modes", "initial_states", "simulate_batch", "SceneRun", "run_one",
@@ -450,7 +450,7 @@ def feasible_amplitudes(scenes: Sequence[Scene], rests: Sequence[RestPose], mode
 # nonlinear runs
 # --------------------------------------------------------------------------
 @dataclass
-class SceneRun:
+class SceneRun(RunSummary):
     """Outcome of one scene of :func:`simulate_batch` (SI units, world frame).
 
     The fields mean what they mean in
@@ -472,24 +472,7 @@ class SceneRun:
         else None.
     """
 
-    period: float | None
-    period_std: float | None
-    crossings: np.ndarray
-    linear_period: float | None
-    max_constraint_violation: float
-    energy_drift: float
-    tension_min: np.ndarray
-    tension_max: np.ndarray
-    slack: list
-    lowest_z_min: float
-    depth_max: float
-    mode: str | None
-    amplitude: float
-    coordinate_name: str
-    rtol: float
-    nfev: int
     nsteps: int
-    runtime: float
     t: np.ndarray | None = None
     y: np.ndarray | None = None
     t_final: float | None = None

@@ -30,13 +30,9 @@ from .modes import COMPONENTS, Mode, ModeSet, linear_modes
 
 
 @dataclass
-class SimulationResult:
-    """Outcome of one nonlinear run (SI units, world frame).
+class RunSummary:
+    """What every nonlinear run reports, single or batched (SI units, world frame).
 
-    t, y : dense samples (k,), (k, 13) of the state (positions absolute).
-    coordinate : (k,) the timed coordinate (dominant component of the mode
-        shape, relative to rest; m or rad) and ``coordinate_name``.
-    tensions : (k, n) N at the samples.
     period : mean measured period, s (None if fewer than two crossings);
         period_std : std of single-cycle periods, s; crossings : times, s.
     linear_period : the mode's linear period, s.
@@ -45,13 +41,10 @@ class SimulationResult:
     tension_min, tension_max : (n,) N.  slack : list of (wire 1-based, t).
     lowest_z_min : lowest world z reached by the body, m; depth_max the
         corresponding depth below the ceiling, m.
+    mode, amplitude, coordinate_name : what was excited and what was timed.
+    rtol, nfev, runtime : integrator tolerance, right-hand-side evaluations, s.
     """
 
-    t: np.ndarray
-    y: np.ndarray
-    coordinate: np.ndarray
-    coordinate_name: str
-    tensions: np.ndarray
     period: float | None
     period_std: float | None
     crossings: np.ndarray
@@ -65,12 +58,29 @@ class SimulationResult:
     depth_max: float
     mode: str | None
     amplitude: float
-    model: str
-    method: str
+    coordinate_name: str
     rtol: float
-    atol: float
     nfev: int
     runtime: float
+
+
+@dataclass
+class SimulationResult(RunSummary):
+    """Outcome of one nonlinear run: the :class:`RunSummary` fields plus
+
+    t, y : dense samples (k,), (k, 13) of the state (positions absolute).
+    coordinate : (k,) the timed coordinate (dominant component of the mode
+        shape, relative to rest; m or rad).
+    tensions : (k, n) N at the samples.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    coordinate: np.ndarray
+    tensions: np.ndarray
+    model: str
+    method: str
+    atol: float
     warnings: list = field(default_factory=list)
 
     def to_json(self) -> dict:
