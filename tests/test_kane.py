@@ -338,7 +338,11 @@ def _static_rest(p, x0):
 def test_cylinder_kane_tseng_constraint_and_energy():
     p = cylinder()
     y0 = cylinder_y0(p)
-    assert y0[4] == pytest.approx(0.204005, abs=1e-6)  # theta5(0) from (5.1.2)
+    # theta5(0) closes the loop (5.1.2): an independent bracketing root of g(theta) - l'^2 near 0
+    from scipy.optimize import brentq
+
+    g5 = lambda t5: K.constraint(np.r_[y0[:4], t5], p)  # noqa: E731
+    assert y0[4] == pytest.approx(brentq(g5, -0.6, 0.6, xtol=1e-15), abs=1e-12)
     assert np.all(y0[5:] == 0.0)
     sol = K.simulate(p, y0, 20.0, rtol=RTOL, atol=ATOL)
     assert sol.status == 0
