@@ -64,3 +64,9 @@ class ConvergenceError(BifilarError):
 
 class IntegrationError(BifilarError):
     """The time integrator failed or a health tolerance was blown."""
+
+
+class NotApplicable(Exception):
+    """A method (a rung of the estimator ladder, a coordinate chart) does not
+    apply to this scene or mode; the message says why.  Not an error of the
+    input: callers report it beside the methods that do apply."""

@@ -1,0 +1,386 @@
+"""Monte Carlo check of an inversion with the full model: draws of every
+input, period and amplitude from their assumed distributions, each
+re-estimated (draw by draw, or all at once with the batched engine), and a
+journaled, resumable variant.  SI units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import BifilarError
+from .measurements import COM_UNKNOWNS, MeasurementSet
+from .problem import _IDX, Problem, build_problem, physical_interval
+from .solve import solve_linear
+from .uncertainty import MonteCarloSummary, summarise
+
+if TYPE_CHECKING:
+    from .invert import InversionResult
+
+def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> list:
+    """``n`` perturbed measurement sets for :func:`monte_carlo_check`: inputs,
+    periods and amplitudes drawn from their assumed distributions (centred on
+    the measured values); the amplitude factor is scaled as ``r(A) = 1 + (r -
+    1)(A/A0)^2`` (nonlinear method) and each drawn period is divided by it,
+    so every draw is a linear-model problem.  Inputs left out of the linear
+    budget (degenerate) are not perturbed.  A draw that cannot even be built
+    is ``None``.  Reproducible for a given generator state."""
+    pb = res.problem
+    unc = pb.unc
+    multi = len(pb.models) > 1
+    degenerate = set(res.degenerate_inputs)
+    solved_com = {x for x in pb.unknowns if x in COM_UNKNOWNS}
+    draws: list = []
+    for _ in range(n):
+        try:
+            # shared inputs: mass (relative), gravity, CoM (reference frame)
+            dm = rng.normal(0.0, unc["mass"])
+            dg = rng.normal(0.0, unc.get("gravity", 0.0))
+            dcom = np.array([0.0 if f"com.{a}" in solved_com or f"com.{a}" in degenerate else rng.normal(0.0, unc["com"])
+                             for a in "xyz"])
+            hangs = []
+            for hm in pb.models:
+                s = hm.hanging.scene
+                pre = f"{hm.hanging.name}:" if multi else ""
+                att = s.attachments - (hm.R @ dcom)[None, :]
+                an = s.anchors.copy()
+                L = s.lengths.copy()
+                for i in range(s.n_wires):
+                    if pre + f"length.{i + 1}" not in degenerate:
+                        L[i] += rng.normal(0.0, unc["length"])
+                    for a in range(3):
+                        if pre + f"anchor.{i + 1}.{'xyz'[a]}" not in degenerate:
+                            an[i, a] += rng.normal(0.0, unc["position"])
+                        if pre + f"attachment.{i + 1}.{'xyz'[a]}" not in degenerate:
+                            att[i, a] += rng.normal(0.0, unc["position"])
+                s2 = replace(s, mass=s.mass * (1 + dm), gravity=s.gravity * (1 + dg), lengths=L, anchors=an,
+                             attachments=att)
+                hangs.append(replace(hm.hanging, scene=s2))
+            meas = []
+            for k, m in enumerate(pb.measurements):
+                T = m.period + rng.normal(0.0, m.std)
+                r = res.factors[k]
+                if m.amplitude and res.method == "nonlinear":
+                    sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * m.amplitude
+                    A = m.amplitude + rng.normal(0.0, sA)
+                    r = 1 + (r - 1) * (A / m.amplitude) ** 2
+                meas.append(replace(m, period=T / r))
+            draws.append(MeasurementSet(hangs, meas))
+        except BifilarError:
+            draws.append(None)
+    return draws
+
+
+def batched_applies(pb: Problem) -> bool:
+    """Whether :func:`solve_draws_batched` handles draws of ``pb``: one
+    hanging, one measured period, one unknown that is an inertia component."""
+    return len(pb.models) == 1 and len(pb.measurements) == 1 and len(pb.unknowns) == 1 and pb.unknowns[0] in _IDX
+
+
+def solve_draws_loop(res: InversionResult, draws: list, progress=None) -> np.ndarray:
+    """(n, P) re-estimates of the unknowns, one :func:`solve_linear` of the
+    full perturbed problem per draw (NaN rows: draws whose inversion failed).
+    Any problem shape; ~30 ms a draw."""
+    pb = res.problem
+    out = np.full((len(draws), len(pb.unknowns)), np.nan)
+    for it, ms2 in enumerate(draws):
+        if ms2 is not None:
+            try:
+                pb2 = build_problem(ms2, unc=None, like=pb)
+                pb2.I_ref0 = pb.I_ref0
+                out[it] = solve_linear(pb2, p0=res.values)
+            except BifilarError:
+                pass
+        if progress:
+            progress(it + 1, len(draws))
+    return out
+
+
+def _mac_track(base_shapes: np.ndarray, base_M: np.ndarray, shapes: np.ndarray, k0: np.ndarray) -> np.ndarray:
+    """Index of the mode of each draw matching mode ``k0[b]`` of the draw's
+    base set: :func:`~bifilar.estimation.sensitivity.mac_match` (the MAC
+    matrix of all modes, then the best one-to-one assignment, which keeps
+    two near-degenerate modes apart where a row-wise argmax would swap
+    them), with the MAC matrices of all draws computed at once.
+
+    base_shapes, shapes : (B, K, 6) mode shapes; base_M : (B, 6, 6) mass
+    matrices (world chart) of the base sets; k0 : (B,) ints."""
+    from scipy.optimize import linear_sum_assignment
+
+    MA = np.einsum("bij,bkj->bki", base_M, base_shapes)  # (B, K, 6)
+    num = np.einsum("bki,bli->bkl", MA, shapes) ** 2
+    da = np.einsum("bki,bki->bk", base_shapes, MA)
+    db = np.einsum("bki,bij,bkj->bk", shapes, base_M, shapes)
+    mac = num / np.maximum(da[:, :, None] * db[:, None, :], 1e-300)
+    out = np.empty(len(k0), int)
+    for q in range(len(k0)):
+        _, col = linear_sum_assignment(-mac[q])
+        out[q] = col[k0[q]]
+    return out
+
+
+def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: float = 1e-12,
+                        max_iter: int = 20) -> np.ndarray:
+    """(n, 1) re-estimates, all draws solved in lockstep with the batched
+    engine (:mod:`bifilar.analysis.batch`); NaN rows: failed draws.  Only for
+    problems with :func:`batched_applies`.
+
+    Each draw solves the same equation as :func:`solve_linear` does for it:
+    ``T_lin(x) = T_draw`` (s) for the unknown inertia component ``x``
+    (kg m^2, reference body axes) in its physical interval, the mode tracked
+    as :func:`build_problem` and :class:`HangingModel` track it (MAC against
+    the estimate's base modes, then against the draw's own modes at the
+    prior).  The rest poses do not depend on the inertia, so they are found
+    once (:func:`~bifilar.analysis.batch.rest_poses`, warm-started from the
+    estimate's); every iteration then computes the modes of all unconverged
+    draws in one :func:`~bifilar.analysis.batch.modes_batch` call and makes
+    one secant step per draw on ``f = T^2 - T_draw^2`` (close to linear in an
+    inertia), the first slope from a forward difference, steps limited and
+    kept inside the interval as :func:`solve_scalar` does, until
+    ``|f| <= 2 rtol T_draw^2`` (``|T - T_draw| <= rtol T_draw``).  A draw
+    whose rest pose fails, whose mode has no period, or that has not
+    converged after ``max_iter`` steps is dropped (NaN), as the loop drops
+    draws that raise.  Where the measured mode nearly coincides with another
+    one, the tracked period can jump (avoided crossing) with no root; the
+    loop's Brent step then returns the jump's location, this path drops the
+    draw (no inertia gives ``|T - T_draw| <= rtol T_draw``)."""
+    from ..analysis.batch import modes_batch, rest_poses
+
+    pb = res.problem
+    if not batched_applies(pb):
+        raise ValueError("solve_draws_batched needs one hanging, one period and one inertia unknown")
+    hm = pb.models[0]
+    name = pb.unknowns[0]
+    i, j = _IDX[name]
+    R = hm.R
+    I0 = np.asarray(pb.I_ref0, float)
+    I0w = R @ I0 @ R.T
+    n = len(draws)
+    out = np.full((n, 1), np.nan)
+    ok = [b for b, d in enumerate(draws) if d is not None]
+    scenes0 = [replace(draws[b].hangings[0].scene, inertia=I0w) for b in ok]
+    targets = np.array([draws[b].measurements[0].period for b in ok], float)
+    rests = rest_poses(scenes0, hm.rest0, errors="return") if scenes0 else []
+    keep = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
+    ok = [ok[q] for q in keep]
+    scenes0 = [scenes0[q] for q in keep]
+    rests = [rests[q] for q in keep]
+    targets = targets[keep]
+    B = len(ok)
+    if B == 0:
+        if progress:
+            progress(n, n)
+        return out
+
+    def shapes_of(mss):
+        return np.array([[m.shape for m in ms.modes] for ms in mss])
+
+    # the draws' own base modes (at the prior inertia) and the measured mode in them
+    ms0 = _modes_or_none(modes_batch, scenes0, rests)
+    alive = np.array([m is not None for m in ms0])
+    nk = len(hm.modes0.modes)
+    alive &= np.array([m is not None and len(m.modes) == nk for m in ms0])
+    S0 = np.zeros((B, nk, 6))
+    M0 = np.zeros((B, 6, 6))
+    for b in np.nonzero(alive)[0]:
+        S0[b] = shapes_of([ms0[b]])[0]
+        M0[b] = ms0[b].mass_matrix
+    Sbase = np.broadcast_to(np.array([m.shape for m in hm.modes0.modes]), (B, nk, 6))
+    Mbase = np.broadcast_to(hm.modes0.mass_matrix, (B, 6, 6))
+    k0 = _mac_track(Sbase, Mbase, S0, np.full(B, pb.mode_index[0]))
+
+    def f_of(idx: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """T^2 - target^2 (s^2) of draws ``idx`` at component values ``x``."""
+        if not len(idx):
+            return np.zeros(0)
+        I = np.broadcast_to(I0, (len(idx), 3, 3)).copy()
+        I[:, i, j] = x
+        I[:, j, i] = x
+        Iw = R @ I @ R.T
+        scs = [replace(scenes0[b], inertia=Iw[q]) for q, b in enumerate(idx)]
+        mss = _modes_or_none(modes_batch, scs, [rests[b] for b in idx])
+        T = np.full(len(idx), np.nan)
+        good = [q for q, m in enumerate(mss) if m is not None and len(m.modes) == nk]
+        if good:
+            g = np.array(good)
+            kk = _mac_track(S0[idx[g]], M0[idx[g]], shapes_of([mss[q] for q in good]), k0[idx[g]])
+            for q, k in zip(good, kk):
+                per = mss[q].modes[k].period
+                T[q] = per if per else np.nan
+        return T * T - targets[idx] ** 2
+
+    lo, hi = physical_interval(I0, name)
+    scale = float(pb.scales()[0])
+    margin = 1e-9 * scale
+    lo_m = lo + margin if math.isfinite(lo) else -math.inf
+    hi_m = hi - margin if math.isfinite(hi) else math.inf
+    x0 = float(res.values[0])
+    if math.isfinite(lo_m) or math.isfinite(hi_m):
+        x0 = min(max(x0, lo_m + margin), hi_m - margin)
+    tol = 2 * rtol * targets ** 2
+    h = 1e-6 * scale
+    xh0 = x0 - h if x0 + h >= hi_m else x0 + h
+    # first evaluation: x0 and x0 + h for every draw, in one batched call
+    idx = np.nonzero(alive)[0]
+    fb = f_of(np.concatenate([idx, idx]), np.concatenate([np.full(len(idx), x0), np.full(len(idx), xh0)]))
+    x = np.full(B, x0)
+    fx = np.full(B, np.nan)
+    fx[idx] = fb[:len(idx)]
+    d = np.full(B, np.nan)
+    d[idx] = (fb[len(idx):] - fb[:len(idx)]) / (xh0 - x0)
+    alive &= np.isfinite(fx)
+    result = np.full(B, np.nan)
+    done = alive & (np.abs(fx) <= tol)
+    result[done] = x[done]
+    active = alive & ~done
+    xt = np.full(B, np.nan)  # trial points
+
+    def newton(a):
+        with np.errstate(all="ignore"):
+            good = (d[a] != 0) & np.isfinite(d[a])
+            xn = np.where(good, x[a] - fx[a] / np.where(good, d[a], 1.0), x[a] + np.where(fx[a] < 0, 10, -10) * scale)
+            xn = np.clip(xn, x[a] - 100 * scale, x[a] + 100 * scale)
+            xn = np.where(xn <= lo_m, x[a] - 0.9 * (x[a] - lo_m), xn)
+            xn = np.where(xn >= hi_m, x[a] + 0.9 * (hi_m - x[a]), xn)
+        return xn
+
+    a = np.nonzero(active)[0]
+    xt[a] = newton(a)
+    for _ in range(max_iter):
+        a = np.nonzero(active)[0]
+        if not len(a):
+            break
+        if progress:
+            progress(n - len(a), n)
+        ft = f_of(a, xt[a])
+        fin = np.isfinite(ft)
+        conv = fin & (np.abs(ft) <= tol[a])
+        result[a[conv]] = xt[a[conv]]
+        active[a[conv]] = False
+        # no period at the trial point: halve the step
+        bad = a[~fin]
+        xt[bad] = 0.5 * (x[bad] + xt[bad])
+        # secant update where the trial point has a period but is not yet a root
+        up = a[fin & ~conv]
+        fu = ft[fin & ~conv]
+        stalled = xt[up] == x[up]
+        active[up[stalled]] = False
+        up, fu = up[~stalled], fu[~stalled]
+        d[up] = (fu - fx[up]) / (xt[up] - x[up])
+        x[up], fx[up] = xt[up], fu
+        xt[up] = newton(up)
+    out[np.array(ok), 0] = result
+    if progress:
+        progress(n, n)
+    return out
+
+
+def _modes_or_none(modes_batch, scenes, rests) -> list:
+    """modes_batch, or scene by scene with None for scenes whose modes fail."""
+    try:
+        return modes_batch(scenes, rests)
+    except (np.linalg.LinAlgError, BifilarError):
+        out = []
+        for s, r in zip(scenes, rests):
+            try:
+                out.append(modes_batch([s], [r])[0])
+            except (np.linalg.LinAlgError, BifilarError):
+                out.append(None)
+        return out
+
+
+def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | None = None, resume: bool = False,
+                          chunk: int = 100, progress=None, stop_after: int | None = None) -> MonteCarloSummary:
+    """:func:`monte_carlo_check` in chunks of ``chunk`` draws, each appended to
+    the JSON-lines file ``journal`` as it finishes, so an interrupted run keeps
+    what it finished and ``resume=True`` continues it with identical results.
+
+    Chunk c draws from its own generator, spawned from ``seed`` (stored in the
+    journal's first line with a key of the problem), so the draws do not depend
+    on which chunks ran in which session.  ``stop_after``: finish at most that
+    many chunks in this call (tests simulate an interruption with it).
+    """
+    import hashlib
+    import json
+    import os
+    from pathlib import Path
+
+    from ..errors import InputError
+
+    path = Path(journal)
+    key = hashlib.sha256(json.dumps([list(res.names), [float(v) for v in res.values], [float(v) for v in res.std],
+                                     int(n), int(chunk), res.method], sort_keys=True).encode()).hexdigest()[:16]
+    done: dict[int, np.ndarray] = {}
+    if path.exists():
+        if not resume:
+            raise InputError("--journal", f"{path} exists; pass --resume to continue it or choose another name")
+        lines = path.read_text().splitlines()
+        try:
+            head = json.loads(lines[0])
+        except (IndexError, ValueError):
+            raise InputError("--journal", f"{path} is not a bifilar Monte Carlo journal") from None
+        if head.get("kind") != "bifilar-monte-carlo" or head.get("key") != key:
+            raise InputError("--journal", f"{path} belongs to another problem or settings; it cannot be resumed here")
+        if seed is not None and seed != head["seed"]:
+            raise InputError("--seed", f"differs from the journal's seed {head['seed']}")
+        seed = int(head["seed"])
+        for line in lines[1:]:
+            try:
+                rec = json.loads(line)
+            except ValueError:  # a line torn by the interruption: redo that chunk
+                continue
+            done[int(rec["chunk"])] = np.array([[np.nan if v is None else v for v in row] for row in rec["samples"]],
+                                               float).reshape(-1, len(res.names))
+    else:
+        if resume:
+            raise InputError("--resume", f"no journal {path} to resume")
+        if seed is None:
+            seed = int(np.random.SeedSequence().entropy % 2**63)
+        with open(path, "w") as fh:
+            fh.write(json.dumps({"kind": "bifilar-monte-carlo", "key": key, "seed": seed, "n": n, "chunk": chunk}) + "\n")
+    sizes = [min(chunk, n - c * chunk) for c in range((n + chunk - 1) // chunk)]
+    children = np.random.SeedSequence(seed).spawn(len(sizes))
+    ran = 0
+    for c, size in enumerate(sizes):
+        if c in done:
+            continue
+        if stop_after is not None and ran >= stop_after:
+            break
+        draws = draw_monte_carlo(res, size, np.random.default_rng(children[c]))
+        use_batch = batched_applies(res.problem)
+        est = solve_draws_batched(res, draws, None) if use_batch else solve_draws_loop(res, draws, None)
+        done[c] = est
+        with open(path, "a") as fh:
+            rows = [[None if not np.isfinite(v) else float(v) for v in row] for row in est]
+            fh.write(json.dumps({"chunk": c, "samples": rows}) + "\n")
+            fh.flush()
+            os.fsync(fh.fileno())
+        ran += 1
+        if progress:
+            progress(sum(len(v) for v in done.values()), n)
+    est = np.concatenate([done[c] for c in sorted(done)]) if done else np.zeros((0, len(res.names)))
+    good = np.all(np.isfinite(est), axis=1)
+    return summarise(list(res.problem.unknowns), est[good], res.std, sum(len(v) for v in done.values()))
+
+
+def monte_carlo_check(res: InversionResult, n: int, rng: np.random.Generator, progress=None,
+                      batched: bool | None = None) -> MonteCarloSummary:
+    """Re-estimate the unknowns ``n`` times with inputs, periods and
+    amplitudes drawn from their assumed distributions (:func:`draw_monte_carlo`),
+    each time solving the full (not linearised) model: the rest pose, modes
+    and root finding / Gauss-Newton of the perturbed scene.
+
+    One hanging, one period and one inertia unknown (the common case) go
+    through the batched engine, all draws at once
+    (:func:`solve_draws_batched`, 8-15x faster: docs/performance.md); anything else, or
+    ``batched=False``, draw by draw (:func:`solve_draws_loop`).  Draws
+    whose inversion fails are counted in ``failed``."""
+    draws = draw_monte_carlo(res, n, rng)
+    use_batch = batched_applies(res.problem) if batched is None else bool(batched)
+    est = solve_draws_batched(res, draws, progress) if use_batch else solve_draws_loop(res, draws, progress)
+    good = np.all(np.isfinite(est), axis=1)
+    return summarise(list(res.problem.unknowns), est[good], res.std, n)

@@ -1,0 +1,230 @@
+"""Solving the inversion: scalar root finding, Gauss-Newton least squares,
+and the nonlinear model's amplitude-factor fixed point.
+
+Periods in s, inertia components in kg m^2, CoM shifts in m (see
+:mod:`bifilar.estimation.problem`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import BifilarError, ConvergenceError, InputError
+from .problem import _IDX, HangingModel, Problem, physical_interval
+
+def solve_scalar(T_of_x, target: float, x0: float, lo: float, hi: float, scale: float, fld: str, what: str,
+                 rtol: float = 1e-12) -> float:
+    """Solve ``T(x) = target`` (s) for ``x`` in ``(lo, hi)`` starting at ``x0``.
+
+    Newton/secant on ``T^2 - target^2`` (close to linear in an inertia),
+    kept inside the interval; once a sign change is bracketed, Brent's
+    method to ``|T - target| <= rtol target``.  Raises :class:`InputError`
+    naming ``fld`` with the achievable range when no ``x`` gives ``target``.
+    """
+    from scipy.optimize import brentq
+
+    memo: dict[float, float] = {}
+    margin = 1e-9 * scale
+
+    def f(x: float) -> float:
+        if x not in memo:
+            T = float(T_of_x(x))
+            memo[x] = T * T - target * target if math.isfinite(T) else math.nan
+        return memo[x]
+
+    lo_m = lo + margin if math.isfinite(lo) else -math.inf
+    hi_m = hi - margin if math.isfinite(hi) else math.inf
+    x = min(max(x0, lo_m + margin), hi_m - margin) if math.isfinite(lo_m) or math.isfinite(hi_m) else x0
+    fx = f(x)
+    tol = 2 * rtol * target * target
+    if not math.isfinite(fx):
+        raise ConvergenceError(f"the model has no period for this mode at {what} = {x:.6g}")
+    if abs(fx) <= tol:
+        return x
+    h = 1e-6 * scale
+    xh = x - h if x + h >= hi_m else x + h
+    d = (f(xh) - fx) / (xh - x)
+    for _ in range(80):
+        if d != 0 and math.isfinite(d):
+            xn = x - fx / d
+        else:
+            xn = x + (10 * scale if fx < 0 else -10 * scale)
+        # stay inside the interval; never jump more than 100 scales
+        xn = min(max(xn, x - 100 * scale), x + 100 * scale)
+        if xn <= lo_m:
+            xn = x - 0.9 * (x - lo_m)
+        if xn >= hi_m:
+            xn = x + 0.9 * (hi_m - x)
+        fn = f(xn)
+        if not math.isfinite(fn):
+            xn = 0.5 * (x + xn)
+            fn = f(xn)
+            if not math.isfinite(fn):
+                break
+        if abs(fn) <= tol:
+            return xn
+        if fn * fx < 0:
+            a, b = (x, xn) if x < xn else (xn, x)
+            return brentq(f, a, b, xtol=max(1e-15 * scale, 1e-300), rtol=4 * np.finfo(float).eps, maxiter=200)
+        if xn == x:
+            break
+        d = (fn - fx) / (xn - x)
+        x, fx = xn, fn
+    raise InputError(fld, _range_message(T_of_x, target, x0, lo_m, hi_m, scale, what))
+
+
+def _range_message(T_of_x, target, x0, lo, hi, scale, what) -> str:
+    xs = []
+    a = lo if math.isfinite(lo) else x0 - 1e3 * scale
+    b = hi if math.isfinite(hi) else x0 + 1e4 * scale
+    for x in np.concatenate([np.linspace(a, b, 41), [x0]]):
+        try:
+            T = float(T_of_x(float(x)))
+        except BifilarError:
+            continue
+        if math.isfinite(T):
+            xs.append((x, T))
+    if not xs:
+        return f"no {what} gives a period of {target:.6g} s for this mode"
+    Ts = [t for _, t in xs]
+    tmin, tmax = min(Ts), max(Ts)
+    up = "" if math.isfinite(hi) else " and beyond, growing without bound" if tmax > 10 * tmin else ""
+    return (f"no physical {what} gives a period of {target:.9g} s: this mode's period can only range over "
+            f"{tmin:.9g} s .. {tmax:.9g} s{up} ({what} from {a:.4g} to "
+            f"{'infinity' if not math.isfinite(hi) else f'{b:.4g}'} with the rest of the tensor at its prior)")
+
+
+@dataclass
+class Estimate:
+    p: np.ndarray
+    method: str
+    r: np.ndarray  # amplitude factors (1 when linear)
+    iterations: int = 0
+    sims: list = field(default_factory=list)
+
+
+def _targets(pb: Problem, r: np.ndarray) -> np.ndarray:
+    return np.array([m.period for m in pb.measurements]) / r
+
+
+def solve_linear(pb: Problem, targets: np.ndarray | None = None, p0=None) -> np.ndarray:
+    """Unknowns for which the linear periods equal ``targets`` (default: the
+    measured periods): scalar root finding for one unknown and one period,
+    else Gauss-Newton least squares."""
+    targets = np.array([m.period for m in pb.measurements]) if targets is None else targets
+    p0 = pb.prior if p0 is None else np.asarray(p0, float)
+    sc = pb.scales()
+    if len(pb.unknowns) == 1 and len(pb.measurements) == 1:
+        name = pb.unknowns[0]
+        m = pb.measurements[0]
+        if name in _IDX:
+            lo, hi = physical_interval(pb.I_ref0, name)
+        else:
+            lo, hi = -math.inf, math.inf
+        x = solve_scalar(lambda x: pb.linear_periods([x])[0], float(targets[0]), float(p0[0]), lo, hi,
+                         float(sc[0]), m.field, name)
+        return np.array([x])
+    return gauss_newton(pb, targets, p0)
+
+
+def gauss_newton(pb: Problem, targets: np.ndarray, p0: np.ndarray, max_iter: int = 40) -> np.ndarray:
+    """Weighted least squares ``min sum ((T_k(p) - target_k) / sigma_k)^2``."""
+    sig = np.array([m.std for m in pb.measurements])
+    sc = pb.scales()
+    p = np.asarray(p0, float).copy()
+
+    def cost(p):
+        try:
+            r = (pb.linear_periods(p) - targets) / sig
+        except BifilarError:
+            return math.inf, None
+        return (float(r @ r) if np.all(np.isfinite(r)) else math.inf), r
+
+    c, res = cost(p)
+    if not math.isfinite(c):
+        raise ConvergenceError("the model has no period for a measured mode at the prior")
+    for it in range(max_iter):
+        J = pb.jacobian(p) / sig[:, None] * sc[None, :]
+        _check_identifiable(pb, J)
+        step = -np.linalg.lstsq(J, res, rcond=None)[0] * sc
+        t = 1.0
+        for _ in range(30):
+            pn = p + t * step
+            if _physical(pb, pn):
+                cn, rn = cost(pn)
+                if cn <= c * (1 + 1e-12) or cn < 1e-24:
+                    break
+            t *= 0.5
+        else:
+            # the Gauss-Newton direction descends unless the misfit is at the
+            # rounding floor of the periods (~1e-13 relative): converged
+            if np.max(np.abs(step) / sc) < 1e-6:
+                break
+            raise ConvergenceError("Gauss-Newton found no step that lowers the misfit")
+        small = np.max(np.abs(t * step) / sc) < 1e-12
+        p, c, res = pn, cn, rn
+        if small:
+            break
+    return p
+
+
+def _physical(pb: Problem, p) -> bool:
+    I = pb.models[0].inertia_ref(pb.values(p))
+    return bool(np.linalg.eigvalsh(I)[0] > 0)
+
+
+def _check_identifiable(pb: Problem, Js: np.ndarray) -> None:
+    s = np.linalg.svd(Js, compute_uv=False)
+    if s.size and (s[-1] <= 1e-9 * s[0] or not np.all(np.isfinite(s))):
+        _, _, Vt = np.linalg.svd(Js)
+        v = Vt[-1]
+        worst = [pb.unknowns[i] for i in np.argsort(-np.abs(v))[:2]]
+        raise InputError("--solve-for", f"the measured periods cannot separate {' and '.join(worst)} "
+                                        "(their effects on the periods are (nearly) the same or zero): add "
+                                        "modes or hangings that tell them apart, or solve for fewer components")
+
+
+def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
+                     rtol: float = 1e-10):
+    """r = T_sim / T_lin of base mode ``mode_index`` at ``values``, simulated
+    from rest displaced by ``amplitude`` x the mode shape for ``cycles``
+    linear periods.  Returns (r, SimulationResult)."""
+    from ..analysis.simulate import simulate
+
+    scene = hm.scene(values)
+    rest, ms, match = hm.locate(scene)
+    k = int(match[mode_index])
+    sim = simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, rtol=rtol)
+    if sim.period is None:
+        raise ConvergenceError(f"the simulated {ms.modes[k].label} motion showed fewer than two crossings")
+    return sim.period / ms.modes[k].period, sim
+
+
+def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: float = 1e-9,
+                    max_sims: int = 6, progress=None) -> Estimate:
+    """Fixed point ``p = solve_linear(T_meas / r(p))`` with the amplitude
+    factors ``r`` simulated at each iterate (measurements without an
+    amplitude keep r = 1)."""
+    K = len(pb.measurements)
+    r = np.ones(K)
+    p = np.asarray(p_lin, float)
+    sc = pb.scales()
+    sims = [None] * K
+    it = 0
+    for it in range(1, max_sims + 1):
+        vals = pb.values(p)
+        for k, m in enumerate(pb.measurements):
+            if m.amplitude:
+                r[k], sims[k] = amplitude_factor(pb.models[m.hanging], vals, pb.mode_index[k], m.amplitude,
+                                                 m.cycles, rtol)
+            if progress:
+                progress(it - 1 + (k + 1) / K, 3)
+        pn = solve_linear(pb, _targets(pb, r), p0=p)
+        done = np.max(np.abs(pn - p) / sc) < tol
+        p = pn
+        if done:
+            break
+    return Estimate(p, "nonlinear", r.copy(), it, sims)
