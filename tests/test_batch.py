@@ -334,3 +334,49 @@ def test_sampled_crossings_of_a_known_signal():
     k = np.arange(0, 11)
     exact1 = (k + 1 - np.arccos(0.2) / (2 * np.pi)) / 1.1
     np.testing.assert_allclose(tc[col == 1], exact1[exact1 < 10], atol=1e-10)
+
+
+def test_degenerate_cluster_is_canonical_whatever_the_eigensolver_returns():
+    """Another BLAS kernel returns another (equally valid) eigenbasis of a
+    repeated eigenvalue, in another order, with last-bit differences in the
+    eigenvalues.  Feed mode_set every such variant of the symmetric
+    trifilar's swing pair (rotations of the basis, the two eigenvalues
+    perturbed by +-1e-15 relative in either order): labels, periods and
+    shapes must come out the same every time (independent reference: the
+    unperturbed solution; the swing pair of a symmetric trifilar is
+    degenerate by symmetry, and its canonical shapes are pure x / pure y
+    swings with the coupled roll/pitch, not mixtures)."""
+    from scipy.linalg import eigh
+
+    from bifilar.analysis.equilibrium import reduced_stiffness
+    from bifilar.analysis.modes import mode_set
+
+    s = _trifilar(dz=0.2)
+    r = rest_pose(s)
+    lam = r.tensions / np.linalg.norm(r.wire_vectors, axis=1)
+    N, Kr, Mr, _ = reduced_stiffness(s, r.com, r.R, lam)
+    M = linear_modes(s, r).mass_matrix
+    w2, Y = eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
+    ref = mode_set(N, Y, w2, s.mass, M)
+    pair = [k for k in range(len(w2) - 1) if abs(w2[k + 1] - w2[k]) < 1e-8 * abs(w2).max()]
+    assert len(pair) == 1, "the symmetric trifilar has one degenerate swing pair"
+    k = pair[0]
+    assert ref.labels[:2] == ["swing-x", "swing-y"]
+    for name in ("swing-x", "swing-y"):
+        sh = ref.get(name).shape
+        other = 1 if name == "swing-x" else 0
+        assert abs(sh[other]) < 1e-9  # a pure swing along its own axis
+    rng = np.random.default_rng(0)
+    for trial in range(40):
+        a = rng.uniform(0, 2 * np.pi)
+        Q = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]) * rng.choice([-1, 1], 2)
+        Y2 = Y.copy()
+        Y2[:, k:k + 2] = Y[:, k:k + 2] @ Q
+        w2b = w2.copy()
+        eps = 1e-15 * abs(w2[k]) * (1 if trial % 2 else -1)
+        w2b[k], w2b[k + 1] = w2[k] + eps, w2[k + 1] - eps
+        got = mode_set(N, Y2, w2b, s.mass, M)
+        assert got.labels == ref.labels
+        for g, e in zip(got.modes, ref.modes):
+            assert g.period == pytest.approx(e.period, rel=1e-13)
+            np.testing.assert_allclose(g.shape, e.shape, atol=1e-9)

@@ -59,7 +59,7 @@ from ..models import maximal as mx
 from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
 from .equilibrium import RestPose, rest_pose
-from .modes import _BASE_LABEL, COMPONENTS, Mode, ModeSet, _align_degenerate
+from .modes import COMPONENTS, Mode, ModeSet, mode_set
 from .simulate import RunSummary, measured_period
 
 __all__ = [
@@ -323,41 +323,15 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[Mode
     Li = np.linalg.inv(Lc)
     w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
     Y = np.swapaxes(Li, 1, 2) @ Z
-    scale = np.maximum(np.abs(w2).max(axis=1), 1e-300)
     out = []
-    diagM = np.diagonal(M[:, 3:, 3:], axis1=1, axis2=2)
     for b in range(len(scenes)):
         if not full[b]:
             from .modes import linear_modes
 
             out.append(linear_modes(scenes[b], rests[b]))
             continue
-        Yb = Y[b]
-        if np.any(np.diff(w2[b]) <= 1e-8 * scale[b]):
-            Yb = _align_degenerate(N[b], Yb, w2[b], scale[b])
-        out.append(_modeset(N[b], Yb, w2[b], scale[b], m[b], diagM[b], M[b]))
+        out.append(mode_set(N[b], Y[b], w2[b], m[b], M[b]))
     return out
-
-
-def _modeset(N, Y, w2, scale, mass, diagM, M) -> ModeSet:
-    S = N @ Y  # (6, k) shapes
-    i = np.argmax(np.abs(S), axis=0)
-    S = S / S[i, np.arange(S.shape[1])]
-    share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
-    share = share / share.sum(axis=0)
-    zero = (np.abs(w2) <= 1e-10 * scale) | (w2 <= 0)
-    periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
-    dom_e = np.argmax(share, axis=0)
-    order = sorted(range(len(w2)), key=lambda j: -(periods[j] if not zero[j] else -1.0))
-    seen: dict[str, int] = {}
-    modes = []
-    for j in order:
-        base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
-        c = seen.get(base, 0) + 1
-        seen[base] = c
-        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
-                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
-    return ModeSet(modes, M, N)
 
 
 def rest_and_modes(scenes: Sequence[Scene], guess=None, *, errors: str = "raise"):

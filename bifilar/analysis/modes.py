@@ -99,46 +99,94 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     if N.shape[1] == 0:
         return ModeSet([], M, N)
     w2, Y = eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
-    scale = max(abs(w2).max(), 1e-300)
-    Y = _align_degenerate(N, Y, w2, scale)
-    modes = []
-    for k in range(len(w2)):
-        shape = N @ Y[:, k]
-        i = int(np.argmax(np.abs(shape)))
-        shape = shape / shape[i]
-        share = np.concatenate([scene.mass * shape[:3] ** 2, np.diag(M[3:, 3:]) * shape[3:] ** 2])
-        share = share / share.sum()
-        zero = abs(w2[k]) <= 1e-10 * scale or w2[k] <= 0
-        period = None if zero else float(2 * np.pi / np.sqrt(w2[k]))
-        dom_energy = int(np.argmax(share))
-        modes.append(Mode(_BASE_LABEL[COMPONENTS[dom_energy]], period, float(w2[k]), shape, share, i))
-    # slowest first; neutral (None) modes last
-    modes.sort(key=lambda m: -(m.period if m.period is not None else -1.0))
-    seen: dict[str, int] = {}
+    return mode_set(N, Y, w2, scene.mass, M)
+
+
+#: eigenvalues closer than this, relative to the largest |omega^2|, form one
+#: degenerate cluster (a symmetric rig's repeated modes; rounding differs
+#: between machines at ~1e-15, physical splitting that matters at >> 1e-8)
+DEGENERATE_RTOL = 1e-8
+
+
+def clusters(w2: np.ndarray, scale: float) -> list[tuple[int, int]]:
+    """[start, stop) index ranges of the sorted eigenvalues ``w2`` (rad^2/s^2)
+    that are equal within ``DEGENERATE_RTOL * scale``; chained from the first
+    member, so the grouping does not depend on last-bit noise of the others."""
     out = []
-    for m in modes:
-        c = seen.get(m.label, 0) + 1
-        seen[m.label] = c
-        out.append(m if c == 1 else Mode(f"{m.label}-{c}", m.period, m.omega2, m.shape, m.energy_share, m.dominant))
-    return ModeSet(out, M, N)
+    k = 0
+    while k < len(w2):
+        j = k + 1
+        while j < len(w2) and abs(w2[j] - w2[k]) <= DEGENERATE_RTOL * scale:
+            j += 1
+        out.append((k, j))
+        k = j
+    return out
+
+
+def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.ndarray) -> ModeSet:
+    """The :class:`ModeSet` of a solved eigenproblem ``K y = omega^2 M y``
+    (``w2`` ascending, rad^2/s^2; ``Y`` its eigenvectors in the null-space
+    coordinates ``N`` (6 x k); ``mass`` kg; ``M`` the 6 x 6 world-chart mass
+    matrix), in a canonical form that does not depend on rounding:
+
+    * a cluster of (nearly) equal eigenvalues (:func:`clusters`) gets one
+      eigenvalue (the cluster mean) and the basis aligned with the world
+      axes (:func:`_align_degenerate`), so its modes have identical periods;
+    * modes are ordered slowest first, neutral ones last, and within equal
+      periods by the world component that carries most of their kinetic
+      energy (x, y, z, rx, ry, rz): a symmetric rig always lists swing-x
+      before swing-y, whatever the BLAS kernel;
+    * every shape is scaled so that its largest component is +1 (ties
+      broken by the first component within 1e-9).
+    """
+    scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
+    w2 = np.array(w2, float)
+    Y = _align_degenerate(N, np.array(Y, float), w2, scale)
+    for a, b in clusters(w2, scale):
+        w2[a:b] = np.mean(w2[a:b])
+    S = N @ Y
+    absS = np.abs(S)
+    # first component within 1e-9 of the largest: independent of last-bit noise
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
+    S = S / S[i, np.arange(S.shape[1])]
+    diagM = np.diag(M)[3:]
+    share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
+    share = share / share.sum(axis=0)
+    zero = (np.abs(w2) <= 1e-10 * scale) | (w2 <= 0)
+    periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
+    dom_e = np.argmax(share, axis=0)
+    order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
+    seen: dict[str, int] = {}
+    modes = []
+    for j in order:
+        base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
+        c = seen.get(base, 0) + 1
+        seen[base] = c
+        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
+                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
+    return ModeSet(modes, M, N)
 
 
 def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, scale: float) -> np.ndarray:
     """Within clusters of (nearly) equal eigenvalues the eigenvectors are
     arbitrary; pick the combination whose shapes are aligned with the world
-    axes (pivoted QR on the shapes), so a symmetric rig gets clean labels."""
-    from scipy.linalg import qr
-
+    axes: greedy row pivoting on the cluster's shapes (the world component
+    with the largest remaining norm, ties within 1e-6 going to the first
+    component), then the basis that is the identity on those components.
+    Deterministic: the same choice on every machine."""
     Y = Y.copy()
-    k = 0
-    while k < len(w2):
-        j = k + 1
-        while j < len(w2) and abs(w2[j] - w2[k]) <= 1e-8 * scale:
-            j += 1
-        if j - k > 1:
-            S = N @ Y[:, k:j]  # (6, c)
-            _, _, piv = qr(S.T, pivoting=True)
-            rows = piv[: j - k]
-            Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
-        k = j
+    for k, j in clusters(w2, scale):
+        if j - k < 2:
+            continue
+        S = N @ Y[:, k:j]  # (6, c)
+        T = S.copy()
+        rows: list[int] = []
+        for _ in range(j - k):
+            norms = np.linalg.norm(T, axis=1)
+            norms[rows] = -1.0
+            r = int(np.argmax(norms >= (1 - 1e-6) * norms.max()))
+            rows.append(r)
+            v = T[r] / np.linalg.norm(T[r])
+            T = T - np.outer(T @ v, v)
+        Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
     return Y
