@@ -15,14 +15,14 @@ import json
 import logging
 import math
 import os
-import stat
 import sys
-import tempfile
 import warnings
-from pathlib import Path
 from typing import Any, Callable
 
 import click
+
+from ..output import (PLOT_SUFFIXES, Terminated, atomic_write, check_journal_path,  # noqa: F401 (re-exported)
+                      check_output_path, is_terminated, write_csv, write_table_csv)
 
 log = logging.getLogger("bifilar")
 
@@ -64,11 +64,6 @@ def setup_logging(verbose: bool) -> None:
 def _one_line(s: str) -> str:
     """Collapse a message onto one line (the CLI promises one line per problem)."""
     return " ".join(str(s).replace("\r", "\n").split("\n"))
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM turned into an exception so that ``finally`` blocks (temporary
-    files of :func:`atomic_write`) run; the CLI exits with status 143."""
 
 
 def _raise_terminated(signum, frame):  # pragma: no cover - exercised through a subprocess
@@ -253,101 +248,6 @@ def err_console():
     from rich.console import Console
 
     return Console(stderr=True)
-
-
-PLOT_SUFFIXES = frozenset({".png", ".pdf", ".svg", ".svgz", ".eps", ".ps", ".pgf", ".jpg", ".jpeg", ".tif", ".tiff",
-                           ".webp", ".gif"})
-"""File name endings matplotlib can draw to (``--plot`` names are checked before any work)."""
-
-
-def check_output_path(path: str | None, force: bool, protected: list[str | None], option: str) -> Path | None:
-    """Validate an output path before any work is done (exit 2 on problems).
-
-    ``protected``: paths this command reads or writes through other options
-    (by convention the input config first); the output may be none of them,
-    whether or not they exist yet (symlinks and hard links included).  An
-    existing file is only replaced with ``force``; a directory never.  For
-    ``option == "--plot"`` the name must end in an image format
-    (:data:`PLOT_SUFFIXES`)."""
-    from ..errors import InputError
-
-    if path is None:
-        return None
-    p = Path(path)
-    if str(path).strip() == "":
-        raise InputError(option, "must be a file name, got an empty string")
-    for k, q in enumerate(protected):
-        if q is None:
-            continue
-        if _same_file(p, Path(q)):
-            if k == 0:
-                raise InputError(option, f"refusing to write over the input file {q}")
-            raise InputError(option, f"refusing to write over {q}, which another option of this command also names")
-    if p.is_dir():
-        raise InputError(option, f"{p} is a directory")
-    if option == "--plot" and p.suffix.lower() not in PLOT_SUFFIXES:
-        raise InputError(option, f"cannot tell the image format of {p.name!r}: end the name in .png, .pdf or .svg "
-                                 f"(or {', '.join(s for s in sorted(PLOT_SUFFIXES) if s not in ('.png', '.pdf', '.svg'))})")
-    if p.exists() and not force:
-        raise InputError(option, f"{p} exists; choose another name or pass --force to replace it")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(option, f"directory {parent} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(option, f"directory {parent} is not writable")
-    return p
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-        return a.resolve() == b.resolve()
-    except OSError:  # pragma: no cover - unreadable path components
-        return False
-
-
-def atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``.
-
-    The temporary file sits in the same directory (so the rename is atomic),
-    is flushed to disk before the rename, and is removed if ``write`` fails
-    or the run is interrupted: ``path`` is either untouched or complete.
-    The new file gets the mode of the file it replaces, else the umask's."""
-    path = Path(path)
-    directory = str(path.parent) if str(path.parent) else "."
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=directory)
-    os.close(fd)
-    try:
-        write(tmp)
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.chmod(tmp, _target_mode(path))
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _target_mode(path: Path) -> int:
-    try:
-        return stat.S_IMODE(os.stat(path).st_mode)
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
-
-
-def write_csv(path: Path, header: list[str], rows) -> None:
-    import numpy as np
-
-    def w(tmp: str) -> None:
-        np.savetxt(tmp, np.asarray(rows, float), delimiter=",", header=",".join(header), comments="", fmt="%.12g")
-
-    atomic_write(path, w)
 
 
 def progress_bar(description: str, enabled: bool = True):

@@ -635,53 +635,32 @@ def journal_path(out: str | os.PathLike) -> Path:
 def read_journal(path: Path, fp: str) -> dict[str, dict]:
     """Finished points of an interrupted sweep, by :func:`point_key`.
 
-    A torn last line (interrupted while writing) is ignored.  A journal
-    written for another config or other settings is refused.
+    A torn last line (interrupted while writing) is cut off the file.  A
+    journal written for another config or other settings, or holding lines
+    that are not sweep records, is refused (:class:`~bifilar.errors.InputError`
+    naming ``--resume``).
     """
-    done: dict[str, dict] = {}
-    with open(path, encoding="utf-8") as fh:
-        lines = fh.read().splitlines()
-    if not lines:
-        return done
-    try:
-        head = json.loads(lines[0])
-    except json.JSONDecodeError:
-        head = {}
-    if head.get("journal") != "bifilar-sweep":
-        raise InputError("--resume", f"{path} is not a sweep journal")
-    if head.get("fingerprint") != fp:
-        raise InputError("--resume", f"{path} was written for another config or other settings "
-                                     "(components, amplitude, uncertainties, tensions); rerun with --force to start over")
-    for line in lines[1:]:
-        try:
-            rec = json.loads(line)
-            done[rec["key"]] = rec["point"]
-        except (json.JSONDecodeError, KeyError, TypeError):
-            continue
-    return done
+    from ..output import read_journal as read_jsonl
+
+    def check_header(head) -> None:
+        if not isinstance(head, dict) or head.get("journal") != "bifilar-sweep":
+            raise InputError("--resume", f"{path} is not a sweep journal")
+        if head.get("fingerprint") != fp:
+            raise InputError("--resume", f"{path} was written for another config or other settings "
+                                         "(components, amplitude, uncertainties, tensions); rerun with --force to start over")
+
+    def is_record(rec) -> bool:
+        return isinstance(rec, dict) and isinstance(rec.get("key"), str) and isinstance(rec.get("point"), dict)
+
+    _, records = read_jsonl(path, check_header, is_record)
+    return {rec["key"]: rec["point"] for rec in records}
 
 
-class _Journal:
-    def __init__(self, path: Path | None, fp: str, append: bool):
-        self.fh = None
-        if path is None:
-            return
-        new = not (append and path.exists() and path.stat().st_size > 0)
-        self.fh = open(path, "a" if not new else "w", encoding="utf-8")
-        if new:
-            self._write({"journal": "bifilar-sweep", "version": JOURNAL_VERSION, "fingerprint": fp})
+def _journal_writer(path: Path | None, fp: str, append: bool):
+    from ..output import JournalWriter
 
-    def _write(self, rec: dict) -> None:
-        self.fh.write(json.dumps(rec) + "\n")
-        self.fh.flush()
-
-    def add(self, key: str, point: dict) -> None:
-        if self.fh is not None:
-            self._write({"key": key, "point": point})
-
-    def close(self) -> None:
-        if self.fh is not None:
-            self.fh.close()
+    return JournalWriter(path, {"journal": "bifilar-sweep", "version": JOURNAL_VERSION, "fingerprint": fp},
+                         append=append)
 
 
 def _ignore_sigint() -> None:
@@ -713,7 +692,7 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
     todo = [i for i, r in enumerate(results) if r is None]
     total = len(grid)
     finished = total - len(todo)
-    jr = _Journal(journal, fp, append=resume)
+    jr = _journal_writer(journal, fp, append=resume)
     new = 0
     if progress:
         progress(finished, total)
@@ -721,7 +700,7 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
     def record(i: int, point: dict) -> None:
         nonlocal finished, new
         results[i] = point
-        jr.add(keys[i], point)
+        jr.add({"key": keys[i], "point": point})
         finished += 1
         new += 1
         if progress:
@@ -962,27 +941,9 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
 
 def write_points_csv(path: Path, points: list[dict], param_names: list[str], components: list[str]) -> None:
     """CSV (header row) of :func:`csv_rows`, written atomically; empty cells for missing values."""
-    import csv
+    from ..output import write_table_csv
 
-    from ..cli.common import atomic_write
-
-    header, rows = csv_rows(points, param_names, components)
-
-    def cell(v):
-        if v is None:
-            return ""
-        if isinstance(v, float):
-            return f"{v:.12g}"
-        return str(v)
-
-    def w(tmp: str) -> None:
-        with open(tmp, "w", newline="", encoding="utf-8") as fh:
-            wr = csv.writer(fh)
-            wr.writerow(header)
-            for r in rows:
-                wr.writerow([cell(v) for v in r])
-
-    atomic_write(path, w)
+    write_table_csv(path, *csv_rows(points, param_names, components))
 
 
 # --------------------------------------------------------------------------
@@ -1126,7 +1087,7 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
         a.legend(fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
-    from ..cli.common import atomic_write
+    from ..output import atomic_write
 
     fmt_ = Path(path).suffix.lstrip(".").lower() or "png"
     atomic_write(Path(path), lambda tmp: fig.savefig(tmp, dpi=110, format=fmt_))
