@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, fmt, handle_errors, progress_bar
+from .common import check_journal_path, check_output_path, console, emit_json, fmt, handle_errors, progress_bar
 
 @click.command("invert")
 @click.argument("config", required=False, type=click.Path(dir_okay=False))
@@ -67,8 +67,6 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
         raise InputError("--resume", "needs --journal FILE")
     if journal is not None and not n_mc:
         raise InputError("--journal", "only with --monte-carlo N")
-    if journal is not None and Path(journal).exists() and not resume:
-        raise InputError("--journal", f"{journal} exists; pass --resume to continue it or choose another name")
     cyc = _float(cycles, "--cycles", positive=True)
     sr = _float(sample_rate, "--sample-rate", positive=True)
     scale = _float(signal_scale, "--signal-scale", positive=True)
@@ -83,7 +81,13 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     p_specs = [mm.parse_period_spec(s) for s in periods]
     t_specs = [mm.parse_timed_spec(s) for s in timed]
     s_specs = [mm.split_label(s, "--signal", "torsion=recording.csv") for s in signals]
-    plot_p = check_output_path(plot, force, [config, measurements], "--plot")
+    # every output is distinct from the others and from every input, checked before any work
+    inputs = [config, measurements, *(path for _, path in s_specs)]
+    if journal is not None:
+        check_journal_path(journal, [*inputs, plot], "--journal", resume=resume)
+        if Path(journal).exists() and not resume:
+            raise InputError("--journal", f"{journal} exists; pass --resume to continue it or choose another name")
+    plot_p = check_output_path(plot, force, [*inputs, journal], "--plot")
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
     if measurements is not None:
@@ -109,12 +113,20 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if not ms.measurements:
         raise InputError("--period", "no measurement: give --period, --timed or --signal (or --measurements FILE)")
     _apply_amplitudes(ms, amps)
+    # inputs named inside the measurements file (its config, recordings) are inputs too
+    inputs += [h.source for h in ms.hangings if getattr(h, "source", None)]
+    inputs += [str(m.details["signal"]["path"]) for m in ms.measurements
+               if isinstance(m.details, dict) and isinstance(m.details.get("signal"), dict) and m.details["signal"].get("path")]
+    if journal is not None:
+        check_journal_path(journal, [*inputs, plot], "--journal", resume=resume)
+    if plot_p is not None:
+        check_output_path(plot, force, [*inputs, journal], "--plot")
     fit_paths = {}
     if plot_p is not None:
         for k, m in enumerate(ms.measurements):
             if m.fit is not None:
                 q = plot_p.with_name(f"{plot_p.stem}.fit-{_safe(m.label)}-{k + 1}{plot_p.suffix or '.png'}")
-                fit_paths[k] = check_output_path(str(q), force, [config, measurements], "--plot")
+                fit_paths[k] = check_output_path(str(q), force, [*inputs, journal, plot], "--plot")
     from ..estimation.invert import invert as run, plot_inversion
 
     slow = bool(n_mc or ms.monte_carlo) or any(m.amplitude for m in ms.measurements)

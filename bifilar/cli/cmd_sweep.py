@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, handle_errors, progress_bar
+from .common import check_journal_path, check_output_path, console, emit_json, handle_errors, progress_bar
 
 UNC_HELP = "Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity [relative]."
 
@@ -111,11 +111,11 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                                          lengths_available, min_separation, no_tensions, sim_periods)
     journal = None
     if out:
-        journal = sw.journal_path(out)
+        journal = check_journal_path(sw.journal_path(out), [config, plot], "--out", resume=resume)
         if journal.exists() and not resume and not force:
             raise InputError("--out", f"{journal} holds an interrupted sweep; pass --resume to continue it or --force to start over")
-    out_p = check_output_path(out, force, [config], "--out")
-    plot_p = check_output_path(plot, force, [config, out], "--plot")
+    out_p = check_output_path(out, force, [config, journal], "--out")
+    plot_p = check_output_path(plot, force, [config, out, journal], "--plot")
     t0 = time.perf_counter()
     try:
         with progress_bar(f"sweeping {len(grid)} points", enabled=len(grid) > 1) as upd:

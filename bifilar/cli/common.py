@@ -123,10 +123,10 @@ def handle_errors(fn: Callable) -> Callable:
                 raise
             click.echo(f"error: {type(exc).__name__}: {_one_line(str(exc))}", err=True)
             ctx.exit(1)
-        except Terminated:
-            click.echo("terminated", err=True)
-            ctx.exit(143)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated), possibly re-raised as SweepInterrupted
+            if is_terminated(exc):
+                click.echo("terminated", err=True)
+                ctx.exit(143)
             click.echo("interrupted", err=True)
             ctx.exit(130)
         except BrokenPipeError:
