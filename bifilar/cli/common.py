@@ -9,6 +9,7 @@ file unless ``--force`` is given, and never over the input config.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import io
 import json
@@ -101,7 +102,7 @@ def handle_errors(fn: Callable) -> Callable:
             except (ValueError, OSError):  # pragma: no cover - exotic embedding
                 old_term = None
         try:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _native_stdout_to_stderr():
                 if not debug:
                     warnings.showwarning = _show_warning_one_line
                 return fn(*args, **kwargs)
@@ -151,6 +152,42 @@ def handle_errors(fn: Callable) -> Callable:
     return wrapper
 
 
+@contextlib.contextmanager
+def _native_stdout_to_stderr():
+    """Keep stdout for the package's own output while a command runs.
+
+    Compiled libraries write diagnostics straight to file descriptor 1
+    (LAPACK's ``** On entry to DLASCL parameter number 4 had an illegal
+    value`` for a signal around 1e200), which would corrupt a ``--json``
+    document or a table.  Here fd 1 is pointed at stderr and ``sys.stdout``
+    at a duplicate of the real stdout, restored afterwards.  Nothing is done
+    when ``sys.stdout`` is not fd 1 (a test runner's capture)."""
+    try:
+        sys.stdout.flush()
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError, io.UnsupportedOperation):
+        fd = None
+    if fd != 1:
+        yield
+        return
+    old = sys.stdout
+    saved = os.dup(1)
+    new = io.TextIOWrapper(io.FileIO(saved, "w", closefd=False), encoding=old.encoding, errors=old.errors,
+                           line_buffering=old.line_buffering)
+    os.dup2(2, 1)
+    sys.stdout = new
+    try:
+        yield
+    finally:
+        try:
+            new.flush()
+        except (OSError, ValueError):  # a closed pipe: handled (exit 141) by the caller
+            pass
+        sys.stdout = old
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def _show_warning_one_line(message, category, filename, lineno, file=None, line=None) -> None:
     """Python warnings (numpy overflow, scipy) as one ``warning:`` line on stderr."""
     click.echo(f"warning: {category.__name__}: {_one_line(str(message))}", err=True)
@@ -163,6 +200,25 @@ def _silence_stdout() -> None:
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
         pass
+
+
+MAX_SIM_PERIODS = 10_000
+"""Most periods ``simulate`` and ``tensions`` integrate (~45 s and ~2 M
+samples for the thesis plate; more would run for hours and fill memory)."""
+MAX_SWEEP_PERIODS = 1_000
+"""Most periods a ``sweep`` or ``plan`` point simulates per mode."""
+MAX_WORKERS = 1024
+"""Largest ``--workers`` accepted; fewer processes start when there are fewer
+points or CPUs (:func:`bifilar.studies.sweep.effective_workers`)."""
+
+
+def check_workers(workers: int) -> None:
+    """``--workers`` in 1 .. :data:`MAX_WORKERS` (exit 2 otherwise)."""
+    from ..errors import InputError
+
+    if not 1 <= workers <= MAX_WORKERS:
+        raise InputError("--workers", f"must be in 1 .. {MAX_WORKERS}, got {workers} (at most one process per "
+                                      "CPU and per point starts anyway)")
 
 
 class OptionChecker:
@@ -238,16 +294,37 @@ def emit_json(doc: Any) -> None:
     click.echo(json.dumps(to_jsonable(doc), allow_nan=False))
 
 
-def console():
+def _console_class():
     from rich.console import Console
 
-    return Console()
+    class _Console(Console):
+        def on_broken_pipe(self) -> None:
+            """A closed stdout (``| head``): rich would exit 1; raise so that
+            :func:`handle_errors` ends quietly with 141."""
+            self.quiet = True
+            raise BrokenPipeError(32, "stdout closed")
+
+    return _Console
+
+
+def console():
+    """A rich console on stdout.  Markup in the package's own strings only:
+    pass every user string (names, labels, paths, messages) through :func:`esc`;
+    emoji codes (``:smile:``) are never substituted.  A closed pipe ends the
+    command with status 141 and no message."""
+    return _console_class()(emoji=False)
 
 
 def err_console():
-    from rich.console import Console
+    return _console_class()(stderr=True, emoji=False)
 
-    return Console(stderr=True)
+
+def esc(x: Any) -> str:
+    """``str(x)`` with rich markup escaped, so a config name such as
+    ``"rotor [v2]"`` or ``"frame [/b]"`` prints literally."""
+    from rich.markup import escape
+
+    return escape(str(x))
 
 
 def progress_bar(description: str, enabled: bool = True):

@@ -269,7 +269,7 @@ def build_grid(params: list[ParamSpec], zip_: bool = False) -> list[dict]:
             raise InputError("--zip", "the parameters must have the same number of values: "
                                       + ", ".join(f"{p.name} has {len(p.values)}" for p in params))
         return [dict(zip(names, vals)) for vals in zip(*[p.values for p in params])]
-    total = int(np.prod([len(p.values) for p in params]))
+    total = math.prod(len(p.values) for p in params)  # Python ints: np.prod wraps to 0 at 2**64
     if total > 100_000:
         raise InputError("--param", f"the grid has {total} points; keep it below 100000")
     return [dict(zip(names, vals)) for vals in itertools.product(*[p.values for p in params])]
@@ -570,6 +570,10 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
     sims: dict[int, Any] = {}
     if st.tensions:
         ks = sorted(set(chosen.values()))
+        from ..analysis.simulate import initial_state
+
+        for k in ks:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
+            initial_state(scene, rest, ms.modes[k], amplitude)
         sims = dict(zip(ks, _nonlinear_runs(scene, rest, ms, [labels[k] for k in ks], amplitude, st)))
         tmax = np.max([s.tension_max for s in sims.values()], axis=0) if sims else rest.tensions
         tmin = np.min([s.tension_min for s in sims.values()], axis=0) if sims else rest.tensions
@@ -663,6 +667,12 @@ def _journal_writer(path: Path | None, fp: str, append: bool):
                          append=append)
 
 
+def effective_workers(workers: int, points: int) -> int:
+    """Processes a sweep of ``points`` points actually starts for ``--workers
+    workers``: never more than the points, nor than the CPUs (``os.cpu_count``)."""
+    return max(1, min(int(workers), int(points), os.cpu_count() or 1))
+
+
 def _ignore_sigint() -> None:
     import signal
 
@@ -715,7 +725,7 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
         else:
             from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-            ex = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+            ex = ProcessPoolExecutor(max_workers=effective_workers(workers, len(todo)), initializer=_ignore_sigint)
             try:
                 pending = {ex.submit(evaluate_point, base_cfg, source, grid[i], settings): i for i in todo}
                 while pending:
