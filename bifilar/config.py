@@ -414,7 +414,11 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True) -> S
     """
     chk = _Checker()
     if not isinstance(cfg, dict):
-        raise ConfigErrors([InputError("config", f"must be a YAML mapping with keys body and rig, got {_describe(cfg)}")])
+        # the file's content is not quoted: it may not be a config at all (/etc/passwd)
+        got = _describe(cfg) if cfg is None or isinstance(cfg, (list, tuple)) else (
+            f"text of {len(cfg)} characters: is this a bifilar config?" if isinstance(cfg, str)
+            else f"a {type(cfg).__name__}: is this a bifilar config?")
+        raise ConfigErrors([InputError("config", f"must be a YAML mapping with keys body and rig, got {got}")])
     chk.keys("", cfg, TOP_KEYS, {"body", "rig"})
 
     name = cfg.get("name")

@@ -337,6 +337,22 @@ def _show(value) -> str:
     return str(value)
 
 
+MAX_SIZE = 1e5
+"""Largest part dimension or position coordinate, m (the 100 km of
+``bifilar.config.LIMITS["length"]``): beyond it inertias overflow double
+precision (1e200 m squared) long before a rig could be that large."""
+MAX_ROTATION = 1e3
+"""Largest rotation vector length, rad (about 160 turns): sin and cos of a
+larger angle lose their digits, and of 1e308 overflow."""
+
+
+def _bounded(x: float, path: str, limit: float, unit: str) -> float:
+    """``x`` if ``|x| <= limit``, else a :class:`PartError` naming ``path``."""
+    if abs(x) > limit:
+        raise PartError(path, f"must be at most {limit:g} {unit} in magnitude, got {_show(x)}")
+    return x
+
+
 def _number(value, path: str, *, positive: bool = False, nonneg: bool = False) -> float:
     kind = "a positive number" if positive else ("a non-negative number" if nonneg else "a finite number")
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
@@ -448,6 +464,8 @@ def _build(fields: Mapping, path: str) -> Part:
         raise PartError(_join(path, "name"), f"must be a string, got {_show(name)}")
     mass = _number(fields["mass"], _join(path, "mass"), positive=True)
     position = _vector3(fields.get("position", (0.0, 0.0, 0.0)), _join(path, "position"))
+    for i, v in enumerate(position):
+        _bounded(v, _join(_join(path, "position"), i), MAX_SIZE, "m")
 
     if "axis" in fields and "rotation" in fields:
         raise PartError(_join(path, "axis"), "give either axis or rotation, not both")
@@ -459,12 +477,14 @@ def _build(fields: Mapping, path: str) -> Part:
         R = axis_rotation(axis)
     elif "rotation" in fields:
         rv = _vector3(fields["rotation"], _join(path, "rotation"))
+        for i, v in enumerate(rv):
+            _bounded(v, _join(_join(path, "rotation"), i), MAX_ROTATION, "rad")
         R = rotvec_to_matrix(rv)
     else:
         R = np.eye(3)
 
     def dim(key, **kw):
-        return _number(fields[key], _join(path, key), **kw)
+        return _bounded(_number(fields[key], _join(path, key), **kw), _join(path, key), MAX_SIZE, "m")
 
     if shape == "solid_cylinder":
         geom: Geometry = SolidCylinder(dim("radius", positive=True), dim("length", positive=True))
@@ -480,7 +500,8 @@ def _build(fields: Mapping, path: str) -> Part:
     elif shape == "box":
         size_path = _join(path, "size")
         _vector3(fields["size"], size_path)  # shape and finiteness
-        size = tuple(_number(v, _join(size_path, i), positive=True) for i, v in enumerate(fields["size"]))
+        size = tuple(_bounded(_number(v, _join(size_path, i), positive=True), _join(size_path, i), MAX_SIZE, "m")
+                     for i, v in enumerate(fields["size"]))
         geom = Box(size)  # type: ignore[arg-type]
     elif shape == "solid_sphere":
         geom = SolidSphere(dim("radius", positive=True))

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cli.common import atomic_write, write_csv
+from .output import atomic_write, write_csv
 
 
 def write_timeseries_csv(path: Path, scene, rest, res) -> None:

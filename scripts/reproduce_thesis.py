@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bifilar.cli.common import atomic_write  # noqa: E402
+from bifilar.output import atomic_write  # noqa: E402
 from bifilar.studies.reproduce import run_all, write_report  # noqa: E402
 
 

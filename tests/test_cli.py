@@ -359,7 +359,7 @@ def test_signal_during_a_run_exits_cleanly(tmp_path, sig, code, word):
 
     out = tmp_path / "run.csv"
     master, slave = pty.openpty()
-    proc = subprocess.Popen([sys.executable, "-m", "bifilar", "simulate", str(PLATE), "--periods", "1e6",
+    proc = subprocess.Popen([sys.executable, "-m", "bifilar", "simulate", str(PLATE), "--periods", "1e4",
                              "--out", str(out)], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=slave)
     os.close(slave)
     seen = b""

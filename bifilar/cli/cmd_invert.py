@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, fmt, handle_errors, progress_bar
+from .common import check_journal_path, check_output_path, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 @click.command("invert")
 @click.argument("config", required=False, type=click.Path(dir_okay=False))
@@ -62,15 +62,15 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if method is not None and method not in mm.METHOD_NAMES:
         raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
     n_mc = _int(monte_carlo, "--monte-carlo", minimum=0)
-    seed_v = _int(seed, "--seed")
+    seed_v = _int(seed, "--seed", minimum=0)
     if resume and journal is None:
         raise InputError("--resume", "needs --journal FILE")
     if journal is not None and not n_mc:
         raise InputError("--journal", "only with --monte-carlo N")
-    if journal is not None and Path(journal).exists() and not resume:
-        raise InputError("--journal", f"{journal} exists; pass --resume to continue it or choose another name")
     cyc = _float(cycles, "--cycles", positive=True)
     sr = _float(sample_rate, "--sample-rate", positive=True)
+    if sr is not None and sr > mm.MAX_SAMPLE_RATE:
+        raise InputError("--sample-rate", f"must be in (0, {mm.MAX_SAMPLE_RATE:g}] Hz, got {sr:g}")
     scale = _float(signal_scale, "--signal-scale", positive=True)
     if signal_quantity not in ("angle", "rate", "other"):
         raise InputError("--signal-quantity", f"must be angle, rate or other, got {signal_quantity!r}")
@@ -83,7 +83,13 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     p_specs = [mm.parse_period_spec(s) for s in periods]
     t_specs = [mm.parse_timed_spec(s) for s in timed]
     s_specs = [mm.split_label(s, "--signal", "torsion=recording.csv") for s in signals]
-    plot_p = check_output_path(plot, force, [config, measurements], "--plot")
+    # every output is distinct from the others and from every input, checked before any work
+    inputs = [config, measurements, *(path for _, path in s_specs)]
+    if journal is not None:
+        check_journal_path(journal, [*inputs, plot], "--journal", resume=resume)
+        if Path(journal).exists() and not resume:
+            raise InputError("--journal", f"{journal} exists; pass --resume to continue it or choose another name")
+    plot_p = check_output_path(plot, force, [*inputs, journal], "--plot")
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
     if measurements is not None:
@@ -109,12 +115,20 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if not ms.measurements:
         raise InputError("--period", "no measurement: give --period, --timed or --signal (or --measurements FILE)")
     _apply_amplitudes(ms, amps)
+    # inputs named inside the measurements file (its config, recordings) are inputs too
+    inputs += [h.source for h in ms.hangings if getattr(h, "source", None)]
+    inputs += [str(m.details["signal"]["path"]) for m in ms.measurements
+               if isinstance(m.details, dict) and isinstance(m.details.get("signal"), dict) and m.details["signal"].get("path")]
+    if journal is not None:
+        check_journal_path(journal, [*inputs, plot], "--journal", resume=resume)
+    if plot_p is not None:
+        check_output_path(plot, force, [*inputs, journal], "--plot")
     fit_paths = {}
     if plot_p is not None:
         for k, m in enumerate(ms.measurements):
             if m.fit is not None:
                 q = plot_p.with_name(f"{plot_p.stem}.fit-{_safe(m.label)}-{k + 1}{plot_p.suffix or '.png'}")
-                fit_paths[k] = check_output_path(str(q), force, [config, measurements], "--plot")
+                fit_paths[k] = check_output_path(str(q), force, [*inputs, journal, plot], "--plot")
     from ..estimation.invert import invert as run, plot_inversion
 
     slow = bool(n_mc or ms.monte_carlo) or any(m.amplitude for m in ms.measurements)
@@ -202,7 +216,7 @@ def _render(ms, res) -> None:
     from rich.table import Table
 
     con = console()
-    names = ", ".join(h.scene.name for h in ms.hangings)
+    names = esc(", ".join(h.scene.name for h in ms.hangings))
     con.print(f"[bold]{names}[/bold]: {len(res.measurements)} period(s), method [bold]{res.method}[/bold] "
               f"({res.to_json()['method_description']})")
     t = Table(title="Estimate (reference body axes)")
@@ -229,9 +243,9 @@ def _render(ms, res) -> None:
         for r in res.ladder:
             mark = " *" if r["method"] == res.method else ""
             if not r["applicable"]:
-                lt.add_row(r["method"], *(("-",) if multi else ()), "-", "-", "-", f"n/a: {r['note']}")
+                lt.add_row(r["method"], *(("-",) if multi else ()), "-", "-", "-", f"n/a: {esc(r['note'])}")
                 continue
-            note = r.get("note") or ""
+            note = esc(r.get("note") or "")
             if r.get("thesis_table"):
                 tt = r["thesis_table"]
                 note += (f" (thesis Table 7.1.1: {tt['thesis_value']} vs analytic {tt['analytic']}, "
@@ -249,10 +263,10 @@ def _render(ms, res) -> None:
         bt.add_column("share of variance", justify="right")
         bt.add_column("std contribution", justify="right")
         for g, (sh, c) in res.budget.grouped(i).items():
-            bt.add_row(g, f"{sh:.1%}", fmt(c, 3))
+            bt.add_row(esc(g), f"{sh:.1%}", fmt(c, 3))
         sh = res.budget.shares(i)
         top = sorted(sh, key=lambda k: -sh[k])[:3]
-        bt.caption = "largest single inputs: " + ", ".join(f"{k} {sh[k]:.1%}" for k in top)
+        bt.caption = "largest single inputs: " + esc(", ".join(f"{k} {sh[k]:.1%}" for k in top))
         con.print(bt)
     if len(res.names) > 1:
         ct = Table(title="Correlation of the estimates")
@@ -270,8 +284,8 @@ def _render(ms, res) -> None:
         mt.add_column(c, justify="left" if c in ("hanging", "mode", "source") else "right")
     doc = res.to_json()
     for m, r in zip(res.measurements, doc["residuals"]):
-        mt.add_row(*((r["hanging"],) if several else ()), m.label,
-                   m.source + (f" (zeta {m.damping_ratio:.3g})" if m.damping_ratio else ""),
+        mt.add_row(*((esc(r["hanging"]),) if several else ()), esc(m.label),
+                   esc(m.source) + (f" (zeta {m.damping_ratio:.3g})" if m.damping_ratio else ""),
                    fmt(m.period, 9), fmt(m.std, 3), fmt(m.amplitude, 4), fmt(r["model"], 9),
                    f"{r['normalised_residual']:+.2f}")
     con.print(mt)
@@ -279,6 +293,6 @@ def _render(ms, res) -> None:
     con.print("assumed standard uncertainties: " + "; ".join(f"{k} {v['value']:g} {v['unit'].split(' ')[0]}"
                                                           for k, v in u.items()))
     for n in res.notes:
-        con.print(f"[dim]note: {n}[/dim]")
+        con.print(f"[dim]note: {esc(n)}[/dim]")
     for w in res.warnings:
-        con.print(f"[bold red]WARNING:[/bold red] {w}")
+        con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")

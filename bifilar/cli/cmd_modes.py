@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, fmt, handle_errors, write_csv
+from .common import check_output_path, console, emit_json, esc, fmt, handle_errors, write_csv
 
 
 def modes_document(scene, rest, ms) -> dict:
@@ -49,7 +49,7 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     from rich.table import Table
 
     con = console()
-    con.print(f"[bold]{scene.name}[/bold]: {scene.mass:.6g} kg on {scene.n_wires} wires, {scene.dof} degrees of freedom")
+    con.print(f"[bold]{esc(scene.name)}[/bold]: {scene.mass:.6g} kg on {scene.n_wires} wires, {scene.dof} degrees of freedom")
     t = Table(title="Rest pose (world frame, z up)")
     t.add_column("quantity")
     t.add_column("value")
@@ -60,7 +60,7 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     t.add_row("attitude, rotation vector (deg)", "[" + ", ".join(f"{np.degrees(v):.4g}" for v in matrix_to_rotvec(rest.R)) + "]")
     for i, T in enumerate(rest.tensions):
         t.add_row(f"tension wire {i + 1} (N)", f"{T:.6g}")
-    t.add_row("lowest point z (m)", f"{rest.lowest_z:.6g} ({scene.support_source})")
+    t.add_row("lowest point z (m)", f"{rest.lowest_z:.6g} ({esc(scene.support_source)})")
     t.add_row("depth below ceiling (m)", f"{rest.depth:.6g}")
     con.print(t)
     mt = Table(title="Linear modes (slowest first)")
@@ -68,6 +68,6 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
         mt.add_column(col, justify="right" if col in ("#", "period (s)", "freq (Hz)") else "left")
     for k, m in enumerate(ms.modes):
         shape = " ".join(f"{c}{v:+.3f}" for c, v in zip(COMPONENTS, m.shape) if abs(v) >= 5e-4)
-        mt.add_row(str(k + 1), m.label, fmt(m.period, 8), fmt(1 / m.period if m.period else None, 4), m.description,
+        mt.add_row(str(k + 1), esc(m.label), fmt(m.period, 8), fmt(1 / m.period if m.period else None, 4), esc(m.description),
                    shape)
     con.print(mt)

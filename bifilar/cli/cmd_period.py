@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, fmt, handle_errors
+from .common import check_output_path, console, emit_json, esc, fmt, handle_errors
 
 _MODELS = ("auto", "viscous", "quadratic", "two_mode")
 
@@ -40,10 +40,16 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, as_json, p
             vals[name] = float(v)
         except ValueError:
             raise InputError(name, f"must be a number, got {v!r}") from None
+    from ..estimation.measurements import MAX_SAMPLE_RATE, check_signal_scale
+
+    sr = vals["--sample-rate"]
+    if sr is not None and not 0 < sr <= MAX_SAMPLE_RATE:
+        raise InputError("--sample-rate", f"must be in (0, {MAX_SAMPLE_RATE:g}] Hz, got {sr:g}")
     plot_p = check_output_path(plot, force, [signal], "--plot")
     from ..estimation.signal import fit_period, plot_fit, read_signal
 
-    t, y, meta = read_signal(signal, column=column, sample_rate=vals["--sample-rate"])
+    t, y, meta = read_signal(signal, column=column, sample_rate=sr)
+    check_signal_scale(t, y, "SIGNAL")
     fit = fit_period(t, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"],
                      trim="auto" if trim else None)
     if plot_p is not None:
@@ -67,7 +73,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, as_json, p
     from rich.table import Table
 
     con = console()
-    tb = Table(title=f"{sig['path']}: column {sig['column']}, {sig['n_samples']} samples at "
+    tb = Table(title=f"{esc(sig['path'])}: column {esc(sig['column'])}, {sig['n_samples']} samples at "
                      f"{fmt(sig['sample_rate'], 6)} Hz ({sig['time_source']})")
     tb.add_column("quantity")
     tb.add_column("value", justify="right")
@@ -86,6 +92,6 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, as_json, p
         tb.add_row("cross-check: crossings (s)", f"{fit.crossing.period:.9g} +- {fit.crossing.std:.2g}")
     con.print(tb)
     for n in fit.notes:
-        con.print(f"[dim]note: {n}[/dim]")
+        con.print(f"[dim]note: {esc(n)}[/dim]")
     for w in meta.get("warnings", []) or []:
-        con.print(f"[bold red]WARNING:[/bold red] {w}")
+        con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import click
 
 from .cmd_sweep import _ABBR, _pct, common_options, resolve_all
-from .common import console, emit_json, handle_errors, progress_bar
+from .common import check_workers, console, emit_json, esc, handle_errors, progress_bar
 
 
 @click.command("plan")
@@ -28,8 +28,7 @@ def plan(config, params, components, target, amplitude, sigmas, max_tension, max
     from ..studies.plan import plan as run_plan
     from ..studies.shorthands import check_param, parse_bounds
 
-    if workers < 1:
-        raise InputError("--workers", f"must be at least 1, got {workers}")
+    check_workers(workers)
     cfg = read_yaml(config)
     if not isinstance(cfg, dict):
         raise InputError("config", "must be a YAML mapping with keys body and rig")
@@ -56,11 +55,11 @@ def _render(cfg, res, settings) -> None:
     b = res.best
     con.print(f"[bold green]best configuration[/bold green] after {len(res.evaluated)} evaluations:")
     for n, lo, hi in res.bounds:
-        con.print(f"  {n} = {b['params'][n]:.6g}   (searched {lo:g} .. {hi:g})")
+        con.print(f"  {esc(n)} = {b['params'][n]:.6g}   (searched {lo:g} .. {hi:g})")
     what = f"the target {res.target}" if res.target else "the worst component"
     con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:
-        con.print("  limited by: " + "; ".join(res.active))
+        con.print("  limited by: " + esc("; ".join(res.active)))
     t = Table(title="expected accuracy of each inertia component")
     for h in ("comp", "value", "sigma", "rel %", "mode", "T s"):
         t.add_column(h, justify="right")

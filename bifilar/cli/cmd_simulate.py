@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, fmt, handle_errors, progress_bar
+from .common import check_output_path, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 
 @click.command("simulate")
@@ -27,11 +27,12 @@ from .common import check_output_path, console, emit_json, fmt, handle_errors, p
 @handle_errors
 def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_slack, as_json, out, plot, force):
     """Integrate the full nonlinear motion of CONFIG from a displaced rest pose."""
-    from .common import OptionChecker
+    from .common import MAX_SIM_PERIODS, OptionChecker
 
     chk = OptionChecker()  # every option problem at once
     chk.finite("--amplitude", amplitude)
-    chk.positive("--periods", periods)
+    if chk.positive("--periods", periods):
+        chk.in_range("--periods", periods, 0, MAX_SIM_PERIODS, lo_open=True)
     chk.in_range("--rtol", rtol, 1e-14, 1e-2, hi_open=True)  # below ~100 eps the integrator crawls
     if method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
         chk.error("--method", f"unknown method {method!r}; use DOP853, RK45, RK23, Radau, BDF or LSODA")
@@ -51,9 +52,16 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
 
+        from ..errors import InputError
+
         with progress_bar("simulating (kane)", enabled=not as_json) as upd:
-            res = simulate_kane(scene, rest, ms, mode=mode, amplitude=amplitude, periods=periods, theta=theta,
-                                rtol=rtol, method=method, progress=upd)
+            try:
+                res = simulate_kane(scene, rest, ms, mode=mode, amplitude=amplitude, periods=periods, theta=theta,
+                                    rtol=rtol, method=method, progress=upd)
+            except InputError as exc:
+                if exc.field != "theta1to4":  # the model's name for the angles --theta gives
+                    raise
+                raise InputError("--theta", exc.message) from None
     else:
         mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
@@ -79,7 +87,7 @@ def _render(scene, res) -> None:
     from rich.table import Table
 
     con = console()
-    t = Table(title=f"{scene.name}: {res.model} model, mode {res.mode}, amplitude {res.amplitude:g}")
+    t = Table(title=f"{esc(scene.name)}: {res.model} model, mode {res.mode}, amplitude {res.amplitude:g}")
     t.add_column("quantity")
     t.add_column("value", justify="right")
     t.add_row("measured period (s)", fmt(res.period, 10))
@@ -96,4 +104,4 @@ def _render(scene, res) -> None:
     t.add_row("integrator", f"{res.method} rtol={res.rtol:g}, {res.nfev} evaluations, {res.runtime:.3g} s")
     con.print(t)
     for w in res.warnings:
-        con.print(f"[bold red]WARNING:[/bold red] {w}")
+        con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")

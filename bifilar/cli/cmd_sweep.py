@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, handle_errors, progress_bar
+from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc,
+                     handle_errors, progress_bar)
 
 UNC_HELP = "Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity [relative]."
 
@@ -56,6 +57,8 @@ def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_dep
     from ..studies.shorthands import parse_values
     from ..studies.sweep import resolve_constraints, resolve_settings, resolve_target
 
+    if sim_periods is not None and sim_periods > MAX_SWEEP_PERIODS:
+        raise InputError("--periods", f"must be at most {MAX_SWEEP_PERIODS} periods per mode, got {sim_periods:g}")
     la = None
     if lengths_available is not None:
         la = [float(v) for v in parse_values(lengths_available, "--lengths-available")]
@@ -95,8 +98,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, parse_param
 
-    if workers < 1:
-        raise InputError("--workers", f"must be at least 1, got {workers}")
+    check_workers(workers)
     if resume and not out:
         raise InputError("--resume", "needs --out FILE (the journal is FILE.partial.jsonl)")
     cfg = read_yaml(config)
@@ -111,11 +113,11 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                                          lengths_available, min_separation, no_tensions, sim_periods)
     journal = None
     if out:
-        journal = sw.journal_path(out)
+        journal = check_journal_path(sw.journal_path(out), [config, plot], "--out", resume=resume)
         if journal.exists() and not resume and not force:
             raise InputError("--out", f"{journal} holds an interrupted sweep; pass --resume to continue it or --force to start over")
-    out_p = check_output_path(out, force, [config], "--out")
-    plot_p = check_output_path(plot, force, [config, out], "--plot")
+    out_p = check_output_path(out, force, [config, journal], "--out")
+    plot_p = check_output_path(plot, force, [config, out, journal], "--plot")
     t0 = time.perf_counter()
     try:
         with progress_bar(f"sweeping {len(grid)} points", enabled=len(grid) > 1) as upd:
@@ -159,10 +161,10 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
 
     con = console()
     comps = list(settings.components)
-    t = Table(title=f"{cfg.get('name', Path(config).stem)}: {len(points)} points ({runtime:.1f} s)")
+    t = Table(title=f"{esc(cfg.get('name', Path(config).stem))}: {len(points)} points ({runtime:.1f} s)")
     t.add_column("#", justify="right")
     for n in names:
-        t.add_column(n, justify="right")
+        t.add_column(esc(n), justify="right")
     for c in comps:
         t.add_column(f"{c} +-%", justify="right")
     t.add_column("sep %", justify="right")
@@ -174,7 +176,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         row = [str(i)] + [f"{p['params'][n]:.6g}" for n in names]
         if not p["valid"]:
             row += ["-"] * (len(comps) + 3) + ["[red]invalid[/red]"]
-            notes.append(f"{i}: [red]invalid:[/red] {p['error']}")
+            notes.append(f"{i}: [red]invalid:[/red] {esc(p['error'])}")
             t.add_row(*row)
             continue
         seps = []
@@ -192,7 +194,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         row.append(f"{d:.4g}")
         row.append(str(p["rank"]) if p["rank"] is not None else "[yellow]x[/yellow]" if p["violations"] else "-")
         if p["violations"]:
-            notes.append(f"{i}: " + "; ".join(p["violations"]))
+            notes.append(f"{i}: " + esc("; ".join(p["violations"])))
         t.add_row(*row)
     con.print(t)
     for line in notes[:20]:
@@ -206,13 +208,13 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         f"{k} {v:g}{' s' if k == 'timing' else ' m' if k in ('length', 'position', 'com') else ' (relative)'}"
         for k, v in unc.items()) + f"; amplitude {settings.amplitude:g}")
     if rec.get("best") is None:
-        con.print(f"[bold red]no recommendation:[/bold red] {rec['reason']}")
+        con.print(f"[bold red]no recommendation:[/bold red] {esc(rec['reason'])}")
     else:
         b = points[rec["best"]]
         con.print(f"[bold green]recommended:[/bold green] point {rec['best']}: "
-                  + ", ".join(f"{k} = {v:.6g}" for k, v in b["params"].items()))
+                  + esc(", ".join(f"{k} = {v:.6g}" for k, v in b["params"].items())))
         for line in rec["why"]:
-            con.print(f"  - {line}")
+            con.print(f"  - {esc(line)}")
         acc = Table(title="expected accuracy at the recommended point",
                     caption=f"bias: estimator vs the full model at amplitude {b['amplitude']:g}")
         for h in ("comp", "value", "sigma", "rel %", "mode", "T s", "sm-angle %", "thesis %", "linear %"):
@@ -233,7 +235,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         ft = Table(title="trade-off: predicted uncertainty vs peak tension (Pareto front)")
         ft.add_column("#", justify="right")
         for n in names:
-            ft.add_column(n, justify="right")
+            ft.add_column(esc(n), justify="right")
         ft.add_column("uncertainty %", justify="right")
         ft.add_column("peak T N", justify="right")
         ft.add_column("feasible")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, handle_errors, progress_bar, write_csv
+from .common import check_output_path, console, emit_json, esc, handle_errors, progress_bar, write_csv
 
 
 @click.command("tensions")
@@ -38,11 +38,12 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
-    from .common import OptionChecker
+    from .common import MAX_SIM_PERIODS, OptionChecker
 
     chk = OptionChecker()
     chk.finite("--amplitude", amplitude)
-    chk.positive("--periods", periods)
+    if chk.positive("--periods", periods):
+        chk.in_range("--periods", periods, 0, MAX_SIM_PERIODS, lo_open=True)
     chk.done()
     out_p = check_output_path(out, force, [config, motion], "--out")
     scene = load_scene(config)
@@ -92,7 +93,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from rich.table import Table
 
     con = console()
-    tab = Table(title=f"{scene.name}: tensions, {source}")
+    tab = Table(title=f"{esc(scene.name)}: tensions, {esc(source)}")
     for c in ("wire", "model min..max (N)", "thesis general min..max (N)", "max |general - model| (N)"):
         tab.add_column(c, justify="right")
     for i in range(scene.n_wires):
@@ -122,10 +123,18 @@ def _read_motion(path, scene):
     from ..errors import InputError
     from ..rotations import quat_multiply
 
+    import os
+    import warnings
+
     try:
-        data = np.genfromtxt(path, delimiter=",", names=True)
-    except (OSError, ValueError) as exc:
-        raise InputError("--motion", f"cannot read {path}: {exc}") from None
+        if os.path.getsize(path) == 0:
+            raise InputError("--motion", f"{path} is empty; expected a CSV with a header row (t, com_x, ..., q_w, ...)")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # numpy's "empty input" warnings: reported below as one error
+            data = np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True))
+    except (OSError, ValueError, IndexError, TypeError) as exc:
+        reason = getattr(exc, "strerror", None) or type(exc).__name__
+        raise InputError("--motion", f"cannot read {path} as a CSV table with a header row ({reason})") from None
     names = data.dtype.names or ()
     need = ["t", "com_x", "com_y", "com_z", "q_w", "q_x", "q_y", "q_z"] + [f"tension_{i + 1}" for i in range(scene.n_wires)]
     missing = [n for n in need if n not in names]

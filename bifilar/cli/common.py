@@ -9,20 +9,21 @@ file unless ``--force`` is given, and never over the input config.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import io
 import json
 import logging
 import math
 import os
-import stat
 import sys
-import tempfile
 import warnings
-from pathlib import Path
 from typing import Any, Callable
 
 import click
+
+from ..output import (PLOT_SUFFIXES, Terminated, atomic_write, check_journal_path,  # noqa: F401 (re-exported)
+                      check_output_path, is_terminated, write_csv, write_table_csv)
 
 log = logging.getLogger("bifilar")
 
@@ -66,11 +67,6 @@ def _one_line(s: str) -> str:
     return " ".join(str(s).replace("\r", "\n").split("\n"))
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM turned into an exception so that ``finally`` blocks (temporary
-    files of :func:`atomic_write`) run; the CLI exits with status 143."""
-
-
 def _raise_terminated(signum, frame):  # pragma: no cover - exercised through a subprocess
     raise Terminated()
 
@@ -106,7 +102,7 @@ def handle_errors(fn: Callable) -> Callable:
             except (ValueError, OSError):  # pragma: no cover - exotic embedding
                 old_term = None
         try:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _native_stdout_to_stderr():
                 if not debug:
                     warnings.showwarning = _show_warning_one_line
                 return fn(*args, **kwargs)
@@ -128,10 +124,10 @@ def handle_errors(fn: Callable) -> Callable:
                 raise
             click.echo(f"error: {type(exc).__name__}: {_one_line(str(exc))}", err=True)
             ctx.exit(1)
-        except Terminated:
-            click.echo("terminated", err=True)
-            ctx.exit(143)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated), possibly re-raised as SweepInterrupted
+            if is_terminated(exc):
+                click.echo("terminated", err=True)
+                ctx.exit(143)
             click.echo("interrupted", err=True)
             ctx.exit(130)
         except BrokenPipeError:
@@ -156,6 +152,42 @@ def handle_errors(fn: Callable) -> Callable:
     return wrapper
 
 
+@contextlib.contextmanager
+def _native_stdout_to_stderr():
+    """Keep stdout for the package's own output while a command runs.
+
+    Compiled libraries write diagnostics straight to file descriptor 1
+    (LAPACK's ``** On entry to DLASCL parameter number 4 had an illegal
+    value`` for a signal around 1e200), which would corrupt a ``--json``
+    document or a table.  Here fd 1 is pointed at stderr and ``sys.stdout``
+    at a duplicate of the real stdout, restored afterwards.  Nothing is done
+    when ``sys.stdout`` is not fd 1 (a test runner's capture)."""
+    try:
+        sys.stdout.flush()
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError, io.UnsupportedOperation):
+        fd = None
+    if fd != 1:
+        yield
+        return
+    old = sys.stdout
+    saved = os.dup(1)
+    new = io.TextIOWrapper(io.FileIO(saved, "w", closefd=False), encoding=old.encoding, errors=old.errors,
+                           line_buffering=old.line_buffering)
+    os.dup2(2, 1)
+    sys.stdout = new
+    try:
+        yield
+    finally:
+        try:
+            new.flush()
+        except (OSError, ValueError):  # a closed pipe: handled (exit 141) by the caller
+            pass
+        sys.stdout = old
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def _show_warning_one_line(message, category, filename, lineno, file=None, line=None) -> None:
     """Python warnings (numpy overflow, scipy) as one ``warning:`` line on stderr."""
     click.echo(f"warning: {category.__name__}: {_one_line(str(message))}", err=True)
@@ -168,6 +200,25 @@ def _silence_stdout() -> None:
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
         pass
+
+
+MAX_SIM_PERIODS = 10_000
+"""Most periods ``simulate`` and ``tensions`` integrate (~45 s and ~2 M
+samples for the thesis plate; more would run for hours and fill memory)."""
+MAX_SWEEP_PERIODS = 1_000
+"""Most periods a ``sweep`` or ``plan`` point simulates per mode."""
+MAX_WORKERS = 1024
+"""Largest ``--workers`` accepted; fewer processes start when there are fewer
+points or CPUs (:func:`bifilar.studies.sweep.effective_workers`)."""
+
+
+def check_workers(workers: int) -> None:
+    """``--workers`` in 1 .. :data:`MAX_WORKERS` (exit 2 otherwise)."""
+    from ..errors import InputError
+
+    if not 1 <= workers <= MAX_WORKERS:
+        raise InputError("--workers", f"must be in 1 .. {MAX_WORKERS}, got {workers} (at most one process per "
+                                      "CPU and per point starts anyway)")
 
 
 class OptionChecker:
@@ -243,111 +294,37 @@ def emit_json(doc: Any) -> None:
     click.echo(json.dumps(to_jsonable(doc), allow_nan=False))
 
 
-def console():
+def _console_class():
     from rich.console import Console
 
-    return Console()
+    class _Console(Console):
+        def on_broken_pipe(self) -> None:
+            """A closed stdout (``| head``): rich would exit 1; raise so that
+            :func:`handle_errors` ends quietly with 141."""
+            self.quiet = True
+            raise BrokenPipeError(32, "stdout closed")
+
+    return _Console
+
+
+def console():
+    """A rich console on stdout.  Markup in the package's own strings only:
+    pass every user string (names, labels, paths, messages) through :func:`esc`;
+    emoji codes (``:smile:``) are never substituted.  A closed pipe ends the
+    command with status 141 and no message."""
+    return _console_class()(emoji=False)
 
 
 def err_console():
-    from rich.console import Console
-
-    return Console(stderr=True)
+    return _console_class()(stderr=True, emoji=False)
 
 
-PLOT_SUFFIXES = frozenset({".png", ".pdf", ".svg", ".svgz", ".eps", ".ps", ".pgf", ".jpg", ".jpeg", ".tif", ".tiff",
-                           ".webp", ".gif"})
-"""File name endings matplotlib can draw to (``--plot`` names are checked before any work)."""
+def esc(x: Any) -> str:
+    """``str(x)`` with rich markup escaped, so a config name such as
+    ``"rotor [v2]"`` or ``"frame [/b]"`` prints literally."""
+    from rich.markup import escape
 
-
-def check_output_path(path: str | None, force: bool, protected: list[str | None], option: str) -> Path | None:
-    """Validate an output path before any work is done (exit 2 on problems).
-
-    ``protected``: paths this command reads or writes through other options
-    (by convention the input config first); the output may be none of them,
-    whether or not they exist yet (symlinks and hard links included).  An
-    existing file is only replaced with ``force``; a directory never.  For
-    ``option == "--plot"`` the name must end in an image format
-    (:data:`PLOT_SUFFIXES`)."""
-    from ..errors import InputError
-
-    if path is None:
-        return None
-    p = Path(path)
-    if str(path).strip() == "":
-        raise InputError(option, "must be a file name, got an empty string")
-    for k, q in enumerate(protected):
-        if q is None:
-            continue
-        if _same_file(p, Path(q)):
-            if k == 0:
-                raise InputError(option, f"refusing to write over the input file {q}")
-            raise InputError(option, f"refusing to write over {q}, which another option of this command also names")
-    if p.is_dir():
-        raise InputError(option, f"{p} is a directory")
-    if option == "--plot" and p.suffix.lower() not in PLOT_SUFFIXES:
-        raise InputError(option, f"cannot tell the image format of {p.name!r}: end the name in .png, .pdf or .svg "
-                                 f"(or {', '.join(s for s in sorted(PLOT_SUFFIXES) if s not in ('.png', '.pdf', '.svg'))})")
-    if p.exists() and not force:
-        raise InputError(option, f"{p} exists; choose another name or pass --force to replace it")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(option, f"directory {parent} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(option, f"directory {parent} is not writable")
-    return p
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-        return a.resolve() == b.resolve()
-    except OSError:  # pragma: no cover - unreadable path components
-        return False
-
-
-def atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    """Call ``write(tmp_path)`` then rename the temporary file onto ``path``.
-
-    The temporary file sits in the same directory (so the rename is atomic),
-    is flushed to disk before the rename, and is removed if ``write`` fails
-    or the run is interrupted: ``path`` is either untouched or complete.
-    The new file gets the mode of the file it replaces, else the umask's."""
-    path = Path(path)
-    directory = str(path.parent) if str(path.parent) else "."
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=directory)
-    os.close(fd)
-    try:
-        write(tmp)
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.chmod(tmp, _target_mode(path))
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _target_mode(path: Path) -> int:
-    try:
-        return stat.S_IMODE(os.stat(path).st_mode)
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
-
-
-def write_csv(path: Path, header: list[str], rows) -> None:
-    import numpy as np
-
-    def w(tmp: str) -> None:
-        np.savetxt(tmp, np.asarray(rows, float), delimiter=",", header=",".join(header), comments="", fmt="%.12g")
-
-    atomic_write(path, w)
+    return escape(str(x))
 
 
 def progress_bar(description: str, enabled: bool = True):

@@ -300,6 +300,38 @@ def period_from_trials(cycles: float, times: list[float], time_std: float | None
     return T, sigma, det
 
 
+MAX_SAMPLE_RATE = 1e9
+"""Largest sample rate of a recording, Hz (a sample interval below 1 ns; a
+pendulum's recording is sampled at 10 Hz .. 100 kHz)."""
+SIGNAL_MAGNITUDE = (1e-100, 1e100)
+"""Range of the largest |sample| of a recording: beyond it the fit's squares
+overflow or underflow double precision (rescale the signal)."""
+MAX_DURATION = 1e8
+"""Longest recording, s (three years)."""
+
+
+def check_signal_scale(t, y, fld: str = "--signal") -> None:
+    """Refuse (:class:`~bifilar.errors.InputError`) a recording whose numbers
+    no fit can handle in double precision: sample intervals under
+    1 / :data:`MAX_SAMPLE_RATE` s, a duration over :data:`MAX_DURATION` s,
+    or a largest |sample| outside :data:`SIGNAL_MAGNITUDE`.  ``t`` in s."""
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    if t.size >= 2:
+        dt = float(np.min(np.diff(t)))
+        if np.isfinite(dt) and 0 < dt < 1.0 / MAX_SAMPLE_RATE:
+            raise InputError(fld, f"samples {dt:.3g} s apart (over {MAX_SAMPLE_RATE:g} Hz): is the time in seconds?")
+        span = float(t[-1] - t[0])
+        if not np.isfinite(span) or span > MAX_DURATION:
+            raise InputError(fld, f"the recording spans {span:.3g} s (at most {MAX_DURATION:g} s): is the time in seconds?")
+    finite = y[np.isfinite(y)]
+    peak = float(np.max(np.abs(finite))) if finite.size else 0.0
+    lo, hi = SIGNAL_MAGNITUDE
+    if peak > hi or 0 < peak < lo:
+        raise InputError(fld, f"samples as large as {peak:.3g}: outside {lo:g} .. {hi:g}; rescale the signal "
+                              "(the period does not depend on its unit)")
+
+
 def period_from_signal(path, *, column=None, sample_rate=None, model: str = "auto", quantity: str = "other",
                        scale: float | None = None, t_start=None, t_stop=None, trim=None, fld: str = "--signal"):
     """Fit a recorded oscillation (:mod:`bifilar.estimation.signal`).
@@ -321,6 +353,7 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
         raise InputError(fld, f"quantity must be angle, rate or other, got {quantity!r}")
     try:
         t, y, meta = read_signal(path, column=column, sample_rate=sample_rate)
+        check_signal_scale(t, y, fld)
         fit = fit_period(t, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
     except SignalError as exc:
         raise InputError(f"{fld} ({exc.field})", exc.message) from None

@@ -306,62 +306,68 @@ def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | 
     """
     import hashlib
     import json
-    import os
     from pathlib import Path
 
     from ..errors import InputError
+    from ..output import JournalWriter, read_journal
 
     path = Path(journal)
     key = hashlib.sha256(json.dumps([list(res.names), [float(v) for v in res.values], [float(v) for v in res.std],
                                      int(n), int(chunk), res.method], sort_keys=True).encode()).hexdigest()[:16]
+    n_chunks = (n + chunk - 1) // chunk
     done: dict[int, np.ndarray] = {}
     if path.exists():
         if not resume:
             raise InputError("--journal", f"{path} exists; pass --resume to continue it or choose another name")
-        lines = path.read_text().splitlines()
-        try:
-            head = json.loads(lines[0])
-        except (IndexError, ValueError):
-            raise InputError("--journal", f"{path} is not a bifilar Monte Carlo journal") from None
-        if head.get("kind") != "bifilar-monte-carlo" or head.get("key") != key:
-            raise InputError("--journal", f"{path} belongs to another problem or settings; it cannot be resumed here")
+
+        def check_header(head) -> None:
+            if not isinstance(head, dict) or head.get("kind") != "bifilar-monte-carlo" or type(head.get("seed")) is not int:
+                raise InputError("--journal", f"{path} is not a bifilar Monte Carlo journal")
+            if head.get("key") != key:
+                raise InputError("--journal", f"{path} belongs to another problem or settings; it cannot be resumed here")
+
+        def is_record(rec) -> bool:
+            return (isinstance(rec, dict) and type(rec.get("chunk")) is int and 0 <= rec["chunk"] < n_chunks
+                    and isinstance(rec.get("samples"), list)
+                    and all(isinstance(row, list) and len(row) == len(res.names)
+                            and all(v is None or type(v) in (int, float) for v in row) for row in rec["samples"]))
+
+        head, records = read_journal(path, check_header, is_record)
+        if not head:
+            raise InputError("--journal", f"{path} is not a bifilar Monte Carlo journal")
         if seed is not None and seed != head["seed"]:
             raise InputError("--seed", f"differs from the journal's seed {head['seed']}")
         seed = int(head["seed"])
-        for line in lines[1:]:
-            try:
-                rec = json.loads(line)
-            except ValueError:  # a line torn by the interruption: redo that chunk
-                continue
+        for rec in records:
             done[int(rec["chunk"])] = np.array([[np.nan if v is None else v for v in row] for row in rec["samples"]],
                                                float).reshape(-1, len(res.names))
+        writer = JournalWriter(path, None, append=True)
     else:
         if resume:
             raise InputError("--resume", f"no journal {path} to resume")
         if seed is None:
             seed = int(np.random.SeedSequence().entropy % 2**63)
-        with open(path, "w") as fh:
-            fh.write(json.dumps({"kind": "bifilar-monte-carlo", "key": key, "seed": seed, "n": n, "chunk": chunk}) + "\n")
+        writer = JournalWriter(path, {"kind": "bifilar-monte-carlo", "key": key, "seed": seed, "n": n, "chunk": chunk},
+                               append=False)
     sizes = [min(chunk, n - c * chunk) for c in range((n + chunk - 1) // chunk)]
     children = np.random.SeedSequence(seed).spawn(len(sizes))
     ran = 0
-    for c, size in enumerate(sizes):
-        if c in done:
-            continue
-        if stop_after is not None and ran >= stop_after:
-            break
-        draws = draw_monte_carlo(res, size, np.random.default_rng(children[c]))
-        use_batch = batched_applies(res.problem)
-        est = solve_draws_batched(res, draws, None) if use_batch else solve_draws_loop(res, draws, None)
-        done[c] = est
-        with open(path, "a") as fh:
-            rows = [[None if not np.isfinite(v) else float(v) for v in row] for row in est]
-            fh.write(json.dumps({"chunk": c, "samples": rows}) + "\n")
-            fh.flush()
-            os.fsync(fh.fileno())
-        ran += 1
-        if progress:
-            progress(sum(len(v) for v in done.values()), n)
+    try:
+        for c, size in enumerate(sizes):
+            if c in done:
+                continue
+            if stop_after is not None and ran >= stop_after:
+                break
+            draws = draw_monte_carlo(res, size, np.random.default_rng(children[c]))
+            use_batch = batched_applies(res.problem)
+            est = solve_draws_batched(res, draws, None) if use_batch else solve_draws_loop(res, draws, None)
+            done[c] = est
+            writer.add({"chunk": c, "samples": [[None if not np.isfinite(v) else float(v) for v in row] for row in est]})
+            ran += 1
+            if progress:
+                progress(sum(len(v) for v in done.values()), n)
+    finally:
+        writer.close()
     est = np.concatenate([done[c] for c in sorted(done)]) if done else np.zeros((0, len(res.names)))
     good = np.all(np.isfinite(est), axis=1)
     return summarise(list(res.problem.unknowns), est[good], res.std, sum(len(v) for v in done.values()))

@@ -269,7 +269,7 @@ def build_grid(params: list[ParamSpec], zip_: bool = False) -> list[dict]:
             raise InputError("--zip", "the parameters must have the same number of values: "
                                       + ", ".join(f"{p.name} has {len(p.values)}" for p in params))
         return [dict(zip(names, vals)) for vals in zip(*[p.values for p in params])]
-    total = int(np.prod([len(p.values) for p in params]))
+    total = math.prod(len(p.values) for p in params)  # Python ints: np.prod wraps to 0 at 2**64
     if total > 100_000:
         raise InputError("--param", f"the grid has {total} points; keep it below 100000")
     return [dict(zip(names, vals)) for vals in itertools.product(*[p.values for p in params])]
@@ -570,6 +570,10 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
     sims: dict[int, Any] = {}
     if st.tensions:
         ks = sorted(set(chosen.values()))
+        from ..analysis.simulate import initial_state
+
+        for k in ks:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
+            initial_state(scene, rest, ms.modes[k], amplitude)
         sims = dict(zip(ks, _nonlinear_runs(scene, rest, ms, [labels[k] for k in ks], amplitude, st)))
         tmax = np.max([s.tension_max for s in sims.values()], axis=0) if sims else rest.tensions
         tmin = np.min([s.tension_min for s in sims.values()], axis=0) if sims else rest.tensions
@@ -635,53 +639,38 @@ def journal_path(out: str | os.PathLike) -> Path:
 def read_journal(path: Path, fp: str) -> dict[str, dict]:
     """Finished points of an interrupted sweep, by :func:`point_key`.
 
-    A torn last line (interrupted while writing) is ignored.  A journal
-    written for another config or other settings is refused.
+    A torn last line (interrupted while writing) is cut off the file.  A
+    journal written for another config or other settings, or holding lines
+    that are not sweep records, is refused (:class:`~bifilar.errors.InputError`
+    naming ``--resume``).
     """
-    done: dict[str, dict] = {}
-    with open(path, encoding="utf-8") as fh:
-        lines = fh.read().splitlines()
-    if not lines:
-        return done
-    try:
-        head = json.loads(lines[0])
-    except json.JSONDecodeError:
-        head = {}
-    if head.get("journal") != "bifilar-sweep":
-        raise InputError("--resume", f"{path} is not a sweep journal")
-    if head.get("fingerprint") != fp:
-        raise InputError("--resume", f"{path} was written for another config or other settings "
-                                     "(components, amplitude, uncertainties, tensions); rerun with --force to start over")
-    for line in lines[1:]:
-        try:
-            rec = json.loads(line)
-            done[rec["key"]] = rec["point"]
-        except (json.JSONDecodeError, KeyError, TypeError):
-            continue
-    return done
+    from ..output import read_journal as read_jsonl
+
+    def check_header(head) -> None:
+        if not isinstance(head, dict) or head.get("journal") != "bifilar-sweep":
+            raise InputError("--resume", f"{path} is not a sweep journal")
+        if head.get("fingerprint") != fp:
+            raise InputError("--resume", f"{path} was written for another config or other settings "
+                                         "(components, amplitude, uncertainties, tensions); rerun with --force to start over")
+
+    def is_record(rec) -> bool:
+        return isinstance(rec, dict) and isinstance(rec.get("key"), str) and isinstance(rec.get("point"), dict)
+
+    _, records = read_jsonl(path, check_header, is_record)
+    return {rec["key"]: rec["point"] for rec in records}
 
 
-class _Journal:
-    def __init__(self, path: Path | None, fp: str, append: bool):
-        self.fh = None
-        if path is None:
-            return
-        new = not (append and path.exists() and path.stat().st_size > 0)
-        self.fh = open(path, "a" if not new else "w", encoding="utf-8")
-        if new:
-            self._write({"journal": "bifilar-sweep", "version": JOURNAL_VERSION, "fingerprint": fp})
+def _journal_writer(path: Path | None, fp: str, append: bool):
+    from ..output import JournalWriter
 
-    def _write(self, rec: dict) -> None:
-        self.fh.write(json.dumps(rec) + "\n")
-        self.fh.flush()
+    return JournalWriter(path, {"journal": "bifilar-sweep", "version": JOURNAL_VERSION, "fingerprint": fp},
+                         append=append)
 
-    def add(self, key: str, point: dict) -> None:
-        if self.fh is not None:
-            self._write({"key": key, "point": point})
 
-    def close(self) -> None:
-        if self.fh is not None:
-            self.fh.close()
+def effective_workers(workers: int, points: int) -> int:
+    """Processes a sweep of ``points`` points actually starts for ``--workers
+    workers``: never more than the points, nor than the CPUs (``os.cpu_count``)."""
+    return max(1, min(int(workers), int(points), os.cpu_count() or 1))
 
 
 def _ignore_sigint() -> None:
@@ -713,7 +702,7 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
     todo = [i for i, r in enumerate(results) if r is None]
     total = len(grid)
     finished = total - len(todo)
-    jr = _Journal(journal, fp, append=resume)
+    jr = _journal_writer(journal, fp, append=resume)
     new = 0
     if progress:
         progress(finished, total)
@@ -721,7 +710,7 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
     def record(i: int, point: dict) -> None:
         nonlocal finished, new
         results[i] = point
-        jr.add(keys[i], point)
+        jr.add({"key": keys[i], "point": point})
         finished += 1
         new += 1
         if progress:
@@ -736,7 +725,7 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
         else:
             from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-            ex = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+            ex = ProcessPoolExecutor(max_workers=effective_workers(workers, len(todo)), initializer=_ignore_sigint)
             try:
                 pending = {ex.submit(evaluate_point, base_cfg, source, grid[i], settings): i for i in todo}
                 while pending:
@@ -962,27 +951,9 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
 
 def write_points_csv(path: Path, points: list[dict], param_names: list[str], components: list[str]) -> None:
     """CSV (header row) of :func:`csv_rows`, written atomically; empty cells for missing values."""
-    import csv
+    from ..output import write_table_csv
 
-    from ..cli.common import atomic_write
-
-    header, rows = csv_rows(points, param_names, components)
-
-    def cell(v):
-        if v is None:
-            return ""
-        if isinstance(v, float):
-            return f"{v:.12g}"
-        return str(v)
-
-    def w(tmp: str) -> None:
-        with open(tmp, "w", newline="", encoding="utf-8") as fh:
-            wr = csv.writer(fh)
-            wr.writerow(header)
-            for r in rows:
-                wr.writerow([cell(v) for v in r])
-
-    atomic_write(path, w)
+    write_table_csv(path, *csv_rows(points, param_names, components))
 
 
 # --------------------------------------------------------------------------
@@ -1126,7 +1097,7 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
         a.legend(fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
-    from ..cli.common import atomic_write
+    from ..output import atomic_write
 
     fmt_ = Path(path).suffix.lstrip(".").lower() or "png"
     atomic_write(Path(path), lambda tmp: fig.savefig(tmp, dpi=110, format=fmt_))
