@@ -172,3 +172,13 @@ def test_target_gives_cycles_and_trials_that_reach_it():
             assert 0.1 / (math.sqrt(o["trials"]) * (o["cycles"] - 1)) > goal
     r = run("period", "--timed", "torsion=10:15.2", "--target", "-1%")
     assert r.exit_code == 2 and "--target" in r.output
+
+
+def test_invert_refuses_a_noise_recording(tmp_path):
+    """invert --signal used to turn pure noise into an inertia."""
+    from conftest import CONFIGS
+
+    t, y, _ = signals()["noise"]
+    r = run("invert", CONFIGS / "thesis_lin1_torsion.yaml", "--signal",
+            f"torsion={write(tmp_path / 'noise.csv', t, y)}", "--json")
+    assert r.exit_code == 2 and "no significant spectral peak" in r.output
