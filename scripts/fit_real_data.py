@@ -5,7 +5,7 @@ Regenerates ``docs/real_data.md`` and the figures ``docs/figures/real_*.png``
 from the recordings described in ``../shared/data/README.md``:
 
 * the compound-pendulum rate-gyro trial (BicycleParameters) -- period,
-  damping, model choice, and periods in 3 s windows;
+  damping, model choice, and periods in 5 s windows;
 * the 33 trifilar recordings of the KTH project (5 s, 10 s, 20 s series,
   test mass at r = 0.25 ... 0.75 m) -- period of each, then the linear
   relation T^2 = a + b r^2 against the small-angle trifilar prediction.
@@ -71,15 +71,14 @@ def wls(X, y, sy):
 def gyro(data: Path, figdir: Path):
     path = data / GYRO_REL
     t, y, meta = read_signal(path)
-    cands = ("viscous", "quadratic", "quadratic+viscous")
-    fit = fit_period(t, y, model="auto", candidates=cands, trim="auto")
+    fit = fit_period(t, y, model="auto", trim="auto")
     two = fit_period(t, y, model="two_mode", crossing_check=False, split_check=False)
     plot_fit(fit, t, y, figdir / "real_gyro_fit.png",
              title=f"Compound pendulum, rate gyro ({path.name}): {fit.model} fit")
     windows = []
-    for a in np.arange(0.0, 30.0, 3.0):
-        w = fit_period(t, y, t_start=a, t_stop=a + 3.0, crossing_check=False, split_check=False)
-        windows.append((a, a + 3.0, w.period, w.std, float(w.envelope(a + 1.5)), w.r_squared))
+    for a in np.arange(0.0, 30.0, 5.0):
+        w = fit_period(t, y, t_start=a, t_stop=a + 5.0, crossing_check=False, split_check=False)
+        windows.append((a, a + 5.0, w.period, w.std, float(w.envelope(a + 2.5)), w.r_squared))
     _plot_gyro_windows(windows, fit, figdir / "real_gyro_windows.png")
     return {"path": path, "meta": meta, "fit": fit, "two": two, "windows": windows}
 
@@ -93,7 +92,7 @@ def _plot_gyro_windows(windows, fit, out):
     FigureCanvasAgg(fig)
     ax = fig.subplots()
     ax.errorbar(w[:, 0], w[:, 1], yerr=w[:, 2], fmt="o", color="C3", capsize=3,
-                label="3 s windows (viscous fit, 1σ)")
+                label="5 s windows (viscous fit, 1σ)")
     ax.axhline(fit.period, color="k", lw=1, label=f"whole record: {fit.period:.5f} ± {fit.std:.1g} s")
     ax.axhline(fit.crossing.period, color="C0", lw=1, ls="--",
                label=f"crossings: {fit.crossing.period:.5f} ± {fit.crossing.std:.1g} s")
@@ -119,7 +118,7 @@ def trifilar(data: Path, figdir: Path):
         for r in RADII:
             path = data / KTH_REL / series / f"{r:.2f}.csv"
             t, y, meta = read_signal(path, column="x", sample_rate=FPS)
-            two = fit_period(t, y, model="two_mode")
+            two = fit_period(t, y, model="auto")
             vis = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
             cr = two.crossing if two.crossing is not None else period_from_crossings(t, y)
             amp = float(np.sqrt(np.mean(two.envelope(two.t_used) ** 2)))
@@ -127,7 +126,7 @@ def trifilar(data: Path, figdir: Path):
                          "fit": two, "vis": vis, "cr": cr, "amp": amp, "path": path})
             if series == "20s" and r == 0.50:
                 plot_fit(two, t, y, figdir / "real_trifilar_fit_20s_0.50.png",
-                         title="Trifilar KTH, 20 s series, r = 0.50 m: laser-dot x [px], two-mode fit")
+                         title=f"Trifilar KTH, 20 s series, r = 0.50 m: laser-dot x [px], {two.model} fit")
     return rows
 
 
@@ -205,11 +204,32 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
       "`bifilar.estimation.signal`; data from `../shared/data` (see its README). "
       f"Run time {runtime:.0f} s.")
     a("")
-    a("Every std below is 1σ. `std` comes from the least-squares covariance `s²(JᵀJ)⁻¹`, multiplied by "
-      "`sqrt((1+ρ)/(1−ρ))` when the residuals' lag-1 autocorrelation ρ is significant "
-      "(the factor is listed as *infl.*). It covers the noise, not a model that is wrong in "
-      "a systematic way; the *split check* fits the two halves of each record separately to "
-      "catch a period that changes along the record.")
+    a("Every std below is 1σ. The rules (`bifilar.estimation.signal`, `signal_checks`) are:")
+    a("")
+    a("* **Model choice** (`model=\"auto\"`, the default of `bifilar period` and `invert --signal`): "
+      "every model offered (viscous, quadratic = velocity² drag, quadratic+viscous, two_mode; each with "
+      "a linear drift term) is fitted on the same samples; inadmissible fits are set aside (not "
+      "converged, undefined covariance, a two-mode fit whose mode *grows* or whose modes are closer "
+      "than 1/T_record); the lowest BIC wins and is tried once more without the drift term. The output "
+      "says which model, why (`choice_reason`), and lists the runners-up and the rejected ones.")
+    a("* **Residual checks**: Ljung–Box whiteness test (20 lags, p < 0.01 = not white) and the "
+      "significant peaks left in the residual periodogram (same test as below), labelled as harmonics "
+      "kf₀ of the oscillation or as unmodelled oscillations.")
+    a("* **Headline std** = √((f·σ_noise)² + τ²). σ_noise from the least-squares covariance "
+      "`s²(JᵀJ)⁻¹`. f ≥ 1 (*serial correlation*) applies when the residuals are not white: "
+      "f = √(S_AR(f₀)/γ(0)), the residual spectral density at the oscillation frequency (AR model of "
+      "order ≤ 20 by AIC, Yule–Walker) relative to white noise. τ (*non-stationarity*): the same model "
+      "is fitted to each half of the record (≥ 2 cycles each; a two-mode fit keeps its second mode's "
+      "frequency and damping); when the halves disagree beyond their stds, Q = (T₁−T₂)²/(s₁²+s₂²) > 6.63 "
+      "(χ²₁, 99 %), τ = √((Q−1)/w) (DerSimonian–Laird; ≈ √(((T₁−T₂)² − s₁² − s₂²)/2)) is added in "
+      "quadrature. `uncertainty.dominant` names the largest of noise, serial correlation and "
+      "non-stationarity.")
+    a("* **Refusals** (exit 2): time not strictly increasing; a single gap longer than 2 % of the "
+      "record (and 3 median steps) or samples covering less than 75 % of the span (checked before "
+      "any resampling); no significant spectral peak (periodogram peak / local median·ln 2 below "
+      "ln(m/10⁻³), m bins: false-alarm probability 10⁻³ for noise); fewer than two cycles; a fit "
+      "with r² < 0.1. Records over 200 000 samples are averaged in blocks first (a 10-million-row "
+      "CSV runs in 426 MiB peak RSS, `scripts/bench_period_memory.py`).")
     a("")
     # ---------------- gyro
     a("## 1. Compound pendulum, rate gyro (BicycleParameters, `BrowserInsForkCompoundFirst1`)")
@@ -223,13 +243,16 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
     a("")
     a("Model choice (`model=\"auto\"`, BIC, `trim=\"auto\"`):")
     a("")
-    a("| model | period [s] | std [s] | r² | BIC − BIC(best) |")
-    a("|---|---|---|---|---|")
+    a("| model | period [s] | std [s] | r² | BIC − BIC(best) | admissible |")
+    a("|---|---|---|---|---|---|")
     cand = fit.selection["candidates"]
     bmin = min(c["bic"] for c in cand.values())
     for name, c in cand.items():
-        a(f"| {name}{' (chosen)' if name == fit.model else ''} | {fmt(c['period'])} | {sci(c['std'])} | "
-          f"{c['r_squared']:.5f} | {c['bic'] - bmin:.1f} |")
+        a(f"| {name}{' (chosen)' if name == fit.selection['ranking'][0] else ''} | {fmt(c['period'])} | "
+          f"{sci(c['std'])} | {c['r_squared']:.5f} | {c['bic'] - bmin:.1f} | "
+          f"{'yes' if c['admissible'] else 'no: ' + c['rejected_because']} |")
+    a("")
+    a(f"Why: {fit.choice_reason}.")
     a("")
     cr = fit.crossing
     (T1, s1), (T2, s2) = fit.half_periods
@@ -241,7 +264,9 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
     a(f"| period (damped) | {fmt(fit.period)} ± {sci(fit.std)} s |")
     if fit.period_undamped is not None:
         a(f"| undamped period 2π/ω_n | {fmt(fit.period_undamped)} s |")
-    a(f"| white-noise std, inflation, ρ | {sci(fit.std_raw)} s, ×{fit.std_inflation:.2f}, {fit.lag1_autocorr:.3f} |")
+    u = fit.uncertainty
+    a(f"| std terms: noise, serial-correlation factor, non-stationarity τ | {sci(u['noise'])} s, "
+      f"×{u['serial_factor']:.2f}, {sci(u['nonstationarity'])} s (dominant: {u['dominant']}) |")
     a(f"| damping ratio ζ | {fit.damping_ratio:.5f} ± {sci(fit.damping.get('zeta_std', float('nan')))} |")
     a(f"| amplitude at t0, drift | {fit.amplitude:.3f} V, {fit.drift:.2e} V/s |")
     a(f"| r², residual rms, noise (2nd differences) | {fit.r_squared:.5f}, {fit.residual_rms:.4f} V, {fit.noise_std:.4f} V |")
@@ -253,7 +278,7 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
     a("")
     a("![gyro fit](figures/real_gyro_fit.png)")
     a("")
-    a("Periods of 3 s windows (viscous model each):")
+    a("Periods of 5 s windows (viscous model each; 3 s would hold fewer than two cycles, which is now refused):")
     a("")
     a("| window [s] | period [s] | std [s] | amplitude [V] | r² |")
     a("|---|---|---|---|---|")
@@ -272,20 +297,19 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
       f"crossing method agrees with the fit to {abs(fit.period - cr.period) / fit.period:.1e} "
       "relative. The residuals, however, are not noise: they oscillate at the pendulum frequency and "
       "grow towards both ends of the record, the signature of a frequency that changes along the "
-      f"record. The 3 s windows confirm it: the period falls from {wT[0]:.4f} s to {wT[-1]:.4f} s "
+      f"record. The 5 s windows confirm it: the period falls from {wT[0]:.4f} s to {wT[-1]:.4f} s "
       f"({(wT[0] - wT[-1]) * 1e3:.0f} ms, {(wT[0] - wT[-1]) / wT.mean():.1%}), tens of window stds, and the "
       f"split check flags the halves ({fmt(T1, 5)} vs {fmt(T2, 5)} s). The fall is not a clean "
-      "T₀(1 + cA²) nonisochronism law: it stalls in mid-record "
-      f"({', '.join(f'{x:.4f}' for x in wT[4:7])} s from 12 to 21 s) while the amplitude keeps falling, "
-      f"then drops fastest at the end ({wT[-2]:.4f}, {wT[-1]:.4f} s). A two-mode fit "
+      f"T₀(1 + cA²) nonisochronism law (window periods {', '.join(f'{x:.4f}' for x in wT)} s while "
+      "the amplitude falls steadily). A two-mode fit "
       f"reaches r² = {two.r_squared:.5f} with modes at {m1['period']:.4f} s and {m2['period']:.4f} s, "
       f"but its second mode grows (σ = {m2['sigma']:.4f} 1/s < 0), which a freely decaying "
       "pendulum cannot do: it mimics the changing frequency, it is not a second physical mode. "
-      f"Conclusion: the whole-record period {fmt(fit.period, 5)} s ± {sci(fit.std)} s (statistical) is the "
-      "right summary of this trial *as a constant-frequency fit*; as a value of \"the\" period of this "
-      f"pendulum, the spread of the window periods (±{(wT.max() - wT.min()) / 2 * 1e3:.1f} ms) is the "
-      f"honest uncertainty, {(wT.max() - wT.min()) / 2 / fit.std:.0f} times the statistical one. The autocorrelation inflation "
-      f"(×{fit.std_inflation:.1f}) alone does not capture this; the split check does.")
+      f"Conclusion: the whole-record period is {fmt(fit.period, 5)} s with a noise-only std of "
+      f"{sci(u['noise'])} s; the residuals are far from white (factor ×{u['serial_factor']:.0f}) and the halves "
+      f"disagree (Q = {u['windows_test']['Q']:.0f}), so the headline std is {sci(fit.std)} s, dominated by "
+      f"{u['dominant']}: it reflects the {abs(T1 - T2) * 1e3:.1f} ms split-half drift the record shows "
+      f"(the 5 s windows spread ±{(wT.max() - wT.min()) / 2 * 1e3:.1f} ms).")
     a("")
     # ---------------- trifilar
     a("## 2. Trifilar pendulum (KTH 2014): 33 recordings")
@@ -298,33 +322,38 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
       "by a ≈ 2 s swing (pendulum) mode, which also leaks into `x` with a few px. That leak biases a "
       "single-mode fit and the crossing method by up to "
       f"{max(abs(q['vis'].period - q['fit'].period) for q in rows) * 1e3:.0f} ms (compare the columns of the "
-      "table), so every file is fitted with `model=\"two_mode\"`, the torsional mode being the dominant "
-      "one. Its BIC is lower than the single viscous mode's by "
+      "table). `model=\"auto\"` chooses `two_mode` for "
+      f"{sum(q['fit'].model == 'two_mode' for q in rows)} of the {len(rows)} files (the torsional mode is the "
+      "dominant one); its BIC is lower than the single viscous mode's by "
       f"{min(q['vis'].bic - q['fit'].bic for q in rows):.0f} to {max(q['vis'].bic - q['fit'].bic for q in rows):.0f} "
-      "(column ΔBIC), so `model=\"auto\"` with `two_mode` among its candidates prefers it to the viscous model. The residuals "
-      "of the two-mode fits (2–4 px) are mostly the 2nd and 3rd harmonics of the torsional "
-      "oscillation (the laser-dot position is not linear in the angle); harmonics are orthogonal to the "
-      "fundamental, so they hardly bias the period, but they make the residuals smooth, hence the "
-      "inflation factors of 5–15.")
+      "(column ΔBIC). The residuals of the two-mode fits (2–4 px) hold the 2nd and 3rd harmonics of the "
+      "torsional oscillation (the laser-dot position is not linear in the angle; orthogonal to the "
+      "fundamental, they hardly bias the period) and, in several 20 s files, an unmodelled oscillation "
+      "near 1.04 Hz, close to the torsional 0.95 Hz, that beats with it; the residuals are smooth, hence "
+      "serial-correlation factors of 2–7 (column *f*), and where the halves disagree the non-stationarity "
+      "term τ dominates (column τ).")
     a("")
-    a("| series | r [m] | frames | T two-mode [s] | std [s] | infl. | swing mode [s] | r² | ΔBIC | T viscous [s] | T crossings [s] | amplitude [px] |")
-    a("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    a("| series | r [m] | frames | model | T [s] | std [s] | std/T | f | τ [s] | swing mode [s] | r² | ΔBIC | T viscous [s] | T crossings [s] | amplitude [px] |")
+    a("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for q in rows:
         f2, v, c = q["fit"], q["vis"], q["cr"]
-        a(f"| {q['series']} | {q['r']:.2f} | {q['n']} | {fmt(f2.period)} | {sci(f2.std)} | "
-          f"×{f2.std_inflation:.1f} | {f2.modes[1]['period']:.3f} | {f2.r_squared:.5f} | {v.bic - f2.bic:.0f} | "
+        sw = f"{f2.modes[1]['period']:.3f}" if len(f2.modes) > 1 else "–"
+        a(f"| {q['series']} | {q['r']:.2f} | {q['n']} | {f2.model} | {fmt(f2.period)} | {sci(f2.std)} | "
+          f"{f2.std / f2.period:.3%} | ×{f2.std_inflation:.1f} | {sci(f2.std_nonstationary)} | {sw} | "
+          f"{f2.r_squared:.5f} | {v.bic - f2.bic:.0f} | "
           f"{fmt(v.period, 5)} ± {sci(v.std, 1)} | {fmt(c.period, 5)} ± {sci(c.std, 1)} | {q['amp']:.0f} |")
     a("")
     mono = {s: bool(np.all(np.diff([q["fit"].period for q in rows if q["series"] == s]) > 0)) for s in SERIES}
     mono_v = {s: bool(np.all(np.diff([q["vis"].period for q in rows if q["series"] == s]) > 0)) for s in SERIES}
     mono_c = {s: bool(np.all(np.diff([q["cr"].period for q in rows if q["series"] == s]) > 0)) for s in SERIES}
-    a("Period increasing monotonically with r: two-mode "
+    a("Period increasing monotonically with r: auto "
       + ", ".join(f"{s} {'yes' if mono[s] else 'no'}" for s in SERIES)
       + "; viscous single mode " + ", ".join(f"{s} {'yes' if mono_v[s] else 'no'}" for s in SERIES)
       + "; crossings " + ", ".join(f"{s} {'yes' if mono_c[s] else 'no'}" for s in SERIES) + ".")
     a("")
     a("![trifilar example fit](figures/real_trifilar_fit_20s_0.50.png)")
     a("")
+    agreement(rows, rel, a)
     a("### T² against r²")
     a("")
     a("Small-angle trifilar: I = M g R² T² / (4π² L) with M the hanging mass. With I = I_p + m r² "
@@ -379,13 +408,77 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
       f"missing rise of T between r = 0.25 and 0.75 m is {(b_pred - bP) * 0.5 / (2 * 1.06) * 1e3:.1f} ms); the geometry or the test-mass position/mass as used in the "
       "recordings are the suspects. The χ²/dof above 1 (largest for the long 20 s series, "
       "whose per-file stds are smallest) says that file-to-file reproducibility (≈ 0.2 ms in T) is "
-      "worse than the per-file statistical std even after the autocorrelation inflation; "
+      "worse than the per-file std; "
       + (f"part of it is amplitude dependence (adding c·A² lowers the pooled χ²/dof from {P['chi2']:.2f} to "
          f"{PA['chi2']:.2f}, with c > 0 as a finite-amplitude pendulum demands)"
          if cA > 0 and PA["chi2"] < P["chi2"] else "an amplitude term does not explain it")
       + ". For an inertia measurement, budget ~0.2 ms per recording, not the fit's std.")
     a("")
     out.write_text("\n".join(L) + "\n")
+
+
+LIMITS = {"5s": 0.002, "10s": 0.001, "20s": 0.0002}  # issue 11: std below these fractions of T
+
+
+def agreement(rows, rel, a):
+    """Do the 5 s, 10 s and 20 s recordings of each position agree within
+    their stds, and are the stds below the issue's limits?"""
+    PA = rel["pooled_amp"]
+    c_amp = PA["coef"][4]
+    a("### Agreement across the 5 s, 10 s and 20 s series")
+    a("")
+    a("Per position: the three periods with their stds (std/T against the limits 0.2 %, 0.1 %, 0.02 %), "
+      "the largest pairwise difference in combined stds, z = |ΔT|/√(s_a² + s_b²) (agreement: z ≤ 2), "
+      f"and the same after removing the amplitude dependence c·A² measured below (c = {c_amp:.2e} s²/px²; "
+      "ΔT_amp = c (A_a² − A_b²) / 2T).")
+    a("")
+    a("| r [m] | T 5 s | T 10 s | T 20 s | stds within limits | max z | max z, amplitude-corrected |")
+    a("|---|---|---|---|---|---|---|")
+    n_ok = n_lim = n_amp = 0
+    over = []
+    for r in RADII:
+        qs = {q["series"]: q for q in rows if q["r"] == r}
+        cells, lim_ok, zs, za = [], True, [], []
+        for sr in SERIES:
+            f = qs[sr]["fit"]
+            ok = f.std / f.period < LIMITS[sr]
+            lim_ok &= ok
+            if not ok:
+                (T1, s1), (T2, s2) = f.half_periods
+                over.append(f"{sr}/{r:.2f} (halves {T1:.6f} ± {sci(s1)} and {T2:.6f} ± {sci(s2)} s, "
+                            f"dominant term {f.uncertainty['dominant']})")
+            cells.append(f"{f.period:.6f} ± {sci(f.std)} ({f.std / f.period:.3%}{'' if ok else ' > limit'})")
+        for i, sa in enumerate(SERIES):
+            for sb in SERIES[i + 1:]:
+                fa, fb = qs[sa]["fit"], qs[sb]["fit"]
+                comb = math.hypot(fa.std, fb.std)
+                d = fa.period - fb.period
+                d_amp = c_amp * (qs[sa]["amp"] ** 2 - qs[sb]["amp"] ** 2) / (2 * fa.period)
+                zs.append(abs(d) / comb)
+                za.append(abs(d - d_amp) / comb)
+        n_ok += max(zs) <= 2
+        n_amp += max(za) <= 2
+        n_lim += lim_ok
+        a(f"| {r:.2f} | " + " | ".join(cells) + f" | {'yes' if lim_ok else 'no'} | {max(zs):.1f} | {max(za):.1f} |")
+    a("")
+    a(f"Stds within the limits at {n_lim} of {len(RADII)} positions; the three series agree (max z ≤ 2) at "
+      f"{n_ok} of {len(RADII)} positions, {n_amp} after the amplitude correction.")
+    a("")
+    a("**What the data show.** Where a std exceeds its limit it is the non-stationarity term: the two "
+      "halves of that record give periods that differ beyond their stds: " + "; ".join(over) + ". In the "
+      "20 s files an unmodelled oscillation near 1.04 Hz beats with the torsional mode over ~11 s; the rule "
+      "reports that spread instead of hiding it. Where the series disagree, much of the 10 s–20 s difference is the "
+      "amplitude dependence of the period (a finite-amplitude pendulum: the recordings at one position "
+      "were released at amplitudes of 70–140 px, and the period at 100 px is ~0.06 % longer than at "
+      "zero amplitude), a real difference between the recordings, not an error of either: periods of "
+      "recordings at different amplitudes cannot agree within stds of 0.01 %. The 5 s recordings "
+      "(under 5 cycles, 2.5 of the 2 s swing mode) differ from the longer ones by up to ~1.5 ms, more than "
+      "their stds and than the amplitude effect: a two-mode fit of a 5 s record is sensitive to the "
+      "swing-mode's shape beyond what its residuals reveal, and halves of 2.4 cycles are too short to "
+      "show it. Agreement of every position within the stated stds is therefore not reached without "
+      "inflating the stds by a rule the single record cannot justify; the limits themselves are met "
+      "except where the record itself shows a larger spread.")
+    a("")
 
 
 def corr_sentence(rel, b):

@@ -1,5 +1,6 @@
-"""`bifilar period`: the period of a recorded oscillation (a thin CLI on
-:mod:`bifilar.estimation.signal`)."""
+"""`bifilar period`: the period of a recorded oscillation or of stopwatch
+trials (a thin CLI on :mod:`bifilar.estimation.signal` and
+:func:`bifilar.estimation.measurements.period_from_trials`)."""
 
 from __future__ import annotations
 
@@ -7,28 +8,49 @@ import click
 
 from .common import check_output_path, console, emit_json, esc, fmt, handle_errors
 
-_MODELS = ("auto", "viscous", "quadratic", "two_mode")
+_MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode")
 
 
 @click.command("period")
-@click.argument("signal", type=click.Path(dir_okay=False))
+@click.argument("signal", type=click.Path(dir_okay=False), required=False)
 @click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time one.")
 @click.option("--sample-rate", default=None, help="Sample rate, Hz (ignores a time column).")
 @click.option("--model", default="auto", show_default=True,
-              help="Fit model: viscous, quadratic (drag ~ v^2), two_mode (beating) or auto (BIC picks).")
+              help="Fit model: viscous, quadratic (drag ~ v^2), quadratic+viscous, two_mode (beating) or "
+                   "auto (fits them all, each with a drift term, and keeps the lowest BIC among the "
+                   "admissible ones).")
 @click.option("--t-start", default=None, help="Start of the fit window, s.")
 @click.option("--t-stop", default=None, help="End of the fit window, s.")
 @click.option("--trim", is_flag=True, help="Drop the settled tail where the envelope is lost in the noise.")
+@click.option("--timed", default=None, metavar="LABEL=N:T1,T2,...",
+              help="Instead of SIGNAL: stopwatch trials of N cycles each, total times in s.")
+@click.option("--target", default=None,
+              help="With --timed: the wanted std of the period (0.1%, 1e-3 relative, or 0.5ms); prints the "
+                   "cycles per trial needed for 1, 2, 3, 5, 10, 20 trials.")
+@click.option("--uncertainty", multiple=True, metavar="KEY=VALUE",
+              help="With --timed: override trial_time, the reaction-time floor of one trial's total time (s).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Draw the signal, the fit and the residuals to this image file.")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file.")
 @handle_errors
-def period(signal, column, sample_rate, model, t_start, t_stop, trim, as_json, plot, force):
+def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, target, uncertainty, as_json,
+           plot, force):
     """Fit the period (s), its standard uncertainty and the damping ratio of a
-    recorded oscillation SIGNAL (CSV with a t/time column in s, or .mat)."""
+    recorded oscillation SIGNAL (CSV with a t/time column in s, or .mat), or
+    reduce stopwatch trials (--timed).  Exit 2 for a record that is not an
+    oscillation (no significant spectral peak, fewer than two cycles, a fit
+    explaining almost nothing, a broken time column)."""
     from ..errors import InputError
 
+    if timed is not None:
+        if signal is not None:
+            raise InputError("--timed", "give either SIGNAL or --timed, not both")
+        return _timed(timed, target, uncertainty, as_json)
+    if target is not None:
+        raise InputError("--target", "only with --timed (a recording's precision is set by the recording)")
+    if signal is None:
+        raise InputError("SIGNAL", "give a recording (CSV or .mat) or --timed LABEL=N:T1,T2,...")
     if model not in _MODELS:
         raise InputError("--model", f"unknown model {model!r}; choose {', '.join(_MODELS)}")
     vals = {}
@@ -78,16 +100,40 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, as_json, p
     tb.add_column("quantity")
     tb.add_column("value", justify="right")
     tb.add_row("period (s)", f"{fit.period:.9g} +- {fit.std:.2g}")
+    u = fit.uncertainty
+    if u:
+        tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}, "
+                                      f"non-stationarity {u['nonstationarity']:.2g}")
+        tb.add_row("  dominant term", u["dominant"].replace("_", " "))
     tb.add_row("frequency (Hz)", fmt(fit.frequency, 9))
     if fit.period_undamped is not None:
         tb.add_row("undamped period (s)", fmt(fit.period_undamped, 9))
     tb.add_row("damping ratio", fmt(fit.damping_ratio, 4))
     tb.add_row("model", fit.model + (f" (chosen by {fit.chosen_by})" if fit.chosen_by else ""))
+    if fit.choice_reason:
+        tb.add_row("  why", fit.choice_reason)
+    cands = fit.selection.get("candidates") or {}
+    for name in (fit.selection.get("ranking") or [])[1:]:
+        c = cands[name]
+        tb.add_row(f"  runner-up {name}", f"{c['period']:.9g} +- {c['std']:.2g} s, "
+                                          f"{fit.chosen_by} +{c['delta']:.1f}")
+    for name, c in cands.items():
+        if not c["admissible"]:
+            tb.add_row(f"  rejected {name}", str(c["rejected_because"]))
+    if fit.modes and len(fit.modes) > 1:
+        tb.add_row("second mode (s)", f"{fit.modes[1]['period']:.6g}")
     tb.add_row("amplitude (signal units)", fmt(fit.amplitude, 5))
     tb.add_row("r^2", fmt(fit.r_squared, 7))
+    rc = fit.residual_check
+    if rc:
+        peaks = ", ".join(f"{p['frequency']:.4g} Hz" + (f" ({p['harmonic']}f)" if p["harmonic"] else "")
+                          for p in rc.get("peaks", [])) or "none"
+        tb.add_row("residuals", f"{'white' if rc.get('white') else 'not white'} (Ljung-Box p = {rc['p']:.2g}); "
+                                f"peaks left: {peaks}")
     tb.add_row("fit window (s)", f"{fit.t0:.4g} .. {fit.t1:.4g}")
-    if fit.std_inflation > 1:
-        tb.add_row("std inflation (autocorrelated residuals)", f"x{fit.std_inflation:.2f}")
+    if fit.half_periods:
+        (T1, s1), (T2, s2) = fit.half_periods
+        tb.add_row("halves (s)", f"{T1:.7g} +- {s1:.2g} / {T2:.7g} +- {s2:.2g}")
     if fit.crossing is not None:
         tb.add_row("cross-check: crossings (s)", f"{fit.crossing.period:.9g} +- {fit.crossing.std:.2g}")
     con.print(tb)
@@ -95,3 +141,44 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, as_json, p
         con.print(f"[dim]note: {esc(n)}[/dim]")
     for w in meta.get("warnings", []) or []:
         con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")
+
+
+def _timed(spec, target, uncertainty, as_json):
+    from ..estimation import measurements as mm
+
+    label, n, times = mm.parse_timed_spec(spec)
+    unc = mm.parse_uncertainty_overrides(uncertainty)
+    T, s, det = mm.period_from_trials(n, times, None, unc)
+    plan = None
+    if target is not None:
+        goal = mm.parse_target(target, T)
+        plan = {"target_std": goal, "trial_std": det["trial_std"],
+                "options": mm.trials_for_target(T, det["trial_std"], goal)}
+    if as_json:
+        doc = {"period": T, "std": s, "damping_ratio": None, "label": label, "timed": det}
+        if plan is not None:
+            doc["target"] = plan
+        emit_json(doc)
+        return
+    from rich.table import Table
+
+    con = console()
+    tb = Table(title=f"{label}: {len(times)} trial(s) of {n:g} cycles")
+    tb.add_column("quantity")
+    tb.add_column("value", justify="right")
+    tb.add_row("period (s)", f"{T:.7g} +- {s:.2g}")
+    tb.add_row("95 % interval (s)", f"{det['interval95'][0]:.7g} .. {det['interval95'][1]:.7g} "
+                                    f"(k = {det['coverage_factor']:.3g}"
+                                    + (f", Student t, {det['dof']} dof)" if det["dof"] else ", normal)"))
+    tb.add_row("std of one trial (s)", f"{det['trial_std']:.3g} ({det['trial_std_source']})")
+    tb.add_row("reaction-time floor trial_time (s)", f"{det['floor']:.3g}")
+    con.print(tb)
+    if plan is not None:
+        tp = Table(title=f"to reach a period std of {plan['target_std']:.2g} s "
+                         f"({plan['target_std'] / T:.2%}) with {plan['trial_std']:.3g} s per trial")
+        for c in ("trials", "cycles per trial", "s per trial", "period std (s)"):
+            tp.add_column(c, justify="right")
+        for o in plan["options"]:
+            tp.add_row(str(o["trials"]), str(o["cycles"]), f"{o['seconds_per_trial']:.4g}", f"{o['std']:.2g}")
+        con.print(tp)
+        con.print("[dim]note: assumes the oscillation lasts that many cycles with a visible amplitude[/dim]")

@@ -275,27 +275,58 @@ def parse_uncertainty_overrides(specs, fld: str = "--uncertainty") -> dict:
 
 def period_from_trials(cycles: float, times: list[float], time_std: float | None = None,
                        unc: dict | None = None) -> tuple[float, float, dict]:
-    """Period and its standard uncertainty from trials of ``cycles`` cycles.
+    """Period and its standard uncertainty from hand-timed trials.
 
-    T = mean(times) / cycles.  Each trial's total time has the standard
-    uncertainty ``time_std`` if given, else the sample std of the trials
-    (Type A, n >= 2), else ``trial_time`` of the assumed uncertainties
-    (0.1 s: a hand-timed start and stop).  sigma_T = sigma_trial / (sqrt(n) cycles).
+    Timing model: trial ``i`` times ``cycles`` cycles in ``times[i]`` (s);
+    ``T = mean(times) / cycles``.  Each trial's total time has the standard
+    uncertainty
+
+    * ``time_std`` (s) if given (Type B, trusted as is);
+    * else ``max(scatter, floor)``: the sample std of the trials (Type A,
+      ``n - 1`` degrees of freedom, ``n >= 2``) but never below the
+      reaction-time floor ``floor = trial_time`` of the assumed
+      uncertainties (s; default 0.1 s for a hand-timed start and stop,
+      override with ``--uncertainty trial_time=...`` or the measurements
+      file's ``uncertainty:``).  A scatter below the floor says only that
+      the trials happened to agree (or were rounded), not that the timing
+      is better than a human's reaction, so identical or near-identical
+      trials both get the floor and are never more uncertain than
+      trials that scatter less.
+
+    ``sigma_T = sigma_trial / (sqrt(n) cycles)``.  The 95 % interval uses
+    Student's t with ``n - 1`` degrees of freedom when the scatter sets
+    ``sigma_trial`` (few trials estimate a std poorly), else the normal
+    1.96.
+
+    Returns ``(T [s], sigma_T [s], details)``; details has ``cycles``,
+    ``times``, ``trial_std`` (s), ``trial_std_source``, ``scatter`` (s or
+    None), ``floor`` (s), ``dof`` (None = infinite), ``coverage_factor``,
+    ``interval95`` ([lo, hi], s) and ``trial_periods`` (s).
     """
+    from scipy import stats
+
     u = default_uncertainty(unc)
     t = np.asarray(times, float)
     n = t.size
     T = float(t.mean() / cycles)
+    floor = float(u["trial_time"])
+    scatter = float(t.std(ddof=1)) if n >= 2 else None
+    dof = None
     if time_std is not None:
         s, how = float(time_std), "given"
-    elif n >= 2:
-        s, how = float(t.std(ddof=1)), "scatter of the trials"
+    elif scatter is not None and scatter > floor:
+        s, how, dof = scatter, f"scatter of the {n} trials (Type A)", n - 1
     else:
-        s, how = float(u["trial_time"]), "assumed (one trial)"
+        s = floor
+        how = ("reaction-time floor trial_time (one trial)" if n < 2 else
+               f"reaction-time floor trial_time (the trials' scatter {scatter:.3g} s is below it)")
     if s <= 0:
-        s, how = float(u["trial_time"]) if n < 2 else 1e-3 * float(t.mean()), "floor (identical trials)"
+        s, how = 1e-3 * float(t.mean()), "floor 1e-3 x the trial time (trial_time = 0)"
     sigma = s / math.sqrt(n) / cycles
+    k = float(stats.t.ppf(0.975, dof)) if dof is not None else 1.959963984540054
     det = {"cycles": cycles, "times": [float(x) for x in t], "trial_std": s, "trial_std_source": how,
+           "scatter": scatter, "floor": floor, "dof": dof, "coverage_factor": k,
+           "interval95": [T - k * sigma, T + k * sigma],
            "trial_periods": [float(x / cycles) for x in t]}
     return T, sigma, det
 
@@ -330,6 +361,46 @@ def check_signal_scale(t, y, fld: str = "--signal") -> None:
     if peak > hi or 0 < peak < lo:
         raise InputError(fld, f"samples as large as {peak:.3g}: outside {lo:g} .. {hi:g}; rescale the signal "
                               "(the period does not depend on its unit)")
+
+
+def trials_for_target(period: float, trial_std: float, target: float,
+                      trials: tuple = (1, 2, 3, 5, 10, 20)) -> list[dict]:
+    """Cycles per trial needed for a target standard uncertainty of the
+    period, for several numbers of trials.
+
+    ``period`` (s) and ``trial_std`` (s, one trial's total-time std, e.g.
+    the reaction floor) as from :func:`period_from_trials`; ``target`` the
+    wanted ``sigma_T`` in s.  With the timing error of a trial independent
+    of its length, ``sigma_T = trial_std / (sqrt(n) N)``, so
+    ``N = ceil(trial_std / (sqrt(n) target))``.  Returns one dict per ``n``:
+    ``trials``, ``cycles``, ``seconds_per_trial`` (N T) and ``std`` (s).
+    """
+    out = []
+    for n in trials:
+        N = max(1, math.ceil(trial_std / (math.sqrt(n) * target) - 1e-12))
+        out.append({"trials": int(n), "cycles": int(N), "seconds_per_trial": N * period,
+                    "std": trial_std / (math.sqrt(n) * N)})
+    return out
+
+
+def parse_target(text: str, period: float, fld: str = "--target") -> float:
+    """``"0.1%"`` (relative), ``"1e-3"`` (relative), ``"0.5ms"`` or
+    ``"0.0005s"`` (absolute) -> target standard uncertainty of the period, s."""
+    s = str(text).strip().lower().replace(" ", "")
+    try:
+        if s.endswith("%"):
+            v = float(s[:-1]) / 100 * period
+        elif s.endswith("ms"):
+            v = float(s[:-2]) * 1e-3
+        elif s.endswith("s"):
+            v = float(s[:-1])
+        else:
+            v = float(s) * period
+    except ValueError:
+        raise InputError(fld, f"expected e.g. 0.1% , 1e-3 (relative) or 0.5ms, got {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(fld, f"the target must be positive, got {text!r}")
+    return v
 
 
 def period_from_signal(path, *, column=None, sample_rate=None, model: str = "auto", quantity: str = "other",

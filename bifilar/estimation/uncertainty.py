@@ -77,7 +77,7 @@ UNCERTAINTY_KEYS = {
     "gravity": "relative",
     "timing": "s (one period given without +-SIGMA)",
     "amplitude": "relative (fraction of the amplitude)",
-    "trial_time": "s (total time of a single timed trial)",
+    "trial_time": "s (reaction-time floor of one hand-timed trial's total time)",
 }
 
 #: budget groups, in display order

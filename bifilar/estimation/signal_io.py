@@ -1,0 +1,440 @@
+"""Reading recorded signals and checking their time column.
+
+SI units: time in s, sample rates in Hz; samples in the file's own unit
+``[y]``.  Part of :mod:`bifilar.estimation.signal` (the public API imports
+from there).
+
+Memory is bounded by the number of samples: text tables are parsed by
+:func:`numpy.loadtxt` (or, when that fails on missing cells, streamed line by
+line into two float arrays), never held as a list of lines; the time column
+is checked (strictly increasing, no gap longer than ``MAX_GAP_FRACTION`` of
+the record, samples covering at least ``MIN_COVERAGE`` of the span) before
+anything is resampled on a uniform grid, so nothing is ever allocated in
+proportion to the time span.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bifilar.errors import InputError
+
+#: fewer samples than this cannot define a period with an uncertainty
+MIN_SAMPLES = 20
+#: NaN / missing samples up to this fraction are dropped with a warning
+MAX_NAN_FRACTION = 0.01
+#: a time step longer than this fraction of the record (and than
+#: ``GAP_MIN_STEPS`` median steps) is a gap that is refused
+MAX_GAP_FRACTION = 0.02
+GAP_MIN_STEPS = 3.0
+#: the samples must cover at least this fraction of the span at the median step
+MIN_COVERAGE = 0.75
+
+_TIME_RE = re.compile(
+    r"^(t|time)([\s_]*[\(\[]\s*(s|sec|seconds)\s*[\)\]]|[\s_]+(s|sec|seconds))?$"
+)
+_RATE_NAMES = {
+    "actualrate", "samplerate", "sample_rate", "samplingrate", "sampling_rate",
+    "fs", "srate", "rate", "samplefrequency", "sample_frequency", "fsample",
+}
+_MISSING = {"", "nan", "na", "n/a", "null", "none", "-nan"}
+
+
+class SignalError(InputError):
+    """A recorded signal cannot be read or analysed.
+
+    ``str(err)`` is ``"field: message"``; ``field`` names the offending
+    input: ``"path"`` (the file), ``"--column"``, ``"--sample-rate"``,
+    ``"time"`` (the time vector) or ``"signal"`` (the samples themselves).
+    """
+
+    def __init__(self, field: str, message: str):
+        super().__init__(field, message)
+
+
+# ---------------------------------------------------------------------------
+# readers
+# ---------------------------------------------------------------------------
+
+def _is_time_name(name: str) -> bool:
+    return bool(_TIME_RE.match(str(name).strip().lower()))
+
+
+def _check_rate(sample_rate) -> float | None:
+    if sample_rate is None:
+        return None
+    try:
+        fs = float(sample_rate)
+    except (TypeError, ValueError):
+        raise SignalError("--sample-rate", f"not a number: {sample_rate!r}") from None
+    if not math.isfinite(fs) or fs <= 0:
+        raise SignalError("--sample-rate", f"must be a positive number of Hz, got {sample_rate!r}")
+    return fs
+
+
+def read_signal(path, column: str | None = None, sample_rate: float | None = None):
+    """Read one recorded signal.
+
+    Parameters
+    ----------
+    path : str or Path
+        A text table (``.csv``, ``.tsv``, ``.txt``, ...; comma, tab,
+        semicolon or whitespace separated, one header row, ``#`` comments
+        skipped) or a MATLAB ``.mat`` file (v5/v7, read by
+        :func:`scipy.io.loadmat`).
+    column : str, optional
+        Text: the signal column (default: the first column that is not the
+        time column).  MAT: the variable (default: the first numeric 1-D
+        array that is not time-like).
+    sample_rate : float, optional
+        Sample rate in Hz.  When given, ``t = arange(n) / sample_rate`` and a
+        time column, if any, is ignored.  Otherwise text files need a time
+        column named ``t`` or ``time`` (case-insensitive, seconds; ``time_s``
+        and ``time (s)`` also accepted) and MAT files a scalar variable named
+        like ``ActualRate``, ``SampleRate`` or ``fs`` (Hz) or a time vector.
+
+    Returns
+    -------
+    t : ndarray
+        Sample times in s, strictly increasing.
+    y : ndarray
+        Samples, in the unit of the file.
+    meta : dict
+        ``path``, ``format``, ``column``, ``columns`` (all available),
+        ``time_source``, ``sample_rate`` (Hz, nominal or median),
+        ``sample_rate_source``, ``n_samples``, ``n_dropped``, ``duration``
+        (s), ``warnings`` (list of str) and, for MAT files, ``fields``
+        (the scalar and string variables, e.g. the trial description).
+
+    Raises
+    ------
+    SignalError
+        Missing or unreadable file (``path``), unknown column (``--column``,
+        listing the available ones), no way to know the time
+        (``--sample-rate``), non-numeric data, more than 1 % NaN or fewer than
+        ``MIN_SAMPLES`` samples (``signal``), non-increasing time (``time``).
+    """
+    fs = _check_rate(sample_rate)
+    p = Path(path)
+    if not p.exists():
+        raise SignalError("path", f"no such file: {p}")
+    if not p.is_file():
+        raise SignalError("path", f"not a file: {p}")
+    if p.suffix.lower() == ".mat":
+        t, y, meta = _read_mat(p, column, fs)
+    else:
+        t, y, meta = _read_text(p, column, fs)
+    return _finish(t, y, meta)
+
+
+def _sniff_delimiter(line: str) -> str | None:
+    for d in ("\t", ",", ";"):
+        if d in line:
+            return d
+    return None  # whitespace
+
+
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return s.strip().lower() in _MISSING - {""}
+
+
+def _header(p: Path):
+    """First non-comment, non-blank line of a text table: (its 0-based line
+    index, its text, the delimiter).  Reads only up to that line."""
+    try:
+        with open(p, encoding="utf-8-sig") as fh:
+            for i, ln in enumerate(fh):
+                if ln.strip() and not ln.lstrip().startswith("#"):
+                    return i, ln.rstrip("\r\n"), _sniff_delimiter(ln)
+    except UnicodeDecodeError:
+        raise SignalError("path", f"{p.name} is not a text table (and not a .mat file)") from None
+    raise SignalError("signal", f"{p.name} is empty")
+
+
+def _has_interior_blank_line(p: Path, chunk: int = 1 << 22) -> bool:
+    """True if a blank line lies between data rows (read in chunks: memory
+    does not grow with the file)."""
+    pat = re.compile(rb"\n[ \t\r]*\n(?=[ \t\r]*[^\s#])")
+    tail = b""
+    with open(p, "rb") as fh:
+        while True:
+            block = fh.read(chunk)
+            if not block:
+                return False
+            buf = tail + block
+            if pat.search(buf):
+                return True
+            tail = buf[-256:]
+
+
+def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str]):
+    """Parse the data rows (from 0-based line ``start``) of columns ``cols``
+    one line at a time into float arrays; missing cells and blank lines
+    between rows are NaN (so times derived from a sample rate stay right),
+    trailing blank lines are ignored, anything else non-numeric is an error
+    naming the line."""
+    from array import array
+
+    out = [array("d") for _ in cols]
+    pending_blank = 0
+    nan = float("nan")
+    with open(p, encoding="utf-8-sig") as fh:
+        for i, ln in enumerate(fh):
+            if i < start or ln.lstrip().startswith("#"):
+                continue
+            if not ln.strip():
+                pending_blank += 1
+                continue
+            if pending_blank:
+                for a in out:
+                    a.extend([nan] * pending_blank)
+                pending_blank = 0
+            row = split(ln.rstrip("\r\n"))
+            for a, c, name in zip(out, cols, names):
+                cell = row[c] if c < len(row) else ""
+                try:
+                    a.append(float(cell))
+                except ValueError:
+                    if cell.strip().lower() in _MISSING:
+                        a.append(nan)
+                    else:
+                        raise SignalError("signal", f"non-numeric value {cell!r} in column {name!r} "
+                                                    f"at line {i + 1} of {p.name}") from None
+    return [np.frombuffer(a, dtype=float).copy() if len(a) else np.empty(0) for a in out]
+
+
+def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split):
+    """Columns ``cols`` of the data rows as float arrays: :func:`numpy.loadtxt`
+    (C parser, memory ~ 8 bytes per value) when the table is clean, else the
+    line-by-line parser with its NaN rules and precise messages."""
+    if not _has_interior_blank_line(p):
+        try:
+            with open(p, encoding="utf-8-sig") as fh:
+                a = np.loadtxt(fh, delimiter=delim, comments="#", skiprows=start, usecols=cols,
+                               ndmin=2, dtype=float, quotechar='"')
+            return [a[:, k].copy() for k in range(len(cols))]
+        except (ValueError, IndexError):
+            pass
+    return _stream_columns(p, start, split, cols, names)
+
+
+def _read_text(p: Path, column, fs):
+    hline, first, delim = _header(p)
+
+    def split(s: str) -> list[str]:
+        cells = s.split(delim) if delim else s.split()
+        return [c.strip().strip('"').strip("'").strip() for c in cells]
+
+    warnings_: list[str] = []
+    header = split(first)
+    if all(_is_number(c) for c in header):
+        names = [f"col{i + 1}" for i in range(len(header))]
+        start = hline
+        warnings_.append(f"no header row; columns named {', '.join(names)}")
+    else:
+        names = header
+        start = hline + 1
+    time_idx = next((i for i, n in enumerate(names) if _is_time_name(n)), None)
+
+    if column is None:
+        cand = [i for i in range(len(names)) if i != time_idx]
+        if not cand:
+            raise SignalError("--column", f"{p.name} has only a time column ({names[time_idx]!r})")
+        col_idx = cand[0]
+    else:
+        col = str(column)
+        col_idx = next((i for i, n in enumerate(names) if n == col), None)
+        if col_idx is None:
+            col_idx = next((i for i, n in enumerate(names) if n.lower() == col.lower()), None)
+        if col_idx is None:
+            raise SignalError("--column", f"no column {col!r} in {p.name}; available: {', '.join(names)}")
+        if col_idx == time_idx and fs is None:
+            raise SignalError("--column", f"{col!r} is the time column of {p.name}; "
+                                          f"choose one of {', '.join(n for n in names if n != col)}")
+    if fs is None and time_idx is None:
+        raise SignalError(
+            "--sample-rate",
+            f"{p.name} has no time column (named 't' or 'time'; columns: "
+            f"{', '.join(names)}); give the sample rate in Hz")
+    cols = [col_idx] if fs is not None else [col_idx, time_idx]
+    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split)
+    y = arrays[0]
+    meta: dict[str, Any] = {
+        "path": str(p), "format": "text", "delimiter": delim or "whitespace",
+        "column": names[col_idx], "columns": list(names), "warnings": warnings_,
+    }
+    if fs is not None:
+        t = np.arange(len(y)) / fs
+        meta.update(time_source="sample_rate", sample_rate=fs, sample_rate_source="argument")
+        if time_idx is not None:
+            warnings_.append(f"time column {names[time_idx]!r} ignored: sample_rate given")
+    else:
+        t = arrays[1]
+        meta.update(time_source=f"column {names[time_idx]!r}", sample_rate=None,
+                    sample_rate_source=f"median step of column {names[time_idx]!r}")
+    return t, y, meta
+
+
+def _as_1d_numeric(v) -> np.ndarray | None:
+    if isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.size >= 2:
+        s = np.squeeze(v)
+        if s.ndim == 1:
+            return s.astype(float)
+    return None
+
+
+def _read_mat(p: Path, column, fs):
+    from scipy.io import loadmat
+
+    try:
+        m = loadmat(str(p))
+    except NotImplementedError:
+        raise SignalError("path", f"{p.name} is a MATLAB v7.3 (HDF5) file; save it with -v7") from None
+    except Exception as exc:  # scipy raises several types for corrupt files
+        raise SignalError("path", f"cannot read {p.name} as a MAT file ({exc})") from None
+    vars_ = {k: v for k, v in m.items() if not k.startswith("__")}
+    numeric = [k for k, v in vars_.items() if _as_1d_numeric(v) is not None]
+    warnings_: list[str] = []
+    fields: dict[str, Any] = {}
+    for k, v in vars_.items():
+        if isinstance(v, np.ndarray):
+            if v.dtype.kind in "iuf" and v.size == 1:
+                fields[k] = v.item()
+            elif v.dtype.kind == "U" and v.size <= 1:
+                fields[k] = str(v.item()) if v.size else ""
+
+    if column is None:
+        cand = [k for k in numeric if not _is_time_name(k)]
+        if not cand:
+            raise SignalError("--column", f"no numeric 1-D variable in {p.name}; variables: {', '.join(vars_)}")
+        name = cand[0]
+    else:
+        name = column if column in vars_ else next(
+            (k for k in vars_ if k.lower() == str(column).lower()), None)
+        if name is None:
+            raise SignalError("--column", f"no variable {column!r} in {p.name}; available: "
+                                          f"{', '.join(numeric) or '(no numeric 1-D variable)'}"
+                                          f" (all: {', '.join(vars_)})")
+        if _as_1d_numeric(vars_[name]) is None:
+            v = vars_[name]
+            raise SignalError("--column", f"variable {name!r} of {p.name} is not a numeric 1-D array "
+                                          f"(dtype {getattr(v, 'dtype', type(v))}, shape {getattr(v, 'shape', '?')}); "
+                                          f"numeric 1-D variables: {', '.join(numeric) or 'none'}")
+    y = _as_1d_numeric(vars_[name])
+    meta: dict[str, Any] = {"path": str(p), "format": "mat", "column": name,
+                            "columns": list(numeric), "fields": fields, "warnings": warnings_}
+    rate_var = next((k for k in vars_ if k.lower() in _RATE_NAMES and isinstance(vars_[k], np.ndarray)
+                     and vars_[k].dtype.kind in "iuf" and vars_[k].size == 1), None)
+    if fs is not None:
+        t = np.arange(len(y)) / fs
+        meta.update(time_source="sample_rate", sample_rate=fs, sample_rate_source="argument")
+        if rate_var is not None and not np.isclose(float(vars_[rate_var].item()), fs):
+            warnings_.append(f"sample_rate {fs:g} Hz given overrides {rate_var} = "
+                             f"{float(vars_[rate_var].item()):g} Hz in the file")
+        return t, y, meta
+    if rate_var is not None:
+        fsv = float(vars_[rate_var].item())
+        if not math.isfinite(fsv) or fsv <= 0:
+            raise SignalError("--sample-rate", f"{rate_var} = {fsv!r} in {p.name} is not a sample rate; give one")
+        t = np.arange(len(y)) / fsv
+        meta.update(time_source="sample_rate", sample_rate=fsv, sample_rate_source=f"variable {rate_var!r}")
+        return t, y, meta
+    tvar = next((k for k in numeric if _is_time_name(k) and _as_1d_numeric(vars_[k]).size == y.size), None)
+    if tvar is not None:
+        meta.update(time_source=f"variable {tvar!r}", sample_rate=None,
+                    sample_rate_source=f"median step of variable {tvar!r}")
+        return _as_1d_numeric(vars_[tvar]), y, meta
+    raise SignalError("--sample-rate", f"{p.name} has no sample-rate variable (ActualRate, SampleRate, fs) "
+                                       f"and no time vector; give the sample rate in Hz")
+
+
+def _finish(t: np.ndarray, y: np.ndarray, meta: dict):
+    n = len(y)
+    bad = ~np.isfinite(y) | ~np.isfinite(t)
+    nb = int(bad.sum())
+    meta["n_dropped"] = nb
+    if nb:
+        if nb > max(1, int(MAX_NAN_FRACTION * n)):
+            raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN or missing "
+                                        f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording")
+        t, y = t[~bad], y[~bad]
+        meta["warnings"].append(f"dropped {nb} NaN/missing sample(s) of {n}")
+    if len(y) < MIN_SAMPLES:
+        raise SignalError("signal", f"only {len(y)} usable samples in {meta['column']!r}; "
+                                    f"need at least {MIN_SAMPLES}")
+    dt = check_time(t)
+    if meta.get("sample_rate") is None:
+        meta["sample_rate"] = float(1.0 / np.median(dt))
+    meta["n_samples"] = int(len(y))
+    meta["duration"] = float(t[-1] - t[0])
+    return t, y, meta
+
+
+def check_time(t) -> np.ndarray:
+    """Check a time column (s) before anything is resampled; returns its steps.
+
+    Refused (``SignalError`` on ``time``): a step that is not positive
+    (time not strictly increasing); a single step longer than
+    ``MAX_GAP_FRACTION`` of the record and than ``GAP_MIN_STEPS`` median
+    steps (a gap the fit would have to bridge by interpolation); a span that would need more than ``1 / MIN_COVERAGE``
+    times as many samples at the median step as there are (many gaps).  The
+    checks cost O(n) and allocate O(n), whatever the span.
+    """
+    dt = np.diff(t)
+    bad = np.nonzero(~(dt > 0))[0]
+    if bad.size:
+        i = int(bad[0])
+        raise SignalError("time", f"time is not strictly increasing at sample {i + 2} "
+                                  f"(t = {t[i]:g} s then {t[i + 1]:g} s)")
+    span = float(t[-1] - t[0])
+    if not math.isfinite(span):
+        raise SignalError("time", "the time span is not finite")
+    i = int(np.argmax(dt))
+    med = float(np.median(dt))
+    if dt[i] > MAX_GAP_FRACTION * span and dt[i] > GAP_MIN_STEPS * med:
+        raise SignalError("time", f"gap of {dt[i]:g} s between t = {t[i]:g} s and {t[i + 1]:g} s is "
+                                  f"{dt[i] / span:.0%} of the record (more than {MAX_GAP_FRACTION:.0%}); "
+                                  f"cut the record at the gap (--t-start/--t-stop) or fix the time column")
+    need = span / med + 1
+    if need > t.size / MIN_COVERAGE:
+        raise SignalError("time", f"the {t.size} samples cover only {t.size / need:.0%} of the "
+                                  f"{span:g} s span at the median step {med:g} s (less than "
+                                  f"{MIN_COVERAGE:.0%}): too many gaps")
+    return dt
+
+
+def _validate(t, y) -> tuple[np.ndarray, np.ndarray]:
+    t = np.asarray(t, dtype=float).ravel()
+    y = np.asarray(y, dtype=float).ravel()
+    if t.shape != y.shape:
+        raise SignalError("signal", f"t and y differ in length ({t.size} vs {y.size})")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise SignalError("signal", "t and y must be finite (read_signal drops NaNs)")
+    if t.size < MIN_SAMPLES:
+        raise SignalError("signal", f"only {t.size} samples; need at least {MIN_SAMPLES}")
+    check_time(t)
+    return t, y
+
+
+def _window(t, y, t_start, t_stop):
+    lo = -np.inf if t_start is None else float(t_start)
+    hi = np.inf if t_stop is None else float(t_stop)
+    if lo >= hi:
+        raise SignalError("--t-start", f"t_start = {lo:g} s is not before t_stop = {hi:g} s")
+    m = (t >= lo) & (t <= hi)
+    if m.sum() < MIN_SAMPLES:
+        raise SignalError("--t-start" if t_start is not None else "--t-stop",
+                          f"only {int(m.sum())} samples between {lo:g} s and {hi:g} s; "
+                          f"need at least {MIN_SAMPLES}")
+    return t[m], y[m]
+
+

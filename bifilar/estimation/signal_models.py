@@ -1,0 +1,369 @@
+"""Damped-oscillation models, their least-squares solver and start values,
+and the spectral helpers they use.  Part of :mod:`bifilar.estimation.signal`.
+
+Every model: ``y = c0 + c1 (t - tm) + oscillation(t - t0)`` with ``t`` in s,
+``t0`` the window start and ``tm`` its middle; rates in rad/s and 1/s;
+samples in the signal's unit ``[y]``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from .signal_io import SignalError
+
+def _uniform(t, y):
+    d = np.diff(t)
+    dt = float(np.median(d))
+    if np.all(np.abs(d - dt) <= 1e-3 * dt):
+        return y, dt
+    tu = np.arange(t[0], t[-1], dt)
+    return np.interp(tu, t, y), dt
+
+
+def _spectrum(t, y, window=True, pad=8):
+    """|FFT| of the linearly detrended signal, zero-padded ``pad`` times."""
+    yu, dt = _uniform(t, y)
+    n = yu.size
+    x = np.arange(n)
+    yd = yu - np.polyval(np.polyfit(x, yu, 1), x)
+    w = np.hanning(n) if window else np.ones(n)
+    nfft = 1 << int(math.ceil(math.log2(pad * n)))
+    S = np.abs(np.fft.rfft(yd * w, nfft))
+    f = np.fft.rfftfreq(nfft, dt)
+    return f, S, n * dt
+
+
+def _spectral_peaks(f, S, T_rec, k=1):
+    """Frequencies (Hz) of the ``k`` largest local maxima above 1.5 cycles
+    per record, refined by a parabola through the log magnitudes."""
+    fmin = 1.5 / T_rec
+    i = np.arange(1, S.size - 1)
+    lm = i[(S[i] >= S[i - 1]) & (S[i] > S[i + 1]) & (f[i] >= fmin)]
+    if lm.size == 0:
+        return []
+    lm = lm[np.argsort(S[lm])[::-1][:k]]
+    df = f[1] - f[0]
+    out = []
+    for j in lm:
+        l0, l1, l2 = np.log(S[j - 1:j + 2] + 1e-300)
+        den = l0 - 2 * l1 + l2
+        d = 0.5 * (l0 - l2) / den if den < 0 else 0.0
+        out.append(float(f[j] + np.clip(d, -0.5, 0.5) * df))
+    return out
+
+
+def _robust_std(x) -> float:
+    x = np.asarray(x, float)
+    mad = np.median(np.abs(x - np.median(x)))
+    return float(1.4826 * mad) if mad > 0 else float(np.std(x))
+
+
+def _noise_sigma(y) -> float:
+    """White-noise level of ``y`` from its second differences (a smooth
+    oscillation contributes ``A w^2 dt^2`` there, negligible when sampled
+    finely); robust (MAD) unless the signal is so quantised that the MAD is
+    zero."""
+    if len(y) < 4:
+        return 0.0
+    return _robust_std(np.diff(y, 2)) / math.sqrt(6.0)
+
+
+def _lag1(r) -> float:
+    r = np.asarray(r, float) - np.mean(r)
+    den = float(r @ r)
+    return float(r[:-1] @ r[1:] / den) if den > 0 else 0.0
+
+
+
+# ---------------------------------------------------------------------------
+# models
+# ---------------------------------------------------------------------------
+# every model: y = c0 + c1 (t - tm) + oscillation(t - t0); linear amplitudes
+# (a, b) with A cos(w tau + phi) = a cos(w tau) + b sin(w tau), i.e.
+# A = hypot(a, b), phi = atan2(-b, a).
+
+_NAMES = {
+    "viscous": ("c0", "c1", "a", "b", "omega_d", "sigma"),
+    "quadratic": ("c0", "c1", "a", "b", "omega", "kappa", "sigma"),
+    "two_mode": ("c0", "c1", "a1", "b1", "omega1", "sigma1", "a2", "b2", "omega2", "sigma2"),
+}
+
+
+def _E(sg: float, tau: np.ndarray):
+    """E = (1 - exp(-sg tau)) / sg and dE/dsg, with the series for small
+    sg tau (E -> tau as sg -> 0)."""
+    x = sg * tau
+    small = np.abs(x) < 1e-4
+    E = np.empty_like(tau)
+    dE = np.empty_like(tau)
+    if np.any(~small):
+        xs, ts = x[~small], tau[~small]
+        E[~small] = -np.expm1(-xs) / sg
+        dE[~small] = (ts * np.exp(-xs) - E[~small]) / sg
+    xs, ts = x[small], tau[small]
+    E[small] = ts * (1 - xs / 2 + xs ** 2 / 6 - xs ** 3 / 24)
+    dE[small] = ts ** 2 * (-0.5 + xs / 3 - xs ** 2 / 8 + xs ** 3 / 30)
+    return E, dE
+
+
+def _damped(a, b, w, sg, tau, J=None, col=0):
+    e = np.exp(-sg * tau)
+    c, s = np.cos(w * tau), np.sin(w * tau)
+    osc = a * c + b * s
+    if J is not None:
+        J[:, col] = e * c
+        J[:, col + 1] = e * s
+        J[:, col + 2] = e * tau * (b * c - a * s)
+        J[:, col + 3] = -tau * e * osc
+    return e * osc
+
+
+def _model(kind: str, p, t, t0, tm, want_jac=False):
+    tau = t - t0
+    s = t - tm
+    J = np.empty((t.size, len(p))) if want_jac else None
+    if J is not None:
+        J[:, 0] = 1.0
+        J[:, 1] = s
+    y = p[0] + p[1] * s
+    if kind == "viscous":
+        y = y + _damped(p[2], p[3], p[4], p[5], tau, J, 2)
+    elif kind == "two_mode":
+        y = y + _damped(p[2], p[3], p[4], p[5], tau, J, 2) + _damped(p[6], p[7], p[8], p[9], tau, J, 6)
+    elif kind == "quadratic":
+        a, b, w, kap, sg = p[2:7]
+        E, dE = _E(sg, tau)
+        D = 1.0 + kap * E
+        g = np.exp(-sg * tau) / D
+        c, sn = np.cos(w * tau), np.sin(w * tau)
+        osc = a * c + b * sn
+        y = y + g * osc
+        if J is not None:
+            J[:, 2] = g * c
+            J[:, 3] = g * sn
+            J[:, 4] = g * tau * (b * c - a * sn)
+            J[:, 5] = -g * E / D * osc
+            J[:, 6] = (-tau * g - g * kap * dE / D) * osc
+    else:  # pragma: no cover - guarded by fit_period
+        raise ValueError(kind)
+    return (y, J) if want_jac else y
+
+
+def _envelope(kind: str, p, t, t0):
+    """Amplitude envelope ([y]) of the (first) oscillation."""
+    tau = t - t0
+    if kind == "viscous" or kind == "two_mode":
+        return math.hypot(p[2], p[3]) * np.exp(-p[5] * tau)
+    E, _ = _E(p[6], tau)
+    return math.hypot(p[2], p[3]) * np.exp(-p[6] * tau) / (1.0 + p[5] * E)
+
+
+def _linear_amplitudes(t, y, t0, tm, omegas, sigmas, kap=0.0):
+    """Least-squares offset, drift and (a, b) per mode for fixed nonlinear
+    parameters (variable projection start)."""
+    tau = t - t0
+    cols = [np.ones_like(t), t - tm]
+    for w, sg in zip(omegas, sigmas):
+        g = np.exp(-sg * tau)
+        if kap:
+            g = g / (1.0 + kap * _E(sg, tau)[0])
+        cols += [g * np.cos(w * tau), g * np.sin(w * tau)]
+    A = np.vstack(cols).T
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    r = y - A @ coef
+    return coef, float(r @ r)
+
+
+@dataclass
+class _Raw:
+    kind: str
+    p: np.ndarray
+    free: np.ndarray
+    t0: float
+    tm: float
+    resid: np.ndarray
+    J: np.ndarray
+    cost: float
+    converged: bool
+    message: str
+
+
+def _solve(kind, t, y, t0, tm, p0, free=None, squared=()) -> _Raw:
+    """Levenberg-Marquardt (MINPACK) on the free parameters; parameters in
+    ``squared`` must stay >= 0 and are solved for as ``q`` with ``p = q^2``
+    (no bounded solver needed: the bounded 'trf' costs ten times more per
+    iteration on long records).  The returned Jacobian is in the natural
+    parameters."""
+    p0 = np.asarray(p0, float).copy()
+    free = np.ones(p0.size, bool) if free is None else np.asarray(free, bool)
+    sq = np.zeros(p0.size, bool)
+    sq[list(squared)] = True
+    sq &= free
+    p0[sq] = np.maximum(p0[sq], 0.0)
+    q0 = p0.copy()
+    q0[sq] = np.sqrt(p0[sq])
+
+    def full(q):
+        p = p0.copy()
+        p[free] = q
+        p[sq] = p[sq] ** 2
+        return p
+
+    def fun(q):
+        with np.errstate(all="ignore"):
+            r = _model(kind, full(q), t, t0, tm) - y
+        return np.nan_to_num(r, nan=1e150, posinf=1e150, neginf=-1e150)
+
+    def jac(q):
+        with np.errstate(all="ignore"):
+            J = _model(kind, full(q), t, t0, tm, want_jac=True)[1]
+        qq = p0.copy()
+        qq[free] = q
+        J[:, sq] *= 2.0 * qq[sq]
+        return np.nan_to_num(J[:, free])
+
+    res = optimize.least_squares(fun, q0[free], jac=jac, method="lm", x_scale="jac",
+                                 ftol=1e-13, xtol=1e-13, gtol=1e-13, max_nfev=200 * int(free.sum()))
+    p = full(res.x)
+    yhat, J = _model(kind, p, t, t0, tm, want_jac=True)
+    r = y - yhat
+    ok = bool(res.status > 0) and bool(np.all(np.isfinite(r)))
+    return _Raw(kind, p, free, t0, tm, r, J[:, free], float(r @ r), ok, res.message)
+
+
+
+# ---------------------------------------------------------------------------
+# fitting
+# ---------------------------------------------------------------------------
+
+def _envelope_thirds(t, yd):
+    """RMS-based amplitudes (sqrt 2 RMS) of the first and last thirds and
+    their centre times."""
+    T_rec = t[-1] - t[0]
+    m1 = t <= t[0] + T_rec / 3
+    m3 = t >= t[-1] - T_rec / 3
+    A1 = math.sqrt(2 * np.mean(yd[m1] ** 2))
+    A3 = math.sqrt(2 * np.mean(yd[m3] ** 2))
+    return A1, A3, float(np.mean(t[m1])), float(np.mean(t[m3]))
+
+
+def _start_viscous(t, y, t0, tm, f_guess, drift):
+    T_rec = t[-1] - t[0]
+    if f_guess is None:
+        f, S, _ = _spectrum(t, y)
+        pk = _spectral_peaks(f, S, T_rec, 1)
+        if not pk:
+            raise SignalError("signal", "no spectral peak above 1.5 cycles per record: "
+                                        "the window holds too few oscillations")
+        f_guess = pk[0]
+    w0 = 2 * math.pi * f_guess
+    coef, _ = _linear_amplitudes(t, y, t0, tm, [w0], [0.0])
+    yd = y - coef[0] - coef[1] * (t - tm)
+    A1, A3, tc1, tc3 = _envelope_thirds(t, yd)
+    sg0 = math.log(A1 / A3) / (tc3 - tc1) if A1 > 0 and A3 > 0 else 0.0
+    sg0 = float(np.clip(sg0, -10.0 / T_rec, 10.0 / T_rec))
+    coef, _ = _linear_amplitudes(t, y, t0, tm, [w0], [sg0])
+    p0 = [coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w0, sg0]
+    return np.array(p0), (A1, A3, tc1 - t0, tc3 - t0)
+
+
+def _fit_viscous(t, y, t0, tm, f_guess, drift):
+    p0, env = _start_viscous(t, y, t0, tm, f_guess, drift)
+    free = np.ones(6, bool)
+    free[1] = drift
+    return _solve("viscous", t, y, t0, tm, p0, free), env
+
+
+def _fit_quadratic(t, y, t0, tm, visc: _Raw, env, drift, viscous_term):
+    A1, A3, tau1, tau3 = env
+    # 1/A(tau) = (1 + kappa tau)/A0 through the two thirds
+    den = A3 * tau3 - A1 * tau1
+    kap0 = (A1 - A3) / den if den > 0 and A1 > A3 else 0.0
+    kap0 = float(np.clip(kap0, 1e-3 / (t[-1] - t[0]), 100.0 / (t[-1] - t[0])))
+    w = visc.p[4]
+    free = np.ones(7, bool)
+    free[1] = drift
+    free[6] = viscous_term
+    starts = []
+    coef, _ = _linear_amplitudes(t, y, t0, tm, [w], [0.0], kap0)
+    starts.append([coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w, kap0, 0.0])
+    if viscous_term:
+        sg = max(visc.p[5], 0.0)
+        tiny = 1e-3 / (t[-1] - t[0])
+        starts.append([visc.p[0], visc.p[1], visc.p[2], visc.p[3], w, tiny, max(sg, tiny)])
+        coef, _ = _linear_amplitudes(t, y, t0, tm, [w], [0.5 * sg], 0.5 * kap0)
+        starts.append([coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w, 0.5 * kap0, 0.5 * sg])
+    best = None
+    for p0 in starts:
+        raw = _solve("quadratic", t, y, t0, tm, np.array(p0), free, squared=(5, 6))
+        if best is None or raw.cost < best.cost:
+            best = raw
+    return best
+
+
+def _fit_two_mode(t, y, t0, tm, visc: _Raw, drift):
+    T_rec = t[-1] - t[0]
+    cands = []
+    for win in (False, True):
+        f, S, _ = _spectrum(t, y, window=win)
+        cands += _spectral_peaks(f, S, T_rec, 6)
+    f, S, _ = _spectrum(t, visc.resid)
+    cands += _spectral_peaks(f, S, T_rec, 3)
+    cands.append(visc.p[4] / (2 * math.pi))
+    uniq: list[float] = []
+    for c in cands:  # candidates closer than a third of a bin are one
+        if all(abs(c - u) >= 0.3 / T_rec for u in uniq):
+            uniq.append(c)
+    cands = uniq
+    sg = visc.p[5]
+    best_pair, best_rss = None, np.inf
+    for i, fa in enumerate(cands):
+        for fb in cands[i + 1:]:
+            if abs(fa - fb) < 0.3 / T_rec:
+                continue
+            _, rss = _linear_amplitudes(t, y, t0, tm, [2 * math.pi * fa, 2 * math.pi * fb], [sg, sg])
+            if rss < best_rss:
+                best_pair, best_rss = (fa, fb), rss
+    if best_pair is None:
+        raise SignalError("signal", "cannot find two distinct spectral peaks for a two-mode fit")
+    w1, w2 = (2 * math.pi * best_pair[0], 2 * math.pi * best_pair[1])
+    coef, _ = _linear_amplitudes(t, y, t0, tm, [w1, w2], [sg, sg])
+    p0 = [coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w1, sg, coef[4], coef[5], w2, sg]
+    free = np.ones(10, bool)
+    free[1] = drift
+    raw = _solve("two_mode", t, y, t0, tm, np.array(p0), free)
+    if math.hypot(raw.p[6], raw.p[7]) > math.hypot(raw.p[2], raw.p[3]):
+        # canonical order: the dominant mode (amplitude at t0) first
+        perm = np.r_[0, 1, 6, 7, 8, 9, 2, 3, 4, 5]
+        raw.p = raw.p[perm]
+        raw.free = raw.free[perm]
+        raw.J = _model("two_mode", raw.p, t, t0, tm, want_jac=True)[1][:, raw.free]
+    return raw
+
+
+def _auto_trim(t, y, raw: _Raw, k: float):
+    """Last time at which the envelope (sqrt 2 x moving RMS over one period
+    of the offset- and drift-free signal, noise power removed) is still at
+    least ``k`` x the white-noise level of the residuals."""
+    noise = _noise_sigma(raw.resid)
+    if noise <= 0:
+        return None, noise
+    T = 2 * math.pi / raw.p[4]
+    dt = float(np.median(np.diff(t)))
+    m = max(int(round(T / dt)), 1)
+    yd = y - raw.p[0] - raw.p[1] * (t - raw.tm)
+    if m >= yd.size:
+        return None, noise
+    ms = np.convolve(yd ** 2, np.ones(m) / m, mode="same")
+    env = np.sqrt(2 * np.clip(ms - noise ** 2, 0, None))
+    above = np.nonzero(env >= k * noise)[0]
+    if above.size == 0:
+        return None, noise
+    return float(t[min(above[-1] + m // 2, t.size - 1)]), noise
+
+

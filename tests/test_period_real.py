@@ -1,0 +1,116 @@
+"""The period std on the real recordings of ../shared/data (skipped when the
+folder is absent): the KTH trifilar 5 s / 10 s / 20 s series and the
+compound-pendulum gyro trial.  See docs/real_data.md for the full tables."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from bifilar.estimation.signal import fit_period, read_signal
+
+from conftest import SHARED
+
+KTH = SHARED / "data" / "trifilar-kth-2014"
+GYRO = SHARED / "data" / "compound-gyro-bicycleparameters" / "BrowserInsForkCompoundFirst1.mat"
+RADII = (0.25, 0.30, 0.35, 0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75)
+SERIES = ("5s", "10s", "20s")
+#: issue 11: the std must be below these fractions of the period
+LIMITS = {"5s": 0.002, "10s": 0.001, "20s": 0.0002}
+#: the halves disagree beyond noise above this Cochran Q (chi^2_1, 99 %)
+Q99 = stats.chi2.ppf(0.99, 1)
+
+
+def _load(series, r):
+    return read_signal(KTH / series / f"{r:.2f}.csv", column="x", sample_rate=240)[:2]
+
+
+@pytest.fixture(scope="module")
+def kth():
+    if not KTH.exists():
+        pytest.skip(f"real data not found at {KTH}")
+    out = {}
+    for s in SERIES:
+        for r in RADII:
+            t, y = _load(s, r)
+            # auto picks two_mode on these files (checked on a sample below);
+            # fitting it directly keeps the test at a few seconds
+            fit = fit_period(t, y, model="two_mode", crossing_check=False)
+            amp = float(np.sqrt(np.mean(fit.envelope(fit.t_used) ** 2)))
+            out[s, r] = (fit, amp)
+    return out
+
+
+@pytest.mark.parametrize("series,r", [("10s", 0.30)])
+def test_auto_chooses_two_modes_on_the_laser_dot(series, r):
+    if not KTH.exists():
+        pytest.skip(f"real data not found at {KTH}")
+    t, y = _load(series, r)
+    fit = fit_period(t, y, model="auto", crossing_check=False, split_check=False)
+    # the ~2 s swing mode leaks into x: one mode leaves it in the residuals
+    assert fit.model == "two_mode", fit.choice_reason
+    assert 1.8 < fit.modes[1]["period"] < 2.2
+    assert fit.selection["candidates"]["viscous"]["bic"] - fit.bic > 1000
+    assert "lowest BIC" in fit.choice_reason
+
+
+def test_std_below_the_limits_unless_the_record_shows_a_drift(kth):
+    """Every std is below its limit (0.2 %, 0.1 %, 0.02 % of T for 5, 10,
+    20 s), or the excess is the record's own split-half disagreement: the
+    halves differ beyond noise and that term dominates the std."""
+    within = 0
+    for (s, r), (fit, _) in kth.items():
+        if fit.std / fit.period < LIMITS[s]:
+            within += 1
+            continue
+        (T1, s1), (T2, s2) = fit.half_periods
+        assert (T1 - T2) ** 2 / (s1 ** 2 + s2 ** 2) > Q99, (s, r)
+        assert fit.uncertainty["dominant"] == "nonstationarity", (s, r)
+        # tau ~ |T1 - T2| / sqrt(2): the std reflects the spread, no more
+        assert fit.std < 1.5 * abs(T1 - T2), (s, r)
+    # most recordings meet the limits (docs/real_data.md: 28 of 33)
+    assert within >= 25
+
+
+def test_series_differences_follow_the_amplitude(kth):
+    """The 10 s and 20 s periods of a position differ (beyond their stds at
+    some positions) because the recordings have different amplitudes: a
+    finite-amplitude pendulum's period grows as T^2 = T0^2 + c A^2.  The
+    differences regress on (A10^2 - A20^2) / 2T with c > 0 at > 3 sigma,
+    and removing that term leaves differences consistent with the stds
+    (chi^2/dof below the 99 % point for 10 dof, 2.32)."""
+    d, x, sd = [], [], []
+    for r in RADII:
+        (fa, aa), (fb, ab) = kth["10s", r], kth["20s", r]
+        d.append(fa.period - fb.period)
+        x.append((aa ** 2 - ab ** 2) / (2 * fa.period))
+        sd.append(math.hypot(fa.std, fb.std))
+    d, x, sd = map(np.asarray, (d, x, sd))
+    w = 1 / sd ** 2
+    c = float(np.sum(w * x * d) / np.sum(w * x * x))
+    sc = float(1 / math.sqrt(np.sum(w * x * x)))
+    chi2 = float(np.sum(w * (d - c * x) ** 2)) / (d.size - 1)
+    assert c > 3 * sc, (c, sc)
+    assert chi2 < stats.chi2.ppf(0.99, d.size - 1) / (d.size - 1), chi2
+    # the same c (s^2/px^2) as the pooled T^2 fit of docs/real_data.md
+    # (1.3e-7 +- 2.5e-8): within a factor 2
+    assert 0.5 * 1.3e-7 < c < 2 * 1.3e-7, c
+
+
+def test_gyro_std_reflects_its_split_half_drift():
+    if not GYRO.exists():
+        pytest.skip(f"real data not found at {GYRO}")
+    t, y, _ = read_signal(GYRO)
+    fit = fit_period(t, y, model="auto", crossing_check=False)
+    (T1, s1), (T2, s2) = fit.half_periods
+    # the halves differ by ~3 ms, at tens of their stds
+    assert 2e-3 < T1 - T2 < 4e-3 and (T1 - T2) > 10 * math.hypot(s1, s2)
+    # the headline std carries it (not the 7e-5 s of noise and correlation)
+    assert fit.uncertainty["dominant"] == "nonstationarity"
+    assert 0.5 * (T1 - T2) < fit.std < (T1 - T2)
+    # a growing "second mode" is no reason to prefer two modes
+    assert fit.model == "viscous"
+    assert not fit.selection["candidates"]["two_mode"]["admissible"]
