@@ -29,12 +29,15 @@ def rod(mass=1.0, L=1.5, h=0.1, d=0.5, I_roll=1e-9):
     }, warn=False)
 
 
-def test_modes_of_a_thin_rod_match_closed_forms():
-    """Slow modes next to a 5 kHz roll: each period must go with its own
-    shape (a degeneracy tolerance relative to the fastest mode merged them
-    and swapped torsion and swing-x)."""
+@pytest.mark.parametrize("I_roll", [1e-9, 1e-11])
+def test_modes_of_a_thin_rod_match_closed_forms(I_roll):
+    """Slow modes next to a 5-50 kHz roll: each period must go with its own
+    shape (a degeneracy tolerance relative to the fastest mode merged them:
+    swapped torsion and swing-x, one mean period for all three, or called
+    them neutral).  The generalised eigenproblem with a 1e11 spread of
+    inertias loses ~1e-6 of the slow periods: tolerance 1e-5."""
     m, L, h, d = 1.0, 1.5, 0.1, 0.5
-    s = rod(m, L, h, d)
+    s = rod(m, L, h, d, I_roll=I_roll)
     expect = {
         "torsion": 2 * np.pi * np.sqrt(1.0 * L / (m * G * d**2)),  # bifilar torsion, vertical wires
         "swing-x": 2 * np.pi * np.sqrt(L / G),  # along the rod: the wires stay parallel
@@ -44,7 +47,7 @@ def test_modes_of_a_thin_rod_match_closed_forms():
     _, (ms_batch,) = rest_and_modes([s])
     for ms in (ms_single, ms_batch):
         for label, T in expect.items():
-            assert ms.get(label).period == pytest.approx(T, rel=1e-6), label
+            assert ms.get(label).period == pytest.approx(T, rel=1e-5), label
         roll = ms.get("roll").period
         assert roll < 1e-3 * min(expect.values())
 
