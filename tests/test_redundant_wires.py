@@ -145,4 +145,6 @@ def test_cli_tensions_sweep_and_invert_run_on_dependent_wires(n, ra, tmp_path):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert doc["inertia"]["Izz"]["value"] == pytest.approx(2.5, rel=1e-6)
+    # one wire's length has no derivative with rigid dependent wires: said, and left out of the budget
+    assert any("dependent wires" in w and "length.1" in w for w in doc["warnings"])
 
