@@ -273,7 +273,7 @@ def simulate(
     stiff = _stiffness_check(f, modes, ys0, t_end, method, rtol, atol_v, max_evaluations)
     if stiff:
         warnings.append(stiff)
-        f = _with_budget(f, t_end, max_evaluations, stiff)
+        f = _with_budget(f, t_end, max_evaluations)
     if progress is not None:
         f = _with_progress(f, t_end, progress)
     events = None
@@ -326,7 +326,7 @@ def simulate(
 STIFF_RATIO = 1e3
 """Ratio of the slowest to the fastest linear period above which a run is
 probed for its cost before integrating (a body with a tiny principal moment,
-e.g. a thin rod, has a mode hundreds of thousands of times faster than the
+e.g. a thin rod, has a mode tens of thousands of times faster than the
 swing it is timed on, and an explicit method's steps follow the fast one)."""
 PROBE_FRACTION = 0.01
 """Share of the run integrated by the cost probe."""
@@ -364,7 +364,7 @@ def _stiffness_check(f, modes: ModeSet, y0: np.ndarray, t_end: float, method: st
     return msg
 
 
-def _with_budget(f, t_end: float, max_evaluations: float, why: str):
+def _with_budget(f, t_end: float, max_evaluations: float):
     """``f`` that raises :class:`InputError` naming ``--periods`` once it has
     been evaluated ``max_evaluations`` times, with the time reached and the
     extrapolated cost of the whole run."""
