@@ -18,8 +18,10 @@ imposes the holonomic constraint ``phi_i = (|d_i|^2 - L_i^2) / 2 = 0`` with
 (index-1 form with Baumgarte stabilisation ``a``, ``b``, which vanishes on the
 constraint manifold).  The wire tension is ``T_i = -lam_i |d_i|`` (N, positive
 when the wire pulls).  No angle is used anywhere, so no pose a rig reaches is
-singular: the constraint Jacobian loses rank only if wires become parallel
-*and* attach at the same point, which the config checks reject.
+singular.  With four or five taut wires the constraints can be dependent (a
+symmetric rig: J has rank 3); the multipliers are then the minimum-norm ones
+(:func:`_min_norm`), which give the same accelerations as any other
+solution (docs/design.md).
 
 Every function is vectorised: ``y`` may have any leading shape ``(..., 13)``
 that broadcasts against the leading shape of the :class:`RigParams` arrays
@@ -265,7 +267,9 @@ def pack(r, q, v=None, w=None) -> np.ndarray:
 # ~10x faster than array code on 3-vectors) and on numpy arrays of any
 # broadcastable shape (a batch: one vectorised operation per term).  The n x n
 # multiplier system is solved by unpivoted symmetric elimination, which is
-# exact for its symmetric positive definite matrix J M^-1 J^T.
+# exact for its symmetric positive definite matrix J M^-1 J^T, for up to three
+# wires; four or five wires may be dependent (J M^-1 J^T singular) and go
+# through the pseudo-inverse of _min_norm (~5x the cost of an evaluation).
 
 _STATE_NAMES = ("rx", "ry", "rz", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")
 _AX = "xyz"
@@ -449,6 +453,9 @@ MIN_NORM_RCOND = 1e-10
 as zero by :func:`_min_norm` (dependent wires)."""
 
 
+_TRIU = {n: np.triu_indices(n) for n in range(1, 6)}
+
+
 def _min_norm(upper: tuple, rb: tuple) -> tuple:
     """Minimum-norm solution ``lam = A^+ rb`` of the multiplier system.
 
@@ -463,14 +470,15 @@ def _min_norm(upper: tuple, rb: tuple) -> tuple:
     or arrays.
     """
     n = len(rb)
-    single = all(isinstance(x, float) for x in upper + rb)
-    if single:
+    if all(isinstance(x, float) for x in upper + rb):  # one state: the cheapest numpy calls
         A = np.empty((n, n))
-        b = np.array(rb)
-    else:
-        shape = np.broadcast_shapes(*(np.shape(x) for x in upper + rb))
-        A = np.empty(shape + (n, n))
-        b = np.stack([np.broadcast_to(x, shape) for x in rb], axis=-1)
+        A[_TRIU[n]] = upper
+        w, V = np.linalg.eigh(A, UPLO="U")
+        keep = w > MIN_NORM_RCOND * w[-1]
+        return tuple((V[:, keep] @ ((V[:, keep].T @ rb) / w[keep])).tolist())
+    shape = np.broadcast_shapes(*(np.shape(x) for x in upper + rb))
+    A = np.empty(shape + (n, n))
+    b = np.stack([np.broadcast_to(x, shape) for x in rb], axis=-1)
     k = 0
     for i in range(n):
         for j in range(i, n):
@@ -482,8 +490,6 @@ def _min_norm(upper: tuple, rb: tuple) -> tuple:
     winv = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
     c = np.einsum("...ji,...j->...i", V, b) * winv
     lam = np.einsum("...ij,...j->...i", V, c)
-    if single:
-        return tuple(lam.tolist())
     return tuple(np.moveaxis(lam, -1, 0))
 
 
