@@ -269,7 +269,7 @@ def pack(r, q, v=None, w=None) -> np.ndarray:
 # multiplier system is solved by unpivoted symmetric elimination, which is
 # exact for its symmetric positive definite matrix J M^-1 J^T, for up to three
 # wires; four or five wires may be dependent (J M^-1 J^T singular) and go
-# through the pseudo-inverse of _min_norm (~5x the cost of an evaluation).
+# through the pseudo-inverse of _min_norm (an evaluation costs ~5-10x more).
 
 _STATE_NAMES = ("rx", "ry", "rz", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")
 _AX = "xyz"
