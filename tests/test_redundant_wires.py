@@ -132,12 +132,12 @@ def test_cli_tensions_sweep_and_invert_run_on_dependent_wires(n, ra, tmp_path):
     scene = scene_from_dict(cfg, warn=False)
     rest = rest_pose(scene)
     T_lin = linear_modes(scene, rest).get("torsion").period
-    # a tiny sweep: every point evaluated (no broadcast error between 4 or 5 wires and 3 modes)
+    # a tiny sweep point (its sensitivities perturb one wire at a time: no broadcast error between
+    # the neighbour's 2 modes and the rig's 3)
     st = sw.resolve_settings(cfg, tensions=False)
-    for length in (1.9, 2.0):
-        p = sw.evaluate_point(cfg, "test", {"length": length}, st)
-        assert p["valid"], p["error"]
-        assert p["periods"]["torsion"] > 0
+    p = sw.evaluate_point(cfg, "test", {"length": 1.9}, st)
+    assert p["valid"], p["error"]
+    assert p["periods"]["torsion"] > 0
     # invert the torsion period the model predicts: Izz comes back
     m = tmp_path / "m.yaml"
     m.write_text(f"config: {path}\nsolve_for: [Izz]\nmeasurements:\n  - mode: torsion\n    period: {T_lin!r} +- 0.0005\n")
