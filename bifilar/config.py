@@ -161,7 +161,7 @@ def parse_yaml(text: str) -> Any:
         if problems:
             raise ConfigErrors(problems)
         try:
-            return loader.construct_document(node)
+            return _unshare(loader.construct_document(node))
         except yaml.YAMLError as exc:
             raise _yaml_error(exc) from None
         except RecursionError:
@@ -171,6 +171,21 @@ def parse_yaml(text: str) -> Any:
                                        "check explicit tags such as !!int") from None
     finally:
         loader.dispose()
+
+
+def _unshare(data: Any) -> Any:
+    """A copy of constructed YAML data in which no list or mapping appears
+    twice.  PyYAML builds one object per anchor and hands it to every alias
+    (``*p0``), so without this an edit of one place (a sweep of
+    ``rig.attachments.0.1``) would silently edit every place that named the
+    same anchor.  :func:`copy.deepcopy` keeps such sharing (its memo), hence
+    the explicit rebuild; the size is bounded by :data:`MAX_YAML_VALUES` and
+    recursive aliases were rejected before."""
+    if isinstance(data, dict):
+        return {k: _unshare(v) for k, v in data.items()}
+    if isinstance(data, list):
+        return [_unshare(v) for v in data]
+    return data
 
 
 def _short_tag(tag: str) -> str:
@@ -689,6 +704,7 @@ PLAUSIBLE = {
     "mm_span": 10.0,  # m: ... while anchors and attachments span less: lengths in mm?
     "gyration_shape": 2.0,  # k / extent, body shape known: sqrt(3) is the geometric limit
     "gyration_attachments": 30.0,  # k / attachment spread (either way) when only attachments are known
+    "gyration_for_mass": 10.0,  # m: largest k for 1 kg, scaled by (m / 1 kg)^(1/3); a whole config in mm
 }
 """Thresholds of :func:`plausibility_warnings` (SI units)."""
 
@@ -707,7 +723,15 @@ def plausibility_warnings(scene: Scene) -> list[str]:
       size h (its farthest extent from the CoM along a body axis): k > 2 h
       when the shape is known (bounding box or parts; every mass point lies
       within sqrt(3) h, so k <= sqrt(3) h), k > 30 h or k < h / 30 when only
-      the attachment points are known (inertia in kg cm^2 or g mm^2).
+      the attachment points are known (inertia in kg cm^2 or g mm^2);
+    * a radius of gyration too large for the mass, k > 10 m (m / 1 kg)^(1/3)
+      (21.5 m for 10 kg, 46 m for 100 kg): a config written wholly in
+      millimetres (lengths, points and inertia in kg mm^2, all consistent, so
+      no other rule sees it) has k 1000 times the real one.  The body's size
+      and inertia, not the wire length, carry the rule: long wires on a small
+      body are legitimate (the thesis's 500 m wires on a 100 kg plate with
+      k = 1.6 m).  Checked only when the shape rule above is quiet (one
+      warning per slip).
     """
     out = []
     L = scene.lengths
@@ -727,6 +751,7 @@ def plausibility_warnings(scene: Scene) -> list[str]:
     ev = np.linalg.eigvalsh(scene.inertia)
     k = math.sqrt(ev[-1] / scene.mass)
     d = np.eye(3)
+    bad = False
     size = float(np.max(scene.body_support(np.vstack([d, -d]))))  # farthest extent from the CoM along a body axis
     if size > 0:
         if scene.support_source == "attachments":
@@ -737,6 +762,10 @@ def plausibility_warnings(scene: Scene) -> list[str]:
         if bad:
             out.append(f"body: radius of gyration sqrt(I/m) = {k:.3g} m does not fit a body reaching {size:.3g} m "
                        f"from its centre of mass ({scene.support_source}); are the inertia and mass in kg m^2 and kg?")
+    k_max = PLAUSIBLE["gyration_for_mass"] * scene.mass ** (1.0 / 3.0)
+    if not bad and k > k_max:
+        out.append(f"body: radius of gyration sqrt(I/m) = {k:.3g} m is implausibly large for a {scene.mass:.3g} kg body "
+                   f"(above {k_max:.3g} m); is the whole config in millimetres (lengths in m, inertia in kg m^2)?")
     return out
 
 

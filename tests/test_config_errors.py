@@ -157,6 +157,25 @@ def test_yaml_merge_keys_are_not_duplicates():
     assert data["other"] == {"x": 1, "y": 3}
 
 
+def test_yaml_aliases_are_copies_so_one_edit_changes_one_place():
+    """An anchor shared by an anchor point and an attachment point: sweeping
+    the attachment must not move the anchor (PyYAML hands one list to every
+    alias, and copy.deepcopy would keep the sharing)."""
+    from bifilar.studies.shorthands import apply_params
+
+    text = ("body: {mass: 2.0, inertia: {principal: [0.1, 0.1, 0.2]}}\n"
+            "rig:\n  anchors: [&p0 [0, -0.5, 0.1], &p1 [0, 0.5, 0.1]]\n"
+            "  attachments: [*p0, *p1]\n  lengths: [1.5, 1.5]\n")
+    cfg = parse_yaml(text)
+    assert cfg["rig"]["anchors"] == cfg["rig"]["attachments"]
+    assert cfg["rig"]["anchors"][0] is not cfg["rig"]["attachments"][0]
+    new, _ = apply_params(cfg, {"rig.attachments.0.1": -0.4})
+    assert new["rig"]["attachments"][0] == [0, -0.4, 0.1]
+    assert new["rig"]["anchors"][0] == [0, -0.5, 0.1]
+    s = scene_from_dict(new, warn=False)
+    np.testing.assert_array_equal(s.anchors[0], [0, -0.5, 0.1])
+
+
 @pytest.mark.parametrize("payload", [
     "!!python/object/apply:os.system ['touch {m}']",
     "!!python/object/new:os.system ['touch {m}']",
@@ -311,6 +330,12 @@ def test_plausibility_thresholds_are_sharp():
     # wire lengths: 99 m is not flagged, all > 100 m in a 1 m rig is
     assert warns(rig__lengths=[99.0, 99.0]) == []
     assert "millimetres" in warns(rig__lengths=[101.0, 101.0])[0]
+    # radius of gyration for the mass: k_max = 10 m (m / 1 kg)^(1/3) = 12.6 m for 2 kg, i.e. I = m k^2 = 317.5
+    # (the attachments reaching 0.5 m keep the shape rule, k <= 15 m, out of the way)
+    k_max2 = 2.0 * (10.0 * 2.0 ** (1 / 3)) ** 2
+    assert warns(body__inertia={"principal": [0.5 * k_max2, 0.5 * k_max2, 0.99 * k_max2]}) == []
+    big = warns(body__inertia={"principal": [0.6 * k_max2, 0.6 * k_max2, 1.01 * k_max2]})
+    assert len(big) == 1 and "implausibly large for a 2 kg body (above 12.6 m)" in big[0]
 
 
 def test_warnings_go_to_the_log_unless_disabled(caplog):

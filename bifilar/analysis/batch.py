@@ -330,7 +330,7 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[Mode
 
             out.append(linear_modes(scenes[b], rests[b]))
             continue
-        out.append(mode_set(N[b], Y[b], w2[b], m[b], M[b]))
+        out.append(mode_set(N[b], Y[b], w2[b], m[b], M[b], K=Kr[b]))
     return out
 
 

@@ -99,7 +99,7 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     if N.shape[1] == 0:
         return ModeSet([], M, N)
     w2, Y = eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
-    return mode_set(N, Y, w2, scene.mass, M)
+    return mode_set(N, Y, w2, scene.mass, M, K=0.5 * (Kr + Kr.T))
 
 
 #: eigenvalues closer than this, relative to the largest |omega^2|, form one
@@ -110,22 +110,42 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
 DEGENERATE_RTOL = 1e-10
 
 
-def clusters(w2: np.ndarray, scale: float) -> list[tuple[int, int]]:
+def clusters(w2: np.ndarray, tol) -> list[tuple[int, int]]:
     """[start, stop) index ranges of the sorted eigenvalues ``w2`` (rad^2/s^2)
-    that are equal within ``DEGENERATE_RTOL * scale``; chained from the first
-    member, so the grouping does not depend on last-bit noise of the others."""
+    that are equal within ``tol`` (rad^2/s^2: one number, or one per
+    eigenvalue, the larger of the pair applying, see :func:`_noise`); chained
+    from the first member, so the grouping does not depend on last-bit noise
+    of the others."""
+    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2))
     out = []
     k = 0
     while k < len(w2):
         j = k + 1
-        while j < len(w2) and abs(w2[j] - w2[k]) <= DEGENERATE_RTOL * scale:
+        while j < len(w2) and abs(w2[j] - w2[k]) <= max(t[k], t[j]):
             j += 1
         out.append((k, j))
         k = j
     return out
 
 
-def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.ndarray) -> ModeSet:
+def _noise(w2: np.ndarray, Y: np.ndarray, K: np.ndarray | None) -> np.ndarray:
+    """Resolution (rad^2/s^2) of each eigenvalue: ``DEGENERATE_RTOL`` times
+    the size of the terms whose sum is omega^2 = y^T K y (M-normalised y),
+    ``|y|^T |K| |y|``, when the reduced stiffness ``K`` is given; else
+    ``DEGENERATE_RTOL`` times the largest |omega^2| for all.  The per-mode
+    form matters for a stiff body: a thin rod (principal moments
+    [1e-11, 1, 1]) has a roll mode 1e11 times stiffer than its swings, and a
+    tolerance relative to it merged the swings and the torsion into one
+    cluster (one mean period for all three) or called them neutral."""
+    if K is None:
+        scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
+        return np.full(len(w2), DEGENERATE_RTOL * scale)
+    aY = np.abs(Y)
+    return DEGENERATE_RTOL * np.maximum(np.einsum("ik,ij,jk->k", aY, np.abs(K), aY), 1e-300)
+
+
+def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.ndarray,
+             K: np.ndarray | None = None) -> ModeSet:
     """The :class:`ModeSet` of a solved eigenproblem ``K y = omega^2 M y``
     (``w2`` ascending, rad^2/s^2; ``Y`` its eigenvectors in the null-space
     coordinates ``N`` (6 x k); ``mass`` kg; ``M`` the 6 x 6 world-chart mass
@@ -140,11 +160,15 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
       before swing-y, whatever the BLAS kernel;
     * every shape is scaled so that its largest component is +1 (ties
       broken by the first component within 1e-9).
+
+    ``K`` (k x k, optional): the reduced stiffness, for a per-mode resolution
+    of the eigenvalues (:func:`_noise`); without it one resolution relative
+    to the largest eigenvalue applies to all.
     """
-    scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
     w2 = np.array(w2, float)
-    Y = _align_degenerate(N, np.array(Y, float), w2, scale)
-    for a, b in clusters(w2, scale):
+    tol = _noise(w2, np.array(Y, float), K)
+    Y = _align_degenerate(N, np.array(Y, float), w2, tol)
+    for a, b in clusters(w2, tol):
         w2[a:b] = np.mean(w2[a:b])
     S = N @ Y
     absS = np.abs(S)
@@ -154,7 +178,7 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     diagM = np.diag(M)[3:]
     share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
     share = share / share.sum(axis=0)
-    zero = (np.abs(w2) <= 1e-10 * scale) | (w2 <= 0)
+    zero = (np.abs(w2) <= tol) | (w2 <= 0)
     periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
     dom_e = np.argmax(share, axis=0)
     order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
@@ -169,7 +193,7 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     return ModeSet(modes, M, N)
 
 
-def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, scale: float) -> np.ndarray:
+def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol) -> np.ndarray:
     """Within clusters of (nearly) equal eigenvalues the eigenvectors are
     arbitrary; pick the combination whose shapes are aligned with the world
     axes: greedy row pivoting on the cluster's shapes (the world component
@@ -177,7 +201,7 @@ def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, scale: float
     component), then the basis that is the identity on those components.
     Deterministic: the same choice on every machine."""
     Y = Y.copy()
-    for k, j in clusters(w2, scale):
+    for k, j in clusters(w2, tol):
         if j - k < 2:
             continue
         S = N @ Y[:, k:j]  # (6, c)

@@ -276,7 +276,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     budget, degenerate, T_lin_hat = _budget(pb, p_hat, r_hat, method, rungs, best, unc_all)
     if degenerate:
         warnings.append("these inputs have no derivative here (the scene is degenerate: a neutral mode, e.g. the "
-                        "CoM on the line through two attachment points) and are left out of the budget: "
+                        "CoM on the line through two attachment points; or four or five dependent wires, where a change "
+                        "of one wire leaves a wire slack or removes a mode) and are left out of the budget: "
                         + ", ".join(degenerate))
     # -- ladder rows ------------------------------------------------------
     p_best = rungs[best]["p"]

@@ -120,24 +120,45 @@ def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
     return 0.0  # inertia components: the unknowns
 
 
-def mac_match(base: ModeSet, other: ModeSet) -> np.ndarray:
-    """Index into ``other.modes`` of the mode matching each base mode (MAC)."""
+def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarray]:
+    """(rows into ``base.modes``, columns into ``other.modes``) of the best
+    one-to-one MAC matching; every mode of the smaller set is matched."""
     M = base.mass_matrix
     A = np.array([m.shape for m in base.modes])
     B = np.array([m.shape for m in other.modes])
     num = (A @ M @ B.T) ** 2
     den = np.outer(np.einsum("ij,jk,ik->i", A, M, A), np.einsum("ij,jk,ik->i", B, M, B))
     mac = num / np.maximum(den, 1e-300)
-    _, col = linear_sum_assignment(-mac)
-    return col
+    return linear_sum_assignment(-mac)
+
+
+def mac_match(base: ModeSet, other: ModeSet) -> np.ndarray:
+    """Index into ``other.modes`` of the mode matching each base mode (MAC)."""
+    return _mac_assignment(base, other)[1]
+
+
+def matched_periods(base: ModeSet, other: ModeSet) -> np.ndarray:
+    """Periods (s) of ``other``'s modes in the order of ``base``'s (MAC
+    matching), NaN for a neutral mode and for a base mode that ``other`` does
+    not have.  The second happens on a rig with four or five wires all taut
+    and dependent (a symmetric rig: the rest pose has fewer independent
+    constraints than wires): changing one wire's length or point makes the
+    wires independent and, with inextensible wires, removes a mode, so that
+    mode's period has no derivative with respect to that input."""
+    out = np.full(len(base.modes), np.nan)
+    for r, i in zip(*_mac_assignment(base, other)):
+        out[r] = other.modes[i].period if other.modes[i].period else np.nan
+    return out
 
 
 def periods_of(scene: Scene, base: ModeSet | None = None, guess: RestPose | None = None) -> np.ndarray:
-    """Linear periods (s) in the order of ``base``'s modes (NaN for neutral modes)."""
+    """Linear periods (s) in the order of ``base``'s modes (NaN for neutral
+    modes and for modes the scene lacks, see :func:`matched_periods`)."""
     rest = rest_pose(scene, guess=guess, local_only=guess is not None)
     ms = linear_modes(scene, rest)
-    idx = mac_match(base, ms) if base is not None else np.arange(len(ms.modes))
-    return np.array([ms.modes[i].period if ms.modes[i].period else np.nan for i in idx])
+    if base is None:
+        return np.array([m.period if m.period else np.nan for m in ms.modes])
+    return matched_periods(base, ms)
 
 
 @dataclass(frozen=True)

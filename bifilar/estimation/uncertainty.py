@@ -57,7 +57,7 @@ from .sensitivity import (
     INERTIA_COMPONENTS,
     Sensitivity,
     input_sigma,
-    mac_match,
+    matched_periods,
     measured_inputs,
     perturb,
 )
@@ -132,9 +132,7 @@ def _neighbour_periods(scene: Scene, base: ModeSet, rest: RestPose, degenerate: 
         if degenerate:
             raise UnstableRestError("body", "the neighbouring scene does not hang near the base pose")
         r = rest_pose(scene, guess=rest)
-    ms = linear_modes(scene, r)
-    idx = mac_match(base, ms)
-    return np.array([ms.modes[i].period if ms.modes[i].period else np.nan for i in idx])
+    return matched_periods(base, linear_modes(scene, r))
 
 
 def input_jacobian(scene: Scene, names: list[str], rest: RestPose, modes: ModeSet,

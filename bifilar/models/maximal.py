@@ -18,8 +18,10 @@ imposes the holonomic constraint ``phi_i = (|d_i|^2 - L_i^2) / 2 = 0`` with
 (index-1 form with Baumgarte stabilisation ``a``, ``b``, which vanishes on the
 constraint manifold).  The wire tension is ``T_i = -lam_i |d_i|`` (N, positive
 when the wire pulls).  No angle is used anywhere, so no pose a rig reaches is
-singular: the constraint Jacobian loses rank only if wires become parallel
-*and* attach at the same point, which the config checks reject.
+singular.  With four or five taut wires the constraints can be dependent (a
+symmetric rig: J has rank 3); the multipliers are then the minimum-norm ones
+(:func:`_min_norm`), which give the same accelerations as any other
+solution (docs/design.md).
 
 Every function is vectorised: ``y`` may have any leading shape ``(..., 13)``
 that broadcasts against the leading shape of the :class:`RigParams` arrays
@@ -265,7 +267,9 @@ def pack(r, q, v=None, w=None) -> np.ndarray:
 # ~10x faster than array code on 3-vectors) and on numpy arrays of any
 # broadcastable shape (a batch: one vectorised operation per term).  The n x n
 # multiplier system is solved by unpivoted symmetric elimination, which is
-# exact for its symmetric positive definite matrix J M^-1 J^T.
+# exact for its symmetric positive definite matrix J M^-1 J^T, for up to three
+# wires; four or five wires may be dependent (J M^-1 J^T singular) and go
+# through the pseudo-inverse of _min_norm (an evaluation costs ~5-10x more).
 
 _STATE_NAMES = ("rx", "ry", "rz", "qw", "qx", "qy", "qz", "vx", "vy", "vz", "wx", "wy", "wz")
 _AX = "xyz"
@@ -397,8 +401,14 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
         for j in range(i, n):
             dd = f"dd{i}" if i == j else "(" + C.expr([(1, f"d{a}{i}", f"d{a}{j}") for a in _AX]) + ")"
             C.let(f"A{i}{j}", [(1, "minv", dd)] + [(1, f"J{a}{i}", f"NJ{a}{j}") for a in _AX])
+    if n > MAX_ELIMINATION_WIRES:
+        # four or more wires: the constraints can be dependent (every wire taut on a symmetric rig),
+        # J M^-1 J^T is then singular and the minimum-norm multipliers are taken (see _min_norm)
+        upper = ", ".join(C.v(f"A{i}{j}") for i in range(n) for j in range(i, n))
+        rbs = ", ".join(C.v(f"rb{i}") for i in range(n))
+        C.lines.append(f"{', '.join(f'lam{i}' for i in range(n))}, = _min_norm(({upper},), ({rbs},))")
     # unpivoted symmetric elimination, then back substitution
-    for k in range(n):
+    for k in range(n if n <= MAX_ELIMINATION_WIRES else 0):
         C.lines.append(f"iA{k} = 1.0/A{k}{k}")
         for i in range(k + 1, n):
             C.lines.append(f"f = A{k}{i}*iA{k}")
@@ -406,7 +416,7 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
                 C.lines.append(f"A{i}{j} = A{i}{j} - f*A{k}{j}")
             C.lines.append(f"rb{i} = {C.v(f'rb{i}')} - f*{C.v(f'rb{k}')}")
             C.zero.discard(f"rb{i}")
-    for i in reversed(range(n)):
+    for i in reversed(range(n if n <= MAX_ELIMINATION_WIRES else 0)):
         rest = "".join(f" - A{i}{j}*lam{j}" for j in range(i + 1, n))
         C.lines.append(f"lam{i} = ({C.v(f'rb{i}')}{rest})*iA{i}")
     for a in range(3):
@@ -433,6 +443,54 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
            f"        return ({', '.join(out)},)\n"
            f"    return f\n")
     return src, params
+
+
+MAX_ELIMINATION_WIRES = 3
+"""Wire counts up to this solve the multiplier system by straight-line
+elimination in the kernel; more wires go through :func:`_min_norm`."""
+MIN_NORM_RCOND = 1e-10
+"""Eigenvalues of J M^-1 J^T below this fraction of the largest are treated
+as zero by :func:`_min_norm` (dependent wires)."""
+
+
+_TRIU = {n: np.triu_indices(n) for n in range(1, 6)}
+
+
+def _min_norm(upper: tuple, rb: tuple) -> tuple:
+    """Minimum-norm solution ``lam = A^+ rb`` of the multiplier system.
+
+    ``upper``: the n (n + 1) / 2 entries of the symmetric positive
+    semi-definite ``A = J M^-1 J^T`` row by row (i <= j), ``rb``: the n
+    right-hand sides; floats (one state) or arrays of one broadcast shape (a
+    batch).  Eigenvalues below :data:`MIN_NORM_RCOND` times the largest are
+    dropped (pseudo-inverse).  When the wires are dependent the accelerations
+    ``M^-1 J^T lam`` are the same for every solution (the null space of A is
+    that of J^T); the minimum-norm multipliers are also the tensions the rest
+    pose reports (``lstsq`` of the equilibrium equations).  Returns n floats
+    or arrays.
+    """
+    n = len(rb)
+    if all(isinstance(x, float) for x in upper + rb):  # one state: the cheapest numpy calls
+        A = np.empty((n, n))
+        A[_TRIU[n]] = upper
+        w, V = np.linalg.eigh(A, UPLO="U")
+        keep = w > MIN_NORM_RCOND * w[-1]
+        return tuple((V[:, keep] @ ((V[:, keep].T @ rb) / w[keep])).tolist())
+    shape = np.broadcast_shapes(*(np.shape(x) for x in upper + rb))
+    A = np.empty(shape + (n, n))
+    b = np.stack([np.broadcast_to(x, shape) for x in rb], axis=-1)
+    k = 0
+    for i in range(n):
+        for j in range(i, n):
+            A[..., i, j] = upper[k]
+            A[..., j, i] = upper[k]
+            k += 1
+    w, V = np.linalg.eigh(A)
+    keep = w > MIN_NORM_RCOND * w[..., -1:]
+    winv = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
+    c = np.einsum("...ji,...j->...i", V, b) * winv
+    lam = np.einsum("...ij,...j->...i", V, c)
+    return tuple(np.moveaxis(lam, -1, 0))
 
 
 def _zero_set(vals: dict) -> frozenset:
@@ -467,7 +525,7 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
             src, params = _kernel_source(n, zero, stabilise, extras)
-            ns: dict = {}
+            ns: dict = {"_min_norm": _min_norm}
             exec(compile(src, f"<bifilar.maximal kernel n={n}>", "exec"), ns)  # noqa: S102 - generated here
             _FACTORY_CACHE[fkey] = (ns["make"], params)
         make, params = _FACTORY_CACHE[fkey]
