@@ -432,7 +432,7 @@ def with_degenerate_monte_carlo(budget: LinearBudget, p_hat, samples: np.ndarray
 
 
 def component_std(scene, component: str, mode: str | int, unc: dict, timing: float | None = None,
-                  amplitude: float | None = 0.0) -> float:
+                  amplitude: float | None = 0.0, fallback: float | None = None) -> float:
     """The honest standard uncertainty (kg m^2) of inertia ``component``
     (body axes) estimated from the linear period of ``mode`` (label or
     1-based index) of ``scene``, with input uncertainties ``unc`` (as
@@ -441,16 +441,23 @@ def component_std(scene, component: str, mode: str | int, unc: dict, timing: flo
     :func:`bifilar.estimation.invert.invert` prints, second order where the
     linear one is wrong, degenerate inputs by the targeted Monte Carlo.
     ``amplitude``: as ``--amplitude`` (0: small, None: the assumed default
-    range).  For planners (``sweep``)."""
+    range).  ``fallback``: returned instead of raising when the inversion
+    fails (a planner's point keeps its linear sigma).  For planners
+    (``sweep``)."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from .invert import invert
     from .measurements import Hanging, Measurement, MeasurementSet
 
-    ms = linear_modes(scene, rest_pose(scene))
-    md = ms.get(mode) if isinstance(mode, str) else ms.modes[int(mode) - 1]
-    s = float(unc.get("timing", 1e-3) if timing is None else timing)
-    meas = MeasurementSet([Hanging("ref", scene, np.eye(3))],
-                          [Measurement(md.label, float(md.period), s, "period", "--period", amplitude=amplitude)])
-    res = invert(meas, method="linear", solve_for=[component], unc=unc, ladder=False)
-    return float(res.sigma(component))
+    try:
+        ms = linear_modes(scene, rest_pose(scene))
+        md = ms.get(mode) if isinstance(mode, str) else ms.modes[int(mode) - 1]
+        s = float(unc.get("timing", 1e-3) if timing is None else timing)
+        meas = MeasurementSet([Hanging("ref", scene, np.eye(3))],
+                              [Measurement(md.label, float(md.period), s, "period", "--period", amplitude=amplitude)])
+        res = invert(meas, method="linear", solve_for=[component], unc=unc, ladder=False)
+        return float(res.sigma(component))
+    except BifilarError:
+        if fallback is None:
+            raise
+        return float(fallback)
