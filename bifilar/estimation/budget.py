@@ -441,9 +441,11 @@ def component_std(scene, component: str, mode: str | int, unc: dict, timing: flo
     :func:`bifilar.estimation.invert.invert` prints, second order where the
     linear one is wrong, degenerate inputs by the targeted Monte Carlo.
     ``amplitude``: as ``--amplitude`` (0: small, None: the assumed default
-    range).  ``fallback``: returned instead of raising when the inversion
-    fails (a planner's point keeps its linear sigma).  For planners
-    (``sweep``)."""
+    range).  ``fallback``: the planner's own linear sigma (kg m^2); returned
+    when the inversion fails, and also when the honest std is within
+    :data:`LINEAR_ENOUGH` of it (the linear budget holds; the two linear
+    budgets differ only by their finite-difference error, ~1e-6).  For
+    planners (``sweep``)."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from .invert import invert
@@ -453,10 +455,14 @@ def component_std(scene, component: str, mode: str | int, unc: dict, timing: flo
         ms = linear_modes(scene, rest_pose(scene))
         md = ms.get(mode) if isinstance(mode, str) else ms.modes[int(mode) - 1]
         s = float(unc.get("timing", 1e-3) if timing is None else timing)
+        s = max(s, 1e-15 * float(md.period))  # an exact period: the gain needs a positive weight
         meas = MeasurementSet([Hanging("ref", scene, np.eye(3))],
                               [Measurement(md.label, float(md.period), s, "period", "--period", amplitude=amplitude)])
         res = invert(meas, method="linear", solve_for=[component], unc=unc, ladder=False)
-        return float(res.sigma(component))
+        sd = float(res.sigma(component))
+        if fallback is not None and abs(sd - fallback) <= LINEAR_ENOUGH * abs(fallback):
+            return float(fallback)
+        return sd
     except BifilarError:
         if fallback is None:
             raise
