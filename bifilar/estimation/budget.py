@@ -25,10 +25,10 @@ std) the linear budget is kept unchanged; otherwise each input's
 contribution becomes ``(a_j, sqrt(2) b_j)`` and the mean offset ``sum b_j``
 is carried as a term of its own, so the printed std is the RMS distance of
 the truth from the estimate.  Inputs whose sigma points cannot hang at all
-(a knife-edge: the CoM exactly on the attachment line) are *degenerate*:
-they are budgeted by a targeted Monte Carlo over every input at once
-(:func:`bifilar.estimation.montecarlo.monte_carlo_check`, draws that cannot
-hang are the experiments that could not have been made and are dropped).
+(a knife-edge: the CoM exactly on the attachment line) are *degenerate*
+and returned to the caller, which lists them; a scene with a neutral mode
+gets no sigma points at all (each would need the slow global rest-pose
+search; docs/invert.md, "Degenerate scenes", for what is still open).
 """
 
 from __future__ import annotations
@@ -53,8 +53,6 @@ OFFSET_ENOUGH = 0.1
 #: default range of release amplitudes when none is given: uniform in 0 .. this
 #: many degrees of the mode's dominant rotation (a swing: the wires' angle)
 DEFAULT_AMPLITUDE_RANGE_DEG = 10.0
-#: draws of the targeted Monte Carlo for degenerate inputs
-DEGENERATE_DRAWS = 100
 #: samples of the second-order surrogate for the 95 % interval
 _SURROGATE_SAMPLES = 20000
 
@@ -409,26 +407,6 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
     ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
                         list(degenerate), scenes, rests, modes, matches)
     return budget, degenerate, T_lin, ctx
-
-
-def with_degenerate_monte_carlo(budget: LinearBudget, p_hat, samples: np.ndarray, keys: list) -> LinearBudget:
-    """The budget with the inputs ``keys`` (degenerate: no derivative, their
-    sigma points cannot hang) replaced by one term sized so that the std is
-    the RMS distance of the Monte Carlo re-estimates ``samples`` (n, P; every
-    input drawn, draws that cannot hang dropped) from the estimate, when
-    that is larger than the budget without them."""
-    p = np.asarray(p_hat, float)
-    S = np.asarray(samples, float)
-    rms2 = np.mean((S - p[None, :]) ** 2, axis=0)
-    contrib = {k: v for k, v in budget.contributions.items() if k not in keys}
-    var = sum((np.asarray(c) ** 2 for c in contrib.values()), np.zeros(len(p)))
-    extra = np.sqrt(np.maximum(rms2 - var, 0.0))
-    contrib["degenerate"] = extra
-    cov = np.zeros_like(budget.covariance)
-    for c in contrib.values():
-        cov += np.outer(c, c)
-    sig = {k: v for k, v in budget.sigmas.items() if k not in keys}
-    return LinearBudget(list(budget.names), cov, contrib, sig)
 
 
 def component_std(scene, component: str, mode: str | int, unc: dict, timing: float | None = None,

@@ -113,7 +113,6 @@ class InversionResult:
     runtime: float = 0.0
     monte_carlo: MonteCarloSummary | None = None
     interval: np.ndarray | None = None
-    degenerate_monte_carlo: MonteCarloSummary | None = None
     problem: Problem | None = field(default=None, repr=False)
     sims: list = field(default_factory=list, repr=False)
 
@@ -172,8 +171,6 @@ class InversionResult:
             "assumed_uncertainty": self.uncertainty,
             "degenerate_inputs": self.degenerate_inputs,
             "monte_carlo": self.monte_carlo.to_json() if self.monte_carlo is not None else None,
-            "degenerate_monte_carlo": (self.degenerate_monte_carlo.to_json()
-                                       if self.degenerate_monte_carlo is not None else None),
             "warnings": list(self.warnings),
             "notes": list(self.notes),
             "runtime_s": self.runtime,
@@ -326,7 +323,6 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           list(pb.measurements), list(ms.hangings), T_lin_hat, np.asarray(r_hat, float),
                           _assumed(unc_all), degenerate, warnings, notes, problem=pb,
                           sims=(est_nl.sims if est_nl is not None else []))
-    mc_deg = None
     if degenerate:
         # TODO(issue 10): a targeted Monte Carlo over every input for these
         # (montecarlo.monte_carlo_check perturbs them now); too slow on the
@@ -335,8 +331,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         warnings.append("these inputs have no derivative here (the scene is degenerate: a neutral mode, e.g. the "
                         "CoM on the line through two attachment points) and are left out of the budget, which is "
                         "therefore too small; run --monte-carlo N to see their effect: " + ", ".join(degenerate))
-    res.interval = interval_95(p_hat, res.budget, bctx, mc_deg.samples if mc_deg is not None and mc_deg.n_ok >= 20
-                               else None)
+    res.interval = interval_95(p_hat, res.budget, bctx)
     I_hat = pb.models[0].inertia_ref(pb.values(p_hat))
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:  # no inertia outside the positive-definite interval (others at the estimate)
