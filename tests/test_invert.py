@@ -29,7 +29,7 @@ from bifilar.estimation.invert import (
     physical_interval,
 )
 from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
-from bifilar.estimation.sensitivity import DEFAULT_UNCERTAINTY, inertia_budget, period_sensitivity
+from bifilar.estimation.sensitivity import inertia_budget, period_sensitivity
 from bifilar.estimation.uncertainty import input_jacobian
 from bifilar.models.reduced import TorsionParams, torsion_period
 from bifilar.rotations import rotvec_to_matrix
@@ -41,8 +41,9 @@ G = 9.81
 I_B1, I_B2, I_B3 = 100 * (25 + 6.25) / 12, 100 * 25 / 12, 100 * 6.25 / 12
 
 
-def one(scene, label, T, std=1e-4, amplitude=None, cycles=10, **kw):
-    """A single-hanging, single-period problem."""
+def one(scene, label, T, std=1e-4, amplitude=0.0, cycles=10, **kw):
+    """A single-hanging, single-period problem (amplitude 0: the periods
+    given are small-amplitude ones, so no assumed amplitude range is budgeted)."""
     return MeasurementSet([Hanging("ref", scene, np.eye(3))],
                           [Measurement(label, T, std, "period", "--period", amplitude=amplitude, cycles=cycles, **kw)])
 
@@ -208,7 +209,10 @@ def test_ladder_exposes_amplitude_bias_at_large_amplitude():
     s = trapezoid(b=D, bp=D, l1=L, inertia=(0.2, 0.1, I), mass=m)
     p = TorsionParams(m, I, L, D, D)
     T_A, T_0 = torsion_period(p, A, "exact"), torsion_period(p, 0.0, "exact")
-    res = invert(one(s, "torsion", T_A, std=1e-4, amplitude=A), solve_for=["Izz"])
+    # the CoM lies on the attachment line (a knife edge: its honest budget is
+    # dominated by the CoM and attachment positions, docs/invert.md), so the
+    # geometry is taken as exact here to compare the bias with the amplitude term
+    res = invert(one(s, "torsion", T_A, std=1e-4, amplitude=A), solve_for=["Izz"], unc={"position": 0.0, "com": 0.0})
     rows = {r["method"]: r for r in res.ladder}
     bias = (T_A / T_0) ** 2 - 1  # ~1.6 %
     assert rows["linear"]["values"]["Izz"] / I - 1 == pytest.approx(bias, rel=1e-6)
@@ -352,56 +356,7 @@ def test_degenerate_scene_reports_inputs_without_derivative():
     assert any("degenerate" in w for w in res.warnings)
 
 
-def _draw_measured_scene(truth, rng, unc):
-    """The scene an experimenter would write down: every measured input off
-    by a normal error with the stated standard uncertainty."""
-    n = truth.n_wires
-    return replace(
-        truth,
-        mass=truth.mass * (1 + rng.normal(0, unc["mass"])),
-        lengths=truth.lengths + rng.normal(0, unc["length"], n),
-        anchors=truth.anchors + rng.normal(0, unc["position"], (n, 3)),
-        attachments=truth.attachments + rng.normal(0, unc["position"], (n, 3)) - rng.normal(0, unc["com"], 3),
-    )
-
-
-def _coverage(n, seed):
-    """Fraction of n synthetic experiments whose 95 % interval covers the
-    truth, and the same for an interval built from the timing alone."""
-    truth = lab_plate()
-    T_true = linear_modes(truth, rest_pose(truth)).get("torsion").period
-    unc = dict(DEFAULT_UNCERTAINTY)
-    rng = np.random.default_rng(seed)
-    hit = hit_timing_only = 0
-    for _ in range(n):
-        meas = _draw_measured_scene(truth, rng, unc)
-        T = T_true + rng.normal(0, unc["timing"])
-        res = invert(one(meas, "torsion", T, std=unc["timing"]), solve_for=["Izz"], ladder=False)
-        err = abs(res.value("Izz") - truth.inertia[2, 2])
-        hit += err <= 1.96 * res.sigma("Izz")
-        hit_timing_only += err <= 1.96 * abs(res.budget.contributions["timing[torsion]"][0])
-    return hit / n, hit_timing_only / n
-
-
-def test_95_percent_intervals_cover_the_truth_fast():
-    # 40 draws: P(coverage < 0.85 | true 95 %) = P(X <= 33 | n = 40) = 0.3 %
-    cov, cov_t = _coverage(40, 11)
-    assert cov >= 0.85
-    assert cov_t < 0.5
-
-
-@pytest.mark.slow
-def test_95_percent_intervals_cover_the_truth():
-    # 400 synthetic experiments from a known truth with known input errors
-    # (the assumed defaults: 1 mm lengths and positions, 2 mm CoM, 0.1 % mass,
-    # 1 ms timing).  The estimate +- 1.96 std must cover the truth in 95 % of
-    # them; with 400 draws the binomial std of the coverage is 1.1 %, so the
-    # band 95 +- 2.2 % (2 sigma; a correct std passes it for 95 % of seeds, the
-    # seed is fixed) fails for a std 15 % too small (91.2 %) or too large (97.6 %).
-    cov, cov_t = _coverage(400, 20240601)
-    assert 0.928 <= cov <= 0.972, cov
-    # the test can fail: an interval from the timing alone covers far less often
-    assert cov_t < 0.5
+# coverage of the 95 % intervals: tests/test_coverage.py (two-sided, independent truth)
 
 
 def test_monte_carlo_agrees_with_linear_propagation():
@@ -416,16 +371,23 @@ def test_monte_carlo_agrees_with_linear_propagation():
     assert abs(mc.mean[0] - res.value("Izz")) < 4 * res.sigma("Izz") / math.sqrt(200)
 
 
-def test_monte_carlo_flags_a_nonlinear_budget():
+def test_second_order_budget_matches_monte_carlo_where_linear_fails():
     # CoM only 10 mm below the attachment line: a 1 mm attachment error tilts
     # the plate by ~6 degrees, a second-order effect the linear budget cannot
-    # see (the first derivative vanishes by symmetry).  The Monte Carlo spread
-    # is several times the linear std (observed ~4-8x) and the output says so.
+    # see (the first derivative vanishes by symmetry; the Monte Carlo spread is
+    # 4-8x the linear std).  The sigma-point budget must say so and give the
+    # RMS distance of the re-estimates from the estimate: 300 draws, the RMS
+    # of a heavy-tailed sample has a relative std of ~10 %; band +-30 %.
     s = lab_plate(drop=0.01)
     T = linear_modes(s, rest_pose(s)).get("torsion").period
-    res = invert(one(s, "torsion", T, std=1e-3), solve_for=["Izz"], ladder=False, monte_carlo=100, seed=3)
-    assert res.monte_carlo.ratio[0] > 1.5
-    assert any("Monte Carlo" in w for w in res.warnings)
+    res = invert(one(s, "torsion", T, std=1e-3), solve_for=["Izz"], ladder=False, monte_carlo=300, seed=3)
+    assert any("not linear" in w for w in res.warnings)
+    lin = math.sqrt(sum(float(c[0]) ** 2 for k, c in res.budget.contributions.items()
+                        if "2nd order" not in k and k != "offset"))
+    S = res.monte_carlo.samples[:, 0]
+    rms = math.sqrt(np.mean((S - res.value("Izz")) ** 2))
+    assert rms > 2 * lin  # the linear budget alone would be far too small
+    assert 0.7 < res.sigma("Izz") / rms < 1.3
 
 
 def test_period_outside_the_achievable_range_names_the_range():
@@ -547,7 +509,8 @@ def test_hangings_example_file_recovers_the_tensor():
     for n, v in want.items():
         assert abs(res.value(n) - v) < 3 * res.sigma(n)
     groups = res.budget.grouped(res.names.index("Ixz"))
-    assert set(groups) <= {"timing", "lengths", "spacings", "mass", "com", "gravity"}
+    # no amplitude in the file: the assumed release-amplitude range is budgeted too
+    assert set(groups) <= {"timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "offset"}
     assert groups["timing"][0] > 0
 
 

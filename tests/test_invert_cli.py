@@ -74,7 +74,7 @@ def test_solve_for_repeats_and_several_periods():
 
 def test_timed_trials_and_uncertainty_override():
     r = run("invert", LIN2, "--timed", "torsion=10:19.05,19.06,19.04", "--uncertainty", "mass=0.01",
-            "--uncertainty", "trial_time=0.005", "--json")  # floor below the 0.01 s scatter
+            "--uncertainty", "trial_time=0.005", "--amplitude", "0", "--json")  # floor below the 0.01 s scatter
     assert r.exit_code == 0, r.stderr
     doc = json.loads(r.stdout)
     m = doc["measurements"][0]
@@ -116,7 +116,7 @@ def test_unreachable_period_says_the_achievable_range():
 
 def test_method_forced_and_nonlinear_needs_amplitude():
     T = linear_period(PLATE, "torsion")
-    r = run("invert", PLATE, "--period", f"torsion={T!r}", "--method", "small-angle", "--json")
+    r = run("invert", PLATE, "--period", f"torsion={T!r}", "--method", "small-angle", "--amplitude", "0", "--json")
     assert r.exit_code == 0, r.stderr
     doc = json.loads(r.stdout)
     # inclined wires: the formula gives b'/b = 1/2 of the truth, and the

@@ -1,19 +1,336 @@
-"""The uncertainty budget of an inversion at its estimate: period and input
-sensitivities, the gain matrix and each input's contribution
-(:func:`bifilar.estimation.uncertainty.propagate`).  SI units.
+"""The uncertainty budget of an inversion at its estimate: the linear budget
+(period and input sensitivities, the gain matrix and each input's
+contribution, :func:`bifilar.estimation.uncertainty.propagate`), its
+second-order check and correction by sigma points, the systematic term of an
+unstated release amplitude, and the 95 % interval.  SI units.
+
+Second order (docs/invert.md, "Where the linear budget is wrong")
+-----------------------------------------------------------------
+Each measured input ``x_j`` (standard uncertainty ``s_j``) is moved to the
+two sigma points ``x_j +- sqrt(3) s_j`` (the three-point Gauss-Hermite rule
+of the unscented transform with ``kappa = 3 - n``), the rest pose found
+again (global search allowed, so a body that tilts is followed), the
+measured modes tracked by MAC, and the unknowns re-solved so that the
+periods are unchanged (Gauss-Newton steps on ``T^2``, nearly linear in an
+inertia).  With ``p_+-`` the two re-solved estimates, the error of the
+estimate due to input ``j`` is modelled by the quadratic through the three
+points, ``q_j(z) = a_j z + b_j z^2`` with ``z ~ N(0, 1)``,
+
+    a_j = (p_+ - p_-) / (2 sqrt 3),   b_j = (p_+ + p_- - 2 p) / 6,
+
+whose mean is ``b_j`` and whose variance is ``a_j^2 + 2 b_j^2`` (exact for a
+quadratic response).  When every input is linear enough (the second-order
+std differs from the linear one by < 2 % and the offsets are < 10 % of the
+std) the linear budget is kept unchanged; otherwise each input's
+contribution becomes ``(a_j, sqrt(2) b_j)`` and the mean offset ``sum b_j``
+is carried as a term of its own, so the printed std is the RMS distance of
+the truth from the estimate.  Inputs whose sigma points cannot hang at all
+(a knife-edge: the CoM exactly on the attachment line) are *degenerate*
+and returned to the caller, which lists them; a scene with a neutral mode
+gets no sigma points at all (each would need the slow global rest-pose
+search; docs/invert.md, "Degenerate scenes", for what is still open).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field, replace
+
 import numpy as np
 
+from ..errors import BifilarError
 from .measurements import COM_UNKNOWNS
 from .problem import Problem
-from .sensitivity import input_sigma, measured_inputs
-from .uncertainty import gain_matrix, propagate, robust_sensitivity
+from .sensitivity import input_sigma, mac_match, measured_inputs, perturb
+from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
+
+#: sigma points at +- sqrt(3) standard uncertainties (3-point Gauss-Hermite)
+SIGMA_POINT = math.sqrt(3.0)
+#: keep the linear budget when the second-order std differs by less than this (relative)
+LINEAR_ENOUGH = 0.02
+#: and every mean offset is below this fraction of the std
+OFFSET_ENOUGH = 0.1
+#: default range of release amplitudes when none is given: uniform in 0 .. this
+#: many degrees of the mode's dominant rotation (a swing: the wires' angle)
+DEFAULT_AMPLITUDE_RANGE_DEG = 10.0
+#: samples of the second-order surrogate for the 95 % interval
+_SURROGATE_SAMPLES = 20000
+
+
+@dataclass
+class BudgetContext:
+    """What the second-order step needs from the linear budget."""
+
+    inputs: list                     # input keys in the budget
+    sigmas: dict                     # key -> standard uncertainty (SI)
+    G: np.ndarray                    # (P, K) gain matrix
+    T_hat: np.ndarray                # (K,) model periods at the estimate (r T_lin)
+    degenerate: list                 # keys without a derivative
+    scenes: list                     # per hanging, the scene at the estimate
+    rests: list
+    modes: list
+    match: list                      # per hanging, base mode k -> index in modes
+    nonlinear: list = field(default_factory=list)   # keys treated to second order
+    surrogate: dict = field(default_factory=dict)   # key -> (a, b) of the quadratic
+    amplitude: dict = field(default_factory=dict)   # label -> D (P,): truth - p at A_max
+
+
+def _key_hanging(pb: Problem, key: str) -> list:
+    """Indices of the hangings an input key affects."""
+    if key.startswith("com.") or key in ("mass", "gravity"):
+        return list(range(len(pb.models)))
+    if len(pb.models) > 1:
+        name = key.split(":", 1)[0]
+        return [h for h, hm in enumerate(pb.models) if hm.hanging.name == name]
+    return [0]
+
+
+def _perturbed_scene(pb: Problem, h: int, scene, key: str, d: float):
+    """Hanging ``h``'s ``scene`` with input ``key`` changed by ``d`` (SI; a
+    ``com.*`` key is a shift in the reference body frame)."""
+    if key.startswith("com."):
+        v = np.zeros(3)
+        v["xyz".index(key[-1])] = d
+        return replace(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
+    name = key.split(":", 1)[1] if len(pb.models) > 1 and ":" in key else key
+    return perturb(scene, name, d)
+
+
+def _hanging_periods(scenes, rest, base_modes) -> list:
+    """(periods, scene, rest, modes, col) of each scene, ``col`` the index of
+    each of ``base_modes`` in its modes (MAC), rest poses from ``rest``
+    (global search where Newton fails); None where the scene cannot hang.
+    Batched engine."""
+    from ..analysis.batch import modes_batch, rest_poses
+    from .montecarlo import _modes_or_none
+
+    rests = rest_poses(scenes, rest, errors="return")
+    good = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
+    out: list = [None] * len(scenes)
+    if not good:
+        return out
+    mss = _modes_or_none(modes_batch, [scenes[q] for q in good], [rests[q] for q in good])
+    for q, ms in zip(good, mss):
+        if ms is None or len(ms.modes) != len(base_modes.modes):
+            continue
+        col = mac_match(base_modes, ms)
+        T = np.array([ms.modes[c].period or np.nan for c in col])
+        out[q] = (T, scenes[q], rests[q], ms, col)
+    return out
+
+
+def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, key: str, d: float, hits: dict):
+    """Unknowns that keep every model period at the estimate's value with
+    input ``key`` changed by ``d``: Gauss-Newton steps on ``T^2`` (nearly
+    linear in an inertia) with the gain matrix; the rest pose of the
+    perturbed geometry is reused while only the inertia changes.  ``hits``:
+    {hanging: (T, scene, rest, modes, col)} at the estimate; None if a
+    period is lost on the way."""
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+
+    T = ctx.T_hat.copy()
+    com_unknown = any(n in COM_UNKNOWNS for n in pb.unknowns)
+
+    def fill(h, ms, col):
+        for k, m in enumerate(pb.measurements):
+            if m.hanging == h:
+                T[k] = r_hat[k] * (ms.modes[col[ctx.match[h][pb.mode_index[k]]]].period or np.nan)
+
+    for h, (_, _, _, ms, col) in hits.items():
+        fill(h, ms, col)
+    p = np.asarray(p_hat, float).copy()
+    sc = pb.scales()
+    for _ in range(8):
+        if not np.all(np.isfinite(T)):
+            return None
+        small = np.max(np.abs(T / ctx.T_hat - 1)) < 1e-2  # one step on T^2: error ~(dT/T)^2 of the step
+        step = ctx.G @ ((ctx.T_hat ** 2 - T ** 2) / (2 * ctx.T_hat))
+        p = p + step
+        if small or np.max(np.abs(step) / sc) < 1e-10:
+            return p
+        vals = pb.values(p)
+        for h, (_, _, rest, ms0, col) in hits.items():
+            scene = _perturbed_scene(pb, h, pb.models[h].scene(vals), key, d)
+            try:
+                r = rest_pose(scene, guess=rest) if com_unknown else rest
+                ms = linear_modes(scene, r)
+            except BifilarError:
+                return None
+            c2 = mac_match(ms0, ms)
+            fill(h, ms, c2[col])
+    return p if np.all(np.isfinite(T)) else None
+
+
+def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudget) -> tuple[LinearBudget, list]:
+    """The sigma-point check of the linear budget (module docstring), and
+    the unstated-amplitude terms of ``ctx.amplitude``.
+
+    Returns the budget to report (the linear contributions when every input
+    is linear enough) and the keys whose sigma points cannot hang (to be
+    budgeted by the targeted Monte Carlo).  Fills ``ctx.surrogate`` and
+    ``ctx.nonlinear``."""
+    keys = [k for k in ctx.inputs if ctx.sigmas.get(k, 0) > 0]
+    if any(any(m.period is None for m in ms.modes) for ms in ctx.modes):
+        # a neutral mode (knife edge): sigma points would need the slow global
+        # rest-pose search; not treated yet (TODO issue 10, docs/invert.md)
+        keys = []
+    H = len(pb.models)
+    jobs: dict[int, list] = {h: [] for h in range(H)}
+    for key in keys:
+        for h in _key_hanging(pb, key):
+            for sgn in (1, -1):
+                d = sgn * SIGMA_POINT * ctx.sigmas[key]
+                jobs[h].append((key, sgn, _perturbed_scene(pb, h, ctx.scenes[h], key, d)))
+    res: dict = {}
+    for h, jl in jobs.items():
+        if not jl or not any(m.hanging == h for m in pb.measurements):
+            continue
+        out = _hanging_periods([j[2] for j in jl], ctx.rests[h], ctx.modes[h])
+        for (key, sgn, _), o in zip(jl, out):
+            res.setdefault((key, sgn), {})[h] = o
+    failed, surrogate = [], {}
+    for key in keys:
+        ps = []
+        for sgn in (1, -1):
+            hits = res.get((key, sgn), {})
+            p = None
+            if all(v is not None for v in hits.values()):
+                p = _resolve(pb, ctx, p_hat, r_hat, key, sgn * SIGMA_POINT * ctx.sigmas[key], hits)
+            if p is None:
+                break
+            ps.append(p)
+        if len(ps) < 2:
+            failed.append(key)
+            continue
+        a = (ps[0] - ps[1]) / (2 * SIGMA_POINT)
+        b = (ps[0] + ps[1] - 2 * np.asarray(p_hat, float)) / 6
+        surrogate[key] = (a, b)
+    std1 = lin.std
+    contrib = {k: v for k, v in lin.contributions.items() if k not in surrogate}
+    offset = np.zeros(len(pb.unknowns))
+    for key, (a, b) in surrogate.items():
+        contrib[key] = a
+        contrib[f"{key} (2nd order)"] = math.sqrt(2) * b
+        offset = offset + b
+    var2 = sum((np.asarray(c) ** 2 for c in contrib.values()), np.zeros(len(offset))) + offset ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        change = np.abs(np.sqrt(var2) / std1 - 1)
+        off_rel = np.abs(offset) / std1
+    if np.all(change < LINEAR_ENOUGH) and np.all(off_rel < OFFSET_ENOUGH):
+        contrib, offset = dict(lin.contributions), np.zeros(len(offset))
+        ctx.surrogate = {}
+    else:
+        ctx.surrogate = surrogate
+        ctx.nonlinear = [k for k, (a, b) in surrogate.items()
+                         if np.any(math.sqrt(2) * np.abs(b) > 0.05 * std1)
+                         or np.any(np.abs(a - lin.contributions.get(k, a)) > 0.05 * std1)]
+    if not ctx.surrogate and not ctx.amplitude:
+        return lin, failed
+    for lab, D in ctx.amplitude.items():
+        contrib[f"amplitude[{lab}]"] = D * math.sqrt(4 / 45)
+        offset = offset + D / 3
+    if np.any(offset):
+        contrib["offset"] = offset
+    cov = np.zeros_like(lin.covariance)
+    for c in contrib.values():
+        cov += np.outer(c, c)
+    return LinearBudget(list(lin.names), cov, contrib, dict(lin.sigmas)), failed
+
+
+def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_samples=None) -> np.ndarray:
+    """(P, 2) 95 % intervals of the unknowns (SI): the symmetric
+    ``p +- 1.96 std`` joined with the 2.5-97.5 % quantiles of the error
+    model (the second-order surrogate ``sum_j a_j z_j + b_j z_j^2``, normal
+    terms for the linear inputs and periods, ``D u`` with ``u = (A/A_max)^2``,
+    ``A`` uniform, for an unstated amplitude) or of Monte Carlo re-estimates
+    ``mc_samples`` (n, P).  The join is asymmetric where the error is
+    skewed, and never narrower than the RMS interval, which covers the
+    truth for every true input (a quadratic response with the truth at its
+    extremum makes the quantile interval alone miss).  When the only skewed
+    term is the unstated amplitude (an assumed distribution of the release
+    amplitude, independent of the inputs), the quantile interval alone."""
+    p = np.asarray(p_hat, float)
+    sd = budget.std
+    lo, hi = p - 1.96 * sd, p + 1.96 * sd
+    skewed = ctx is not None and (ctx.surrogate or ctx.amplitude)
+    if mc_samples is not None and len(mc_samples) > 1:
+        q = np.quantile(np.asarray(mc_samples, float), [0.025, 0.975], axis=0)
+        lo, hi = np.minimum(lo, q[0]), np.maximum(hi, q[1])
+    elif skewed:
+        rng = np.random.default_rng(20261123)
+        N = _SURROGATE_SAMPLES
+        err = np.zeros((N, len(p)))
+        skip = set(ctx.surrogate) | {f"amplitude[{lab}]" for lab in ctx.amplitude} | {"offset"}
+        for k, c in budget.contributions.items():
+            if k in skip or k.endswith("(2nd order)"):
+                continue
+            err += rng.standard_normal(N)[:, None] * np.asarray(c)[None, :]
+        for a, b in ctx.surrogate.values():
+            z = rng.standard_normal(N)[:, None]
+            err += a[None, :] * z + b[None, :] * z * z
+        for D in ctx.amplitude.values():
+            u = rng.uniform(0.0, 1.0, N)[:, None] ** 2
+            err += D[None, :] * u
+        q = np.quantile(err, [0.025, 0.975], axis=0)
+        if ctx.surrogate:
+            lo, hi = np.minimum(lo, p + q[0]), np.maximum(hi, p + q[1])
+        else:  # only the amplitude's one-sided term: its distribution is assumed, the quantiles are right
+            lo, hi = p + q[0], p + q[1]
+    return np.column_stack([lo, hi])
+
+
+def default_amplitude_range(scene, mode) -> float:
+    """Upper end ``A_max`` of the assumed release amplitudes of ``mode`` (in
+    the unit of ``--amplitude``: the mode's dominant coordinate, rad or m):
+    :data:`DEFAULT_AMPLITUDE_RANGE_DEG` of rotation when the dominant
+    coordinate is a rotation, else the sideways displacement of a wire
+    swung by that angle, ``mean(L) sin(angle)``."""
+    ang = math.radians(DEFAULT_AMPLITUDE_RANGE_DEG)
+    if mode.dominant >= 3:
+        return ang
+    return float(np.mean(scene.lengths)) * math.sin(ang)
+
+
+def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: float = 1e-10) -> dict:
+    """The systematic term of periods timed at an unstated amplitude
+    (measurements whose ``amplitude is None``): release amplitudes assumed
+    uniform in 0 .. A_max (:func:`default_amplitude_range`), the amplitude
+    factor ``r(A) = 1 + (r_max - 1) (A / A_max)^2`` with ``r_max`` simulated
+    by the nonlinear model at A_max, so the truth is ``p + D u`` with
+    ``u = (A/A_max)^2`` (mean 1/3, std 2/sqrt(45)) and
+    ``D = -G T (r_max - 1) / r_max``.  The estimate is kept (it is the
+    small-amplitude one the user asked for); :func:`second_order` puts
+    the term's mean ``D/3`` into ``offset`` and its spread ``2 D / sqrt(45)``
+    into ``amplitude[label]``.  Fills ``ctx.amplitude`` {label: D}; returns {label:
+    (A_max, r_max)}."""
+    from .solve import amplitude_factor
+
+    out = {}
+    multi = len(pb.models) > 1
+    for k, m in enumerate(pb.measurements):
+        if m.amplitude is not None:
+            continue
+        hm = pb.models[m.hanging]
+        scene = ctx.scenes[m.hanging]
+        mode = ctx.modes[m.hanging].modes[ctx.match[m.hanging][pb.mode_index[k]]]
+        A = default_amplitude_range(scene, mode)
+        try:
+            r_max, _ = amplitude_factor(hm, pb.values(p_hat), pb.mode_index[k], A, 3, rtol)
+        except BifilarError:
+            continue
+        lab = f"{hm.hanging.name}:{m.label}" if multi else m.label
+        e = np.zeros(len(pb.measurements))
+        e[k] = ctx.T_hat[k] * (r_max - 1) / r_max
+        D = -(ctx.G @ e)
+        ctx.amplitude[lab] = D
+        out[lab] = (A, float(r_max))
+    return out
+
 
 def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
-    """Linear budget at the estimate; returns (LinearBudget, degenerate inputs, T_lin at p_hat)."""
+    """Linear budget at the estimate; returns (LinearBudget, degenerate
+    inputs, T_lin at p_hat, BudgetContext for :func:`second_order`)."""
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
@@ -24,17 +341,22 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
     sigmas: dict[str, float] = {}
     degenerate: list[str] = []
     solved_com = {n for n in pb.unknowns if n in COM_UNKNOWNS}
+    scenes, rests, modes, matches = [], [], [], []
     for h, hm in enumerate(pb.models):
+        scene = hm.scene(vals)
+        rest, ms_h, match = hm.locate(scene)
+        scenes.append(scene)
+        rests.append(rest)
+        modes.append(ms_h)
+        matches.append(match)
         ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
         if not ks:
             continue
-        scene = hm.scene(vals)
-        rest, ms_h, match = hm.locate(scene)
         names = [n for n in measured_inputs(scene) if not n.startswith("com.")]
         names += list(COM_UNKNOWNS)
         sens, failed = robust_sensitivity(scene, rest, ms_h, names, scheme="forward")
         pre = f"{hm.hanging.name}:" if multi else ""
-        degenerate += [pre + n for n in failed]
+        degenerate += [(n if n.startswith("com.") or n in ("mass", "gravity") else pre + n) for n in failed]
         for j, n in enumerate(sens.names):
             col = np.zeros(K)
             for k in ks:
@@ -54,6 +376,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
             else:
                 cols[pre + n] = col
                 sigmas[pre + n] = input_sigma(scene, n, unc)
+    degenerate = [d for d in dict.fromkeys(degenerate) if d not in solved_com]
     in_names = list(cols)
     Jx = np.column_stack([cols[n] for n in in_names]) if in_names else np.zeros((K, 0))
     in_sig = np.array([sigmas[n] for n in in_names])
@@ -72,4 +395,53 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
         lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
         tn.append(f"timing[{lab}]")
     budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn)
-    return budget, degenerate, T_lin
+    # every input, degenerate ones too, with its standard uncertainty
+    all_sig = dict(sigmas)
+    for d in degenerate:
+        if d.startswith("com."):
+            all_sig[d] = float(unc["com"])
+        else:
+            n = d.split(":", 1)[-1]
+            h = next(iter(_key_hanging(pb, d)))
+            all_sig[d] = input_sigma(scenes[h], n, unc)
+    ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
+                        list(degenerate), scenes, rests, modes, matches)
+    return budget, degenerate, T_lin, ctx
+
+
+def component_std(scene, component: str, mode: str | int, unc: dict, timing: float | None = None,
+                  amplitude: float | None = 0.0, fallback: float | None = None) -> float:
+    """The honest standard uncertainty (kg m^2) of inertia ``component``
+    (body axes) estimated from the linear period of ``mode`` (label or
+    1-based index) of ``scene``, with input uncertainties ``unc`` (as
+    :func:`~bifilar.estimation.uncertainty.default_uncertainty`) and period
+    uncertainty ``timing`` (s; default ``unc['timing']``): the budget
+    :func:`bifilar.estimation.invert.invert` prints, second order where the
+    linear one is wrong, degenerate inputs by the targeted Monte Carlo.
+    ``amplitude``: as ``--amplitude`` (0: small, None: the assumed default
+    range).  ``fallback``: the planner's own linear sigma (kg m^2); returned
+    when the inversion fails, and also when the honest std is within
+    :data:`LINEAR_ENOUGH` of it (the linear budget holds; the two linear
+    budgets differ only by their finite-difference error, ~1e-6).  For
+    planners (``sweep``)."""
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+    from .invert import invert
+    from .measurements import Hanging, Measurement, MeasurementSet
+
+    try:
+        ms = linear_modes(scene, rest_pose(scene))
+        md = ms.get(mode) if isinstance(mode, str) else ms.modes[int(mode) - 1]
+        s = float(unc.get("timing", 1e-3) if timing is None else timing)
+        s = max(s, 1e-15 * float(md.period))  # an exact period: the gain needs a positive weight
+        meas = MeasurementSet([Hanging("ref", scene, np.eye(3))],
+                              [Measurement(md.label, float(md.period), s, "period", "--period", amplitude=amplitude)])
+        res = invert(meas, method="linear", solve_for=[component], unc=unc, ladder=False)
+        sd = float(res.sigma(component))
+        if fallback is not None and abs(sd - fallback) <= LINEAR_ENOUGH * abs(fallback):
+            return float(fallback)
+        return sd
+    except BifilarError:
+        if fallback is None:
+            raise
+        return float(fallback)

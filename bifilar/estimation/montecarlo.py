@@ -26,13 +26,12 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     periods and amplitudes drawn from their assumed distributions (centred on
     the measured values); the amplitude factor is scaled as ``r(A) = 1 + (r -
     1)(A/A0)^2`` (nonlinear method) and each drawn period is divided by it,
-    so every draw is a linear-model problem.  Inputs left out of the linear
-    budget (degenerate) are not perturbed.  A draw that cannot even be built
+    so every draw is a linear-model problem.  Every input is perturbed,
+    degenerate ones (no derivative) too: their finite-size effect is what the
+    linear budget cannot see.  A draw that cannot even be built
     is ``None``.  Reproducible for a given generator state."""
     pb = res.problem
     unc = pb.unc
-    multi = len(pb.models) > 1
-    degenerate = set(res.degenerate_inputs)
     solved_com = {x for x in pb.unknowns if x in COM_UNKNOWNS}
     draws: list = []
     for _ in range(n):
@@ -40,23 +39,18 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
             # shared inputs: mass (relative), gravity, CoM (reference frame)
             dm = rng.normal(0.0, unc["mass"])
             dg = rng.normal(0.0, unc.get("gravity", 0.0))
-            dcom = np.array([0.0 if f"com.{a}" in solved_com or f"com.{a}" in degenerate else rng.normal(0.0, unc["com"])
-                             for a in "xyz"])
+            dcom = np.array([0.0 if f"com.{a}" in solved_com else rng.normal(0.0, unc["com"]) for a in "xyz"])
             hangs = []
             for hm in pb.models:
                 s = hm.hanging.scene
-                pre = f"{hm.hanging.name}:" if multi else ""
                 att = s.attachments - (hm.R @ dcom)[None, :]
                 an = s.anchors.copy()
                 L = s.lengths.copy()
                 for i in range(s.n_wires):
-                    if pre + f"length.{i + 1}" not in degenerate:
-                        L[i] += rng.normal(0.0, unc["length"])
+                    L[i] += rng.normal(0.0, unc["length"])
                     for a in range(3):
-                        if pre + f"anchor.{i + 1}.{'xyz'[a]}" not in degenerate:
-                            an[i, a] += rng.normal(0.0, unc["position"])
-                        if pre + f"attachment.{i + 1}.{'xyz'[a]}" not in degenerate:
-                            att[i, a] += rng.normal(0.0, unc["position"])
+                        an[i, a] += rng.normal(0.0, unc["position"])
+                        att[i, a] += rng.normal(0.0, unc["position"])
                 s2 = replace(s, mass=s.mass * (1 + dm), gravity=s.gravity * (1 + dg), lengths=L, anchors=an,
                              attachments=att)
                 hangs.append(replace(hm.hanging, scene=s2))
@@ -374,7 +368,7 @@ def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | 
 
 
 def monte_carlo_check(res: InversionResult, n: int, rng: np.random.Generator, progress=None,
-                      batched: bool | None = None) -> MonteCarloSummary:
+                      batched: bool | None = None, near_pose: bool = False) -> MonteCarloSummary:
     """Re-estimate the unknowns ``n`` times with inputs, periods and
     amplitudes drawn from their assumed distributions (:func:`draw_monte_carlo`),
     each time solving the full (not linearised) model: the rest pose, modes
@@ -384,8 +378,23 @@ def monte_carlo_check(res: InversionResult, n: int, rng: np.random.Generator, pr
     through the batched engine, all draws at once
     (:func:`solve_draws_batched`, 8-15x faster: docs/performance.md); anything else, or
     ``batched=False``, draw by draw (:func:`solve_draws_loop`).  Draws
-    whose inversion fails are counted in ``failed``."""
+    whose inversion fails are counted in ``failed``.  ``near_pose``: drop
+    draws that do not hang near the estimate's rest pose (Newton from it
+    fails: the body would hang visibly otherwise than the one measured; the
+    targeted Monte Carlo of degenerate inputs, which skips the slow global
+    search for them)."""
     draws = draw_monte_carlo(res, n, rng)
+    if near_pose:
+        from ..analysis.equilibrium import rest_pose
+
+        for q, d in enumerate(draws):
+            if d is None:
+                continue
+            try:
+                for h, hm in zip(d.hangings, res.problem.models):
+                    rest_pose(h.scene, guess=hm.rest0, local_only=True)
+            except BifilarError:
+                draws[q] = None
     use_batch = batched_applies(res.problem) if batched is None else bool(batched)
     est = solve_draws_batched(res, draws, progress) if use_batch else solve_draws_loop(res, draws, progress)
     good = np.all(np.isfinite(est), axis=1)

@@ -81,7 +81,7 @@ UNCERTAINTY_KEYS = {
 }
 
 #: budget groups, in display order
-GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "model bias")
+GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "model bias", "offset", "degenerate")
 
 
 def default_uncertainty(overrides: dict | None = None) -> dict:
@@ -96,9 +96,13 @@ def default_uncertainty(overrides: dict | None = None) -> dict:
 def group_of(name: str) -> str:
     """Budget group of an input name: ``timing``, ``lengths``, ``spacings``
     (anchor and attachment coordinates), ``mass``, ``com``, ``gravity``,
-    ``amplitude`` or ``model bias``.  Inputs may carry a hanging prefix
-    (``"<hanging>:length.1"``); per-measurement terms a bracketed suffix
+    ``amplitude`` or ``model bias``; ``offset`` (the mean offset of a
+    second-order or amplitude term) and ``degenerate`` (the targeted Monte
+    Carlo) otherwise.  Inputs may carry a hanging prefix
+    (``"<hanging>:length.1"``), a second-order term the suffix `` (2nd
+    order)``; per-measurement terms a bracketed suffix
     (``timing[<hanging>:torsion]``)."""
+    name = name.removesuffix(" (2nd order)")
     head = name.split("[", 1)[0]
     if head in ("timing", "amplitude", "model bias"):
         return head

@@ -514,6 +514,7 @@ def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSet
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> dict:
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
+    from ..estimation.budget import component_std  # issue 10 (budget)
     from ..estimation.sensitivity import best_mode_for, grouped_shares, inertia_budget, measured_inputs
 
     cfg, amp_override = apply_params(base_cfg, params, source)
@@ -552,6 +553,8 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         k = best_mode_for(sens, comp)
         chosen[comp] = k
         b = inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+        # issue 10 (budget): the std invert prints, second order where the linear one is wrong
+        sigma = component_std(scene, comp, labels[k], unc, unc["timing"], fallback=b.value_sigma)
         j_all = [j for j, n in enumerate(sens.names) if n not in _IDX]
         dI_dx = {sens.names[j]: -float(sens.jacobian[k, j] / col[k]) for j in j_all}
         others = [periods[i] for i in range(len(periods)) if i != k and np.isfinite(periods[i])]
@@ -559,7 +562,7 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         axis = _IDX[comp][0] if comp in PRINCIPAL else None
         entry.update(
             mode=labels[k], period=float(periods[k]),
-            sigma=b.value_sigma, rel_sigma=b.value_sigma / abs(I) if I else math.inf,
+            sigma=sigma, rel_sigma=sigma / abs(I) if I else math.inf,
             rel_sensitivity_period=b.rel_sensitivity,
             dlnI_dx={n: v / I for n, v in dI_dx.items()} if I else dI_dx,
             shares=grouped_shares(b), separation=sep,
