@@ -15,7 +15,7 @@ from .common import check_workers, console, emit_json, esc, handle_errors, progr
               help="Parameter to search within bounds (repeatable): a dotted config path or a shorthand "
                    "(spacing, ceiling_spacing, length, length_offset, height, amplitude, rotate_*).")
 @common_options
-@click.option("--workers", type=int, default=1, show_default=True, help="Processes for the coarse grid.")
+@click.option("--workers", type=int, default=1, show_default=True, help="Processes for the coarse grid (1..1024; at most one per CPU and per point starts).")
 @handle_errors
 def plan(config, params, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
          min_separation, no_tensions, sim_periods, as_json, workers):

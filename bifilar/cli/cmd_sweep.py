@@ -82,7 +82,7 @@ def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_dep
 @click.option("--out", type=click.Path(dir_okay=False), help="Write one CSV row per point (and a resumable journal FILE.partial.jsonl while running).")
 @click.option("--resume", is_flag=True, help="Reuse the finished points of an interrupted sweep with the same --out.")
 @click.option("--plot", type=click.Path(dir_okay=False), help="Draw the figures to this image file (PNG, PDF, SVG).")
-@click.option("--workers", type=int, default=1, show_default=True, help="Processes to use.")
+@click.option("--workers", type=int, default=1, show_default=True, help="Processes to use (1..1024; at most one per CPU and per point starts).")
 @click.option("--force", is_flag=True, help="Replace existing --out/--plot files (and a stale journal).")
 @click.option("--stop-after", type=int, default=None, hidden=True, help="Stop after N new points (tests: a stand-in for Ctrl-C).")
 @handle_errors
