@@ -215,7 +215,9 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     dof = max(n - npar, 1)
     s2 = raw.cost / dof
     # covariance s^2 (J^T J)^-1 via the SVD of J (free parameters only)
-    U, S, Vt = np.linalg.svd(raw.J, full_matrices=False)
+    # singular values and right vectors of J from its small triangular factor
+    # (J = Q R: same S and V, without the n x p matrix U)
+    _, S, Vt = np.linalg.svd(np.linalg.qr(raw.J, mode="r"))
     tol = S[0] * max(raw.J.shape) * np.finfo(float).eps if S.size else 0.0
     with np.errstate(divide="ignore"):
         inv2 = np.where(S > tol, 1.0 / S ** 2, np.inf)
