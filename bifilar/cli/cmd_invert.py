@@ -87,11 +87,11 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
     if measurements is not None:
-        ms = mm.load_measurements(measurements, config_override=config)
+        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for))
     else:
         from ..config import load_scene
 
-        scene = load_scene(config)
+        scene = load_scene(config, unknown=tuple(solve_for))
         ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config))
     merged = dict(unc)
     ms.uncertainty = {**ms.uncertainty, **merged}
