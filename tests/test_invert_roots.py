@@ -273,3 +273,41 @@ def test_random_scenes_answers_refusals_and_roots(n_wires, seed):
 @pytest.mark.parametrize("n_wires,seed", [(n, s) for n in (2, 3, 4) for s in range(10, 16)])
 def test_random_scenes_more(n_wires, seed):
     _check_scene(np.random.default_rng(1000 * n_wires + seed), n_wires)
+
+
+def test_second_root_reported_with_the_mode_that_separates_them():
+    # issue repro 2's body: its swing-y period is reproduced by two values of
+    # Ixz; the torsion periods at the two (forward model) tell them apart
+    s = scene_from_dict(R2, warn=False)
+    rest = rest_pose(s)
+    T = linear_modes(s, rest).get("swing-y").period
+    res = invert(one(s, "swing-y", T, std=1e-4), solve_for=["Ixz"], ladder=False)
+    xs = [r["inertia"]["Ixz"]["value"] for r in res.roots]
+    assert res.ambiguous and len(xs) == 2 and any(abs(x - 0.036173) < 1e-7 for x in xs)
+    sep = res.to_json()["separating_measurement"]
+    fwd = [linear_modes(with_component(s, "Ixz", x), rest).get(sep["mode"]).period for x in xs]
+    assert sep["periods"] == pytest.approx(fwd, rel=1e-9)
+    assert sep["separation"] == pytest.approx(abs(fwd[0] - fwd[1]) / 1e-4, rel=1e-6) and sep["separation"] > 3
+    assert any(f"time mode '{sep['mode']}'" in w for w in res.warnings)
+
+
+def _two_periods(s, dT_pitch):
+    ms = linear_modes(s, rest_pose(s))
+    T1, T2 = ms.get("torsion").period, ms.get("pitch").period + dT_pitch
+    return MeasurementSet([Hanging("h", s, np.eye(3))],
+                          [Measurement("torsion", T1, 1e-4, "period", "--period"),
+                           Measurement("pitch", T2, 1e-4, "period", "--period")])
+
+
+def test_joint_fit_passes_its_chi_square_and_refuses_inconsistent_periods():
+    truth = trapezoid(h=0.5, inertia=[200.0, 60.0, 230.0])
+    prior = with_component(truth, "Izz", 0.8 * 230.0)
+    res = invert(replace(_two_periods(truth, 0.0), hangings=[Hanging("h", prior, np.eye(3))]), solve_for=["Izz"],
+                 ladder=False)
+    assert res.value("Izz") == pytest.approx(230.0, rel=1e-6)
+    assert res.fit["passed"] and res.fit["dof"] == 1
+    # the pitch period 1000 sigma off: chi2 ~ 1e6 for 1 degree of freedom (threshold 10.8)
+    with pytest.raises(InputError) as ei:
+        invert(replace(_two_periods(truth, 0.1), hangings=[Hanging("h", prior, np.eye(3))]), solve_for=["Izz"],
+               ladder=False)
+    assert ei.value.field == "--period" and "chi2" in ei.value.message

@@ -381,14 +381,13 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         msg = (f"{len(roots)} physical tensors reproduce the measured period(s) ({vals}); the first is shown above, "
                "but the data cannot tell them apart")
         sep = res.separation
-        if sep is not None:
+        if sep is not None and sep["separation"] >= 3:
             ps = ", ".join(f"{t:.6g} s" for t in sep["periods"])
             msg += (f": time mode '{sep['mode']}' (hanging '{sep['hanging']}') as well, predicted {ps} at these "
                     f"roots ({sep['separation']:.3g} timing sigma apart)")
-            if sep["separation"] < 3:
-                msg += ", too close: hang the body another way"
         else:
-            msg += ": hang the body another way and time a mode there"
+            best_sep = f" (the best, '{sep['mode']}', by {sep['separation']:.2g} timing sigma)" if sep else ""
+            msg += f": no mode of the hangings used separates them{best_sep}; hang the body another way and time a mode there"
         warnings.append(msg)
     n_mc = ms.monte_carlo if monte_carlo is None else monte_carlo
     if n_mc:

@@ -124,12 +124,13 @@ class HangingModel:
     are tracked by MAC against the modes at the prior.
     """
 
-    def __init__(self, hanging, I_ref0: np.ndarray, like: "HangingModel | None" = None):
+    def __init__(self, hanging, I_ref0: np.ndarray, like: "HangingModel | None" = None, rest=None):
         self.hanging = hanging
         self.R = np.asarray(hanging.rotation, float)
         self.I_ref0 = np.asarray(I_ref0, float)
         self.scene0 = replace(hanging.scene, inertia=self.R @ self.I_ref0 @ self.R.T)
-        self.rest0 = rest_pose(self.scene0, guess=like.rest0 if like is not None else None)
+        # ``rest``: the rest pose of this geometry (it does not depend on the inertia)
+        self.rest0 = rest if rest is not None else rest_pose(self.scene0, guess=like.rest0 if like is not None else None)
         self.modes0 = linear_modes(self.scene0, self.rest0)
         # for a perturbed copy, base-mode k of ``like`` is mode map_like[k] here
         self.map_like = mac_match(like.modes0, self.modes0) if like is not None else None
@@ -235,13 +236,15 @@ class Problem:
 
 
 def build_problem(ms: MeasurementSet, solve_for: list | None = None, unc: dict | None = None,
-                  like: Problem | None = None) -> Problem:
+                  like: Problem | None = None, rests: list | None = None) -> Problem:
     """Hanging models at the prior, mode indices and the unknowns (picked
     per measurement as the component its period is most sensitive to,
-    relatively, when ``solve_for`` is empty)."""
+    relatively, when ``solve_for`` is empty).  ``rests``: the hangings'
+    rest poses when known (the same geometry with another inertia)."""
     h0 = ms.hangings[0]
     I_ref0 = h0.rotation.T @ h0.scene.inertia @ h0.rotation
-    models = [HangingModel(h, I_ref0, like=like.models[i] if like is not None else None)
+    models = [HangingModel(h, I_ref0, like=like.models[i] if like is not None else None,
+                           rest=rests[i] if rests is not None else None)
               for i, h in enumerate(ms.hangings)]
     idx = []
     for k, m in enumerate(ms.measurements):
@@ -342,7 +345,8 @@ def problem_at(ms: MeasurementSet, pb: Problem, p, unc: dict | None = None) -> P
     hangs = [replace(h, scene=replace(h.scene, inertia=np.asarray(h.rotation) @ I_hat @ np.asarray(h.rotation).T))
              for h in ms.hangings]
     ms2 = replace(ms, hangings=hangs)
-    pb2 = build_problem(ms2, list(pb.unknowns), unc if unc is not None else pb.unc)
+    pb2 = build_problem(ms2, list(pb.unknowns), unc if unc is not None else pb.unc,
+                        rests=[hm.rest0 for hm in pb.models])
     pb2.unc = pb.unc
     if any(n not in _IDX for n in pb.unknowns):
         relabel(pb2, p)
