@@ -311,3 +311,17 @@ def test_joint_fit_passes_its_chi_square_and_refuses_inconsistent_periods():
         invert(replace(_two_periods(truth, 0.1), hangings=[Hanging("h", prior, np.eye(3))]), solve_for=["Izz"],
                ladder=False)
     assert ei.value.field == "--period" and "chi2" in ei.value.message
+
+
+def test_thin_plate_period_timed_just_beyond_the_edge_is_answered_at_the_edge():
+    # Izz = Ixx + Iyy exactly: a torsion period 1 sigma longer than the
+    # truth's has no physical root inside; the edge reproduces it within 2 sigma
+    truth = trapezoid(h=0.5)
+    T = linear_modes(truth, rest_pose(truth)).get("torsion").period
+    res = invert(one(truth, "torsion", T + 1e-4, std=1e-4), solve_for=["Izz"], ladder=False)
+    assert res.value("Izz") == pytest.approx(PLATE_I[2], rel=1e-5) and res.roots[0]["edge"]
+    assert abs(res.roots[0]["residuals"][0]["normalised_residual"]) <= EDGE_Z
+    assert any("edge of the physical set" in w for w in res.warnings)
+    # 3 sigma beyond: refused
+    with pytest.raises(InputError):
+        invert(one(truth, "torsion", T + 3e-4, std=1e-4), solve_for=["Izz"], ladder=False)
