@@ -615,6 +615,9 @@ def _inertia_with_nulls(spec: dict, nulls: list, chk: _Checker) -> np.ndarray | 
     positive numbers, the known products numbers."""
     key = "principal" if "principal" in spec else "tensor"
     path = f"body.inertia.{key}"
+    if key == "principal" and len(spec[key]) != 3:
+        chk.error(path, f"must be a list of 3 numbers (or null for an unknown one), got {_describe(spec[key])}")
+        return None
     unknown_at = {INERTIA_NAMES[n] for n in nulls} | {INERTIA_NAMES[n][::-1] for n in nulls}
     I = np.zeros((3, 3))
     ok = True

@@ -325,3 +325,19 @@ def test_thin_plate_period_timed_just_beyond_the_edge_is_answered_at_the_edge():
     # 3 sigma beyond: refused
     with pytest.raises(InputError):
         invert(one(truth, "torsion", T + 3e-4, std=1e-4), solve_for=["Izz"], ladder=False)
+
+
+def test_two_unknowns_every_root_from_the_start_design():
+    # issue repro 1's mirror-symmetric rig: (Izz, +Iyz) and (Izz, -Iyz) give
+    # the same torsion and pitch periods (forward model); both are reported
+    s = scene_from_dict(R1, warn=False)
+    st = with_component(with_component(s, "Izz", 255.0), "Iyz", 20.0)
+    ms = linear_modes(st, rest_pose(st))
+    sm = with_component(st, "Iyz", -20.0)
+    assert linear_modes(sm, rest_pose(sm)).get("pitch").period == pytest.approx(ms.get("pitch").period, rel=1e-12)
+    meas = MeasurementSet([Hanging("h", s, np.eye(3))],
+                          [Measurement(lab, ms.get(lab).period, 1e-4, "period", "--period") for lab in ("torsion", "pitch")])
+    res = invert(meas, solve_for=["Izz", "Iyz"], ladder=False)
+    got = sorted(((r["inertia"]["Izz"]["value"], r["inertia"]["Iyz"]["value"]) for r in res.roots), key=lambda v: v[1])
+    assert res.ambiguous and len(got) == 2
+    assert got[0] == pytest.approx((255.0, -20.0), rel=1e-7) and got[1] == pytest.approx((255.0, 20.0), rel=1e-7)

@@ -469,7 +469,8 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
             best = {"p": p, "z": z, "chi2": chi2, "test": test}
     if not found and not best and errors:
         raise ConvergenceError(f"the least-squares solver failed from every start point: {errors[0]}")
-    found.sort(key=lambda q: tuple(q))
+    # ascending, compared at 1e-9 of the scales so that last-bit noise cannot reorder them
+    found.sort(key=lambda q: tuple(np.round(q / sc, 9)))
     return [Root(q) for q in found], best
 
 
