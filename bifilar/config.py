@@ -388,10 +388,7 @@ def check_inertia_tensor(I: np.ndarray, path: str, chk: _Checker) -> bool:
     """Symmetric, positive definite, principal moments obey the triangle
     inequality (kg m^2, any axes).  Problems go to ``chk`` under ``path``."""
     scale = float(np.max(np.abs(I))) or 1.0
-    if np.max(np.abs(I - I.T)) > 1e-9 * scale:
-        i, j = np.unravel_index(int(np.argmax(np.abs(I - I.T))), I.shape)
-        chk.error(path, f"inertia tensor must be symmetric; row {i}, column {j} is {I[i, j]:.6g} but "
-                        f"row {j}, column {i} is {I[j, i]:.6g}")
+    if not _check_symmetric(I, path, chk):
         return False
     ev = np.linalg.eigvalsh(I)
     if ev[0] <= 1e-12 * scale:
@@ -415,12 +412,18 @@ def _fmt(a: np.ndarray) -> str:
 # the scene
 
 
-def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True) -> Scene:
+def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True, unknown: tuple | None = None) -> Scene:
     """Validate a config mapping and build the :class:`Scene` (SI units;
     anchors world frame, attachments body frame with origin at the CoM).
 
     ``warn=False`` skips the plausibility warnings (for studies that build
     many variants of one config; call :func:`plausibility_warnings` once).
+
+    ``unknown``: for ``bifilar invert``, the inertia components being solved
+    for (their values are starting guesses, not checked for plausibility)
+    and permission to mark components unknown with ``null`` (see
+    :func:`null_components`; the scene then holds a placeholder the
+    inversion replaces).  None (every other command): a null is an error.
 
     Raises
     ------
@@ -465,7 +468,7 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True) -> S
             if "mass" in body:
                 mass = chk.number("body.mass", body["mass"], positive=True, limit="mass", unit="kg")
             if "inertia" in body:
-                inertia = _inertia(body["inertia"], chk)
+                inertia = _inertia(body["inertia"], chk, unknown)
         if "bounding_box" in body:
             bb = body["bounding_box"]
             if chk.keys("body.bounding_box", bb, {"min", "max"}, {"min", "max"}) and "min" in bb and "max" in bb:
@@ -480,7 +483,8 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True) -> S
                         corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
                         support = _points_support(corners)
                         support_source = "bounding_box"
-    if mass is not None and inertia is not None:
+    guessed = unknown is not None and (set(unknown) & set(INERTIA_NAMES) or null_components(cfg))
+    if mass is not None and inertia is not None and not guessed:
         _check_gyration(mass, inertia, "body.parts" if body and "parts" in body else "body.inertia", chk)
 
     anchors = attachments = lengths = None
@@ -552,9 +556,41 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True) -> S
     return scene
 
 
-def _inertia(spec: Any, chk: _Checker) -> np.ndarray | None:
+INERTIA_NAMES = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
+
+
+def null_components(cfg: Any) -> list[str]:
+    """Inertia components the config marks unknown with ``null`` (a config
+    mapping or a :class:`Scene` built from one), e.g. ``tensor: [[215, 0, 0],
+    [0, 52.08, 0], [0, 0, null]]`` or ``principal: [1, 2, null]``: ``Izz``."""
+    cfg = getattr(cfg, "config", cfg)
+    try:
+        spec = cfg["body"]["inertia"]
+    except (KeyError, TypeError):
+        return []
+    out = []
+    if not isinstance(spec, dict):
+        return out
+    if isinstance(spec.get("principal"), (list, tuple)):
+        out = [n for n, (i, j) in INERTIA_NAMES.items() if i == j and i < len(spec["principal"])
+               and spec["principal"][i] is None]
+    rows = spec.get("tensor")
+    if isinstance(rows, (list, tuple)) and len(rows) == 3 and all(isinstance(r, (list, tuple)) and len(r) == 3
+                                                                  for r in rows):
+        out = [n for n, (i, j) in INERTIA_NAMES.items() if rows[i][j] is None or rows[j][i] is None]
+    return out
+
+
+def _inertia(spec: Any, chk: _Checker, unknown: tuple | None = None) -> np.ndarray | None:
     if not chk.keys("body.inertia", spec, INERTIA_KEYS):
         return None
+    nulls = null_components({"body": {"inertia": spec}})
+    if nulls:
+        if unknown is None:
+            chk.error("body.inertia", f"{', '.join(nulls)} is null (unknown): only `bifilar invert` accepts an unknown "
+                                      "component (it solves for it); give its value")
+            return None
+        return _inertia_with_nulls(spec, nulls, chk)
     present = [k for k in ("tensor", "principal") if k in spec]
     if len(present) != 1:
         chk.error("body.inertia", "give exactly one of 'tensor' (3x3) or 'principal' ([I1, I2, I3]), "
@@ -576,7 +612,49 @@ def _inertia(spec: Any, chk: _Checker) -> np.ndarray | None:
             return None
         I = np.asarray(vals)
         path = "body.inertia.tensor"
+    if unknown and set(unknown) & set(INERTIA_NAMES):
+        # the components solved for are starting guesses: only the tensor's shape is checked here
+        return I if _check_symmetric(I, path, chk) else None
     return I if check_inertia_tensor(I, path, chk) else None
+
+
+def _check_symmetric(I: np.ndarray, path: str, chk: _Checker) -> bool:
+    scale = float(np.max(np.abs(I))) or 1.0
+    if np.max(np.abs(I - I.T)) > 1e-9 * scale:
+        i, j = np.unravel_index(int(np.argmax(np.abs(I - I.T))), I.shape)
+        chk.error(path, f"inertia tensor must be symmetric; row {i}, column {j} is {I[i, j]:.6g} but "
+                        f"row {j}, column {i} is {I[j, i]:.6g}")
+        return False
+    return True
+
+
+def _inertia_with_nulls(spec: dict, nulls: list, chk: _Checker) -> np.ndarray | None:
+    """The tensor with placeholders for the null components (diagonal: the
+    mean of the known moments, products: 0); the known moments must be
+    positive numbers, the known products numbers."""
+    key = "principal" if "principal" in spec else "tensor"
+    path = f"body.inertia.{key}"
+    if key == "principal" and len(spec[key]) != 3:
+        chk.error(path, f"must be a list of 3 numbers (or null for an unknown one), got {_describe(spec[key])}")
+        return None
+    unknown_at = {INERTIA_NAMES[n] for n in nulls} | {INERTIA_NAMES[n][::-1] for n in nulls}
+    I = np.zeros((3, 3))
+    ok = True
+    for i in range(3):
+        for j in range(3):
+            if (i, j) in unknown_at or (key == "principal" and i != j):
+                continue
+            v = spec[key][i] if key == "principal" else spec[key][i][j]
+            x = chk.number(f"{path}.{i}" if key == "principal" else f"{path}.{i}.{j}", v, positive=(i == j))
+            ok = ok and x is not None
+            I[i, j] = x if x is not None else 0.0
+    if not ok:
+        return None
+    known = [I[i, i] for i in range(3) if (i, i) not in unknown_at]
+    for i in range(3):
+        if (i, i) in unknown_at:
+            I[i, i] = float(np.mean(known)) if known else 1.0
+    return I if _check_symmetric(I, path, chk) else None
 
 
 def _check_gyration(mass: float, I: np.ndarray, path: str, chk: _Checker) -> None:
@@ -769,7 +847,7 @@ def plausibility_warnings(scene: Scene) -> list[str]:
     return out
 
 
-def load_scene(path: str | os.PathLike, *, warn: bool = True) -> Scene:
+def load_scene(path: str | os.PathLike, *, warn: bool = True, unknown: tuple | None = None) -> Scene:
     """Read and validate a config file; see :func:`read_yaml` and :func:`scene_from_dict`."""
     cfg = read_yaml(path)
-    return scene_from_dict(cfg, source=str(path), warn=warn)
+    return scene_from_dict(cfg, source=str(path), warn=warn, unknown=unknown)

@@ -380,3 +380,24 @@ def test_degenerate_cluster_is_canonical_whatever_the_eigensolver_returns():
         for g, e in zip(got.modes, ref.modes):
             assert g.period == pytest.approx(e.period, rel=1e-13)
             np.testing.assert_allclose(g.shape, e.shape, atol=1e-9)
+
+
+def test_a_neutral_mode_stays_neutral_whatever_the_rounding():
+    """CoM on the line through the two attachment points of a parallel
+    bifilar: rolling about that line has no restoring moment (omega^2 = 0
+    exactly, by statics).  Rounding leaves ~1e-16 of the largest omega^2,
+    of either sign; it must always read as neutral (period None), never as a
+    2e8 s mode that shifts the order of the others (it did, at some inertia
+    values, and the inversion's period-vs-inertia scan jumped)."""
+    from bifilar.config import scene_from_dict
+
+    for izz in np.linspace(0.1, 0.3, 41):
+        s = scene_from_dict({"body": {"mass": 5.0, "inertia": {"principal": [0.2, 0.1, float(izz)]}},
+                             "rig": {"anchors": [[0, -0.2, 0], [0, 0.2, 0]],
+                                     "attachments": [[0, -0.2, 0], [0, 0.2, 0]], "lengths": [1.5, 1.5]}})
+        r = rest_pose(s)
+        for ms in (linear_modes(s, r), bt.modes_batch([s], [r])[0]):
+            assert [m.period is None for m in ms.modes] == [False, False, False, True]
+            # the swings of parallel 1.5 m wires: a simple pendulum's 2 pi sqrt(L / g)
+            swings = [m.period for m in ms.modes if m.label.startswith("swing")]
+            assert swings == pytest.approx([2 * np.pi * np.sqrt(1.5 / G)] * 2, rel=1e-9)

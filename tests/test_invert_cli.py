@@ -254,3 +254,71 @@ def test_period_of_real_gyro_recording():
     assert doc["signal"]["sample_rate"] == 1000.0 and doc["signal"]["n_samples"] == 30000
     assert abs(doc["period"] - doc["crossing_period"]) < 5e-3
     assert 1.5 < doc["period"] < 1.7
+
+
+# --------------------------------------------------------------------------- roots, refusals, guesses (issue 10)
+
+R1_YAML = ("body: {mass: 100.0, inertia: {tensor: [[215.0,0,0],[0,52.0833333333,3.0],[0,3.0,260.4166666667]]}}\n"
+           "rig: {anchors: [[0,-5,0],[0,5,0]], attachments: [[0,-2.5,0.5],[0,2.5,0.5]], lengths: [5.0,5.0]}\n")
+
+
+def test_ambiguous_roots_in_json(tmp_path):
+    cfg = tmp_path / "r1.yaml"
+    cfg.write_text(R1_YAML)
+    s = load_scene(cfg)
+    I = s.inertia.copy()
+    I[1, 2] = I[2, 1] = 20.0
+    from dataclasses import replace
+    s2 = replace(s, inertia=I)
+    T = linear_modes(s2, rest_pose(s2)).get("torsion").period
+    r = run("invert", cfg, "--period", f"torsion={T!r}+-0.0001", "--solve-for", "Iyz", "--json", "--no-ladder")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    vals = sorted(x["inertia"]["Iyz"]["value"] for x in doc["roots"])
+    # the mirror-symmetric rig: -20 and +20 give the same torsion period
+    assert doc["ambiguous"] is True and vals == pytest.approx([-20.0, 20.0], rel=1e-6)
+    assert doc["inertia"]["Iyz"]["value"] == doc["roots"][0]["inertia"]["Iyz"]["value"]
+    assert all(x["inertia"]["Iyz"]["std"] > 0 for x in doc["roots"])
+    assert "warning:" in r.stderr and "cannot tell them apart" in r.stderr
+    t = run("invert", cfg, "--period", f"torsion={T!r}+-0.0001", "--solve-for", "Iyz", "--no-ladder")
+    assert t.exit_code == 0 and "AMBIGUOUS" in t.stdout
+
+
+@pytest.mark.parametrize("period", ["1e300", "1e-300"])
+def test_unreachable_extreme_period_is_exit_2(tmp_path, period):
+    cfg = tmp_path / "r1.yaml"
+    cfg.write_text(R1_YAML)
+    r = run("invert", cfg, "--period", f"torsion={period}", "--solve-for", "Izz", "--json")
+    assert r.exit_code == 2 and r.stdout == ""
+    ls = lines(r.stderr)
+    assert len(ls) == 1 and ls[0].startswith("error: --period: no physical Izz"), ls
+
+
+def test_guessed_and_null_priors_on_the_command_line(tmp_path):
+    T = linear_period(LIN1, "torsion")
+    text = LIN1.read_text()
+    assert "principal: [208.3333333333, 52.0833333333, 260.4166666667]" in text
+    # the thin plate with a prior Izz above Ixx + Iyy: only a starting guess
+    hi = tmp_path / "hi.yaml"
+    hi.write_text(text.replace("260.4166666667", "300.0"))
+    r = run("invert", hi, "--period", f"torsion={T!r}+-0.001", "--solve-for", "Izz", "--json", "--no-ladder")
+    assert r.exit_code == 0, r.stderr
+    assert json.loads(r.stdout)["inertia"]["Izz"]["value"] == pytest.approx(I_B1, rel=1e-6)
+    # not solved for, it is a known value and checked as such on load
+    bad = run("invert", hi, "--period", f"torsion={T!r}")
+    assert bad.exit_code == 2 and "body.inertia.principal" in bad.stderr and "triangle" in bad.stderr
+    # solving for Ixx instead, Izz = 300 is given: no physical Ixx reproduces the period (torsion barely
+    # depends on Ixx), a refusal naming the period
+    bad = run("invert", hi, "--period", f"torsion={T!r}", "--solve-for", "Ixx")
+    assert bad.exit_code == 2 and bad.stderr.startswith("error: --period: no physical Ixx")
+    # Izz unknown (null): solved for without --solve-for, the start said in a note
+    nul = tmp_path / "null.yaml"
+    nul.write_text(text.replace("260.4166666667", "null"))
+    r = run("invert", nul, "--period", f"torsion={T!r}+-0.001", "--json", "--no-ladder")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert list(doc["inertia"]) == ["Izz"] and doc["inertia"]["Izz"]["value"] == pytest.approx(I_B1, rel=1e-6)
+    assert any("null" in n for n in doc["notes"])
+    other = run("invert", nul, "--period", f"torsion={T!r}", "--solve-for", "Ixx")
+    assert other.exit_code == 2 and "--solve-for" in other.stderr
+    assert run("modes", nul).exit_code == 2

@@ -59,6 +59,6 @@ def test_journal_guards(tmp_path):
     assert r.invoke(main, base + ["--journal", str(j), "--monte-carlo", "10", "--seed", "1"]).exit_code == 0
     again = r.invoke(main, base + ["--journal", str(j), "--monte-carlo", "10", "--seed", "1"])
     assert again.exit_code == 2 and "--resume" in again.stderr
-    other = r.invoke(main, ["invert", str(CFG), "--period", "torsion=1.95+-0.001", "--journal", str(j),
+    other = r.invoke(main, ["invert", str(CFG), "--period", "torsion=1.90+-0.001", "--journal", str(j),
                             "--monte-carlo", "10", "--resume", "--json"])
     assert other.exit_code == 2 and "another problem" in other.stderr

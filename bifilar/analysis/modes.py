@@ -108,6 +108,8 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
 #: real asymmetry splits a pair by more (one wire of a trifilar 0.1 mm longer
 #: in 2 m splits its swings by 1e-8), and that split is kept.
 DEGENERATE_RTOL = 1e-10
+#: an eigenvalue below this fraction of the largest |omega^2| is neutral (no period)
+NEUTRAL_RTOL = 1e-13
 
 
 def clusters(w2: np.ndarray, tol) -> list[tuple[int, int]]:
@@ -178,7 +180,12 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     diagM = np.diag(M)[3:]
     share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
     share = share / share.sum(axis=0)
-    zero = (np.abs(w2) <= tol) | (w2 <= 0)
+    # neutral: below the eigenvalue's own resolution, or below NEUTRAL_RTOL of
+    # the largest |omega^2| (rounding leaves a neutral mode at ~1e-16 of it,
+    # positive or negative; a real soft mode, a thin rod's swing beside its
+    # 1e11 times stiffer roll, sits at >= 1e-11)
+    scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
+    zero = (np.abs(w2) <= np.maximum(tol, NEUTRAL_RTOL * scale)) | (w2 <= 0)
     periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
     dom_e = np.argmax(share, axis=0)
     order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))

@@ -93,11 +93,11 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
     if measurements is not None:
-        ms = mm.load_measurements(measurements, config_override=config)
+        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for))
     else:
         from ..config import load_scene
 
-        scene = load_scene(config)
+        scene = load_scene(config, unknown=tuple(solve_for))
         ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config))
     merged = dict(unc)
     ms.uncertainty = {**ms.uncertainty, **merged}
@@ -234,6 +234,29 @@ def _render(ms, res) -> None:
             row.append(f"{mc.std[i]:.3g} (x{mc.ratio[i]:.2f})" if mc.n_ok > 1 else "-")
         t.add_row(*row)
     con.print(t)
+    if res.ambiguous:
+        rt = Table(title=f"AMBIGUOUS: {len(res.roots)} physical solutions reproduce the measurements "
+                         "(the first is shown above)")
+        rt.add_column("root", justify="right")
+        for n in res.names:
+            rt.add_column(f"{n}", justify="right")
+            rt.add_column("std", justify="right")
+        rt.add_column("max |resid|/std", justify="right")
+        for q, r in enumerate(res.roots):
+            ent = {**r["inertia"], **{f"com.{k}": v for k, v in r.get("com", {}).items()}}
+            cells = []
+            for n in res.names:
+                cells += [fmt(ent[n]["value"], 8), fmt(ent[n]["std"], 3)]
+            zmax = max(abs(x["normalised_residual"]) for x in r["residuals"])
+            rt.add_row(str(q + 1), *cells, f"{zmax:.2g}")
+        sep = res.separation
+        if sep is None or sep["separation"] < 3:
+            rt.caption = "no mode of the hangings used separates them: hang the body another way and time a mode"
+        else:
+            rt.caption = (f"to separate them, time mode '{sep['mode']}' (hanging '{sep['hanging']}'): "
+                          + ", ".join(f"{p:.6g} s" for p in sep["periods"])
+                          + f" at these roots ({sep['separation']:.3g} timing sigma apart)")
+        con.print(rt)
     if len(res.ladder) > 1:
         lt = Table(title="Ladder of estimators (what the simpler methods cost)")
         multi = len(res.names) > 1

@@ -67,7 +67,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BifilarError, InputError, NotApplicable
+from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
 from .budget import DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, interval_95, second_order
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
 from .ladder import small_angle_geometry, small_angle_vertical_inertia, thesis_linearisation_for  # noqa: F401
@@ -81,6 +81,8 @@ from .montecarlo import (  # noqa: F401
     solve_draws_loop,
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval, triangle_ok  # noqa: F401
+from .problem import TRIANGLE_SLACK, admissible, admissible_interval, problem_at, start_guesses
+from .roots import EDGE_Z, Root, find_roots, fit_statistics, labelled_periods, separating_measurement
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
@@ -114,6 +116,10 @@ class InversionResult:
     monte_carlo: MonteCarloSummary | None = None
     interval: np.ndarray | None = None
     problem: Problem | None = field(default=None, repr=False)
+    fit: dict = field(default_factory=dict)
+    roots: list = field(default_factory=list)
+    ambiguous: bool = False
+    separation: dict | None = None
     sims: list = field(default_factory=list, repr=False)
 
     @property
@@ -168,6 +174,10 @@ class InversionResult:
             "hangings": [{"name": h.name, "config": h.source, "rotation": np.asarray(h.rotation).tolist()}
                          for h in self.hangings],
             "residuals": res,
+            "fit": self.fit,
+            "ambiguous": bool(self.ambiguous),
+            "roots": self.roots,
+            "separating_measurement": self.separation,
             "assumed_uncertainty": self.uncertainty,
             "degenerate_inputs": self.degenerate_inputs,
             "monte_carlo": self.monte_carlo.to_json() if self.monte_carlo is not None else None,
@@ -189,7 +199,7 @@ def _assumed(unc: dict) -> dict:
 def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | None = None,
            unc: dict | None = None, monte_carlo: int | None = None, seed: int | None = None,
            ladder: bool = True, rtol: float = 1e-10, progress=None, journal=None,
-           resume: bool = False) -> InversionResult:
+           resume: bool = False, physical_only: bool = True) -> InversionResult:
     """Estimate the unknowns from the measurements (module docstring).
 
     Parameters
@@ -207,6 +217,11 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     ladder : also compute every other applicable rung.
     rtol : integrator tolerance of the nonlinear simulations.
     progress : optional ``progress(done, total)`` for long runs.
+    physical_only : search every admissible root (:mod:`.roots`; the
+        command line always does).  False: the local solve from the prior
+        with the tensor only kept positive definite, for studies that show
+        what a rung gives even where it leaves the physical set (a thin
+        plate's linear estimate of a period lengthened by the amplitude).
 
     Raises
     ------
@@ -222,6 +237,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     unc_all = default_uncertainty({**ms.uncertainty, **(unc or {})})
     warnings: list[str] = []
     notes: list[str] = list(ms.notes)
+    ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
+    notes += start_notes
     pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
     pb.unc = unc_all
     K, P = len(pb.measurements), len(pb.unknowns)
@@ -233,6 +250,12 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if method in ("small-angle", "thesis") and not scalar:
         raise InputError("--method", f"{method} estimates one component from one period; this problem has "
                                      f"{P} unknown(s) and {K} period(s): use linear or nonlinear")
+    if method == "small-angle" and scalar:
+        m0 = pb.measurements[0]
+        lab = pb.models[m0.hanging].modes0.modes[pb.mode_index[0]].label
+        if not lab.startswith("torsion"):
+            raise InputError("--method", f"small-angle does not apply: the formula describes torsion about the "
+                                         f"vertical; mode '{lab}' is not torsion")
     if method == "nonlinear" and not has_amp:
         raise InputError("--method", "the nonlinear method needs the oscillation amplitude (--amplitude)")
     for m in pb.measurements:
@@ -241,13 +264,45 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                          "the period by 1/sqrt(1-zeta^2), ~zeta^2/2 (5e-5 for zeta = 0.01)")
             break
 
+    # -- every admissible solution; the measured modes decided at each ----
+    targets0 = None
+    if has_amp:
+        # the linear model must reproduce T / r: start from the amplitude
+        # factors at the (physical) starting tensor; the fixed point below
+        # re-simulates them at the estimate
+        r0 = np.ones(K)
+        for k, m in enumerate(pb.measurements):
+            if m.amplitude:
+                r0[k], _ = amplitude_factor(pb.models[m.hanging], pb.values(pb.prior), pb.mode_index[k],
+                                            m.amplitude, m.cycles, rtol)
+        targets0 = np.array([m.period for m in pb.measurements]) / r0
+    if physical_only:
+        roots = find_roots(pb, targets0)
+    else:
+        roots = [Root(solve_linear(pb, targets0))]
+    root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
+    pb = root_pbs[0]
+    p_start = np.asarray(roots[0].p, float)
+    if roots[0].edge:
+        warnings.append(f"no physical tensor reproduces the period exactly: the estimate lies on the edge of the "
+                        f"physical set (triangle inequality I1 + I2 = I3, a thin flat body), within {EDGE_Z:g} sigma "
+                        "of the measurement")
     # -- the ladder -------------------------------------------------------
-    p_lin = solve_linear(pb)
     rungs: dict[str, dict] = {}
-    rungs["linear"] = {"p": p_lin, "r": np.ones(K)}
+    if not has_amp:
+        rungs["linear"] = {"p": p_start, "r": np.ones(K)}
+    else:
+        # the linear rung: the same equations without the amplitude factors,
+        # solved near the estimate (for comparison; it may leave the physical set)
+        try:
+            rungs["linear"] = {"p": solve_linear(pb, p0=p_start), "r": np.ones(K)}
+        except BifilarError as exc:
+            rungs["linear"] = {"na": f"failed: {exc}"}
+    if method == "linear" and "na" in rungs["linear"]:
+        raise InputError("--method", f"linear does not apply: {rungs['linear']['na']}")
     est_nl = None
     if has_amp and (method == "nonlinear" or ladder or method != best):
-        est_nl = solve_nonlinear(pb, p_lin, rtol=rtol, progress=progress)
+        est_nl = solve_nonlinear(pb, p_start, rtol=rtol, progress=progress)
         rungs["nonlinear"] = {"p": est_nl.p, "r": est_nl.r, "iterations": est_nl.iterations}
         for s in est_nl.sims:
             if s is not None:
@@ -269,12 +324,21 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if method == "nonlinear":
         r_hat = est_nl.r
 
+    edge = bool(roots[0].edge)
+    if method == "nonlinear" and P == 1 and pb.unknowns[0] in _IDX and physical_only:
+        # the fixed point refines locally and may step past the edge of the
+        # physical set (a thin plate): back to the edge, which must then fit
+        lo, hi = admissible_interval(pb.I_ref0, pb.unknowns[0])
+        if not lo <= p_hat[0] <= hi:
+            p_hat = np.array([min(max(float(p_hat[0]), lo), hi)])
+            rungs["nonlinear"]["p"] = p_hat
+            edge = True
+            if not roots[0].edge:
+                warnings.append("the nonlinear estimate lies on the edge of the physical set (triangle inequality "
+                                "I1 + I2 = I3, a thin flat body)")
     # -- the budget -------------------------------------------------------
-    budget, degenerate, T_lin_hat, bctx = _budget(pb, p_hat, r_hat, method, rungs, best, unc_all)
-    std_lin = budget.std
-    amp_default = amplitude_systematic(pb, p_hat, r_hat, bctx, rtol)
-    budget, failed = second_order(pb, p_hat, r_hat, bctx, budget)
-    degenerate = [d for d in dict.fromkeys(degenerate + failed) if bctx.sigmas.get(d, 0) > 0]
+    budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(pb, p_hat, r_hat, method, rungs, best,
+                                                                            unc_all, rtol)
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
         worst = ", ".join(f"{n} {100 * D[i] / p_hat[i]:+.2g} % ({D[i] / budget.std[i]:+.2g} std)"
@@ -311,10 +375,11 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                 if extra in rg:
                     row[extra] = rg[extra]
         ladder_rows.append(row)
+    fit = _fit_check(pb, p_hat, r_hat, method, edge=edge)
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))
-            if not triangle_ok(I):
+            if not admissible(I, rel=2 * TRIANGLE_SLACK):
                 warnings.append(f"with {n} = {p_hat[i]:.6g} and the other components at their prior the tensor "
                                 "violates the triangle inequality (no real body has it): check the config's "
                                 "inertia or solve for more components")
@@ -338,6 +403,27 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         if n in _IDX:  # no inertia outside the positive-definite interval (others at the estimate)
             lo, hi = physical_interval(I_hat, n)
             res.interval[i] = np.clip(res.interval[i], lo, hi)
+    res.fit = fit
+    res.roots = [_root_entry(pb, p_hat, r_hat, budget, roots[0].edge, fit)]
+    for r, pb_r in zip(roots[1:], root_pbs[1:]):
+        res.roots.append(_other_root(pb_r, r, method, unc_all, rtol))
+    if len(roots) > 1:
+        res.ambiguous = True
+        sig_t = float(min(m.std for m in pb.measurements))
+        res.separation = separating_measurement(root_pbs, roots, sig_t)
+        vals = "; ".join(", ".join(f"{n} = {e['value']:.6g}" for n, e in {**r["inertia"], **r.get("com", {})}.items())
+                         for r in res.roots)
+        msg = (f"{len(roots)} physical tensors reproduce the measured period(s) ({vals}); the first is shown above, "
+               "but the data cannot tell them apart")
+        sep = res.separation
+        if sep is not None and sep["separation"] >= 3:
+            ps = ", ".join(f"{t:.6g} s" for t in sep["periods"])
+            msg += (f": time mode '{sep['mode']}' (hanging '{sep['hanging']}') as well, predicted {ps} at these "
+                    f"roots ({sep['separation']:.3g} timing sigma apart)")
+        else:
+            best_sep = f" (the best, '{sep['mode']}', by {sep['separation']:.2g} timing sigma)" if sep else ""
+            msg += f": no mode of the hangings used separates them{best_sep}; hang the body another way and time a mode there"
+        warnings.append(msg)
     n_mc = ms.monte_carlo if monte_carlo is None else monte_carlo
     if n_mc:
         if journal is not None:
@@ -353,6 +439,112 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                             "the model is not linear over the input uncertainties; quote the Monte Carlo interval")
     res.runtime = time.perf_counter() - t0
     return res
+
+
+def _with_start_guesses(ms: MeasurementSet, solve_for) -> tuple[MeasurementSet, list]:
+    """``ms`` with a physical starting tensor (:func:`start_guesses`) when the
+    config marks components unknown (null) or a component being solved for
+    makes the prior tensor unphysical; the nulls are solved for."""
+    from dataclasses import replace
+
+    from ..config import null_components
+
+    h0 = ms.hangings[0]
+    nulls = null_components(h0.scene)
+    unknowns = list(solve_for or [])
+    if nulls:
+        missing = [n for n in nulls if unknowns and n not in unknowns]
+        if missing:
+            raise InputError("--solve-for", f"{', '.join(missing)} is unknown in the config (null): solve for it too "
+                                            f"(--solve-for {missing[0]}) or give its value")
+        if not unknowns:
+            unknowns = list(nulls)
+            ms = replace(ms, solve_for=unknowns)
+    R0 = np.asarray(h0.rotation)
+    I_ref = R0.T @ h0.scene.inertia @ R0
+    if not unknowns or (not nulls and admissible(I_ref)):
+        return ms, []
+    given = {n: (None if n in nulls else float(I_ref[_IDX[n]])) for n in unknowns if n in _IDX}
+    I_start, notes = start_guesses(I_ref, unknowns, given)
+    hangs = [replace(h, scene=replace(h.scene, inertia=np.asarray(h.rotation) @ I_start @ np.asarray(h.rotation).T))
+             for h in ms.hangings]
+    return replace(ms, hangings=hangs), notes
+
+
+def _residuals(pb: Problem, p, r) -> tuple[np.ndarray, np.ndarray]:
+    """(model periods, normalised residuals) at ``p`` with amplitude factors
+    ``r``; the model period of each measurement is that of the mode carrying
+    its label at ``p``."""
+    T = labelled_periods(pb, p) * np.asarray(r, float)
+    return T, (T - np.array([m.period for m in pb.measurements])) / np.array([m.std for m in pb.measurements])
+
+
+def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
+    """The estimate must reproduce every measurement (roots.py: the fit
+    check).  Raises ConvergenceError when it does not; a forced lower rung
+    (small-angle, thesis) is a different model, so its fit is reported,
+    not enforced.  ``edge``: an answer on the edge of the physical set,
+    accepted within ``EDGE_Z`` sigma."""
+    T, z = _residuals(pb, p, r)
+    ok, chi2, test = fit_statistics(z, len(pb.unknowns))
+    if edge and len(z) <= len(pb.unknowns):
+        ok, test = bool(np.all(np.abs(z) <= EDGE_Z)), f"|residual| <= {EDGE_Z:g} sigma (on the edge of the physical set)"
+    out = {"passed": bool(ok), "chi2": chi2, "dof": max(len(z) - len(pb.unknowns), 0), "test": test,
+           "max_abs_normalised_residual": float(np.max(np.abs(z)))}
+    if not ok and method in ("linear", "nonlinear"):
+        zs = ", ".join(f"{m.label} {zk:+.3g}" for m, zk in zip(pb.measurements, z))
+        raise ConvergenceError(f"the {method} estimate does not reproduce the measurements (normalised residuals "
+                               f"{zs} sigma; required {test}): no answer is given")
+    return out
+
+
+def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float):
+    """The budget every answer (the chosen root and any further one) gets:
+    the linear budget (:func:`~bifilar.estimation.budget._budget`), the
+    systematic term of an unstated amplitude, and second-order propagation
+    where the linear one is wrong (:func:`~bifilar.estimation.budget.second_order`).
+    Returns (budget, linear std, degenerate inputs, T_lin at ``p`` (s),
+    budget context, {mode: (assumed max amplitude, its period factor)})."""
+    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc)
+    std_lin = budget.std
+    amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
+    budget, failed = second_order(pb, p, r, bctx, budget)
+    degenerate = [d for d in dict.fromkeys(degenerate + failed) if bctx.sigmas.get(d, 0) > 0]
+    return budget, std_lin, degenerate, T_lin, bctx, amp_default
+
+
+def _root_entry(pb: Problem, p, r, budget, edge: bool, fit: dict) -> dict:
+    T, z = _residuals(pb, p, r)
+    inertia, com = {}, {}
+    for i, n in enumerate(pb.unknowns):
+        d = {"value": float(p[i]), "std": float(budget.std[i])}
+        if n in _IDX:
+            inertia[n] = {**d, "unit": "kg m^2"}
+        else:
+            com[n.split(".")[1]] = {**d, "unit": "m"}
+    out = {"inertia": inertia, "residuals": [{"mode": m.label, "hanging": pb.models[m.hanging].hanging.name,
+                                              "measured": m.period, "model": float(t),
+                                              "normalised_residual": float(zk)}
+                                             for m, t, zk in zip(pb.measurements, T, z)],
+           "chi2": fit["chi2"], "edge": bool(edge)}
+    if com:
+        out["com"] = com
+    return out
+
+
+def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
+    """Value, linear-budget std and fit of a further root (the chosen
+    method when it is linear or nonlinear, else the linear one)."""
+    K = len(pb.measurements)
+    p, r = np.asarray(root.p, float), np.ones(K)
+    if method == "nonlinear":
+        est = solve_nonlinear(pb, p, rtol=rtol)
+        p, r = est.p, est.r
+    m = method if method in ("linear", "nonlinear") else "linear"
+    budget = full_budget(pb, p, r, m, {m: {"p": p, "r": r}}, m, unc, rtol)[0]
+    T, z = _residuals(pb, p, r)
+    ok, chi2, test = fit_statistics(z, len(pb.unknowns))
+    return _root_entry(pb, p, r, budget, root.edge, {"chi2": chi2})
 
 
 def plot_inversion(res: InversionResult, path, span: float | None = None) -> None:

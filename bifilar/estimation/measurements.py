@@ -548,13 +548,15 @@ _MEAS = {"mode", "period", "std", "cycles", "times", "time_std", "signal", "colu
          "scale", "model", "t_start", "t_stop", "trim", "amplitude", "amplitude_std", "note"}
 
 
-def load_measurements(path, config_override: str | None = None) -> MeasurementSet:
+def load_measurements(path, config_override: str | None = None, unknown: tuple = ()) -> MeasurementSet:
     """Read and validate a measurements file (module docstring); every
     problem is reported at once (:class:`~bifilar.errors.ConfigErrors`),
     fields named by their dotted path in the file.
 
     ``config_override``: a config path given on the command line, used when
-    the file names none (a single-hanging file)."""
+    the file names none (a single-hanging file).  ``unknown``: components
+    solved for (from the command line; the file's ``solve_for`` adds to
+    them), whose config values are starting guesses only."""
     from ..config import read_yaml
 
     p = Path(path)
@@ -627,7 +629,7 @@ def load_measurements(path, config_override: str | None = None) -> MeasurementSe
                 if k not in _HANG:
                     errs.append(InputError(f"{fh}.{k}", f"unknown key; expected one of {', '.join(sorted(_HANG))}"))
             _hanging(ms, h.get("config"), h.get("rotation"), h.get("name") or f"hanging {i + 1}",
-                     h.get("measurements"), fh, base, errs, unc)
+                     h.get("measurements"), fh, base, errs, unc, unknown=tuple(unknown) + tuple(ms.solve_for or ()))
     else:
         cfg = doc.get("config")
         if cfg is None:
@@ -638,24 +640,25 @@ def load_measurements(path, config_override: str | None = None) -> MeasurementSe
             errs.append(InputError("config", "the file names a config and so does the command line; give one"))
         if cfg is not None:
             _hanging(ms, cfg, None, doc.get("name") or "reference", doc.get("measurements", []), "", base, errs, unc,
-                     cli_config=config_override is not None and doc.get("config") is None)
+                     cli_config=config_override is not None and doc.get("config") is None,
+                     unknown=tuple(unknown) + tuple(ms.solve_for or ()))
     if errs:
         raise ConfigErrors(errs)
     return ms
 
 
 def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs: list, unc: dict,
-             cli_config: bool = False) -> None:
+             cli_config: bool = False, unknown: tuple = ()) -> None:
     from ..config import load_scene, scene_from_dict
 
     pre = f"{fh}." if fh else ""
     scene = None
     try:
         if isinstance(cfg, dict):
-            scene = scene_from_dict(cfg, source=f"{ms.source}:{pre}config")
+            scene = scene_from_dict(cfg, source=f"{ms.source}:{pre}config", unknown=unknown)
         elif isinstance(cfg, str):
             cp = Path(cfg) if (cli_config or Path(cfg).is_absolute()) else base / cfg
-            scene = load_scene(cp)
+            scene = load_scene(cp, unknown=unknown)
         else:
             errs.append(InputError(f"{pre}config", "must be a config file path or an inline config mapping"))
     except ConfigErrors as exc:

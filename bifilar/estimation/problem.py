@@ -51,6 +51,70 @@ def triangle_ok(I: np.ndarray, rel: float = 1e-6) -> bool:
     return bool(ev[0] > 0 and ev[0] + ev[1] >= ev[2] * (1 - rel))
 
 
+#: relative slack of the triangle inequality in the admissible set (rounding
+#: of a thin plate's moments, which sit exactly on the limit I1 + I2 = I3)
+TRIANGLE_SLACK = 1e-6
+
+
+def _psd_interval(A: np.ndarray, B: np.ndarray) -> tuple[float, float]:
+    """The closed interval of ``t`` for which ``A + t B`` (symmetric 3x3) is
+    positive semi-definite (empty: ``lo > hi``).  Its ends are roots of
+    ``det(A + t B) = 0`` (generalised eigenvalues of the pencil); the set is
+    an interval because the smallest eigenvalue is concave in ``t``."""
+    from scipy.linalg import eigvals
+
+    with np.errstate(all="ignore"):
+        ev = eigvals(A, -B)
+    sc = max(float(np.max(np.abs(A))), float(np.max(np.abs(B))), 1e-300)
+    cand = sorted({float(e.real) for e in ev if np.isfinite(e) and abs(e.imag) <= 1e-9 * max(1.0, abs(e.real))})
+
+    def ok(t: float) -> bool:
+        return bool(np.linalg.eigvalsh(A + t * B)[0] >= -1e-12 * sc * max(1.0, abs(t)))
+
+    if not cand:
+        return (-math.inf, math.inf) if ok(0.0) else (math.inf, -math.inf)
+    probes = [cand[0] - max(1.0, abs(cand[0]))] + [0.5 * (a + b) for a, b in zip(cand, cand[1:])] \
+        + [cand[-1] + max(1.0, abs(cand[-1]))]
+    good = [i for i, t in enumerate(probes) if ok(t)]
+    if not good:
+        pts = [c for c in cand if ok(c)]
+        return (pts[0], pts[-1]) if pts else (math.inf, -math.inf)
+    lo = -math.inf if good[0] == 0 else cand[good[0] - 1]
+    hi = math.inf if good[-1] == len(cand) else cand[good[-1]]
+    return lo, hi
+
+
+def admissible_interval(I: np.ndarray, name: str, rel: float = TRIANGLE_SLACK) -> tuple[float, float]:
+    """Values of inertia component ``name`` (kg m^2; the other components
+    fixed at ``I``, whose own value of ``name`` is ignored) for which the
+    tensor is physical: positive definite and its principal moments obey the
+    triangle inequality ``I1 + I2 >= I3`` (with relative slack ``rel``).
+
+    The triangle inequality is ``lambda_max <= tr/2``, i.e. ``(1 + rel) tr/2
+    Id - I`` positive semi-definite, and with one component free both that
+    matrix and ``I`` are affine in it: each set is an interval whose ends
+    are roots of a 3x3 determinant.  Returns ``(lo, hi)``; ``lo > hi`` when
+    no value is physical.  The positive-definite ends are open (a singular
+    tensor), the triangle ends closed; for a diagonal component the interval
+    is bounded by the triangle inequality, for a product by definiteness."""
+    i, j = _IDX[name]
+    I0 = np.array(I, float)
+    I0[i, j] = I0[j, i] = 0.0
+    E = basis(name)
+    lo1, hi1 = _psd_interval(I0, E)
+    c = 0.5 * (1.0 + rel)
+    J0 = c * np.trace(I0) * np.eye(3) - I0
+    D = (c * np.trace(E)) * np.eye(3) - E
+    lo2, hi2 = _psd_interval(J0, D)
+    return max(lo1, lo2), min(hi1, hi2)
+
+
+def admissible(I: np.ndarray, rel: float = TRIANGLE_SLACK) -> bool:
+    """Positive definite with principal moments obeying the triangle inequality."""
+    ev = np.linalg.eigvalsh(0.5 * (I + I.T))
+    return bool(ev[0] > 0 and ev[0] + ev[1] >= ev[2] * (1 - rel))
+
+
 class HangingModel:
     """Linear periods of one hanging's modes as functions of the unknowns.
 
@@ -60,12 +124,13 @@ class HangingModel:
     are tracked by MAC against the modes at the prior.
     """
 
-    def __init__(self, hanging, I_ref0: np.ndarray, like: "HangingModel | None" = None):
+    def __init__(self, hanging, I_ref0: np.ndarray, like: "HangingModel | None" = None, rest=None):
         self.hanging = hanging
         self.R = np.asarray(hanging.rotation, float)
         self.I_ref0 = np.asarray(I_ref0, float)
         self.scene0 = replace(hanging.scene, inertia=self.R @ self.I_ref0 @ self.R.T)
-        self.rest0 = rest_pose(self.scene0, guess=like.rest0 if like is not None else None)
+        # ``rest``: the rest pose of this geometry (it does not depend on the inertia)
+        self.rest0 = rest if rest is not None else rest_pose(self.scene0, guess=like.rest0 if like is not None else None)
         self.modes0 = linear_modes(self.scene0, self.rest0)
         # for a perturbed copy, base-mode k of ``like`` is mode map_like[k] here
         self.map_like = mac_match(like.modes0, self.modes0) if like is not None else None
@@ -171,13 +236,15 @@ class Problem:
 
 
 def build_problem(ms: MeasurementSet, solve_for: list | None = None, unc: dict | None = None,
-                  like: Problem | None = None) -> Problem:
+                  like: Problem | None = None, rests: list | None = None) -> Problem:
     """Hanging models at the prior, mode indices and the unknowns (picked
     per measurement as the component its period is most sensitive to,
-    relatively, when ``solve_for`` is empty)."""
+    relatively, when ``solve_for`` is empty).  ``rests``: the hangings'
+    rest poses when known (the same geometry with another inertia)."""
     h0 = ms.hangings[0]
     I_ref0 = h0.rotation.T @ h0.scene.inertia @ h0.rotation
-    models = [HangingModel(h, I_ref0, like=like.models[i] if like is not None else None)
+    models = [HangingModel(h, I_ref0, like=like.models[i] if like is not None else None,
+                           rest=rests[i] if rests is not None else None)
               for i, h in enumerate(ms.hangings)]
     idx = []
     for k, m in enumerate(ms.measurements):
@@ -229,3 +296,58 @@ def best_component(pb: Problem, k: int) -> str:
         m = pb.measurements[k]
         raise InputError(m.field, f"mode '{m.label}' does not depend on the inertia; time a rotational mode")
     return best
+
+
+def start_guesses(I_ref: np.ndarray, unknowns: list, given: dict | None = None) -> tuple[np.ndarray, list]:
+    """A physical starting tensor for the solver (reference body axes,
+    kg m^2) and notes saying what was assumed.
+
+    The config's values of the components being solved for are guesses:
+    ``given`` maps each unknown inertia component to its config value, or
+    to None when the config marks it unknown (``null``).  While the tensor
+    with these values is not physical (positive definite, triangle
+    inequality), each unknown component in turn is set to the midpoint of
+    its admissible interval (:func:`admissible_interval`, the others as
+    they stand), nulls first; a null is set so in any case."""
+    I = np.array(I_ref, float)
+    given = dict(given or {})
+    comps = [n for n in unknowns if n in _IDX]
+    notes = []
+    nulls = [n for n in comps if n in given and given[n] is None]
+    order = nulls + [n for n in comps if n not in nulls]
+    for n in order:
+        if n not in nulls and admissible(I):
+            break
+        lo, hi = admissible_interval(I, n)
+        if not lo <= hi:
+            continue
+        x = 0.5 * (lo + hi)
+        old = I[_IDX[n]]
+        I[_IDX[n]] = I[_IDX[n][::-1]] = x
+        if n in nulls:
+            notes.append(f"{n} is unknown in the config (null): the solver starts from {x:.6g} kg m^2, the middle of "
+                         f"its physical range {lo:.6g} .. {hi:.6g} kg m^2 with the other components as given")
+        else:
+            notes.append(f"the config's {n} = {old:.6g} kg m^2 (a starting guess) makes the tensor unphysical: the "
+                         f"solver starts from {x:.6g} kg m^2, the middle of its physical range")
+    return I, notes
+
+
+def problem_at(ms: MeasurementSet, pb: Problem, p, unc: dict | None = None) -> Problem:
+    """``pb`` rebuilt around the solution ``p``: every hanging's scene carries
+    the estimated tensor, the unknowns' reference values are the estimate
+    and the measured modes are the ones carrying the measured labels there
+    (so finite differences, the budget and Monte Carlo draws follow the
+    mode the experimenter saw at the solution)."""
+    from .roots import relabel
+
+    I_hat = pb.models[0].inertia_ref(pb.values(p))
+    hangs = [replace(h, scene=replace(h.scene, inertia=np.asarray(h.rotation) @ I_hat @ np.asarray(h.rotation).T))
+             for h in ms.hangings]
+    ms2 = replace(ms, hangings=hangs)
+    pb2 = build_problem(ms2, list(pb.unknowns), unc if unc is not None else pb.unc,
+                        rests=[hm.rest0 for hm in pb.models])
+    pb2.unc = pb.unc
+    if any(n not in _IDX for n in pb.unknowns):
+        relabel(pb2, p)
+    return pb2
