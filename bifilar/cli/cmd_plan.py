@@ -5,20 +5,24 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import _ABBR, _pct, common_options, resolve_all
-from .common import console, emit_json, handle_errors, progress_bar
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, render_identifiability, render_rig, resolve_all,
+                        write_point_config)
+from .common import check_output_path, console, emit_json, handle_errors, progress_bar
 
 
 @click.command("plan")
 @click.argument("config", type=click.Path(dir_okay=False))
 @click.option("--param", "params", multiple=True, required=True, metavar="NAME=LO:HI",
-              help="Parameter to search within bounds (repeatable): a dotted config path or a shorthand "
-                   "(spacing, ceiling_spacing, length, length_offset, height, amplitude, rotate_*).")
+              help="Parameter to search within bounds (repeatable). " + SHORTHAND_HELP)
+@click.option("--zip", "zip_", is_flag=True,
+              help="Move the parameters together, each the same fraction of its range (e.g. spacing and "
+                   "ceiling_spacing over one range keep the wires parallel).")
 @common_options
 @click.option("--workers", type=int, default=1, show_default=True, help="Processes for the coarse grid.")
+@click.option("--force", is_flag=True, help="Replace an existing --write-config file.")
 @handle_errors
-def plan(config, params, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-         min_separation, no_tensions, sim_periods, as_json, workers):
+def plan(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
+         min_separation, no_tensions, sim_periods, write_config, as_json, workers, force):
     """Search the parameters of CONFIG for the configuration that minimises
     the predicted uncertainty of the target inertia subject to the
     constraints; report the expected accuracy of each component.  Exit 2,
@@ -35,21 +39,34 @@ def plan(config, params, components, target, amplitude, sigmas, max_tension, max
         raise InputError("config", "must be a YAML mapping with keys body and rig")
     scene_from_dict(cfg, config)  # the base config must be valid itself (ConfigErrors: exit 2, every problem)
     bounds = [parse_bounds(p) for p in params]
-    for n, _, _ in bounds:
-        check_param(cfg, n)
+    for n, lo, hi in bounds:
+        check_param(cfg, n, (lo, hi))
+    if zip_ and len(bounds) < 2:
+        raise InputError("--zip", "needs two parameters or more to move together")
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
-                                         lengths_available, min_separation, no_tensions, sim_periods)
+                                         lengths_available, min_separation, no_tensions, sim_periods,
+                                         [b[0] for b in bounds], config)
+    wc_p = check_output_path(write_config, force, [config], "--write-config")
     with progress_bar("planning", enabled=True) as upd:
-        res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd)
+        res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
+    doc = res.to_json()
+    doc["settings"] = settings.describe()
+    ident = doc["identifiability"]
+    need = [c for c, e in ident.items() if not e["identifiable"]]
+    if need:
+        from ..studies.remedy import add_remedies
+
+        add_remedies({"identifiability": ident}, cfg, config, res.best["params"], settings, need)
+    if wc_p:
+        write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
+        doc["config_written"] = str(wc_p)
     if as_json:
-        doc = res.to_json()
-        doc["settings"] = settings.describe()
         emit_json(doc)
         return
-    _render(cfg, res, settings)
+    _render(cfg, res, settings, doc)
 
 
-def _render(cfg, res, settings) -> None:
+def _render(cfg, res, settings, doc) -> None:
     from rich.table import Table
 
     con = console()
@@ -71,6 +88,11 @@ def _render(cfg, res, settings) -> None:
             t.add_row(c, f"{e['value']:.6g}", f"{e['sigma']:.3g}", _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
                       f"{e['period']:.6g}")
     con.print(t)
+    con.print("identifiability:")
+    render_identifiability(con, doc["identifiability"])
+    render_rig(con, b["rig"])
+    if doc.get("config_written"):
+        con.print(f"config written to {doc['config_written']} (check: bifilar modes {doc['config_written']})")
     tn = b["tension"]
     if tn.get("peak") is not None:
         con.print(f"wire tension: rest {', '.join(f'{x:.4g}' for x in tn['rest'])} N, peak {tn['peak']:.4g} N, "

@@ -238,6 +238,72 @@ def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: Sw
                           rests=[rest] * n, modes=[ms] * n)
 
 
+def point_uncertainty(st: SweepSettings, params: dict) -> dict:
+    """Input uncertainties of a point: the settings' (defaults < config
+    ``uncertainty:`` block < ``--sigma``), with any swept ``uncertainty.KEY``
+    parameter of the point taking its value (units as
+    :data:`~bifilar.estimation.sensitivity.DEFAULT_UNCERTAINTY`)."""
+    unc = st.unc
+    for name, v in params.items():
+        if name.startswith("uncertainty."):
+            unc[name.split(".", 1)[1]] = float(v)
+    return unc
+
+
+def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
+    """The predicted uncertainty of ``comp`` estimated from mode ``k``: the
+    one place the sweep, the plan and the remedies compute it (a
+    :class:`~bifilar.estimation.sensitivity.Budget`; ``value_sigma`` kg m^2).
+
+    Linear propagation of the period's timing sigma ``unc["timing"]`` (s)
+    and of every measured input's sigma.  ``column``: dT/dI (s per kg m^2)
+    of every mode, replacing ``sens``'s column of ``comp`` (a component of
+    the reference body frame seen from another hanging, see
+    :mod:`bifilar.studies.remedy`).
+    """
+    from dataclasses import replace
+
+    from ..estimation.sensitivity import inertia_budget
+
+    if column is not None:  # the same budget with comp's column replaced (the hanging's other inputs unchanged)
+        jac = np.array(sens.jacobian, float, copy=True)
+        jac[:, sens.names.index(comp)] = np.asarray(column, float)
+        sens = replace(sens, jacobian=jac)
+    return inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+
+
+def component_scale(inertia, comp: str) -> float:
+    """The scale a component's uncertainty is relative to (kg m^2): ``|I_ii|``
+    for a moment; ``sqrt(I_ii I_jj)`` for a product ``I_ij`` (which may be
+    zero, and whose size is bounded by that geometric mean)."""
+    i, j = _IDX[comp]
+    if i == j:
+        return abs(float(inertia[i, i]))
+    return float(np.sqrt(abs(inertia[i, i] * inertia[j, j])))
+
+
+def timed_separation(periods, timed) -> float:
+    """The mode-separation guard: the smallest relative gap
+    ``|T_k - T_j| / T_k`` between any timed mode ``k`` (indices ``timed``)
+    and any other mode ``j`` (periods in s; neutral modes, NaN, ignored).
+    Close periods beat and spoil the timing.  ``inf`` when nothing is
+    timed or there is no other mode."""
+    periods = np.asarray(periods, float)
+    gaps = [abs(periods[k] - periods[j]) / periods[k] for k in timed for j in range(len(periods))
+            if j != k and np.isfinite(periods[j]) and np.isfinite(periods[k])]
+    return float(min(gaps)) if gaps else math.inf
+
+
+def rig_of(scene, rest) -> dict:
+    """The rig to build (SI): anchors (world, m), attachments (body frame, CoM
+    origin, m), wire lengths (m), each wire's angle from the vertical at rest
+    (deg) and the attachment points' world positions at rest (m)."""
+    d = np.asarray(rest.wire_vectors, float)  # anchor -> attachment
+    ang = np.degrees(np.arccos(np.clip(-d[:, 2] / np.linalg.norm(d, axis=1), -1.0, 1.0)))
+    return {"anchors": scene.anchors, "attachments": scene.attachments, "lengths": scene.lengths,
+            "wire_angles_deg": ang, "attachments_world": rest.com + scene.attachments @ rest.R.T}
+
+
 def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSettings) -> dict:
     """All figures of one sweep point (see the module docstring); never raises
     for a bad point: ``valid: false`` and a one-line ``error`` instead."""
@@ -257,7 +323,7 @@ def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSet
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> dict:
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
-    from ..estimation.sensitivity import best_mode_for, grouped_shares, inertia_budget, measured_inputs
+    from ..estimation.sensitivity import best_mode_for, grouped_shares, measured_inputs
 
     cfg, amp_override = apply_params(base_cfg, params, source)
     amplitude = st.amplitude if amp_override is None else amp_override
@@ -265,7 +331,7 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         raise InputError("amplitude", f"must be positive, got {amplitude:g}")
     scene = scene_from_dict(cfg, source, warn=False)  # the base config's warnings were shown once
     rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
-    unc = st.unc
+    unc = point_uncertainty(st, params)
     names = list(st.components) + measured_inputs(scene)
     sens, notes = point_sensitivity(scene, names, rest0)
     ms, rest = sens.modes, sens.rest
@@ -277,16 +343,20 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         "lengths": scene.lengths,
         "periods": {m.label: m.period for m in ms.modes},
         "components": {},
+        "uncertainty": unc,
+        "rig": rig_of(scene, rest),
         "notes": notes,
         "warnings": [],
     }
     chosen: dict[str, int] = {}
     for comp in st.components:
         I = float(scene.inertia[_IDX[comp]])
+        scale = component_scale(scene.inertia, comp)
         col = sens.column(comp)
-        rel = np.abs(col) * abs(I) / np.where(np.isfinite(periods), periods, np.inf) if I != 0 else np.abs(col)
+        rel = np.abs(col) * scale / np.where(np.isfinite(periods), periods, np.inf)
         rel = np.where(np.isfinite(rel), rel, 0.0)
-        entry: dict = {"value": I, "identifiable": bool(rel.max() >= IDENTIFIABLE_MIN)}
+        entry: dict = {"value": I, "identifiable": bool(rel.max() >= IDENTIFIABLE_MIN),
+                       "from_modes": {labels[i]: float(rel[i]) for i in np.argsort(-rel) if rel[i] >= IDENTIFIABLE_MIN}}
         if not entry["identifiable"]:
             entry.update(mode=None, sigma=math.inf, rel_sigma=math.inf,
                          reason=f"no mode's period depends on {comp} (max |d ln T / d ln {comp}| = {rel.max():.1e})")
@@ -294,21 +364,21 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
             continue
         k = best_mode_for(sens, comp)
         chosen[comp] = k
-        b = inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+        b = predicted_budget(sens, scene, comp, k, unc)
         j_all = [j for j, n in enumerate(sens.names) if n not in _IDX]
         dI_dx = {sens.names[j]: -float(sens.jacobian[k, j] / col[k]) for j in j_all}
-        others = [periods[i] for i in range(len(periods)) if i != k and np.isfinite(periods[i])]
-        sep = float(min(abs(periods[k] - p) for p in others) / periods[k]) if others else math.inf
+        sep = timed_separation(periods, {k})
         axis = _IDX[comp][0] if comp in PRINCIPAL else None
         entry.update(
             mode=labels[k], period=float(periods[k]),
-            sigma=b.value_sigma, rel_sigma=b.value_sigma / abs(I) if I else math.inf,
+            sigma=b.value_sigma, rel_sigma=b.value_sigma / scale if scale else math.inf,
             rel_sensitivity_period=b.rel_sensitivity,
-            dlnI_dx={n: v / I for n, v in dI_dx.items()} if I else dI_dx,
+            dlnI_dx={n: v / scale for n, v in dI_dx.items()} if scale else dI_dx,
             shares=grouped_shares(b), separation=sep,
             axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
         )
         res["components"][comp] = entry
+    res["separation"] = timed_separation(periods, set(chosen.values()))
     # nonlinear runs: one per chosen mode
     sims: dict[int, Any] = {}
     if st.tensions:

@@ -2,7 +2,15 @@
 
 Operates on the point dicts of :func:`bifilar.studies.point.evaluate_point`;
 the objective is the predicted relative standard uncertainty (of the target
-component, or the worst of the components).
+component, or the worst of the *measurable* components: those identifiable
+at some valid point of the range; the others get a remedy, see
+:mod:`bifilar.studies.remedy`, instead of blocking every recommendation).
+
+The mode-separation guard is one figure per point, ``separation``: the
+smallest relative gap between any timed mode (the mode each measurable
+component is estimated from) and any other mode
+(:func:`bifilar.studies.point.timed_separation`); it is what the table,
+the text and the plot show and what ``min_separation`` limits.
 """
 
 from __future__ import annotations
@@ -14,21 +22,35 @@ from .settings import Constraints
 
 
 
-def objective(point: dict, target: str | None) -> float:
+def objective(point: dict, target: str | None, among=None) -> float:
     """Relative standard uncertainty the ranking minimises: of ``target``, or
-    the worst of the point's components (inf when not identifiable)."""
+    the worst of the components ``among`` (default: all of the point's);
+    inf when one of them is not identifiable or the point is invalid."""
     if not point.get("valid"):
         return math.inf
     comps = point["components"]
-    vals = [comps[target]["rel_sigma"]] if target else [c["rel_sigma"] for c in comps.values()]
+    sel = [target] if target else (list(among) if among is not None else list(comps))
+    vals = [comps[k]["rel_sigma"] for k in sel if k in comps]
     vals = [math.inf if v is None else v for v in vals]
     return float(max(vals)) if vals else math.inf
 
 
-def _target_modes(point: dict, target: str | None) -> list[dict]:
-    comps = point["components"]
-    sel = [comps[target]] if target else list(comps.values())
-    return [c for c in sel if c.get("identifiable")]
+def measurable_components(points: list[dict]) -> list[str]:
+    """Components identifiable at one valid point at least (config order)."""
+    out = []
+    for c in _components(points):
+        if any(p.get("valid") and p["components"][c].get("identifiable") for p in points):
+            out.append(c)
+    return out
+
+
+def point_separation(point: dict) -> float | None:
+    """The point's mode-separation guard (see the module docstring)."""
+    sep = point.get("separation")
+    if sep is None:  # a point from before the guard had its own field
+        seps = [e["separation"] for e in point["components"].values() if e.get("separation") is not None]
+        sep = min(seps) if seps else None
+    return sep
 
 
 def violations(point: dict, c: Constraints, target: str | None = None) -> list[tuple[str, str]]:
@@ -56,9 +78,9 @@ def violations(point: dict, c: Constraints, target: str | None = None) -> list[t
             out.append(("lengths_available", f"wire lengths {', '.join(f'{x:g}' for x in L)} m not all in "
                                              f"{', '.join(f'{a:g}' for a in c.lengths_available)}"))
     if c.min_separation is not None:
-        seps = [e["separation"] for e in _target_modes(point, target) if e.get("separation") is not None]
-        if seps and min(seps) < c.min_separation:
-            out.append(("min_separation", f"mode separation {100 * min(seps):.3g} % < {100 * c.min_separation:g} %"))
+        sep = point_separation(point)
+        if sep is not None and sep < c.min_separation:
+            out.append(("min_separation", f"mode separation {100 * sep:.3g} % < {100 * c.min_separation:g} %"))
     return out
 
 
@@ -67,16 +89,17 @@ CONSTRAINT_FLAGS = {"max_tension": "--max-tension", "max_depth": "--max-depth",
                     "slack": "--amplitude", "valid": "--param"}
 
 
-def binding_constraint(points: list[dict], c: Constraints, target: str | None) -> tuple[str, str]:
+def binding_constraint(points: list[dict], c: Constraints, target: str | None, among=None) -> tuple[str, str]:
     """Which limit leaves no point feasible: (flag name, message)."""
     valid = [p for p in points if p.get("valid")]
     if not valid:
         reasons = sorted({p.get("error") or "?" for p in points})
         return "--param", "no valid configuration in the range: " + "; ".join(reasons[:3])
-    finite = [p for p in valid if math.isfinite(objective(p, target))]
+    finite = [p for p in valid if math.isfinite(objective(p, target, among))]
     if not finite:
-        what = target or "every component"
-        return "--target", f"{what} is not identifiable from any mode anywhere in the range"
+        what = target or "no component"
+        verb = "is not" if target else "is"
+        return "--target", f"{what} {verb} identifiable from any mode anywhere in the range"
     viol = [dict(violations(p, c, target)) for p in finite]
     names = [n for n in ("slack", "max_tension", "max_depth", "lengths_available", "min_separation")
              if any(n in v for v in viol)]
@@ -91,7 +114,7 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None) -
         lo = min(p["depth"]["max"] for p in finite if p["depth"].get("max") is not None)
         msg = f"no configuration meets --max-depth {c.max_depth:g} m: the smallest depth found is {lo:.4g} m"
     elif best == "min_separation":
-        hi = max(min(e["separation"] for e in _target_modes(p, target)) for p in finite)
+        hi = max(point_separation(p) for p in finite)
         msg = (f"no configuration meets --min-separation {c.min_separation:g}: the best mode separation "
                f"found is {hi:.3g}")
     elif best == "slack":
@@ -104,11 +127,11 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None) -
     return flag, msg
 
 
-def pareto_front(points: list[dict], target: str | None) -> list[int]:
+def pareto_front(points: list[dict], target: str | None, among=None) -> list[int]:
     """Indices of the valid points not dominated in (peak tension, objective),
-    sorted by increasing peak tension."""
-    cand = [(p["tension"]["peak"], objective(p, target), i) for i, p in enumerate(points)
-            if p.get("valid") and p["tension"].get("peak") is not None and math.isfinite(objective(p, target))]
+    sorted by increasing peak tension (empty without the nonlinear runs)."""
+    cand = [(p["tension"]["peak"], objective(p, target, among), i) for i, p in enumerate(points)
+            if p.get("valid") and p["tension"].get("peak") is not None and math.isfinite(objective(p, target, among))]
     cand.sort()
     front, best = [], math.inf
     for tp, ob, i in cand:
@@ -120,10 +143,17 @@ def pareto_front(points: list[dict], target: str | None) -> list[int]:
 
 def assess(points: list[dict], constraints: Constraints, target: str | None) -> dict:
     """Mark each point ``feasible`` / ``violations`` / ``objective`` / ``rank``
-    (in place) and return the recommendation document."""
+    (in place) and return the recommendation document.
+
+    Without a target the objective is the worst of the measurable components
+    (:func:`measurable_components`); ``identifiability`` says per component
+    whether it is measurable and from which modes at the recommended point
+    (``remedy`` entries are added by :func:`bifilar.studies.remedy.add_remedies`).
+    """
+    among = measurable_components(points)
     for p in points:
         v = violations(p, constraints, target)
-        p["objective"] = _plain(objective(p, target))
+        p["objective"] = _plain(objective(p, target, among))
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
@@ -131,19 +161,35 @@ def assess(points: list[dict], constraints: Constraints, target: str | None) -> 
                     key=lambda i: points[i]["objective"])
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
-    front = pareto_front(points, target)
-    doc: dict = {"target": target or "worst relative of " + ", ".join(_components(points)),
+    front = pareto_front(points, target, among)
+    comps = _components(points)
+    doc: dict = {"target": target or "worst relative of " + ", ".join(among or comps),
+                 "measurable": among, "not_measurable": [c for c in comps if c not in among],
                  "constraints": constraints.describe(), "pareto_front": front,
                  "n_valid": sum(bool(p.get("valid")) for p in points),
                  "n_feasible": sum(bool(p["feasible"]) for p in points)}
     if not ranked:
-        flag, msg = binding_constraint(points, constraints, target)
+        flag, msg = binding_constraint(points, constraints, target, among)
         doc.update(best=None, binding=flag, reason=msg)
-        return doc
-    i = ranked[0]
-    doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"], why=explain(points[i], constraints, target),
-               ranking=ranked[:10])
+    else:
+        i = ranked[0]
+        doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
+                   why=explain(points[i], constraints, target, among), ranking=ranked[:10],
+                   rig=points[i].get("rig"), separation=point_separation(points[i]))
+    ref = points[doc["best"]] if doc.get("best") is not None else None
+    doc["identifiability"] = {c: identifiability(c, ref, c in among) for c in comps}
     return doc
+
+
+def identifiability(comp: str, point: dict | None, measurable: bool) -> dict:
+    """Per component: measurable in the range, and at ``point`` (the
+    recommended one) the modes whose period depends on it (``|d ln T / d ln I|``)
+    and the mode it is estimated from."""
+    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None}
+    if point is not None and point.get("valid"):
+        e = point["components"].get(comp, {})
+        d.update(from_modes=e.get("from_modes", {}), mode=e.get("mode"), rel_sigma=e.get("rel_sigma"))
+    return d
 
 
 def _components(points: list[dict]) -> list[str]:
@@ -153,21 +199,22 @@ def _components(points: list[dict]) -> list[str]:
     return []
 
 
-def explain(p: dict, c: Constraints, target: str | None) -> list[str]:
+def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str]:
     """Plain-language reasons a point was recommended."""
     lines = []
     comps = p["components"]
-    sel = [target] if target else [k for k, e in comps.items()]
+    sel = [target] if target else list(among if among is not None else comps)
     worst = max(sel, key=lambda k: math.inf if comps[k]["rel_sigma"] is None else comps[k]["rel_sigma"])
     e = comps[worst]
-    lines.append(f"lowest predicted uncertainty of {'the target ' + target if target else 'the worst component'}: "
+    lines.append(f"lowest predicted uncertainty of {'the target ' + target if target else 'the worst measurable component'}: "
                  f"{worst} +- {100 * e['rel_sigma']:.3g} % (from the {e['mode']} mode)")
     if e.get("shares"):
         top = max(e["shares"], key=e["shares"].get)
         lines.append(f"its variance is {100 * e['shares'][top]:.0f} % {top}")
-    if e.get("separation") is not None:
-        lines.append(f"mode separation {100 * e['separation']:.3g} %"
-                     + (f" (>= {100 * c.min_separation:g} % required)" if c.min_separation is not None else ""))
+    sep = point_separation(p)
+    if sep is not None:
+        lines.append(f"mode separation {100 * sep:.3g} % (smallest gap between a timed mode and any other)"
+                     + (f", >= {100 * c.min_separation:g} % required" if c.min_separation is not None else ""))
     t = p["tension"]
     if t.get("peak") is not None:
         lines.append(f"peak wire tension {t['peak']:.4g} N" + (f" (<= {c.max_tension:g} N)" if c.max_tension else ""))

@@ -22,6 +22,10 @@ from .shorthands import ParamSpec
 
 _IDX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
 PRINCIPAL = ("Ixx", "Iyy", "Izz")
+#: the default mode-separation guard (relative): over ~12 timed cycles two modes
+#: 2 % apart drift a quarter of a cycle apart, so a beating of the two is still
+#: visible as a slow change of the amplitude rather than a spoiled count
+DEFAULT_MIN_SEPARATION = 0.02
 PLAN_KEYS = {"target", "max_tension", "max_depth", "lengths_available", "min_separation", "amplitude", "components"}
 
 # --------------------------------------------------------------------------
@@ -36,8 +40,9 @@ class Constraints:
     max_depth : m, the lowest body point below the ceiling, swing included.
     lengths_available : m, the wire lengths one can cut/buy; every wire of a
         feasible point has one of them (to 1e-6 m).
-    min_separation : relative distance between a chosen mode's period and
-        the nearest other period (e.g. 0.05 = 5 %).
+    min_separation : the smallest allowed relative gap between any timed
+        mode's period and any other mode's (e.g. 0.05 = 5 %; see
+        :func:`bifilar.studies.point.timed_separation`).
     """
 
     max_tension: float | None = None
@@ -135,7 +140,9 @@ def plan_block(cfg: dict) -> dict:
 
 def resolve_constraints(cfg: dict, max_tension=None, max_depth=None, lengths_available=None,
                         min_separation=None) -> Constraints:
-    """Constraints from the ``plan:`` block, overridden by the given values (flags)."""
+    """Constraints from the ``plan:`` block, overridden by the given values
+    (flags); the mode-separation guard defaults to
+    :data:`DEFAULT_MIN_SEPARATION` (``0`` switches it off)."""
     block = plan_block(cfg)
 
     def pick(key, flag, **kw):
@@ -155,8 +162,12 @@ def resolve_constraints(cfg: dict, max_tension=None, max_depth=None, lengths_ava
         max_tension=pick("max_tension", max_tension, positive=True),
         max_depth=pick("max_depth", max_depth, positive=True),
         lengths_available=la,
-        min_separation=pick("min_separation", min_separation, nonneg=True),
+        min_separation=_default(pick("min_separation", min_separation, nonneg=True), DEFAULT_MIN_SEPARATION),
     )
+
+
+def _default(v, d):
+    return d if v is None else v
 
 
 def resolve_settings(cfg: dict, components=None, amplitude=None, sigma=None, tensions=True,
@@ -219,3 +230,36 @@ def build_grid(params: list[ParamSpec], zip_: bool = False) -> list[dict]:
     if total > 100_000:
         raise InputError("--param", f"the grid has {total} points; keep it below 100000")
     return [dict(zip(names, vals)) for vals in itertools.product(*[p.values for p in params])]
+
+
+def _touches(names, prefixes) -> bool:
+    return any(n == p or n.startswith(p + ".") or n.startswith(p) for n in names for p in prefixes)
+
+
+def unreachable(cfg: dict, source: str, names: list[str], c: Constraints) -> None:
+    """Refuse, before any work, a constraint no point of the search can meet
+    (:class:`InputError` naming the flag).
+
+    * ``max_tension`` below the static load ``m g / n`` (N): the vertical
+      components of the n tensions carry the weight at rest and, on
+      average, during the swing, so some wire carries at least that much at
+      every point; checked unless a parameter changes the mass or gravity;
+    * ``lengths_available`` that the config's wires do not use, when no
+      parameter changes a length.
+    """
+    from ..config import scene_from_dict
+
+    if c.max_tension is not None and not _touches(names, ("body", "gravity")):
+        sc = scene_from_dict(cfg, source, warn=False)
+        load = sc.mass * sc.gravity / sc.n_wires
+        if c.max_tension < load:
+            raise InputError("--max-tension", f"{c.max_tension:g} N is below the static load m g / n = "
+                                              f"{sc.mass:.6g} kg x {sc.gravity:g} m/s^2 / {sc.n_wires} wires = "
+                                              f"{load:.4g} N that some wire carries at every point")
+    if c.lengths_available is not None and not _touches(names, ("length", "rig.lengths")):
+        sc = scene_from_dict(cfg, source, warn=False)
+        off = [x for x in sc.lengths if min(abs(x - a) for a in c.lengths_available) > 1e-6]
+        if off:
+            raise InputError("--lengths-available", f"the wires are {', '.join(f'{x:g}' for x in sc.lengths)} m at "
+                                                    "every point (no length parameter) and not all available; sweep "
+                                                    "length or rig.lengths.I")

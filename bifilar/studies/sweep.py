@@ -16,13 +16,19 @@ the body axes of the point's scene):
   ``(dI/I)/(dT/T)`` and to every measured input ``d ln I / d x`` (1/unit of
   x), the predicted standard uncertainty ``sigma`` (kg m^2) and
   ``rel_sigma`` for the stated measurement errors
-  (:func:`~bifilar.estimation.sensitivity.inertia_budget`), the variance
-  shares by kind, the mode separation (relative distance from the chosen
-  mode's period to the nearest other period: close periods beat and ruin
-  the timing), and the relative bias of simple estimators against the full
+  (:func:`~bifilar.studies.point.predicted_budget`, for the point's
+  uncertainties: the settings', or a swept ``uncertainty.KEY``), the
+  variance shares by kind, the modes its period depends on
+  (``from_modes``: ``|d ln T / d ln I|`` per mode), the separation of its
+  mode (relative distance to the nearest other period), and the relative bias of simple estimators against the full
   model at the prescribed amplitude: the small-angle formula (thesis
   5.2.18), the thesis's linearisation (§7.1), and the exact linear model
   (the amplitude error of linear theory);
+* ``separation``: the mode-separation guard, the smallest relative gap
+  between any timed mode and any other mode (close periods beat and spoil
+  the timing);
+* ``rig``: the rig to build: anchors (world), attachments (body frame),
+  lengths, each wire's angle from the vertical at rest (deg);
 * ``tension``: rest tension per wire, and peak and minimum tension per wire
   during the prescribed excitation of each chosen mode (nonlinear model,
   the chosen modes of a point in one call of the batched engine
@@ -42,7 +48,9 @@ torsion about the vertical only); the exact linear model is inverted here
 A component that no mode's period depends on (``|d ln T / d ln I| < 1e-6``
 for every mode, e.g. the pitch inertia of a body on two vertical wires: its
 in-plane swing is a pure translation) is reported with ``identifiable:
-false`` and an infinite (``null``) uncertainty.
+false`` and an infinite (``null``) uncertainty; the ranking then uses the
+components that are measurable, and :mod:`bifilar.studies.remedy` names
+the cheapest change that makes the others measurable.
 
 Each point's figures depend only on the base config, the point's parameters
 and the evaluation settings (every rest pose is found afresh by the
@@ -69,15 +77,17 @@ from typing import Callable
 
 from ..errors import InputError
 from .point import (IDENTIFIABLE_MIN, TURN_MAX, _Ladder, _nonlinear_runs, _one_line, _plain,  # noqa: F401
-                    evaluate_point, linear_estimate, point_sensitivity)
-from .ranking import (CONSTRAINT_FLAGS, assess, binding_constraint, explain, objective,  # noqa: F401
-                      pareto_front, violations)
-from .settings import (_IDX, PLAN_KEYS, PRINCIPAL, Constraints, SweepSettings, build_grid,  # noqa: F401
+                    evaluate_point, linear_estimate, point_sensitivity, predicted_budget, rig_of,
+                    timed_separation)
+from .ranking import (CONSTRAINT_FLAGS, assess, binding_constraint, explain, measurable_components,  # noqa: F401
+                      objective, pareto_front, point_separation, violations)
+from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Constraints,  # noqa: F401
+                       SweepSettings, build_grid,
                        check_component, plan_block, resolve_constraints, resolve_settings, resolve_target,
                        resolve_uncertainty)
 from .sweep_output import csv_rows, plot_sweep, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 1
+JOURNAL_VERSION = 2  # 2: points carry rig, separation, uncertainty, from_modes
 
 
 # --------------------------------------------------------------------------

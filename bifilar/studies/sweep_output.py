@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .ranking import point_separation
 from .settings import Constraints
 from .shorthands import ParamSpec
 
@@ -119,11 +120,11 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
                 y = 100 * _series(points, lambda p, c=c, m=m: p["components"][c]["bias"][m])
                 if np.any(np.isfinite(y)):
                     ax[1].plot(x, y, ls, marker=".", label=f"{c} {m.replace('_', '-')}")
-            ax[2].semilogy(x, 100 * _series(points, lambda p, c=c: p["components"][c]["separation"]), "o-", ms=3, label=c)
         ax[0].set_ylabel("predicted rel. uncertainty [%]")
         ax[1].set_ylabel("estimator bias vs full model [%]")
         ax[1].axhline(0, color="k", lw=0.5)
-        ax[2].set_ylabel("mode separation [%]")
+        ax[2].semilogy(x, 100 * _series(points, point_separation), "ko-", ms=3, label="timed modes")
+        ax[2].set_ylabel("mode separation [%] (smallest gap, timed mode to any other)")
         if constraints.min_separation is not None:
             ax[2].axhline(100 * constraints.min_separation, color="r", lw=1, ls="--", label="minimum")
         rest_t = _series(points, lambda p: max(p["tension"]["rest"]))
@@ -156,8 +157,7 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
         X, Y = np.meshgrid(np.asarray(p1.values), np.asarray(p0.values))
         panels = [(np.log10(100 * obj), "log10 rel. uncertainty [%]" + (f" of {target}" if target else " (worst)")),
                   (peak, "peak wire tension [N]"), (dmax, "depth with swing [m]"),
-                  (100 * _series(points, lambda p: min(e["separation"] for e in p["components"].values()
-                                                       if e.get("separation") is not None)), "min mode separation [%]"),
+                  (100 * _series(points, point_separation), "mode separation [%]"),
                   (np.log10(100 * _series(points, lambda p: (p["components"].get(components[0]) or {}).get("rel_sigma"))),
                    f"log10 rel. uncertainty of {components[0]} [%]")]
         F = feas.reshape(nx, ny).astype(float)
@@ -208,6 +208,11 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
     a.grid(alpha=0.3, which="both")
     if ok.any():
         a.legend(fontsize=7)
+    else:
+        why = ("no nonlinear runs (--no-tensions): no peak tensions" if not np.isfinite(peak).any() else
+               "no point has a finite predicted uncertainty of " + (target or "the measurable components"))
+        a.text(0.5, 0.5, "trade-off front empty:\n" + why, ha="center", va="center", transform=a.transAxes,
+               fontsize=9, wrap=True)
     fig.suptitle(title)
     fig.tight_layout()
     from ..cli.common import atomic_write
