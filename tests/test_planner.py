@@ -157,3 +157,38 @@ def test_modes_prints_the_body_built_from_parts():
     np.testing.assert_allclose(np.linalg.eigvalsh(I), body["principal_moments"], rtol=1e-12)
     code, text, _ = run(["modes", str(SOLAR)])
     assert "CoM in the parts' build frame" in text and "principal moments" in text
+
+
+def test_sensor_timing_bound_matches_a_least_squares_fit_of_noisy_records():
+    # the Cramer-Rao bound of how_to_time's sensor model against the scatter of an independent
+    # least-squares sinusoid fit of simulated records (white noise, known sample rate)
+    from scipy.optimize import least_squares
+
+    from bifilar.studies.timing import sensor_sigma
+
+    T, noise, rate, N = 2.0, 0.05, 50.0, 4
+    t = np.arange(0, N * T, 1 / rate)
+    rng = np.random.default_rng(7)
+    est = []
+    for _ in range(300):
+        y = np.sin(2 * np.pi * t / T + 0.3) + noise * rng.standard_normal(t.size)
+        r = least_squares(lambda p: p[0] * np.sin(2 * np.pi * t / p[1] + p[2]) + p[3] - y, [1.0, T * 1.001, 0.3, 0.0],
+                          x_scale=[1, 1e-3, 1, 1], xtol=1e-14, ftol=1e-14, gtol=1e-14)
+        est.append(r.x[1])
+    # 300 draws: the sample std is within ~12 % (3 sigma) of the true one
+    assert np.std(est, ddof=1) == pytest.approx(sensor_sigma(T, noise, rate, N, 1), rel=0.15)
+
+
+def test_stopwatch_advice_reaches_the_target_with_the_fewest_trials_and_respects_the_separation():
+    from bifilar.studies.timing import BEAT_FRACTION, how_to_time, stopwatch_sigma
+
+    cfg = read_yaml(PLATE)
+    p = sw.evaluate_point(cfg, "t", {"spacing": 2.0}, sw.resolve_settings(cfg, tensions=False))
+    for target in (1e-3, 5e-3):
+        rows = how_to_time(p, target, reaction=0.1)
+        assert {r["mode"] for r in rows} == {p["components"][c]["mode"] for c in ("Ixx", "Izz")}
+        for r in rows:
+            N, n = r["cycles_per_trial"], r["stopwatch"]["trials"]
+            assert N * r["separation"] <= BEAT_FRACTION < (N + 1) * r["separation"] or N == 50
+            assert stopwatch_sigma(0.1, N, n) <= target * (1 + 1e-12)
+            assert n == 1 or stopwatch_sigma(0.1, N, n - 1) > target

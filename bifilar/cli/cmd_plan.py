@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, render_identifiability, render_rig, resolve_all,
-                        write_point_config)
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, render_identifiability, render_rig, render_timing,
+                        resolve_all, timing_advice, write_point_config)
 from .common import check_output_path, console, emit_json, handle_errors, progress_bar
 
 
@@ -22,7 +22,7 @@ from .common import check_output_path, console, emit_json, handle_errors, progre
 @click.option("--force", is_flag=True, help="Replace an existing --write-config file.")
 @handle_errors
 def plan(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-         min_separation, no_tensions, sim_periods, write_config, as_json, workers, force):
+         min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, workers, force):
     """Search the parameters of CONFIG for the configuration that minimises
     the predicted uncertainty of the target inertia subject to the
     constraints; report the expected accuracy of each component.  Exit 2,
@@ -41,6 +41,9 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     bounds = [parse_bounds(p) for p in params]
     for n, lo, hi in bounds:
         check_param(cfg, n, (lo, hi))
+    from ..studies.timing import check_reaction, parse_sensor
+
+    reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
     if zip_ and len(bounds) < 2:
         raise InputError("--zip", "needs two parameters or more to move together")
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
@@ -51,6 +54,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
         res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
     doc = res.to_json()
     doc["settings"] = settings.describe()
+    doc["how_to_time"] = timing_advice(res.best, reaction, sensor)
     ident = doc["identifiability"]
     need = [c for c, e in ident.items() if not e["identifiable"]]
     if need:
@@ -91,6 +95,7 @@ def _render(cfg, res, settings, doc) -> None:
     con.print("identifiability:")
     render_identifiability(con, doc["identifiability"])
     render_rig(con, b["rig"])
+    render_timing(con, doc["how_to_time"])
     if doc.get("config_written"):
         con.print(f"config written to {doc['config_written']} (check: bifilar modes {doc['config_written']})")
     tn = b["tension"]

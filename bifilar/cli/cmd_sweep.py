@@ -31,6 +31,12 @@ def common_options(fn):
         click.option("--write-config", "write_config", type=click.Path(dir_okay=False), default=None,
                      help="Write the recommended point as a config (anchors, attachments, lengths) that "
                           "`bifilar modes` accepts."),
+        click.option("--stopwatch", "reaction", type=float, default=0.1, show_default=True, metavar="SECONDS",
+                     help="Timing by hand: standard uncertainty of one trial's total time (start and stop) [s]; "
+                          "sets the cycles and trials recommended per timed mode."),
+        click.option("--sensor", default=None, metavar="NOISE,RATE",
+                     help="Timing from a recording: noise relative to the amplitude and sample rate [Hz]; adds "
+                          "the records needed per timed mode."),
         click.option("--json", "as_json", is_flag=True, help="Print one JSON document."),
     ]
     for o in reversed(opts):
@@ -127,6 +133,23 @@ def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> N
         add_remedies(rec, cfg, source, ref["params"], settings, need)
 
 
+def timing_advice(point: dict, reaction: float, sensor) -> list[dict]:
+    """How to time the point's modes to reach its assumed timing sigma
+    (:func:`bifilar.studies.timing.how_to_time`)."""
+    from ..studies.timing import how_to_time
+
+    return how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
+
+
+def render_timing(con, rows: list[dict]) -> None:
+    from ..studies.timing import describe
+
+    if rows:
+        con.print("how to time it (reaches the assumed timing uncertainty of each period):")
+        for r in rows:
+            con.print(f"  - {describe(r)}")
+
+
 def render_identifiability(con, ident: dict) -> None:
     """Per component: measurable, from which modes; else its remedy."""
     for c, e in ident.items():
@@ -168,7 +191,8 @@ def render_rig(con, rig: dict, title: str = "the rig to build") -> None:
 @click.option("--stop-after", type=int, default=None, hidden=True, help="Stop after N new points (tests: a stand-in for Ctrl-C).")
 @handle_errors
 def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-          min_separation, no_tensions, sim_periods, write_config, as_json, out, resume, plot, workers, force, stop_after):
+          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, out, resume, plot, workers,
+          force, stop_after):
     """Compare suspension configurations of CONFIG: predicted inertia
     uncertainty, estimator bias, mode separation, tensions and clearance per
     point; rank the feasible points and recommend one."""
@@ -178,6 +202,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, parse_param
+    from ..studies.timing import check_reaction, parse_sensor
 
     if workers < 1:
         raise InputError("--workers", f"must be at least 1, got {workers}")
@@ -191,6 +216,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     for s in specs:
         check_param(cfg, s.name, s.values)
     grid = sw.build_grid(specs, zip_)
+    reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
                                          lengths_available, min_separation, no_tensions, sim_periods,
                                          [s.name for s in specs], config)
@@ -215,6 +241,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     runtime = time.perf_counter() - t0
     rec = sw.assess(points, cons, target)
     remedies_for(rec, points, cfg, config, settings)
+    if rec.get("best") is not None:
+        rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
     names = [s.name for s in specs]
     if wc_p:
         if rec.get("best") is None:
@@ -323,6 +351,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
                         f"{e['period']:.5g}", _pct(bias.get("small_angle")), thesis, _pct(bias.get("linear")))
         con.print(acc)
         render_rig(con, b["rig"])
+        render_timing(con, rec.get("how_to_time") or [])
         if rec.get("config_written"):
             con.print(f"config of the recommended point written to {rec['config_written']}")
     front = rec.get("pareto_front") or []

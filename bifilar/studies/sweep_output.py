@@ -115,7 +115,8 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
         x = np.array([p["params"][params[0].name] for p in points], float)
         xl = f"{params[0].name} [{param_unit(params[0].name)}]"
         for c in components:
-            ax[0].semilogy(x, 100 * _series(points, lambda p, c=c: p["components"][c]["rel_sigma"]), "o-", ms=3, label=c)
+            y = 100 * _series(points, lambda p, c=c: p["components"][c]["rel_sigma"])
+            ax[0].semilogy(x, y, "o-", ms=3, label=c if np.isfinite(y).any() else f"{c}: not identifiable")
             for m, ls in (("small_angle", "--"), ("thesis", ":"), ("linear", "-")):
                 y = 100 * _series(points, lambda p, c=c, m=m: p["components"][c]["bias"][m])
                 if np.any(np.isfinite(y)):
@@ -124,7 +125,8 @@ def plot_sweep(path: Path, points: list[dict], params: list[ParamSpec], zip_: bo
         ax[1].set_ylabel("estimator bias vs full model [%]")
         ax[1].axhline(0, color="k", lw=0.5)
         ax[2].semilogy(x, 100 * _series(points, point_separation), "ko-", ms=3, label="timed modes")
-        ax[2].set_ylabel("mode separation [%] (smallest gap, timed mode to any other)")
+        ax[2].set_ylabel("mode separation [%]")
+        ax[2].set_title("smallest gap between a timed mode and any other", fontsize=9)
         if constraints.min_separation is not None:
             ax[2].axhline(100 * constraints.min_separation, color="r", lw=1, ls="--", label="minimum")
         rest_t = _series(points, lambda p: max(p["tension"]["rest"]))
