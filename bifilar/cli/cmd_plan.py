@@ -6,7 +6,7 @@ from __future__ import annotations
 import click
 
 from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, render_identifiability, render_rig, render_timing,
-                        resolve_all, timing_advice, write_point_config)
+                        resolve_all, timing_advice, write_point_config, write_yaml)
 from .common import check_output_path, console, emit_json, handle_errors, progress_bar
 
 
@@ -19,10 +19,18 @@ from .common import check_output_path, console, emit_json, handle_errors, progre
                    "ceiling_spacing over one range keep the wires parallel).")
 @common_options
 @click.option("--workers", type=int, default=1, show_default=True, help="Processes for the coarse grid.")
-@click.option("--force", is_flag=True, help="Replace an existing --write-config file.")
+@click.option("--hangings", "hangings", is_flag=True,
+              help="Plan several hangings (orientations of the body on the planned rig) and the modes to time in "
+                   "each, so that every --component is identified (automatic when one hanging cannot); predicts "
+                   "each component from the joint fit.")
+@click.option("--write-measurements", type=click.Path(dir_okay=False), default=None,
+              help="Write the multi-hanging plan as a measurements file for `bifilar invert --measurements` "
+                   "(planned periods: replace them with the measured ones).")
+@click.option("--force", is_flag=True, help="Replace existing --write-config / --write-measurements files.")
 @handle_errors
 def plan(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-         min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, workers, force):
+         min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, workers, hangings,
+         write_measurements, force):
     """Search the parameters of CONFIG for the configuration that minimises
     the predicted uncertainty of the target inertia subject to the
     constraints; report the expected accuracy of each component.  Exit 2,
@@ -50,6 +58,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
                                          lengths_available, min_separation, no_tensions, sim_periods,
                                          [b[0] for b in bounds], config)
     wc_p = check_output_path(write_config, force, [config], "--write-config")
+    wm_p = check_output_path(write_measurements, force, [config, write_config], "--write-measurements")
     with progress_bar("planning", enabled=True) as upd:
         res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
     doc = res.to_json()
@@ -64,6 +73,17 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     if wc_p:
         write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
         doc["config_written"] = str(wc_p)
+    if hangings or need or wm_p:
+        from ..studies.hangings import measurements_document, plan_hangings
+
+        hp = plan_hangings(cfg, config, res.best["params"], settings, list(settings.components), cons.min_separation)
+        doc["multi_hanging"] = hp.to_json()
+        if wm_p:
+            write_yaml(wm_p, measurements_document(hp), [f"measurements planned by bifilar plan for {config}",
+                                                         "the periods are the PLANNED ones (the config's inertia): "
+                                                         "replace them with the measured periods",
+                                                         f"then: bifilar invert --measurements {wm_p.name}"])
+            doc["measurements_written"] = str(wm_p)
     if as_json:
         emit_json(doc)
         return
@@ -96,6 +116,16 @@ def _render(cfg, res, settings, doc) -> None:
     render_identifiability(con, doc["identifiability"])
     render_rig(con, b["rig"])
     render_timing(con, doc["how_to_time"])
+    mh = doc.get("multi_hanging")
+    if mh:
+        from ..studies.hangings import describe_json
+
+        con.print("[bold]multi-hanging plan[/bold] (joint weighted least-squares fit of every timed period):")
+        for line in describe_json(mh):
+            con.print(f"  - {line}")
+        if doc.get("measurements_written"):
+            con.print(f"measurements file written to {doc['measurements_written']} "
+                      f"(bifilar invert --measurements {doc['measurements_written']})")
     if doc.get("config_written"):
         con.print(f"config written to {doc['config_written']} (check: bifilar modes {doc['config_written']})")
     tn = b["tension"]

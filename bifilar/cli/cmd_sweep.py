@@ -100,25 +100,30 @@ def point_config(base_cfg: dict, source: str, point: dict) -> dict:
     return cfg
 
 
-def write_point_config(path, base_cfg: dict, source: str, point: dict, what: str) -> None:
-    """Write a point's config (YAML, atomically) with its parameters and
-    planned periods in a header comment; `bifilar modes` reproduces them."""
+def write_yaml(path, doc: dict, comments: list[str]) -> None:
+    """Write ``doc`` as YAML (atomically) after ``#`` comment lines."""
     import yaml
 
     from ..jsonable import to_jsonable
     from .common import atomic_write
 
-    cfg = to_jsonable(point_config(base_cfg, source, point))
-    head = [f"# {what} of {source}", "# parameters: " + ", ".join(f"{k} = {v:.10g}" for k, v in point["params"].items()),
-            "# planned linear periods (s): " + ", ".join(f"{k} {v:.8g}" for k, v in point["periods"].items() if v),
-            "# check: bifilar modes THIS_FILE"]
-    text = "\n".join(head) + "\n" + yaml.safe_dump(cfg, sort_keys=False, default_flow_style=None, width=110)
+    text = "".join(f"# {c}\n" for c in comments) + yaml.safe_dump(to_jsonable(doc), sort_keys=False,
+                                                                   default_flow_style=None, width=110)
 
     def w(tmp: str) -> None:
         with open(tmp, "w", encoding="utf-8") as fh:
             fh.write(text)
 
     atomic_write(path, w)
+
+
+def write_point_config(path, base_cfg: dict, source: str, point: dict, what: str) -> None:
+    """Write a point's config (YAML, atomically) with its parameters and
+    planned periods in a header comment; `bifilar modes` reproduces them."""
+    write_yaml(path, point_config(base_cfg, source, point),
+               [f"{what} of {source}", "parameters: " + ", ".join(f"{k} = {v:.10g}" for k, v in point["params"].items()),
+                "planned linear periods (s): " + ", ".join(f"{k} {v:.8g}" for k, v in point["periods"].items() if v),
+                "check: bifilar modes THIS_FILE"])
 
 
 def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> None:
