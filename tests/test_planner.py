@@ -192,7 +192,7 @@ def test_sensor_timing_bound_matches_a_least_squares_fit_of_noisy_records():
 
 
 def test_stopwatch_advice_reaches_the_target_with_the_fewest_trials_and_respects_the_separation():
-    from bifilar.studies.timing import BEAT_FRACTION, how_to_time, stopwatch_sigma
+    from bifilar.studies.timing import MAX_CYCLES, MIN_CYCLES, how_to_time, stopwatch_sigma
 
     cfg = read_yaml(PLATE)
     p = sw.evaluate_point(cfg, "t", {"spacing": 2.0}, sw.resolve_settings(cfg, tensions=False))
@@ -201,7 +201,8 @@ def test_stopwatch_advice_reaches_the_target_with_the_fewest_trials_and_respects
         assert {r["mode"] for r in rows} == {p["components"][c]["mode"] for c in ("Ixx", "Izz")}
         for r in rows:
             N, n = r["cycles_per_trial"], r["stopwatch"]["trials"]
-            assert N * r["separation"] <= BEAT_FRACTION < (N + 1) * r["separation"] or N == 50
+            # a whole beat with the nearest mode, within the usual 10 .. 50 cycles
+            assert N == min(MAX_CYCLES, max(MIN_CYCLES, math.ceil(1 / r["separation"]))), r
             assert stopwatch_sigma(0.1, N, n) <= target * (1 + 1e-12)
             assert n == 1 or stopwatch_sigma(0.1, N, n - 1) > target
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, render_identifiability, render_rig, render_timing,
-                        resolve_all, timing_advice, write_point_config, write_yaml)
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, multi_hanging, render_identifiability,
+                        render_multi_hanging, render_rig, render_timing, resolve_all, timing_advice, write_point_config)
 from .common import check_output_path, console, emit_json, handle_errors, progress_bar
 
 
@@ -19,13 +19,6 @@ from .common import check_output_path, console, emit_json, handle_errors, progre
                    "ceiling_spacing over one range keep the wires parallel).")
 @common_options
 @click.option("--workers", type=int, default=1, show_default=True, help="Processes for the coarse grid.")
-@click.option("--hangings", "hangings", is_flag=True,
-              help="Plan several hangings (orientations of the body on the planned rig) and the modes to time in "
-                   "each, so that every --component is identified (automatic when one hanging cannot); predicts "
-                   "each component from the joint fit.")
-@click.option("--write-measurements", type=click.Path(dir_okay=False), default=None,
-              help="Write the multi-hanging plan as a measurements file for `bifilar invert --measurements` "
-                   "(planned periods: replace them with the measured ones).")
 @click.option("--force", is_flag=True, help="Replace existing --write-config / --write-measurements files.")
 @handle_errors
 def plan(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
@@ -73,17 +66,8 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     if wc_p:
         write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
         doc["config_written"] = str(wc_p)
-    if hangings or need or wm_p:
-        from ..studies.hangings import measurements_document, plan_hangings
-
-        hp = plan_hangings(cfg, config, res.best["params"], settings, list(settings.components), cons.min_separation)
-        doc["multi_hanging"] = hp.to_json()
-        if wm_p:
-            write_yaml(wm_p, measurements_document(hp), [f"measurements planned by bifilar plan for {config}",
-                                                         "the periods are the PLANNED ones (the config's inertia): "
-                                                         "replace them with the measured periods",
-                                                         f"then: bifilar invert --measurements {wm_p.name}"])
-            doc["measurements_written"] = str(wm_p)
+    multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor, hangings or bool(need), wm_p,
+                  "bifilar plan")
     if as_json:
         emit_json(doc)
         return
@@ -116,18 +100,7 @@ def _render(cfg, res, settings, doc) -> None:
     render_identifiability(con, doc["identifiability"])
     render_rig(con, b["rig"])
     render_timing(con, doc["how_to_time"])
-    mh = doc.get("multi_hanging")
-    if mh:
-        from ..studies.hangings import describe_json
-
-        con.print("[bold]multi-hanging plan[/bold] (joint weighted least-squares fit of every timed period):")
-        for line in describe_json(mh):
-            con.print(f"  - {line}")
-        if doc.get("measurements_written"):
-            con.print(f"measurements file written to {doc['measurements_written']} "
-                      f"(bifilar invert --measurements {doc['measurements_written']})")
-    if doc.get("config_written"):
-        con.print(f"config written to {doc['config_written']} (check: bifilar modes {doc['config_written']})")
+    render_multi_hanging(con, doc)
     tn = b["tension"]
     if tn.get("peak") is not None:
         con.print(f"wire tension: rest {', '.join(f'{x:.4g}' for x in tn['rest'])} N, peak {tn['peak']:.4g} N, "

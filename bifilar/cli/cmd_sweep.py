@@ -37,6 +37,13 @@ def common_options(fn):
         click.option("--sensor", default=None, metavar="NOISE,RATE",
                      help="Timing from a recording: noise relative to the amplitude and sample rate [Hz]; adds "
                           "the records needed per timed mode."),
+        click.option("--hangings", "hangings", is_flag=True,
+                     help="Plan several hangings (orientations of the body on the recommended rig) and the modes to "
+                          "time in each, so that every --component is identified (automatic when one hanging "
+                          "cannot); predicts each component from the joint fit."),
+        click.option("--write-measurements", type=click.Path(dir_okay=False), default=None,
+                     help="Write the multi-hanging plan as a measurements file for `bifilar invert --measurements` "
+                          "(planned periods: replace them with the measured ones)."),
         click.option("--json", "as_json", is_flag=True, help="Print one JSON document."),
     ]
     for o in reversed(opts):
@@ -138,6 +145,38 @@ def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> N
         add_remedies(rec, cfg, source, ref["params"], settings, need)
 
 
+def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
+                  wm_p, who: str) -> None:
+    """Add the multi-hanging plan at ``params`` to ``doc`` (when ``wanted``
+    or a measurements file is asked for) and write that file."""
+    if not (wanted or wm_p):
+        return
+    from ..studies.hangings import measurements_document, plan_hangings
+
+    hp = plan_hangings(cfg, config, params, settings, list(settings.components), cons.min_separation, reaction, sensor)
+    doc["multi_hanging"] = hp.to_json()
+    if wm_p:
+        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}",
+                                                     "the periods are the PLANNED ones (the config's inertia): "
+                                                     "replace them with the measured periods",
+                                                     f"then: bifilar invert --measurements {wm_p.name}"])
+        doc["measurements_written"] = str(wm_p)
+
+
+def render_multi_hanging(con, doc: dict) -> None:
+    mh = doc.get("multi_hanging")
+    if not mh:
+        return
+    from ..studies.hangings import describe_json
+
+    con.print("[bold]multi-hanging plan[/bold] (joint weighted least-squares fit of every timed period):")
+    for line in describe_json(mh):
+        con.print(f"  - {line}")
+    if doc.get("measurements_written"):
+        con.print(f"measurements file written to {doc['measurements_written']} "
+                  f"(bifilar invert --measurements {doc['measurements_written']})")
+
+
 def timing_advice(point: dict, reaction: float, sensor) -> list[dict]:
     """How to time the point's modes to reach its assumed timing sigma
     (:func:`bifilar.studies.timing.how_to_time`)."""
@@ -196,8 +235,8 @@ def render_rig(con, rig: dict, title: str = "the rig to build") -> None:
 @click.option("--stop-after", type=int, default=None, hidden=True, help="Stop after N new points (tests: a stand-in for Ctrl-C).")
 @handle_errors
 def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, out, resume, plot, workers,
-          force, stop_after):
+          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, hangings, write_measurements, as_json,
+          out, resume, plot, workers, force, stop_after):
     """Compare suspension configurations of CONFIG: predicted inertia
     uncertainty, estimator bias, mode separation, tensions and clearance per
     point; rank the feasible points and recommend one."""
@@ -233,6 +272,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     out_p = check_output_path(out, force, [config], "--out")
     plot_p = check_output_path(plot, force, [config, out], "--plot")
     wc_p = check_output_path(write_config, force, [config, out, plot], "--write-config")
+    wm_p = check_output_path(write_measurements, force, [config, out, plot, write_config], "--write-measurements")
     t0 = time.perf_counter()
     try:
         with progress_bar(f"sweeping {len(grid)} points", enabled=len(grid) > 1) as upd:
@@ -248,6 +288,10 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     remedies_for(rec, points, cfg, config, settings)
     if rec.get("best") is not None:
         rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
+        multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
+                      hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
+    elif wm_p or hangings:
+        raise InputError("--hangings", "no recommended point to plan the hangings at: " + rec["reason"])
     names = [s.name for s in specs]
     if wc_p:
         if rec.get("best") is None:
@@ -357,6 +401,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         con.print(acc)
         render_rig(con, b["rig"])
         render_timing(con, rec.get("how_to_time") or [])
+        render_multi_hanging(con, rec)
         if rec.get("config_written"):
             con.print(f"config of the recommended point written to {rec['config_written']}")
     front = rec.get("pareto_front") or []

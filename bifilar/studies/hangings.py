@@ -26,8 +26,9 @@ the rank of ``J`` (relative sensitivities, tolerance
 :data:`~bifilar.studies.point.IDENTIFIABLE_MIN`), then lowers the worst
 relative uncertainty, a new hanging counting only when it beats a mode of a
 hanging already used by :data:`NEW_HANGING_GAIN`; once every component is
-identified, modes of the hangings in use are added while each lowers the
-worst relative uncertainty by more than :data:`MIN_GAIN`.
+identified, further measurements are added while each lowers the worst
+relative uncertainty by more than :data:`MIN_GAIN` (a mode of a hanging in
+use) or halves it (a new hanging).
 """
 
 from __future__ import annotations
@@ -150,9 +151,13 @@ def joint_covariance(blocks: list[tuple[np.ndarray, np.ndarray]], timing: float)
 
 
 def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSettings, components: list[str],
-                  min_separation: float | None = None) -> HangingPlan:
+                  min_separation: float | None = None, reaction: float | None = None, sensor=None) -> HangingPlan:
     """Choose hangings and modes that identify ``components`` (see the
-    module docstring) at the point ``params``."""
+    module docstring) at the point ``params``; each measurement carries how
+    to time it (:func:`bifilar.studies.timing.advice`, stopwatch sigma
+    ``reaction`` s per trial, optional ``sensor``)."""
+    from .timing import DEFAULT_REACTION, advice
+
     unc = point_uncertainty(settings, params)
     timing = unc["timing"]
     hs = candidate_hangings(base_cfg, source, params)
@@ -199,8 +204,8 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
         if best is None:
             break
         _, m, r, w = best
-        if rank == len(components):  # phase 2: only cheap and worthwhile additions
-            if m[0] not in used or w > (1 - MIN_GAIN) * worst:
+        if rank == len(components):  # phase 2: only worthwhile additions
+            if w > (NEW_HANGING_GAIN if m[0] not in used else 1 - MIN_GAIN) * worst:
                 break
         elif r <= rank and w >= worst:
             break
@@ -211,8 +216,9 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     sc = np.array([scales[c] for c in components])
     C = C * np.outer(sc, sc)
     used_idx = sorted({a for a, _ in chosen})
-    meas = [{"hanging": hs[a].name, "mode": hs[a].sens.modes.modes[k].label, "period": float(hs[a].sens.periods[k]),
-             "separation": float(hs[a].separation[k]), "period_sigma": timing}
+    meas = [{"hanging": hs[a].name, "mode": hs[a].sens.modes.modes[k].label, "period_sigma": timing,
+             **advice(float(hs[a].sens.periods[k]), float(hs[a].separation[k]), timing,
+                      DEFAULT_REACTION if reaction is None else reaction, sensor)}
             for a in used_idx for (b, k) in sorted(chosen) if b == a]
     missing = [c for c, u in zip(components, unresolved) if u]
     return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing)
@@ -249,7 +255,8 @@ def describe_json(doc: dict) -> list[str]:
     for h in doc["hangings"]:
         modes = [m for m in doc["measurements"] if m["hanging"] == h["name"]]
         lines.append(f"hang {h['name']}" + (f" (rotation vector {h['rotation_deg']} deg)" if any(h["rotation_deg"]) else "")
-                     + ": time " + ", ".join(f"{m['mode']} (T = {m['period']:.5g} s, sep {100 * m['separation']:.3g} %)"
+                     + ": time " + ", ".join(f"{m['mode']} (T = {m['period']:.5g} s, sep {100 * m['separation']:.3g} %; "
+                                             f"{m['cycles_per_trial']} cycles x {m['stopwatch']['trials']} stopwatch trials)"
                                              for m in modes))
     for c, a in doc["accuracy"].items():
         ok = a["sigma"] is not None and math.isfinite(a["sigma"])

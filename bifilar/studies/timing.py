@@ -17,12 +17,12 @@ module says how to get there with a given timing instrument:
   with ``M = rate D`` samples is ``sigma_w = sqrt(24) noise / (sqrt(M) D)``, so one record gives
   ``sigma_T = T^2 sigma_w / (2 pi)`` and ``n`` records ``sigma_T / sqrt(n)``.
 
-``N`` is as many cycles as the mode separation allows: over ``N`` cycles the
-timed mode and its nearest neighbour (relative gap ``s``) drift ``N s``
-cycles apart; keeping that below a quarter cycle (a beat shows as a slow
-change of amplitude, not as a miscount) gives ``N <= 0.25 / s``, capped at
-:data:`MAX_CYCLES` (damping) and at least 1.  Then ``n`` is the smallest
-number of trials reaching the target ``sigma_T``.
+``N`` cycles per trial: at least :data:`MIN_CYCLES` (the usual ten), at
+least ``1 / s`` with ``s`` the relative gap to the nearest other mode (the
+window then spans a whole beat of the two, so that a record resolves them
+and a small admixture of the neighbour averages out of a count instead of
+biasing it), at most :data:`MAX_CYCLES` (damping, patience).  Then ``n`` is
+the smallest number of trials reaching the target ``sigma_T``.
 """
 
 from __future__ import annotations
@@ -33,8 +33,8 @@ import numpy as np
 
 from ..errors import InputError
 
+MIN_CYCLES = 10
 MAX_CYCLES = 50
-BEAT_FRACTION = 0.25
 DEFAULT_REACTION = 0.1  # s, one hand-timed start and stop (bifilar.estimation.uncertainty.DEFAULT_TRIAL_TIME_SIGMA)
 
 
@@ -58,13 +58,14 @@ def check_reaction(reaction: float) -> float:
     return float(reaction)
 
 
-def max_cycles(separation: float | None) -> int:
-    """Cycles per trial the mode separation allows (see the module docstring)."""
+def cycles_per_trial(separation: float | None) -> int:
+    """Cycles per trial for a mode ``separation`` (relative) from its nearest
+    neighbour (see the module docstring)."""
     if separation is None or math.isinf(separation):
-        return MAX_CYCLES
+        return MIN_CYCLES
     if not separation > 0:
-        return 1
-    return int(max(1, min(MAX_CYCLES, math.floor(BEAT_FRACTION / separation))))
+        return MAX_CYCLES
+    return int(min(MAX_CYCLES, max(MIN_CYCLES, math.ceil(1.0 / separation - 1e-9))))
 
 
 def stopwatch_sigma(reaction: float, cycles: int, trials: int) -> float:
@@ -105,20 +106,25 @@ def how_to_time(point: dict, target_sigma: float, reaction: float = DEFAULT_REAC
         T = float(T_all[k])
         others = [abs(T - t) / T for j, t in enumerate(T_all) if j != k and np.isfinite(t)]
         sep = min(others) if others else None
-        N = max_cycles(sep)
-        row = {"mode": label, "components": comps, "period": T, "separation": sep, "cycles_per_trial": N,
-               "target_sigma": target_sigma}
-        n = _trials(stopwatch_sigma(reaction, N, 1), target_sigma)
-        row["stopwatch"] = {"reaction_sigma": reaction, "trials": n,
-                            "sigma": stopwatch_sigma(reaction, N, n) if n else None,
-                            "time_s": n * N * T}
-        if sensor is not None:
-            noise, rate = sensor
-            n2 = _trials(sensor_sigma(T, noise, rate, N, 1), target_sigma)
-            row["sensor"] = {"noise": noise, "rate": rate, "records": n2,
-                             "sigma": sensor_sigma(T, noise, rate, N, n2) if n2 else None, "time_s": n2 * N * T}
-        out.append(row)
+        out.append({"mode": label, "components": comps, **advice(T, sep, target_sigma, reaction, sensor)})
     return out
+
+
+def advice(T: float, sep: float | None, target_sigma: float, reaction: float = DEFAULT_REACTION,
+           sensor: tuple[float, float] | None = None) -> dict:
+    """Cycles per trial and trials for one mode of period ``T`` (s) and
+    relative separation ``sep`` to reach ``target_sigma`` (s)."""
+    N = cycles_per_trial(sep)
+    row = {"period": T, "separation": sep, "cycles_per_trial": N, "target_sigma": target_sigma}
+    n = _trials(stopwatch_sigma(reaction, N, 1), target_sigma)
+    row["stopwatch"] = {"reaction_sigma": reaction, "trials": n,
+                        "sigma": stopwatch_sigma(reaction, N, n) if n else None, "time_s": n * N * T}
+    if sensor is not None:
+        noise, rate = sensor
+        n2 = _trials(sensor_sigma(T, noise, rate, N, 1), target_sigma)
+        row["sensor"] = {"noise": noise, "rate": rate, "records": n2,
+                         "sigma": sensor_sigma(T, noise, rate, N, n2) if n2 else None, "time_s": n2 * N * T}
+    return row
 
 
 def describe(row: dict) -> str:
