@@ -201,6 +201,9 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     for g, p in zip(grid, pts):
         cache[tuple(g[n] for n in names)] = p
     among = measurable_components(pts)
+    if target is not None and target not in among:
+        raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
+                         + _remedy_text(base_cfg, source, pts, settings, target))
 
     def evaluate(params: dict) -> dict:
         key = tuple(float(params[n]) for n in names)
@@ -263,6 +266,19 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     best["objective"] = objective(best, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
                       among, zip_)
+
+
+def _remedy_text(base_cfg, source, pts, settings, comp) -> str:
+    """``"; remedy: ..."`` for a component no point measures (empty if none found)."""
+    from dataclasses import replace
+
+    from .remedy import candidates, cheapest, describe
+
+    ref = next((p for p in pts if p.get("valid")), None)
+    if ref is None:
+        return ""
+    r = cheapest(candidates(base_cfg, source, ref["params"], replace(settings, tensions=False), [comp]), comp)
+    return f"; remedy at {', '.join(f'{k} = {v:.4g}' for k, v in ref['params'].items())}: {describe(r)}" if r else ""
 
 
 def _product(lists):
