@@ -471,7 +471,7 @@ def plan_section(w: dict) -> str:
     A("")
     A("`plan.yaml` is the measurements file of this plan (`bifilar invert --measurements plan.yaml` reads it; its "
       "periods are the planned ones: replace them with the measured periods, or with `cycles` and `times`). "
-      "tests/test_planner.py checks the joint-fit prediction against a Monte Carlo of a planned experiment "
+      "tests/test_planner.py checks the joint-fit prediction of this plan (and of a two-hanging plate plan) against a Monte Carlo of the planned experiment "
       "(perturbed rigs, exact periods, timing errors, re-fitted).\n")
     return "\n".join(L)
 
