@@ -21,7 +21,8 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
                    f"{c}_separation", f"{c}_bias_small_angle", f"{c}_bias_thesis", f"{c}_bias_linear",
                    f"{c}_nonlinear_period_s"]
     header += [f"tension_rest_{i + 1}" for i in range(n_w)] + [f"tension_max_{i + 1}" for i in range(n_w)]
-    header += [f"tension_min_{i + 1}" for i in range(n_w)] + ["slack", "depth_rest_m", "depth_max_m", "periods", "error"]
+    header += [f"tension_min_{i + 1}" for i in range(n_w)] + ["slack", "depth_rest_m", "depth_max_m", "separation",
+                                                               "periods", "error"]
     rows = []
     for p in points:
         row = [p["params"].get(n) for n in param_names] + [p.get("valid"), p.get("feasible"), p.get("rank"), p.get("objective")]
@@ -38,7 +39,7 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
         for key in ("rest", "max", "min"):
             vals = t.get(key) or [None] * n_w
             row += list(vals) + [None] * (n_w - len(vals))
-        row += [t.get("slack"), p["depth"]["rest"], p["depth"]["max"],
+        row += [t.get("slack"), p["depth"]["rest"], p["depth"]["max"], point_separation(p),
                 ";".join(f"{k}={v:.10g}" if v is not None else f"{k}=" for k, v in p["periods"].items()),
                 "; ".join(p.get("violations", []))]
         rows.append(row)
