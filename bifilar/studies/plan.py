@@ -20,7 +20,11 @@ The answer is the best feasible point evaluated, so it is never worse than
 the grid.
 
 The objective is the relative standard uncertainty of ``target`` (or the
-worst of the components) at a point, exactly as the sweep ranks points.
+worst of the *measurable* components: those identifiable at some point of
+the coarse grid) at a point, exactly as the sweep ranks points; a target
+no point can measure is refused with its remedy
+(:mod:`bifilar.studies.remedy`).  With ``zip_`` the parameters move
+together, each the same fraction of its range (one search variable).
 When ``lengths_available`` is given and a wire length is a search
 parameter, that parameter is searched over the available lengths within its
 bounds (discrete) and the others continuously for each of them.
