@@ -188,6 +188,23 @@ def _target_mode(path: Path) -> int:
         return 0o666 & ~umask
 
 
+def write_yaml(path, doc: dict, comments: list[str]) -> None:
+    """Write ``doc`` (a config or measurements file) as YAML, atomically, after
+    ``#`` comment lines (``comments``, one line each)."""
+    import yaml
+
+    from .jsonable import to_jsonable
+
+    text = "".join(f"# {c}\n" for c in comments) + yaml.safe_dump(to_jsonable(doc), sort_keys=False,
+                                                                   default_flow_style=None, width=110)
+
+    def w(tmp: str) -> None:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+
+    atomic_write(path, w)
+
+
 def write_csv(path: Path, header: list[str], rows) -> None:
     """A numeric table (header row, then rows of floats, 12 significant
     digits), written atomically."""

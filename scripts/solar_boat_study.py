@@ -3,7 +3,9 @@
 study of the thesis's section 8, redone with the full model and a predicted
 uncertainty for every inertia.
 
-    python scripts/solar_boat_study.py [--workers 2]
+    python scripts/solar_boat_study.py [--workers 2] [--plan-only]
+
+``--plan-only`` regenerates only section 5 (the whole plan) in the existing page.
 
 Takes about a minute on one core.  Everything comes from configs/solar_boat.yaml
 (the assumed geometric model of thesis section 8.1, see docs/solar_boat_model.md)
@@ -31,7 +33,9 @@ from bifilar.analysis.simulate import relative_pose, simulate  # noqa: E402
 from bifilar.config import read_yaml, scene_from_dict  # noqa: E402
 from bifilar.estimation.sensitivity import DEFAULT_UNCERTAINTY, measured_inputs, period_sensitivity  # noqa: E402
 from bifilar.studies import sweep as sw  # noqa: E402
+from bifilar.studies.hangings import plan_hangings  # noqa: E402
 from bifilar.studies.plan import plan  # noqa: E402
+from bifilar.studies.timing import how_to_time  # noqa: E402
 from bifilar.studies.shorthands import ParamSpec, apply_params  # noqa: E402
 
 CONFIG = ROOT / "configs" / "solar_boat.yaml"
@@ -392,12 +396,106 @@ def conclusions(d: dict) -> list[str]:
     return out
 
 
+PLAN_TAG = "## 5. The whole plan"
+
+
+def whole_plan(cfg: dict, workers: int = 1) -> dict:
+    """``bifilar plan`` for I1, I2, I3 with the limits above, then the
+    hangings and modes of the joint fit, the rig and how to time it."""
+    st = sw.SweepSettings(components=tuple(AXES.values()), amplitude=AMP_EST, periods=3.0)
+    bounds = [("spacing", 1.0, 4.8), ("length", 1.5, 6.0)]
+    pr = plan(cfg, str(CONFIG), bounds, st, LIMITS, None, workers=workers)
+    hp = plan_hangings(cfg, str(CONFIG), pr.best["params"], st, list(AXES.values()), LIMITS.min_separation)
+    full = plan_hangings(cfg, str(CONFIG), pr.best["params"], st, ["Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"],
+                         LIMITS.min_separation)
+    return {"best": pr.best, "active": pr.active, "evaluations": len(pr.evaluated), "bounds": bounds,
+            "timing": how_to_time(pr.best, st.unc["timing"]), "hangings": hp.to_json(), "full": full.to_json()}
+
+
+def _hanging_table(hp: dict) -> str:
+    vec = lambda v: "[" + ", ".join(f"{x:.4g}" for x in v) + "]"  # noqa: E731
+    return table(["hanging", "rotation (deg)", "mode", "period (s)", "separation", "cycles per trial",
+                  "stopwatch trials", "timing (min)"],
+                 [[m["hanging"], vec(next(h["rotation_deg"] for h in hp["hangings"] if h["name"] == m["hanging"])),
+                   m["mode"], f"{m['period']:.4f}", f"{100 * m['separation']:.3g} %", m["cycles_per_trial"],
+                   m["stopwatch"]["trials"], f"{m['stopwatch']['time_s'] / 60:.3g}"] for m in hp["measurements"]])
+
+
+def plan_section(w: dict) -> str:
+    b, hp = w["best"], w["hangings"]
+    L = []
+    A = L.append
+    A(f"{PLAN_TAG}: hangings, rig, modes, cycles and trials\n")
+    A("`bifilar plan configs/solar_boat.yaml --param spacing=1:4.8 --param length=1.5:6 --max-tension 1000 "
+      "--max-depth 6 --min-separation 0.05 --amplitude 0.03927 --hangings --write-config rig.yaml "
+      "--write-measurements plan.yaml` (the same search as section 3's continuous optimum; "
+      f"{w['evaluations']} evaluations) gives the whole experiment. Regenerate this section with "
+      "`python scripts/solar_boat_study.py --plan-only`.\n")
+    A(f"**The rig** (spacing {b['params']['spacing']:.3f} m, wires {b['params']['length']:.3f} m"
+      + (f"; limited by {'; '.join(w['active'])}" if w["active"] else "") + f"): peak tension "
+      f"{b['tension']['peak']:.4g} N, {b['depth']['max']:.3g} m below the ceiling with the swing, mode separation "
+      f"{100 * b['separation']:.3g} %. Anchors in the world frame (z up, ceiling at z = 0), attachments in the boat's "
+      "body frame (origin at the CoM, x along the boat), angle of each wire from the vertical at rest:\n")
+    r = b["rig"]
+    vec = lambda v: "[" + ", ".join(f"{x:.4g}" for x in v) + "]"  # noqa: E731
+    A(table(["wire", "anchor (m)", "attachment (m)", "length (m)", "angle (deg)"],
+            [[i + 1, vec(a), vec(t), f"{L_:.4f}", f"{g:.3g}"] for i, (a, t, L_, g) in
+             enumerate(zip(r["anchors"], r["attachments"], r["lengths"], r["wire_angles_deg"]))]))
+    A("")
+    nh = len(hp["hangings"])
+    A(f"**The hangings and the modes to time** ({nh} hanging{'s' if nh > 1 else ''}). The planner first adds the "
+      "measurements that identify every moment, then further modes of a hanging in use while each lowers the worst "
+      "uncertainty by 10 % (a new hanging only if it halves it). Cycles per trial: at least 10, at least one whole "
+      "beat with the nearest other mode (1 / separation), at most 50; trials: as many stopwatch trials (0.1 s "
+      f"per trial) as reach the assumed {1e3 * hp['uncertainty']['timing']:g} ms per period:\n")
+    A(_hanging_table(hp))
+    A("")
+    A("**Predicted uncertainty** from the joint weighted least-squares fit of every timed period (`(J^T W J)^-1`, W "
+      "the inverse covariance of the periods: timing and every measured input of each hanging), beside the "
+      "single-hanging estimate of each moment from its own mode at the same rig:\n")
+    A(table(["inertia", "value (kg m^2)", "joint fit sigma", "relative", "one mode, one hanging"],
+            [[f"{th} ({c})", f"{hp['accuracy'][c]['value']:.2f}", f"{hp['accuracy'][c]['sigma']:.3g}",
+              f"{100 * hp['accuracy'][c]['rel_sigma']:.2g} %", f"{100 * b['components'][c]['rel_sigma']:.2g} %"]
+             for th, c in AXES.items()]))
+    A("")
+    fh = w["full"]
+    A(f"**The full tensor** (`--component` all six, same rig): the products of inertia of the symmetric boat are "
+      f"zero and no period of the planned hanging depends on them to first order, so the planner hangs the boat "
+      f"{len(fh['hangings'])} ways (turned on the same wires; `rotation` maps the reference body frame to the "
+      "hanging's, as in `bifilar invert --measurements`):\n")
+    A(_hanging_table(fh))
+    A("")
+    A(table(["component", "value (kg m^2)", "joint fit sigma", "relative (products: to sqrt(I_ii I_jj))"],
+            [[c, f"{a['value']:.2f}", f"{a['sigma']:.3g}", f"{100 * a['rel_sigma']:.2g} %"]
+             for c, a in fh["accuracy"].items()]))
+    A("")
+    A("`plan.yaml` is the measurements file of this plan (`bifilar invert --measurements plan.yaml` reads it; its "
+      "periods are the planned ones: replace them with the measured periods, or with `cycles` and `times`). "
+      "tests/test_planner.py checks the joint-fit prediction of this plan (and of a two-hanging plate plan) against a Monte Carlo of the planned experiment "
+      "(perturbed rigs, exact periods, timing errors, re-fitted).\n")
+    return "\n".join(L)
+
+
+def insert_plan_section(doc: str, section: str) -> str:
+    """Replace (or add, before the data comment) section 5 of the page."""
+    head, sep, tail = doc.partition(f"<!-- {DATA_TAG}")
+    if PLAN_TAG in head:
+        head = head[:head.index(PLAN_TAG)]
+    return head.rstrip() + "\n\n" + section + "\n" + sep + tail
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--plan-only", action="store_true", help="regenerate only section 5 (the whole plan)")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     cfg = read_yaml(CONFIG)
+    if args.plan_only:
+        DOC.write_text(insert_plan_section(DOC.read_text(encoding="utf-8"), plan_section(whole_plan(cfg, args.workers))),
+                       encoding="utf-8")
+        print(f"wrote section 5 of {DOC.relative_to(ROOT)} in {time.perf_counter() - t0:.0f} s")
+        return 0
     FIG.mkdir(parents=True, exist_ok=True)
     print("three configurations ...", flush=True)
     rows = three_configs(cfg)
@@ -446,8 +544,10 @@ def main(argv=None) -> int:
         "plan": {"params": pl["params"], "objective": pl["objective"]},
         "monte_carlo": mcs,
     })
+    print("the whole plan ...", flush=True)
+    section = plan_section(whole_plan(cfg, args.workers))
     d["runtime_s"] = time.perf_counter() - t0
-    DOC.write_text(write_doc(d), encoding="utf-8")
+    DOC.write_text(insert_plan_section(write_doc(d), section), encoding="utf-8")
     print(f"wrote {DOC.relative_to(ROOT)} and docs/figures/solar_*.png in {d['runtime_s']:.0f} s")
     return 0
 

@@ -21,7 +21,18 @@ def modes_document(scene, rest, ms) -> dict:
             for m in ms.modes
         ],
         "scene": {"name": scene.name, "mass": scene.mass, "wires": scene.n_wires, "dof": scene.dof},
+        "body": body_document(scene),
     }
+
+
+def body_document(scene) -> dict:
+    """The body as the program sees it (SI): mass (kg), inertia tensor about
+    the CoM in body axes and its principal moments (kg m^2), and for a body
+    built from parts the CoM in the parts' build frame (m)."""
+    import numpy as np
+
+    return {"mass": scene.mass, "inertia": scene.inertia, "principal_moments": np.linalg.eigvalsh(scene.inertia),
+            "com_in_parts_frame": scene.parts_com, "built_from": "parts" if scene.parts_com is not None else "mass+inertia"}
 
 
 @click.command("modes")
@@ -50,6 +61,19 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
 
     con = console()
     con.print(f"[bold]{esc(scene.name)}[/bold]: {scene.mass:.6g} kg on {scene.n_wires} wires, {scene.dof} degrees of freedom")
+    body = body_document(scene)
+    bt = Table(title="Body (inertia about the CoM, body axes)")
+    bt.add_column("quantity")
+    bt.add_column("value")
+    bt.add_row("mass (kg)", f"{scene.mass:.6g}")
+    if body["com_in_parts_frame"] is not None:
+        bt.add_row("CoM in the parts' build frame (m)", "[" + ", ".join(f"{v:.6g}" for v in body["com_in_parts_frame"]) + "]")
+    else:
+        bt.add_row("CoM", "origin of the body frame (given)")
+    for i, row in enumerate(scene.inertia):
+        bt.add_row("" if i else "inertia (kg m^2)", "[" + ", ".join(f"{v:.6g}" for v in row) + "]")
+    bt.add_row("principal moments (kg m^2)", ", ".join(f"{v:.6g}" for v in body["principal_moments"]))
+    con.print(bt)
     t = Table(title="Rest pose (world frame, z up)")
     t.add_column("quantity")
     t.add_column("value")

@@ -5,20 +5,25 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import _ABBR, _pct, common_options, resolve_all
-from .common import check_workers, console, emit_json, esc, handle_errors, progress_bar
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, multi_hanging, render_identifiability,
+                        render_multi_hanging, render_rig, render_timing, resolve_all, timing_advice, write_point_config)
+from .common import check_output_path, check_workers, console, emit_json, esc, handle_errors, progress_bar
 
 
 @click.command("plan")
 @click.argument("config", type=click.Path(dir_okay=False))
 @click.option("--param", "params", multiple=True, required=True, metavar="NAME=LO:HI",
-              help="Parameter to search within bounds (repeatable): a dotted config path or a shorthand "
-                   "(spacing, ceiling_spacing, length, length_offset, height, amplitude, rotate_*).")
+              help="Parameter to search within bounds (repeatable). " + SHORTHAND_HELP)
+@click.option("--zip", "zip_", is_flag=True,
+              help="Move the parameters together, each the same fraction of its range (e.g. spacing and "
+                   "ceiling_spacing over one range keep the wires parallel).")
 @common_options
 @click.option("--workers", type=int, default=1, show_default=True, help="Processes for the coarse grid (1..1024; at most one per CPU and per point starts).")
+@click.option("--force", is_flag=True, help="Replace existing --write-config / --write-measurements files.")
 @handle_errors
-def plan(config, params, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-         min_separation, no_tensions, sim_periods, as_json, workers):
+def plan(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
+         min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, workers, hangings,
+         write_measurements, force):
     """Search the parameters of CONFIG for the configuration that minimises
     the predicted uncertainty of the target inertia subject to the
     constraints; report the expected accuracy of each component.  Exit 2,
@@ -34,21 +39,41 @@ def plan(config, params, components, target, amplitude, sigmas, max_tension, max
         raise InputError("config", "must be a YAML mapping with keys body and rig")
     scene_from_dict(cfg, config)  # the base config must be valid itself (ConfigErrors: exit 2, every problem)
     bounds = [parse_bounds(p) for p in params]
-    for n, _, _ in bounds:
-        check_param(cfg, n)
+    for n, lo, hi in bounds:
+        check_param(cfg, n, (lo, hi))
+    from ..studies.timing import check_reaction, parse_sensor
+
+    reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
+    if zip_ and len(bounds) < 2:
+        raise InputError("--zip", "needs two parameters or more to move together")
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
-                                         lengths_available, min_separation, no_tensions, sim_periods)
+                                         lengths_available, min_separation, no_tensions, sim_periods,
+                                         [b[0] for b in bounds], config)
+    wc_p = check_output_path(write_config, force, [config], "--write-config")
+    wm_p = check_output_path(write_measurements, force, [config, write_config], "--write-measurements")
     with progress_bar("planning", enabled=True) as upd:
-        res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd)
+        res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
+    doc = res.to_json()
+    doc["settings"] = settings.describe()
+    doc["how_to_time"] = timing_advice(res.best, reaction, sensor)
+    ident = doc["identifiability"]
+    need = [c for c, e in ident.items() if not e["identifiable"]]
+    if need:
+        from ..studies.remedy import add_remedies
+
+        add_remedies({"identifiability": ident}, cfg, config, res.best["params"], settings, need)
+    if wc_p:
+        write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
+        doc["config_written"] = str(wc_p)
+    multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor, hangings or bool(need), wm_p,
+                  "bifilar plan")
     if as_json:
-        doc = res.to_json()
-        doc["settings"] = settings.describe()
         emit_json(doc)
         return
-    _render(cfg, res, settings)
+    _render(cfg, res, settings, doc)
 
 
-def _render(cfg, res, settings) -> None:
+def _render(cfg, res, settings, doc) -> None:
     from rich.table import Table
 
     con = console()
@@ -70,6 +95,11 @@ def _render(cfg, res, settings) -> None:
             t.add_row(c, f"{e['value']:.6g}", f"{e['sigma']:.3g}", _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
                       f"{e['period']:.6g}")
     con.print(t)
+    con.print("identifiability:")
+    render_identifiability(con, doc["identifiability"])
+    render_rig(con, b["rig"])
+    render_timing(con, doc["how_to_time"])
+    render_multi_hanging(con, doc)
     tn = b["tension"]
     if tn.get("peak") is not None:
         con.print(f"wire tension: rest {', '.join(f'{x:.4g}' for x in tn['rest'])} N, peak {tn['peak']:.4g} N, "

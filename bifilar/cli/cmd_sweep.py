@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from ..output import write_yaml
 from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc,
                      handle_errors, progress_bar)
 
@@ -24,10 +25,27 @@ def common_options(fn):
         click.option("--max-depth", type=float, default=None, help="Largest allowed depth of the body below the ceiling, swing included [m]."),
         click.option("--lengths-available", default=None, metavar="L1,L2,...", help="Wire lengths one can use [m]."),
         click.option("--min-separation", type=float, default=None,
-                     help="Smallest allowed relative gap between a chosen mode's period and any other (e.g. 0.05)."),
+                     help="Smallest allowed relative gap between any timed mode's period and any other mode's "
+                          "(default 0.02; 0 switches the guard off)."),
         click.option("--no-tensions", is_flag=True, help="Skip the nonlinear runs (no tensions, swing depth or amplitude bias)."),
         click.option("--periods", "sim_periods", type=float, default=3.0, show_default=True,
                      help="Periods simulated per mode for the tensions."),
+        click.option("--write-config", "write_config", type=click.Path(dir_okay=False), default=None,
+                     help="Write the recommended point as a config (anchors, attachments, lengths) that "
+                          "`bifilar modes` accepts."),
+        click.option("--stopwatch", "reaction", type=float, default=0.1, show_default=True, metavar="SECONDS",
+                     help="Timing by hand: standard uncertainty of one trial's total time (start and stop) [s]; "
+                          "sets the cycles and trials recommended per timed mode."),
+        click.option("--sensor", default=None, metavar="NOISE,RATE",
+                     help="Timing from a recording: noise relative to the amplitude and sample rate [Hz]; adds "
+                          "the records needed per timed mode."),
+        click.option("--hangings", "hangings", is_flag=True,
+                     help="Plan several hangings (orientations of the body on the recommended rig) and the modes to "
+                          "time in each, so that every --component is identified (automatic when one hanging "
+                          "cannot); predicts each component from the joint fit."),
+        click.option("--write-measurements", type=click.Path(dir_okay=False), default=None,
+                     help="Write the multi-hanging plan as a measurements file for `bifilar invert --measurements` "
+                          "(planned periods: replace them with the measured ones)."),
         click.option("--json", "as_json", is_flag=True, help="Print one JSON document."),
     ]
     for o in reversed(opts):
@@ -50,12 +68,22 @@ def parse_sigmas(sigmas) -> dict:
     return out
 
 
+SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.lengths.1, body.mass, "
+                  "uncertainty.timing) or a shorthand: spacing (body attachments' spacing, m), ceiling_spacing "
+                  "(anchors' spacing, m), length (mean wire length, m), length_offset (last minus first wire, m), "
+                  "height (attachments above the CoM, m), amplitude (excitation), rotate_x/_y/_z[_deg] (turn the "
+                  "body before hanging); see README 'Sweep parameters'.")
+
+
 def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-                min_separation, no_tensions, sim_periods):
-    """(settings, constraints, target) from the config and the flags; exit 2 on bad input."""
+                min_separation, no_tensions, sim_periods, names=(), source="config"):
+    """(settings, constraints, target) from the config and the flags; exit 2
+    on bad input, or at once when no point of a search over the parameters
+    ``names`` can meet a constraint."""
     from ..errors import InputError
     from ..studies.shorthands import parse_values
     from ..studies.sweep import resolve_constraints, resolve_settings, resolve_target
+    from ..studies.settings import unreachable
 
     if sim_periods is not None and sim_periods > MAX_SWEEP_PERIODS:
         raise InputError("--periods", f"must be at most {MAX_SWEEP_PERIODS} periods per mode, got {sim_periods:g}")
@@ -68,15 +96,122 @@ def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_dep
     if no_tensions and cons.needs_nonlinear:
         which = "--max-tension" if cons.max_tension is not None else "--max-depth"
         raise InputError("--no-tensions", f"{which} needs the nonlinear run; drop one of them")
+    both = sorted(set(parse_sigmas(sigmas)) & {n.split(".", 1)[1] for n in names if n.startswith("uncertainty.")})
+    if both:
+        raise InputError("--sigma", f"{both[0]} is both set by --sigma and swept as uncertainty.{both[0]}; drop one")
+    unreachable(cfg, source, list(names), cons)
     return settings, cons, resolve_target(cfg, target, settings.components)
+
+
+def point_config(base_cfg: dict, source: str, point: dict) -> dict:
+    """The config of a point (the base config edited by its parameters)."""
+    from ..studies.shorthands import apply_params
+
+    cfg, _ = apply_params(base_cfg, point["params"], source)
+    return cfg
+
+
+def write_point_config(path, base_cfg: dict, source: str, point: dict, what: str) -> None:
+    """Write a point's config (YAML, atomically) with its parameters and
+    planned periods in a header comment; `bifilar modes` reproduces them."""
+    write_yaml(path, point_config(base_cfg, source, point),
+               [f"{what} of {source}", "parameters: " + ", ".join(f"{k} = {v:.10g}" for k, v in point["params"].items()),
+                "planned linear periods (s): " + ", ".join(f"{k} {v:.8g}" for k, v in point["periods"].items() if v),
+                "check: bifilar modes THIS_FILE"])
+
+
+def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> None:
+    """Add the remedies of the components no point can measure (and of a
+    target that is not) to ``rec["identifiability"]``, evaluated at the
+    recommended point (else the first valid one)."""
+    from ..studies.remedy import add_remedies
+
+    need = list(rec.get("not_measurable") or [])
+    ref = points[rec["best"]] if rec.get("best") is not None else next((p for p in points if p.get("valid")), None)
+    if need and ref is not None:
+        add_remedies(rec, cfg, source, ref["params"], settings, need)
+
+
+def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
+                  wm_p, who: str) -> None:
+    """Add the multi-hanging plan at ``params`` to ``doc`` (when ``wanted``
+    or a measurements file is asked for) and write that file."""
+    if not (wanted or wm_p):
+        return
+    from ..studies.hangings import measurements_document, plan_hangings
+
+    hp = plan_hangings(cfg, config, params, settings, list(settings.components), cons.min_separation, reaction, sensor)
+    doc["multi_hanging"] = hp.to_json()
+    if wm_p:
+        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}",
+                                                     "the periods are the PLANNED ones (the config's inertia): "
+                                                     "replace them with the measured periods",
+                                                     f"then: bifilar invert --measurements {wm_p.name}"])
+        doc["measurements_written"] = str(wm_p)
+
+
+def render_multi_hanging(con, doc: dict) -> None:
+    mh = doc.get("multi_hanging")
+    if not mh:
+        return
+    from ..studies.hangings import describe_json
+
+    con.print("[bold]multi-hanging plan[/bold] (joint weighted least-squares fit of every timed period):")
+    for line in describe_json(mh):
+        con.print(f"  - {line}")
+    if doc.get("measurements_written"):
+        con.print(f"measurements file written to {doc['measurements_written']} "
+                  f"(bifilar invert --measurements {doc['measurements_written']})")
+
+
+def timing_advice(point: dict, reaction: float, sensor) -> list[dict]:
+    """How to time the point's modes to reach its assumed timing sigma
+    (:func:`bifilar.studies.timing.how_to_time`)."""
+    from ..studies.timing import how_to_time
+
+    return how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
+
+
+def render_timing(con, rows: list[dict]) -> None:
+    from ..studies.timing import describe
+
+    if rows:
+        con.print("how to time it (reaches the assumed timing uncertainty of each period):")
+        for r in rows:
+            con.print(f"  - {describe(r)}")
+
+
+def render_identifiability(con, ident: dict) -> None:
+    """Per component: measurable, from which modes; else its remedy."""
+    for c, e in ident.items():
+        if e["identifiable"]:
+            modes = ", ".join(f"{m} ({v:.2g})" for m, v in list(e.get("from_modes", {}).items())[:3])
+            con.print(f"  {c}: measurable" + (f" from {modes} (|d ln T / d ln I|)" if modes else ""))
+        else:
+            r = e.get("remedy")
+            con.print(f"  [yellow]{c}: not identifiable[/yellow] (no mode's period depends on it)"
+                      + (f"; remedy: {r['text']}" if r else "; the model found no remedy among the changes tried"))
+
+
+def render_rig(con, rig: dict, title: str = "the rig to build") -> None:
+    """Anchors (world), attachments (body frame), lengths and wire angles."""
+    from rich.table import Table
+
+    t = Table(title=title, caption="anchors: world frame, z up; attachments: body frame, origin at the CoM; "
+                                   "angle from the vertical at rest")
+    for h in ("wire", "anchor m", "attachment m", "length m", "angle deg"):
+        t.add_column(h, justify="right")
+    vec = lambda v: "[" + ", ".join(f"{x:.4g}" for x in v) + "]"  # noqa: E731
+    for i, (a, b, L, ang) in enumerate(zip(rig["anchors"], rig["attachments"], rig["lengths"], rig["wire_angles_deg"])):
+        t.add_row(str(i + 1), vec(a), vec(b), f"{L:.5g}", f"{ang:.3g}")
+    con.print(t)
 
 
 @click.command("sweep")
 @click.argument("config", type=click.Path(dir_okay=False))
 @click.option("--param", "params", multiple=True, required=True, metavar="NAME=VALUES",
-              help="Parameter to vary (repeatable): a dotted config path (rig.attachments.0.0) or a shorthand "
-                   "(spacing, ceiling_spacing, length, length_offset, height, amplitude, rotate_x/_y/_z[_deg]); "
-                   "VALUES as START:STOP:NUM, log:START:STOP:NUM, [a, b, c] or a,b,c.")
+              help="Parameter to vary (repeatable); VALUES as START:STOP:NUM, log:START:STOP:NUM, [a, b, c] or "
+                   "a,b,c. " + SHORTHAND_HELP)
 @click.option("--zip", "zip_", is_flag=True, help="Vary the parameters together instead of over a grid.")
 @common_options
 @click.option("--out", type=click.Path(dir_okay=False), help="Write one CSV row per point (and a resumable journal FILE.partial.jsonl while running).")
@@ -87,7 +222,8 @@ def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_dep
 @click.option("--stop-after", type=int, default=None, hidden=True, help="Stop after N new points (tests: a stand-in for Ctrl-C).")
 @handle_errors
 def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-          min_separation, no_tensions, sim_periods, as_json, out, resume, plot, workers, force, stop_after):
+          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, hangings, write_measurements, as_json,
+          out, resume, plot, workers, force, stop_after):
     """Compare suspension configurations of CONFIG: predicted inertia
     uncertainty, estimator bias, mode separation, tensions and clearance per
     point; rank the feasible points and recommend one."""
@@ -97,6 +233,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, parse_param
+    from ..studies.timing import check_reaction, parse_sensor
 
     check_workers(workers)
     if resume and not out:
@@ -107,10 +244,12 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     scene_from_dict(cfg, config)  # the base config must be valid itself (ConfigErrors: exit 2, every problem)
     specs = [parse_param(p) for p in params]
     for s in specs:
-        check_param(cfg, s.name)
+        check_param(cfg, s.name, s.values)
     grid = sw.build_grid(specs, zip_)
+    reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
-                                         lengths_available, min_separation, no_tensions, sim_periods)
+                                         lengths_available, min_separation, no_tensions, sim_periods,
+                                         [s.name for s in specs], config)
     journal = None
     if out:
         journal = check_journal_path(sw.journal_path(out), [config, plot], "--out", resume=resume)
@@ -118,6 +257,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
             raise InputError("--out", f"{journal} holds an interrupted sweep; pass --resume to continue it or --force to start over")
     out_p = check_output_path(out, force, [config, journal], "--out")
     plot_p = check_output_path(plot, force, [config, out, journal], "--plot")
+    wc_p = check_output_path(write_config, force, [config, out, plot, journal], "--write-config")
+    wm_p = check_output_path(write_measurements, force, [config, out, plot, write_config, journal], "--write-measurements")
     t0 = time.perf_counter()
     try:
         with progress_bar(f"sweeping {len(grid)} points", enabled=len(grid) > 1) as upd:
@@ -130,7 +271,19 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         raise
     runtime = time.perf_counter() - t0
     rec = sw.assess(points, cons, target)
+    remedies_for(rec, points, cfg, config, settings)
+    if rec.get("best") is not None:
+        rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
+        multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
+                      hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
+    elif wm_p or hangings:
+        raise InputError("--hangings", "no recommended point to plan the hangings at: " + rec["reason"])
     names = [s.name for s in specs]
+    if wc_p:
+        if rec.get("best") is None:
+            raise InputError("--write-config", "no recommended point to write: " + rec["reason"])
+        write_point_config(wc_p, cfg, config, points[rec["best"]], f"point {rec['best']} recommended by bifilar sweep")
+        rec["config_written"] = str(wc_p)
     if out_p:
         sw.write_points_csv(out_p, points, names, list(settings.components))
         journal.unlink(missing_ok=True)
@@ -159,6 +312,8 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
 
     from rich.table import Table
 
+    from ..studies.ranking import point_separation
+
     con = console()
     comps = list(settings.components)
     t = Table(title=f"{esc(cfg.get('name', Path(config).stem))}: {len(points)} points ({runtime:.1f} s)")
@@ -179,15 +334,13 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
             notes.append(f"{i}: [red]invalid:[/red] {esc(p['error'])}")
             t.add_row(*row)
             continue
-        seps = []
         for c in comps:
             e = p["components"][c]
             if not e["identifiable"]:
                 row.append("[yellow]n/a[/yellow]")
             else:
                 row.append(f"{_pct(e['rel_sigma'])} {_ABBR.get(e['mode'], e['mode'])}")
-                seps.append(e["separation"])
-        row.append(_pct(min(seps)) if seps else "-")
+        row.append(_pct(point_separation(p)))
         pk = p["tension"]["peak"] if settings.tensions else max(p["tension"]["rest"])
         row.append("-" if pk is None else f"{pk:.4g}")
         d = p["depth"]["max"] if p["depth"]["max"] is not None else p["depth"]["rest"]
@@ -201,8 +354,10 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         con.print(f"  [yellow]x[/yellow] {line}")
     if len(notes) > 20:
         con.print(f"  ... {len(notes) - 20} more (see --json or --out)")
-    con.print("(n/a: no mode's period depends on that component; modes: " + ", ".join(
-        f"{v} = {k}" for k, v in _ABBR.items()) + ")")
+    con.print("(n/a: no mode's period depends on that component; sep: smallest gap between a timed mode and any "
+              "other mode; modes: " + ", ".join(f"{v} = {k}" for k, v in _ABBR.items()) + ")")
+    con.print("identifiability" + (" at the recommended point:" if rec.get("best") is not None else ":"))
+    render_identifiability(con, rec["identifiability"])
     unc = settings.unc
     con.print("measurement uncertainties: " + ", ".join(
         f"{k} {v:g}{' s' if k == 'timing' else ' m' if k in ('length', 'position', 'com') else ' (relative)'}"
@@ -230,6 +385,11 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
             acc.add_row(c, f"{e['value']:.5g}", f"{e['sigma']:.3g}", _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
                         f"{e['period']:.5g}", _pct(bias.get("small_angle")), thesis, _pct(bias.get("linear")))
         con.print(acc)
+        render_rig(con, b["rig"])
+        render_timing(con, rec.get("how_to_time") or [])
+        render_multi_hanging(con, rec)
+        if rec.get("config_written"):
+            con.print(f"config of the recommended point written to {rec['config_written']}")
     front = rec.get("pareto_front") or []
     if len(front) > 1:
         ft = Table(title="trade-off: predicted uncertainty vs peak tension (Pareto front)")

@@ -20,7 +20,11 @@ The answer is the best feasible point evaluated, so it is never worse than
 the grid.
 
 The objective is the relative standard uncertainty of ``target`` (or the
-worst of the components) at a point, exactly as the sweep ranks points.
+worst of the *measurable* components: those identifiable at some point of
+the coarse grid) at a point, exactly as the sweep ranks points; a target
+no point can measure is refused with its remedy
+(:mod:`bifilar.studies.remedy`).  With ``zip_`` the parameters move
+together, each the same fraction of its range (one search variable).
 When ``lengths_available`` is given and a wire length is a search
 parameter, that parameter is searched over the available lengths within its
 bounds (discrete) and the others continuously for each of them.
@@ -37,6 +41,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
+from .ranking import identifiability, measurable_components, point_separation
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -51,6 +56,9 @@ class PlanResult:
     best : the point dict of the optimum (see :mod:`bifilar.studies.sweep`).
     evaluated : every point evaluated (grid first, then the local search).
     active : constraints within 1 % of their limit at the optimum.
+    among : the measurable components (identifiable somewhere in the range);
+        without a target the worst of them is minimised.
+    zip : the parameters moved together (one search variable).
     """
 
     best: dict
@@ -59,6 +67,8 @@ class PlanResult:
     constraints: Constraints
     bounds: list[tuple[str, float, float]]
     active: list[str] = field(default_factory=list)
+    among: list[str] = field(default_factory=list)
+    zip: bool = False
 
     def accuracy(self) -> dict:
         """Predicted accuracy per component at the optimum (kg m^2, relative, mode, period s)."""
@@ -74,30 +84,38 @@ class PlanResult:
         return {
             "optimum": {"params": b["params"], "objective": b["objective"], "accuracy": self.accuracy(),
                         "tension": b["tension"], "depth": b["depth"], "periods": b["periods"],
+                        "rig": b.get("rig"), "separation": point_separation(b),
                         "active_constraints": self.active},
-            "target": self.target or "worst relative of the components",
+            "target": self.target or "worst relative of " + ", ".join(self.among),
+            "identifiability": self.identifiability(),
             "constraints": self.constraints.describe(),
             "bounds": {n: [lo, hi] for n, lo, hi in self.bounds},
+            "zip": self.zip,
             "evaluations": len(self.evaluated),
         }
+
+    def identifiability(self) -> dict:
+        """Per component: measurable in the range, modes at the optimum."""
+        return {c: identifiability(c, self.best, c in self.among) for c in self.best["components"]}
 
 
 def _is_length(name: str) -> bool:
     return name == "length" or (name.startswith("rig.lengths.") and name.count(".") == 2)
 
 
-def _penalty(p: dict, c: Constraints, target: str | None) -> float:
+def _penalty(p: dict, c: Constraints, target: str | None, among=None) -> float:
     """Exterior penalty, continuous at the edge of the feasible set:
     feasible -> the relative uncertainty; infeasible -> that times
     (1 + 100 x the relative excess over each limit); invalid or not
     identifiable -> 1e6 (the optimum itself is always a feasible point)."""
     if not p.get("valid"):
         return 1e6
-    ob = objective(p, target)
+    ob = objective(p, target, among)
     if not math.isfinite(ob):
         return 1e6
     if target is None:  # the worst component, smoothed (a 16-norm) so that the simplex slides along the ridge
-        rel = np.array([e["rel_sigma"] for e in p["components"].values()], float)
+        sel = among if among is not None else list(p["components"])
+        rel = np.array([p["components"][k]["rel_sigma"] for k in sel], float)
         ob = float(np.sum(rel**16) ** (1 / 16))
     v = dict(violations(p, c, target))
     if not v:
@@ -108,17 +126,21 @@ def _penalty(p: dict, c: Constraints, target: str | None) -> float:
     if "max_depth" in v and p["depth"].get("max") is not None:
         excess += p["depth"]["max"] / c.max_depth - 1
     if "min_separation" in v and c.min_separation:
-        seps = [e["separation"] for e in p["components"].values() if e.get("separation") is not None]
-        excess += 1 - min(seps) / c.min_separation
+        excess += 1 - point_separation(p) / c.min_separation
     excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v)
     return ob * (1 + 100 * max(excess, 1e-6))
 
 
 def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
          constraints: Constraints, target: str | None = None, *, workers: int = 1,
-         progress: Callable[[int, int], None] | None = None, max_local: int | None = None) -> PlanResult:
+         progress: Callable[[int, int], None] | None = None, max_local: int | None = None,
+         zip_: bool = False) -> PlanResult:
     """Search ``bounds`` [(name, lo, hi)] for the feasible configuration with
     the smallest predicted relative uncertainty (see the module docstring).
+
+    ``zip_``: move every parameter together, each the same fraction of its
+    range (one search variable), e.g. ``spacing`` and ``ceiling_spacing``
+    over the same range keep the wires parallel.
 
     Raises :class:`InputError` naming the binding constraint's flag (e.g.
     ``--max-tension``) when no evaluated configuration is feasible.
@@ -137,7 +159,27 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
                     raise InputError("--lengths-available",
                                      f"none of the available lengths lies in {n} = {lo:g}..{hi:g} m")
                 discrete[n] = vals
+    if zip_ and discrete:
+        raise InputError("--zip", "cannot move the parameters together when a wire length takes only the "
+                                  "--lengths-available values; drop one of them")
     cont = [(n, lo, hi) for n, lo, hi in bounds if n not in discrete]
+    if zip_:
+        cont = [("zip", 0.0, 1.0)]
+
+    def expand(vals: dict) -> dict:
+        """Search variables -> the parameters of a point."""
+        if not zip_:
+            return vals
+        t = vals["zip"]
+        return {n: float(lo + t * (hi - lo)) for n, lo, hi in bounds}
+
+    def unit(params: dict) -> np.ndarray:
+        """A point's parameters -> the search variables scaled to [0, 1]."""
+        if zip_:
+            n, lo, hi = bounds[0]
+            return np.array([(params[n] - lo) / (hi - lo)])
+        return np.array([(params[n] - lo) / (hi - lo) for n, lo, hi in cont])
+
     d = len(cont)
     ng = _GRID.get(d, 3)
     axes = [np.linspace(lo, hi, ng) for _, lo, hi in cont]
@@ -145,7 +187,7 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     grid = []
     for fixed in combos:
         for vals in _product(axes):
-            grid.append({**{n: float(v) for (n, _, _), v in zip(cont, vals)}, **fixed})
+            grid.append({**expand({n: float(v) for (n, _, _), v in zip(cont, vals)}), **fixed})
     grid = [{n: g[n] for n in names} for g in grid]  # keep the user's order
     cache: dict[tuple, dict] = {}
     local_budget = max_local if max_local is not None else (12 if d == 1 else 30 * d) * max(len(combos), 1)
@@ -162,6 +204,10 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     done[0] = len(grid)
     for g, p in zip(grid, pts):
         cache[tuple(g[n] for n in names)] = p
+    among = measurable_components(pts)
+    if target is not None and target not in among:
+        raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
+                         + _remedy_text(base_cfg, source, pts, settings, target))
 
     def evaluate(params: dict) -> dict:
         key = tuple(float(params[n]) for n in names)
@@ -171,7 +217,7 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
         return cache[key]
 
     def score(p):
-        return _penalty(p, constraints, target)
+        return _penalty(p, constraints, target, among)
 
     if d:
         from scipy.optimize import minimize, minimize_scalar
@@ -184,14 +230,14 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
 
             def f(x, fixed=fixed):
                 x = np.clip(np.atleast_1d(x), 0.0, 1.0)
-                params = {**{n: float(lo_v[i] + x[i] * span[i]) for i, (n, _, _) in enumerate(cont)}, **fixed}
+                params = {**expand({n: float(lo_v[i] + x[i] * span[i]) for i, (n, _, _) in enumerate(cont)}), **fixed}
                 return score(evaluate(params))
 
             def best_x(fixed=fixed, rank=0):
                 sub = sorted((p for p in cache.values() if all(p["params"][n] == v for n, v in fixed.items())),
                              key=score)
                 p0 = sub[min(rank, len(sub) - 1)]
-                return np.array([(p0["params"][n] - lo) / (hi - lo) for n, lo, hi in cont])
+                return unit(p0["params"])
 
             if d > 1:
                 # Nelder-Mead in the unit box from the best STARTS grid points (the feasible set is often
@@ -215,14 +261,28 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
                 x0 = best_x()
     evaluated = list(cache.values())
     feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target)
-                and math.isfinite(objective(p, target))]
+                and math.isfinite(objective(p, target, among))]
     if not feasible:
-        flag, msg = binding_constraint(evaluated, constraints, target)
+        flag, msg = binding_constraint(evaluated, constraints, target, among)
         raise InputError(flag, msg)
-    best = min(feasible, key=lambda p: objective(p, target))
+    best = min(feasible, key=lambda p: objective(p, target, among))
     best = dict(best)
-    best["objective"] = objective(best, target)
-    return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds))
+    best["objective"] = objective(best, target, among)
+    return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
+                      among, zip_)
+
+
+def _remedy_text(base_cfg, source, pts, settings, comp) -> str:
+    """``"; remedy: ..."`` for a component no point measures (empty if none found)."""
+    from dataclasses import replace
+
+    from .remedy import candidates, cheapest, describe
+
+    ref = next((p for p in pts if p.get("valid")), None)
+    if ref is None:
+        return ""
+    r = cheapest(candidates(base_cfg, source, ref["params"], replace(settings, tensions=False), [comp]), comp)
+    return f"; remedy at {', '.join(f'{k} = {v:.4g}' for k, v in ref['params'].items())}: {describe(r)}" if r else ""
 
 
 def _product(lists):
@@ -239,10 +299,9 @@ def _active(p: dict, c: Constraints, bounds) -> list[str]:
         out.append(f"max tension ({t:.4g} of {c.max_tension:g} N)")
     if c.max_depth is not None and dpt is not None and dpt >= 0.99 * c.max_depth:
         out.append(f"max depth ({dpt:.4g} of {c.max_depth:g} m)")
-    if c.min_separation is not None:
-        seps = [e["separation"] for e in p["components"].values() if e.get("separation") is not None]
-        if seps and min(seps) <= 1.01 * c.min_separation:
-            out.append(f"min separation ({min(seps):.3g} vs {c.min_separation:g})")
+    sep = point_separation(p)
+    if c.min_separation is not None and sep is not None and sep <= 1.01 * c.min_separation:
+        out.append(f"min separation ({sep:.3g} vs {c.min_separation:g})")
     for n, lo, hi in bounds:
         v = p["params"][n]
         if abs(v - lo) <= 0.01 * (hi - lo):

@@ -5,8 +5,8 @@ A sweep parameter is either
 * a **dotted path** into the config mapping (``rig.attachments.0.0``,
   ``rig.lengths.1``, ``body.mass``, ``body.parts.2.position.2``,
   ``uncertainty.timing``): list items are addressed by 0-based index and the
-  leaf must be an existing number (``uncertainty.*`` and ``plan.*`` leaves may
-  be new); or
+  leaf must be an existing number (``uncertainty.KEY`` leaves may be new: a
+  point's measurement uncertainty, units as ``--sigma``, not negative); or
 * a **named shorthand** for the usual design questions (:data:`SHORTHANDS`).
 
 Values are SI (m, kg, s, rad, N) except the ``*_deg`` rotations (degrees).
@@ -56,7 +56,7 @@ SHORTHANDS: dict[str, tuple[str, str]] = {
 }
 
 _ORDER = ("length", "length_offset", "spacing", "ceiling_spacing", "height")
-_CREATABLE = ("uncertainty", "plan")  # top-level blocks whose leaves may be new
+_CREATABLE = ("uncertainty",)  # top-level blocks whose leaves may be new
 MAX_POINTS = 100_000
 
 
@@ -203,7 +203,7 @@ def get_path(cfg: Any, path: str) -> Any:
 
 def set_path(cfg: dict, path: str, value: float) -> None:
     """Set a numeric leaf in place (the leaf must exist and be a number,
-    except under ``uncertainty`` and ``plan``, whose leaves may be new)."""
+    except under ``uncertainty``, whose leaves may be new)."""
     toks = _tokens(path)
     create = toks[0] in _CREATABLE
     node, key = _walk(cfg, toks, path, create=create)
@@ -221,8 +221,26 @@ def is_shorthand(name: str) -> bool:
     return name in SHORTHANDS
 
 
-def check_param(cfg: dict, name: str) -> None:
-    """Raise :class:`InputError` (``--param``) if ``name`` cannot be swept on ``cfg``."""
+def check_param(cfg: dict, name: str, values=()) -> None:
+    """Raise :class:`InputError` (``--param``) if ``name`` cannot be swept on
+    ``cfg`` or one of ``values`` is out of its range (``uncertainty.KEY``:
+    a known key, values not negative; ``plan.*`` settings are options, not
+    sweep parameters)."""
+    head = name.split(".")
+    if head[0] == "uncertainty":
+        from ..estimation.sensitivity import DEFAULT_UNCERTAINTY
+
+        if len(head) != 2 or head[1] not in DEFAULT_UNCERTAINTY:
+            raise InputError("--param", f"{name}: use uncertainty.KEY with KEY one of {', '.join(DEFAULT_UNCERTAINTY)}")
+        bad = [v for v in values if v < 0]
+        if bad:
+            raise InputError("--param", f"{name}: a standard uncertainty must not be negative, got {bad[0]:g}")
+        return
+    if head[0] == "plan":
+        raise InputError("--param", f"{name}: the plan block holds options (target, constraints, amplitude), "
+                                    "not sweep parameters; give them as options, or sweep the amplitude shorthand")
+    if name == "amplitude" and any(v <= 0 for v in values):
+        raise InputError("--param", f"amplitude must be positive, got {min(values):g}")
     if is_shorthand(name):
         rig = cfg.get("rig") if isinstance(cfg, dict) else None
         if name in ("spacing", "ceiling_spacing", "height") and not isinstance(rig, dict):

@@ -1,0 +1,274 @@
+"""Multi-hanging plans: which orientations of the body to hang and which
+modes to time so that every requested inertia component is identified, and
+the uncertainty of each from the joint fit.
+
+Candidates: the point's own hanging and the hangings of
+:data:`bifilar.studies.remedy.HANGINGS` (the body turned 90 or 45 degrees
+about a reference body axis on the same rig, convention of
+:mod:`bifilar.studies.remedy` and of ``bifilar invert --measurements``:
+``I_h = R I_ref R^T``).  A candidate measurement is one mode of one hanging
+whose period is separated from every other mode of that hanging by at least
+``min_separation``.
+
+The joint fit: the unknowns ``theta`` are the requested components (kg m^2,
+reference body axes); each timed period ``T_m`` (s) depends on them through
+``J[m, c] = dT_m / dI_c`` (chain rule through ``R``).  The periods'
+covariance ``S`` holds the timing variance ``sigma_T^2`` of each period and,
+within a hanging, the measured inputs' errors propagated to its periods
+(``Jx Sx Jx^T``: wire lengths, anchor and attachment coordinates, mass, CoM,
+re-measured for every hanging, so independent between hangings).  The
+weighted least-squares estimate with ``W = S^-1`` has the covariance
+``C = (J^T W J)^-1``; the plan reports ``sqrt(C_cc)`` per component and the
+correlations.
+
+Selection (greedy, cheapest first): add the measurement that most increases
+the rank of ``J`` (relative sensitivities, tolerance
+:data:`~bifilar.studies.point.IDENTIFIABLE_MIN`), then lowers the worst
+relative uncertainty, a new hanging counting only when it beats a mode of a
+hanging already used by :data:`NEW_HANGING_GAIN`; once every component is
+identified, further measurements are added while each lowers the worst
+relative uncertainty by more than :data:`MIN_GAIN` (a mode of a hanging in
+use) or halves it (a new hanging).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import BifilarError, InputError
+from ..estimation.sensitivity import input_sigma
+from .point import IDENTIFIABLE_MIN, component_scale, point_uncertainty
+from .remedy import HANGINGS, hanging_config, hanging_sensitivity, reference_column, rotation
+from .settings import _IDX, SweepSettings
+from .shorthands import apply_params
+
+NEW_HANGING_GAIN = 0.5  # a new hanging must at least halve the worst uncertainty to beat a mode of a used one
+MIN_GAIN = 0.10
+
+
+@dataclass
+class Hanging:
+    """One candidate hanging: name, rotation (reference -> hanging body
+    frame), config, scene, Sensitivity and per-mode separation."""
+
+    name: str
+    rotvec_deg: tuple
+    R: np.ndarray
+    config: dict
+    scene: object
+    sens: object
+    separation: np.ndarray
+    notes: list = field(default_factory=list)
+
+
+@dataclass
+class HangingPlan:
+    """The chosen measurements and the joint-fit prediction (SI)."""
+
+    components: list
+    hangings: list            # of Hanging, those used
+    measurements: list        # of dicts: hanging, mode, period, separation
+    covariance: np.ndarray    # (C, C) kg^2 m^4
+    values: dict              # prior value of each component, kg m^2
+    scales: dict
+    unc: dict
+    missing: list = field(default_factory=list)
+
+    def accuracy(self) -> dict:
+        sd = np.sqrt(np.clip(np.diag(self.covariance), 0, None)) if len(self.covariance) else []
+        return {c: {"value": self.values[c], "sigma": float(s), "rel_sigma": float(s) / self.scales[c]}
+                for c, s in zip(self.components, sd)}
+
+    def correlation(self) -> list:
+        sd = np.sqrt(np.diag(self.covariance))
+        return (self.covariance / np.outer(sd, sd)).tolist()
+
+    def to_json(self) -> dict:
+        return {"components": self.components, "accuracy": self.accuracy(), "correlation": self.correlation(),
+                "hangings": [{"name": h.name, "rotation_deg": list(h.rotvec_deg), "notes": h.notes}
+                             for h in self.hangings],
+                "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing}
+
+
+def _separations(T: np.ndarray) -> np.ndarray:
+    out = np.full(len(T), math.inf)
+    for k in range(len(T)):
+        gaps = [abs(T[k] - T[j]) / T[k] for j in range(len(T)) if j != k and np.isfinite(T[j])]
+        if gaps and np.isfinite(T[k]):
+            out[k] = min(gaps)
+    return out
+
+
+def candidate_hangings(base_cfg: dict, source: str, params: dict) -> list[Hanging]:
+    """The point's own hanging first, then every turned hanging that can hang."""
+    from ..config import scene_from_dict
+
+    cfg, _ = apply_params(base_cfg, params, source)
+    scene = scene_from_dict(cfg, source, warn=False)
+    out = []
+    for name, rv in (("as planned", (0.0, 0.0, 0.0)),) + tuple(HANGINGS):
+        R = rotation(rv)
+        c = cfg if name == "as planned" else hanging_config(scene, R, f"{cfg.get('name', 'body')}, {name}")
+        try:
+            sc, sens, notes = hanging_sensitivity(c, source)
+        except BifilarError:
+            continue
+        out.append(Hanging(name, tuple(rv), R, c, sc, sens, _separations(sens.periods), notes))
+    return out
+
+
+def _rows(h: Hanging, comps: list[str], unc: dict):
+    """Per mode of a hanging: dT/dtheta (K, C) and the input part of the
+    periods' covariance (K, K), s^2."""
+    J = np.column_stack([reference_column(h.sens, h.R, c) for c in comps])
+    xs = [j for j, n in enumerate(h.sens.names) if n not in _IDX]
+    sx = np.array([input_sigma(h.scene, h.sens.names[j], unc) for j in xs])
+    Jx = h.sens.jacobian[:, xs] * sx
+    return J, Jx @ Jx.T
+
+
+def joint_covariance(blocks: list[tuple[np.ndarray, np.ndarray]], timing: float):
+    """(C, rank, unresolved) of the joint fit: C = (J^T W J)^-1 over hangings
+    (W = S^-1, S block diagonal: timing^2 I + the input covariance of each
+    hanging's chosen modes; ``blocks``: per hanging (J rows, input
+    covariance)); C is inf when J^T W J is singular, ``unresolved`` then a
+    boolean per unknown: it has weight in the null space."""
+    n = blocks[0][0].shape[1] if blocks else 0
+    F = np.zeros((n, n))
+    for J, Sx in blocks:
+        S = Sx + timing**2 * np.eye(len(J))
+        F = F + J.T @ np.linalg.solve(S, J)
+    w, V = np.linalg.eigh(F)
+    ok = w > max(float(w.max()) if w.size else 0.0, 0.0) * 1e-12
+    rank = int(np.sum(ok)) if w.size else 0
+    if rank < n:
+        null = V[:, ~ok]
+        return np.full((n, n), np.inf), rank, np.max(np.abs(null), axis=1) > 1e-6
+    return V @ np.diag(1 / w) @ V.T, rank, np.zeros(n, bool)
+
+
+def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSettings, components: list[str],
+                  min_separation: float | None = None, reaction: float | None = None, sensor=None) -> HangingPlan:
+    """Choose hangings and modes that identify ``components`` (see the
+    module docstring) at the point ``params``; each measurement carries how
+    to time it (:func:`bifilar.studies.timing.advice`, stopwatch sigma
+    ``reaction`` s per trial, optional ``sensor``)."""
+    from .timing import DEFAULT_REACTION, advice
+
+    unc = point_uncertainty(settings, params)
+    timing = unc["timing"]
+    hs = candidate_hangings(base_cfg, source, params)
+    if not hs:
+        raise InputError("--param", "the body cannot hang in any orientation tried at the planned point")
+    ref = hs[0].scene
+    scales = {c: component_scale(ref.inertia, c) for c in components}
+    values = {c: float(ref.inertia[_IDX[c]]) for c in components}
+    data = [_rows(h, components, unc) for h in hs]
+    cands = []
+    for hi, h in enumerate(hs):
+        T = h.sens.periods
+        for k in range(len(T)):
+            if not np.isfinite(T[k]) or (min_separation and h.separation[k] < min_separation):
+                continue
+            rel = np.abs(data[hi][0][k]) * np.array([scales[c] for c in components]) / T[k]
+            if rel.max() >= IDENTIFIABLE_MIN:
+                cands.append((hi, k))
+    chosen: list[tuple[int, int]] = []
+
+    def evaluate(sel):
+        blocks = []
+        for hi in sorted({a for a, _ in sel}):
+            ks = [k for a, k in sel if a == hi]
+            J, Sx = data[hi]
+            scale = np.array([scales[c] for c in components])
+            blocks.append((J[ks] * scale, Sx[np.ix_(ks, ks)]))  # in units of each component's scale
+        C, rank, unresolved = joint_covariance(blocks, timing)
+        worst = float(np.sqrt(np.max(np.diag(C)))) if rank == len(components) else math.inf
+        return rank, worst, C, unresolved
+
+    rank, worst = 0, math.inf
+    while cands:
+        used = {a for a, _ in chosen}
+        best = None
+        for m in cands:
+            if m in chosen:
+                continue
+            r, w, _, _ = evaluate(chosen + [m])
+            eff = w / NEW_HANGING_GAIN if (m[0] not in used and used) else w
+            key = (-r, eff)
+            if best is None or key < best[0]:
+                best = (key, m, r, w)
+        if best is None:
+            break
+        _, m, r, w = best
+        if rank == len(components):  # phase 2: only worthwhile additions
+            if w > (NEW_HANGING_GAIN if m[0] not in used else 1 - MIN_GAIN) * worst:
+                break
+        elif r <= rank and w >= worst:
+            break
+        chosen.append(m)
+        rank, worst = r, w
+    rank, worst, C, unresolved = evaluate(chosen) if chosen else (0, math.inf, np.full((len(components),) * 2, np.inf),
+                                                                     np.ones(len(components), bool))
+    sc = np.array([scales[c] for c in components])
+    C = C * np.outer(sc, sc)
+    used_idx = sorted({a for a, _ in chosen})
+    meas = [{"hanging": hs[a].name, "mode": hs[a].sens.modes.modes[k].label, "period_sigma": timing,
+             **advice(float(hs[a].sens.periods[k]), float(hs[a].separation[k]), timing,
+                      DEFAULT_REACTION if reaction is None else reaction, sensor)}
+            for a in used_idx for (b, k) in sorted(chosen) if b == a]
+    missing = [c for c, u in zip(components, unresolved) if u]
+    return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing)
+
+
+def measurements_document(plan: HangingPlan, reaction: float | None = None) -> dict:
+    """The plan as a ``bifilar invert --measurements`` file (docs/invert.md):
+    one hanging per entry with its inline config and rotation, one
+    measurement per timed mode.  The periods are the *planned* ones (the
+    config's inertia) with the timing sigma and ``amplitude: 0`` (small):
+    replace them with the measured values (or ``cycles``/``times``) and the
+    release amplitude after the experiment; without an amplitude, invert
+    budgets an assumed 0-10 degree release range, which the plan leaves out."""
+    from ..jsonable import to_jsonable
+
+    hangs = []
+    for h in plan.hangings:
+        # amplitude 0: the planned periods are small-amplitude (linear) ones and
+        # the plan's sigma assumes the amplitude is stated; put the release
+        # amplitude there with the measured period (invert then corrects for it)
+        ms = [{"mode": m["mode"], "period": f"{m['period']:.9g} +- {m['period_sigma']:.3g}", "amplitude": 0.0}
+              for m in plan.measurements if m["hanging"] == h.name]
+        entry = {"name": h.name, "config": to_jsonable(h.config),
+                 "rotation": "identity" if not any(h.rotvec_deg) else {"rotvec_deg": list(h.rotvec_deg)},
+                 "measurements": ms}
+        hangs.append(entry)
+    unc = {k: v for k, v in plan.unc.items() if k != "timing"}
+    return {"solve_for": list(plan.components), "uncertainty": unc, "hangings": hangs}
+
+
+def describe(plan: HangingPlan) -> list[str]:
+    """Plain lines: hangings, modes, predicted uncertainty per component."""
+    return describe_json(plan.to_json())
+
+
+def describe_json(doc: dict) -> list[str]:
+    """:func:`describe` of a :meth:`HangingPlan.to_json` document."""
+    lines = []
+    for h in doc["hangings"]:
+        modes = [m for m in doc["measurements"] if m["hanging"] == h["name"]]
+        lines.append(f"hang {h['name']}" + (f" (rotation vector {h['rotation_deg']} deg)" if any(h["rotation_deg"]) else "")
+                     + ": time " + ", ".join(f"{m['mode']} (T = {m['period']:.5g} s, sep {100 * m['separation']:.3g} %; "
+                                             f"{m['cycles_per_trial']} cycles x {m['stopwatch']['trials']} stopwatch trials)"
+                                             for m in modes))
+    for c, a in doc["accuracy"].items():
+        ok = a["sigma"] is not None and math.isfinite(a["sigma"])
+        lines.append(f"{c} = {a['value']:.6g} +- {a['sigma']:.3g} kg m^2 ({100 * a['rel_sigma']:.3g} %)" if ok
+                     else f"{c}: not identified by the hangings tried")
+    return lines
+
+
+__all__ = ["HangingPlan", "candidate_hangings", "describe", "joint_covariance", "measurements_document",
+           "plan_hangings"]

@@ -1,0 +1,426 @@
+"""One sweep point: every figure of a configuration (see :mod:`bifilar.studies.sweep`
+for the list), computed from the base config, the point's parameters and the
+settings only.  A bad point is returned with ``valid: false`` and a
+one-line reason, never raised.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..errors import BifilarError, ConvergenceError, InputError, SlackWireError, UnstableRestError
+from ..jsonable import to_jsonable
+from .settings import _IDX, PRINCIPAL, SweepSettings
+from .shorthands import apply_params
+
+#: below this |d ln T / d ln I| for every mode a component counts as not identifiable
+IDENTIFIABLE_MIN = 1e-6
+
+# one point
+
+
+_plain = to_jsonable  # point dicts read back from a journal equal the computed ones
+
+
+def _one_line(exc: BaseException) -> str:
+    errs = getattr(exc, "errors", None)
+    if errs:
+        more = f" (+{len(errs) - 1} more)" if len(errs) > 1 else ""
+        return str(errs[0]).splitlines()[0] + more
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _fd_step(scene, name: str, rel_step: float = 1e-6) -> float:
+    """Finite-difference step of :func:`~bifilar.estimation.sensitivity.period_sensitivity`."""
+    if name in _IDX:
+        return rel_step * float(np.max(np.linalg.eigvalsh(scene.inertia)))
+    if name in ("mass", "gravity"):
+        return rel_step * float(getattr(scene, name))
+    return rel_step * float(np.max(scene.lengths))
+
+
+#: rad: a neighbour (1e-6 relative input step) whose rest pose turned more than this jumped branch
+TURN_MAX = 1e-3
+
+
+def _neighbour_rest(scene, base, global_search: bool):
+    """Rest pose of a finite-difference neighbour on the branch through
+    ``base`` (Newton from it; the global search only if that fails and
+    ``global_search``), or None when there is none near ``base``."""
+    from ..analysis import equilibrium as eq
+    from ..rotations import matrix_to_rotvec
+
+    local = getattr(eq, "_from_guess", None)  # TODO(lead): a public rest_pose(..., local_only=True)
+    r = local(scene, base) if local is not None else None
+    if r is None and global_search:
+        try:
+            r = eq.rest_pose(scene, guess=base)
+        except (UnstableRestError, SlackWireError, ConvergenceError):
+            r = None
+    if r is None or float(np.linalg.norm(matrix_to_rotvec(r.R @ base.R.T))) > TURN_MAX:
+        return None
+    return r
+
+
+def point_sensitivity(scene, names: list[str], rest=None):
+    """:func:`~bifilar.estimation.sensitivity.period_sensitivity`, robust at
+    the edge of stability.
+
+    A scene with a neutral mode (e.g. a thin plate whose CoM lies on the
+    attachment line) has neighbours that cannot hang near its rest pose:
+    a micrometre's change turns the body over (Newton from the rest pose
+    lands on a pose turned by ~1 rad).  A derivative must follow the local
+    branch, so each side's rest pose must stay within :data:`TURN_MAX` of the
+    base pose; otherwise that side is dropped (one-sided difference, first
+    order: relative error ~1e-6), and an input with no side left is left out
+    of the uncertainty budget (its column set to 0) with a note.  Regular
+    scenes take the shared central differences.  Returns (Sensitivity, notes).
+    """
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+    from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
+
+    rest = rest if rest is not None else rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
+    neutral = not np.all(np.isfinite(T0))
+    if not neutral:
+        try:
+            return period_sensitivity(scene, names), []
+        except (UnstableRestError, SlackWireError, ConvergenceError):
+            pass
+    jac = np.zeros((len(T0), len(names)))
+    notes = []
+    for j, name in enumerate(names):
+        h = _fd_step(scene, name)
+        side = {}
+        for sgn in (1.0, -1.0):
+            sc = perturb(scene, name, sgn * h)
+            r = _neighbour_rest(sc, rest, global_search=not neutral)
+            if r is not None:
+                side[sgn] = periods_of(sc, ms, r)
+        if len(side) == 2:
+            jac[:, j] = (side[1.0] - side[-1.0]) / (2 * h)
+        elif side:
+            sgn, T1 = next(iter(side.items()))
+            jac[:, j] = (T1 - T0) / (sgn * h)
+            notes.append(f"{name}: one-sided derivative (no nearby stable rest for a {'-+'[sgn < 0]}{h:.1e} change)")
+        else:
+            notes.append(f"{name}: left out of the budget (no nearby stable rest for a {h:.1e} change either way: "
+                         "the point is at the edge of stability)")
+    return Sensitivity(list(names), T0, jac, ms, rest), notes
+
+
+def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slope: float,
+                    T0: float | None = None) -> float | None:
+    """The exact linear model's estimate of ``comp`` (kg m^2): the value for
+    which the linear period of mode ``k`` of ``modes`` (tracked by MAC, rest
+    poses warm-started from ``rest``) equals ``T_target`` (s), the other
+    inputs as in ``scene``.  Secant iteration from ``slope`` = dT/dI (s per
+    kg m^2) to 1e-13 in the period; ``T0`` the period at the scene's value
+    (computed if None).  None if a step leaves the stable region."""
+    from ..estimation.sensitivity import perturb, periods_of
+
+    I0 = float(scene.inertia[_IDX[comp]])
+    try:
+        if T0 is None:
+            T0 = float(periods_of(scene, modes, rest)[k])
+        x0, f0 = 0.0, float(T0 - T_target)
+        if f0 == 0.0:
+            return I0
+        x1 = -f0 / float(slope)
+        for _ in range(12):
+            f1 = float(periods_of(perturb(scene, comp, x1), modes, rest)[k] - T_target)
+            if abs(f1) <= 1e-13 * T_target or f1 == f0:
+                return I0 + x1
+            x0, f0, x1 = x1, f1, x1 - f1 * (x1 - x0) / (f1 - f0)
+    except (UnstableRestError, SlackWireError, ConvergenceError):
+        return None
+    return None
+
+
+class _Ladder:
+    """The simple estimators of :mod:`bifilar.estimation.invert` applied to
+    one point: the small-angle formula (thesis 5.2.18; two wires: D = the
+    attachment spacing, h = the mean vertical drop of the wires at rest;
+    n >= 3: the multifilar analogue with R = the mean horizontal distance of
+    the attachments from the CoM's vertical) and the thesis's section 7.1
+    linearisation of its Kane model (two wires, anchors at one height,
+    inclined wires).  Falls back to :func:`bifilar.models.reduced.small_angle_inertia`
+    (and marks the thesis's method pending) when that module is absent.
+    """
+
+    def __init__(self, scene, rest):
+        self.scene, self.rest = scene, rest
+        try:
+            from ..estimation import invert as inv
+            from ..estimation.measurements import Hanging
+        except ImportError:
+            inv = Hanging = None
+        self.inv = inv if inv is not None and hasattr(inv, "ThesisModel") else None
+        self._Hanging = Hanging
+        self._hm = None
+
+    def small_angle(self, comp: str, T: float) -> float:
+        """Estimate of ``comp`` (kg m^2): the formula gives the moment about the
+        vertical; the other components keep their prior."""
+        sc, rest = self.scene, self.rest
+        if self.inv is not None:
+            I_v, _ = self.inv.small_angle_vertical_inertia(sc, rest, T)
+        else:
+            from ..models.reduced import small_angle_inertia
+
+            P = rest.com + sc.attachments @ rest.R.T
+            h = float(np.mean(sc.anchors[:, 2] - P[:, 2]))
+            if sc.n_wires == 2:
+                D = float(np.linalg.norm(P[0] - P[1]))
+            else:
+                D = 2.0 * float(np.mean(np.linalg.norm(P[:, :2] - rest.com[:2], axis=1)))
+            I_v = float(small_angle_inertia(sc.mass, sc.gravity, D, h, T))
+        n = rest.R.T @ np.array([0.0, 0.0, 1.0])  # the vertical in body axes
+        a = _IDX[comp][0]
+        return float(sc.inertia[a, a] + (I_v - n @ sc.inertia @ n) / n[a] ** 2)
+
+    def thesis(self, comp: str, mode_label: str, T: float) -> tuple[float | None, str]:
+        """(estimate in kg m^2 or None, note)."""
+        inv = self.inv
+        if inv is None:
+            return None, "pending: bifilar.estimation.invert (the thesis's linearisation) not available"
+        try:
+            if self._hm is None:
+                self._hm = inv.HangingModel(self._Hanging("sweep point", self.scene, np.eye(3)), self.scene.inertia)
+            hm = self._hm
+            tm = inv.ThesisModel(hm, hm.mode_index(mode_label, "mode"), comp)
+            lo, hi = inv.physical_interval(self.scene.inertia, comp)
+            scale = float(np.max(np.linalg.eigvalsh(self.scene.inertia)))
+            x = inv.solve_scalar(tm.period, T, float(self.scene.inertia[_IDX[comp]]), lo, hi, scale, "mode", comp)
+            return float(x), f"linearisation {tm.which} of thesis section 7.1"
+        except inv.NotApplicable as exc:
+            return None, str(exc)
+        except (BifilarError, ValueError, ArithmeticError) as exc:
+            return None, _one_line(exc)
+
+    def biases(self, comp: str, mode_label: str, T_ref: float, axis_vertical: bool) -> tuple[dict, dict]:
+        """Relative bias of each estimator fed the reference period ``T_ref`` (s)."""
+        I_true = float(self.scene.inertia[_IDX[comp]])
+        bias: dict = {"small_angle": None, "thesis": None}
+        notes: dict = {}
+        if mode_label.startswith("torsion") and axis_vertical:
+            bias["small_angle"] = self.small_angle(comp, T_ref) / I_true - 1
+        else:
+            notes["small_angle"] = "applies only to the torsion about the vertical axis"
+        x, notes["thesis"] = self.thesis(comp, mode_label, T_ref)
+        if x is not None:
+            bias["thesis"] = x / I_true - 1
+        return bias, notes
+
+
+def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: SweepSettings) -> list:
+    """One nonlinear run per mode label from ``amplitude`` x its shape, all
+    in one call of the batched engine (:func:`bifilar.analysis.batch.simulate_batch`;
+    :func:`bifilar.analysis.simulate.simulate` one by one if it is absent).
+    Each result has .period, .tension_min/.tension_max (n,) N, .slack,
+    .depth_max m, .mode, .warnings."""
+    if not labels:
+        return []
+    try:
+        from ..analysis.batch import simulate_batch
+    except ImportError:
+        from ..analysis.simulate import simulate
+
+        return [simulate(scene, lab, amplitude, st.periods, rest=rest, modes=ms, rtol=st.rtol) for lab in labels]
+    n = len(labels)
+    return simulate_batch([scene] * n, mode=labels, amplitude=amplitude, periods=st.periods, rtol=st.rtol,
+                          rests=[rest] * n, modes=[ms] * n)
+
+
+def point_uncertainty(st: SweepSettings, params: dict) -> dict:
+    """Input uncertainties of a point: the settings' (defaults < config
+    ``uncertainty:`` block < ``--sigma``), with any swept ``uncertainty.KEY``
+    parameter of the point taking its value (units as
+    :data:`~bifilar.estimation.sensitivity.DEFAULT_UNCERTAINTY`)."""
+    unc = st.unc
+    for name, v in params.items():
+        if name.startswith("uncertainty."):
+            unc[name.split(".", 1)[1]] = float(v)
+    return unc
+
+
+def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
+    """The predicted uncertainty of ``comp`` estimated from mode ``k``: the
+    one place the sweep, the plan and the remedies compute it (a
+    :class:`~bifilar.estimation.sensitivity.Budget`; ``value_sigma`` kg m^2).
+
+    Propagation of the period's timing sigma ``unc["timing"]`` (s) and of
+    every measured input's sigma: linear, or the second-order std of
+    :func:`bifilar.estimation.budget.component_std` where the linear one is
+    wrong (shares and contributions stay the linear ones).  ``column``: dT/dI (s per kg m^2)
+    of every mode, replacing ``sens``'s column of ``comp`` (a component of
+    the reference body frame seen from another hanging, see
+    :mod:`bifilar.studies.remedy`).
+    """
+    from dataclasses import replace
+
+    from ..estimation.budget import component_std
+    from ..estimation.sensitivity import inertia_budget
+
+    if column is not None:  # the same budget with comp's column replaced (the hanging's other inputs unchanged)
+        jac = np.array(sens.jacobian, float, copy=True)
+        jac[:, sens.names.index(comp)] = np.asarray(column, float)
+        sens = replace(sens, jacobian=jac)
+        return inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+    b = inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+    # the std invert prints: second order where the linear one is wrong (a
+    # shallow CoM), so a planner can penalise such a rig (issue 10)
+    return replace(b, value_sigma=component_std(scene, comp, k + 1, unc, unc["timing"], fallback=b.value_sigma))
+
+
+def component_scale(inertia, comp: str) -> float:
+    """The scale a component's uncertainty is relative to (kg m^2): ``|I_ii|``
+    for a moment; ``sqrt(I_ii I_jj)`` for a product ``I_ij`` (which may be
+    zero, and whose size is bounded by that geometric mean)."""
+    i, j = _IDX[comp]
+    if i == j:
+        return abs(float(inertia[i, i]))
+    return float(np.sqrt(abs(inertia[i, i] * inertia[j, j])))
+
+
+def timed_separation(periods, timed) -> float:
+    """The mode-separation guard: the smallest relative gap
+    ``|T_k - T_j| / T_k`` between any timed mode ``k`` (indices ``timed``)
+    and any other mode ``j`` (periods in s; neutral modes, NaN, ignored).
+    Close periods beat and spoil the timing.  ``inf`` when nothing is
+    timed or there is no other mode."""
+    periods = np.asarray(periods, float)
+    gaps = [abs(periods[k] - periods[j]) / periods[k] for k in timed for j in range(len(periods))
+            if j != k and np.isfinite(periods[j]) and np.isfinite(periods[k])]
+    return float(min(gaps)) if gaps else math.inf
+
+
+def rig_of(scene, rest) -> dict:
+    """The rig to build (SI): anchors (world, m), attachments (body frame, CoM
+    origin, m), wire lengths (m), each wire's angle from the vertical at rest
+    (deg) and the attachment points' world positions at rest (m)."""
+    d = np.asarray(rest.wire_vectors, float)  # anchor -> attachment
+    ang = np.degrees(np.arccos(np.clip(-d[:, 2] / np.linalg.norm(d, axis=1), -1.0, 1.0)))
+    return {"anchors": scene.anchors, "attachments": scene.attachments, "lengths": scene.lengths,
+            "wire_angles_deg": ang, "attachments_world": rest.com + scene.attachments @ rest.R.T}
+
+
+def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSettings) -> dict:
+    """All figures of one sweep point (see the module docstring); never raises
+    for a bad point: ``valid: false`` and a one-line ``error`` instead."""
+    out: dict = {"params": dict(params), "valid": False, "error": None}
+    try:
+        out.update(_evaluate(base_cfg, source, params, settings))
+        out["valid"] = True
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except BifilarError as exc:
+        out["error"] = _one_line(exc)
+    except Exception as exc:  # noqa: BLE001 - a sweep point must never crash the sweep
+        out["error"] = f"internal error ({type(exc).__name__}: {_one_line(exc)})"
+    return _plain(out)
+
+
+def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> dict:
+    from ..analysis.equilibrium import rest_pose
+    from ..config import scene_from_dict
+    from ..estimation.sensitivity import best_mode_for, grouped_shares, measured_inputs
+
+    cfg, amp_override = apply_params(base_cfg, params, source)
+    amplitude = st.amplitude if amp_override is None else amp_override
+    if not amplitude > 0:
+        raise InputError("amplitude", f"must be positive, got {amplitude:g}")
+    scene = scene_from_dict(cfg, source, warn=False)  # the base config's warnings were shown once
+    rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
+    unc = point_uncertainty(st, params)
+    names = list(st.components) + measured_inputs(scene)
+    sens, notes = point_sensitivity(scene, names, rest0)
+    ms, rest = sens.modes, sens.rest
+    labels = [m.label for m in ms.modes]
+    periods = sens.periods
+    res: dict = {
+        "amplitude": amplitude,
+        "mass": scene.mass,
+        "lengths": scene.lengths,
+        "periods": {m.label: m.period for m in ms.modes},
+        "components": {},
+        "uncertainty": unc,
+        "rig": rig_of(scene, rest),
+        "notes": notes,
+        "warnings": [],
+    }
+    chosen: dict[str, int] = {}
+    for comp in st.components:
+        I = float(scene.inertia[_IDX[comp]])
+        scale = component_scale(scene.inertia, comp)
+        col = sens.column(comp)
+        rel = np.abs(col) * scale / np.where(np.isfinite(periods), periods, np.inf)
+        rel = np.where(np.isfinite(rel), rel, 0.0)
+        entry: dict = {"value": I, "identifiable": bool(rel.max() >= IDENTIFIABLE_MIN),
+                       "from_modes": {labels[i]: float(rel[i]) for i in np.argsort(-rel) if rel[i] >= IDENTIFIABLE_MIN}}
+        if not entry["identifiable"]:
+            entry.update(mode=None, sigma=math.inf, rel_sigma=math.inf,
+                         reason=f"no mode's period depends on {comp} (max |d ln T / d ln {comp}| = {rel.max():.1e})")
+            res["components"][comp] = entry
+            continue
+        k = best_mode_for(sens, comp)
+        chosen[comp] = k
+        b = predicted_budget(sens, scene, comp, k, unc)
+        j_all = [j for j, n in enumerate(sens.names) if n not in _IDX]
+        dI_dx = {sens.names[j]: -float(sens.jacobian[k, j] / col[k]) for j in j_all}
+        sep = timed_separation(periods, {k})
+        axis = _IDX[comp][0] if comp in PRINCIPAL else None
+        entry.update(
+            mode=labels[k], period=float(periods[k]),
+            sigma=b.value_sigma, rel_sigma=b.value_sigma / scale if scale else math.inf,
+            rel_sensitivity_period=b.rel_sensitivity,
+            dlnI_dx={n: v / scale for n, v in dI_dx.items()} if scale else dI_dx,
+            shares=grouped_shares(b), separation=sep,
+            axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
+        )
+        res["components"][comp] = entry
+    res["separation"] = timed_separation(periods, set(chosen.values()))
+    # nonlinear runs: one per chosen mode
+    sims: dict[int, Any] = {}
+    if st.tensions:
+        ks = sorted(set(chosen.values()))
+        from ..analysis.simulate import initial_state
+
+        for k in ks:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
+            initial_state(scene, rest, ms.modes[k], amplitude)
+        sims = dict(zip(ks, _nonlinear_runs(scene, rest, ms, [labels[k] for k in ks], amplitude, st)))
+        tmax = np.max([s.tension_max for s in sims.values()], axis=0) if sims else rest.tensions
+        tmin = np.min([s.tension_min for s in sims.values()], axis=0) if sims else rest.tensions
+        slack = sorted({w for s in sims.values() for w, _ in s.slack})
+        res["tension"] = {"rest": rest.tensions, "max": tmax, "min": tmin, "peak": float(np.max(tmax)),
+                          "slack": bool(slack), "slack_wires": slack, "by_mode": {
+                              labels[k]: {"max": s.tension_max, "min": s.tension_min} for k, s in sims.items()}}
+        depth_max = max([rest.depth] + [s.depth_max for s in sims.values()])
+        res["depth"] = {"rest": rest.depth, "max": depth_max}
+        for s in sims.values():
+            res["warnings"] += [f"{s.mode}: {w}" for w in s.warnings]
+    else:
+        res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
+                          "slack_wires": [], "by_mode": {}}
+        res["depth"] = {"rest": rest.depth, "max": None}
+    # biases at the prescribed amplitude
+    ladder = _Ladder(scene, rest)
+    for comp, k in chosen.items():
+        e = res["components"][comp]
+        T_lin = float(periods[k])
+        T_nl = sims[k].period if k in sims else None
+        T_ref = T_nl if T_nl is not None else T_lin
+        bias, bnotes = ladder.biases(comp, labels[k], T_ref, e["axis_vertical"])
+        I_lin = linear_estimate(scene, comp, k, T_ref, ms, rest, sens.column(comp)[k], float(periods[k]))
+        bias["linear"] = (I_lin - e["value"]) / e["value"] if I_lin is not None and e["value"] else None
+        e.update(nonlinear_period=T_nl, bias=bias, bias_reference="nonlinear" if T_nl else "linear",
+                 bias_notes=bnotes)
+        if st.tensions and T_nl is None:
+            bnotes["linear"] = "no period measured in the nonlinear run; biases against the linear period"
+    return res

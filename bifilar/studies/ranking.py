@@ -1,0 +1,223 @@
+"""Feasibility, ranking and the recommendation of a sweep's points.
+
+Operates on the point dicts of :func:`bifilar.studies.point.evaluate_point`;
+the objective is the predicted relative standard uncertainty (of the target
+component, or the worst of the *measurable* components: those identifiable
+at some valid point of the range; the others get a remedy, see
+:mod:`bifilar.studies.remedy`, instead of blocking every recommendation).
+
+The mode-separation guard is one figure per point, ``separation``: the
+smallest relative gap between any timed mode (the mode each measurable
+component is estimated from) and any other mode
+(:func:`bifilar.studies.point.timed_separation`); it is what the table,
+the text and the plot show and what ``min_separation`` limits.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..jsonable import to_jsonable as _plain
+from .settings import Constraints
+
+
+
+def objective(point: dict, target: str | None, among=None) -> float:
+    """Relative standard uncertainty the ranking minimises: of ``target``, or
+    the worst of the components ``among`` (default: all of the point's);
+    inf when one of them is not identifiable or the point is invalid."""
+    if not point.get("valid"):
+        return math.inf
+    comps = point["components"]
+    sel = [target] if target else (list(among) if among is not None else list(comps))
+    vals = [comps[k]["rel_sigma"] for k in sel if k in comps]
+    vals = [math.inf if v is None else v for v in vals]
+    return float(max(vals)) if vals else math.inf
+
+
+def measurable_components(points: list[dict]) -> list[str]:
+    """Components identifiable at one valid point at least (config order)."""
+    out = []
+    for c in _components(points):
+        if any(p.get("valid") and p["components"][c].get("identifiable") for p in points):
+            out.append(c)
+    return out
+
+
+def point_separation(point: dict) -> float | None:
+    """The point's mode-separation guard (see the module docstring)."""
+    sep = point.get("separation")
+    if sep is None:  # a point from before the guard had its own field
+        seps = [e["separation"] for e in point["components"].values() if e.get("separation") is not None]
+        sep = min(seps) if seps else None
+    return sep
+
+
+def violations(point: dict, c: Constraints, target: str | None = None) -> list[tuple[str, str]]:
+    """(constraint, message) for every limit the point breaks."""
+    out: list[tuple[str, str]] = []
+    if not point.get("valid"):
+        return [("valid", point.get("error") or "invalid")]
+    t = point["tension"]
+    if t.get("slack"):
+        out.append(("slack", f"wire(s) {', '.join(map(str, t['slack_wires']))} go slack during the excitation"))
+    if c.max_tension is not None:
+        if t.get("peak") is None:
+            out.append(("max_tension", "no nonlinear run (tensions off)"))
+        elif t["peak"] > c.max_tension:
+            out.append(("max_tension", f"peak tension {t['peak']:.4g} N > {c.max_tension:g} N"))
+    if c.max_depth is not None:
+        d = point["depth"].get("max")
+        if d is None:
+            out.append(("max_depth", "no nonlinear run (tensions off)"))
+        elif d > c.max_depth:
+            out.append(("max_depth", f"depth {d:.4g} m > {c.max_depth:g} m"))
+    if c.lengths_available is not None:
+        L = point.get("lengths")
+        if L is not None and not all(min(abs(x - a) for a in c.lengths_available) <= 1e-6 for x in L):
+            out.append(("lengths_available", f"wire lengths {', '.join(f'{x:g}' for x in L)} m not all in "
+                                             f"{', '.join(f'{a:g}' for a in c.lengths_available)}"))
+    if c.min_separation is not None:
+        sep = point_separation(point)
+        if sep is not None and sep < c.min_separation:
+            out.append(("min_separation", f"mode separation {100 * sep:.3g} % < {100 * c.min_separation:g} %"))
+    return out
+
+
+CONSTRAINT_FLAGS = {"max_tension": "--max-tension", "max_depth": "--max-depth",
+                    "lengths_available": "--lengths-available", "min_separation": "--min-separation",
+                    "slack": "--amplitude", "valid": "--param"}
+
+
+def binding_constraint(points: list[dict], c: Constraints, target: str | None, among=None) -> tuple[str, str]:
+    """Which limit leaves no point feasible: (flag name, message)."""
+    valid = [p for p in points if p.get("valid")]
+    if not valid:
+        reasons = sorted({p.get("error") or "?" for p in points})
+        return "--param", "no valid configuration in the range: " + "; ".join(reasons[:3])
+    finite = [p for p in valid if math.isfinite(objective(p, target, among))]
+    if not finite:
+        what = target or "no component"
+        verb = "is not" if target else "is"
+        return "--target", f"{what} {verb} identifiable from any mode anywhere in the range"
+    viol = [dict(violations(p, c, target)) for p in finite]
+    names = [n for n in ("slack", "max_tension", "max_depth", "lengths_available", "min_separation")
+             if any(n in v for v in viol)]
+    # the constraint that no point satisfies, else the one whose removal frees the most points
+    never = [n for n in names if all(n in v for v in viol)]
+    best = never[0] if never else max(names, key=lambda n: sum(set(v) == {n} for v in viol))
+    flag = CONSTRAINT_FLAGS[best]
+    if best == "max_tension":
+        lo = min(p["tension"]["peak"] for p in finite if p["tension"].get("peak") is not None)
+        msg = f"no configuration meets --max-tension {c.max_tension:g} N: the lowest peak tension found is {lo:.4g} N"
+    elif best == "max_depth":
+        lo = min(p["depth"]["max"] for p in finite if p["depth"].get("max") is not None)
+        msg = f"no configuration meets --max-depth {c.max_depth:g} m: the smallest depth found is {lo:.4g} m"
+    elif best == "min_separation":
+        hi = max(point_separation(p) for p in finite)
+        msg = (f"no configuration meets --min-separation {c.min_separation:g}: the best mode separation "
+               f"found is {hi:.3g}")
+    elif best == "slack":
+        msg = "every configuration lets a wire go slack during the excitation; reduce --amplitude"
+    else:
+        msg = "no configuration uses only the available wire lengths " + ", ".join(f"{a:g}" for a in c.lengths_available)
+    others = [CONSTRAINT_FLAGS[n] for n in names if n != best]
+    if others:
+        msg += f" (also limiting: {', '.join(others)})"
+    return flag, msg
+
+
+def pareto_front(points: list[dict], target: str | None, among=None) -> list[int]:
+    """Indices of the valid points not dominated in (peak tension, objective),
+    sorted by increasing peak tension (empty without the nonlinear runs)."""
+    cand = [(p["tension"]["peak"], objective(p, target, among), i) for i, p in enumerate(points)
+            if p.get("valid") and p["tension"].get("peak") is not None and math.isfinite(objective(p, target, among))]
+    cand.sort()
+    front, best = [], math.inf
+    for tp, ob, i in cand:
+        if ob < best:
+            front.append(i)
+            best = ob
+    return front
+
+
+def assess(points: list[dict], constraints: Constraints, target: str | None) -> dict:
+    """Mark each point ``feasible`` / ``violations`` / ``objective`` / ``rank``
+    (in place) and return the recommendation document.
+
+    Without a target the objective is the worst of the measurable components
+    (:func:`measurable_components`); ``identifiability`` says per component
+    whether it is measurable and from which modes at the recommended point
+    (``remedy`` entries are added by :func:`bifilar.studies.remedy.add_remedies`).
+    """
+    among = measurable_components(points)
+    for p in points:
+        v = violations(p, constraints, target)
+        p["objective"] = _plain(objective(p, target, among))
+        p["violations"] = [m for _, m in v]
+        p["feasible"] = not v
+        p["rank"] = None
+    ranked = sorted((i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None),
+                    key=lambda i: points[i]["objective"])
+    for r, i in enumerate(ranked):
+        points[i]["rank"] = r + 1
+    front = pareto_front(points, target, among)
+    comps = _components(points)
+    doc: dict = {"target": target or "worst relative of " + ", ".join(among or comps),
+                 "measurable": among, "not_measurable": [c for c in comps if c not in among],
+                 "constraints": constraints.describe(), "pareto_front": front,
+                 "n_valid": sum(bool(p.get("valid")) for p in points),
+                 "n_feasible": sum(bool(p["feasible"]) for p in points)}
+    if not ranked:
+        flag, msg = binding_constraint(points, constraints, target, among)
+        doc.update(best=None, binding=flag, reason=msg)
+    else:
+        i = ranked[0]
+        doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
+                   why=explain(points[i], constraints, target, among), ranking=ranked[:10],
+                   rig=points[i].get("rig"), separation=point_separation(points[i]))
+    ref = points[doc["best"]] if doc.get("best") is not None else None
+    doc["identifiability"] = {c: identifiability(c, ref, c in among) for c in comps}
+    return doc
+
+
+def identifiability(comp: str, point: dict | None, measurable: bool) -> dict:
+    """Per component: measurable in the range, and at ``point`` (the
+    recommended one) the modes whose period depends on it (``|d ln T / d ln I|``)
+    and the mode it is estimated from."""
+    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None}
+    if point is not None and point.get("valid"):
+        e = point["components"].get(comp, {})
+        d.update(from_modes=e.get("from_modes", {}), mode=e.get("mode"), rel_sigma=e.get("rel_sigma"))
+    return d
+
+
+def _components(points: list[dict]) -> list[str]:
+    for p in points:
+        if p.get("valid"):
+            return list(p["components"])
+    return []
+
+
+def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str]:
+    """Plain-language reasons a point was recommended."""
+    lines = []
+    comps = p["components"]
+    sel = [target] if target else list(among if among is not None else comps)
+    worst = max(sel, key=lambda k: math.inf if comps[k]["rel_sigma"] is None else comps[k]["rel_sigma"])
+    e = comps[worst]
+    lines.append(f"lowest predicted uncertainty of {'the target ' + target if target else 'the worst measurable component'}: "
+                 f"{worst} +- {100 * e['rel_sigma']:.3g} % (from the {e['mode']} mode)")
+    if e.get("shares"):
+        top = max(e["shares"], key=e["shares"].get)
+        lines.append(f"its variance is {100 * e['shares'][top]:.0f} % {top}")
+    sep = point_separation(p)
+    if sep is not None:
+        lines.append(f"mode separation {100 * sep:.3g} % (smallest gap between a timed mode and any other)"
+                     + (f", >= {100 * c.min_separation:g} % required" if c.min_separation is not None else ""))
+    t = p["tension"]
+    if t.get("peak") is not None:
+        lines.append(f"peak wire tension {t['peak']:.4g} N" + (f" (<= {c.max_tension:g} N)" if c.max_tension else ""))
+    if p["depth"].get("max") is not None:
+        lines.append(f"needs {p['depth']['max']:.4g} m below the ceiling" + (f" (<= {c.max_depth:g} m)" if c.max_depth else ""))
+    return lines
