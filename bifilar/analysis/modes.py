@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh
 
 from ..scene import Scene
 from .equilibrium import RestPose, reduced_stiffness
@@ -98,7 +97,7 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     M[3:, 3:] = rest.R @ scene.inertia @ rest.R.T
     if N.shape[1] == 0:
         return ModeSet([], M, N)
-    w2, Y = eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
+    w2, Y = eigh_generalized(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
     scale = max(abs(w2).max(), 1e-300)
     Y = _align_degenerate(N, Y, w2, scale)
     modes = []
@@ -123,22 +122,59 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     return ModeSet(out, M, N)
 
 
-def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, scale: float) -> np.ndarray:
-    """Within clusters of (nearly) equal eigenvalues the eigenvectors are
-    arbitrary; pick the combination whose shapes are aligned with the world
-    axes (pivoted QR on the shapes), so a symmetric rig gets clean labels."""
-    from scipy.linalg import qr
+def eigh_generalized(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (ascending) and eigenvectors Y of ``K y = w M y`` for
+    symmetric K and symmetric positive definite M, normalised Y^T M Y = I
+    (as ``scipy.linalg.eigh(K, M)``), in numpy alone: with M = C C^T
+    (Cholesky), the standard problem C^-1 K C^-T z = w z and y = C^-T z.
+    Units: w in units of K over M (rad^2/s^2 for a stiffness and a mass)."""
+    C = np.linalg.cholesky(M)
+    Ci = np.linalg.inv(C)
+    A = Ci @ K @ Ci.T
+    w, Z = np.linalg.eigh(0.5 * (A + A.T))
+    return w, Ci.T @ Z
 
-    Y = Y.copy()
+
+def _pivot_rows(S: np.ndarray, k: int) -> np.ndarray:
+    """Indices of ``k`` rows of S (6, c) picked as a column-pivoted QR of S^T
+    picks them: each time the row with the largest norm once the span of the
+    rows already picked is removed (first index on a tie)."""
+    R = np.array(S, dtype=float)
+    picked = []
+    for _ in range(k):
+        norms = np.einsum("ij,ij->i", R, R)
+        norms[picked] = -1.0
+        i = int(np.argmax(norms))
+        picked.append(i)
+        u = R[i] / np.sqrt(norms[i])
+        R = R - np.outer(R @ u, u)
+    return np.array(picked)
+
+
+def degenerate_clusters(w2: np.ndarray, scale: float, rel: float = 1e-8) -> list[tuple[int, int]]:
+    """Index ranges [k, j) of clusters of two or more (nearly) equal
+    eigenvalues in the ascending array ``w2`` (rad^2/s^2): neighbours within
+    ``rel * scale`` of the cluster's first member."""
+    out = []
     k = 0
     while k < len(w2):
         j = k + 1
-        while j < len(w2) and abs(w2[j] - w2[k]) <= 1e-8 * scale:
+        while j < len(w2) and abs(w2[j] - w2[k]) <= rel * scale:
             j += 1
         if j - k > 1:
-            S = N @ Y[:, k:j]  # (6, c)
-            _, _, piv = qr(S.T, pivoting=True)
-            rows = piv[: j - k]
-            Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
+            out.append((k, j))
         k = j
+    return out
+
+
+def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, scale: float) -> np.ndarray:
+    """Within clusters of (nearly) equal eigenvalues the eigenvectors are
+    arbitrary; pick the combination whose shapes are aligned with the world
+    axes (pivoted QR on the shapes), so a symmetric rig gets clean labels,
+    ordered by world component (swing-x before swing-y) within the cluster."""
+    Y = Y.copy()
+    for k, j in degenerate_clusters(w2, scale):
+        S = N @ Y[:, k:j]  # (6, c)
+        rows = np.sort(_pivot_rows(S, j - k))  # world-axis order within the cluster (x before y ...)
+        Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
     return Y
