@@ -36,6 +36,7 @@ STYLE = {
     "scipy-Radau": ("tab:brown", "s", "solve_ivp Radau"),
     "scipy-LSODA": ("tab:cyan", "^", "solve_ivp LSODA"),
     "simulate": ("tab:purple", "D", "analysis.simulate (solve_ivp DOP853 + health)"),
+    "simulate-auto": ("m", "d", "analysis.simulate method='auto' (odeint LSODA + health; CLI default)"),
     "own-DOP853": ("tab:red", "o", "own DOP853 (bifilar.integrators), one scene"),
     "odeint-LSODA": ("tab:green", "^", "odeint LSODA, one scene (batch 'auto')"),
     "batch-DOP853": ("tab:orange", "P", "batch DOP853, per-scene steps (200 scenes, per scene)"),

@@ -903,7 +903,8 @@ def _single_health(obs: Health, run, idx, idx0, Y, n: int, ns: int) -> None:
 def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0,
            health: bool, on_slack: str, progress):
     """The whole group as one ODE in normalised time tau = t / T_ref (every
-    scene oscillates at ~1 per unit tau, so one step sequence suits all),
+    scene oscillates at ~1 per unit tau, so one step sequence suits all; a
+    single scene in physical time, which is the same ODE without the scaling),
     integrated by LSODA (:func:`scipy.integrate.odeint`: the step loop runs in
     Fortran, only the compiled right-hand side is Python).
 
@@ -926,17 +927,17 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     sq = np.sqrt(Bn)
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
-    if Bn == 1:
+    if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
         k1 = mx.compiled_kernel(P.take(0))
-        T1 = float(T_ref[0])
-        array = np.array
+        tscale = float(T_ref[0])
 
-        def f(y, tau):
-            return array(k1(*y.tolist())) * T1
+        def f(y, t):
+            return k1(*y.tolist())
         kx = mx.compiled_kernel(P.take(0), extras=True)
     else:
         kb = mx.compiled_kernel(P)
         Tcol = T_ref[:, None]
+        tscale = 1.0
 
         def f(y, tau):
             out = kb(*y.reshape(Bn, 13).T)
@@ -959,7 +960,7 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     while k0 < K_total:
         k1_ = min(K_total, k0 + chunk)
         tt = taus[k0:k1_ + 1]
-        Y, info = odeint(f, y, tt, rtol=rte, atol=ate, full_output=True, mxstep=100000, ml=12, mu=12)
+        Y, info = odeint(f, y, tt * tscale, rtol=rte, atol=ate, full_output=True, mxstep=100000, ml=12, mu=12)
         message = info["message"]
         if message == "Integration successful." and not np.all(np.isfinite(Y)):
             message = "the solution is not finite (NaN or inf)"
