@@ -27,12 +27,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _child(n: int, repeat: int) -> dict:
-    sys.path.insert(0, str(ROOT))
+def _child(n: int, repeat: int, package_dir: str | None = None) -> dict:
     sys.path.insert(0, str(ROOT / "scripts"))
-    from bench_targets import monte_carlo
+    sys.path.insert(0, str(package_dir or ROOT))
+    from bifilar.analysis import batch as bt  # first: the package's other modules then come from the same place
 
-    from bifilar.analysis import batch as bt
+    from bench_targets import monte_carlo
 
     scenes = monte_carlo(n, seed=1)
     rests, modes = bt.rest_and_modes(scenes)
@@ -49,10 +49,12 @@ def _child(n: int, repeat: int) -> dict:
             "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 
-def measure(sizes=(1000, 10000), repeat: int = 3) -> list[dict]:
+def measure(sizes=(1000, 10000), repeat: int = 3, package_dir: str | None = None) -> list[dict]:
+    """One fresh process per size; ``package_dir``: the ``bifilar`` to run (e.g. an older revision)."""
     out = []
     for n in sizes:
-        r = subprocess.run([sys.executable, __file__, "--child", str(n), "--repeat", str(repeat)],
+        extra = ["--package-dir", str(package_dir)] if package_dir else []
+        r = subprocess.run([sys.executable, __file__, "--child", str(n), "--repeat", str(repeat), *extra],
                            capture_output=True, text=True, check=True, cwd=ROOT)
         out.append(json.loads(r.stdout.strip().splitlines()[-1]))
     return out
@@ -63,12 +65,13 @@ def main() -> None:
     ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--child", type=int, default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--package-dir", default=None, help="run the bifilar package found in this directory")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args()
     if a.child is not None:
-        print(json.dumps(_child(a.child, a.repeat)))
+        print(json.dumps(_child(a.child, a.repeat, a.package_dir)))
         return
-    res = measure(a.sizes, a.repeat)
+    res = measure(a.sizes, a.repeat, a.package_dir)
     if a.json:
         print(json.dumps(res))
         return

@@ -24,25 +24,28 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _run(argv: list[str]) -> tuple[float, float]:
-    """Wall time and child CPU time (s) of one run of ``argv``."""
+def _run(argv: list[str], package_dir=None) -> tuple[float, float]:
+    """Wall time and child CPU time (s) of one run of ``argv`` (in ``package_dir``, so that
+    ``python -m bifilar`` finds that tree's package first; default this tree)."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, cwd=ROOT)
+    env = None if package_dir is None else {**os.environ, "PYTHONPATH": str(package_dir)}
+    subprocess.run(argv, check=True, stdout=subprocess.DEVNULL, cwd=package_dir or ROOT, env=env)
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
-def measure(config: str, repeat: int = 15) -> dict:
-    """Medians (s) of wall and CPU time of the two commands and their ratios."""
+def measure(config: str, repeat: int = 15, package_dir: str | None = None) -> dict:
+    """Medians (s) of wall and CPU time of the two commands and their ratios.
+    ``package_dir``: run the ``bifilar`` found there (e.g. an older revision)."""
     base = [sys.executable, "-c", "import numpy"]
-    cmd = [sys.executable, "-m", "bifilar", "modes", config, "--json"]
-    _run(base), _run(cmd)  # warm the file cache
+    cmd = [sys.executable, "-m", "bifilar", "modes", str(ROOT / config), "--json"]
+    _run(base), _run(cmd, package_dir)  # warm the file cache
     b, c = [], []
     for _ in range(repeat):
         b.append(_run(base))
-        c.append(_run(cmd))
+        c.append(_run(cmd, package_dir))
     med = lambda xs, k: statistics.median(x[k] for x in xs)  # noqa: E731
     out = {
         "config": config, "repeat": repeat,
