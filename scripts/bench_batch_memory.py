@@ -6,7 +6,7 @@ rest poses and modes computed first (not timed), then
 ``simulate_batch(method="dop853", rtol=1e-9)`` for 10 torsion periods, with
 the default health and lowest point.  Reported: wall and CPU time per scene
 (median of ``--repeat`` runs) and the process's peak resident set size
-(ru_maxrss, MB, includes the interpreter, numpy and scipy: the baseline
+(VmHWM, MB, includes the interpreter, numpy and scipy: the baseline
 before the run is reported too).  Issue 14's targets: per-scene cost at
 10 000 scenes no higher than at 1000, peak memory below 250 MB.
 
@@ -36,7 +36,7 @@ def _child(n: int, repeat: int, package_dir: str | None = None) -> dict:
 
     scenes = monte_carlo(n, seed=1)
     rests, modes = bt.rest_and_modes(scenes)
-    base_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    base_mb = _peak_mb()
     walls, cpus = [], []
     for _ in range(repeat):
         t0, c0 = time.perf_counter(), time.process_time()
@@ -46,7 +46,19 @@ def _child(n: int, repeat: int, package_dir: str | None = None) -> dict:
         del runs
     return {"scenes": n, "wall_ms_per_scene": 1e3 * statistics.median(walls),
             "cpu_ms_per_scene": 1e3 * statistics.median(cpus), "baseline_mb": base_mb,
-            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "peak_mb": _peak_mb()}
+
+
+def _peak_mb() -> float:
+    """Peak resident set size of this process, MB: VmHWM of /proc/self/status (ru_maxrss would
+    carry over the parent's peak across fork and exec); ru_maxrss where /proc is missing."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def measure(sizes=(1000, 10000), repeat: int = 3, package_dir: str | None = None) -> list[dict]:

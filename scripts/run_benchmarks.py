@@ -358,6 +358,9 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smoke run")
     ap.add_argument("--json", default=None, help="also write the raw results to this file")
+    ap.add_argument("--reuse", default=None,
+                    help="a --json file of an earlier run: keep its work-precision, target and Monte Carlo results "
+                         "and measure only the issue-14 figures again")
     ap.add_argument("--before", default="b53fe28",
                     help="git revision for the 'before' figures of issue 14 ('' to skip)")
     args = ap.parse_args(argv)
@@ -367,9 +370,14 @@ def main(argv=None) -> None:
 
     t0 = time.perf_counter()
     flags = ["--quick"] if args.quick else []
-    wp = bench_work_precision.main(flags)
-    tg = bench_targets.main(flags)
-    mc = bench_monte_carlo.main(flags)
+    if args.reuse:
+        old = json.loads(Path(args.reuse).read_text())
+        wp, tg, mc = old["work_precision"], old["targets"], old.get("monte_carlo")
+        t0 -= old.get("elapsed_s", 0.0)
+    else:
+        wp = bench_work_precision.main(flags)
+        tg = bench_targets.main(flags)
+        mc = bench_monte_carlo.main(flags)
     i14 = issue14(args.quick, args.before or None)
     elapsed = time.perf_counter() - t0
     FIG.mkdir(parents=True, exist_ok=True)
@@ -378,8 +386,8 @@ def main(argv=None) -> None:
             plot_work_precision(wp, scene, FIG / f"perf_wp_{scene}.png")
     plot_scaling(tg, FIG / "perf_batch_scaling.png")
     if args.json:
-        Path(args.json).write_text(json.dumps({"work_precision": wp, "targets": tg, "issue14": i14}, indent=1,
-                                              default=float))
+        Path(args.json).write_text(json.dumps({"work_precision": wp, "targets": tg, "monte_carlo": mc, "issue14": i14,
+                                               "elapsed_s": elapsed}, indent=1, default=float))
     DOC.write_text(write_report(wp, tg, elapsed, args.quick, mc, i14))
     print(f"wrote {DOC} and {FIG}/perf_*.png in {elapsed:.0f} s", file=sys.stderr)
 

@@ -185,7 +185,7 @@ def test_default_integrator_failure_is_exit_1_with_its_reason(monkeypatch):
     real = scipy.integrate.odeint
 
     def broken(f, y0, t, *a, **kw):
-        return real(lambda y, tau: f(y, tau) * (np.nan if tau > 0.2 else 1.0), y0, t, *a, **kw)
+        return real(lambda y, tau: np.asarray(f(y, tau)) * (np.nan if tau > 0.2 else 1.0), y0, t, *a, **kw)
 
     monkeypatch.setattr(scipy.integrate, "odeint", broken)
     res = run("simulate", PLATE, "--periods", 1, "--json")
