@@ -29,7 +29,9 @@ tolerance each).  Methods:
 * ``scipy-RK45``, ``scipy-DOP853``, ``scipy-Radau``, ``scipy-LSODA``:
   ``solve_ivp`` on the compiled right-hand side (what
   :func:`bifilar.analysis.simulate.simulate` does);
-* ``simulate``: :func:`bifilar.analysis.simulate.simulate` itself;
+* ``simulate``: :func:`bifilar.analysis.simulate.simulate` itself with
+  solve_ivp's DOP853 (the default before issue 14); ``simulate-auto``: the
+  same with ``method="auto"`` (the CLI's default since: LSODA through odeint);
 * ``own-DOP853``: the project's DOP853 (:mod:`bifilar.integrators`) on
   Python floats, crossings on its dense output;
 * ``odeint-LSODA``: LSODA through ``odeint`` (step loop in Fortran) on
@@ -239,6 +241,7 @@ METHODS_10 = {
     "scipy-Radau": [1e-5, 1e-6, 1e-7, 1e-8],
     "scipy-LSODA": [1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
     "simulate": [1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
+    "simulate-auto": [1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
     "own-DOP853": [1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
     "odeint-LSODA": [1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
     "batch-DOP853": [1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
@@ -256,8 +259,10 @@ def run_method(name, scene, rest, ms, md, amplitude, periods, rtol, repeats, bat
         (per, viol, drift, yend, nfev), wall, cpu = timed(
             lambda: scipy_run(scene, rest, md, amplitude, periods, meth, rtol, naive=(name == "naive")), repeats)
         return dict(period=per, viol=viol, drift=drift, y_end=yend, nfev=nfev, wall=wall, cpu=cpu)
-    if name == "simulate":
-        r, wall, cpu = timed(lambda: simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=rtol), repeats)
+    if name in ("simulate", "simulate-auto"):
+        meth = "auto" if name == "simulate-auto" else "DOP853"
+        r, wall, cpu = timed(lambda: simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=rtol,
+                                              method=meth), repeats)
         return dict(period=r.period, viol=r.max_constraint_violation, drift=r.energy_drift, y_end=None, nfev=r.nfev,
                     wall=wall, cpu=cpu)
     if name in ("own-DOP853", "odeint-LSODA"):

@@ -244,6 +244,8 @@ def test_dense_samples_match_simulate():
     # lsoda samples on its own grid (>= 64 per period in normalised time): compare by interpolation
     # (linear interpolation of a ~0.05 rad oscillation at 64 samples per period: error ~1e-4)
     np.testing.assert_allclose(np.interp(a.t, c.t, c.y[:, 5]), a.y[:, 5], atol=1e-4)
+    for j in range(3):  # positions (absolute, world frame): the CoM moves by ~1e-4 m here
+        np.testing.assert_allclose(np.interp(a.t, c.t, c.y[:, j]), a.y[:, j], atol=1e-5)
 
 
 def test_to_json_has_the_interface_keys():

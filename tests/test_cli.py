@@ -170,10 +170,28 @@ def test_integrator_failure_is_exit_1_with_its_reason(monkeypatch):
         return real(lambda t, y: fun(t, y) * (np.nan if t > 0.2 else 1.0), t_span, y0, **kw)
 
     monkeypatch.setattr(simmod, "solve_ivp", broken)
-    res = run("simulate", PLATE, "--periods", 1, "--json")
+    res = run("simulate", PLATE, "--periods", 1, "--json", "--method", "DOP853")
     assert res.exit_code == 1
     assert lines(res.stderr) == ["error: IntegrationError: integrator DOP853 failed: Required step size is less than "
                                  "spacing between numbers."]
+    assert res.stdout == ""
+
+
+def test_default_integrator_failure_is_exit_1_with_its_reason(monkeypatch):
+    """The default engine (LSODA through scipy.integrate.odeint): a right-hand side
+    that turns NaN gives a non-finite solution, which is a failure, not a result."""
+    import scipy.integrate
+
+    real = scipy.integrate.odeint
+
+    def broken(f, y0, t, *a, **kw):
+        return real(lambda y, tau: np.asarray(f(y, tau)) * (np.nan if tau > 0.2 else 1.0), y0, t, *a, **kw)
+
+    monkeypatch.setattr(scipy.integrate, "odeint", broken)
+    res = run("simulate", PLATE, "--periods", 1, "--json")
+    assert res.exit_code == 1
+    assert lines(res.stderr) == ["error: IntegrationError: integrator LSODA failed: the solution is not finite "
+                                 "(NaN or inf)"]
     assert res.stdout == ""
 
 

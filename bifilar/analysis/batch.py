@@ -40,7 +40,10 @@ How to call it (sweeps, Monte Carlo, amplitude ladders)::
 
 ``mode``, ``amplitude`` and ``periods`` may be one value or one per scene;
 ``rests=``/``modes=`` reuse precomputed rest poses and mode sets
-(:func:`rest_and_modes`); ``health=False`` skips everything but the period.
+(:func:`rest_and_modes`); ``health=False`` skips everything but the period
+(the health figures are then NaN).  Memory is bounded: groups above
+:data:`CHUNK` scenes run in chunks, and the lowest point is a running
+minimum (:mod:`bifilar.analysis.batch_health`).
 
 Units SI, world frame z up, as everywhere in the package.
 """
@@ -58,6 +61,7 @@ from ..errors import BifilarError, InputError
 from ..models import maximal as mx
 from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
+from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, sample_health
 from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, mode_set
 from .simulate import RunSummary, measured_period
@@ -499,177 +503,6 @@ def _coordinate_vector(dom: int, q0: np.ndarray) -> np.ndarray:
     return e
 
 
-def _refine_extremes(t: np.ndarray, T: np.ndarray):
-    """Extremes of sampled tensions refined by the parabola through each
-    interior local extremum and its two neighbours.
-
-    t (K, B) sample times, T (n, K, B).  Returns (Tmin, tmin, Tmax) each
-    (n, B) over the refined interior extremes (inf / nan where there are
-    none).  A sampled extreme is off by ~(omega dt)^2 / 8 of the tension's
-    swing; the vertex of the parabola by ~(omega dt)^3, which matters for a
-    sharp dip near slack.
-    """
-    if T.shape[1] < 3:
-        shape = (T.shape[0], T.shape[2])
-        return np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, -np.inf)
-    t0, t1, t2 = t[:-2], t[1:-1], t[2:]
-    f0, f1, f2 = T[:, :-2], T[:, 1:-1], T[:, 2:]
-    with np.errstate(all="ignore"):
-        d0 = (f1 - f0) / (t1 - t0)
-        d1 = (f2 - f1) / (t2 - t1)
-        a = (d1 - d0) / (t2 - t0)
-        b = d0 + a * (t1 - t0)
-        tv = t1 - b / (2 * a)
-        fv = f1 - b * b / (4 * a)
-    inside = (tv >= t0) & (tv <= t2) & np.isfinite(fv)
-    lo = (f1 <= f0) & (f1 <= f2) & inside & (fv <= f1)
-    hi = (f1 >= f0) & (f1 >= f2) & inside & (fv >= f1)
-    vmin = np.where(lo, fv, np.inf)
-    k = np.argmin(vmin, axis=1)  # (n, B)
-    Tmin = np.take_along_axis(vmin, k[:, None, :], 1)[:, 0]
-    tmin = np.take_along_axis(np.broadcast_to(tv, vmin.shape), k[:, None, :], 1)[:, 0]
-    Tmax = np.max(np.where(hi, fv, -np.inf), axis=1)
-    return Tmin, tmin, Tmax
-
-
-def _merge_refined(obs, idx, Tmin, tmin, Tmax, T_scale=1.0) -> None:
-    """Fold refined extremes (n, k) for scenes ``idx`` into the observer."""
-    obs.Tmin[idx] = np.minimum(obs.Tmin[idx], Tmin.T)
-    obs.Tmax[idx] = np.maximum(obs.Tmax[idx], Tmax.T)
-    neg = (Tmin.T <= 0) & np.isnan(obs.slack_t[idx])
-    if np.any(neg):
-        st = obs.slack_t[idx]
-        st[neg] = (tmin.T * T_scale)[neg] if np.ndim(T_scale) == 0 else (tmin.T * T_scale[:, None])[neg]
-        obs.slack_t[idx] = st
-
-
-class _Health(itg.BatchObserver):
-    """Per-scene crossings, constraint violation, energy, tensions, slack and
-    the states at the accepted steps (for the lowest point), gathered while
-    the batch integrates."""
-
-    def __init__(self, Bn, n, e, mass, grav, inertia, L2, on_slack: str, keep_states: bool, progress, t_end,
-                 dense_times=None):
-        self.n = n
-        self.e = e  # (13, B)
-        self.mass, self.grav, self.inertia, self.L2 = mass, grav, inertia, L2
-        self.cross: list[list] = [[] for _ in range(Bn)]
-        self.viol = np.zeros(Bn)
-        self.E0 = np.zeros(Bn)
-        self.dE = np.zeros(Bn)
-        self.Tmin = np.full((Bn, n), np.inf)
-        self.Tmax = np.full((Bn, n), -np.inf)
-        self.slack_t = np.full((Bn, n), np.nan)
-        self.stop_on_slack = on_slack == "stop"
-        self.states: list = []
-        self.keep = keep_states
-        self.progress = progress
-        self.t_end = t_end
-        self.tnow = np.zeros(Bn)
-        self.dense_times = dense_times  # list of (B) arrays of sample times, or None
-        self.next_k = np.zeros(Bn, int)  # index of each scene's next unused sample
-        self.samples: list = [[] for _ in range(Bn)] if dense_times is not None else None
-        self.lz = np.full(Bn, np.nan)
-        self.low_parts: list = []
-        self.t_final = np.zeros(Bn)
-        self.y_final = np.zeros((Bn, 13))
-
-    def _energy(self, idx, y):
-        v = y[7:10]
-        w = y[10:13]
-        Iw = np.einsum("bij,jb->ib", self.inertia[idx], w)
-        return 0.5 * self.mass[idx] * np.sum(v * v, 0) + 0.5 * np.sum(w * Iw, 0) + self.mass[idx] * self.grav[idx] * y[2]
-
-    def _tension_viol(self, idx, ext):
-        n = self.n
-        lam, phi = ext[:n], ext[n:2 * n]
-        L2 = self.L2[:, idx]
-        dl = np.sqrt(L2 + 2.0 * phi)
-        return -lam * dl, np.abs(2.0 * phi / (dl + np.sqrt(L2)))
-
-    def _next_sample(self) -> np.ndarray:
-        """(B,) time of each scene's next sample not yet taken (inf when done)."""
-        return np.array([ts[k] if k < len(ts) else np.inf for ts, k in zip(self.dense_times, self.next_k)])
-
-    def start(self, idx, y, ext):
-        self.E0[idx] = self._energy(idx, y)
-        T, v = self._tension_viol(idx, ext)
-        self.Tmin[idx] = T.T
-        self.Tmax[idx] = T.T
-        Bn = len(self.E0)
-        self.prev_t = np.full((2, Bn), np.nan)
-        self.prev_T = np.full((self.n, 2, Bn), np.nan)
-        self.prev_t[1, idx] = 0.0
-        self.prev_T[:, 1, idx] = T
-        self.viol[idx] = v.max(axis=0)
-        if self.keep:
-            self.states.append((idx.copy(), np.zeros(len(idx)), y.T.copy()))
-        if self.samples is not None:
-            for k, b in enumerate(idx):
-                if self.dense_times[b][0] == 0.0:
-                    self.samples[b].append((np.zeros(1), y[:, k][None, :].copy()))
-                    self.next_k[b] = 1
-
-    def accepted(self, idx, t_old, t_new, y_old, y_new, ext_new, dense):
-        E = self._energy(idx, y_new)
-        self.dE[idx] = np.maximum(self.dE[idx], np.abs(E - self.E0[idx]))
-        T, v = self._tension_viol(idx, ext_new)
-        self.viol[idx] = np.maximum(self.viol[idx], v.max(axis=0))
-        self.Tmin[idx] = np.minimum(self.Tmin[idx], T.T)
-        self.Tmax[idx] = np.maximum(self.Tmax[idx], T.T)
-        neg = (T.T <= 0) & np.isnan(self.slack_t[idx])
-        if np.any(neg):
-            st = self.slack_t[idx]
-            st[neg] = np.broadcast_to(t_new[:, None], st.shape)[neg]
-            self.slack_t[idx] = st
-        # refine the extremes on the last three steps (parabola through them)
-        tt = np.stack([self.prev_t[0, idx], self.prev_t[1, idx], t_new])
-        TT = np.concatenate([self.prev_T[:, :, idx], T[:, None, :]], axis=1)
-        if np.all(np.isfinite(tt[0])):
-            _merge_refined(self, idx, *_refine_extremes(tt, TT))
-        self.prev_t[0, idx] = self.prev_t[1, idx]
-        self.prev_t[1, idx] = t_new
-        self.prev_T[:, 0, idx] = self.prev_T[:, 1, idx]
-        self.prev_T[:, 1, idx] = T
-        if self.keep:
-            self.states.append((idx, t_new, y_new.T.copy()))
-        e = self.e[:, idx]
-        c_old = np.sum(e * y_old, 0)
-        c_new = np.sum(e * y_new, 0)
-        up = np.nonzero((c_old < 0) & (c_new >= 0))[0]
-        need = up
-        if self.samples is not None:
-            has = self._next_sample()[idx] <= t_new  # the next unused sample time falls in this step
-            need = np.union1d(up, np.nonzero(has)[0])
-        if len(need):
-            F = dense(need)
-            pos = {int(j): k for k, j in enumerate(need)}
-            if len(up):
-                cols = [pos[int(j)] for j in up]
-                Fc = np.einsum("kmj,mj->kj", F[:, :, cols], e[:, up])
-                x = itg.crossing_on_step(Fc, c_old[up], c_new[up])
-                tc = t_old[up] + x * (t_new[up] - t_old[up])
-                for b, tt in zip(idx[up], tc):
-                    self.cross[b].append(float(tt))
-            if self.samples is not None:
-                for j in need:
-                    b = idx[j]
-                    ts = self.dense_times[b]
-                    sel = ts[(ts > t_old[j]) & (ts <= t_new[j])]
-                    self.next_k[b] = int(np.searchsorted(ts, t_new[j], side="right"))
-                    if len(sel):
-                        x = (sel - t_old[j]) / (t_new[j] - t_old[j])
-                        Fj = F[:, :, pos[int(j)]]
-                        ys = itg.dense_eval(Fj[:, :, None], y_old[:, j][:, None], x[None, :]).T
-                        self.samples[b].append((sel, ys))
-        self.tnow[idx] = t_new
-        if self.progress is not None:
-            self.progress(float(np.mean(np.minimum(self.tnow / self.t_end, 1.0))), 1.0)
-        if self.stop_on_slack:
-            return np.any(T <= 0, axis=0)
-        return None
-
-
 def _h0(T_ref: np.ndarray, rtol: np.ndarray) -> np.ndarray:
     """First step, s: about the step the controller settles on (DOP853 takes
     ~15-40 steps per period at rtol 1e-8..1e-12), a little smaller."""
@@ -722,7 +555,8 @@ def simulate_batch(
         the tension extremes then use the samples too.
     lowest_point : compute the lowest point / depth.
     health : compute the constraint violation, energy drift, tensions and
-        lowest point (False: only the period and the crossings; faster).
+        lowest point (False: only the period and the crossings, faster; the
+        health figures are NaN and slack wires are not reported).
     method : ``"dop853"``: the project's DOP853 with a step size and error
         test per scene, health at its steps, crossings on the dense output;
         ``"lsoda"``: LSODA (``scipy.integrate.odeint``, step loop in
@@ -819,11 +653,12 @@ def _mode_of(ms: ModeSet, key) -> Mode:
 
 def run_one(scene: Scene, rest: RestPose, md: Mode, amplitude: float, periods: float, rtol: float = 1e-10,
             atol=None, samples_per_period: int | None = None, lowest_point: bool = True, health: bool = True,
-            method: str = "auto", on_slack: str = "continue") -> SceneRun:
+            method: str = "auto", on_slack: str = "continue", progress: Callable | None = None) -> SceneRun:
     """One scene through the float fast path (what :func:`simulate_batch` does
-    for a batch of one), given its rest pose and mode (no input checks)."""
+    for a batch of one), given its rest pose and mode (no input checks).
+    ``progress(done, total)`` as in :func:`simulate_batch`."""
     return _run_group([scene], [rest], [md], np.array([amplitude], float), np.array([periods], float), rtol, atol,
-                      on_slack, samples_per_period, lowest_point, None, method, health)[0]
+                      on_slack, samples_per_period, lowest_point, progress, method, health)[0]
 
 
 SMALL_BATCH = 20
@@ -833,6 +668,11 @@ calls on arrays of a few elements cost more than the float arithmetic
 LARGE_BATCH = 300
 """From this many scenes ``method="auto"`` uses the per-scene-step DOP853
 engine, below it LSODA on the stacked system (measured crossover)."""
+CHUNK = 2000
+"""Larger groups run in chunks of this many scenes: the vectorised engines'
+numpy overhead is amortised by then, while larger working arrays fall out of
+the processor's cache and cost more per scene (docs/performance.md,
+``scripts/bench_batch_memory.py``); memory stays bounded too."""
 
 
 def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
@@ -847,6 +687,18 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                               on_slack, spp, lowest_point, None, method, health)
             if progress is not None:
                 progress((j + 1) / Bn, 1.0)
+        return out
+    if Bn > CHUNK:  # chunks: the same cost per scene and bounded memory however many scenes
+        out = []
+        starts = list(range(0, Bn, CHUNK))
+        for c, j in enumerate(starts):
+            sl = slice(j, j + CHUNK)
+            sub_progress = None
+            if progress is not None:
+                def sub_progress(done, total, c=c):
+                    progress((c + done / total) / len(starts), 1.0)
+            out += _run_group(scenes[sl], rests[sl], mds[sl], amps[sl], pers[sl], rtol, atol, on_slack, spp,
+                              lowest_point, sub_progress, method, health)
         return out
     t_start = time.perf_counter()
     n = scenes[0].n_wires
@@ -869,12 +721,13 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         at = np.broadcast_to(np.asarray(atol, float).reshape(-1, 1) if np.ndim(atol) else float(atol), (13, Bn)).copy()
     e = np.array([_coordinate_vector(md.dominant, r.q) for md, r in zip(mds, rests)]).T  # (13, B)
     L2 = (P.lengths**2).T
+    lowest = LowestPoint(scenes, com0) if (lowest_point and health) else None
     if method == "lsoda":
-        obs = _Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, False, progress, t_end,
-                      [None] * Bn if spp else None)
+        obs = Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest, progress, t_end,
+                     [None] * Bn if spp else None, health=health)
         try:
             nfev, nsteps, status, msgs = _lsoda(P, ys0, T_ref, pers, float(rtol), at, max(64, int(spp or 0)), obs,
-                                                scenes, com0, health, lowest_point and health, on_slack, progress)
+                                                com0, health, on_slack, progress)
         except _BatchFailed:  # one scene spoils the shared run: run them one by one
             return [_run_group([s_], [r_], [m_], amps[j:j + 1], pers[j:j + 1], rtol, atol, on_slack, spp,
                                lowest_point, None, method, health)[0]
@@ -883,8 +736,8 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         dense_times = None
         if spp:
             dense_times = [np.linspace(0.0, te, max(int(spp * te / tr), 200) + 1) for te, tr in zip(t_end, T_ref)]
-        obs = _Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest_point, progress, t_end,
-                      dense_times)
+        obs = Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest, progress, t_end,
+                     dense_times, health=health)
         h0 = _h0(T_ref, rt)
         if Bn == 1:
             nfev, nsteps, status, msg = _single(P.take(0), ys0[0], float(t_end[0]), float(rt[0]), at[:, 0],
@@ -910,20 +763,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 T_ = -lam_ * np.sqrt(L2[:, b:b + 1] + 2 * phi_)  # (n, k)
                 obs.Tmin[b] = np.minimum(obs.Tmin[b], T_.min(axis=1))
                 obs.Tmax[b] = np.maximum(obs.Tmax[b], T_.max(axis=1))
-                _merge_refined(obs, np.array([b]), *_refine_extremes(ts_[:, None], T_[:, :, None]))
+                merge_refined(obs, np.array([b]), *refine_extremes(ts_[:, None], T_[:, :, None]))
     runtime = (time.perf_counter() - t_start) / Bn
-    # lowest point at the stored steps
-    lz = obs.lz
-    if lowest_point and obs.states:
-        idx_all = np.concatenate([s[0] for s in obs.states])
-        Y_all = np.concatenate([s[2] for s in obs.states])
-        order = np.argsort(idx_all, kind="stable")
-        bounds = np.searchsorted(idx_all[order], np.arange(Bn + 1))
-        for b in range(Bn):
-            Yb = Y_all[order[bounds[b]:bounds[b + 1]]]
-            if len(Yb):
-                com = Yb[:, :3] + com0[b]
-                lz[b] = float(np.min(lowest_point_z(scenes[b], com, mx.quat_to_matrix(Yb[:, 3:7]))))
+    lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
     for b in range(Bn):
         tc = np.array(obs.cross[b])
@@ -936,7 +778,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             warnings.append(f"WIRE {w_} GOES SLACK at t = {ts_:.4g} s (tension {obs.Tmin[b, w_ - 1]:.3g} N): "
                             "the motion after that is not physical; reduce the amplitude")
         if status[b] == 1:
-            warnings.append("run stopped because a wire went slack")
+            warnings.append(f"run stopped at t = {obs.t_final[b]:.4g} s because a wire went slack")
         if status[b] == -1:
             warnings.append(f"integration failed: {msgs.get(b, '')}")
         if obs.viol[b] > 1e-6 * Lmax[b]:
@@ -963,7 +805,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     return out
 
 
-def _single(P1: mx.RigParams, y0, t_end, rtol, atol, h0, obs: _Health, on_slack: str):
+def _single(P1: mx.RigParams, y0, t_end, rtol, atol, h0, obs: Health, on_slack: str):
     """One scene on Python floats; the observer is fed afterwards, in one
     vectorised pass over the accepted steps."""
     k = mx.compiled_kernel(P1, extras=True)
@@ -987,20 +829,10 @@ def _single(P1: mx.RigParams, y0, t_end, rtol, atol, h0, obs: _Health, on_slack:
         e = obs.e[:, 0]
         c = e @ Y
         up = np.nonzero((c[:-1] < 0) & (c[1:] >= 0))[0]
-        E = obs._energy(idx, Y[:, 1:])
-        obs.dE[0] = np.max(np.abs(E - obs.E0[0]))
-        T, v = obs._tension_viol(idx, run.ext[1:].T)
-        obs.viol[0] = max(obs.viol[0], float(v.max()))
-        obs.Tmin[0] = np.minimum(obs.Tmin[0], T.min(axis=1))
-        obs.Tmax[0] = np.maximum(obs.Tmax[0], T.max(axis=1))
-        for i in range(n):
-            neg = np.nonzero(T[i] <= 0)[0]
-            if len(neg):
-                obs.slack_t[0, i] = run.t[neg[0] + 1]
-        T_all = obs._tension_viol(np.zeros(ns + 1, int), run.ext.T)[0]  # (n, k+1) including t = 0
-        _merge_refined(obs, idx0, *_refine_extremes(run.t[:, None], T_all[:, :, None]))
-        if obs.keep:
-            obs.states.append((idx, run.t[1:], run.y[1:]))
+        if obs.health:
+            _single_health(obs, run, idx, idx0, Y, n, ns)
+        if obs.lowest is not None:
+            obs.lowest.add_states(idx, Y[:, 1:])
         steps = set(up.tolist())
         samp_step = None
         if obs.samples is not None:
@@ -1026,10 +858,27 @@ def _single(P1: mx.RigParams, y0, t_end, rtol, atol, h0, obs: _Health, on_slack:
     return run.nfev, len(run.t) - 1, run.status, run.message
 
 
-def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: _Health, scenes, com0,
-           health: bool, lowest_point: bool, on_slack: str, progress):
+def _single_health(obs: Health, run, idx, idx0, Y, n: int, ns: int) -> None:
+    """Health over all accepted steps of a one-scene run at once."""
+    E = obs._energy(idx, Y[:, 1:])
+    obs.dE[0] = np.max(np.abs(E - obs.E0[0]))
+    T, v = obs._tension_viol(idx, run.ext[1:].T)
+    obs.viol[0] = max(obs.viol[0], float(v.max()))
+    obs.Tmin[0] = np.minimum(obs.Tmin[0], T.min(axis=1))
+    obs.Tmax[0] = np.maximum(obs.Tmax[0], T.max(axis=1))
+    for i in range(n):
+        neg = np.nonzero(T[i] <= 0)[0]
+        if len(neg):
+            obs.slack_t[0, i] = run.t[neg[0] + 1]
+    T_all = obs._tension_viol(np.zeros(ns + 1, int), run.ext.T)[0]  # (n, k+1) including t = 0
+    merge_refined(obs, idx0, *refine_extremes(run.t[:, None], T_all[:, :, None]))
+
+
+def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0,
+           health: bool, on_slack: str, progress):
     """The whole group as one ODE in normalised time tau = t / T_ref (every
-    scene oscillates at ~1 per unit tau, so one step sequence suits all),
+    scene oscillates at ~1 per unit tau, so one step sequence suits all; a
+    single scene in physical time, which is the same ODE without the scaling),
     integrated by LSODA (:func:`scipy.integrate.odeint`: the step loop runs in
     Fortran, only the compiled right-hand side is Python).
 
@@ -1052,17 +901,17 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: _H
     sq = np.sqrt(Bn)
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
-    if Bn == 1:
+    if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
         k1 = mx.compiled_kernel(P.take(0))
-        T1 = float(T_ref[0])
-        array = np.array
+        tscale = float(T_ref[0])
 
-        def f(y, tau):
-            return array(k1(*y.tolist())) * T1
+        def f(y, t):
+            return k1(*y.tolist())
         kx = mx.compiled_kernel(P.take(0), extras=True)
     else:
         kb = mx.compiled_kernel(P)
         Tcol = T_ref[:, None]
+        tscale = 1.0
 
         def f(y, tau):
             out = kb(*y.reshape(Bn, 13).T)
@@ -1085,12 +934,15 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: _H
     while k0 < K_total:
         k1_ = min(K_total, k0 + chunk)
         tt = taus[k0:k1_ + 1]
-        Y, info = odeint(f, y, tt, rtol=rte, atol=ate, full_output=True, mxstep=100000, ml=12, mu=12)
-        if info["message"] != "Integration successful.":
+        Y, info = odeint(f, y, tt * tscale, rtol=rte, atol=ate, full_output=True, mxstep=100000, ml=12, mu=12)
+        message = info["message"]
+        if message == "Integration successful." and not np.all(np.isfinite(Y)):
+            message = "the solution is not finite (NaN or inf)"
+        if message != "Integration successful.":
             if Bn > 1:
-                raise _BatchFailed(info["message"])
+                raise _BatchFailed(message)
             status[0] = -1
-            msgs[0] = f"LSODA: {info['message']}"
+            msgs[0] = f"LSODA: {message}"
             good = np.nonzero(np.all(np.isfinite(Y), axis=1))[0]
             Y = Y[: (good[-1] + 1) if len(good) else 1]
             tt = tt[: len(Y)]
@@ -1112,14 +964,12 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: _H
         cross_t.append(tx[keep] + tau0)
         tail_c = cc[-7:]
         if health:
-            _sample_health(Ys, tt, obs, P, kx, n, scenes, com0, T_ref, stop_tau, lowest_point, on_slack, first)
+            sample_health(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first)
         if obs.samples is not None:
             for b in range(Bn):
                 sel = tt <= stop_tau[b] + 1e-12
                 if np.any(sel):
-                    yy = Ys[sel, b, :].copy()
-                    yy[:, :3] += com0[b]
-                    obs.samples[b].append((tt[sel] * T_ref[b], yy))
+                    obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :].copy()))  # com0 added at the end
         if progress is not None:
             progress(min(float(tt[-1]) / tau_end, 1.0), 1.0)
         first = False
@@ -1135,81 +985,8 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: _H
         obs.cross[b] = list(np.sort(sel[sel <= stop_tau[b] + 1e-12]) * T_ref[b])
         if stop_tau[b] < pers[b] - 1e-12 and status[b] == 0:
             status[b] = 1
-    _finish_lowest(obs, scenes)
     return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
 
 
 class _BatchFailed(Exception):
     pass
-
-
-def _sample_health(Ys, tt, obs: _Health, P, kx, n, scenes, com0, T_ref, stop_tau, lowest_point, on_slack, first):
-    """Health figures at the samples of one window (blocks of ~50k values)."""
-    K, Bn, _ = Ys.shape
-    blk = max(1, int(5e4 // max(Bn, 1)))
-    for s0 in range(0, K, blk):
-        Yb = Ys[s0:s0 + blk]  # (kb, B, 13)
-        tb = tt[s0:s0 + blk]
-        valid = tb[:, None] <= stop_tau[None, :] + 1e-12  # (kb, B)
-        comps = [Yb[:, :, j] for j in range(13)]
-        if Bn == 1:
-            comps = [cmp[:, 0] for cmp in comps]
-        out = kx(*comps)
-        lam = np.array(np.broadcast_arrays(*out[13:13 + n])).reshape(n, len(tb), Bn)
-        phi = np.array(np.broadcast_arrays(*out[13 + n:13 + 2 * n])).reshape(n, len(tb), Bn)
-        L2 = obs.L2[:, None, :]
-        dl = np.sqrt(L2 + 2.0 * phi)
-        T = -lam * dl  # (n, kb, B)
-        viol = np.abs(2.0 * phi / (dl + np.sqrt(L2)))
-        if on_slack == "stop":
-            slack_now = np.any(T <= 0, axis=0) & valid  # (kb, B)
-            if np.any(slack_now):
-                kfirst = np.where(np.any(slack_now, axis=0), np.argmax(slack_now, axis=0), -1)
-                for b in np.nonzero(kfirst >= 0)[0]:
-                    stop_tau[b] = min(stop_tau[b], tb[kfirst[b]])
-                valid = tb[:, None] <= stop_tau[None, :] + 1e-12
-        if len(tb) >= 3:
-            Tv = np.where(valid[None], T, np.nan)
-            rmin, rt_, rmax = _refine_extremes(np.broadcast_to(tb[:, None], valid.shape), Tv)
-            _merge_refined(obs, np.arange(Bn), np.where(np.isfinite(rmin), rmin, np.inf), rt_,
-                           np.where(np.isfinite(rmax), rmax, -np.inf), T_ref)
-        vT = np.where(valid[None], T, np.nan)
-        with np.errstate(all="ignore"):
-            obs.Tmin = np.fmin(obs.Tmin, np.nanmin(vT, axis=1).T) if np.any(valid) else obs.Tmin
-            obs.Tmax = np.fmax(obs.Tmax, np.nanmax(vT, axis=1).T) if np.any(valid) else obs.Tmax
-            obs.viol = np.fmax(obs.viol, np.nanmax(np.where(valid[None], viol, np.nan), axis=(0, 1)))
-        neg = (T <= 0) & valid[None]
-        if np.any(neg):
-            for i, kk, b in zip(*np.nonzero(neg)):
-                if np.isnan(obs.slack_t[b, i]):
-                    obs.slack_t[b, i] = tb[kk] * T_ref[b]
-        # energy relative to the rest pose (positions are relative to the rest CoM)
-        v = Yb[:, :, 7:10]
-        w = Yb[:, :, 10:13]
-        Iw = np.einsum("bij,kbj->kbi", obs.inertia, w)
-        E = 0.5 * obs.mass * np.sum(v * v, -1) + 0.5 * np.sum(w * Iw, -1) + obs.mass * obs.grav * Yb[:, :, 2]
-        if first and s0 == 0:
-            obs.E0 = E[0].copy()
-        obs.dE = np.fmax(obs.dE, np.nanmax(np.where(valid, np.abs(E - obs.E0), np.nan), axis=0))
-        if lowest_point:
-            # third row of R (body -> world) from the quaternions: world z of the body axes
-            q = Yb[:, :, 3:7]
-            q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-            qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-            down = -np.stack([2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)], -1)
-            z = np.where(valid, Yb[:, :, 2] + com0[None, :, 2], np.inf)
-            obs.low_parts.append((z, down))
-
-
-def _finish_lowest(obs: _Health, scenes) -> None:
-    """Lowest body point over the stored samples: one support call per scene."""
-    if not obs.low_parts:
-        return
-    z = np.concatenate([p_[0] for p_ in obs.low_parts])
-    down = np.concatenate([p_[1] for p_ in obs.low_parts])
-    for b, sc in enumerate(scenes):
-        ok = np.isfinite(z[:, b])
-        if np.any(ok):
-            lz = float(np.min(z[ok, b] - sc.body_support(down[ok, b])))
-            obs.lz[b] = lz if np.isnan(obs.lz[b]) else min(obs.lz[b], lz)
-    obs.low_parts = []

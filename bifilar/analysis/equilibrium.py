@@ -6,11 +6,18 @@ It is found in three stages:
 
 1. translate the body (axes aligned with the world, as ``interface.md``
    prescribes for the start) below the anchors;
-2. SLSQP over the 6 pose coordinates with the inequality constraints
-   ``|d_i| <= L_i``, the rotation kept within 90 degrees of the start so that
-   a body that would rather flip over is caught, not silently flipped;
-3. Newton's method on the KKT equations with every wire taut, to machine
-   precision, giving the multipliers, hence the tensions.
+2. Newton's method on the KKT equations with every wire taut, from that
+   start; its pose is taken when it is a strict local minimum of the
+   inequality-constrained problem (every tension positive, reduced stiffness
+   positive definite: the second-order sufficient conditions) within the
+   start orientation's 90-degree box, which is the common case and needs no
+   scipy;
+3. otherwise SLSQP over the 6 pose coordinates with the inequality
+   constraints ``|d_i| <= L_i`` (exact constraint Jacobian), the rotation
+   kept within 90 degrees of the start so that a body that would rather flip
+   over is caught, not silently flipped; then Newton on the KKT equations
+   with every wire taut, to machine precision, giving the multipliers, hence
+   the tensions.
 
 A wire left slack by stage 2, or a negative tension in stage 3, is a
 :class:`~bifilar.errors.SlackWireError` naming the wire and by how much to
@@ -23,10 +30,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestError
-from ..rotations import matrix_to_quat, rotvec_to_matrix, skew
+from ..rotations import matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
 from ..scene import Scene, lowest_point_z
 
 
@@ -85,7 +91,21 @@ def _initial_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return np.array([xy[0], xy[1], z]), np.eye(3)
 
 
-def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray):
+def _left_jacobian(x: np.ndarray) -> np.ndarray:
+    """Left Jacobian J of SO(3) at rotation vector ``x`` (rad):
+    exp(x + dx) = exp(J dx) exp(x) to first order."""
+    th = float(np.linalg.norm(x))
+    K = skew(x)
+    if th < 1e-6:
+        return np.eye(3) + 0.5 * K + K @ K / 6.0
+    return np.eye(3) + (1 - np.cos(th)) / th**2 * K + (th - np.sin(th)) / th**3 * (K @ K)
+
+
+def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray, jacobian: bool = True):
+    """SLSQP stage; ``jacobian=False`` lets SLSQP difference the constraints
+    itself (slower; tests compare the two)."""
+    from scipy.optimize import minimize  # only when the Newton start fails (slack wire, flip, ...)
+
     L = scene.lengths
     scale = float(np.max(L))
 
@@ -108,20 +128,43 @@ def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray):
     def cons_jac(x):
         c, R = pose(x)
         _, _, G = constraint_jacobian(scene, c, R)
-        # chain rule for the scaled translation; rotation-vector chart is exact to first order at x=0
-        # and SLSQP only needs a descent-quality Jacobian (stage 3 polishes exactly).
-        Jr = -G[:, :3] * scale / scale**2
-        Jt = -G[:, 3:] / scale**2
+        # chain rule: translation scaled by ``scale``; rotation exp(x) R0 with the left Jacobian of SO(3)
+        Jr = -G[:, :3] / scale
+        Jt = -(G[:, 3:] @ _left_jacobian(x[3:])) / scale**2
         return np.hstack([Jr, Jt])
 
     bounds = [(None, None)] * 3 + [(-np.pi / 2, np.pi / 2)] * 3
     res = minimize(
         fun, np.zeros(6), jac=jac_f, method="SLSQP", bounds=bounds,
-        constraints=[{"type": "ineq", "fun": cons}], options={"maxiter": 500, "ftol": 1e-14},
+        constraints=[{"type": "ineq", "fun": cons, **({"jac": cons_jac} if jacobian else {})}], options={"maxiter": 500, "ftol": 1e-14},
     )
     c, R = pose(res.x)
     at_bound = bool(np.any(np.abs(res.x[3:]) > np.pi / 2 - 1e-3))
     return c, R, res, at_bound
+
+
+def _newton_start(scene: Scene, com0: np.ndarray, R0: np.ndarray) -> RestPose | None:
+    """Stage 2: Newton on the all-taut KKT equations from the start pose.
+
+    Returns the rest pose when Newton converges to a strict local minimum of
+    the inequality-constrained problem (KKT residual < 1e-9, every multiplier
+    positive, reduced stiffness positive definite: second-order sufficient
+    conditions, checked by :func:`_finish`) whose rotation from the start
+    lies inside SLSQP's box (each rotation-vector component below 90 degrees
+    less 1e-3 rad); else None (the caller runs SLSQP, which names slack wires
+    and flips)."""
+    try:
+        c, R, lam, kkt = _newton_kkt(scene, com0.copy(), R0.copy(), iters=40)
+    except np.linalg.LinAlgError:
+        return None
+    if not (kkt < 1e-9) or not np.all(lam > 0):
+        return None
+    if np.any(np.abs(matrix_to_rotvec(R @ R0.T)) > np.pi / 2 - 1e-3):
+        return None
+    try:
+        return _finish(scene, c, R, lam, kkt)
+    except Exception:  # noqa: BLE001 - unstable or slack here: SLSQP decides and explains
+        return None
 
 
 def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | None = None, iters: int = 60):
@@ -181,7 +224,8 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     return N, N.T @ K @ N, N.T @ M @ N, rank
 
 
-def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False) -> RestPose:
+def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,
+              global_search: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.
 
     ``guess``: the rest pose of a nearby scene (a sweep or finite-difference
@@ -189,6 +233,8 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
     it converges to a taut, stable pose.  ``local_only``: with a guess, raise
     :class:`ConvergenceError` instead of falling back to the global search
     (finite differences want the neighbouring equilibrium or nothing).
+    ``global_search``: skip the Newton start (stage 2) and always run SLSQP
+    (tests compare the two).
 
     Raises
     ------
@@ -207,6 +253,10 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
         if local_only:
             raise ConvergenceError("no taut, stable rest pose near the guess")
     com0, R0 = _initial_pose(scene)
+    if not global_search:
+        quick = _newton_start(scene, com0, R0)
+        if quick is not None:
+            return quick
     c, R, res, at_bound = _slsqp(scene, com0, R0)
     L = scene.lengths
     d = c + scene.attachments @ R.T - scene.anchors

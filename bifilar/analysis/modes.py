@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh
 
 from ..scene import Scene
 from .equilibrium import RestPose, reduced_stiffness
@@ -98,8 +97,21 @@ def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     M[3:, 3:] = rest.R @ scene.inertia @ rest.R.T
     if N.shape[1] == 0:
         return ModeSet([], M, N)
-    w2, Y = eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
+    w2, Y = eigh_generalized(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
     return mode_set(N, Y, w2, scene.mass, M, K=0.5 * (Kr + Kr.T))
+
+
+def eigh_generalized(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (ascending) and eigenvectors Y of ``K y = w M y`` for
+    symmetric K and symmetric positive definite M, normalised Y^T M Y = I
+    (as ``scipy.linalg.eigh(K, M)``), in numpy alone: with M = C C^T
+    (Cholesky), the standard problem C^-1 K C^-T z = w z and y = C^-T z.
+    Units: w in units of K over M (rad^2/s^2 for a stiffness and a mass)."""
+    C = np.linalg.cholesky(M)
+    Ci = np.linalg.inv(C)
+    A = Ci @ K @ Ci.T
+    w, Z = np.linalg.eigh(0.5 * (A + A.T))
+    return w, Ci.T @ Z
 
 
 #: eigenvalues closer than this, relative to the largest |omega^2|, form one
@@ -223,3 +235,22 @@ def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol) -> np.n
             T = T - np.outer(T @ v, v)
         Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
     return Y
+
+
+def degenerate_clusters(w2: np.ndarray, scale: float, rel: float = 1e-8) -> list[tuple[int, int]]:
+    """Index ranges [k, j) of clusters of two or more (nearly) equal
+    eigenvalues in the ascending array ``w2`` (rad^2/s^2): neighbours within
+    ``rel * scale`` of the cluster's first member.  A wider band than the
+    canonical :func:`clusters` on purpose: eigenvalue perturbation
+    (:mod:`bifilar.analysis.derivatives`) is unreliable for pairs this close
+    and falls back to finite differences there."""
+    out = []
+    k = 0
+    while k < len(w2):
+        j = k + 1
+        while j < len(w2) and abs(w2[j] - w2[k]) <= rel * scale:
+            j += 1
+        if j - k > 1:
+            out.append((k, j))
+        k = j
+    return out

@@ -228,7 +228,16 @@ def simulate(
     y0, t_end : start from an explicit state (13,) instead, for ``t_end`` s.
     method, rtol, atol : passed to :func:`scipy.integrate.solve_ivp`; ``atol``
         defaults to ``rtol`` times the amplitude-scaled size of each state
-        component.
+        component.  ``method="auto"`` (the CLI's default): LSODA
+        (``scipy.integrate.odeint``, the step loop in Fortran) on the compiled
+        right-hand side through the batched engine's one-scene path
+        (:func:`bifilar.analysis.batch.run_one`): crossings on the samples
+        (degree-7 interpolation), health at the samples; the cheapest method
+        reaching a given period error in the work-precision tables
+        (docs/performance.md: at rtol 1e-10 a period error ~2e-11, about a
+        fifth of the cost of solve_ivp's DOP853).  With an explicit ``y0``
+        ``auto`` means DOP853, and so it does for a stiff body (modes spanning
+        over :data:`STIFF_RATIO` in period), whose cost is probed and bounded.
     on_slack : ``continue`` (report and go on with the bilateral model) or
         ``stop`` (end the run when a wire goes slack).
     progress : optional callable ``progress(t, t_end)`` called as the
@@ -245,9 +254,18 @@ def simulate(
     modes = modes or linear_modes(scene, rest)
     warnings: list[str] = []
     m = modes.get(mode) if y0 is None else (modes.get(mode) if mode is not None else None)
+    if method == "auto" and y0 is not None:
+        method = "DOP853"
+    if method == "auto" and _period_ratio(modes) > STIFF_RATIO:
+        # a stiff body: the DOP853 path, whose cost is probed and bounded
+        # (_stiffness_check); LSODA needed 3x its evaluations on a thin rod
+        method = "DOP853"
     if y0 is None:
         if m.period is None:
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
+        if method == "auto":
+            return _simulate_engine(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period, on_slack,
+                                    progress)
         y0 = initial_state(scene, rest, m, amplitude)
     T_ref = (m.period if m is not None else None) or min((x.period for x in modes.modes if x.period), default=1.0)
     if t_end is None:
@@ -332,6 +350,12 @@ PROBE_FRACTION = 0.01
 """Share of the run integrated by the cost probe."""
 
 
+def _period_ratio(modes: ModeSet) -> float:
+    """Slowest over fastest linear period of ``modes`` (1 with fewer than two periods)."""
+    periods = [m.period for m in modes.modes if m.period]
+    return max(periods) / min(periods) if len(periods) >= 2 else 1.0
+
+
 def _stiffness_check(f, modes: ModeSet, y0: np.ndarray, t_end: float, method: str, rtol: float, atol,
                      max_evaluations: float) -> str | None:
     """Estimate the cost of a run whose modes span more than :data:`STIFF_RATIO`
@@ -348,9 +372,9 @@ def _stiffness_check(f, modes: ModeSet, y0: np.ndarray, t_end: float, method: st
     LSODA needed 3x and Radau 90x the evaluations of DOP853 at the default
     rtol = 1e-10, the fast mode being hardly excited.
     """
-    periods = [m.period for m in modes.modes if m.period]
-    if len(periods) < 2 or max(periods) / min(periods) <= STIFF_RATIO:
+    if _period_ratio(modes) <= STIFF_RATIO:
         return None
+    periods = [m.period for m in modes.modes if m.period]
     t_probe = PROBE_FRACTION * t_end
     probe = solve_ivp(f, (0.0, t_probe), y0, method=method, rtol=rtol, atol=atol)
     est = probe.nfev / PROBE_FRACTION
@@ -381,6 +405,40 @@ def _with_budget(f, t_end: float, max_evaluations: float):
         return f(t, y)
 
     return g
+
+
+def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, periods: float, rtol: float, atol,
+                     samples_per_period: int, on_slack: str, progress) -> SimulationResult:
+    """``simulate(method="auto")``: the batched engine's one-scene LSODA path,
+    its samples turned into a :class:`SimulationResult` (tensions and the
+    timed coordinate at the samples; period, crossings and health from the run)."""
+    from .batch import run_one
+
+    initial_state(scene, rest, m, amplitude)  # the input checks (InputError for an amplitude no pose can take)
+    t_end = periods * m.period
+    prog = None if progress is None else (lambda done, total: progress(done / total * t_end, t_end))
+    t0 = time.perf_counter()
+    run = run_one(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period=samples_per_period,
+                  method="lsoda", on_slack=on_slack, progress=prog)
+    runtime = time.perf_counter() - t0
+    failed = [w for w in run.warnings if w.startswith("integration failed")]
+    if failed:
+        reason = failed[0].split(": ", 1)[-1]  # "LSODA: <why>"
+        raise IntegrationError("integrator " + reason.replace(": ", " failed: ", 1))
+    P = mx.params_from_scenes(scene)
+    T = mx.tensions(run.y, P)
+    c = relative_pose(run.y, rest)[:, m.dominant]
+    amp, Lmax, omega = max(abs(float(amplitude)), 1e-6), float(np.max(scene.lengths)), 2 * np.pi / m.period
+    atol_min = float(np.min(atol)) if atol is not None else rtol * amp * min(Lmax, 1.0, omega * Lmax, omega)
+    return SimulationResult(
+        t=run.t, y=run.y, coordinate=c, coordinate_name=run.coordinate_name, tensions=T,
+        period=run.period, period_std=run.period_std, crossings=run.crossings, linear_period=m.period,
+        max_constraint_violation=run.max_constraint_violation, energy_drift=run.energy_drift,
+        tension_min=np.minimum(run.tension_min, T.min(axis=0)), tension_max=np.maximum(run.tension_max, T.max(axis=0)),
+        slack=run.slack, lowest_z_min=run.lowest_z_min, depth_max=run.depth_max, mode=m.label,
+        amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
+        nfev=int(run.nfev), runtime=runtime, warnings=list(run.warnings),
+    )
 
 
 def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,

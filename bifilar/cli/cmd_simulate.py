@@ -16,7 +16,9 @@ from .common import check_output_path, console, emit_json, esc, fmt, handle_erro
 @click.option("--model", type=click.Choice(["maximal", "kane"]), default="maximal", show_default=True,
               help="maximal: general model (any rig); kane: the thesis's five-angle model (two wires).")
 @click.option("--theta", default=None, help="kane model: initial theta1..theta4 [rad], comma separated.")
-@click.option("--method", default="DOP853", show_default=True, help="solve_ivp method (DOP853, RK45, Radau, LSODA).")
+@click.option("--method", default="auto", show_default=True,
+              help="auto: LSODA (scipy odeint) on the compiled model, the cheapest for the printed digits "
+                   "(docs/performance.md); or a solve_ivp method (DOP853, RK45, Radau, LSODA).")
 @click.option("--rtol", type=float, default=1e-10, show_default=True, help="Relative tolerance of the integrator.")
 @click.option("--on-slack", type=click.Choice(["continue", "stop"]), default="continue", show_default=True,
               help="What to do when a wire goes slack during the motion.")
@@ -34,8 +36,8 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     if chk.positive("--periods", periods):
         chk.in_range("--periods", periods, 0, MAX_SIM_PERIODS, lo_open=True)
     chk.in_range("--rtol", rtol, 1e-14, 1e-2, hi_open=True)  # below ~100 eps the integrator crawls
-    if method not in ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
-        chk.error("--method", f"unknown method {method!r}; use DOP853, RK45, RK23, Radau, BDF or LSODA")
+    if method not in ("auto", "DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
+        chk.error("--method", f"unknown method {method!r}; use auto, DOP853, RK45, RK23, Radau, BDF or LSODA")
     if theta is not None and model != "kane":
         chk.error("--theta", "only with --model kane")
     chk.done()
@@ -57,7 +59,8 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
         with progress_bar("simulating (kane)", enabled=not as_json) as upd:
             try:
                 res = simulate_kane(scene, rest, ms, mode=mode, amplitude=amplitude, periods=periods, theta=theta,
-                                    rtol=rtol, method=method, progress=upd)
+                                    rtol=rtol, method="DOP853" if method == "auto" else method,
+                                    progress=upd)
             except InputError as exc:
                 if exc.field != "theta1to4":  # the model's name for the angles --theta gives
                     raise

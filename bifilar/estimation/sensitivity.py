@@ -11,12 +11,15 @@ The inputs an experimenter measures (SI units) are named like this:
 * ``com.x`` ...: position of the CoM relative to the attachment points, m
   (moving the CoM by +d moves every attachment by -d in the body frame).
 
-Sensitivities are central finite differences of the exact linear periods
-(:func:`bifilar.analysis.modes.linear_modes`), which are accurate to ~1e-13,
-so a relative step of ~1e-6 leaves an error of ~1e-9 in each derivative.
-Modes are tracked across a perturbation by the modal assurance criterion
-(MAC) so that two modes that swap order (torsion and roll near coincidence)
-are not confused.
+Sensitivities are analytic (:mod:`bifilar.analysis.derivatives`: implicit
+differentiation of the rest pose and first-order eigenvalue perturbation, at
+one rest pose), with central finite differences of the exact linear periods
+(:func:`bifilar.analysis.modes.linear_modes`, accurate to ~1e-13, so a
+relative step of ~1e-6 leaves an error of ~1e-9 in each derivative) as the
+reference and the fallback where no analytic derivative exists.  Modes are
+tracked across a finite-difference perturbation by the modal assurance
+criterion (MAC) so that two modes that swap order (torsion and roll near
+coincidence) are not confused.
 """
 
 from __future__ import annotations
@@ -24,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from ..analysis.equilibrium import RestPose, rest_pose
 from ..analysis.modes import ModeSet, linear_modes
@@ -123,6 +125,8 @@ def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
 def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarray]:
     """(rows into ``base.modes``, columns into ``other.modes``) of the best
     one-to-one MAC matching; every mode of the smaller set is matched."""
+    from scipy.optimize import linear_sum_assignment
+
     M = base.mass_matrix
     A = np.array([m.shape for m in base.modes])
     B = np.array([m.shape for m in other.modes])
@@ -168,7 +172,8 @@ class Sensitivity:
     periods : (K,) s.  jacobian : (K, J) s per unit of input.  A scene on the
     edge of stability (CoM exactly on the attachment line, a neutral mode) has
     inputs whose perturbation one way makes it unable to hang: those are
-    differentiated one-sidedly and listed in ``one_sided``.
+    differentiated one-sidedly and listed in ``one_sided``.  ``method``:
+    how the Jacobian was obtained (:func:`period_sensitivity`).
     """
 
     names: list[str]
@@ -178,22 +183,66 @@ class Sensitivity:
     rest: RestPose
     one_sided: tuple = ()  # inputs differentiated one-sidedly (one neighbour cannot hang)
     undefined: tuple = ()  # inputs whose neighbours on both sides cannot hang (column NaN)
+    method: str = "finite-difference"  # "analytic", or "finite-difference" and why (see period_sensitivity)
 
     def column(self, name: str) -> np.ndarray:
         return self.jacobian[:, self.names.index(name)]
 
 
-def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: float = 1e-6) -> Sensitivity:
-    """Central-difference sensitivities of all linear periods to ``names``.
+def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: float = 1e-6, *,
+                       rest: RestPose | None = None, method: str = "analytic") -> Sensitivity:
+    """Sensitivities dT_k/dx_j (s per unit input) of all linear periods to ``names``.
+
+    ``method="analytic"`` (default): derivatives of the rest pose and of the
+    eigenvalues at the one rest pose (:mod:`bifilar.analysis.derivatives`),
+    exact to rounding; inputs without a derivative there (a neutral
+    direction: the CoM on the attachment line) are differenced as
+    :func:`period_sensitivity_fd` does (listed in ``one_sided`` /
+    ``undefined``), and a scene with repeated eigenvalues (a symmetric
+    trifilar's two swings) falls back to :func:`period_sensitivity_fd` for
+    the whole Jacobian.  ``method="fd"``: :func:`period_sensitivity_fd`.
+    ``rest``: the rest pose of ``scene`` if already known.  The method used
+    is in ``Sensitivity.method``.
+    """
+    from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
+
+    names = list(names if names is not None else list(INERTIA_COMPONENTS) + measured_inputs(scene))
+    if method not in ("analytic", "fd"):
+        raise ValueError(f"method must be 'analytic' or 'fd', not {method!r}")
+    rest = rest if rest is not None else rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
+    if method == "fd":
+        return _fd_sensitivity(scene, names, rel_step, rest, ms, T0, "finite-difference")
+    try:
+        jac = analytic_period_jacobian(scene, rest, ms, names)
+    except NotDifferentiable as exc:
+        return _fd_sensitivity(scene, names, rel_step, rest, ms, T0, f"finite-difference ({exc})")
+    live = np.isfinite(T0)
+    bad = [j for j in range(len(names)) if live.any() and np.all(np.isnan(jac[live, j]))]
+    one: tuple = ()
+    undef: tuple = ()
+    if bad:
+        sub = _fd_sensitivity(scene, [names[j] for j in bad], rel_step, rest, ms, T0, "")
+        jac[:, bad] = sub.jacobian
+        one, undef = sub.one_sided, sub.undefined
+    return Sensitivity(names, T0, jac, ms, rest, one, undef, "analytic")
+
+
+def period_sensitivity_fd(scene: Scene, names: list[str] | None = None, rel_step: float = 1e-6) -> Sensitivity:
+    """Central-difference sensitivities of all linear periods to ``names``
+    (the reference for :func:`period_sensitivity` and its fallback).
 
     Steps: relative ``rel_step`` of the input's natural scale (inertia: the
     largest principal moment; lengths and positions: the longest wire; mass,
-    gravity: their value).
+    gravity: their value).  Each neighbour's rest pose by Newton from the
+    base pose, modes matched by MAC.
     """
-    names = list(names if names is not None else list(INERTIA_COMPONENTS) + measured_inputs(scene))
-    rest = rest_pose(scene)
-    ms = linear_modes(scene, rest)
-    T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
+    return period_sensitivity(scene, names, rel_step, method="fd")
+
+
+def _fd_sensitivity(scene: Scene, names: list[str], rel_step: float, rest: RestPose, ms: ModeSet, T0: np.ndarray,
+                    method: str) -> Sensitivity:
     Jac = np.zeros((len(T0), len(names)))
     Lmax = float(np.max(scene.lengths))
     Imax = float(np.max(np.linalg.eigvalsh(scene.inertia)))
@@ -218,7 +267,7 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
         else:
             undef.append(name)
             Jac[:, j] = np.nan
-    return Sensitivity(names, T0, Jac, ms, rest, tuple(one), tuple(undef))
+    return Sensitivity(names, T0, Jac, ms, rest, tuple(one), tuple(undef), method)
 
 
 def _periods_or_none(scene: Scene, base: ModeSet, guess: RestPose):

@@ -48,7 +48,6 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
-from scipy import integrate, special
 
 from bifilar.errors import InputError
 
@@ -373,6 +372,8 @@ def _torsion_period_scalar(p: TorsionParams, theta0: float, model: str, epsrel: 
         H = float(_H(th, p))
         return np.sqrt(2.0 * theta0 * (1.0 + sphi) / sinc) * np.sqrt(M * (H + H0a) / (four_mgc * np.sin(sigma)))
 
+    from scipy import integrate
+
     val, _err = integrate.quad(integrand, 0.0, 0.5 * np.pi, epsabs=0.0, epsrel=epsrel, limit=200)
     return float(4.0 * val)
 
@@ -454,6 +455,8 @@ def compound_pendulum_period(I_pivot, m, g, d, amplitude=0.0):
     if np.any(amp >= np.pi):
         raise InputError("amplitude", "compound pendulum amplitude must be below pi rad")
     k = np.sin(0.5 * amp)
+    from scipy import special
+
     T = 4.0 * np.sqrt(np.asarray(I_pivot) / (np.asarray(m) * np.asarray(g) * np.asarray(d))) * special.ellipk(k * k)
     return float(T) if np.ndim(T) == 0 else T
 

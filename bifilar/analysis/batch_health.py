@@ -1,0 +1,324 @@
+"""Health of batched runs: the observer that gathers crossings, constraint
+violation, energy drift, tension extremes and slack at the integrator's
+steps (DOP853 engine) or samples (LSODA engine), and the lowest body point
+as a running minimum (bounded memory however many scenes and steps).
+
+Split from :mod:`bifilar.analysis.batch` (which calls it); SI units, world
+frame z up.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .. import integrators as itg
+from ..scene import Scene
+
+
+class LowestPoint:
+    """Running minimum, per scene, of the world z of the lowest body point.
+
+    States arrive in chunks (scene index, CoM world z, quaternion body ->
+    world); they are buffered and folded into the minimum every ``limit``
+    rows (default 2^18 rows, ~12 MB), so memory stays bounded for any batch
+    size and run length.  A fold calls the body's support function
+    (:meth:`~bifilar.scene.Scene.body_support`) once per distinct support
+    function among the scenes (scenes copied from one scene share it) and
+    takes the attachment points of all scenes at once.
+
+    scenes : the batch; com0 : (B, 3) rest CoM, m (states given relative to
+    it through :meth:`add_states`).  :attr:`z` (B,): the minimum so far, m
+    (NaN for a scene with no state yet).
+    """
+
+    def __init__(self, scenes: Sequence[Scene], com0: np.ndarray, limit: int = 1 << 18):
+        self.scenes = list(scenes)
+        self.com0 = np.asarray(com0, float)
+        self.limit = int(limit)
+        self.att = np.array([s.attachments for s in self.scenes])  # (B, n, 3)
+        groups: dict = {}
+        for b, s in enumerate(self.scenes):
+            if s.support is not None:
+                groups.setdefault(id(s.support), (s.support, []))[1].append(b)
+        self.groups = [(f, np.array(bs)) for f, bs in groups.values()]
+        self._zmin = np.full(len(self.scenes), np.inf)
+        self._buf: list = []
+        self._rows = 0
+
+    def add_states(self, idx: np.ndarray, y: np.ndarray) -> None:
+        """States y (13, k) of scenes ``idx`` (k,), positions relative to the rest CoM."""
+        idx = np.asarray(idx)
+        self.add(idx, y[2] + self.com0[idx, 2], y[3:7].T)
+
+    def add(self, idx: np.ndarray, z: np.ndarray, q: np.ndarray) -> None:
+        """Scene indices (k,), CoM world z (k,) m, quaternions (k, 4)."""
+        self._buf.append((np.array(idx, dtype=np.int32), np.array(z, float), np.array(q, float)))
+        self._rows += len(idx)
+        if self._rows >= self.limit:
+            self.fold()
+
+    def fold(self) -> None:
+        """Fold the buffered states into the running minimum."""
+        if not self._buf:
+            return
+        idx = np.concatenate([p[0] for p in self._buf])
+        z = np.concatenate([p[1] for p in self._buf])
+        q = np.concatenate([p[2] for p in self._buf])
+        self._buf, self._rows = [], 0
+        q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+        qw, qx, qy, qz = q.T
+        # world -z in body axes: minus the third row of R (body -> world)
+        down = -np.stack([2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)], -1)
+        h = np.max(np.einsum("rnk,rk->rn", self.att[idx], down), axis=1)  # attachment points
+        for f, bs in self.groups:
+            rows = np.nonzero(np.isin(idx, bs))[0]
+            if len(rows):
+                h[rows] = np.maximum(h[rows], np.asarray(f(down[rows]), float))
+        np.minimum.at(self._zmin, idx, z - h)
+
+    @property
+    def z(self) -> np.ndarray:
+        self.fold()
+        return np.where(np.isfinite(self._zmin), self._zmin, np.nan)
+
+
+def refine_extremes(t: np.ndarray, T: np.ndarray):
+    """Extremes of sampled tensions refined by the parabola through each
+    interior local extremum and its two neighbours.
+
+    t (K, B) sample times, T (n, K, B).  Returns (Tmin, tmin, Tmax) each
+    (n, B) over the refined interior extremes (inf / nan where there are
+    none).  A sampled extreme is off by ~(omega dt)^2 / 8 of the tension's
+    swing; the vertex of the parabola by ~(omega dt)^3, which matters for a
+    sharp dip near slack.
+    """
+    if T.shape[1] < 3:
+        shape = (T.shape[0], T.shape[2])
+        return np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, -np.inf)
+    t0, t1, t2 = t[:-2], t[1:-1], t[2:]
+    f0, f1, f2 = T[:, :-2], T[:, 1:-1], T[:, 2:]
+    with np.errstate(all="ignore"):
+        d0 = (f1 - f0) / (t1 - t0)
+        d1 = (f2 - f1) / (t2 - t1)
+        a = (d1 - d0) / (t2 - t0)
+        b = d0 + a * (t1 - t0)
+        tv = t1 - b / (2 * a)
+        fv = f1 - b * b / (4 * a)
+    inside = (tv >= t0) & (tv <= t2) & np.isfinite(fv)
+    lo = (f1 <= f0) & (f1 <= f2) & inside & (fv <= f1)
+    hi = (f1 >= f0) & (f1 >= f2) & inside & (fv >= f1)
+    vmin = np.where(lo, fv, np.inf)
+    k = np.argmin(vmin, axis=1)  # (n, B)
+    Tmin = np.take_along_axis(vmin, k[:, None, :], 1)[:, 0]
+    tmin = np.take_along_axis(np.broadcast_to(tv, vmin.shape), k[:, None, :], 1)[:, 0]
+    Tmax = np.max(np.where(hi, fv, -np.inf), axis=1)
+    return Tmin, tmin, Tmax
+
+
+def merge_refined(obs, idx, Tmin, tmin, Tmax, T_scale=1.0) -> None:
+    """Fold refined extremes (n, k) for scenes ``idx`` into the observer.
+    A wire's slack time is the earliest evidence: a sample or step at or
+    below zero, or the vertex of a refined dip below zero."""
+    obs.Tmin[idx] = np.minimum(obs.Tmin[idx], Tmin.T)
+    obs.Tmax[idx] = np.maximum(obs.Tmax[idx], Tmax.T)
+    neg = Tmin.T <= 0
+    if np.any(neg):
+        st = obs.slack_t[idx]
+        tv = (tmin.T * T_scale) if np.ndim(T_scale) == 0 else (tmin.T * T_scale[:, None])
+        st[neg] = np.fmin(st[neg], tv[neg])
+        obs.slack_t[idx] = st
+
+
+class Health(itg.BatchObserver):
+    """Per-scene crossings, constraint violation, energy, tensions, slack and
+    the lowest point (a running minimum, :class:`LowestPoint`), gathered while
+    the batch integrates.  ``health=False``: only the crossings and samples
+    (and the tensions when ``on_slack == "stop"`` needs them); the health
+    figures stay NaN."""
+
+    def __init__(self, Bn, n, e, mass, grav, inertia, L2, on_slack: str, lowest: "LowestPoint | None", progress,
+                 t_end, dense_times=None, health: bool = True):
+        self.n = n
+        self.e = e  # (13, B)
+        self.mass, self.grav, self.inertia, self.L2 = mass, grav, inertia, L2
+        self.cross: list[list] = [[] for _ in range(Bn)]
+        self.health = health
+        self.viol = np.zeros(Bn) if health else np.full(Bn, np.nan)
+        self.E0 = np.zeros(Bn) if health else np.full(Bn, np.nan)
+        self.dE = np.zeros(Bn) if health else np.full(Bn, np.nan)
+        self.Tmin = np.full((Bn, n), np.inf if health else np.nan)
+        self.Tmax = np.full((Bn, n), -np.inf if health else np.nan)
+        self.slack_t = np.full((Bn, n), np.nan)
+        self.stop_on_slack = on_slack == "stop"
+        self.lowest = lowest
+        self.progress = progress
+        self.t_end = t_end
+        self.tnow = np.zeros(Bn)
+        self.dense_times = dense_times  # list of (B) arrays of sample times, or None
+        self.next_k = np.zeros(Bn, int)  # index of each scene's next unused sample
+        self.samples: list = [[] for _ in range(Bn)] if dense_times is not None else None
+        self.t_final = np.zeros(Bn)
+        self.y_final = np.zeros((Bn, 13))
+
+    def _energy(self, idx, y):
+        v = y[7:10]
+        w = y[10:13]
+        Iw = np.einsum("bij,jb->ib", self.inertia[idx], w)
+        return 0.5 * self.mass[idx] * np.sum(v * v, 0) + 0.5 * np.sum(w * Iw, 0) + self.mass[idx] * self.grav[idx] * y[2]
+
+    def _tension_viol(self, idx, ext):
+        n = self.n
+        lam, phi = ext[:n], ext[n:2 * n]
+        L2 = self.L2[:, idx]
+        dl = np.sqrt(L2 + 2.0 * phi)
+        return -lam * dl, np.abs(2.0 * phi / (dl + np.sqrt(L2)))
+
+    def _next_sample(self) -> np.ndarray:
+        """(B,) time of each scene's next sample not yet taken (inf when done)."""
+        return np.array([ts[k] if k < len(ts) else np.inf for ts, k in zip(self.dense_times, self.next_k)])
+
+    def start(self, idx, y, ext):
+        Bn = len(self.E0)
+        if self.health:
+            self.E0[idx] = self._energy(idx, y)
+            T, v = self._tension_viol(idx, ext)
+            self.Tmin[idx] = T.T
+            self.Tmax[idx] = T.T
+            self.prev_t = np.full((2, Bn), np.nan)
+            self.prev_T = np.full((self.n, 2, Bn), np.nan)
+            self.prev_t[1, idx] = 0.0
+            self.prev_T[:, 1, idx] = T
+            self.viol[idx] = v.max(axis=0)
+        if self.lowest is not None:
+            self.lowest.add_states(idx, y)
+        if self.samples is not None:
+            for k, b in enumerate(idx):
+                if self.dense_times[b][0] == 0.0:
+                    self.samples[b].append((np.zeros(1), y[:, k][None, :].copy()))
+                    self.next_k[b] = 1
+
+    def accepted(self, idx, t_old, t_new, y_old, y_new, ext_new, dense):
+        T = self._step_health(idx, t_new, y_new, ext_new) if self.health else None
+        if self.lowest is not None:
+            self.lowest.add_states(idx, y_new)
+        self._crossings_and_samples(idx, t_old, t_new, y_old, y_new, dense)
+        self.tnow[idx] = t_new
+        if self.progress is not None:
+            self.progress(float(np.mean(np.minimum(self.tnow / self.t_end, 1.0))), 1.0)
+        if self.stop_on_slack:
+            if T is None:
+                T = self._tension_viol(idx, ext_new)[0]
+            return np.any(T <= 0, axis=0)
+        return None
+
+    def _step_health(self, idx, t_new, y_new, ext_new):
+        """Energy, tensions (returned, (n, k) N), violation, slack and refined extremes at an accepted step."""
+        E = self._energy(idx, y_new)
+        self.dE[idx] = np.maximum(self.dE[idx], np.abs(E - self.E0[idx]))
+        T, v = self._tension_viol(idx, ext_new)
+        self.viol[idx] = np.maximum(self.viol[idx], v.max(axis=0))
+        self.Tmin[idx] = np.minimum(self.Tmin[idx], T.T)
+        self.Tmax[idx] = np.maximum(self.Tmax[idx], T.T)
+        neg = T.T <= 0
+        if np.any(neg):
+            st = self.slack_t[idx]
+            st[neg] = np.fmin(st[neg], np.broadcast_to(t_new[:, None], st.shape)[neg])
+            self.slack_t[idx] = st
+        # refine the extremes on the last three steps (parabola through them)
+        tt = np.stack([self.prev_t[0, idx], self.prev_t[1, idx], t_new])
+        TT = np.concatenate([self.prev_T[:, :, idx], T[:, None, :]], axis=1)
+        if np.all(np.isfinite(tt[0])):
+            merge_refined(self, idx, *refine_extremes(tt, TT))
+        self.prev_t[0, idx] = self.prev_t[1, idx]
+        self.prev_t[1, idx] = t_new
+        self.prev_T[:, 0, idx] = self.prev_T[:, 1, idx]
+        self.prev_T[:, 1, idx] = T
+        return T
+
+    def _crossings_and_samples(self, idx, t_old, t_new, y_old, y_new, dense):
+        e = self.e[:, idx]
+        c_old = np.sum(e * y_old, 0)
+        c_new = np.sum(e * y_new, 0)
+        up = np.nonzero((c_old < 0) & (c_new >= 0))[0]
+        need = up
+        if self.samples is not None:
+            has = self._next_sample()[idx] <= t_new  # the next unused sample time falls in this step
+            need = np.union1d(up, np.nonzero(has)[0])
+        if len(need):
+            F = dense(need)
+            pos = {int(j): k for k, j in enumerate(need)}
+            if len(up):
+                cols = [pos[int(j)] for j in up]
+                Fc = np.einsum("kmj,mj->kj", F[:, :, cols], e[:, up])
+                x = itg.crossing_on_step(Fc, c_old[up], c_new[up])
+                tc = t_old[up] + x * (t_new[up] - t_old[up])
+                for b, tt in zip(idx[up], tc):
+                    self.cross[b].append(float(tt))
+            if self.samples is not None:
+                for j in need:
+                    b = idx[j]
+                    ts = self.dense_times[b]
+                    sel = ts[(ts > t_old[j]) & (ts <= t_new[j])]
+                    self.next_k[b] = int(np.searchsorted(ts, t_new[j], side="right"))
+                    if len(sel):
+                        x = (sel - t_old[j]) / (t_new[j] - t_old[j])
+                        Fj = F[:, :, pos[int(j)]]
+                        ys = itg.dense_eval(Fj[:, :, None], y_old[:, j][:, None], x[None, :]).T
+                        self.samples[b].append((sel, ys))
+
+
+def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first):
+    """Health figures at the samples of one window of the LSODA engine
+    (blocks of ~50k values): Ys (k, B, 13) states relative to the rest CoM
+    ``com0`` (B, 3), tt (k,) normalised times, ``kx`` the compiled kernel
+    with extras; the lowest point into ``obs.lowest`` if it is set."""
+    K, Bn, _ = Ys.shape
+    blk = max(1, int(5e4 // max(Bn, 1)))
+    for s0 in range(0, K, blk):
+        Yb = Ys[s0:s0 + blk]  # (kb, B, 13)
+        tb = tt[s0:s0 + blk]
+        valid = tb[:, None] <= stop_tau[None, :] + 1e-12  # (kb, B)
+        comps = [Yb[:, :, j] for j in range(13)]
+        if Bn == 1:
+            comps = [cmp[:, 0] for cmp in comps]
+        out = kx(*comps)
+        lam = np.array(np.broadcast_arrays(*out[13:13 + n])).reshape(n, len(tb), Bn)
+        phi = np.array(np.broadcast_arrays(*out[13 + n:13 + 2 * n])).reshape(n, len(tb), Bn)
+        L2 = obs.L2[:, None, :]
+        dl = np.sqrt(L2 + 2.0 * phi)
+        T = -lam * dl  # (n, kb, B)
+        viol = np.abs(2.0 * phi / (dl + np.sqrt(L2)))
+        if on_slack == "stop":
+            slack_now = np.any(T <= 0, axis=0) & valid  # (kb, B)
+            if np.any(slack_now):
+                kfirst = np.where(np.any(slack_now, axis=0), np.argmax(slack_now, axis=0), -1)
+                for b in np.nonzero(kfirst >= 0)[0]:
+                    stop_tau[b] = min(stop_tau[b], tb[kfirst[b]])
+                valid = tb[:, None] <= stop_tau[None, :] + 1e-12
+        if len(tb) >= 3:
+            Tv = np.where(valid[None], T, np.nan)
+            rmin, rt_, rmax = refine_extremes(np.broadcast_to(tb[:, None], valid.shape), Tv)
+            merge_refined(obs, np.arange(Bn), np.where(np.isfinite(rmin), rmin, np.inf), rt_,
+                           np.where(np.isfinite(rmax), rmax, -np.inf), T_ref)
+        vT = np.where(valid[None], T, np.nan)
+        with np.errstate(all="ignore"):
+            obs.Tmin = np.fmin(obs.Tmin, np.nanmin(vT, axis=1).T) if np.any(valid) else obs.Tmin
+            obs.Tmax = np.fmax(obs.Tmax, np.nanmax(vT, axis=1).T) if np.any(valid) else obs.Tmax
+            obs.viol = np.fmax(obs.viol, np.nanmax(np.where(valid[None], viol, np.nan), axis=(0, 1)))
+        neg = (T <= 0) & valid[None]
+        if np.any(neg):
+            for i, kk, b in zip(*np.nonzero(neg)):
+                obs.slack_t[b, i] = np.fmin(obs.slack_t[b, i], tb[kk] * T_ref[b])
+        # energy relative to the rest pose (positions are relative to the rest CoM)
+        v = Yb[:, :, 7:10]
+        w = Yb[:, :, 10:13]
+        Iw = np.einsum("bij,kbj->kbi", obs.inertia, w)
+        E = 0.5 * obs.mass * np.sum(v * v, -1) + 0.5 * np.sum(w * Iw, -1) + obs.mass * obs.grav * Yb[:, :, 2]
+        if first and s0 == 0:
+            obs.E0 = E[0].copy()
+        obs.dE = np.fmax(obs.dE, np.nanmax(np.where(valid, np.abs(E - obs.E0), np.nan), axis=0))
+        if obs.lowest is not None:
+            kk, bb = np.nonzero(valid)
+            obs.lowest.add(bb, Yb[kk, bb, 2] + com0[bb, 2], Yb[kk, bb, 3:7])

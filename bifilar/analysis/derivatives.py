@@ -1,0 +1,280 @@
+"""Analytic first derivatives of the rest pose and of the linear mode
+periods with respect to every scene input (issue 14).
+
+One rest pose and one eigen-solve replace the 2 J rest-pose + mode solves of
+central finite differences (J inputs).
+
+Inputs are named as in :mod:`bifilar.estimation.sensitivity` (SI units):
+``Ixx Iyy Izz Ixy Ixz Iyz`` (body axes, kg m^2; an off-diagonal name moves
+both symmetric entries), ``mass`` (kg), ``gravity`` (m/s^2), ``length.i``
+(m), ``anchor.i.x|y|z`` (world frame, m), ``attachment.i.x|y|z`` (body
+frame, m) and ``com.x|y|z`` (m: the CoM moved by +d, i.e. every attachment
+by -d in body axes).
+
+Method
+------
+Rest pose.  The pose is ``(c, R)`` with the world chart ``(dr, dtheta)``
+(``R -> exp(dtheta) R``) and the multipliers ``lam_i = T_i / |d_i|``; the
+KKT equations ``F = [grad V + G^T lam; phi] = 0`` (``V = m g z``,
+``phi_i = (|d_i|^2 - L_i^2)/2``, ``G`` the Jacobian of ``phi``) define the
+pose implicitly, so with ``A = [[K, G^T], [G, 0]]`` (``K = sum lam_i
+Hess phi_i``, the Lagrangian's Hessian, which is also the chart derivative
+of the Lagrangian gradient at an equilibrium) the derivative along input
+``p_j`` is ``A [dx; dlam] = -dF/dp_j``.
+
+Eigenvalues.  A mode ``omega^2`` with shape ``v`` (``v^T M v = 1``) solves
+``(K - omega^2 M) v + G^T mu = 0``, ``G v = 0``; differentiating,
+
+    d omega^2 = v^T (dK - omega^2 dM) v + 2 mu^T dG v,
+
+where ``dK, dM, dG`` are total derivatives along the input and the pose and
+multiplier derivatives above.  ``dF/dp``, ``dK``, ``dM`` and ``dG`` are taken
+by the complex step (``Im f(x + i h e) / h``, exact to rounding: every
+matrix is a polynomial in the pose, the rotation perturbed to first order as
+``(I + i h [dtheta]x) R``), all inputs at once, at the fixed rest pose: no
+new rest pose and no new eigen-solve.  Then ``dT = -T/(2 omega^2) d omega^2``.
+
+Where this does not apply: a neutral mode (no period) gets a NaN row.  A
+singular KKT matrix (CoM on the attachment line: a neutral direction) gives
+the minimum-norm pose derivative, as the Newton solver's least-squares step
+gives a finite-difference neighbour, except for inputs that push along the
+neutral direction, whose columns are NaN (the body turns by a finite angle
+for any change: the caller differences them one-sidedly, see
+:func:`bifilar.estimation.sensitivity.period_sensitivity`).  Repeated
+eigenvalues (a degenerate cluster as :func:`bifilar.analysis.modes.linear_modes`
+finds them, e.g. the two swings of a symmetric trifilar): the derivative of
+each member depends on the perturbation's direction, so no single Jacobian
+row per mode exists; :func:`analytic_period_jacobian` raises
+:class:`NotDifferentiable` and the caller falls back to finite differences
+with mode tracking for the whole Jacobian (what the old code did).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene import Scene
+from .equilibrium import RestPose
+from .modes import ModeSet, degenerate_clusters
+
+INERTIA_INDEX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
+_AX = {"x": 0, "y": 1, "z": 2}
+_H = 1e-30  # complex step; any tiny value gives the derivative to rounding
+
+
+class NotDifferentiable(Exception):
+    """The analytic derivative does not exist or is not unique here (the message says why)."""
+
+
+@dataclass(frozen=True)
+class RestDerivative:
+    """Derivatives of the rest pose with respect to ``names`` (one row per input).
+
+    dcom : (J, 3) m per unit input (world frame).
+    dtheta : (J, 3) rad per unit input: the rotation derivative,
+        dR/dp = [dtheta]x R (world-frame rotation vector).
+    dtensions : (J, n) N per unit input.
+    dlam : (J, n) the multipliers lam_i = T_i / |d_i| (N/m) per unit input.
+    """
+
+    names: list
+    dcom: np.ndarray
+    dtheta: np.ndarray
+    dtensions: np.ndarray
+    dlam: np.ndarray
+
+
+def input_directions(scene: Scene, names: list[str]) -> dict:
+    """Unit perturbation of every scene array along each input (leading axis J).
+
+    Returns a dict of real arrays: ``anchors`` (J, n, 3), ``attachments``
+    (J, n, 3), ``lengths`` (J, n), ``mass`` (J,), ``gravity`` (J,),
+    ``inertia`` (J, 3, 3): the derivative of each scene array with respect
+    to the input (dimensionless: 1 per unit of the input).
+    """
+    J, n = len(names), scene.n_wires
+    out = {"anchors": np.zeros((J, n, 3)), "attachments": np.zeros((J, n, 3)), "lengths": np.zeros((J, n)),
+           "mass": np.zeros(J), "gravity": np.zeros(J), "inertia": np.zeros((J, 3, 3))}
+    for j, name in enumerate(names):
+        if name in INERTIA_INDEX:
+            a, b = INERTIA_INDEX[name]
+            out["inertia"][j, a, b] = 1.0
+            out["inertia"][j, b, a] = 1.0
+            continue
+        if name in ("mass", "gravity"):
+            out[name][j] = 1.0
+            continue
+        parts = name.split(".")
+        if parts[0] == "length" and len(parts) == 2:
+            out["lengths"][j, int(parts[1]) - 1] = 1.0
+        elif parts[0] in ("anchor", "attachment") and len(parts) == 3:
+            out[parts[0] + "s"][j, int(parts[1]) - 1, _AX[parts[2]]] = 1.0
+        elif parts[0] == "com" and len(parts) == 2:
+            out["attachments"][j, :, _AX[parts[1]]] = -1.0
+        else:
+            raise KeyError(f"unknown input {name!r}")
+    return out
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrices (..., 3, 3) of (..., 3), complex-safe."""
+    z = np.zeros(v.shape[:-1], dtype=v.dtype)
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
+def _parts(a, p, L, m, g, I, c, R, lam):
+    """KKT residual, constraint Jacobian, Lagrangian Hessian and mass matrix,
+    batched over a leading axis and complex-safe (no conjugation).
+
+    a, p (B, n, 3); L (B, n); m, g (B,); I (B, 3, 3); c (B, 3); R (B, 3, 3);
+    lam (B, n).  Returns F (B, 6 + n), G (B, n, 6), K (B, 6, 6), M (B, 6, 6).
+    """
+    w = np.einsum("bij,bnj->bni", R, p)
+    d = c[:, None, :] + w - a
+    G = np.concatenate([d, np.cross(w, d)], axis=-1)
+    phi = 0.5 * (np.einsum("bni,bni->bn", d, d) - L**2)
+    gradV = np.zeros(c.shape[:1] + (6,), dtype=G.dtype)
+    gradV[:, 2] = m * g
+    F = np.concatenate([gradV + np.einsum("bni,bn->bi", G, lam), phi], axis=-1)
+    W = _skew(w)  # (B, n, 3, 3)
+    eye = np.eye(3)
+    dw = np.einsum("bni,bni->bn", d, w)
+    rot = (-W @ W + 0.5 * (np.einsum("bni,bnj->bnij", d, w) + np.einsum("bni,bnj->bnij", w, d))
+           - dw[..., None, None] * eye)
+    B = c.shape[0]
+    K = np.zeros((B, 6, 6), dtype=G.dtype)
+    sl = lam.sum(axis=1)
+    K[:, :3, :3] = sl[:, None, None] * eye
+    K[:, :3, 3:] = -np.einsum("bn,bnij->bij", lam, W)
+    K[:, 3:, :3] = np.einsum("bn,bnij->bij", lam, W)
+    K[:, 3:, 3:] = np.einsum("bn,bnij->bij", lam, rot)
+    M = np.zeros((B, 6, 6), dtype=G.dtype)
+    M[:, :3, :3] = m[:, None, None] * eye
+    M[:, 3:, 3:] = R @ I @ np.swapaxes(R, -1, -2)
+    return F, G, K, M
+
+
+def _base(scene: Scene, rest: RestPose):
+    lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
+    return (scene.anchors[None], scene.attachments[None], scene.lengths[None], np.array([scene.mass]),
+            np.array([scene.gravity]), scene.inertia[None], rest.com[None], rest.R[None], lam[None])
+
+
+def _stepped(scene, rest, dirs, dx=None, dlam=None):
+    """The scene arrays, pose and multipliers moved by i h along every input
+    direction (and along the pose/multiplier derivatives ``dx`` (J, 6), ``dlam`` (J, n))."""
+    a, p, L, m, g, I, c, R, lam = _base(scene, rest)
+    ih = 1j * _H
+    J = dirs["mass"].shape[0]
+    args = [a + ih * dirs["anchors"], p + ih * dirs["attachments"], L + ih * dirs["lengths"],
+            m + ih * dirs["mass"], g + ih * dirs["gravity"], I + ih * dirs["inertia"]]
+    if dx is None:
+        args += [np.repeat(c, J, 0).astype(complex), np.repeat(R, J, 0).astype(complex),
+                 np.repeat(lam, J, 0).astype(complex)]
+    else:
+        Rj = (np.eye(3) + ih * _skew(dx[:, 3:].astype(complex))) @ R
+        args += [c + ih * dx[:, :3], Rj, lam + ih * dlam]
+    return args
+
+
+def _kkt_matrix(scene: Scene, rest: RestPose):
+    F, G, K, M = _parts(*_base(scene, rest))
+    n = scene.n_wires
+    A = np.zeros((6 + n, 6 + n))
+    A[:6, :6] = K[0]
+    A[:6, 6:] = G[0].T
+    A[6:, :6] = G[0]
+    return A, G[0], K[0], M[0]
+
+
+def _scales(scene: Scene):
+    """Row and column scales making the KKT matrix dimensionless (as in the Newton solver)."""
+    n, Ls, fs = scene.n_wires, float(np.max(scene.lengths)), scene.mass * scene.gravity
+    cs = np.concatenate([np.full(3, Ls), np.ones(3), np.full(n, fs / Ls**2)])
+    rs = np.concatenate([np.full(3, 1 / fs), np.full(3, 1 / (fs * Ls)), np.full(n, 1 / Ls**2)])
+    return rs, cs
+
+
+def _pose_derivative(scene: Scene, rest: RestPose, dirs: dict, singular: float = 1e-12, consistent: float = 1e-8):
+    """dx (J, 6) = (dcom, dtheta) and dlam (J, n) per unit of each input,
+    and a mask (J,) of the inputs whose derivative does not exist.
+
+    The KKT system is solved in the dimensionless scaling of the Newton
+    solver.  When the KKT matrix is singular (smallest singular value below
+    ``singular`` times the largest: a neutral direction, e.g. the CoM on the
+    attachment line) the minimum-norm solution is taken, as the Newton
+    solver's least-squares step takes it for a finite-difference neighbour;
+    an input that pushes along the neutral direction (least-squares residual
+    above ``consistent`` of the right-hand side) has no derivative: the body
+    would turn over, or turn by a finite angle, for any change of it."""
+    A, G, K, M = _kkt_matrix(scene, rest)
+    F = _parts(*_stepped(scene, rest, dirs))[0]
+    dF = F.imag / _H  # (J, 6 + n)
+    rs, cs = _scales(scene)
+    As = rs[:, None] * A * cs[None, :]
+    b = -(rs[:, None] * dF.T)  # (6 + n, J)
+    U, s, Vt = np.linalg.svd(As)
+    keep = s > singular * s[0]
+    coef = (U[:, keep].T @ b) / s[keep, None]
+    z = Vt[keep].T @ coef
+    resid = np.linalg.norm(b - As @ z, axis=0)
+    bad = resid > consistent * np.linalg.norm(b, axis=0)
+    z = cs[:, None] * z
+    return z[:6].T, z[6:].T, bad
+
+
+def rest_derivative(scene: Scene, rest: RestPose, names: list[str]) -> RestDerivative:
+    """Derivatives of the rest pose ``rest`` of ``scene`` with respect to ``names``
+    (implicit function theorem on the KKT equations; see the module docstring).
+    Inputs with no derivative (a singular KKT matrix and an input pushing
+    along its neutral direction, see :func:`_pose_derivative`) get NaN rows."""
+    dirs = input_directions(scene, names)
+    dx, dlam, bad = _pose_derivative(scene, rest, dirs)
+    dx[bad] = np.nan
+    dlam[bad] = np.nan
+    d = rest.wire_vectors
+    nd = np.linalg.norm(d, axis=1)
+    lam = rest.tensions / nd
+    # d_i = c + R p_i - a_i: dd_i = dc + [dtheta]x R p_i + R dp_i - da_i
+    w = scene.attachments @ rest.R.T
+    dd = (dx[:, None, :3] + np.cross(dx[:, None, 3:], w[None]) + dirs["attachments"] @ rest.R.T
+          - dirs["anchors"])
+    dT = dlam * nd + lam * np.einsum("jni,ni->jn", dd, d) / nd
+    return RestDerivative(list(names), dx[:, :3], dx[:, 3:], dT, dlam)
+
+
+def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: list[str]) -> np.ndarray:
+    """dT_k/dp_j (s per unit input), (K, J), for the modes of ``ms`` (the
+    linear modes of ``scene`` about ``rest``), analytic (module docstring).
+
+    A neutral mode (no period) has a NaN row; an input without a derivative
+    (singular KKT matrix and the input pushing along its neutral direction)
+    a NaN column: the caller differences those columns.  Raises
+    :class:`NotDifferentiable` for repeated eigenvalues.
+    """
+    if not ms.modes:
+        return np.zeros((0, len(names)))
+    w2 = np.array([m.omega2 for m in ms.modes])
+    live = np.array([m.period is not None for m in ms.modes])
+    scale = float(np.max(np.abs(w2)))
+    if degenerate_clusters(np.sort(w2[live]), scale):
+        raise NotDifferentiable("repeated eigenvalues: each mode's derivative depends on the perturbation")
+    dirs = input_directions(scene, names)
+    dx, dlam, bad = _pose_derivative(scene, rest, dirs)
+    _, G, K, M = _kkt_matrix(scene, rest)
+    _, Gs, Ks, Ms = _parts(*_stepped(scene, rest, dirs, dx, dlam))
+    dG, dK, dM = Gs.imag / _H, Ks.imag / _H, Ms.imag / _H
+    V = np.array([m.shape for m in ms.modes]).T  # (6, K)
+    V = V / np.sqrt(np.einsum("ik,ij,jk->k", V, M, V))  # v^T M v = 1
+    Rres = K @ V - M @ V * w2  # (K - w2 M) v = -G^T mu
+    mu = -np.linalg.lstsq(G.T, Rres, rcond=None)[0]  # (n, K)
+    dw2 = (np.einsum("ik,jil,lk->kj", V, dK, V) - w2[:, None] * np.einsum("ik,jil,lk->kj", V, dM, V)
+           + 2 * np.einsum("nk,jnl,lk->kj", mu, dG, V))
+    T = np.array([m.period if m.period is not None else np.nan for m in ms.modes])
+    jac = -(T / (2 * np.where(live, w2, 1.0)))[:, None] * dw2
+    jac[~live] = np.nan
+    jac[:, bad] = np.nan
+    return jac
