@@ -264,6 +264,12 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
     tol = 1e-6 * np.max(L)
     if np.max(stretch) > tol:  # no pose found with every wire within its length
         _check_reach(scene, c, R, tol)  # InputError if there is none
+        if at_bound:
+            # the only poses within reach are turned by 90 degrees or more from
+            # the start orientation: an input problem, like turning over
+            raise UnstableRestError("rig.attachments", "the body cannot hang within 90 degrees of its start "
+                                    "orientation (body axes along the world axes): the attachments do not face "
+                                    "the anchors; check their order and the body frame")
         raise ConvergenceError(f"rest pose search failed: {res.message}")
     if at_bound:
         # the body wants to turn over rather than hang in its start orientation
