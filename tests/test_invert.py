@@ -29,6 +29,7 @@ from bifilar.estimation.invert import (
     physical_interval,
 )
 from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+from bifilar.jsonable import to_jsonable
 from bifilar.estimation.sensitivity import inertia_budget, period_sensitivity
 from bifilar.estimation.uncertainty import input_jacobian
 from bifilar.models.reduced import TorsionParams, torsion_period
@@ -354,6 +355,12 @@ def test_degenerate_scene_reports_inputs_without_derivative():
     res = invert(one(s, "torsion", ms.get("torsion").period), solve_for=["Izz"], ladder=False)
     assert "attachment.1.x" in res.degenerate_inputs and "com.x" in res.degenerate_inputs
     assert any("degenerate" in w for w in res.warnings)
+    # issue 10: a budget without those inputs was 50x too small; no std is printed instead
+    assert res.std_unavailable and "cannot be given" in res.std_unavailable
+    assert np.isnan(res.sigma("Izz")) and np.all(np.isnan(res.interval))
+    doc = to_jsonable(res.to_json())
+    assert doc["inertia"]["Izz"]["std"] is None and doc["inertia"]["Izz"]["interval_95"] == [None, None]
+    assert doc["inertia"]["Izz"]["value"] == pytest.approx(s.inertia[2, 2], rel=1e-6)
 
 
 # coverage of the 95 % intervals: tests/test_coverage.py (two-sided, independent truth)

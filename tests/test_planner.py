@@ -133,12 +133,17 @@ def test_plan_zip_keeps_wires_parallel_and_writes_a_config_and_a_measurements_fi
     assert mh["not_identified"] == [] and len(mh["hangings"]) >= 2
     code, out, err = run(["invert", "--measurements", str(meas), "--json"])
     assert code == 0, err
-    inv = json.loads(out)["inertia"]
+    idoc = json.loads(out)
+    inv = idoc["inertia"]
     for c, a in mh["accuracy"].items():
-        # the planned periods are those of the prior: invert must give the prior back, with a comparable
-        # sigma (invert adds the amplitude and model-bias terms the plan leaves out)
+        # the planned periods are those of the prior: invert must give the prior back
         assert inv[c]["value"] == pytest.approx(a["value"], rel=1e-6), c
-        assert inv[c]["std"] == pytest.approx(a["sigma"], rel=0.25), c
+        # this plate's CoM lies on its attachment line (a knife edge: a 1 mm sideways error tips it),
+        # so invert gives no std rather than a wrong one (issue 10), naming the inputs; the plan's
+        # linear sigma is its known limit there.  The sigma round trip on a rig that is not a knife
+        # edge: test_multi_hanging_plan_uncertainty_matches_a_monte_carlo_of_the_planned_experiment.
+        assert inv[c]["std"] is None, c
+    assert "cannot be given" in idoc["std_unavailable"] and "attachment" in idoc["std_unavailable"]
 
 
 def test_separation_guard_is_the_smallest_gap_of_any_timed_mode():

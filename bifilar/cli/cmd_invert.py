@@ -213,6 +213,7 @@ def _apply_amplitudes(ms, amps: dict) -> None:
 
 
 def _render(ms, res) -> None:
+    import numpy as np
     from rich.table import Table
 
     con = console()
@@ -228,8 +229,12 @@ def _render(ms, res) -> None:
     for i, n in enumerate(res.names):
         v, s = res.values[i], res.std[i]
         unit = "kg m^2" if n.startswith("I") else "m"
-        row = [f"{n} ({unit})", fmt(float(v), 8), fmt(float(s), 3), f"{s / abs(v):.2%}" if v else "-",
-               f"{v - 1.96 * s:.6g} .. {v + 1.96 * s:.6g}"]
+        if np.isfinite(s):
+            lo, hi = res.interval[i] if res.interval is not None else (v - 1.96 * s, v + 1.96 * s)
+            row = [f"{n} ({unit})", fmt(float(v), 8), fmt(float(s), 3), f"{s / abs(v):.2%}" if v else "-",
+                   f"{lo:.6g} .. {hi:.6g}"]
+        else:  # res.std_unavailable says why (printed as a warning)
+            row = [f"{n} ({unit})", fmt(float(v), 8), "cannot be given", "-", "-"]
         if mc is not None:
             row.append(f"{mc.std[i]:.3g} (x{mc.ratio[i]:.2f})" if mc.n_ok > 1 else "-")
         t.add_row(*row)

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import BifilarError
+from ..errors import BifilarError, ConvergenceError
 from .measurements import COM_UNKNOWNS
 from .problem import Problem
 from .sensitivity import input_sigma, mac_match, measured_inputs, perturb
@@ -438,6 +438,13 @@ def component_std(scene, component: str, mode: str | int, unc: dict, timing: flo
                               [Measurement(md.label, float(md.period), s, "period", "--period", amplitude=amplitude)])
         res = invert(meas, method="linear", solve_for=[component], unc=unc, ladder=False)
         sd = float(res.sigma(component))
+        if not np.isfinite(sd):
+            # a knife edge (res.std_unavailable): invert prints no std there;
+            # the planner keeps its linear figure so the rig can still be
+            # compared (known limit: it understates such a point's sigma)
+            if fallback is None:
+                raise ConvergenceError(res.std_unavailable or "no std")
+            return float(fallback)
         if fallback is not None and abs(sd - fallback) <= LINEAR_ENOUGH * abs(fallback):
             return float(fallback)
         return sd

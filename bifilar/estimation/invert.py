@@ -115,6 +115,8 @@ class InversionResult:
     runtime: float = 0.0
     monte_carlo: MonteCarloSummary | None = None
     interval: np.ndarray | None = None
+    #: why no std can be given (degenerate inputs), or None; then ``std`` is NaN
+    std_unavailable: str | None = None
     problem: Problem | None = field(default=None, repr=False)
     fit: dict = field(default_factory=dict)
     roots: list = field(default_factory=list)
@@ -124,6 +126,10 @@ class InversionResult:
 
     @property
     def std(self) -> np.ndarray:
+        """Standard uncertainty of each unknown (NaN when it cannot be given,
+        see ``std_unavailable``)."""
+        if self.std_unavailable:
+            return np.full(len(self.names), np.nan)
         return self.budget.std
 
     def value(self, name: str) -> float:
@@ -135,7 +141,7 @@ class InversionResult:
     def to_json(self) -> dict:
         inertia, com = {}, {}
         for i, n in enumerate(self.names):
-            d = {"value": float(self.values[i]), "std": float(self.std[i])}
+            d = {"value": float(self.values[i]), "std": float(self.std[i])}  # NaN -> null (std_unavailable)
             if self.interval is not None:
                 d["interval_95"] = [float(self.interval[i, 0]), float(self.interval[i, 1])]
             if self.monte_carlo is not None and self.monte_carlo.n_ok > 1:
@@ -181,6 +187,7 @@ class InversionResult:
             "assumed_uncertainty": self.uncertainty,
             "degenerate_inputs": self.degenerate_inputs,
             "monte_carlo": self.monte_carlo.to_json() if self.monte_carlo is not None else None,
+            "std_unavailable": self.std_unavailable,
             "warnings": list(self.warnings),
             "notes": list(self.notes),
             "runtime_s": self.runtime,
@@ -389,15 +396,22 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           _assumed(unc_all), degenerate, warnings, notes, problem=pb,
                           sims=(est_nl.sims if est_nl is not None else []))
     if degenerate:
-        # TODO(issue 10): a targeted Monte Carlo over every input for these
-        # (montecarlo.monte_carlo_check perturbs them now); too slow on the
-        # thesis plate's knife edge (a global rest-pose search per draw), so
-        # not wired in yet: they are still listed and left out.
-        warnings.append("these inputs have no derivative here (the scene is degenerate: a neutral mode, e.g. the "
-                        "CoM on the line through two attachment points; or four or five dependent wires, where a "
-                        "change of one wire leaves a wire slack or removes a mode) and are left out of the budget, which is "
-                        "therefore too small; run --monte-carlo N to see their effect: " + ", ".join(degenerate))
+        # inputs with no derivative (a knife edge): within their stated
+        # uncertainty the scene changes qualitatively, and a budget without
+        # them is far too small (50x on the thesis plate with its CoM on the
+        # attachment line).  No std is better than a wrong one.
+        res.std_unavailable = (
+            "the uncertainty cannot be given: these inputs have no derivative here (the scene is degenerate: a "
+            "neutral mode, e.g. the CoM on the line through two attachment points; or four or five dependent "
+            "wires, where a change of one wire leaves a wire slack or removes a mode), so within their stated "
+            "uncertainty the hanging changes qualitatively (it cannot hang, tilts far, or loses a mode): "
+            + ", ".join(degenerate) + ". Hang the body with its CoM clearly below the attachment line, state "
+            "those inputs' uncertainty (--uncertainty KEY=VALUE) if it is smaller, or run --monte-carlo N to "
+            "see the spread")
+        warnings.append(res.std_unavailable)
     res.interval = interval_95(p_hat, res.budget, bctx)
+    if res.std_unavailable:
+        res.interval = np.full_like(res.interval, np.nan)
     I_hat = pb.models[0].inertia_ref(pb.values(p_hat))
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:  # no inertia outside the positive-definite interval (others at the estimate)
