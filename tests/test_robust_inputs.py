@@ -214,3 +214,22 @@ def test_messages_never_quote_a_file_that_is_not_a_config(tmp_path):
     for args in (["modes", secret], ["invert", "--measurements", meas], ["tensions", PITCH, "--motion", secret]):
         code, _, err = run(args)
         assert code == 2 and "SECRET" not in err and "root:x" not in err, (args, err)
+
+
+def test_a_file_that_is_not_a_recording_is_named_never_quoted(tmp_path):
+    # issue 13: `period /etc/passwd` and `invert --signal torsion=/etc/passwd` quoted the file's first line
+    secret = "root:x:0:0:root:/root:/bin/bash"
+    f = tmp_path / "passwd"
+    f.write_text(secret + "\ndaemon:x:1:1:daemon:/usr/sbin\n")
+    for args in (["period", f], ["invert", PITCH, "--signal", f"torsion={f}"], ["period", f, "--json"]):
+        code, out, err = run(args)
+        line = one_error(err)
+        assert code == 2 and "passwd is not a recording" in line, err
+        assert "root" not in err and "daemon" not in err and out == ""
+    # a real header with numbers below is still read (and its column names may be listed)
+    g = tmp_path / "rec.csv"
+    t = np.arange(0, 20, 0.01)
+    g.write_text("t,angle (rad)\n" + "".join(f"{a:.3f},{0.05 * np.cos(2 * np.pi * a / 1.9):.6f}\n" for a in t))
+    code, out, err = run(["period", g, "--json"])
+    assert code == 0, err
+    assert json.loads(out)["period"] == pytest.approx(1.9, rel=1e-4)

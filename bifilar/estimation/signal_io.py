@@ -227,6 +227,21 @@ def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str],
     return _stream_columns(p, start, split, cols, names)
 
 
+#: a column name: letters, digits and a few signs, at most 64 characters
+_NAME_CHARS = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-. ()[]/%+*^#'|°µ")
+
+
+def _plausible_header(names: list[str]) -> bool:
+    """Whether a first row reads as column names: at most 1000 of them, each
+    1-64 characters from :data:`_NAME_CHARS`, at least one starting with a
+    letter (a line of some other text file fails, so it is never quoted)."""
+    if not 1 <= len(names) <= 1000:
+        return False
+    if not all(0 < len(n) <= 64 and set(n) <= _NAME_CHARS for n in names):
+        return False
+    return any(n[:1].isalpha() for n in names)
+
+
 def _read_text(p: Path, column, fs):
     hline, first, delim = _header(p)
 
@@ -243,6 +258,11 @@ def _read_text(p: Path, column, fs):
     else:
         names = header
         start = hline + 1
+        if not _plausible_header(names):
+            # not a recording (a password file, a log, prose): name the file and
+            # the problem, never quote its content
+            raise SignalError("signal", f"{p.name} is not a recording: its first row is not a header of column "
+                                        "names (expected e.g. 't,x' with numbers below, or a .mat file)")
     time_idx = next((i for i, n in enumerate(names) if _is_time_name(n)), None)
 
     if column is None:
