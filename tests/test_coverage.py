@@ -5,9 +5,12 @@ HERE (not read from DEFAULT_UNCERTAINTY, so a changed default is caught), the
 the truth's exact linear period, or its nonlinear run at a random release
 amplitude), each experiment re-estimated with the batched solver
 (:func:`bifilar.estimation.montecarlo.solve_draws_batched`), and the interval
-``invert`` states for the nominal experiment (its half-widths; they vary by
-far less than the spread between experiments here) checked for covering the
-truth.
+``invert`` states for the nominal experiment (its half-widths) checked for
+covering the truth.  The half-widths vary by far less than the spread
+between experiments, except for the wheel, whose truth sits at the extremum
+of the response: there the measured inputs spread about the truth and the
+error's skew is the reverse of the nominal model's, which the second-order
+interval is symmetrised against (docs/invert.md, "The 95 % interval").
 
 Two-sided: with N = 400 experiments the binomial std of a true 95 % coverage
 is 1.09 %, so 95 +- 2.2 % is a 2-sigma band (a correct budget passes it for
