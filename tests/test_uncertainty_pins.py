@@ -128,7 +128,7 @@ def test_sweep_penalises_a_shallow_com():
     # the wheel: with the CoM 20 mm below the attachments a sideways
     # CoM error (2 mm) tilts it, a second-order effect; at 50 mm far less.
     # The linear budget predicts nearly the same sigma at both depths; the
-    # honest one more than 1.5x more at 20 mm (observed ~2.3x)
+    # honest one more than 1.5x more at 20 mm (observed ~2.5x with the pair interactions, ~2.3x without)
     cfg = wheel_cfg()
     st = sw.resolve_settings(cfg, components=("Izz",), tensions=False)
     sig = {}

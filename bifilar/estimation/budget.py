@@ -24,7 +24,15 @@ std differs from the linear one by < 2 % and the offsets are < 10 % of the
 std) the linear budget is kept unchanged; otherwise each input's
 contribution becomes ``(a_j, sqrt(2) b_j)`` and the mean offset ``sum b_j``
 is carried as a term of its own, so the printed std is the RMS distance of
-the truth from the estimate.  Inputs whose sigma points cannot hang at all
+the truth from the estimate.  Each input so flagged is then paired with
+every other input: four more re-solved corners ``(+-h, +-h)`` make a 3 x 3
+grid through which the biquadratic in ``(z_i, z_j)`` is exact, and its
+interactions (``z_i z_j``, ``z_i^2 z_j``, ``z_i z_j^2``, ``z_i^2 z_j^2``:
+the wheel's sideways CoM times the attachments' y errors and times the
+CoM depth's) enter the budget in orthonormal Hermite terms
+(:func:`_pair_terms`).  The 95 % interval is symmetrised against the
+reversed skew of a truth at the response's extremum (:func:`interval_95`).
+Inputs whose sigma points cannot hang at all
 (a knife-edge: the CoM exactly on the attachment line) are *degenerate*
 and returned to the caller, which lists them; a scene with a neutral mode
 gets no sigma points at all (each would need the slow global rest-pose
@@ -72,6 +80,7 @@ class BudgetContext:
     match: list                      # per hanging, base mode k -> index in modes
     nonlinear: list = field(default_factory=list)   # keys treated to second order
     surrogate: dict = field(default_factory=dict)   # key -> (a, b) of the quadratic
+    cross: dict = field(default_factory=dict)       # (key_i, key_j) -> (k11, k21, k12, k22)
     amplitude: dict = field(default_factory=dict)   # label -> D (P,): truth - p at A_max
 
 
@@ -85,15 +94,18 @@ def _key_hanging(pb: Problem, key: str) -> list:
     return [0]
 
 
-def _perturbed_scene(pb: Problem, h: int, scene, key: str, d: float):
-    """Hanging ``h``'s ``scene`` with input ``key`` changed by ``d`` (SI; a
-    ``com.*`` key is a shift in the reference body frame)."""
-    if key.startswith("com."):
-        v = np.zeros(3)
-        v["xyz".index(key[-1])] = d
-        return replace(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
-    name = key.split(":", 1)[1] if len(pb.models) > 1 and ":" in key else key
-    return perturb(scene, name, d)
+def _perturbed_scene(pb: Problem, h: int, scene, moves):
+    """Hanging ``h``'s ``scene`` with each input ``key`` of ``moves``
+    [(key, d), ...] changed by ``d`` (SI; a ``com.*`` key is a shift in the
+    reference body frame)."""
+    for key, d in moves:
+        if key.startswith("com."):
+            v = np.zeros(3)
+            v["xyz".index(key[-1])] = d
+            scene = replace(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
+        else:
+            scene = perturb(scene, key.split(":", 1)[1] if len(pb.models) > 1 and ":" in key else key, d)
+    return scene
 
 
 def _hanging_periods(scenes, rest, base_modes) -> list:
@@ -119,9 +131,9 @@ def _hanging_periods(scenes, rest, base_modes) -> list:
     return out
 
 
-def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, key: str, d: float, hits: dict):
+def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
     """Unknowns that keep every model period at the estimate's value with
-    input ``key`` changed by ``d``: Gauss-Newton steps on ``T^2`` (nearly
+    the inputs of ``moves`` [(key, d), ...] changed: Gauss-Newton steps on ``T^2`` (nearly
     linear in an inertia) with the gain matrix; the rest pose of the
     perturbed geometry is reused while only the inertia changes.  ``hits``:
     {hanging: (T, scene, rest, modes, col)} at the estimate; None if a
@@ -151,7 +163,7 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, key: str, d: float, 
             return p
         vals = pb.values(p)
         for h, (_, _, rest, ms0, col) in hits.items():
-            scene = _perturbed_scene(pb, h, pb.models[h].scene(vals), key, d)
+            scene = _perturbed_scene(pb, h, pb.models[h].scene(vals), moves)
             try:
                 r = rest_pose(scene, guess=rest) if com_unknown else rest
                 ms = linear_modes(scene, r)
@@ -160,6 +172,80 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, key: str, d: float, 
             c2 = mac_match(ms0, ms)
             fill(h, ms, c2[col])
     return p if np.all(np.isfinite(T)) else None
+
+
+def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -> dict:
+    """Re-solved unknowns (P,) at each point {id: [(key, d), ...]} of moved
+    inputs (:func:`_resolve`), None where a hanging cannot hang or a period
+    is lost; the perturbed scenes of each hanging in one batch."""
+    jobs: dict[int, list] = {h: [] for h in range(len(pb.models))}
+    for pid, moves in points.items():
+        for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
+            if any(m.hanging == h for m in pb.measurements):
+                jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves)))
+    res: dict = {pid: {} for pid in points}
+    for h, jl in jobs.items():
+        if jl:
+            for (pid, _), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
+                res[pid][h] = o
+    return {pid: (_resolve(pb, ctx, p_hat, r_hat, points[pid], hits)
+                  if all(v is not None for v in hits.values()) else None)
+            for pid, hits in res.items()}
+
+
+def _coefs3(vm, v0, vp):
+    """(constant, linear, quadratic) coefficients in ``z`` of the quadratic
+    through values at ``z = -h, 0, +h`` (h = :data:`SIGMA_POINT`)."""
+    h = SIGMA_POINT
+    return v0, (vp - vm) / (2 * h), (vp + vm - 2 * v0) / (2 * h * h)
+
+
+def _pair_terms(pb: Problem, ctx: BudgetContext, p_hat, r_hat, sol: dict, contrib: dict, std1) -> np.ndarray:
+    """Interactions of each flagged input ``i`` (``ctx.nonlinear``) with
+    every other input ``j``: the re-solved unknowns at the four corners
+    ``(+-h, +-h)`` complete, with the sigma points ``sol`` and the estimate,
+    a 3 x 3 grid in ``(z_i, z_j)``, through which the biquadratic
+    ``sum_{p,q<=2} k_pq z_i^p z_j^q`` is exact.  Its interaction part
+    ``k11 z_i z_j + k21 z_i^2 z_j + k12 z_i z_j^2 + k22 z_i^2 z_j^2`` is
+    stored in ``ctx.cross`` and entered in ``contrib`` in orthonormal
+    Hermite terms (``z``, ``(z^2 - 1)/sqrt 2`` and their products are
+    uncorrelated, so the variance is the sum of the squared coefficients):
+    ``k21`` adds to ``j``'s linear term, ``k12`` to ``i``'s, ``sqrt 2 k22``
+    to both quadratic terms, and ``k11``, ``sqrt 2 k21``, ``sqrt 2 k12``,
+    ``2 k22`` are terms of their own (listed where > 0.1 % of the std).
+    Returns the added mean offset, ``sum k22``.  A pair with a corner that
+    cannot hang is left out (the per-input terms stand)."""
+    flagged = list(ctx.nonlinear)
+    pairs = [(ki, kj) for n, ki in enumerate(flagged) for kj in ctx.surrogate
+             if kj != ki and not (kj in flagged and flagged.index(kj) < n)]
+    h = SIGMA_POINT
+    corners = _solve_points(pb, ctx, p_hat, r_hat,
+                            {(ki, kj, si, sj): [(ki, si * h * ctx.sigmas[ki]), (kj, sj * h * ctx.sigmas[kj])]
+                             for ki, kj in pairs for si in (1, -1) for sj in (1, -1)})
+    p0 = np.asarray(p_hat, float)
+    offset = np.zeros(len(p0))
+    r2 = math.sqrt(2)
+    for ki, kj in pairs:
+        F = {(si, sj): corners[(ki, kj, si, sj)] for si in (1, -1) for sj in (1, -1)}
+        if any(v is None for v in F.values()):
+            continue
+        F.update({(1, 0): sol[(ki, 1)], (-1, 0): sol[(ki, -1)], (0, 1): sol[(kj, 1)], (0, -1): sol[(kj, -1)],
+                  (0, 0): p0})
+        # coefficients in z_i at z_j = -h, 0, +h, then each in z_j
+        rows = [_coefs3(F[(-1, sj)], F[(0, sj)], F[(1, sj)]) for sj in (-1, 0, 1)]
+        k = [_coefs3(rows[0][pp], rows[1][pp], rows[2][pp]) for pp in range(3)]  # k[p][q]
+        k11, k21, k12, k22 = k[1][1], k[2][1], k[1][2], k[2][2]
+        ctx.cross[(ki, kj)] = (k11, k21, k12, k22)
+        contrib[kj] = contrib[kj] + k21
+        contrib[ki] = contrib[ki] + k12
+        contrib[f"{ki} (2nd order)"] = contrib[f"{ki} (2nd order)"] + r2 * k22
+        contrib[f"{kj} (2nd order)"] = contrib[f"{kj} (2nd order)"] + r2 * k22
+        offset = offset + k22
+        for name, c in ((f"{ki} x {kj}", k11), (f"{ki}^2 x {kj}", r2 * k21),
+                        (f"{ki} x {kj}^2", r2 * k12), (f"{ki}^2 x {kj}^2", 2 * k22)):
+            if np.any(np.abs(c) > 1e-3 * std1):
+                contrib[f"{name} (2nd order)"] = c
+    return offset
 
 
 def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudget) -> tuple[LinearBudget, list]:
@@ -175,37 +261,17 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
         # a neutral mode (knife edge): sigma points would need the slow global
         # rest-pose search; not treated yet (TODO issue 10, docs/invert.md)
         keys = []
-    H = len(pb.models)
-    jobs: dict[int, list] = {h: [] for h in range(H)}
-    for key in keys:
-        for h in _key_hanging(pb, key):
-            for sgn in (1, -1):
-                d = sgn * SIGMA_POINT * ctx.sigmas[key]
-                jobs[h].append((key, sgn, _perturbed_scene(pb, h, ctx.scenes[h], key, d)))
-    res: dict = {}
-    for h, jl in jobs.items():
-        if not jl or not any(m.hanging == h for m in pb.measurements):
-            continue
-        out = _hanging_periods([j[2] for j in jl], ctx.rests[h], ctx.modes[h])
-        for (key, sgn, _), o in zip(jl, out):
-            res.setdefault((key, sgn), {})[h] = o
+    h_ = SIGMA_POINT
+    sol = _solve_points(pb, ctx, p_hat, r_hat, {(key, sgn): [(key, sgn * h_ * ctx.sigmas[key])]
+                                                for key in keys for sgn in (1, -1)})
+    p0 = np.asarray(p_hat, float)
     failed, surrogate = [], {}
     for key in keys:
-        ps = []
-        for sgn in (1, -1):
-            hits = res.get((key, sgn), {})
-            p = None
-            if all(v is not None for v in hits.values()):
-                p = _resolve(pb, ctx, p_hat, r_hat, key, sgn * SIGMA_POINT * ctx.sigmas[key], hits)
-            if p is None:
-                break
-            ps.append(p)
-        if len(ps) < 2:
+        pp, pm = sol[(key, 1)], sol[(key, -1)]
+        if pp is None or pm is None:
             failed.append(key)
             continue
-        a = (ps[0] - ps[1]) / (2 * SIGMA_POINT)
-        b = (ps[0] + ps[1] - 2 * np.asarray(p_hat, float)) / 6
-        surrogate[key] = (a, b)
+        surrogate[key] = ((pp - pm) / (2 * h_), (pp + pm - 2 * p0) / 6)
     std1 = lin.std
     contrib = {k: v for k, v in lin.contributions.items() if k not in surrogate}
     offset = np.zeros(len(pb.unknowns))
@@ -217,6 +283,7 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
     with np.errstate(invalid="ignore", divide="ignore"):
         change = np.abs(np.sqrt(var2) / std1 - 1)
         off_rel = np.abs(offset) / std1
+    ctx.cross = {}
     if np.all(change < LINEAR_ENOUGH) and np.all(off_rel < OFFSET_ENOUGH):
         contrib, offset = dict(lin.contributions), np.zeros(len(offset))
         ctx.surrogate = {}
@@ -225,6 +292,7 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
         ctx.nonlinear = [k for k, (a, b) in surrogate.items()
                          if np.any(math.sqrt(2) * np.abs(b) > 0.05 * std1)
                          or np.any(np.abs(a - lin.contributions.get(k, a)) > 0.05 * std1)]
+        offset = offset + _pair_terms(pb, ctx, p_hat, r_hat, sol, contrib, std1)
     if not ctx.surrogate and not ctx.amplitude:
         return lin, failed
     for lab, D in ctx.amplitude.items():
@@ -239,17 +307,23 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
 
 
 def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_samples=None) -> np.ndarray:
-    """(P, 2) 95 % intervals of the unknowns (SI): the symmetric
-    ``p +- 1.96 std`` joined with the 2.5-97.5 % quantiles of the error
-    model (the second-order surrogate ``sum_j a_j z_j + b_j z_j^2``, normal
-    terms for the linear inputs and periods, ``D u`` with ``u = (A/A_max)^2``,
-    ``A`` uniform, for an unstated amplitude) or of Monte Carlo re-estimates
-    ``mc_samples`` (n, P).  The join is asymmetric where the error is
-    skewed, and never narrower than the RMS interval, which covers the
-    truth for every true input (a quadratic response with the truth at its
-    extremum makes the quantile interval alone miss).  When the only skewed
-    term is the unstated amplitude (an assumed distribution of the release
-    amplitude, independent of the inputs), the quantile interval alone."""
+    """(P, 2) 95 % intervals of the unknowns (SI).  Linear budget: ``p +-
+    1.96 std``.  Second-order budget: the 2.5-97.5 % quantiles of the error
+    model ``e = sum_j (a_j z_j + b_j z_j^2)`` plus the pair interactions of
+    ``ctx.cross`` (:func:`_pair_terms`) plus normal terms for the linear inputs and periods, taken with a random
+    sign ``s = +-1`` (the model and its mirror image, equally likely), plus
+    ``D u`` with ``u = (A/A_max)^2``, ``A`` uniform, for an unstated
+    amplitude.  Why the mirror: the model is built around the *measured*
+    inputs (the truth spread about them), but where the truth sits at the
+    extremum of the response (the symmetric wheel) the error the
+    experimenter makes is ``-e`` (the measured inputs spread about the
+    truth); the interval ``p +- t`` with ``P(|e| <= t) = 0.95`` covers 95 %
+    in both readings, and is ``p +- 1.96 std`` for a normal ``e``
+    (docs/invert.md, "The 95 % interval").  The unstated amplitude's term
+    keeps its sign (an assumed distribution of the release amplitude,
+    independent of the inputs).  With Monte Carlo re-estimates
+    ``mc_samples`` (n, P): ``p +- 1.96 std`` joined with their 2.5-97.5 %
+    quantiles."""
     p = np.asarray(p_hat, float)
     sd = budget.std
     lo, hi = p - 1.96 * sd, p + 1.96 * sd
@@ -266,17 +340,21 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
             if k in skip or k.endswith("(2nd order)"):
                 continue
             err += rng.standard_normal(N)[:, None] * np.asarray(c)[None, :]
-        for a, b in ctx.surrogate.values():
-            z = rng.standard_normal(N)[:, None]
+        zs = {}
+        for key, (a, b) in ctx.surrogate.items():
+            z = zs[key] = rng.standard_normal(N)[:, None]
             err += a[None, :] * z + b[None, :] * z * z
+        for (ki, kj), (k11, k21, k12, k22) in ctx.cross.items():
+            zi, zj = zs[ki], zs[kj]
+            err += zi * zj * (k11 + k21 * zi + k12 * zj + k22 * zi * zj)
+        amp = np.zeros_like(err)
         for D in ctx.amplitude.values():
             u = rng.uniform(0.0, 1.0, N)[:, None] ** 2
-            err += D[None, :] * u
-        q = np.quantile(err, [0.025, 0.975], axis=0)
+            amp += D[None, :] * u
         if ctx.surrogate:
-            lo, hi = np.minimum(lo, p + q[0]), np.maximum(hi, p + q[1])
-        else:  # only the amplitude's one-sided term: its distribution is assumed, the quantiles are right
-            lo, hi = p + q[0], p + q[1]
+            err *= rng.choice([-1.0, 1.0], N)[:, None]
+        q = np.quantile(err + amp, [0.025, 0.975], axis=0)
+        lo, hi = p + q[0], p + q[1]
     return np.column_stack([lo, hi])
 
 
