@@ -522,6 +522,10 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
     budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc)
     std_lin = budget.std
     amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
+    if any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):
+        # no std can be given anyway (InversionResult.std_unavailable): skip
+        # the sigma points, each a global rest-pose search on such a scene
+        return budget, std_lin, [d for d in degenerate if bctx.sigmas.get(d, 0) > 0], T_lin, bctx, amp_default
     budget, failed = second_order(pb, p, r, bctx, budget)
     degenerate = [d for d in dict.fromkeys(degenerate + failed) if bctx.sigmas.get(d, 0) > 0]
     return budget, std_lin, degenerate, T_lin, bctx, amp_default
