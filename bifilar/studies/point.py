@@ -274,6 +274,11 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
         sens = replace(sens, jacobian=jac)
         return inertia_budget(sens, scene, comp, k, unc["timing"], unc)
     b = inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+    if not np.all(np.isfinite(np.asarray(sens.jacobian, float)[k])):
+        # an input with no derivative (a knife edge, dependent wires): invert
+        # gives no std there, and component_std would fall back to this
+        # linear figure after a costly inversion (the known limit)
+        return b
     # the std invert prints: second order where the linear one is wrong (a
     # shallow CoM), so a planner can penalise such a rig (issue 10)
     return replace(b, value_sigma=component_std(scene, comp, k + 1, unc, unc["timing"], fallback=b.value_sigma))
