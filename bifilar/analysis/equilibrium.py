@@ -177,13 +177,17 @@ def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | 
     if lam is None:
         lam = -np.linalg.lstsq(G.T, gradV, rcond=None)[0]
     force_scale = m * g
+    prev = np.inf
     for _ in range(iters):
         d, w, G = constraint_jacobian(scene, com, R)
         phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
         r1 = gradV + G.T @ lam
         res = max(np.max(np.abs(r1)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
-        if res < 1e-15:
+        # converged, or at the rounding floor (a singular system: dependent
+        # wires or a neutral direction stall at ~1e-14 instead of 1e-15)
+        if res < 1e-15 or (res < 1e-12 and res > 0.5 * prev):
             break
+        prev = res
         H = np.einsum("i,ijk->jk", lam, constraint_hessians(d, w))
         K = np.zeros((6 + n, 6 + n))
         K[:6, :6] = H
