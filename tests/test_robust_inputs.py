@@ -233,3 +233,10 @@ def test_a_file_that_is_not_a_recording_is_named_never_quoted(tmp_path):
     code, out, err = run(["period", g, "--json"])
     assert code == 0, err
     assert json.loads(out)["period"] == pytest.approx(1.9, rel=1e-4)
+
+
+def test_timed_trial_label_with_markup_is_printed_literally():
+    # the --timed table's title rendered the label as rich markup ('[b]x' printed as a bold 'x')
+    code, out, err = run(["period", "--timed", "[b]x=10:15.20,15.21"])
+    assert code == 0, err
+    assert "[b]x: 2 trial(s)" in out

@@ -163,7 +163,7 @@ def _timed(spec, target, uncertainty, as_json):
     from rich.table import Table
 
     con = console()
-    tb = Table(title=f"{label}: {len(times)} trial(s) of {n:g} cycles")
+    tb = Table(title=f"{esc(label)}: {len(times)} trial(s) of {n:g} cycles")
     tb.add_column("quantity")
     tb.add_column("value", justify="right")
     tb.add_row("period (s)", f"{T:.7g} +- {s:.2g}")
