@@ -61,6 +61,7 @@ re-estimation with the full model (:func:`monte_carlo_check`).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
