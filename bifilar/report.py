@@ -1,7 +1,5 @@
-"""Files for people and programs: time-series CSV and figures.
-
-matplotlib is imported lazily (Agg backend) so the CLI starts fast.
-"""
+"""The time series of a nonlinear run as a CSV table (its figure is
+:func:`bifilar.figures.plot_simulation`)."""
 
 from __future__ import annotations
 
@@ -9,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .output import atomic_write, write_csv
+from .output import write_csv
 
 
 def write_timeseries_csv(path: Path, scene, rest, res) -> None:
@@ -27,33 +25,3 @@ def write_timeseries_csv(path: Path, scene, rest, res) -> None:
         cols += list(np.asarray(theta).T)
         header += [f"theta{i + 1}" for i in range(5)]
     write_csv(path, header, np.column_stack(cols))
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def plot_simulation(path: Path, scene, res) -> None:
-    """Timed coordinate, wire tensions and constraint health against time."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    ax[0].plot(res.t, res.coordinate, lw=1)
-    ax[0].plot(res.crossings, np.zeros_like(res.crossings), "k|", ms=10, label="upward crossings")
-    ax[0].set_ylabel(f"{res.coordinate_name} rel. rest")
-    per = f"{res.period:.6f} s" if res.period else "n/a"
-    ax[0].set_title(f"{scene.name}: mode {res.mode}, measured period {per}")
-    ax[0].legend(loc="upper right")
-    for i in range(scene.n_wires):
-        ax[1].plot(res.t, res.tensions[:, i], lw=1, label=f"wire {i + 1}")
-    ax[1].axhline(0, color="r", lw=0.8)
-    ax[1].set_ylabel("tension [N]")
-    ax[1].set_xlabel("time [s]")
-    ax[1].legend(loc="upper right")
-    fig.tight_layout()
-    atomic_write(Path(path), lambda tmp: fig.savefig(tmp, dpi=120, format=Path(path).suffix.lstrip(".") or "png"))
-    plt.close(fig)

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bifilar.estimation.signal import fit_period, period_from_crossings, plot_fit, read_signal
+from bifilar.estimation.signal import fit_period, period_from_crossings, read_signal
+from bifilar.figures import new_figure, plot_fit, save
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = REPO.parent / "shared" / "data"
@@ -73,7 +74,7 @@ def gyro(data: Path, figdir: Path):
     t, y, meta = read_signal(path)
     fit = fit_period(t, y, model="auto", trim="auto")
     two = fit_period(t, y, model="two_mode", crossing_check=False, split_check=False)
-    plot_fit(fit, t, y, figdir / "real_gyro_fit.png",
+    plot_fit(figdir / "real_gyro_fit.png", fit, t, y,
              title=f"Compound pendulum, rate gyro ({path.name}): {fit.model} fit")
     windows = []
     for a in np.arange(0.0, 30.0, 5.0):
@@ -84,13 +85,8 @@ def gyro(data: Path, figdir: Path):
 
 
 def _plot_gyro_windows(windows, fit, out):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     w = np.array([(0.5 * (a + b), T, s, A) for a, b, T, s, A, _ in windows])
-    fig = Figure(figsize=(8, 4.2), constrained_layout=True)
-    FigureCanvasAgg(fig)
-    ax = fig.subplots()
+    fig, ax = new_figure(size=(8, 4.2), layout="constrained")
     ax.errorbar(w[:, 0], w[:, 1], yerr=w[:, 2], fmt="o", color="C3", capsize=3,
                 label="5 s windows (viscous fit, 1σ)")
     ax.axhline(fit.period, color="k", lw=1, label=f"whole record: {fit.period:.5f} ± {fit.std:.1g} s")
@@ -105,7 +101,7 @@ def _plot_gyro_windows(windows, fit, out):
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="lower left")
     ax.set_title("Gyro trial: the period shortens along the record")
-    fig.savefig(str(out), dpi=110)
+    save(fig, out)
 
 
 # ---------------------------------------------------------------------------
@@ -125,7 +121,7 @@ def trifilar(data: Path, figdir: Path):
             rows.append({"series": series, "r": r, "n": t.size, "duration": float(t[-1] - t[0]),
                          "fit": two, "vis": vis, "cr": cr, "amp": amp, "path": path})
             if series == "20s" and r == 0.50:
-                plot_fit(two, t, y, figdir / "real_trifilar_fit_20s_0.50.png",
+                plot_fit(figdir / "real_trifilar_fit_20s_0.50.png", two, t, y,
                          title=f"Trifilar KTH, 20 s series, r = 0.50 m: laser-dot x [px], {two.model} fit")
     return rows
 
@@ -163,12 +159,8 @@ def prediction():
 
 
 def _plot_relation(rel, b_pred, out):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(8, 6), constrained_layout=True)
-    FigureCanvasAgg(fig)
-    ax, axr = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    fig, (ax, axr) = new_figure(2, 1, size=(8, 6), layout="constrained", sharex=True,
+                                gridspec_kw={"height_ratios": [2, 1]})
     xx = np.linspace(0.0, 0.6, 50)
     for k, s in enumerate(SERIES):
         d = rel[s]
@@ -186,7 +178,7 @@ def _plot_relation(rel, b_pred, out):
     axr.set_xlabel("r² [m²]")
     ax.legend(fontsize=8)
     ax.set_title("Trifilar KTH: T² against r² of the 20.94 g test mass")
-    fig.savefig(str(out), dpi=110)
+    save(fig, out)
 
 
 # ---------------------------------------------------------------------------

@@ -32,11 +32,14 @@ from bifilar.analysis.modes import linear_modes  # noqa: E402
 from bifilar.analysis.simulate import relative_pose, simulate  # noqa: E402
 from bifilar.config import read_yaml, scene_from_dict  # noqa: E402
 from bifilar.estimation.sensitivity import DEFAULT_UNCERTAINTY, measured_inputs, period_sensitivity  # noqa: E402
+from bifilar.figures import new_figure, plot_sweep, save  # noqa: E402
+from bifilar.figures.thesis import solar_tensions  # noqa: E402
 from bifilar.studies import sweep as sw  # noqa: E402
 from bifilar.studies.hangings import plan_hangings  # noqa: E402
 from bifilar.studies.plan import plan  # noqa: E402
 from bifilar.studies.timing import how_to_time  # noqa: E402
 from bifilar.studies.shorthands import ParamSpec, apply_params  # noqa: E402
+from bifilar.studies.sweep_output import sweep_figure_data  # noqa: E402
 
 CONFIG = ROOT / "configs" / "solar_boat.yaml"
 DOC = ROOT / "docs" / "solar_boat.md"
@@ -163,18 +166,8 @@ def monte_carlo(cfg: dict, params: dict, comp: str, n: int, seed: int, unc: dict
 # figures
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def fig_configs(rows: list[dict], path: Path) -> None:
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    fig, axes = new_figure(1, 3, size=(14, 4.2))
     labels = [f"config {r['config']}\n({r['spacing']:.1f} m)" for r in rows]
     for ax, (th, comp) in zip(axes, AXES.items()):
         x = np.arange(3)
@@ -205,25 +198,13 @@ def fig_configs(rows: list[dict], path: Path) -> None:
     axes[0].legend(fontsize=8, loc="upper left")
     fig.suptitle("Solar Boat, thesis section 8.3: estimate errors (amplitude pi/80) and predicted uncertainty")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
 
 
 def fig_tensions(runs: list[dict], path: Path) -> None:
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(9, 4.5))
-    for r, c in zip(runs, ("C0", "C1", "C2")):
-        ax.plot(r["t"], r["tensions"][:, 0], color=c, lw=1.2,
-                label=f"config {INSET.index(r['inset']) + 1} ({4.8 - 2 * r['inset']:.1f} m apart)")
-        ax.axhline(r["rest"][0], color=c, lw=0.8, ls="--")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("tension per wire [N]")
-    ax.set_title("torsion from pi/12 (thesis Fig 8.4.1); dashed: at rest")
-    ax.legend()
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    """Thesis Fig 8.4.1 (the package's figure, with the spacings in the legend)."""
+    solar_tensions(path, [(r["t"], r["tensions"][:, 0], r["rest"][0]) for r in runs],
+                   labels=[f"config {INSET.index(r['inset']) + 1} ({4.8 - 2 * r['inset']:.1f} m apart)" for r in runs])
 
 
 # --------------------------------------------------------------------------
@@ -505,14 +486,14 @@ def main(argv=None) -> int:
     spec1 = [ParamSpec("spacing", tuple(float(v) for v in np.linspace(1.0, 4.8, 20)))]
     pts1 = sw.run_sweep(cfg, str(CONFIG), sw.build_grid(spec1), st, workers=args.workers)
     rec1 = sw.assess(pts1, LIMITS, None)
-    sw.plot_sweep(FIG / "solar_spacing.png", pts1, spec1, False, ["Ixx", "Iyy", "Izz"], LIMITS, rec1,
-                  title="Solar Boat: attachment spacing, 3 m wires, anchors 4.8 m apart")
+    plot_sweep(FIG / "solar_spacing.png", sweep_figure_data(pts1, spec1, False, ["Ixx", "Iyy", "Izz"], LIMITS, rec1),
+               title="Solar Boat: attachment spacing, 3 m wires, anchors 4.8 m apart")
     print("spacing x length sweep ...", flush=True)
     spec2 = [ParamSpec("spacing", tuple(float(v) for v in SPACINGS)), ParamSpec("length", tuple(float(v) for v in LENGTHS))]
     pts = sw.run_sweep(cfg, str(CONFIG), sw.build_grid(spec2), st, workers=args.workers)
     rec = sw.assess(pts, LIMITS, None)
-    sw.plot_sweep(FIG / "solar_sweep.png", pts, spec2, False, ["Ixx", "Iyy", "Izz"], LIMITS, rec,
-                  title="Solar Boat: attachment spacing x wire length (anchors 4.8 m apart)")
+    plot_sweep(FIG / "solar_sweep.png", sweep_figure_data(pts, spec2, False, ["Ixx", "Iyy", "Izz"], LIMITS, rec),
+               title="Solar Boat: attachment spacing x wire length (anchors 4.8 m apart)")
     print("plan ...", flush=True)
     pr = plan(cfg, str(CONFIG), [("spacing", 1.0, 4.8), ("length", 1.5, 6.0)], st, LIMITS, None, workers=args.workers)
     pl = {"params": pr.best["params"], "objective": pr.best["objective"], "active": pr.active,

@@ -25,7 +25,6 @@ from bifilar.estimation.signal import (
     SignalError,
     fit_period,
     period_from_crossings,
-    plot_fit,
     read_signal,
 )
 
@@ -261,15 +260,6 @@ def test_unknown_model_is_a_signal_error():
     with pytest.raises(SignalError) as e:
         fit_period(t, damped(t), model="cubic")
     assert e.value.field == "--model"
-
-
-def test_plot_fit_writes_png(tmp_path):
-    t = np.arange(0, 10, 0.01)
-    y = damped(t) + 0.01 * np.random.default_rng(1).standard_normal(t.size)
-    fit = fit_period(t, y, t_start=1.0)
-    out = plot_fit(fit, t, y, tmp_path / "fig" / "fit.png")
-    data = Path(out).read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
 
 
 # ---------------------------------------------------------------------------

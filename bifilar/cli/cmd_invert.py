@@ -129,22 +129,21 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
             if m.fit is not None:
                 q = plot_p.with_name(f"{plot_p.stem}.fit-{_safe(m.label)}-{k + 1}{plot_p.suffix or '.png'}")
                 fit_paths[k] = check_output_path(str(q), force, [*inputs, journal, plot], "--plot")
-    from ..estimation.invert import invert as run, plot_inversion
+    from ..estimation.invert import invert as run
 
     slow = bool(n_mc or ms.monte_carlo) or any(m.amplitude for m in ms.measurements)
     with progress_bar("inverting", enabled=slow) as upd:
         res = run(ms, method=method, solve_for=list(solve_for) or None, unc=unc, monte_carlo=n_mc, seed=seed_v,
                   ladder=not no_ladder, progress=upd, journal=journal, resume=resume)
     if plot_p is not None:
-        from .common import atomic_write
+        from ..estimation.invert import inversion_curves
+        from ..figures import plot_fit, plot_inversion
 
-        atomic_write(plot_p, lambda tmp: plot_inversion(res, tmp))
-        from ..estimation.signal import plot_fit
-
+        plot_inversion(plot_p, inversion_curves(res))
         for k, q in fit_paths.items():
             m = ms.measurements[k]
-            atomic_write(q, lambda tmp, m=m: plot_fit(m.fit, m.signal[0], m.signal[1], tmp,
-                                                       title=f"{m.label}: {Path(str(m.details['signal']['path'])).name}"))
+            plot_fit(q, m.fit, m.signal[0], m.signal[1],
+                     title=f"{m.label}: {Path(str(m.details['signal']['path'])).name}")
     if as_json:
         doc = res.to_json()
         doc["scene"] = {"name": ms.hangings[0].scene.name, "source": ms.source}

@@ -68,7 +68,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     if sr is not None and not 0 < sr <= MAX_SAMPLE_RATE:
         raise InputError("--sample-rate", f"must be in (0, {MAX_SAMPLE_RATE:g}] Hz, got {sr:g}")
     plot_p = check_output_path(plot, force, [signal], "--plot")
-    from ..estimation.signal import fit_period, plot_fit, read_signal
+    from ..estimation.signal import fit_period, read_signal
 
     t, y, meta = read_signal(signal, column=column, sample_rate=sr)
     check_signal_scale(t, y, "SIGNAL")
@@ -77,9 +77,9 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     if plot_p is not None:
         from pathlib import Path
 
-        from .common import atomic_write
+        from ..figures import plot_fit
 
-        atomic_write(plot_p, lambda tmp: plot_fit(fit, t, y, tmp, title=Path(signal).name))
+        plot_fit(plot_p, fit, t, y, title=Path(signal).name)
     sig = {k: meta.get(k) for k in ("path", "format", "column", "columns", "time_source", "sample_rate",
                                     "sample_rate_source", "n_samples", "n_dropped", "duration", "warnings")}
     sig["path"] = str(sig["path"]) if sig["path"] is not None else str(signal)

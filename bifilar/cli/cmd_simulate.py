@@ -75,9 +75,9 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
 
         write_timeseries_csv(out_p, scene, rest, res)
     if plot_p:
-        from ..report import plot_simulation
+        from ..figures import plot_simulation
 
-        plot_simulation(plot_p, scene, res)
+        plot_simulation(plot_p, res, scene.name)
     if as_json:
         emit_json(res.to_json())
         for w in res.warnings:

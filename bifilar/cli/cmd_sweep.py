@@ -290,8 +290,11 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     if plot_p:
         from pathlib import Path
 
-        sw.plot_sweep(plot_p, points, specs, zip_, list(settings.components), cons, rec,
-                      title=f"{cfg.get('name', Path(config).stem)}: sweep of {', '.join(names)}")
+        from ..figures import plot_sweep
+        from ..studies.sweep_output import sweep_figure_data
+
+        plot_sweep(plot_p, sweep_figure_data(points, specs, zip_, list(settings.components), cons, rec),
+                   title=f"{cfg.get('name', Path(config).stem)}: sweep of {', '.join(names)}")
     if as_json:
         emit_json({"points": points, "recommendation": rec, "settings": settings.describe(),
                    "parameters": names, "zip": zip_, "runtime_s": runtime})

@@ -565,24 +565,26 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
     return _root_entry(pb, p, r, budget, root.edge, {"chi2": chi2})
 
 
-def plot_inversion(res: InversionResult, path, span: float | None = None) -> None:
-    """Period against each unknown (others at their estimate) for every
-    measured mode, with the measurement (and its +-1 sigma band) and the
-    estimate marked; the small-angle curve too when it applies.
-    matplotlib (Agg) is imported here."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+def inversion_curves(res: InversionResult, span: float | None = None) -> list[dict]:
+    """The model's period against one unknown near the estimate, one panel per
+    measured mode (drawn by :func:`bifilar.figures.plot_inversion`).
 
+    Each panel varies the unknown the mode's period is most sensitive to
+    (the others at their estimate) over the estimate +- ``span`` (its unit;
+    default 6 std, at least 5 % of the value), within the physical interval
+    of an inertia component.  Keys: ``x`` (kg m^2 or m), ``linear`` (s, the
+    linear model; NaN where it fails), ``nonlinear`` (s, times the mode's
+    amplitude factor, or None when it is 1), ``small_angle`` (s, the
+    small-angle formula for a single measurement where it applies, else
+    None), ``measured``, ``measured_std`` (s), ``estimate``,
+    ``estimate_std``, ``amplitude`` and the labels ``unknown``, ``unit``,
+    ``title``."""
     pb = res.problem
     K = len(pb.measurements)
-    ncol = min(K, 3)
-    nrow = math.ceil(K / ncol)
-    fig = Figure(figsize=(5.2 * ncol, 4.0 * nrow), constrained_layout=True)
-    FigureCanvasAgg(fig)
-    axes = np.atleast_1d(fig.subplots(nrow, ncol, squeeze=False)).ravel()
     Jp = pb.jacobian(res.values)
+    sa = next((r for r in res.ladder if r["method"] == "small-angle" and r.get("applicable")), None)
+    panels = []
     for k, m in enumerate(pb.measurements):
-        ax = axes[k]
         j = int(np.argmax(np.abs(Jp[k]) * pb.scales()))
         name = pb.unknowns[j]
         x_hat = res.values[j]
@@ -601,25 +603,15 @@ def plot_inversion(res: InversionResult, path, span: float | None = None) -> Non
             except BifilarError:
                 Ts.append(np.nan)
         Ts = np.array(Ts)
-        ax.plot(xs, Ts, color="C0", label="linear model")
-        if res.factors[k] != 1.0:
-            ax.plot(xs, Ts * res.factors[k], color="C3", label=f"nonlinear (amplitude {m.amplitude:.3g})")
-        sa = next((r for r in res.ladder if r["method"] == "small-angle" and r.get("applicable")), None)
+        small = None
         if sa is not None and K == 1:
             # T_sa ~ sqrt(I_vertical), I_vertical = I_v(x_sa) + coefficient (x - x_sa)
             geo = sa["geometry"]
-            x_sa = sa["values"][name]
-            Iv = geo["I_vertical"] + geo["coefficient"] * (xs - x_sa)
-            ax.plot(xs, m.period * np.sqrt(np.clip(Iv, 0, None) / geo["I_vertical"]), color="C2", ls="--",
-                    label="small-angle formula")
-        ax.axhline(m.period, color="k", lw=0.8, label="measured")
-        ax.axhspan(m.period - m.std, m.period + m.std, color="0.85", zorder=0)
-        ax.axvline(x_hat, color="C1", lw=0.8, label=f"estimate {x_hat:.6g}")
-        ax.axvspan(x_hat - sd, x_hat + sd, color="C1", alpha=0.15, zorder=0)
-        ax.set_xlabel(f"{name} [{'kg m^2' if name in _IDX else 'm'}]")
-        ax.set_ylabel("period [s]")
-        ax.set_title(f"{pb.models[m.hanging].hanging.name}: {m.label}")
-        ax.legend(fontsize=7)
-    for ax in axes[K:]:
-        ax.set_visible(False)
-    fig.savefig(str(path), dpi=110)
+            Iv = geo["I_vertical"] + geo["coefficient"] * (xs - sa["values"][name])
+            small = m.period * np.sqrt(np.clip(Iv, 0, None) / geo["I_vertical"])
+        panels.append({"x": xs, "linear": Ts, "nonlinear": Ts * res.factors[k] if res.factors[k] != 1.0 else None,
+                       "small_angle": small, "measured": m.period, "measured_std": m.std, "estimate": x_hat,
+                       "estimate_std": sd, "amplitude": m.amplitude, "unknown": name,
+                       "unit": "kg m^2" if name in _IDX else "m",
+                       "title": f"{pb.models[m.hanging].hanging.name}: {m.label}"})
+    return panels

@@ -12,7 +12,9 @@ The implementation is split by concern; this module is the public API:
 * :mod:`.signal_checks` -- is it an oscillation, whiteness, residual peaks,
   the serial-correlation factor;
 * :mod:`.signal_result` -- :class:`PeriodFit`, covariance and std factors;
-* :mod:`.signal_crossings` -- the crossing method; :mod:`.signal_plot`.
+* :mod:`.signal_crossings` -- the crossing method.
+
+The figure of a fit is :func:`bifilar.figures.plot_fit`.
 
 Public API
 ----------
@@ -24,8 +26,6 @@ Public API
     ``auto``, which compares them all).
 ``period_from_crossings(t, y, ...) -> CrossingPeriod``
     The experimenter's method: interpolated crossings of the mean level.
-``plot_fit(fit, t, y, path)``
-    PNG of the signal, the fitted model and the residuals.
 
 Uncertainty (the headline ``std``)
 ----------------------------------
@@ -91,7 +91,6 @@ from .signal_models import (
     _linear_amplitudes,
     _solve,
 )
-from .signal_plot import plot_fit
 from .signal_result import PeriodFit, _build
 
 __all__ = [
@@ -101,7 +100,6 @@ __all__ = [
     "read_signal",
     "fit_period",
     "period_from_crossings",
-    "plot_fit",
     "check_time",
     "MIN_SAMPLES",
     "MAX_NAN_FRACTION",

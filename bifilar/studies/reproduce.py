@@ -6,7 +6,8 @@ with the library's models and returns a :class:`Result`: rows
 (``thesis`` and ``ours`` are numbers where the thesis printed one, else a
 short text), the reading of the thesis taken (markdown), the raw numbers a
 test can check (``data``) and, when ``figdir`` is given, the figures written
-there (``thesis_*.png``).  ``fast=True`` shortens every integration (and
+there (``thesis_*.png``, drawn by :mod:`bifilar.figures.thesis` from the arrays
+computed here).  ``fast=True`` shortens every integration (and
 loosens the tolerances of the long ones) so that the whole set runs in a
 test; the rows whose ``stale_tol`` is a number do not depend on that choice
 (closed forms, quadratures, rest poses, periods of exactly periodic motions)
@@ -103,22 +104,23 @@ def _times(ratio: float) -> str:
     return f"~1e{round(math.log10(abs(ratio)))} x"
 
 
-def _pyplot():
-    """matplotlib.pyplot on the Agg backend (imported only when a figure is drawn)."""
-    from ..report import _pyplot as pyplot
-
-    return pyplot()
-
-
-def _save(fig, figdir: Path | None, name: str, out: list) -> None:
+def _figure(figdir: Path | None, name: str, out: list, draw: Callable, *args) -> None:
+    """Draw ``figdir/thesis_<name>.png`` with ``draw(path, *args)`` (a function of
+    :mod:`bifilar.figures.thesis`) and list it in ``out``; nothing without ``figdir``."""
     if figdir is None:
         return
     figdir = Path(figdir)
     figdir.mkdir(parents=True, exist_ok=True)
     path = figdir / f"thesis_{name}.png"
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    _pyplot().close(fig)
+    draw(path, *args)
     out.append(path)
+
+
+def _figures():
+    """:mod:`bifilar.figures.thesis` (imported only when a figure is drawn)."""
+    from ..figures import thesis
+
+    return thesis
 
 
 def _scene(name: str):
@@ -263,20 +265,7 @@ def spherical_pendulum(fast: bool = False, figdir: Path | None = None) -> Result
     ]
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig = plt.figure(figsize=(11, 4.6))
-        ax = fig.add_subplot(1, 2, 1, projection="3d")
-        ax.plot(*a["x"], lw=1.0, label="angles (4.5.7)")
-        ax.plot(*a["xc"], "--", lw=0.8, label="Cartesian, constrained")
-        ax.set_title("Fig 4.5.2: thetadot(0) = 1, phidot(0) = 2")
-        ax.set_xlabel("x (m)"), ax.set_ylabel("y (m)"), ax.set_zlabel("z (m)")
-        ax.legend(fontsize=8)
-        ax = fig.add_subplot(1, 2, 2, projection="3d")
-        ax.plot(*b["x"], lw=1.0)
-        ax.plot(*b["xc"], "--", lw=0.8)
-        ax.set_title("Fig 4.5.3: thetadot(0) = 1, phidot(0) = 0")
-        ax.set_xlabel("x (m)"), ax.set_ylabel("y (m)"), ax.set_zlabel("z (m)")
-        _save(fig, figdir, "4_5_spherical", figs)
+        _figure(figdir, "4_5_spherical", figs, _figures().spherical_pendulum, a, b)
     reading = (
         "Reading: the thesis gives the initial rates only; theta(0) = pi/6, phi(0) = 0 is taken (at theta(0) = 0 "
         "the angle form (4.5.7) divides by sin(theta) = 0 and cannot start).  Both formulations "
@@ -330,23 +319,15 @@ def constraint_loop(fast: bool = False, figdir: Path | None = None) -> Result:
     ]
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig = plt.figure(figsize=(10, 4.6))
-        for k, (th, title) in enumerate(((th_rest, "Fig 5.1.2: θ = [0, π/6, π/2, 0, 0]"),
-                                         (th2, "Fig 5.1.3: θ = [0, π/6, π/4, π/4, 0]"))):
-            ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        poses = []
+        for th, title in ((th_rest, "Fig 5.1.2: θ = [0, π/6, π/2, 0, 0]"), (th2, "Fig 5.1.3: θ = [0, π/6, π/4, π/4, 0]")):
             BC, DA = kn.wire_vectors(th, p)
             B, A = p.anchor_B, p.anchor_A
             C = B + BC
             D = A - DA
-            for P0, P1, lab, st in ((A, B, "AB", "k-"), (B, C, "BC (l)", "b-"), (C, D, "CD (b')", "g-"),
-                                    (A, D, f"AD, |AD| = {np.linalg.norm(D - A):.3f}", "r--")):
-                ax.plot(*np.c_[P0, P1], st, lw=2, label=lab)
-            ax.set_title(title, fontsize=10)
-            ax.set_xlim(-1, 6), ax.set_ylim(-0.5, 10.5), ax.set_zlim(-5, 0.5)
-            ax.set_xlabel("n1"), ax.set_ylabel("n2"), ax.set_zlabel("n3")
-            ax.legend(fontsize=8)
-        _save(fig, figdir, "5_1_loop", figs)
+            poses.append((title, [(A, B, "AB", "k-"), (B, C, "BC (l)", "b-"), (C, D, "CD (b')", "g-"),
+                                  (A, D, f"AD, |AD| = {np.linalg.norm(D - A):.3f}", "r--")]))
+        _figure(figdir, "5_1_loop", figs, _figures().constraint_loop, poses)
     reading = (
         "The loop AB + BC + CD = AD holds by the definition of AD for any angles, so plotting it checks nothing; "
         "the constraint (5.1.2) is |AD| = l'.  At the rest pose g − 25 = "
@@ -408,19 +389,7 @@ def side_sway(fast: bool = False, figdir: Path | None = None) -> Result:
     ]
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig, axs = plt.subplots(1, 2, figsize=(11, 3.6))
-        axs[0].plot(ts, Y[1], label="θ2")
-        axs[0].plot(ts, Y[2], label="θ3")
-        for t in tc:
-            axs[0].axvline(t, color="0.8", lw=0.6)
-        axs[0].set_xlabel("t (s)"), axs[0].set_ylabel("rad"), axs[0].legend()
-        axs[0].set_title(f"side sway, θ̇3(0) = 1 rad/s: period {T_sim:.5f} s (exact {T_ell:.5f}, small-angle {T0:.4f})",
-                         fontsize=9)
-        axs[1].plot(ts, rel)
-        axs[1].set_xlabel("t (s)"), axs[1].set_ylabel("m")
-        axs[1].set_title("5 sin(π/6)/cos(θ3 − π/2) − 5 sin θ2 (thesis: mean −2.05e-7)", fontsize=9)
-        _save(fig, figdir, "6_1_side_sway", figs)
+        _figure(figdir, "6_1_side_sway", figs, _figures().side_sway, ts, Y[1], Y[2], tc, rel, T_sim, T_ell, T0)
     reading = (
         f"Kane model (`models.kane`, thin plate, b = 10, b' = 5, l = l' = 5) from the rest pose with θ̇3(0) = 1 rad/s, "
         f"DOP853 at rtol {rtol:g}.  The attachment point C starts at {v0:.3f} m/s, so the wire plane swings about AB "
@@ -495,18 +464,9 @@ def torsion(fast: bool = False, figdir: Path | None = None) -> Result:
                     f"default model, rtol {rtol:g}; max | |wire| − l | = {cp['viol']:.1e} m", "m^2"))
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
         for geo, name in (("parallel", "6_2_2_3_lagrange"), ("inclined", "6_2_5_adjusted")):
-            fig, axs = plt.subplots(1, 2, figsize=(11, 3.6))
-            for ax, amp in zip(axs, (PI / 80, PI / 8)):
-                c = cases[(geo, amp)]
-                ax.plot(c["t"], c["yaw"], label="full model (default)")
-                ax.plot(c["t"], c["yaw_model"], "--", label=labels[geo][0])
-                ax.set_xlabel("t (s)"), ax.set_ylabel("rotation about the vertical (rad)")
-                ax.set_title(f"{geo} wires, θ0 = {'π/80' if amp < 0.1 else 'π/8'}: period error "
-                             f"{100 * c['err']:+.3f} %", fontsize=9)
-                ax.legend(fontsize=8)
-            _save(fig, figdir, name, figs)
+            _figure(figdir, name, figs, _figures().torsion, geo, labels[geo][0],
+                    [("π/80" if amp < 0.1 else "π/8", cases[(geo, amp)]) for amp in (PI / 80, PI / 8)])
     ci = cases[("inclined", PI / 8)]
     reading = (
         "Full model: the default (maximal-coordinate) model, started from rest turned by θ0 about the vertical "
@@ -603,23 +563,8 @@ def com_below_cd(fast: bool = False, figdir: Path | None = None) -> Result:
     ]
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig, axs = plt.subplots(1, 2, figsize=(11, 3.6))
-        axs[0].plot(ts, ph2, label="full model")
-        axs[0].plot(ts, ye[1], "--", label="exact reduction (m1 = 0, I2 = I_CD)")
-        axs[0].plot(ts, ya[1], ":", label="thesis analogy (m1 = m2 = 5)")
-        axs[0].set_xlabel("t (s)"), axs[0].set_ylabel("φ2 = roll about CD (rad)"), axs[0].legend(fontsize=8)
-        axs[0].set_title(f"Fig 6.3.2: θ1(0) = {th1} rad", fontsize=9)
-        axs[1].semilogy(ts, np.maximum(np.abs(ye[1] - ph2), 1e-17), label="|exact reduction − full|")
-        axs[1].semilogy(ts, np.maximum(d_analog, 1e-17), label="|analogy − full|")
-        axs[1].set_xlabel("t (s)"), axs[1].set_ylabel("rad"), axs[1].legend(fontsize=8)
-        _save(fig, figdir, "6_3_2_double_pendulum", figs)
-        fig, ax = plt.subplots(figsize=(6.5, 3.4))
-        ax.plot(ts, s1[1], label="φ(0) = [0, π/6]")
-        ax.plot(ts, s2[1], "--", label="φ(0) = [0.05, π/6]")
-        ax.set_xlabel("t (s)"), ax.set_ylabel("φ2 (rad)"), ax.legend(fontsize=8)
-        ax.set_title("Fig 6.3.3: the thesis's double pendulum from two starts", fontsize=9)
-        _save(fig, figdir, "6_3_3_sensitivity", figs)
+        _figure(figdir, "6_3_2_double_pendulum", figs, _figures().double_pendulum, ts, ph2, ye[1], ya[1], th1)
+        _figure(figdir, "6_3_3_sensitivity", figs, _figures().double_pendulum_starts, ts, s1[1], s2[1])
     reading = (
         "The thick plate of `configs/thesis_lin2_pitch.yaml` (CoM 0.5 m below the middle of CD) is released rolled "
         f"about CD by θ1(0) = {th1} rad with θ2..θ4 at rest (both wires unchanged, θ5 = 0: the start is on the "
@@ -686,16 +631,9 @@ def cylinder(fast: bool = False, figdir: Path | None = None) -> Result:
     ]
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig, axs = plt.subplots(1, 3, figsize=(13, 3.4))
-        for ax, (a, b_, lab) in zip(axs, ((th_k[0], th_m[0], "θ1 (rad), Fig 6.4.2"),
-                                          (th_k[3], th_m[3], "θ4 (rad), Fig 6.4.3"),
-                                          (oe_k, oe_m, "|OE| horizontal (m), Fig 6.4.4"))):
-            ax.plot(ts, a, label="Kane (thesis) model")
-            ax.plot(ts, b_, "--", label="default model")
-            ax.set_xlabel("t √(g/b)"), ax.set_title(lab, fontsize=9)
-        axs[0].legend(fontsize=8)
-        _save(fig, figdir, "6_4_cylinder", figs)
+        _figure(figdir, "6_4_cylinder", figs, _figures().cylinder, ts,
+                [(th_k[0], th_m[0], "θ1 (rad), Fig 6.4.2"), (th_k[3], th_m[3], "θ4 (rad), Fig 6.4.3"),
+                 (oe_k, oe_m, "|OE| horizontal (m), Fig 6.4.4")])
     reading = (
         "`configs/thesis_cylinder_6_4.yaml` (b = b' = g = 9.81, so t√(g/b) = t in seconds; l = 2b, l' = 1.8b, "
         "height = diameter = b, m = 1 kg), started from the thesis's angles with θ5 from the constraint "
@@ -769,20 +707,12 @@ def linearisation_table(fast: bool = False, figdir: Path | None = None) -> Resul
                         f"{amp:.4g} {'rad' if mode.dominant >= 3 else 'm'}", "kg m^2", 1e-8))
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig, ax = plt.subplots(figsize=(7.5, 3.4))
-        meths = ("thesis (printed)", "thesis method", "exact linear", "nonlinear")
-        for j, (k, *_r) in enumerate(LINEARISATIONS):
+        errors = []
+        for k, *_r in LINEARISATIONS:
             d = data[k]
             vals = [THESIS["table_7_1_1"][k][1], d["thesis"], d["linear"], d["nonlinear"]]
-            errs = [100 * (v / d["analytic"] - 1) if isinstance(v, float) else np.nan for v in vals]
-            ax.bar(np.arange(4) + 5 * j, errs, color=["C3", "C0", "C1", "C2"])
-        ax.set_xticks([1.5, 6.5, 11.5], ["Lin. 1 (I1)", "Lin. 2 (I2)", "Lin. 3 (I3)"])
-        ax.axhline(0, color="k", lw=0.6)
-        ax.set_ylabel("error of the estimate (%)")
-        ax.legend([plt.Rectangle((0, 0), 1, 1, color=f"C{i}") for i in (3, 0, 1, 2)], meths, fontsize=8)
-        ax.set_title("Table 7.1.1: inertia from the period simulated at π/80", fontsize=9)
-        _save(fig, figdir, "7_1_1_linearisation", figs)
+            errors.append([100 * (v / d["analytic"] - 1) if isinstance(v, float) else np.nan for v in vals])
+        _figure(figdir, "7_1_1_linearisation", figs, _figures().linearisation, errors)
     d = data
     d1, d2, d3 = data[1], data[2], data[3]
     reading = (
@@ -906,20 +836,9 @@ def tensions(fast: bool = False, figdir: Path | None = None) -> Result:
     ]
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig, axs = plt.subplots(2, 1, figsize=(8, 5.2), sharex=True)
-        axs[0].plot(rp_.t, rp_.tensions[:, 0], lw=2.5, alpha=0.5, label="model multipliers (both wires)")
-        axs[0].plot(rp_.t, pure["F_gen"][:, 0], "--", label="thesis general least squares")
-        axs[0].plot(rp_.t, pure["F_sym"], ":", label="thesis symmetric formula")
-        axs[0].plot(rl.t, rl.tensions[:, 0], lw=0.8, color="0.5", label="wire 1, literal θ4-only start")
-        axs[0].axhline(T_rest, color="0.5", lw=0.6)
-        axs[0].set_ylabel("tension (N)"), axs[0].legend(fontsize=7)
-        axs[0].set_title("Fig 7.2.2: thin plate, torsion from π/12 (grey line: at rest)", fontsize=9)
         rel = relative_pose(rp_.y, pure["rest"])
-        axs[1].plot(rp_.t, rel[:, 5], label="rotation about the vertical (rad)")
-        axs[1].plot(rp_.t, 20 * rel[:, 2], label="20 x CoM rise (m)")
-        axs[1].set_xlabel("t (s)"), axs[1].legend(fontsize=7)
-        _save(fig, figdir, "7_2_2_tensions", figs)
+        _figure(figdir, "7_2_2_tensions", figs, _figures().tensions, rp_.t, rp_.tensions[:, 0], pure["F_gen"][:, 0],
+                pure["F_sym"], rl.t, rl.tensions[:, 0], T_rest, rel[:, 5], rel[:, 2])
     reading = (
         f"Rest (Fig 7.2.1): {T_rest:.4f} N per wire = m g/(2 cos 30°), the thesis's 'a little over 566 N'.  "
         "Fig 7.2.2 and (7.2.2) are read as a pure torsion from π/12 about the vertical through the CoM (the text: "
@@ -1047,14 +966,7 @@ def solar_boat(fast: bool = False, figdir: Path | None = None) -> Result:
                         f"{d['tension_max']:.1f} N", "N", 1e-9))
     figs: list = []
     if figdir is not None:
-        plt = _pyplot()
-        fig, ax = plt.subplots(figsize=(8, 3.6))
-        for ci, (t, T, T0) in enumerate(runs, start=1):
-            ax.plot(t, T, color=f"C{ci - 1}", label=f"configuration {ci}")
-            ax.axhline(T0, color=f"C{ci - 1}", lw=0.7, ls="--")
-        ax.set_xlabel("t (s)"), ax.set_ylabel("tension per wire (N)"), ax.legend(fontsize=8)
-        ax.set_title("Fig 8.4.1: Solar Boat, θ4(0) = π/12 torsion (dashed: at rest)", fontsize=9)
-        _save(fig, figdir, "8_4_1_solar_tensions", figs)
+        _figure(figdir, "8_4_1_solar_tensions", figs, _figures().solar_tensions, runs)
     link = ("The full study -- uncertainty budgets, a sweep of spacing and wire length, a recommended "
             "suspension -- is [docs/solar_boat.md](solar_boat.md); ")
     agree_txt = (f"our errors, computed independently (`estimation.invert` here, the sweep engine there), agree "

@@ -85,7 +85,7 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        SweepSettings, build_grid,
                        check_component, plan_block, resolve_constraints, resolve_settings, resolve_target,
                        resolve_uncertainty)
-from .sweep_output import csv_rows, plot_sweep, write_points_csv  # noqa: F401
+from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
 JOURNAL_VERSION = 2  # 2: points carry rig, separation, uncertainty, from_modes
 

@@ -1,31 +1,25 @@
-"""PNG of a period fit (signal, model, envelope, residuals).  Part of
-:mod:`bifilar.estimation.signal`."""
+"""``period --plot`` (and ``invert --plot``, one per recording): a period fit."""
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .signal import PeriodFit
+from . import new_figure, save
 
-def plot_fit(fit: PeriodFit, t, y, path, title: str | None = None):
-    """Write a PNG: the signal with the fitted model (and envelope) on top,
-    the residuals below.  ``t`` in s, ``y`` in [y]; matplotlib (Agg canvas)
-    is imported here so the library does not need it otherwise.
 
-    Returns the path written.
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+def plot_fit(path, fit, t, y, title: str | None = None) -> Path:
+    """Draw a period fit to ``path`` (format from its ending): the signal with
+    the fitted model and its envelope on top (the samples outside the fit
+    window shaded, the upward crossings marked), the residuals below.
 
+    ``fit``: a :class:`bifilar.estimation.signal.PeriodFit`; ``t`` (s) and
+    ``y`` (signal units): the whole recording.  Returns ``path``."""
     t = np.asarray(t, float).ravel()
     y = np.asarray(y, float).ravel()
-    fig = Figure(figsize=(10, 6.5), constrained_layout=True)
-    FigureCanvasAgg(fig)
-    ax, axr = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+    fig, (ax, axr) = new_figure(2, 1, size=(10, 6.5), layout="constrained", sharex=True,
+                                gridspec_kw={"height_ratios": [2.2, 1]})
     lw = 0.6 if t.size > 3000 else 0.9
     ax.plot(t, y, color="0.55", lw=lw, label="signal")
     if fit.model != "crossings":
@@ -52,14 +46,11 @@ def plot_fit(fit: PeriodFit, t, y, path, title: str | None = None):
     if fit.uncertainty.get("dominant", "noise") != "noise":
         txt += f"\nstd dominated by {fit.uncertainty['dominant'].replace('_', ' ')}"
     ax.text(0.99, 0.97, txt, transform=ax.transAxes, ha="right", va="top", fontsize=9,
-            bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
+            bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9})
     ax.set_ylabel("signal")
     axr.set_ylabel("residual")
     axr.set_xlabel("t [s]")
     ax.legend(loc="upper left", fontsize=8)
     if title:
         ax.set_title(title)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(str(path), dpi=110)
-    return Path(path)
-
+    return save(fig, path)
