@@ -161,6 +161,8 @@ def parse_value_sigma(text: Any, fld: str, what: str = "value") -> tuple[float, 
     if isinstance(text, bool):
         raise InputError(fld, f"expected a number, got {text!r}")
     if isinstance(text, (int, float)):
+        if not math.isfinite(float(text)):  # YAML's .nan / .inf reach here as floats
+            raise InputError(fld, f"must be finite, got {text!r}")
         return float(text), None
     s = str(text).strip()
     parts = _PM.split(s)
@@ -197,7 +199,17 @@ def parse_period_spec(text: str, fld: str = "--period") -> tuple[str, float, flo
         raise InputError(fld, f"the period must be positive, got {T:g} s in {text!r}")
     if s is not None and s == 0:
         raise InputError(fld, f"a zero uncertainty cannot be weighted; give a positive SIGMA or none in {text!r}")
+    check_period_sigma(T, s, fld)
     return label, T, s
+
+
+def check_period_sigma(T: float, s: float | None, fld: str) -> None:
+    """Refuse a period's standard uncertainty ``s`` (s) at least as large as
+    the period ``T`` (s): such a measurement says nothing about the period
+    (and a 1e300 s sigma makes the weighted normal equations singular)."""
+    if s is not None and s >= T:
+        raise InputError(fld, f"the uncertainty {s:g} s is not smaller than the period {T:g} s: such a "
+                         "measurement says nothing about the period; give the period's standard uncertainty")
 
 
 _TIMED = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(?:cycles?|periods?|x)?\s*(?::|@|in)\s*(.+)$", re.I)
@@ -727,6 +739,7 @@ def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:
             raise InputError(f"{fm}.period", f"must be positive, got {T:g}")
         if s is not None and s <= 0:
             raise InputError(f"{fm}.std", "must be positive")
+        check_period_sigma(T, s, f"{fm}.period")
         given = s is not None
         s = s if given else default_uncertainty(unc)["timing"]
         return Measurement(label, T, s, "period", f"{fm}.period", amplitude=amp, amplitude_std=amp_s,

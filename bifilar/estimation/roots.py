@@ -435,6 +435,26 @@ def start_design(pb: Problem, n_extra: int | None = None) -> list[np.ndarray]:
     return out
 
 
+UNREACHABLE_FACTOR = 10.0
+"""A measured period more than this factor outside the range its mode spans
+over the start design is an input error (units, a typo), not a failed fit."""
+
+
+def _refuse_unreachable(pb: Problem, targets: np.ndarray) -> None:
+    """Raise an :class:`InputError` naming the measurement whose period (s)
+    lies more than :data:`UNREACHABLE_FACTOR` outside the periods its mode
+    takes over the admissible start design (a sample of the admissible set):
+    a 1e300 s period makes every least-squares misfit overflow, which is bad
+    input, not a solver failure."""
+    T = np.array([labelled_periods(pb, p) for p in start_design(pb)])  # (starts, K) s
+    for k, m in enumerate(pb.measurements):
+        col = T[:, k][np.isfinite(T[:, k])]
+        if col.size and not col.min() / UNREACHABLE_FACTOR <= targets[k] <= col.max() * UNREACHABLE_FACTOR:
+            raise InputError(m.field, f"no admissible inertia gives a period near {m.period:.6g} s for the "
+                             f"mode labelled {m.label!r}: over {col.size} admissible tensors sampled its period "
+                             f"ranges over {col.min():.6g} .. {col.max():.6g} s (check the units and the label)")
+
+
 def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Root], dict]:
     """Distinct admissible least-squares solutions that pass the fit check,
     from every start of :func:`start_design`; also the best failed fit
@@ -468,6 +488,7 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
         elif not best or chi2 < best["chi2"]:
             best = {"p": p, "z": z, "chi2": chi2, "test": test}
     if not found and not best and errors:
+        _refuse_unreachable(pb, targets)
         raise ConvergenceError(f"the least-squares solver failed from every start point: {errors[0]}")
     # ascending, compared at 1e-9 of the scales so that last-bit noise cannot reorder them
     found.sort(key=lambda q: tuple(np.round(q / sc, 9)))

@@ -150,10 +150,11 @@ def gauss_newton(pb: Problem, targets: np.ndarray, p0: np.ndarray, max_iter: int
 
     def cost(p):
         try:
-            r = (pb.linear_periods(p) - targets) / sig
+            with np.errstate(over="ignore"):  # an absurd period overflows r @ r: inf, refused by the caller
+                r = (pb.linear_periods(p) - targets) / sig
+                return (float(r @ r) if np.all(np.isfinite(r)) else math.inf), r
         except BifilarError:
             return math.inf, None
-        return (float(r @ r) if np.all(np.isfinite(r)) else math.inf), r
 
     if relabel and not _relabel(pb, p):
         raise ConvergenceError("a measured mode's label is missing at the start point")
