@@ -136,5 +136,33 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     corr = cov / np.maximum(np.outer(std, std), 1e-300)
     values = dict(zip(comps, map(float, x)))
     stds = dict(zip(comps, map(float, std)))
-    poor = [c for c in comps if not np.isfinite(stds[c]) or stds[c] > threshold * max(abs(values[c]), 1e-300)]
+    # a column at the rounding level of the torques (no motion about that
+    # axis) fits rounding noise with a tiny residual: flag it by its size
+    excited = _excited(scene, com, R, tensions, A2, len(t))
+    poor = [c for j, c in enumerate(comps) if not excited[j] or not np.isfinite(stds[c]) or stds[c] <= 0
+            or stds[c] > threshold * max(abs(values[c]), 1e-300)]
     return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)))
+
+
+EXCITATION_FLOOR = 1e-8
+"""A component is excited when the torque its column explains (at the scale
+of the largest principal moment) exceeds this fraction of the gross torque
+of the wires (the sum of the magnitudes of each wire's torque about the
+CoM).  Rounding leaves the net torque of a body at rest at ~1e-16 of the
+gross one; differentiating rounding-level angular velocities for the
+acceleration amplifies that by 1 / (omega dt) ~ 1e2-1e3.  1e-8 keeps four
+orders of margin above that, while a motion of 1e-8 rad still counts."""
+
+
+def _excited(scene: Scene, com, R, tensions, A2: np.ndarray, k: int) -> np.ndarray:
+    """(m,) bool: whether each design column of ``A2`` ((3k, m), 1/s^2)
+    carries a torque above :data:`EXCITATION_FLOOR` of the gross wire
+    torque (N m, RMS over the k samples)."""
+    u = wire_units(scene, com, R)  # world, attachment -> anchor
+    f_body = np.einsum("kji,knj->kni", R, tensions[..., None] * u)
+    gross = np.linalg.norm(np.cross(scene.attachments[None, :, :], f_body), axis=-1).sum(axis=1)  # (k,) N m
+    floor = EXCITATION_FLOOR * float(np.sqrt(np.mean(gross ** 2)))
+    I_scale = float(np.max(np.linalg.eigvalsh(scene.inertia)))  # kg m^2
+    explained = I_scale * np.linalg.norm(A2, axis=0) / np.sqrt(max(k, 1))  # RMS over samples, N m
+    return explained > floor
+
