@@ -27,11 +27,12 @@ class PeriodFit:
     Attributes
     ----------
     model : str
-        ``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode`` or
-        ``crossings`` (fallback).
+        ``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode``,
+        ``three_mode`` or ``crossings`` (fallback).
     period : float
         s, the observed (damped) period ``2 pi / omega`` of the oscillation;
-        for ``two_mode`` the mode with the larger amplitude at ``t0``.
+        for ``two_mode`` / ``three_mode`` the mode with the largest
+        amplitude at ``t0``.
     std : float
         s, 1-sigma uncertainty of ``period``:
         ``hypot(std_raw * std_inflation, std_nonstationary)`` (module
@@ -241,7 +242,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         return serial_factor(r, abs(raw.p[i_param]) / (2 * math.pi), dt)[0]
 
     infl = factor(4)
-    infl2 = factor(8) if raw.kind == "two_mode" else infl
+    multi = raw.kind in ("two_mode", "three_mode")
+    facs = {iw: (factor(iw) if multi and iw > 4 else infl) for iw in range(4, raw.p.size, 4)}
     if infl > 1.0:
         notes.append(f"residuals not white (Ljung-Box p = {lb_p:.2g} < {LB_ALPHA:g}, lag-1 rho = {rho:.3f}): "
                      f"std x{infl:.2f}, the residual spectral density at the oscillation frequency relative "
@@ -256,7 +258,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     names = _NAMES[raw.kind]
 
     def mode(ia, ib, iw, isg):
-        fac = infl if iw == 4 else infl2
+        fac = facs[iw]
         a, b, w, sg = (float(p[i]) for i in (ia, ib, iw, isg))
         T = 2 * math.pi / w
         sdT_raw = 2 * math.pi / w ** 2 * _std(cov, iw)
@@ -275,8 +277,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"],
                    "zeta": m["damping_ratio"], "zeta_std": m["damping_ratio_std"]}
         T_und = m["period_undamped"]
-    elif raw.kind == "two_mode":
-        modes = [mode(2, 3, 4, 5), mode(6, 7, 8, 9)]
+    elif multi:
+        modes = [mode(i, i + 1, i + 2, i + 3) for i in range(2, p.size, 4)]
         modes.sort(key=lambda d: -d["amplitude"])
         m = modes[0]
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"], "zeta": m["damping_ratio"],
