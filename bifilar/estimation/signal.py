@@ -345,7 +345,7 @@ def _fit_window(t, y, model, drift, freq_guess, candidates, criterion):
     for c in sorted(candidates, key=lambda c: c == "three_mode"):
         if c == "three_mode" and "two_mode" in fits and _inadmissible(fits["two_mode"]):
             # the third oscillation extends an admissible two-mode fit
-            failed[c] = f"not tried: two_mode is inadmissible ({_inadmissible(fits['two_mode'])})"
+            failed[c] = "not tried: two_mode is inadmissible"
             continue
         try:
             fits[c] = _fit_one(c, t, y, t0, tm, visc, env, drift, fits.get("two_mode"))
