@@ -121,7 +121,7 @@ def trifilar(data: Path, figdir: Path):
             two = fit_period(t, y, model="auto")
             vis = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
             cr = two.crossing if two.crossing is not None else period_from_crossings(t, y)
-            amp = float(np.sqrt(np.mean(two.envelope(two.t_used) ** 2)))
+            amp = two.amplitude_rms
             q = {"series": series, "r": r, "n": t.size, "duration": float(t[-1] - t[0]),
                  "fit": two, "vis": vis, "cr": cr, "amp": amp, "path": path}
             if two.model == "three_mode":  # what the beat did to the two-mode fit
@@ -569,8 +569,9 @@ def agreement(rows, rel, a):
       "itself (so its period cannot honestly be referred to zero amplitude by the fit): in the 20 s records "
       "the envelope decays so little that the amplitude term would change the period between the halves "
       f"by only {1e3 * min(np.abs(pred)):.2f}–{1e3 * max(np.abs(pred)):.2f} ms, against halves' stds of "
-      f"{1e3 * min(comb):.2f}–{1e3 * max(comb):.2f} ms; the amplitude is therefore reported with every fit "
-      "(column *amplitude*, JSON `amplitude` at t = 0) so that comparisons can correct for it. "
+      f"{1e3 * min(comb):.2f}–{1e3 * max(comb):.2f} ms; the amplitude the period refers to is therefore "
+      "reported with every fit (column *amplitude*: `amplitude_rms` of the JSON, the RMS of the "
+      "envelope over the fit window) so that comparisons can correct for it. "
       "What remains after the correction (largest at the 5 s recordings, which differ from the longer "
       f"ones by up to ~1.5 ms) is recording-to-recording reproducibility: between-recording std "
       f"{tau_rec * 1e3:.2f} ms (DerSimonian–Laird over the 11 positions, amplitude-corrected periods; "

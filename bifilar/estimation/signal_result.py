@@ -53,6 +53,12 @@ class PeriodFit:
     amplitude, phase : float
         [y] and rad, of the oscillation at ``t0``:
         ``A cos(omega (t - t0) + phase)``.
+    amplitude_rms : float
+        [y], RMS over the fit window of the (dominant) oscillation's
+        envelope: the amplitude the period refers to.  A finite-amplitude
+        pendulum's period depends on it, and one record rarely spans enough
+        amplitude to measure that dependence; compare periods of
+        recordings at their ``amplitude_rms`` (docs/real_data.md).
     offset, drift : float
         [y] at ``t_ref`` and [y]/s: ``c0 + c1 (t - t_ref)``.
     residual_rms, r_squared : float
@@ -134,6 +140,7 @@ class PeriodFit:
     std_inflation: float = 1.0
     lag1_autocorr: float = 0.0
     noise_std: float = float("nan")
+    amplitude_rms: float = float("nan")
     period_undamped: float | None = None
     aic: float = float("nan")
     bic: float = float("nan")
@@ -185,7 +192,7 @@ class PeriodFit:
     def to_dict(self) -> dict:
         """JSON-friendly scalars (no arrays)."""
         keys = ("model", "period", "std", "frequency", "period_undamped", "damping_ratio", "damping",
-                "amplitude", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
+                "amplitude", "amplitude_rms", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
                 "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "uncertainty",
                 "lag1_autocorr", "noise_std", "aic", "bic", "converged", "modes", "selection",
                 "chosen_by", "choice_reason", "windows", "residual_check", "oscillation", "notes")
@@ -315,6 +322,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         offset=float(p[0]), drift=float(p[1]), residual_rms=float(math.sqrt(raw.cost / n)),
         r_squared=float(r2), n_samples=int(n), covariance=cov, params=p.copy(), param_names=names,
         t0=float(t[0]), t1=float(t[-1]), t_ref=float(raw.tm), std_raw=m["std_raw"], std_inflation=infl,
-        lag1_autocorr=rho, noise_std=_noise_sigma(r), period_undamped=T_und, aic=aic, bic=bic,
+        lag1_autocorr=rho, noise_std=_noise_sigma(r),
+        amplitude_rms=float(np.sqrt(np.mean(_envelope(raw.kind, p, t, raw.t0) ** 2))),
+        period_undamped=T_und, aic=aic, bic=bic,
         converged=raw.converged, modes=modes, t_used=t.copy(), residuals=r.copy(), notes=notes,
         selection={"free_parameters": free_n}, residual_check=check, _kind=raw.kind)
