@@ -338,6 +338,7 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
     # ---------------- trifilar
     th_rows = [q for q in rows if "two" in q]
     f3 = [q["fit"].modes[2]["frequency"] for q in th_rows] or [float("nan")]
+    d32 = [q["fit"].modes[2]["frequency"] - 2 * q["fit"].modes[1]["frequency"] for q in th_rows] or [float("nan")]
     f1 = [q["fit"].frequency for q in rows]
     a("## 2. Trifilar pendulum (KTH 2014): 33 recordings")
     a("")
@@ -361,7 +362,11 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
       "halves of 5s/0.50 and 10s/0.75 stayed 2.3 and 1.6 ms apart) and, in "
       f"{sum(q['fit'].model == 'three_mode' for q in rows)} of the 20 s files, a weak oscillation "
       f"at {min(f3):.3f}–{max(f3):.3f} Hz (column *third osc.*: its period and amplitude at t = 0), close to "
-      f"the torsional {min(f1):.3f}–{max(f1):.3f} Hz, that beats with it. The two-mode fit of these files "
+      f"the torsional {min(f1):.3f}–{max(f1):.3f} Hz, that beats with it. It does not follow the torsion "
+      "as r changes but sits at twice the swing frequency (f₃ − 2f₂ = "
+      f"{min(d32) * 1e3:+.1f} to {max(d32) * 1e3:+.1f} mHz, within a third of the 1/T_record = 50 mHz "
+      "resolution): most likely the swing mode's second harmonic (a dot position not linear in the "
+      "swing displacement either). The two-mode fit of these files "
       f"sees that beat as a period changing along the record at {sum(q['two'].std_nonstationary > 0 for q in th_rows)} "
       f"of them (τ up to {max(q['two'].std_nonstationary for q in th_rows) * 1e3:.2f} ms, stds up to "
       f"{max(q['two'].std / q['two'].period for q in th_rows):.3%}); `three_mode` models it "
