@@ -563,7 +563,11 @@ def agreement(rows, rel, a):
         "periods that differ beyond their stds: " + "; ".join(over) + ". Harmonics 2f₁, 3f₁ tied to the "
         "torsion reduce but do not remove these disagreements (above), and a 5 s or 10 s record cannot resolve a third "
         "oscillation as close as the one found in the 20 s files; the rule reports that spread instead "
-        "of hiding it. " if over else "Every std is within its limit. ")
+        "of hiding it. (An exploratory fit, not in the tool, that ties the third oscillation to 2f₂ with "
+        "damping 2σ₂, two linear parameters identifiable even where 2f₂ is not resolved from f₁, makes "
+        "the halves of 10s/0.75 agree, 1.06432 and 1.06463 s, at ΔBIC = −273 against two_mode and "
+        "T = 1.06528 s; on 5 s records its half-record fits are unstable, so it would need its own "
+        "split rule and coverage tests.) " if over else "Every std is within its limit. ")
       + "The stds are calibrated for what one record can show (table above), so where the series "
       "disagree, the recordings themselves differ. Part of it is the amplitude dependence of the period: "
       "the recordings at one position were released at amplitudes of "
