@@ -36,9 +36,11 @@ def kth():
     for s in SERIES:
         for r in RADII:
             t, y = _load(s, r)
-            # auto picks two_mode on these files (checked on a sample below);
-            # fitting it directly keeps the test at a few seconds
-            fit = fit_period(t, y, model="two_mode", crossing_check=False)
+            # auto picks two_mode or three_mode on these files (the single-mode
+            # models lose by thousands in BIC, checked on a sample below);
+            # comparing only those two keeps the test at seconds
+            fit = fit_period(t, y, model="auto", candidates=("two_mode", "three_mode"),
+                             crossing_check=False)
             amp = float(np.sqrt(np.mean(fit.envelope(fit.t_used) ** 2)))
             out[s, r] = (fit, amp)
     return out
@@ -71,8 +73,9 @@ def test_std_below_the_limits_unless_the_record_shows_a_drift(kth):
         assert fit.uncertainty["dominant"] == "nonstationarity", (s, r)
         # tau ~ |T1 - T2| / sqrt(2): the std reflects the spread, no more
         assert fit.std < 1.5 * abs(T1 - T2), (s, r)
-    # most recordings meet the limits (docs/real_data.md: 28 of 33)
-    assert within >= 25
+    # most recordings meet the limits (docs/real_data.md: 31 of 33 since
+    # three_mode models the beat in the 20 s files; 28 with two_mode alone)
+    assert within >= 29
 
 
 def test_series_differences_follow_the_amplitude(kth):
@@ -96,8 +99,8 @@ def test_series_differences_follow_the_amplitude(kth):
     assert c > 3 * sc, (c, sc)
     assert chi2 < stats.chi2.ppf(0.99, d.size - 1) / (d.size - 1), chi2
     # the same c (s^2/px^2) as the pooled T^2 fit of docs/real_data.md
-    # (1.3e-7 +- 2.5e-8): within a factor 2
-    assert 0.5 * 1.3e-7 < c < 2 * 1.3e-7, c
+    # (1.2e-7 +- 3e-8): within a factor 2
+    assert 0.5 * 1.2e-7 < c < 2 * 1.2e-7, c
 
 
 def test_gyro_std_reflects_its_split_half_drift():

@@ -55,6 +55,11 @@ def test_noise_free_viscous_recovered_exactly():
     assert fit.r_squared > 1 - 1e-15
     # residuals at rounding level must not trigger the autocorrelation inflation
     assert fit.std_inflation == 1.0
+    # the amplitude the period refers to: RMS of A exp(-sigma t) over the
+    # 20 s window, A sqrt((1 - exp(-2 sigma T_rec)) / (2 sigma T_rec))
+    sg = zeta * 2 * math.pi / T / math.sqrt(1 - zeta ** 2)
+    x = 2 * sg * (t[-1] - t[0])
+    assert abs(fit.amplitude_rms - math.sqrt(-math.expm1(-x) / x)) < 1e-3  # sampling: 2000 points
 
 
 def test_noise_free_quadratic_envelope_recovered():

@@ -19,7 +19,7 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @click.option("--column", default=None, help="Signal column / MAT variable (default: first non-time one).")
 @click.option("--sample-rate", default=None, help="Signal sample rate, Hz (when the file has no time column).")
 @click.option("--signal-model", default="auto", show_default=True,
-              help="Signal fit model: viscous, quadratic, two_mode or auto.")
+              help="Signal fit model: viscous, quadratic, two_mode, three_mode or auto.")
 @click.option("--signal-quantity", default="other", show_default=True,
               help="What the signal is: angle (the mode's coordinate), rate (its derivative) or other; "
                    "angle and rate give the amplitude from the fit.")

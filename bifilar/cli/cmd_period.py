@@ -8,7 +8,7 @@ import click
 
 from .common import check_output_path, console, emit_json, esc, fmt, handle_errors
 
-_MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode")
+_MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "three_mode")
 
 
 @click.command("period")
@@ -16,8 +16,8 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode")
 @click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time one.")
 @click.option("--sample-rate", default=None, help="Sample rate, Hz (ignores a time column).")
 @click.option("--model", default="auto", show_default=True,
-              help="Fit model: viscous, quadratic (drag ~ v^2), quadratic+viscous, two_mode (beating) or "
-                   "auto (fits them all, each with a drift term, and keeps the lowest BIC among the "
+              help="Fit model: viscous, quadratic (drag ~ v^2), quadratic+viscous, two_mode (beating), "
+                   "three_mode (two modes and a third oscillation close to the dominant one) or auto (fits them all, each with a drift term, and keeps the lowest BIC among the "
                    "admissible ones).")
 @click.option("--t-start", default=None, help="Start of the fit window, s.")
 @click.option("--t-stop", default=None, help="End of the fit window, s.")
@@ -122,7 +122,10 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
             tb.add_row(f"  rejected {name}", str(c["rejected_because"]))
     if fit.modes and len(fit.modes) > 1:
         tb.add_row("second mode (s)", f"{fit.modes[1]['period']:.6g}")
-    tb.add_row("amplitude (signal units)", fmt(fit.amplitude, 5))
+    if len(fit.modes) > 2:
+        m3 = fit.modes[2]
+        tb.add_row("third mode (s)", f"{m3['period']:.6g} (amplitude {m3['amplitude']:.3g})")
+    tb.add_row("amplitude (signal units)", f"{fmt(fit.amplitude, 5)} at t0, {fmt(fit.amplitude_rms, 5)} RMS over the fit")
     tb.add_row("r^2", fmt(fit.r_squared, 7))
     rc = fit.residual_check
     if rc:

@@ -30,7 +30,7 @@ One hanging::
         sample_rate: 240               # optional, Hz
         quantity: angle                # angle | rate | other (amplitude from the fit if angle/rate)
         scale: 0.0174533               # optional: multiplies the signal to rad (or m)
-        model: auto                    # viscous | quadratic | two_mode | auto
+        model: auto                    # viscous | quadratic | two_mode | three_mode | auto
 
 Several hangings (the body re-hung in other orientations)::
 

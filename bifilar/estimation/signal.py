@@ -22,8 +22,8 @@ Public API
     CSV/TSV text or MATLAB ``.mat`` -> time (s), samples ([y]), metadata.
 ``fit_period(t, y, model="viscous", ...) -> PeriodFit``
     Nonlinear least-squares fit of a damped-oscillation model
-    (``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode`` or
-    ``auto``, which compares them all).
+    (``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode``,
+    ``three_mode`` or ``auto``, which compares them all).
 ``period_from_crossings(t, y, ...) -> CrossingPeriod``
     The experimenter's method: interpolated crossings of the mean level.
 
@@ -37,8 +37,9 @@ Uncertainty (the headline ``std``)
   residuals, applied when the Ljung-Box test rejects whiteness (see
   :mod:`.signal_checks`);
 * ``std_nonstationary``: the same model is fitted to each half of the
-  record (``MIN_WINDOW_CYCLES`` cycles or more each; for ``two_mode`` the
-  secondary mode's frequency and damping stay at the whole-record values);
+  record (``MIN_WINDOW_CYCLES`` cycles or more each; for ``two_mode`` and
+  ``three_mode`` the other modes' frequencies and dampings stay at the
+  whole-record values);
   when the halves disagree beyond their own stds (Cochran's ``Q =
   (T1 - T2)^2 / (s1^2 + s2^2)`` above its ``WINDOW_Q_LEVEL`` chi^2_1
   quantile, 6.63) the between-half std ``tau = sqrt((Q - 1) / w)`` (the
@@ -86,6 +87,7 @@ from .signal_io import (
 from .signal_models import (
     _auto_trim,
     _fit_quadratic,
+    _fit_three_mode,
     _fit_two_mode,
     _fit_viscous,
     _linear_amplitudes,
@@ -113,14 +115,15 @@ __all__ = [
 MAX_FIT_SAMPLES = 200_000
 #: every model ``auto`` compares (each with a linear drift term; the winner
 #: is also tried without it)
-MODELS = ("viscous", "quadratic", "quadratic+viscous", "two_mode")
+MODELS = ("viscous", "quadratic", "quadratic+viscous", "two_mode", "three_mode")
 #: cycles each half of the record needs for the non-stationarity check
 MIN_WINDOW_CYCLES = 2.0
 #: the windows disagree beyond noise when Cochran's Q exceeds this quantile
 WINDOW_Q_LEVEL = 0.99
 
 _KIND = {"viscous": ("viscous", False), "quadratic": ("quadratic", False),
-         "quadratic+viscous": ("quadratic", True), "two_mode": ("two_mode", False)}
+         "quadratic+viscous": ("quadratic", True), "two_mode": ("two_mode", False),
+         "three_mode": ("three_mode", False)}
 _MODEL_CHOICES = MODELS + ("auto",)
 
 
@@ -146,13 +149,20 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     ``two_mode``
         Two viscous damped cosines (beating modes); ``period`` is the mode
         with the larger amplitude, ``modes`` lists both.
+    ``three_mode``
+        ``two_mode`` plus a third viscous damped cosine, started at the
+        strongest peaks of the two-mode residuals that are resolved from
+        both modes and are not harmonics ``k f1`` (k >= 2) of the dominant
+        one (a nonlinear sensor's harmonics are orthogonal to the
+        fundamental and do not bias it; an oscillation close to it does,
+        and beats with it).
     ``quadratic+viscous``
         ``quadratic`` with ``viscous_term=True`` (combined damping).
     ``auto``
         Fits every model in ``candidates`` (default all of :data:`MODELS`,
         each with the linear drift ``c1``) on the same samples, drops the
-        inadmissible ones (not converged, undefined covariance, a two-mode
-        fit whose mode grows or whose modes are closer than the frequency
+        inadmissible ones (not converged, undefined covariance, a multi-mode
+        fit with a growing mode or two modes closer than the frequency
         resolution), returns the one with the lowest ``criterion``
         (``"BIC"`` or ``"AIC"``), tries it once more without the drift term
         (kept if the criterion prefers it), and reports the ranking and why
@@ -173,7 +183,7 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
         Samples, [y].
     model : str
         ``viscous`` (default), ``quadratic``, ``quadratic+viscous``,
-        ``two_mode`` or ``auto``.
+        ``two_mode``, ``three_mode`` or ``auto``.
     trim : {None, "auto"}
         ``"auto"`` drops the settled tail where the envelope has fallen
         below ``trim_k`` x the white-noise level (estimated from second
@@ -281,14 +291,23 @@ def _from_crossings(cr: CrossingPeriod, t, y, notes) -> PeriodFit:
                                   "total": cr.std, "dominant": "noise"})
 
 
-def _fit_one(name, t, y, t0, tm, visc, env, drift) -> PeriodFit:
+def _fit_one(name, t, y, t0, tm, visc, env, drift, two: PeriodFit | None = None) -> PeriodFit:
+    """One model on ``(t, y)``; ``three_mode`` extends the two-mode fit
+    ``two`` (fitted here if not given)."""
     kind, vt = _KIND[name]
     if kind == "viscous":
         raw = visc if drift or not visc.free[1] else _fit_viscous(t, y, t0, tm, visc.p[4] / (2 * math.pi), False)[0]
     elif kind == "quadratic":
         raw = _fit_quadratic(t, y, t0, tm, visc, env, drift, vt)
-    else:
+    elif kind == "two_mode":
         raw = _fit_two_mode(t, y, t0, tm, visc, drift)
+    else:
+        if two is None:
+            raw2 = _fit_two_mode(t, y, t0, tm, visc, drift)
+            p2, r2 = raw2.p, raw2.resid
+        else:
+            p2, r2 = two.params, two.residuals
+        raw = _fit_three_mode(t, y, t0, tm, p2, r2, drift)
     f = _build(raw, t, y, name, [])
     f.selection["drift"] = bool(drift)
     return f
@@ -300,14 +319,15 @@ def _inadmissible(f: PeriodFit) -> str | None:
         return "least squares did not converge"
     if not (np.isfinite(f.std) and f.std > 0):
         return "covariance undefined (parameters not identifiable)"
-    if f.model == "two_mode":
+    if f.model in ("two_mode", "three_mode"):
         T_rec = f.t1 - f.t0
         for m in f.modes:
             if m["sigma"] < 0 and m["sigma"] < -3 * m["sigma_std"]:
                 return (f"its mode at {m['period']:.4g} s grows (sigma = {m['sigma']:.3g} 1/s): it mimics a "
-                        f"changing frequency, not a second mode of a free decay")
-        if abs(f.modes[0]["frequency"] - f.modes[1]["frequency"]) < 1.0 / T_rec:
-            return "its two modes are closer than the frequency resolution 1/T_record"
+                        f"changing frequency, not a mode of a free decay")
+        fr = sorted(m["frequency"] for m in f.modes)
+        if min(b - a for a, b in zip(fr[:-1], fr[1:])) < 1.0 / T_rec:
+            return "two of its modes are closer than the frequency resolution 1/T_record"
     return None
 
 
@@ -320,9 +340,13 @@ def _fit_window(t, y, model, drift, freq_guess, candidates, criterion):
     key = criterion.lower()
     fits: dict[str, PeriodFit] = {}
     failed: dict[str, str] = {}
-    for c in candidates:
+    for c in sorted(candidates, key=lambda c: c == "three_mode"):
+        if c == "three_mode" and "two_mode" in fits and _inadmissible(fits["two_mode"]):
+            # the third oscillation extends an admissible two-mode fit
+            failed[c] = "not tried: two_mode is inadmissible"
+            continue
         try:
-            fits[c] = _fit_one(c, t, y, t0, tm, visc, env, drift)
+            fits[c] = _fit_one(c, t, y, t0, tm, visc, env, drift, fits.get("two_mode"))
         except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
                 ZeroDivisionError) as exc:
             failed[c] = str(exc)
@@ -363,8 +387,11 @@ def _fit_window(t, y, model, drift, freq_guess, candidates, criterion):
     rej = [f"{c} ({why[c]})" for c in fits if why[c] is not None]
     if rej:
         reason += "; rejected: " + "; ".join(rej)
-    if failed:
-        reason += "; failed: " + ", ".join(failed)
+    skipped = [c for c, m in failed.items() if m.startswith("not tried")]
+    if skipped:
+        reason += "; " + "; ".join(f"{c} {failed[c]}" for c in skipped)
+    if len(failed) > len(skipped):
+        reason += "; failed: " + ", ".join(c for c in failed if c not in skipped)
     best.choice_reason = reason
     for c in ranking[1:4]:
         f = fits[c]
@@ -437,25 +464,28 @@ def _residual_peaks(fit: PeriodFit):
 
 def _window_fit(fit: PeriodFit, th, yh) -> PeriodFit:
     """The chosen model fitted to a window, started from the whole-record
-    frequencies; for ``two_mode`` the secondary mode's frequency and damping
-    stay fixed (a short window cannot resolve it), the rest is free."""
+    frequencies; for ``two_mode`` / ``three_mode`` the other modes'
+    frequencies and dampings stay fixed (a short window cannot resolve
+    them), the rest is free."""
     kind, vt = _KIND[fit.model]
     drift = fit.selection.get("drift", True)
     t0 = float(th[0])
     tm = float(0.5 * (th[0] + th[-1]))
-    if kind != "two_mode":
+    if kind not in ("two_mode", "three_mode"):
         visc, env = _fit_viscous(th, yh, t0, tm, fit.frequency, drift)
         return _fit_one(fit.model, th, yh, t0, tm, visc, env, drift)
     p = fit.params
-    ws, ss = [p[4], p[8]], [p[5], p[9]]
+    ws, ss = list(p[4::4]), list(p[5::4])
     coef, _ = _linear_amplitudes(th, yh, t0, tm, ws, ss)
-    p0 = np.array([coef[0], coef[1] if drift else 0.0, coef[2], coef[3], ws[0], ss[0],
-                   coef[4], coef[5], ws[1], ss[1]])
-    free = np.ones(10, bool)
+    p0 = [coef[0], coef[1] if drift else 0.0]
+    for k in range(len(ws)):
+        p0 += [coef[2 + 2 * k], coef[3 + 2 * k], ws[k], ss[k]]
+    free = np.ones(len(p0), bool)
     free[1] = drift
-    free[8] = free[9] = False
-    raw = _solve("two_mode", th, yh, t0, tm, p0, free)
-    return _build(raw, th, yh, "two_mode", [])
+    free[8::4] = False
+    free[9::4] = False
+    raw = _solve(kind, th, yh, t0, tm, np.array(p0), free)
+    return _build(raw, th, yh, kind, [])
 
 
 def _window_periods(fit: PeriodFit, t, y, K: int) -> list[dict]:

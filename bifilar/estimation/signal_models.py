@@ -91,6 +91,8 @@ _NAMES = {
     "viscous": ("c0", "c1", "a", "b", "omega_d", "sigma"),
     "quadratic": ("c0", "c1", "a", "b", "omega", "kappa", "sigma"),
     "two_mode": ("c0", "c1", "a1", "b1", "omega1", "sigma1", "a2", "b2", "omega2", "sigma2"),
+    "three_mode": ("c0", "c1", "a1", "b1", "omega1", "sigma1", "a2", "b2", "omega2", "sigma2",
+                   "a3", "b3", "omega3", "sigma3"),
 }
 
 
@@ -133,8 +135,9 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
     y = p[0] + p[1] * s
     if kind == "viscous":
         y = y + _damped(p[2], p[3], p[4], p[5], tau, J, 2)
-    elif kind == "two_mode":
-        y = y + _damped(p[2], p[3], p[4], p[5], tau, J, 2) + _damped(p[6], p[7], p[8], p[9], tau, J, 6)
+    elif kind in ("two_mode", "three_mode"):
+        for col in range(2, len(p), 4):
+            y = y + _damped(p[col], p[col + 1], p[col + 2], p[col + 3], tau, J, col)
     elif kind == "quadratic":
         a, b, w, kap, sg = p[2:7]
         E, dE = _E(sg, tau)
@@ -157,7 +160,7 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
 def _envelope(kind: str, p, t, t0):
     """Amplitude envelope ([y]) of the (first) oscillation."""
     tau = t - t0
-    if kind == "viscous" or kind == "two_mode":
+    if kind in ("viscous", "two_mode", "three_mode"):
         return math.hypot(p[2], p[3]) * np.exp(-p[5] * tau)
     E, _ = _E(p[6], tau)
     return math.hypot(p[2], p[3]) * np.exp(-p[6] * tau) / (1.0 + p[5] * E)
@@ -174,7 +177,17 @@ def _linear_amplitudes(t, y, t0, tm, omegas, sigmas, kap=0.0):
             g = g / (1.0 + kap * _E(sg, tau)[0])
         cols += [g * np.cos(w * tau), g * np.sin(w * tau)]
     A = np.vstack(cols).T
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    # normal equations of the column-scaled design (k <= 8 columns: k^2 n
+    # flops, several times faster than the SVD of lstsq, which the start
+    # search calls hundreds of times); lstsq where they are ill-conditioned
+    sc = np.sqrt(np.einsum("ij,ij->j", A, A))
+    sc[sc == 0] = 1.0
+    As = A / sc
+    G = As.T @ As
+    if np.linalg.cond(G) < 1e8:
+        coef = np.linalg.solve(G, As.T @ y) / sc
+    else:
+        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     r = y - A @ coef
     return coef, float(r @ r)
 
@@ -193,7 +206,7 @@ class _Raw:
     message: str
 
 
-def _solve(kind, t, y, t0, tm, p0, free=None, squared=()) -> _Raw:
+def _solve(kind, t, y, t0, tm, p0, free=None, squared=(), max_nfev_per_param=200) -> _Raw:
     """Levenberg-Marquardt (MINPACK) on the free parameters; parameters in
     ``squared`` must stay >= 0 and are solved for as ``q`` with ``p = q^2``
     (no bounded solver needed: the bounded 'trf' costs ten times more per
@@ -228,7 +241,8 @@ def _solve(kind, t, y, t0, tm, p0, free=None, squared=()) -> _Raw:
         return np.nan_to_num(J[:, free])
 
     res = optimize.least_squares(fun, q0[free], jac=jac, method="lm", x_scale="jac",
-                                 ftol=1e-13, xtol=1e-13, gtol=1e-13, max_nfev=200 * int(free.sum()))
+                                 ftol=1e-13, xtol=1e-13, gtol=1e-13,
+                                 max_nfev=max_nfev_per_param * int(free.sum()))
     p = full(res.x)
     yhat, J = _model(kind, p, t, t0, tm, want_jac=True)
     r = y - yhat
@@ -337,13 +351,91 @@ def _fit_two_mode(t, y, t0, tm, visc: _Raw, drift):
     free = np.ones(10, bool)
     free[1] = drift
     raw = _solve("two_mode", t, y, t0, tm, np.array(p0), free)
-    if math.hypot(raw.p[6], raw.p[7]) > math.hypot(raw.p[2], raw.p[3]):
-        # canonical order: the dominant mode (amplitude at t0) first
-        perm = np.r_[0, 1, 6, 7, 8, 9, 2, 3, 4, 5]
+    return _canonical(raw, t)
+
+
+def _canonical(raw: _Raw, t) -> _Raw:
+    """Modes of a multi-mode fit in canonical order: by amplitude at ``t0``,
+    the dominant (the reported period) first."""
+    starts = list(range(2, raw.p.size, 4))
+    order = sorted(starts, key=lambda i: -math.hypot(raw.p[i], raw.p[i + 1]))
+    if order != starts:
+        perm = np.r_[0, 1, [i + k for i in order for k in range(4)]]
         raw.p = raw.p[perm]
         raw.free = raw.free[perm]
-        raw.J = _model("two_mode", raw.p, t, t0, tm, want_jac=True)[1][:, raw.free]
+        raw.J = _model(raw.kind, raw.p, t, raw.t0, raw.tm, want_jac=True)[1][:, raw.free]
     return raw
+
+
+#: candidate frequencies of a third oscillation tried by ``_fit_three_mode``
+THIRD_MODE_TRIES = 2
+#: the third oscillation lies within this fraction of the dominant frequency
+THIRD_MODE_BAND = 0.25
+
+
+def _near_dominant(fc: float, f1: float, T_rec: float) -> bool:
+    """Is ``fc`` (Hz) a third oscillation that can bias the dominant mode's
+    frequency ``f1`` (Hz): resolved from it (at least ``1/T_rec`` away) and
+    within ``THIRD_MODE_BAND * f1`` of it?  Farther components (the swing
+    mode, harmonics ``k f1`` of a nonlinear sensor, a bounce mode) are
+    nearly orthogonal to the dominant cosine over the record and hardly
+    move its period; a close one beats with it."""
+    return 1.0 / T_rec <= abs(fc - f1) <= THIRD_MODE_BAND * f1
+
+
+def _third_mode_candidates(t, p2, resid2) -> list[float]:
+    """Frequencies (Hz) of the significant peaks left in the two-mode
+    residuals (the residual check's test, :func:`.signal_checks.residual_peaks`)
+    that can be a third oscillation (:func:`_near_dominant`, and resolved
+    from the second mode), strongest first."""
+    from .signal_checks import residual_peaks  # signal_checks imports this module
+
+    T_rec = float(t[-1] - t[0])
+    f1, f2 = p2[4] / (2 * math.pi), p2[8] / (2 * math.pi)
+    # the peak's Fourier bin may lie half a bin closer to f1 than the
+    # oscillation itself: the fitted third mode is checked again
+    return [pk["frequency"] for pk in residual_peaks(t, resid2, f1, max_peaks=8)
+            if _near_dominant(pk["frequency"], f1, 2 * T_rec) and abs(pk["frequency"] - f2) >= 1.0 / T_rec]
+
+
+def _fit_three_mode(t, y, t0, tm, p2, resid2, drift):
+    """``two_mode`` plus a third damped oscillation close to the dominant
+    mode, where the residuals ``resid2`` of the two-mode fit ``p2`` show a significant peak there
+    (:func:`_third_mode_candidates`).  The candidates are ranked by the
+    residual sum of squares of the linear fit with all frequencies fixed;
+    the best ``THIRD_MODE_TRIES`` are refined by nonlinear least squares and
+    the best fit whose third oscillation stays close (:func:`_near_dominant`)
+    is kept."""
+    T_rec = float(t[-1] - t[0])
+    cands = _third_mode_candidates(t, p2, resid2)
+    if not cands:
+        raise SignalError("signal", "no significant peak in the two-mode residuals close to the dominant "
+                                    "mode: no third oscillation to fit")
+    ws = [p2[4], p2[8]]
+    ss = [p2[5], p2[9]]
+    starts = []
+    for fc in cands:
+        w3 = [*ws, 2 * math.pi * fc]
+        s3 = [*ss, p2[5]]
+        coef, rss = _linear_amplitudes(t, y, t0, tm, w3, s3)
+        p0 = [coef[0], coef[1] if drift else 0.0]
+        for k in range(3):
+            p0 += [coef[2 + 2 * k], coef[3 + 2 * k], w3[k], s3[k]]
+        starts.append((rss, p0))
+    starts.sort(key=lambda sp: sp[0])
+    free = np.ones(14, bool)
+    free[1] = drift
+    best = None
+    for _, p0 in starts[:THIRD_MODE_TRIES]:
+        # a start that converges does so in tens of evaluations; one that
+        # wanders off would spend the full budget of 200 per parameter
+        raw = _solve("three_mode", t, y, t0, tm, np.array(p0), free, max_nfev_per_param=40)
+        near = _near_dominant(abs(raw.p[12]) / (2 * math.pi), abs(raw.p[4]) / (2 * math.pi), T_rec)
+        if raw.converged and near and (best is None or raw.cost < best.cost):
+            best = raw
+    if best is None:
+        raise ValueError("no three-mode fit kept its third oscillation close to the dominant mode")
+    return _canonical(best, t)
 
 
 def _auto_trim(t, y, raw: _Raw, k: float):

@@ -27,11 +27,12 @@ class PeriodFit:
     Attributes
     ----------
     model : str
-        ``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode`` or
-        ``crossings`` (fallback).
+        ``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode``,
+        ``three_mode`` or ``crossings`` (fallback).
     period : float
         s, the observed (damped) period ``2 pi / omega`` of the oscillation;
-        for ``two_mode`` the mode with the larger amplitude at ``t0``.
+        for ``two_mode`` / ``three_mode`` the mode with the largest
+        amplitude at ``t0``.
     std : float
         s, 1-sigma uncertainty of ``period``:
         ``hypot(std_raw * std_inflation, std_nonstationary)`` (module
@@ -52,6 +53,12 @@ class PeriodFit:
     amplitude, phase : float
         [y] and rad, of the oscillation at ``t0``:
         ``A cos(omega (t - t0) + phase)``.
+    amplitude_rms : float
+        [y], RMS over the fit window of the (dominant) oscillation's
+        envelope: the amplitude the period refers to.  A finite-amplitude
+        pendulum's period depends on it, and one record rarely spans enough
+        amplitude to measure that dependence; compare periods of
+        recordings at their ``amplitude_rms`` (docs/real_data.md).
     offset, drift : float
         [y] at ``t_ref`` and [y]/s: ``c0 + c1 (t - t_ref)``.
     residual_rms, r_squared : float
@@ -133,6 +140,7 @@ class PeriodFit:
     std_inflation: float = 1.0
     lag1_autocorr: float = 0.0
     noise_std: float = float("nan")
+    amplitude_rms: float = float("nan")
     period_undamped: float | None = None
     aic: float = float("nan")
     bic: float = float("nan")
@@ -184,7 +192,7 @@ class PeriodFit:
     def to_dict(self) -> dict:
         """JSON-friendly scalars (no arrays)."""
         keys = ("model", "period", "std", "frequency", "period_undamped", "damping_ratio", "damping",
-                "amplitude", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
+                "amplitude", "amplitude_rms", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
                 "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "uncertainty",
                 "lag1_autocorr", "noise_std", "aic", "bic", "converged", "modes", "selection",
                 "chosen_by", "choice_reason", "windows", "residual_check", "oscillation", "notes")
@@ -241,7 +249,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         return serial_factor(r, abs(raw.p[i_param]) / (2 * math.pi), dt)[0]
 
     infl = factor(4)
-    infl2 = factor(8) if raw.kind == "two_mode" else infl
+    multi = raw.kind in ("two_mode", "three_mode")
+    facs = {iw: (factor(iw) if multi and iw > 4 else infl) for iw in range(4, raw.p.size, 4)}
     if infl > 1.0:
         notes.append(f"residuals not white (Ljung-Box p = {lb_p:.2g} < {LB_ALPHA:g}, lag-1 rho = {rho:.3f}): "
                      f"std x{infl:.2f}, the residual spectral density at the oscillation frequency relative "
@@ -256,7 +265,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     names = _NAMES[raw.kind]
 
     def mode(ia, ib, iw, isg):
-        fac = infl if iw == 4 else infl2
+        fac = facs[iw]
         a, b, w, sg = (float(p[i]) for i in (ia, ib, iw, isg))
         T = 2 * math.pi / w
         sdT_raw = 2 * math.pi / w ** 2 * _std(cov, iw)
@@ -275,8 +284,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"],
                    "zeta": m["damping_ratio"], "zeta_std": m["damping_ratio_std"]}
         T_und = m["period_undamped"]
-    elif raw.kind == "two_mode":
-        modes = [mode(2, 3, 4, 5), mode(6, 7, 8, 9)]
+    elif multi:
+        modes = [mode(i, i + 1, i + 2, i + 3) for i in range(2, p.size, 4)]
         modes.sort(key=lambda d: -d["amplitude"])
         m = modes[0]
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"], "zeta": m["damping_ratio"],
@@ -313,6 +322,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         offset=float(p[0]), drift=float(p[1]), residual_rms=float(math.sqrt(raw.cost / n)),
         r_squared=float(r2), n_samples=int(n), covariance=cov, params=p.copy(), param_names=names,
         t0=float(t[0]), t1=float(t[-1]), t_ref=float(raw.tm), std_raw=m["std_raw"], std_inflation=infl,
-        lag1_autocorr=rho, noise_std=_noise_sigma(r), period_undamped=T_und, aic=aic, bic=bic,
+        lag1_autocorr=rho, noise_std=_noise_sigma(r),
+        amplitude_rms=float(np.sqrt(np.mean(_envelope(raw.kind, p, t, raw.t0) ** 2))),
+        period_undamped=T_und, aic=aic, bic=bic,
         converged=raw.converged, modes=modes, t_used=t.copy(), residuals=r.copy(), notes=notes,
         selection={"free_parameters": free_n}, residual_check=check, _kind=raw.kind)
