@@ -261,11 +261,11 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
     wrong (shares and contributions stay the linear ones).  ``column``: dT/dI (s per kg m^2)
     of every mode, replacing ``sens``'s column of ``comp`` (a component of
     the reference body frame seen from another hanging, see
-    :mod:`bifilar.studies.remedy`).
+    :mod:`bifilar.studies.remedy`).  Several components of one point at
+    once: :func:`predicted_budgets`.
     """
     from dataclasses import replace
 
-    from ..estimation.budget import component_std
     from ..estimation.sensitivity import inertia_budget
 
     if column is not None:  # the same budget with comp's column replaced (the hanging's other inputs unchanged)
@@ -273,15 +273,32 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
         jac[:, sens.names.index(comp)] = np.asarray(column, float)
         sens = replace(sens, jacobian=jac)
         return inertia_budget(sens, scene, comp, k, unc["timing"], unc)
-    b = inertia_budget(sens, scene, comp, k, unc["timing"], unc)
-    if not np.all(np.isfinite(np.asarray(sens.jacobian, float)[k])):
-        # an input with no derivative (a knife edge, dependent wires): invert
-        # gives no std there, and component_std would fall back to this
-        # linear figure after a costly inversion (the known limit)
-        return b
-    # the std invert prints: second order where the linear one is wrong (a
-    # shallow CoM), so a planner can penalise such a rig (issue 10)
-    return replace(b, value_sigma=component_std(scene, comp, k + 1, unc, unc["timing"], fallback=b.value_sigma))
+    return predicted_budgets(sens, scene, [(comp, k)], unc)[0]
+
+
+def predicted_budgets(sens, scene, requests, unc: dict) -> list:
+    """:func:`predicted_budget` of each ``(component, mode index k)`` of
+    ``requests`` (0-based k), the honest stds of all of them computed
+    together at the scene's truth (:func:`bifilar.estimation.honest.honest_stds`:
+    one sensitivity, one set of sigma points for every component)."""
+    from dataclasses import replace
+
+    from ..estimation.honest import honest_stds
+    from ..estimation.sensitivity import inertia_budget
+
+    out = [inertia_budget(sens, scene, comp, k, unc["timing"], unc) for comp, k in requests]
+    # an input with no derivative (a knife edge, dependent wires): invert
+    # gives no std there, and the honest figure would fall back to the
+    # linear one after a costly inversion (the known limit)
+    todo = [i for i, (_, k) in enumerate(requests) if np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
+    if todo:
+        # the std invert prints: second order where the linear one is wrong (a
+        # shallow CoM), so a planner can penalise such a rig (issue 10)
+        sds = honest_stds(scene, [(requests[i][0], requests[i][1] + 1) for i in todo], unc, unc["timing"],
+                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest)
+        for i, sd in zip(todo, sds):
+            out[i] = replace(out[i], value_sigma=sd)
+    return out
 
 
 def component_scale(inertia, comp: str) -> float:
@@ -374,9 +391,14 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
                          reason=f"no mode's period depends on {comp} (max |d ln T / d ln {comp}| = {rel.max():.1e})")
             res["components"][comp] = entry
             continue
-        k = best_mode_for(sens, comp)
-        chosen[comp] = k
-        b = predicted_budget(sens, scene, comp, k, unc)
+        chosen[comp] = best_mode_for(sens, comp)
+        res["components"][comp] = entry
+    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc)))
+    for comp, k in chosen.items():
+        entry = res["components"][comp]
+        scale = component_scale(scene.inertia, comp)
+        col = sens.column(comp)
+        b = budgets[comp]
         j_all = [j for j, n in enumerate(sens.names) if n not in _IDX]
         dI_dx = {sens.names[j]: -float(sens.jacobian[k, j] / col[k]) for j in j_all}
         sep = timed_separation(periods, {k})
