@@ -7,6 +7,7 @@ one-line reason, never raised.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -276,11 +277,12 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
     return predicted_budgets(sens, scene, [(comp, k)], unc)[0]
 
 
-def predicted_budgets(sens, scene, requests, unc: dict) -> list:
+def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> list:
     """:func:`predicted_budget` of each ``(component, mode index k)`` of
     ``requests`` (0-based k), the honest stds of all of them computed
     together at the scene's truth (:func:`bifilar.estimation.honest.honest_stds`:
-    one sensitivity, one set of sigma points for every component)."""
+    one sensitivity, one set of sigma points for every component).
+    ``honest=False``: the linear budgets only (a planner's screen)."""
     from dataclasses import replace
 
     from ..estimation.honest import honest_stds
@@ -290,7 +292,8 @@ def predicted_budgets(sens, scene, requests, unc: dict) -> list:
     # an input with no derivative (a knife edge, dependent wires): invert
     # gives no std there, and the honest figure would fall back to the
     # linear one after a costly inversion (the known limit)
-    todo = [i for i, (_, k) in enumerate(requests) if np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
+    todo = [i for i, (_, k) in enumerate(requests)
+            if honest and np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
     if todo:
         # the std invert prints: second order where the linear one is wrong (a
         # shallow CoM), so a planner can penalise such a rig (issue 10)
@@ -333,12 +336,22 @@ def rig_of(scene, rest) -> dict:
             "wire_angles_deg": ang, "attachments_world": rest.com + scene.attachments @ rest.R.T}
 
 
-def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSettings) -> dict:
+def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSettings, *,
+                   screen: bool = False) -> dict:
     """All figures of one sweep point (see the module docstring); never raises
-    for a bad point: ``valid: false`` and a one-line ``error`` instead."""
+    for a bad point: ``valid: false`` and a one-line ``error`` instead.
+
+    ``screen``: the cheap figures a planner's search needs, marked
+    ``"screen": true``: each component's sigma is the linear one (no
+    second-order check, :func:`predicted_budgets` with ``honest=False``)
+    and the estimator biases are left out (``bias`` None); everything
+    else (validity, tensions, depth, separation, identifiability) is the
+    full point's."""
     out: dict = {"params": dict(params), "valid": False, "error": None}
+    if screen:
+        out["screen"] = True
     try:
-        out.update(_evaluate(base_cfg, source, params, settings))
+        out.update(_evaluate(base_cfg, source, params, settings, screen))
         out["valid"] = True
     except (KeyboardInterrupt, SystemExit):
         raise
@@ -349,7 +362,60 @@ def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSet
     return _plain(out)
 
 
-def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> dict:
+def evaluate_points(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings, *,
+                    screen: bool = False) -> list[dict]:
+    """:func:`evaluate_point` of every point of ``grid``, the nonlinear runs
+    of all of them in one call of the batched engine
+    (:func:`bifilar.analysis.batch.simulate_batch`: from
+    :data:`~bifilar.analysis.batch.SMALL_BATCH` runs on, one stacked LSODA
+    integration with each run's own error bound).  The figures agree with
+    :func:`evaluate_point`'s to the integrator tolerance (``settings.rtol``)
+    but depend on the batch's other runs at that level, so a point computed
+    here is not bit-for-bit the one computed alone: for a planner's
+    screens, not for a journaled sweep.  A point whose run fails is
+    evaluated alone (its own error message)."""
+    out: list = [None] * len(grid)
+    prepared = []
+    for i, params in enumerate(grid):
+        out[i] = {"params": dict(params), "valid": False, "error": None}
+        if screen:
+            out[i]["screen"] = True
+        try:
+            prepared.append((i, *_prepare(base_cfg, source, params, settings, screen)))
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception:  # noqa: BLE001 - the point alone gives its error as evaluate_point does
+            out[i] = evaluate_point(base_cfg, source, params, settings, screen=screen)
+    jobs = [(i, k, pre) for i, _, pre in prepared for k in pre.runs]
+    runs: list = []
+    if jobs:
+        from ..analysis.batch import simulate_batch
+
+        st = settings
+        runs = simulate_batch([pre.scene for _, _, pre in jobs], mode=[pre.labels[k] for _, k, pre in jobs],
+                              amplitude=[pre.amplitude for _, _, pre in jobs], periods=st.periods, rtol=st.rtol,
+                              rests=[pre.rest for _, _, pre in jobs], modes=[pre.ms for _, _, pre in jobs],
+                              errors="return")
+    sims: dict = {i: {} for i, _, _ in prepared}
+    for (i, k, _), r in zip(jobs, runs):
+        sims[i][k] = r
+    for i, res, pre in prepared:
+        if any(r.error for r in sims[i].values()):
+            out[i] = evaluate_point(base_cfg, source, grid[i], settings, screen=screen)
+            continue
+        try:
+            out[i].update(_finish(res, pre, {k: sims[i][k] for k in pre.runs}, settings, screen))
+            out[i]["valid"] = True
+            out[i] = _plain(out[i])
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception:  # noqa: BLE001
+            out[i] = evaluate_point(base_cfg, source, grid[i], settings, screen=screen)
+    return out
+
+
+def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False):
+    """(the point's figures up to its nonlinear runs, :class:`_Prepared`); raises for a bad point."""
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
     from ..estimation.sensitivity import best_mode_for, grouped_shares, measured_inputs
@@ -393,7 +459,7 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
             continue
         chosen[comp] = best_mode_for(sens, comp)
         res["components"][comp] = entry
-    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc)))
+    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen)))
     for comp, k in chosen.items():
         entry = res["components"][comp]
         scale = component_scale(scene.inertia, comp)
@@ -413,15 +479,45 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         )
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
-    # nonlinear runs: one per chosen mode
-    sims: dict[int, Any] = {}
+    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [])
     if st.tensions:
-        ks = sorted(set(chosen.values()))
+        pre.runs = sorted(set(chosen.values()))
         from ..analysis.simulate import initial_state
 
-        for k in ks:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
+        for k in pre.runs:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
             initial_state(scene, rest, ms.modes[k], amplitude)
-        sims = dict(zip(ks, _nonlinear_runs(scene, rest, ms, [labels[k] for k in ks], amplitude, st)))
+    return res, pre
+
+
+@dataclass
+class _Prepared:
+    """A point evaluated up to its nonlinear runs: what :func:`_finish` needs."""
+
+    scene: Any
+    rest: Any
+    ms: Any
+    labels: list
+    periods: np.ndarray
+    sens: Any
+    chosen: dict
+    amplitude: float
+    runs: list  # mode indices to run nonlinearly (empty: none)
+
+
+def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
+    res, pre = _prepare(base_cfg, source, params, st, screen)
+    sims: dict[int, Any] = {}
+    if pre.runs:
+        sims = dict(zip(pre.runs, _nonlinear_runs(pre.scene, pre.rest, pre.ms, [pre.labels[k] for k in pre.runs],
+                                                  pre.amplitude, st)))
+    return _finish(res, pre, sims, st, screen)
+
+
+def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bool) -> dict:
+    """The point's figures from its nonlinear runs ``sims`` {mode index: run} on."""
+    scene, rest, ms, labels, periods, sens, chosen = (pre.scene, pre.rest, pre.ms, pre.labels, pre.periods,
+                                                      pre.sens, pre.chosen)
+    if st.tensions:
         tmax = np.max([s.tension_max for s in sims.values()], axis=0) if sims else rest.tensions
         tmin = np.min([s.tension_min for s in sims.values()], axis=0) if sims else rest.tensions
         slack = sorted({w for s in sims.values() for w, _ in s.slack})
@@ -436,6 +532,8 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
+    if screen:
+        return res
     # biases at the prescribed amplitude
     ladder = _Ladder(scene, rest)
     for comp, k in chosen.items():
