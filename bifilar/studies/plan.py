@@ -19,6 +19,19 @@ of :mod:`bifilar.studies.shorthands`, each within ``[lo, hi]``):
 The answer is the best feasible point evaluated, so it is never worse than
 the grid.
 
+Screens and confirmation (issue 14).  Both steps evaluate *screens*
+(:func:`~bifilar.studies.point.evaluate_point` with ``screen=True``: each
+component's linear sigma, no estimator biases; the grid's nonlinear runs in
+one batch; the local search's without nonlinear runs when there is no
+tension or depth limit and every grid point's wires keep half their rest
+tension, :func:`_far_from_limits`).  The best :data:`CONFIRM` feasible
+screens are then evaluated in full (the honest second-order sigma, the
+nonlinear runs, the biases); when a full figure equals its screen's (the
+linear budget holds, as it does wherever the CoM is not shallow) the
+search path was the full one's, and the answer is the same.  Otherwise
+(second order matters, or the confirmed point goes slack) the whole search
+is run again on full points, as before.
+
 The objective is the relative standard uncertainty of ``target`` (or the
 worst of the *measurable* components: those identifiable at some point of
 the coarse grid) at a point, exactly as the sweep ranks points; a target
@@ -35,7 +48,7 @@ Deterministic: no random numbers, so the same inputs give the same plan.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -48,6 +61,9 @@ from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_poi
 _GRID = {1: 9, 2: 6, 3: 4}
 STARTS = 3  # local searches from the best grid points (d > 1)
 CONFIRM = 2  # the best feasible screens re-evaluated in full (their figures must not change)
+#: a screen of the local search runs no nonlinear motion when every grid point's
+#: wires keep this fraction of their rest tension during the excitation
+SLACK_MARGIN = 0.5
 
 
 @dataclass
@@ -218,10 +234,14 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
             raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
                              + _remedy_text(base_cfg, source, pts, settings, target))
 
+        local = settings
+        if screen and settings.tensions and _far_from_limits(pts, constraints):
+            local = replace(settings, tensions=False)  # the confirmation runs the best point's motion
+
         def evaluate(params: dict) -> dict:
             key = key_of(params)
             if key not in cache:
-                cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, settings,
+                cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, local,
                                             screen=screen)
                 tick()
             return cache[key]
@@ -257,6 +277,25 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     best["objective"] = objective(best, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
                       among, zip_)
+
+
+def _far_from_limits(points: list[dict], c: Constraints) -> bool:
+    """Whether the nonlinear runs can be left out of a screen of the local
+    search: no limit on the tension or depth, and every valid grid point's
+    wires keep at least :data:`SLACK_MARGIN` of their rest tension
+    throughout the excitation (so no point between them goes slack)."""
+    if c.max_tension is not None or c.max_depth is not None:
+        return False
+    valid = [p for p in points if p.get("valid")]
+    if not valid:
+        return False
+    for p in valid:
+        t = p["tension"]
+        if t.get("min") is None or t.get("slack"):
+            return False
+        if not np.all(np.asarray(t["min"], float) >= SLACK_MARGIN * np.asarray(t["rest"], float)):
+            return False
+    return True
 
 
 def _local_search(cont, combos, expand, unit, ng: int, local_budget: int, cache: dict, evaluate, score) -> None:

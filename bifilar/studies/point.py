@@ -78,12 +78,18 @@ def point_sensitivity(scene, names: list[str], rest=None):
     branch, so each side's rest pose must stay within :data:`TURN_MAX` of the
     base pose; otherwise that side is dropped (one-sided difference, first
     order: relative error ~1e-6), and an input with no side left is left out
-    of the uncertainty budget (its column set to 0) with a note.  Regular
-    scenes take the shared central differences.  Returns (Sensitivity, notes).
+    of the uncertainty budget (its column set to 0) with a note.  The inputs
+    with an analytic derivative at the neutral scene (the branch's
+    derivative, :mod:`bifilar.analysis.derivatives`) take it instead: only
+    those pushing along the neutral direction are differenced.  Regular
+    scenes take :func:`~bifilar.estimation.sensitivity.period_sensitivity`
+    (analytic).  Returns (Sensitivity, notes).
     """
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
+
+    from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
 
     rest = rest if rest is not None else rest_pose(scene)
     ms = linear_modes(scene, rest)
@@ -91,12 +97,27 @@ def point_sensitivity(scene, names: list[str], rest=None):
     neutral = not np.all(np.isfinite(T0))
     if not neutral:
         try:
-            return period_sensitivity(scene, names), []
+            return period_sensitivity(scene, names, rest=rest), []
         except (UnstableRestError, SlackWireError, ConvergenceError):
             pass
     jac = np.zeros((len(T0), len(names)))
     notes = []
-    for j, name in enumerate(names):
+    todo = list(range(len(names)))
+    if neutral:
+        # the analytic derivative where it exists (the branch's derivative, exact: what a
+        # one-sided difference approximates to O(h)); the branch-following differences
+        # below only for the inputs that push along the neutral direction
+        try:
+            an = analytic_period_jacobian(scene, rest, ms, names)
+        except NotDifferentiable:
+            an = None
+        if an is not None:
+            live = np.isfinite(T0)
+            todo = [j for j in todo if np.all(np.isnan(an[live, j]))]
+            keep = [j for j in range(len(names)) if j not in todo]
+            jac[:, keep] = an[:, keep]
+    for j in todo:
+        name = names[j]
         h = _fd_step(scene, name)
         side = {}
         for sgn in (1.0, -1.0):
