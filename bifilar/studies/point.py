@@ -144,8 +144,13 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
     poses warm-started from ``rest``) equals ``T_target`` (s), the other
     inputs as in ``scene``.  Secant iteration from ``slope`` = dT/dI (s per
     kg m^2) to 1e-13 in the period; ``T0`` the period at the scene's value
-    (computed if None).  None if a step leaves the stable region."""
-    from ..estimation.sensitivity import perturb, periods_of
+    (computed if None).  None if a step leaves the stable region.  The rest
+    pose does not depend on the inertia: ``rest`` serves every step."""
+    from ..analysis.modes import linear_modes
+    from ..estimation.sensitivity import matched_periods, perturb
+
+    def periods_of(sc, base, r):
+        return matched_periods(base, linear_modes(sc, r))
 
     I0 = float(scene.inertia[_IDX[comp]])
     try:
