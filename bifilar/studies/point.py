@@ -145,7 +145,9 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
     inputs as in ``scene``.  Secant iteration from ``slope`` = dT/dI (s per
     kg m^2) to 1e-13 in the period; ``T0`` the period at the scene's value
     (computed if None).  None if a step leaves the stable region.  The rest
-    pose does not depend on the inertia: ``rest`` serves every step."""
+    pose does not depend on the inertia: the scene's (Newton from ``rest``)
+    is found once and serves every step."""
+    from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..estimation.sensitivity import matched_periods, perturb
 
@@ -154,6 +156,7 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
 
     I0 = float(scene.inertia[_IDX[comp]])
     try:
+        rest = rest_pose(scene, guess=rest, local_only=True)
         if T0 is None:
             T0 = float(periods_of(scene, modes, rest)[k])
         x0, f0 = 0.0, float(T0 - T_target)
