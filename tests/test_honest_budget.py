@@ -8,7 +8,6 @@ and on the shallow-CoM wheel, where the second-order terms dominate."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from bifilar.config import read_yaml, scene_from_dict

@@ -31,7 +31,7 @@ def test_screened_plan_equals_the_full_search(case, monkeypatch):
     else:  # the CoM 15-45 mm below the attachments: the honest sigma is second order at the shallow end
         cfg, bounds = wheel_cfg(), [("height", 0.015, 0.045)]
         st = sw.resolve_settings(cfg, components=("Izz",), tensions=False)
-    kw = dict(target=None, max_local=4)
+    kw = {"target": None, "max_local": 4}
     screened = plan_mod.plan(cfg, case, bounds, st, sw.Constraints(), **kw)
     with monkeypatch.context() as m:
         _full_only(m)

@@ -85,11 +85,10 @@ def point_sensitivity(scene, names: list[str], rest=None):
     scenes take :func:`~bifilar.estimation.sensitivity.period_sensitivity`
     (analytic).  Returns (Sensitivity, notes).
     """
+    from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
-
-    from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
 
     rest = rest if rest is not None else rest_pose(scene)
     ms = linear_modes(scene, rest)
