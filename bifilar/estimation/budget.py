@@ -82,6 +82,16 @@ class BudgetContext:
     surrogate: dict = field(default_factory=dict)   # key -> (a, b) of the quadratic
     cross: dict = field(default_factory=dict)       # (key_i, key_j) -> (k11, k21, k12, k22)
     amplitude: dict = field(default_factory=dict)   # label -> D (P,): truth - p at A_max
+    #: results shared by budgets of the same scenes (several unknowns at one truth):
+    #: input sensitivities and sigma points' periods, keyed by the scene's arrays
+    cache: dict | None = None
+
+
+def scene_key(scene) -> tuple:
+    """A hashable key of every array of ``scene`` (equal keys: the same scene)."""
+    return (float(scene.mass), float(scene.gravity), np.asarray(scene.lengths, float).tobytes(),
+            np.asarray(scene.anchors, float).tobytes(), np.asarray(scene.attachments, float).tobytes(),
+            np.asarray(scene.inertia, float).tobytes())
 
 
 def _key_hanging(pb: Problem, key: str) -> list:
@@ -152,14 +162,17 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
     for h, (_, _, _, ms, col) in hits.items():
         fill(h, ms, col)
     p = np.asarray(p_hat, float).copy()
-    sc = pb.scales()
+    sc = None
     for _ in range(8):
         if not np.all(np.isfinite(T)):
             return None
         small = np.max(np.abs(T / ctx.T_hat - 1)) < 1e-2  # one step on T^2: error ~(dT/T)^2 of the step
         step = ctx.G @ ((ctx.T_hat ** 2 - T ** 2) / (2 * ctx.T_hat))
         p = p + step
-        if small or np.max(np.abs(step) / sc) < 1e-10:
+        if small:
+            return p
+        sc = pb.scales() if sc is None else sc
+        if np.max(np.abs(step) / sc) < 1e-10:
             return p
         vals = pb.values(p)
         for h, (_, _, rest, ms0, col) in hits.items():
@@ -179,15 +192,22 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
     inputs (:func:`_resolve`), None where a hanging cannot hang or a period
     is lost; the perturbed scenes of each hanging in one batch."""
     jobs: dict[int, list] = {h: [] for h in range(len(pb.models))}
+    res: dict = {pid: {} for pid in points}
+    cache = ctx.cache
     for pid, moves in points.items():
         for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
             if any(m.hanging == h for m in pb.measurements):
-                jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves)))
-    res: dict = {pid: {} for pid in points}
+                ck = ("sigma point", scene_key(ctx.scenes[h]), tuple(moves)) if cache is not None else None
+                if ck is not None and ck in cache:
+                    res[pid][h] = cache[ck]
+                else:
+                    jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
     for h, jl in jobs.items():
         if jl:
-            for (pid, _), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
+            for (pid, _, ck), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
                 res[pid][h] = o
+                if ck is not None:
+                    cache[ck] = o
     return {pid: (_resolve(pb, ctx, p_hat, r_hat, points[pid], hits)
                   if all(v is not None for v in hits.values()) else None)
             for pid, hits in res.items()}
@@ -406,9 +426,11 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
     return out
 
 
-def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
+def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None):
     """Linear budget at the estimate; returns (LinearBudget, degenerate
-    inputs, T_lin at p_hat, BudgetContext for :func:`second_order`)."""
+    inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
+    ``cache``: a dict shared by budgets of other unknowns at the same
+    scenes (:attr:`BudgetContext.cache`), or None."""
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
@@ -432,7 +454,13 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
             continue
         names = [n for n in measured_inputs(scene) if not n.startswith("com.")]
         names += list(COM_UNKNOWNS)
-        sens, failed = robust_sensitivity(scene, rest, ms_h, names, scheme="forward")
+        ck = ("sensitivity", scene_key(scene), tuple(names))
+        if cache is not None and ck in cache:
+            sens, failed = cache[ck]
+        else:
+            sens, failed = robust_sensitivity(scene, rest, ms_h, names, scheme="forward")
+            if cache is not None:
+                cache[ck] = (sens, failed)
         pre = f"{hm.hanging.name}:" if multi else ""
         degenerate += [(n if n.startswith("com.") or n in ("mass", "gravity") else pre + n) for n in failed]
         for j, n in enumerate(sens.names):
@@ -483,7 +511,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc):
             h = next(iter(_key_hanging(pb, d)))
             all_sig[d] = input_sigma(scenes[h], n, unc)
     ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
-                        list(degenerate), scenes, rests, modes, matches)
+                        list(degenerate), scenes, rests, modes, matches, cache=cache)
     return budget, degenerate, T_lin, ctx
 
 

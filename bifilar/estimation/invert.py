@@ -512,14 +512,16 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
     return out
 
 
-def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float):
+def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float,
+                cache: dict | None = None):
     """The budget every answer (the chosen root and any further one) gets:
     the linear budget (:func:`~bifilar.estimation.budget._budget`), the
     systematic term of an unstated amplitude, and second-order propagation
     where the linear one is wrong (:func:`~bifilar.estimation.budget.second_order`).
     Returns (budget, linear std, degenerate inputs, T_lin at ``p`` (s),
-    budget context, {mode: (assumed max amplitude, its period factor)})."""
-    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc)
+    budget context, {mode: (assumed max amplitude, its period factor)}).
+    ``cache``: shared by budgets at the same scenes (``BudgetContext.cache``)."""
+    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache)
     std_lin = budget.std
     amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
     if any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):

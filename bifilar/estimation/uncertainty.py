@@ -195,9 +195,27 @@ def robust_sensitivity(scene: Scene, rest: RestPose, modes: ModeSet, names: list
     """A :class:`~bifilar.estimation.sensitivity.Sensitivity` over ``names``
     (default: the six inertia components and every measured input) that
     survives degenerate scenes; inputs whose derivative does not exist are
-    dropped from it and returned as the second value."""
+    dropped from it and returned as the second value.
+
+    The Jacobian is analytic (:func:`bifilar.analysis.derivatives.analytic_period_jacobian`:
+    one rest pose and one eigen-solve, exact to rounding); the inputs with
+    no analytic derivative there (a neutral direction) are differenced by
+    :func:`input_jacobian` (``rel_step``, ``scheme``), and so is every input
+    when the modes have repeated eigenvalues (no unique derivative per mode)."""
+    from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
+
     names = list(names if names is not None else list(INERTIA_COMPONENTS) + measured_inputs(scene))
-    J, failed = input_jacobian(scene, names, rest, modes, rel_step, scheme)
+    try:
+        J = analytic_period_jacobian(scene, rest, modes, names)
+    except NotDifferentiable:  # repeated eigenvalues: finite differences with mode tracking for all
+        J, failed = input_jacobian(scene, names, rest, modes, rel_step, scheme)
+    else:
+        live = np.array([m.period is not None for m in modes.modes], bool)
+        fd = [j for j in range(len(names)) if live.any() and np.all(np.isnan(J[live, j]))]
+        failed = []
+        if fd:  # no analytic derivative (a neutral direction): finite differences, which may fail too
+            Jf, failed = input_jacobian(scene, [names[j] for j in fd], rest, modes, rel_step, scheme)
+            J[:, fd] = Jf
     keep = [j for j, n in enumerate(names) if n not in failed]
     T0 = np.array([m.period if m.period else np.nan for m in modes.modes])
     return Sensitivity([names[j] for j in keep], T0, J[:, keep], modes, rest), failed

@@ -19,6 +19,19 @@ of :mod:`bifilar.studies.shorthands`, each within ``[lo, hi]``):
 The answer is the best feasible point evaluated, so it is never worse than
 the grid.
 
+Screens and confirmation (issue 14).  Both steps evaluate *screens*
+(:func:`~bifilar.studies.point.evaluate_point` with ``screen=True``: each
+component's linear sigma, no estimator biases; the grid's nonlinear runs in
+one batch; the local search's without nonlinear runs when there is no
+tension or depth limit and every grid point's wires keep half their rest
+tension, :func:`_far_from_limits`).  The best :data:`CONFIRM` feasible
+screens are then evaluated in full (the honest second-order sigma, the
+nonlinear runs, the biases); when a full figure equals its screen's (the
+linear budget holds, as it does wherever the CoM is not shallow) the
+search path was the full one's, and the answer is the same.  Otherwise
+(second order matters, or the confirmed point goes slack) the whole search
+is run again on full points, as before.
+
 The objective is the relative standard uncertainty of ``target`` (or the
 worst of the *measurable* components: those identifiable at some point of
 the coarse grid) at a point, exactly as the sweep ranks points; a target
@@ -35,7 +48,7 @@ Deterministic: no random numbers, so the same inputs give the same plan.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -47,6 +60,10 @@ from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_poi
 
 _GRID = {1: 9, 2: 6, 3: 4}
 STARTS = 3  # local searches from the best grid points (d > 1)
+CONFIRM = 2  # the best feasible screens re-evaluated in full (their figures must not change)
+#: a screen of the local search runs no nonlinear motion when every grid point's
+#: wires keep this fraction of their rest tension during the excitation
+SLACK_MARGIN = 0.5
 
 
 @dataclass
@@ -189,7 +206,6 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
         for vals in _product(axes):
             grid.append({**expand({n: float(v) for (n, _, _), v in zip(cont, vals)}), **fixed})
     grid = [{n: g[n] for n in names} for g in grid]  # keep the user's order
-    cache: dict[tuple, dict] = {}
     local_budget = max_local if max_local is not None else (12 if d == 1 else 30 * d) * max(len(combos), 1)
     total = len(grid) + (local_budget if d else 0)
     done = [0]
@@ -199,77 +215,134 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
         if progress:
             progress(min(done[0], total), total)
 
-    pts = run_sweep(base_cfg, source, grid, settings, workers=workers,
-                    progress=(lambda k, n: progress(k, total)) if progress else None)
-    done[0] = len(grid)
-    for g, p in zip(grid, pts):
-        cache[tuple(g[n] for n in names)] = p
-    among = measurable_components(pts)
-    if target is not None and target not in among:
-        raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
-                         + _remedy_text(base_cfg, source, pts, settings, target))
+    def key_of(params: dict) -> tuple:
+        return tuple(float(params[n]) for n in names)
 
-    def evaluate(params: dict) -> dict:
-        key = tuple(float(params[n]) for n in names)
-        if key not in cache:
-            cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, settings)
-            tick()
-        return cache[key]
+    def search(screen: bool) -> tuple[dict, list]:
+        """Grid, then the local search (module docstring), every point
+        evaluated as a screen (:func:`evaluate_point` ``screen=True``) or
+        in full; returns ({params key: point}, the measurable components)."""
+        cache: dict[tuple, dict] = {}
+        done[0] = 0
+        pts = run_sweep(base_cfg, source, grid, settings, workers=workers, screen=screen,
+                        progress=(lambda k, n: progress(k, total)) if progress else None)
+        done[0] = len(grid)
+        for g, p in zip(grid, pts):
+            cache[key_of(g)] = p
+        among = measurable_components(pts)
+        if target is not None and target not in among:
+            raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
+                             + _remedy_text(base_cfg, source, pts, settings, target))
 
-    def score(p):
-        return _penalty(p, constraints, target, among)
+        local = settings
+        if screen and settings.tensions and _far_from_limits(pts, constraints):
+            local = replace(settings, tensions=False)  # the confirmation runs the best point's motion
 
-    if d:
-        from scipy.optimize import minimize, minimize_scalar
+        def evaluate(params: dict) -> dict:
+            key = key_of(params)
+            if key not in cache:
+                cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, local,
+                                            screen=screen)
+                tick()
+            return cache[key]
 
-        lo_v = np.array([lo for _, lo, _ in cont])
-        span = np.array([hi - lo for _, lo, hi in cont])
-        h = 1.0 / (ng - 1)
-        for fixed in combos:
-            budget = local_budget // max(len(combos), 1)
+        def score(p):
+            return _penalty(p, constraints, target, among)
 
-            def f(x, fixed=fixed):
-                x = np.clip(np.atleast_1d(x), 0.0, 1.0)
-                params = {**expand({n: float(lo_v[i] + x[i] * span[i]) for i, (n, _, _) in enumerate(cont)}), **fixed}
-                return score(evaluate(params))
+        if d:
+            _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluate, score)
+        return cache, among
 
-            def best_x(fixed=fixed, rank=0):
-                sub = sorted((p for p in cache.values() if all(p["params"][n] == v for n, v in fixed.items())),
-                             key=score)
-                p0 = sub[min(rank, len(sub) - 1)]
-                return unit(p0["params"])
-
-            if d > 1:
-                # Nelder-Mead in the unit box from the best STARTS grid points (the feasible set is often
-                # cut into islands by mode-crossing bands), simplex one half-cell wide
-                starts = [best_x(rank=r) for r in range(STARTS)]
-                for x0 in starts:
-                    simplex = np.vstack([x0] + [np.clip(x0 + (0.5 * h if x0[i] + 0.5 * h <= 1 else -0.5 * h) * e, 0, 1)
-                                                for i, e in enumerate(np.eye(d))])
-                    minimize(f, x0, method="Nelder-Mead", bounds=[(0, 1)] * d,
-                             options={"initial_simplex": simplex, "maxfev": (budget - 10 * d) // STARTS,
-                                      "xatol": 1e-3, "fatol": 1e-6})
-            x0 = best_x()
-            for i in range(d):  # polish each parameter by Brent's method in its bracketing cells
-                def g(t, i=i, x0=x0):
-                    x = x0.copy()
-                    x[i] = t
-                    return f(x)
-
-                minimize_scalar(g, bounds=(max(0.0, x0[i] - h), min(1.0, x0[i] + h)), method="bounded",
-                                options={"xatol": 1e-3, "maxiter": 10 if d > 1 else budget})
-                x0 = best_x()
+    # the search on screens (linear sigmas, no biases), then the best feasible
+    # screen confirmed in full; where the full figure differs (second order
+    # matters in this range: a shallow CoM) the whole search again in full
+    cache, among = search(screen=True)
+    feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
+                       and math.isfinite(objective(p, target, among))), key=lambda p: objective(p, target, among))
+    for p in feasible[:CONFIRM]:
+        full = evaluate_point(base_cfg, source, p["params"], settings)
+        cache[key_of(p["params"])] = full
+        if not (full.get("valid") and objective(full, target, among) == objective(p, target, among)
+                and not violations(full, constraints, target)):
+            cache, among = search(screen=False)
+            break
     evaluated = list(cache.values())
     feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target)
                 and math.isfinite(objective(p, target, among))]
     if not feasible:
         flag, msg = binding_constraint(evaluated, constraints, target, among)
         raise InputError(flag, msg)
-    best = min(feasible, key=lambda p: objective(p, target, among))
+    best = min((p for p in feasible if not p.get("screen")), key=lambda p: objective(p, target, among))
     best = dict(best)
     best["objective"] = objective(best, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
                       among, zip_)
+
+
+def _far_from_limits(points: list[dict], c: Constraints) -> bool:
+    """Whether the nonlinear runs can be left out of a screen of the local
+    search: no limit on the tension or depth, and every valid grid point's
+    wires keep at least :data:`SLACK_MARGIN` of their rest tension
+    throughout the excitation (so no point between them goes slack)."""
+    if c.max_tension is not None or c.max_depth is not None:
+        return False
+    valid = [p for p in points if p.get("valid")]
+    if not valid:
+        return False
+    for p in valid:
+        t = p["tension"]
+        if t.get("min") is None or t.get("slack"):
+            return False
+        if not np.all(np.asarray(t["min"], float) >= SLACK_MARGIN * np.asarray(t["rest"], float)):
+            return False
+    return True
+
+
+def _local_search(cont, combos, expand, unit, ng: int, local_budget: int, cache: dict, evaluate, score) -> None:
+    """The local part of :func:`plan` (module docstring, step 2) over the
+    continuous search variables ``cont`` [(name, lo, hi)], for each
+    combination ``combos`` of the discrete ones, from the best points of
+    ``cache`` (filled by ``evaluate``, ranked by ``score``)."""
+    from scipy.optimize import minimize, minimize_scalar
+
+    d = len(cont)
+    lo_v = np.array([lo for _, lo, _ in cont])
+    span = np.array([hi - lo for _, lo, hi in cont])
+    h = 1.0 / (ng - 1)
+    for fixed in combos:
+        budget = local_budget // max(len(combos), 1)
+
+        def f(x, fixed=fixed):
+            x = np.clip(np.atleast_1d(x), 0.0, 1.0)
+            params = {**expand({n: float(lo_v[i] + x[i] * span[i]) for i, (n, _, _) in enumerate(cont)}), **fixed}
+            return score(evaluate(params))
+
+        def best_x(fixed=fixed, rank=0):
+            sub = sorted((p for p in cache.values() if all(p["params"][n] == v for n, v in fixed.items())),
+                         key=score)
+            p0 = sub[min(rank, len(sub) - 1)]
+            return unit(p0["params"])
+
+        if d > 1:
+            # Nelder-Mead in the unit box from the best STARTS grid points (the feasible set is often
+            # cut into islands by mode-crossing bands), simplex one half-cell wide
+            starts = [best_x(rank=r) for r in range(STARTS)]
+            for x0 in starts:
+                simplex = np.vstack([x0] + [np.clip(x0 + (0.5 * h if x0[i] + 0.5 * h <= 1 else -0.5 * h) * e, 0, 1)
+                                            for i, e in enumerate(np.eye(d))])
+                minimize(f, x0, method="Nelder-Mead", bounds=[(0, 1)] * d,
+                         options={"initial_simplex": simplex, "maxfev": (budget - 10 * d) // STARTS,
+                                  "xatol": 1e-3, "fatol": 1e-6})
+        x0 = best_x()
+        for i in range(d):  # polish each parameter by Brent's method in its bracketing cells
+            def g(t, i=i, x0=x0):
+                x = x0.copy()
+                x[i] = t
+                return f(x)
+
+            minimize_scalar(g, bounds=(max(0.0, x0[i] - h), min(1.0, x0[i] + h)), method="bounded",
+                            options={"xatol": 1e-3, "maxiter": 10 if d > 1 else budget})
+            x0 = best_x()
 
 
 def _remedy_text(base_cfg, source, pts, settings, comp) -> str:

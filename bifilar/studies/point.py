@@ -7,6 +7,7 @@ one-line reason, never raised.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -77,9 +78,14 @@ def point_sensitivity(scene, names: list[str], rest=None):
     branch, so each side's rest pose must stay within :data:`TURN_MAX` of the
     base pose; otherwise that side is dropped (one-sided difference, first
     order: relative error ~1e-6), and an input with no side left is left out
-    of the uncertainty budget (its column set to 0) with a note.  Regular
-    scenes take the shared central differences.  Returns (Sensitivity, notes).
+    of the uncertainty budget (its column set to 0) with a note.  The inputs
+    with an analytic derivative at the neutral scene (the branch's
+    derivative, :mod:`bifilar.analysis.derivatives`) take it instead: only
+    those pushing along the neutral direction are differenced.  Regular
+    scenes take :func:`~bifilar.estimation.sensitivity.period_sensitivity`
+    (analytic).  Returns (Sensitivity, notes).
     """
+    from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
@@ -90,12 +96,27 @@ def point_sensitivity(scene, names: list[str], rest=None):
     neutral = not np.all(np.isfinite(T0))
     if not neutral:
         try:
-            return period_sensitivity(scene, names), []
+            return period_sensitivity(scene, names, rest=rest), []
         except (UnstableRestError, SlackWireError, ConvergenceError):
             pass
     jac = np.zeros((len(T0), len(names)))
     notes = []
-    for j, name in enumerate(names):
+    todo = list(range(len(names)))
+    if neutral:
+        # the analytic derivative where it exists (the branch's derivative, exact: what a
+        # one-sided difference approximates to O(h)); the branch-following differences
+        # below only for the inputs that push along the neutral direction
+        try:
+            an = analytic_period_jacobian(scene, rest, ms, names)
+        except NotDifferentiable:
+            an = None
+        if an is not None:
+            live = np.isfinite(T0)
+            todo = [j for j in todo if np.all(np.isnan(an[live, j]))]
+            keep = [j for j in range(len(names)) if j not in todo]
+            jac[:, keep] = an[:, keep]
+    for j in todo:
+        name = names[j]
         h = _fd_step(scene, name)
         side = {}
         for sgn in (1.0, -1.0):
@@ -122,11 +143,19 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
     poses warm-started from ``rest``) equals ``T_target`` (s), the other
     inputs as in ``scene``.  Secant iteration from ``slope`` = dT/dI (s per
     kg m^2) to 1e-13 in the period; ``T0`` the period at the scene's value
-    (computed if None).  None if a step leaves the stable region."""
-    from ..estimation.sensitivity import perturb, periods_of
+    (computed if None).  None if a step leaves the stable region.  The rest
+    pose does not depend on the inertia: the scene's (Newton from ``rest``)
+    is found once and serves every step."""
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+    from ..estimation.sensitivity import matched_periods, perturb
+
+    def periods_of(sc, base, r):
+        return matched_periods(base, linear_modes(sc, r))
 
     I0 = float(scene.inertia[_IDX[comp]])
     try:
+        rest = rest_pose(scene, guess=rest, local_only=True)
         if T0 is None:
             T0 = float(periods_of(scene, modes, rest)[k])
         x0, f0 = 0.0, float(T0 - T_target)
@@ -261,11 +290,11 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
     wrong (shares and contributions stay the linear ones).  ``column``: dT/dI (s per kg m^2)
     of every mode, replacing ``sens``'s column of ``comp`` (a component of
     the reference body frame seen from another hanging, see
-    :mod:`bifilar.studies.remedy`).
+    :mod:`bifilar.studies.remedy`).  Several components of one point at
+    once: :func:`predicted_budgets`.
     """
     from dataclasses import replace
 
-    from ..estimation.budget import component_std
     from ..estimation.sensitivity import inertia_budget
 
     if column is not None:  # the same budget with comp's column replaced (the hanging's other inputs unchanged)
@@ -273,15 +302,34 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
         jac[:, sens.names.index(comp)] = np.asarray(column, float)
         sens = replace(sens, jacobian=jac)
         return inertia_budget(sens, scene, comp, k, unc["timing"], unc)
-    b = inertia_budget(sens, scene, comp, k, unc["timing"], unc)
-    if not np.all(np.isfinite(np.asarray(sens.jacobian, float)[k])):
-        # an input with no derivative (a knife edge, dependent wires): invert
-        # gives no std there, and component_std would fall back to this
-        # linear figure after a costly inversion (the known limit)
-        return b
-    # the std invert prints: second order where the linear one is wrong (a
-    # shallow CoM), so a planner can penalise such a rig (issue 10)
-    return replace(b, value_sigma=component_std(scene, comp, k + 1, unc, unc["timing"], fallback=b.value_sigma))
+    return predicted_budgets(sens, scene, [(comp, k)], unc)[0]
+
+
+def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> list:
+    """:func:`predicted_budget` of each ``(component, mode index k)`` of
+    ``requests`` (0-based k), the honest stds of all of them computed
+    together at the scene's truth (:func:`bifilar.estimation.honest.honest_stds`:
+    one sensitivity, one set of sigma points for every component).
+    ``honest=False``: the linear budgets only (a planner's screen)."""
+    from dataclasses import replace
+
+    from ..estimation.honest import honest_stds
+    from ..estimation.sensitivity import inertia_budget
+
+    out = [inertia_budget(sens, scene, comp, k, unc["timing"], unc) for comp, k in requests]
+    # an input with no derivative (a knife edge, dependent wires): invert
+    # gives no std there, and the honest figure would fall back to the
+    # linear one after a costly inversion (the known limit)
+    todo = [i for i, (_, k) in enumerate(requests)
+            if honest and np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
+    if todo:
+        # the std invert prints: second order where the linear one is wrong (a
+        # shallow CoM), so a planner can penalise such a rig (issue 10)
+        sds = honest_stds(scene, [(requests[i][0], requests[i][1] + 1) for i in todo], unc, unc["timing"],
+                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest)
+        for i, sd in zip(todo, sds):
+            out[i] = replace(out[i], value_sigma=sd)
+    return out
 
 
 def component_scale(inertia, comp: str) -> float:
@@ -316,12 +364,22 @@ def rig_of(scene, rest) -> dict:
             "wire_angles_deg": ang, "attachments_world": rest.com + scene.attachments @ rest.R.T}
 
 
-def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSettings) -> dict:
+def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSettings, *,
+                   screen: bool = False) -> dict:
     """All figures of one sweep point (see the module docstring); never raises
-    for a bad point: ``valid: false`` and a one-line ``error`` instead."""
+    for a bad point: ``valid: false`` and a one-line ``error`` instead.
+
+    ``screen``: the cheap figures a planner's search needs, marked
+    ``"screen": true``: each component's sigma is the linear one (no
+    second-order check, :func:`predicted_budgets` with ``honest=False``)
+    and the estimator biases are left out (``bias`` None); everything
+    else (validity, tensions, depth, separation, identifiability) is the
+    full point's."""
     out: dict = {"params": dict(params), "valid": False, "error": None}
+    if screen:
+        out["screen"] = True
     try:
-        out.update(_evaluate(base_cfg, source, params, settings))
+        out.update(_evaluate(base_cfg, source, params, settings, screen))
         out["valid"] = True
     except (KeyboardInterrupt, SystemExit):
         raise
@@ -332,7 +390,60 @@ def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSet
     return _plain(out)
 
 
-def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> dict:
+def evaluate_points(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings, *,
+                    screen: bool = False) -> list[dict]:
+    """:func:`evaluate_point` of every point of ``grid``, the nonlinear runs
+    of all of them in one call of the batched engine
+    (:func:`bifilar.analysis.batch.simulate_batch`: from
+    :data:`~bifilar.analysis.batch.SMALL_BATCH` runs on, one stacked LSODA
+    integration with each run's own error bound).  The figures agree with
+    :func:`evaluate_point`'s to the integrator tolerance (``settings.rtol``)
+    but depend on the batch's other runs at that level, so a point computed
+    here is not bit-for-bit the one computed alone: for a planner's
+    screens, not for a journaled sweep.  A point whose run fails is
+    evaluated alone (its own error message)."""
+    out: list = [None] * len(grid)
+    prepared = []
+    for i, params in enumerate(grid):
+        out[i] = {"params": dict(params), "valid": False, "error": None}
+        if screen:
+            out[i]["screen"] = True
+        try:
+            prepared.append((i, *_prepare(base_cfg, source, params, settings, screen)))
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception:  # noqa: BLE001 - the point alone gives its error as evaluate_point does
+            out[i] = evaluate_point(base_cfg, source, params, settings, screen=screen)
+    jobs = [(i, k, pre) for i, _, pre in prepared for k in pre.runs]
+    runs: list = []
+    if jobs:
+        from ..analysis.batch import simulate_batch
+
+        st = settings
+        runs = simulate_batch([pre.scene for _, _, pre in jobs], mode=[pre.labels[k] for _, k, pre in jobs],
+                              amplitude=[pre.amplitude for _, _, pre in jobs], periods=st.periods, rtol=st.rtol,
+                              rests=[pre.rest for _, _, pre in jobs], modes=[pre.ms for _, _, pre in jobs],
+                              errors="return")
+    sims: dict = {i: {} for i, _, _ in prepared}
+    for (i, k, _), r in zip(jobs, runs):
+        sims[i][k] = r
+    for i, res, pre in prepared:
+        if any(r.error for r in sims[i].values()):
+            out[i] = evaluate_point(base_cfg, source, grid[i], settings, screen=screen)
+            continue
+        try:
+            out[i].update(_finish(res, pre, {k: sims[i][k] for k in pre.runs}, settings, screen))
+            out[i]["valid"] = True
+            out[i] = _plain(out[i])
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except Exception:  # noqa: BLE001
+            out[i] = evaluate_point(base_cfg, source, grid[i], settings, screen=screen)
+    return out
+
+
+def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False):
+    """(the point's figures up to its nonlinear runs, :class:`_Prepared`); raises for a bad point."""
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
     from ..estimation.sensitivity import best_mode_for, grouped_shares, measured_inputs
@@ -374,9 +485,14 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
                          reason=f"no mode's period depends on {comp} (max |d ln T / d ln {comp}| = {rel.max():.1e})")
             res["components"][comp] = entry
             continue
-        k = best_mode_for(sens, comp)
-        chosen[comp] = k
-        b = predicted_budget(sens, scene, comp, k, unc)
+        chosen[comp] = best_mode_for(sens, comp)
+        res["components"][comp] = entry
+    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen)))
+    for comp, k in chosen.items():
+        entry = res["components"][comp]
+        scale = component_scale(scene.inertia, comp)
+        col = sens.column(comp)
+        b = budgets[comp]
         j_all = [j for j, n in enumerate(sens.names) if n not in _IDX]
         dI_dx = {sens.names[j]: -float(sens.jacobian[k, j] / col[k]) for j in j_all}
         sep = timed_separation(periods, {k})
@@ -391,15 +507,45 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         )
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
-    # nonlinear runs: one per chosen mode
-    sims: dict[int, Any] = {}
+    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [])
     if st.tensions:
-        ks = sorted(set(chosen.values()))
+        pre.runs = sorted(set(chosen.values()))
         from ..analysis.simulate import initial_state
 
-        for k in ks:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
+        for k in pre.runs:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
             initial_state(scene, rest, ms.modes[k], amplitude)
-        sims = dict(zip(ks, _nonlinear_runs(scene, rest, ms, [labels[k] for k in ks], amplitude, st)))
+    return res, pre
+
+
+@dataclass
+class _Prepared:
+    """A point evaluated up to its nonlinear runs: what :func:`_finish` needs."""
+
+    scene: Any
+    rest: Any
+    ms: Any
+    labels: list
+    periods: np.ndarray
+    sens: Any
+    chosen: dict
+    amplitude: float
+    runs: list  # mode indices to run nonlinearly (empty: none)
+
+
+def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
+    res, pre = _prepare(base_cfg, source, params, st, screen)
+    sims: dict[int, Any] = {}
+    if pre.runs:
+        sims = dict(zip(pre.runs, _nonlinear_runs(pre.scene, pre.rest, pre.ms, [pre.labels[k] for k in pre.runs],
+                                                  pre.amplitude, st)))
+    return _finish(res, pre, sims, st, screen)
+
+
+def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bool) -> dict:
+    """The point's figures from its nonlinear runs ``sims`` {mode index: run} on."""
+    scene, rest, ms, labels, periods, sens, chosen = (pre.scene, pre.rest, pre.ms, pre.labels, pre.periods,
+                                                      pre.sens, pre.chosen)
+    if st.tensions:
         tmax = np.max([s.tension_max for s in sims.values()], axis=0) if sims else rest.tensions
         tmin = np.min([s.tension_min for s in sims.values()], axis=0) if sims else rest.tensions
         slack = sorted({w for s in sims.values() for w, _ in s.slack})
@@ -414,6 +560,8 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings) -> d
         res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
+    if screen:
+        return res
     # biases at the prescribed amplitude
     ladder = _Ladder(scene, rest)
     for comp, k in chosen.items():

@@ -77,7 +77,7 @@ from typing import Callable
 
 from ..errors import InputError
 from .point import (IDENTIFIABLE_MIN, TURN_MAX, _Ladder, _nonlinear_runs, _one_line, _plain,  # noqa: F401
-                    evaluate_point, linear_estimate, point_sensitivity, predicted_budget, rig_of,
+                    evaluate_point, evaluate_points, linear_estimate, point_sensitivity, predicted_budget, rig_of,
                     timed_separation)
 from .ranking import (CONSTRAINT_FLAGS, assess, binding_constraint, explain, measurable_components,  # noqa: F401
                       objective, pareto_front, point_separation, violations)
@@ -165,7 +165,7 @@ def _ignore_sigint() -> None:
 
 def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings, *, workers: int = 1,
               journal: Path | None = None, resume: bool = False, progress: Callable[[int, int], None] | None = None,
-              stop_after: int | None = None) -> list[dict]:
+              stop_after: int | None = None, screen: bool = False) -> list[dict]:
     """Evaluate every point of ``grid`` (list of {param: value}); returns the
     point dicts in grid order.
 
@@ -175,8 +175,13 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
         result) instead of recomputed.
     stop_after : stop (raising :class:`SweepInterrupted`) after this many
         newly computed points: a reproducible stand-in for Ctrl-C.
+    screen : the cheap points of a planner's search (``evaluate_point(..., screen=True)``;
+        not for a journal, whose points are full); in one process, their
+        nonlinear runs in one batch (:func:`~bifilar.studies.point.evaluate_points`).
     Raises :class:`SweepInterrupted` on Ctrl-C too; finished points are in the journal.
     """
+    if screen and journal is not None:
+        raise ValueError("screen points are not journaled")
     fp = fingerprint(base_cfg, settings)
     done: dict[str, dict] = {}
     if resume and journal is not None and journal.exists():
@@ -201,17 +206,23 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
             progress(finished, total)
 
     try:
-        if workers <= 1 or len(todo) <= 1:
+        if screen and workers <= 1 and stop_after is None:
+            # a planner's screens: the nonlinear runs of all points in one batch
+            for i, point in zip(todo, evaluate_points(base_cfg, source, [grid[i] for i in todo], settings,
+                                                      screen=True)):
+                record(i, point)
+        elif workers <= 1 or len(todo) <= 1:
             for i in todo:
                 if stop_after is not None and new >= stop_after:
                     raise SweepInterrupted(finished, total)
-                record(i, evaluate_point(base_cfg, source, grid[i], settings))
+                record(i, evaluate_point(base_cfg, source, grid[i], settings, screen=screen))
         else:
             from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
             ex = ProcessPoolExecutor(max_workers=effective_workers(workers, len(todo)), initializer=_ignore_sigint)
             try:
-                pending = {ex.submit(evaluate_point, base_cfg, source, grid[i], settings): i for i in todo}
+                pending = {ex.submit(evaluate_point, base_cfg, source, grid[i], settings, screen=screen): i
+                           for i in todo}
                 while pending:
                     ready, _ = wait(pending, return_when=FIRST_COMPLETED)
                     for f in ready:
