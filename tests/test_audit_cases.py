@@ -61,3 +61,44 @@ def test_triangle_inequality_still_refuses_a_real_violation(tmp_path):
     p.write_text(yaml.safe_dump(cfg))
     code, _, err = run(["modes", p, "--json"])
     assert code == 2 and "body.inertia.principal" in err and "triangle" in err
+
+
+# --------------------------------------------------------------------------- tensions --motion files
+
+
+def _motion_csv(tmp_path):
+    """A short motion of the README plate written by `simulate --out`."""
+    p = tmp_path / "run.csv"
+    code, _, err = run(["simulate", PLATE, "--periods", "1", "--out", p])
+    assert code == 0, err
+    lines = p.read_text().splitlines()
+    return lines[0].split(","), [ln.split(",") for ln in lines[1:]]
+
+
+def _write(tmp_path, hdr, rows, name="bad.csv"):
+    p = tmp_path / name
+    p.write_text("\n".join(",".join(r) for r in [hdr, *rows]) + "\n")
+    return p
+
+
+def test_motion_with_a_missing_value_or_text_exits_2_naming_column_and_row(tmp_path):
+    """A blank cell or a word in a load-cell record gave 'internal error
+    (LinAlgError: SVD did not converge)', exit 1."""
+    hdr, rows = _motion_csv(tmp_path)
+    for cell in ("", "n/a", "nan"):
+        bad = [r[:] for r in rows]
+        bad[5][hdr.index("tension_2")] = cell
+        code, out, err = run(["tensions", PLATE, "--motion", _write(tmp_path, hdr, bad), "--json"])
+        assert code == 2 and out == "", err
+        line = [ln for ln in err.splitlines() if ln.strip()]
+        assert len(line) == 1 and "--motion" in line[0] and "tension_2" in line[0] and "line 7" in line[0], err
+
+
+def test_motion_with_a_zero_quaternion_exits_2(tmp_path):
+    hdr, rows = _motion_csv(tmp_path)
+    bad = [r[:] for r in rows]
+    for c in ("q_w", "q_x", "q_y", "q_z"):
+        bad[3][hdr.index(c)] = "0"
+    code, out, err = run(["tensions", PLATE, "--motion", _write(tmp_path, hdr, bad), "--json"])
+    assert code == 2 and out == "", err
+    assert "--motion" in err and "quaternion" in err and "line 5" in err, err

@@ -142,12 +142,21 @@ def _read_motion(path, scene):
         raise InputError("--motion", f"missing columns {', '.join(missing)} (have {', '.join(names)})")
     if len(data) < 20:
         raise InputError("--motion", "fewer than 20 samples")
+    for n in need:  # a blank cell or a word reads as nan: name the first one (file line, header = line 1)
+        bad = np.flatnonzero(~np.isfinite(data[n]))
+        if len(bad):
+            raise InputError("--motion", f"column {n}, line {bad[0] + 2}: not a finite number "
+                             f"({len(bad)} such value(s) in the column)")
     t = data["t"]
     if np.any(np.diff(t) <= 0):
         raise InputError("--motion", "time column t must increase strictly")
     com = np.c_[data["com_x"], data["com_y"], data["com_z"]]
     q = np.c_[data["q_w"], data["q_x"], data["q_y"], data["q_z"]]
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    qn = np.linalg.norm(q, axis=1, keepdims=True)
+    if np.any(qn < 1e-6):
+        raise InputError("--motion", f"line {int(np.argmax(qn[:, 0] < 1e-6)) + 2}: the quaternion (q_w, q_x, q_y, q_z) "
+                         "is zero; it must be a rotation (unit length)")
+    q /= qn
     T = np.c_[tuple(data[f"tension_{i + 1}"] for i in range(scene.n_wires))]
     qdot = np.gradient(q, t, axis=0, edge_order=2)
     conj = q * np.array([1, -1, -1, -1])
