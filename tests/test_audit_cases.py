@@ -102,3 +102,36 @@ def test_motion_with_a_zero_quaternion_exits_2(tmp_path):
     code, out, err = run(["tensions", PLATE, "--motion", _write(tmp_path, hdr, bad), "--json"])
     assert code == 2 and out == "", err
     assert "--motion" in err and "quaternion" in err and "line 5" in err, err
+
+
+def test_motion_that_does_not_fit_the_rig_is_reported_not_silently_used(tmp_path):
+    """A record whose poses put the attachments 1 m off the wire lengths (a
+    CoM column in another frame, another rig) gave the thesis 'general'
+    tensions, 8 % off the recorded ones, with no word.  The document now
+    states how far the record is from the wire lengths, and warns when it
+    is more than 1 % of a wire: the reported figure must equal an
+    independent |anchor - attachment| - L over the record."""
+    hdr, rows = _motion_csv(tmp_path)
+    code, out, err = run(["tensions", PLATE, "--motion", _write(tmp_path, hdr, rows, "ok.csv"), "--json"])
+    assert code == 0 and "warning" not in err, err
+    assert json.loads(out)["max_wire_length_mismatch"] < 1e-6  # the model's own record: on the constraint
+    bad = [r[:] for r in rows]
+    iz = hdr.index("com_z")
+    for r in bad:
+        r[iz] = repr(float(r[iz]) + 1.0)
+    code, out, err = run(["tensions", PLATE, "--motion", _write(tmp_path, hdr, bad), "--json"])
+    assert code == 0 and "warning" in err and "wire" in err, err
+    cfg = yaml.safe_load(PLATE.read_text())
+    A, a, L = (np.array(cfg["rig"][k], float) for k in ("anchors", "attachments", "lengths"))
+    data = np.array([[float(x) for x in r] for r in bad])
+    worst = 0.0
+    for row in data:
+        qw, qx, qy, qz = row[[hdr.index(c) for c in ("q_w", "q_x", "q_y", "q_z")]]
+        q = np.array([qw, qx, qy, qz]) / np.linalg.norm([qw, qx, qy, qz])
+        w, x, y, z = q
+        R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+        com = row[[hdr.index(c) for c in ("com_x", "com_y", "com_z")]]
+        worst = max(worst, np.max(np.abs(np.linalg.norm(com + a @ R.T - A, axis=1) - L)))
+    assert abs(json.loads(out)["max_wire_length_mismatch"] - worst) < 1e-9

@@ -65,12 +65,23 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         source = f"recorded motion {motion}"
     R = quat_to_matrix(y[:, 3:7])
     u = wire_units(scene, y[:, 0:3], R)
+    # how far the motion's poses are from the wire lengths (m): a record in another frame or of
+    # another rig gives wire directions, hence 'general' tensions and inertia, that are not this rig's
+    span = np.linalg.norm(y[:, None, 0:3] + np.einsum("kij,nj->kni", R, scene.attachments) - scene.anchors, axis=-1)
+    off = np.max(np.abs(span - scene.lengths), axis=0)
+    worst = int(np.argmax(off / scene.lengths))
+    if off[worst] > 0.01 * scene.lengths[worst]:
+        click.echo(f"warning: --motion: the recorded poses are up to {off[worst]:.3g} m off the length of wire "
+                   f"{worst + 1} ({off[worst] / scene.lengths[worst]:.1%}): the record does not fit this config's "
+                   "rig (another frame, units or rig?); the wire directions and all figures from them are suspect",
+                   err=True)
     F_gen, resid = general_tensions(scene.mass, scene.gravity, accel, u)
     doc = {"source": source, "samples": int(len(t)),
            "model": {"min": T_model.min(axis=0), "max": T_model.max(axis=0)},
            "general": {"min": F_gen.min(axis=0), "max": F_gen.max(axis=0),
                        "max_abs_difference_to_model": np.max(np.abs(F_gen - T_model), axis=0),
-                       "max_residual": float(resid.max())}}
+                       "max_residual": float(resid.max())},
+           "max_wire_length_mismatch": float(off.max())}
     F_sym = None
     if scene.n_wires == 2:
         F_sym = symmetric_tension(scene.mass, scene.gravity, accel[:, 2], u)
