@@ -174,3 +174,37 @@ def test_measurements_file_absurd_period_exits_2_like_the_command_line(tmp_path)
 def test_invert_absurd_sigma_is_not_an_internal_error():
     code, out, err = run(["invert", LIN1, "--period", "torsion=2.68+-1e300", "--json"])
     assert "internal error" not in err and code in (0, 2), err
+
+
+# --------------------------------------------------------------------------- tensions on a simulated motion
+
+# an irregular 4-wire rig with products of inertia (wires leaning, every wire taut at rest)
+FOUR_WIRES = {
+    "gravity": 9.81,
+    "body": {"mass": 98.7895823818833,
+             "inertia": {"tensor": [[43.120439489615, 6.821582219276, -9.440759249416],
+                                    [6.821582219276, 38.683098105681, 6.809932276484],
+                                    [-9.440759249416, 6.809932276484, 15.405488371567]]}},
+    "rig": {"anchors": [[0.004105, 0.674829, 1.293725], [-1.274989, -0.328439, 1.293725],
+                        [-0.203035, -0.051761, 1.293725], [0.693893, -0.074046, 1.293725]],
+            "attachments": [[0.074826, 0.586909, 0.105687], [-1.094209, -0.312086, 0.078818],
+                            [-0.219533, -0.099578, 0.081483], [0.569715, -0.149786, 0.110367]],
+            "lengths": [1.193384, 1.228393, 1.213297, 1.192265]},
+}
+
+
+def test_tensions_warns_when_a_wire_goes_slack_in_the_simulated_motion(tmp_path):
+    """`simulate` says WIRE n GOES SLACK; `tensions` on the same motion printed
+    negative 'tensions' (a wire pushing) without a word."""
+    code, out, err = run(["tensions", PLATE, "--amplitude", "3", "--periods", "1", "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    slack = [i + 1 for i, T in enumerate(doc["model"]["min"]) if T < 0]
+    assert slack  # the premise: 3 rad of torsion unloads the wires
+    for w in slack:
+        assert f"WIRE {w} GOES SLACK" in err, err
+    p = tmp_path / "four.yaml"
+    p.write_text(yaml.safe_dump(FOUR_WIRES))
+    code, out, err = run(["tensions", p, "--amplitude", "0.001", "--periods", "1", "--json"])
+    assert code == 0 and min(json.loads(out)["model"]["min"]) > 0 and "SLACK" not in err, err
+

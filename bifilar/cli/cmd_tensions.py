@@ -56,6 +56,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=1e-11,
                            samples_per_period=200, progress=upd)
         t, y, T_model = res.t, res.y, res.tensions
+        for w in res.warnings:  # a wire going slack: the 'tensions' after it are not physical
+            click.echo(f"warning: {w}", err=True)
         P = mx.params_from_scenes(scene)
         accel, alpha, _, _ = mx.solve_dynamics(y, P, stabilise=False)
         omega = y[:, 10:13]
