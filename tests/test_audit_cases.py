@@ -208,3 +208,20 @@ def test_tensions_warns_when_a_wire_goes_slack_in_the_simulated_motion(tmp_path)
     code, out, err = run(["tensions", p, "--amplitude", "0.001", "--periods", "1", "--json"])
     assert code == 0 and min(json.loads(out)["model"]["min"]) > 0 and "SLACK" not in err, err
 
+
+def test_general_method_is_flagged_underdetermined_beyond_three_wires(tmp_path):
+    """Newton's law gives 3 equations: with 4 wires the thesis's 'general'
+    least squares returns the minimum-norm tensions, which balance the
+    forces (residual ~0) but are not the wire tensions (here 200 N off the
+    model's).  With 3 wires the system is square and must equal the model."""
+    p = tmp_path / "four.yaml"
+    p.write_text(yaml.safe_dump(FOUR_WIRES))
+    code, out, err = run(["tensions", p, "--amplitude", "0.001", "--periods", "1", "--json"])
+    assert code == 0, err
+    gen = json.loads(out)["general"]
+    assert max(gen["max_abs_difference_to_model"]) > 1.0  # the premise: not the tensions
+    assert gen["determined"] is False and "underdetermined" in gen["note"]
+    code, out, err = run(["tensions", CONFIGS / "trifilar_kth.yaml", "--amplitude", "0.01", "--periods", "1", "--json"])
+    doc = json.loads(out)
+    assert code == 0 and doc["general"]["determined"] is True
+    assert max(doc["general"]["max_abs_difference_to_model"]) < 1e-9 * max(doc["model"]["max"])

@@ -82,8 +82,12 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
            "model": {"min": T_model.min(axis=0), "max": T_model.max(axis=0)},
            "general": {"min": F_gen.min(axis=0), "max": F_gen.max(axis=0),
                        "max_abs_difference_to_model": np.max(np.abs(F_gen - T_model), axis=0),
-                       "max_residual": float(resid.max())},
+                       "max_residual": float(resid.max()),
+                       "determined": scene.n_wires <= 3},
            "max_wire_length_mismatch": float(off.max())}
+    if scene.n_wires > 3:
+        doc["general"]["note"] = (f"underdetermined: {scene.n_wires} wires, 3 equations (Newton's law); the minimum-norm "
+                                  "tensions balance the forces but are not the wire tensions")
     F_sym = None
     if scene.n_wires == 2:
         F_sym = symmetric_tension(scene.mass, scene.gravity, accel[:, 2], u)
@@ -113,6 +117,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         tab.add_row(str(i + 1), f"{T_model[:, i].min():.6g} .. {T_model[:, i].max():.6g}",
                     f"{F_gen[:, i].min():.6g} .. {F_gen[:, i].max():.6g}", f"{np.max(np.abs(F_gen[:, i] - T_model[:, i])):.2e}")
     con.print(tab)
+    if "note" in doc["general"]:
+        con.print(f"thesis general method: {doc['general']['note']}")
     if F_sym is not None:
         con.print(f"thesis symmetric formula: {F_sym.min():.6g} .. {F_sym.max():.6g} N "
                   f"(max difference to the model {np.max(np.abs(F_sym[:, None] - T_model)):.3g} N; valid for symmetric motion only)")
