@@ -225,3 +225,53 @@ def test_general_method_is_flagged_underdetermined_beyond_three_wires(tmp_path):
     doc = json.loads(out)
     assert code == 0 and doc["general"]["determined"] is True
     assert max(doc["general"]["max_abs_difference_to_model"]) < 1e-9 * max(doc["model"]["max"])
+
+
+# --------------------------------------------------------------------------- rest pose refusals: the right diagnosis
+
+
+def _bifilar(anchor_y, h, tmp_path, L=None):
+    """10 kg body, attachments at y = -+1, h above the CoM; anchors at
+    y = anchor_y, 2 m above the attachments."""
+    L = L or float(np.hypot(anchor_y[1] - 1.0, 2.0))
+    cfg = {"gravity": 9.81, "body": {"mass": 10.0, "inertia": {"principal": [1.0, 1.0, 1.5]}},
+           "rig": {"anchors": [[0, anchor_y[0], 2 + h], [0, anchor_y[1], 2 + h]],
+                   "attachments": [[0, -1, h], [0, 1, h]], "lengths": [L, L]}}
+    p = tmp_path / "x.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+def test_crossed_wires_are_diagnosed_as_crossed_not_as_a_low_attachment(tmp_path):
+    """Anchors swapped (wire 1 from y = +1 to the attachment at y = -1): the
+    torsion stiffness of a bifilar is m g r_a r_b / h with r_a, r_b the
+    anchor's and attachment's signed distances from the axis, negative here
+    whatever the CoM height -- yet the refusal said 'the centre of mass is
+    only 5 m below the attachment points, too little; attach the wires
+    higher', advice that cannot help."""
+    for h in (0.1, 5.0):
+        code, _, err = run(["modes", _bifilar((1.0, -1.0), h, tmp_path, L=float(np.hypot(2.0, 2.0))), "--json"])
+        assert code == 2 and "rig.attachments" in err, err
+        assert "vertical" in err and "rig.anchors" in err and "higher" not in err, err
+    # the same rig uncrossed hangs, with the classical torsion period 2 pi sqrt(Izz h / (m g r^2))
+    code, out, err = run(["modes", _bifilar((-1.0, 1.0), 5.0, tmp_path, L=2.0), "--json"])
+    assert code == 0, err
+    torsion = [md for md in json.loads(out)["modes"] if md["label"] == "torsion"][0]
+    assert abs(torsion["period"] / (2 * np.pi * np.sqrt(1.5 * 2.0 / (10 * 9.81 * 1.0))) - 1) < 1e-9
+
+
+def test_twisted_trifilar_is_diagnosed_as_twisted(tmp_path):
+    """Trifilar with each anchor turned 170 degrees about the vertical from its
+    attachment: the torsion stiffness m g R r cos(phi) / h is negative for
+    any CoM height, so the body turns about the vertical to hang; the
+    refusal blamed the CoM height ('attach the wires higher')."""
+    ang = np.arange(3) * 2 * np.pi / 3
+    att = np.c_[np.cos(ang), np.sin(ang), np.full(3, 0.1)]
+    anc = np.c_[0.3 * np.cos(ang + np.radians(170)), 0.3 * np.sin(ang + np.radians(170)), np.full(3, 2.0)]
+    cfg = {"body": {"mass": 10.0, "inertia": {"principal": [1.0, 1.0, 1.5]}},
+           "rig": {"anchors": anc.tolist(), "attachments": att.tolist(),
+                   "lengths": np.linalg.norm(anc - att, axis=1).tolist()}}
+    p = tmp_path / "twisted.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    code, _, err = run(["modes", p, "--json"])
+    assert code == 2 and "vertical" in err and "rig.anchors" in err and "higher" not in err, err

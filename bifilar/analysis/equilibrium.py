@@ -284,6 +284,12 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
                                     "the anchors; check their order and the body frame")
         raise ConvergenceError(f"rest pose search failed: {res.message}")
     if at_bound:
+        if _yaw_share(scene, R0, np.zeros(3), matrix_to_rotvec(R @ R0.T)) > 0.5:
+            # it turns about the vertical by more than 90 degrees to hang: the anchors are turned against the attachments
+            raise UnstableRestError("rig.attachments", "the body cannot hang within 90 degrees of its start orientation: "
+                                    "it would turn about the vertical by more than that, as wires that cross or twist on "
+                                    "their way down make it (an anchor on the other side from its attachment); check the "
+                                    "order of rig.anchors against rig.attachments")
         # the body wants to turn over rather than hang in its start orientation
         raise UnstableRestError("rig.attachments", "the body cannot hang in its start orientation (it would turn over)"
                                 + _com_height_hint(scene, R0))
@@ -323,12 +329,19 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
         _raise_slack(scene, bad, None, L, tensions=T)
     N, Kr, Mr, rank = reduced_stiffness(scene, c, R, lam)
     if Kr.size:
-        ev = np.linalg.eigvalsh(0.5 * (Kr + Kr.T))
+        ev, vec = np.linalg.eigh(0.5 * (Kr + Kr.T))
         if ev[0] < -1e-9 * max(abs(ev[-1]), 1e-300):
+            x = N @ vec[:, 0]  # the unstable direction: (dr, dtheta), world
+            if _yaw_share(scene, R, x[:3], x[3:]) > 0.5:
+                hint = (": the unstable mode turns the body about the vertical, which no height of the attachments "
+                        "cures: the wires cross or twist on their way down (an anchor on the other side from its "
+                        "attachment); check the order of rig.anchors against rig.attachments")
+            else:
+                hint = _com_height_hint(scene, R)
             raise UnstableRestError(
                 "rig.attachments",
                 "the rest pose is unstable (a mode has negative stiffness: a small push makes the body turn over)"
-                + _com_height_hint(scene, R),
+                + hint,
             )
     lz = float(lowest_point_z(scene, c, R))
     return RestPose(
@@ -349,6 +362,14 @@ def _raise_slack(scene: Scene, idx, gap, L, tensions=None):
             parts.append(f"wire {i + 1} carries no tension at rest ({tensions[i]:.3g} N; slack by less than "
                          f"{1e-3 * np.max(L):.3g} mm): shorten it by a millimetre or so")
     raise SlackWireError([int(i) + 1 for i in idx], "; ".join(parts))
+
+
+def _yaw_share(scene: Scene, R: np.ndarray, dr: np.ndarray, dtheta: np.ndarray) -> float:
+    """Share of a pose change's kinetic-energy norm (translation dr, m, and small
+    rotation dtheta, rad, both world) in the turn about the vertical."""
+    Iw = R @ scene.inertia @ R.T
+    total = scene.mass * float(dr @ dr) + float(dtheta @ Iw @ dtheta)
+    return Iw[2, 2] * float(dtheta[2]) ** 2 / max(total, 1e-300)
 
 
 def _com_height_hint(scene: Scene, R: np.ndarray) -> str:
