@@ -275,3 +275,13 @@ def test_twisted_trifilar_is_diagnosed_as_twisted(tmp_path):
     p.write_text(yaml.safe_dump(cfg))
     code, _, err = run(["modes", p, "--json"])
     assert code == 2 and "vertical" in err and "rig.anchors" in err and "higher" not in err, err
+
+
+def test_simulate_one_cycle_states_no_period_std_rather_than_zero():
+    """Two periods give one full cycle between upward crossings: its spread
+    cannot be estimated from one value, but period_std was 0.0 -- a claim
+    that the period is exact."""
+    code, out, err = run(["simulate", PLATE, "--periods", "2", "--json"])
+    doc = json.loads(out)
+    assert code == 0 and doc["cycles"] == 1 and doc["period"] is not None, err
+    assert doc["period_std"] is None
