@@ -285,3 +285,30 @@ def test_simulate_one_cycle_states_no_period_std_rather_than_zero():
     doc = json.loads(out)
     assert code == 0 and doc["cycles"] == 1 and doc["period"] is not None, err
     assert doc["period_std"] is None
+
+
+def _horizontal(tmp_path, slack):
+    """10 kg body between anchors 6 m apart at its attachments' height: two
+    wires of 2 m + ``slack`` across 2 m gaps on each side."""
+    L = 2.0 + slack
+    cfg = {"gravity": 9.81, "body": {"mass": 10.0, "inertia": {"principal": [1.0, 1.0, 1.5]}},
+           "rig": {"anchors": [[0, -3, 0.1], [0, 3, 0.1]], "attachments": [[0, -1, 0.1], [0, 1, 0.1]],
+                   "lengths": [L, L]}}
+    p = tmp_path / "h.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+def test_wires_straight_across_are_refused_not_given_a_rounding_tension(tmp_path):
+    """Wires exactly as long as the horizontal gap cannot carry any weight
+    (inextensible: infinite tension).  The rest pose came out with 7e7 N in
+    each wire for a 10 kg body, a sag set by rounding (2e-13 m).  With a
+    micrometre of slack the answer is well defined and must match the
+    statics of the symmetric sag: T = m g / (2 sin theta), cos theta = 2 / L."""
+    code, out, err = run(["modes", _horizontal(tmp_path, 0.0), "--json"])
+    assert code == 2 and "rig.lengths" in err and "horizontal" in err, (code, out[:200], err)
+    code, out, err = run(["modes", _horizontal(tmp_path, 1e-6), "--json"])
+    assert code == 0, err
+    L = 2.0 + 1e-6
+    T = 10 * 9.81 / (2 * np.sqrt(1 - (2.0 / L) ** 2))
+    assert np.allclose(json.loads(out)["equilibrium"]["tensions"], T, rtol=1e-6)

@@ -143,6 +143,10 @@ def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray, jacobian: bool = True
     return c, R, res, at_bound
 
 
+#: smallest sine of the steepest wire's angle to horizontal at rest: below it every wire is straight across
+#: (tension > weight / (n 1e-5)), the sag below the solver's length tolerance, the pose set by rounding
+MIN_WIRE_SLOPE = 1e-5
+
 #: largest turn (rad) from the start orientation at which the Newton start's
 #: pose is taken without the global search
 NEWTON_START_MAX_TURN = 0.5
@@ -327,6 +331,12 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     bad = np.where(T < 1e-9 * weight)[0]
     if len(bad):
         _raise_slack(scene, bad, None, L, tensions=T)
+    steep = float(np.max(np.abs(d[:, 2]) / np.linalg.norm(d, axis=1)))  # largest sine of a wire's angle to horizontal
+    if steep < MIN_WIRE_SLOPE:
+        # every wire straight across: inextensible wires would need infinite tension; the sag found is rounding
+        raise InputError("rig.lengths", f"the wires are straight across: every wire is within {steep:.2g} rad of "
+                         f"horizontal at rest, so each carries ~{np.max(T) / weight:.3g} times the body's weight, "
+                         "a sag set by rounding; lengthen them so that they hang, or move the anchors up")
     N, Kr, Mr, rank = reduced_stiffness(scene, c, R, lam)
     if Kr.size:
         ev, vec = np.linalg.eigh(0.5 * (Kr + Kr.T))
