@@ -312,3 +312,21 @@ def test_wires_straight_across_are_refused_not_given_a_rounding_tension(tmp_path
     L = 2.0 + 1e-6
     T = 10 * 9.81 / (2 * np.sqrt(1 - (2.0 / L) ** 2))
     assert np.allclose(json.loads(out)["equilibrium"]["tensions"], T, rtol=1e-6)
+
+
+def test_rig_in_centimetres_beside_a_body_in_metres_warns(tmp_path):
+    """README's plate with the rig typed in cm (anchors +-500, attachments
+    +-250, wires 500) and the body (mass, inertia, bounding box) in SI ran
+    silently: attachments 250 m from the CoM of a body whose bounding box
+    reaches 2.8 m.  Quiet for the shipped configs (bounding box, parts)."""
+    cfg = _readme_config()
+    cfg["rig"] = {"anchors": [[0, -500.0, 0], [0, 500.0, 0]], "attachments": [[0, -250.0, 0], [0, 250.0, 0]],
+                  "lengths": [500.0, 500.0]}
+    p = tmp_path / "cm.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    code, _, err = run(["modes", p, "--json"])
+    assert code == 0 and "warning: rig.attachments" in err and "bounding_box" in err, err
+    p.write_text(yaml.safe_dump(_readme_config()))
+    for cfg_path in (p, CONFIGS / "solar_boat.yaml", CONFIGS / "trifilar_kth.yaml", PLATE):
+        code, _, err = run(["modes", cfg_path, "--json"])
+        assert code == 0 and "warning" not in err, (cfg_path, err)
