@@ -330,3 +330,19 @@ def test_rig_in_centimetres_beside_a_body_in_metres_warns(tmp_path):
     for cfg_path in (p, CONFIGS / "solar_boat.yaml", CONFIGS / "trifilar_kth.yaml", PLATE):
         code, _, err = run(["modes", cfg_path, "--json"])
         assert code == 0 and "warning" not in err, (cfg_path, err)
+
+
+@pytest.mark.xfail(strict=True, reason="estimation/from_tensions.py (outside this audit's files): a component whose "
+                   "design column is zero or at rounding level is not flagged poorly excited (its relative-std test "
+                   "passes 0 <= 0.01 * 0); with no motion it printed Izz = 0 +- 0 and Ixx = -262 +- 1.8 kg m^2")
+def test_inertia_from_tensions_of_a_body_at_rest_claims_nothing():
+    """A body at rest (amplitude 0) says nothing about its inertia: every
+    component must be flagged poorly excited or agree with the config
+    within 3 of its stated std, and no std may be 0."""
+    code, out, err = run(["tensions", PLATE, "--amplitude", "0", "--periods", "1", "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    for c, v in doc["inertia_from_tensions"].items():
+        if c in doc["inertia_from_tensions_poorly_excited"]:
+            continue
+        assert v["std"] > 0 and abs(v["value"] - v["config"]) <= 3 * v["std"], (c, v)
