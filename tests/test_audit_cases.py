@@ -346,3 +346,33 @@ def test_inertia_from_tensions_of_a_body_at_rest_claims_nothing():
         if c in doc["inertia_from_tensions_poorly_excited"]:
             continue
         assert v["std"] > 0 and abs(v["value"] - v["config"]) <= 3 * v["std"], (c, v)
+
+
+# --------------------------------------------------------------------------- statically indeterminate rigs
+
+
+def test_four_vertical_wires_state_that_their_tensions_are_not_determined(tmp_path):
+    """Four vertical wires of equal length on a rigid body: force and moment
+    balance give 3 equations for 4 tensions, so the self-stress (+s, -s, +s,
+    -s) can be added to any answer (checked below independently).  modes
+    printed one split as if it were the tensions, and 'dof': 2 beside
+    three listed modes."""
+    att = np.array([[1.3, 0.6, 0.1], [-0.7, 0.6, 0.1], [-0.7, -0.4, 0.1], [1.3, -0.4, 0.1]])
+    anc = att + [0, 0, 2.0]
+    cfg = {"gravity": 9.81, "body": {"mass": 10.0, "inertia": {"principal": [1.0, 1.0, 1.5]}},
+           "rig": {"anchors": anc.tolist(), "attachments": att.tolist(), "lengths": [2.0] * 4}}
+    p = tmp_path / "quad.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    code, out, err = run(["modes", p, "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    # the premise: a self-stress exists (vertical forces s_i at the attachments with zero sum and zero moment)
+    s = np.array([1.0, -1.0, 1.0, -1.0])
+    assert abs(s.sum()) < 1e-12 and np.allclose(np.cross(att, s[:, None] * [0, 0, 1.0]).sum(0), 0, atol=1e-12)
+    assert doc["equilibrium"]["tensions_determined"] is False
+    assert "indeterminate" in err and "warning" in err, err
+    assert doc["scene"]["dof"] == len(doc["modes"]) == 3
+    code, out, err = run(["modes", CONFIGS / "trifilar_kth.yaml", "--json"])
+    doc = json.loads(out)
+    assert doc["equilibrium"]["tensions_determined"] is True and "indeterminate" not in err
+    assert doc["scene"]["dof"] == len(doc["modes"]) == 3

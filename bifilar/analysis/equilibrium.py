@@ -240,6 +240,17 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     return N, N.T @ K @ N, N.T @ M @ N, rank
 
 
+def tensions_determined(scene: Scene, rest: RestPose) -> bool:
+    """Whether the wire tensions at rest follow from statics alone: the wire
+    directions' constraint Jacobian has full rank n (else 4 or 5 dependent
+    wires, e.g. parallel vertical ones, admit a self-stress and the tensions
+    printed are only the least-squares split; the real one depends on the
+    wires' stretch).  Same rank tolerance as :func:`reduced_stiffness`."""
+    _, _, G = constraint_jacobian(scene, rest.com, rest.R)
+    s = np.linalg.svd(G, compute_uv=False)
+    return int(np.sum(s > 1e-12 * s[0])) == scene.n_wires
+
+
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,
               global_search: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.
