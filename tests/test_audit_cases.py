@@ -372,6 +372,9 @@ def test_four_vertical_wires_state_that_their_tensions_are_not_determined(tmp_pa
     assert doc["equilibrium"]["tensions_determined"] is False
     assert "indeterminate" in err and "warning" in err, err
     assert doc["scene"]["dof"] == len(doc["modes"]) == 3
+    # simulate's tension min/max are the same split: it says so too
+    code, out, err = run(["simulate", p, "--periods", "2", "--json"])
+    assert code == 0 and "indeterminate" in err, err
     code, out, err = run(["modes", CONFIGS / "trifilar_kth.yaml", "--json"])
     doc = json.loads(out)
     assert doc["equilibrium"]["tensions_determined"] is True and "indeterminate" not in err

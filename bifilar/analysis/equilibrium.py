@@ -251,6 +251,15 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     return int(np.sum(s > 1e-12 * s[0])) == scene.n_wires
 
 
+def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
+    """The warning for a rig whose tensions statics cannot fix (see
+    :func:`tensions_determined`), or None."""
+    if tensions_determined(scene, rest):
+        return None
+    return (f"rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically indeterminate: "
+            "those shown are the least-squares split; the real one depends on the wires' stretch and length tolerances")
+
+
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,
               global_search: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.

@@ -56,12 +56,10 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     scene = load_scene(config)
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
-    from ..analysis.equilibrium import tensions_determined
+    from ..analysis.equilibrium import indeterminate_warning
 
-    if not tensions_determined(scene, rest):
-        click.echo(f"warning: rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically "
-                   "indeterminate: those shown are the least-squares split; the real one depends on the wires' "
-                   "stretch and length tolerances", err=True)
+    if (w := indeterminate_warning(scene, rest)) is not None:
+        click.echo(f"warning: {w}", err=True)
     if out_p:
         rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]
         write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)

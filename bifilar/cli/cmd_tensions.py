@@ -50,6 +50,10 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
     if motion is None:
         rest = rest_pose(scene)
+        from ..analysis.equilibrium import indeterminate_warning
+
+        if (w := indeterminate_warning(scene, rest)) is not None:  # the model's tensions are one split of many
+            click.echo(f"warning: {w}", err=True)
         ms = linear_modes(scene, rest)
         mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
