@@ -394,7 +394,9 @@ def check_inertia_tensor(I: np.ndarray, path: str, chk: _Checker) -> bool:
     if ev[0] <= 1e-12 * scale:
         chk.error(path, f"inertia tensor must be positive definite; principal moments are {_fmt(ev)} kg m^2")
         return False
-    if ev[0] + ev[1] < ev[2] * (1 - 1e-5):  # slack for values rounded to ~6 digits (a thin plate sits exactly on the limit)
+    # slack for values rounded to 5 significant digits (each off by up to 5e-5 of itself, so I1 + I2 - I3 by up
+    # to ~1e-4 I3): a thin plate sits exactly on the limit, and README's [208.33, 52.08, 260.42] is one
+    if ev[0] + ev[1] < ev[2] * (1 - 1e-4):
         chk.error(
             path,
             f"principal moments {_fmt(ev)} kg m^2 break the triangle inequality I1 + I2 >= I3 "
@@ -783,6 +785,7 @@ PLAUSIBLE = {
     "gyration_shape": 2.0,  # k / extent, body shape known: sqrt(3) is the geometric limit
     "gyration_attachments": 30.0,  # k / attachment spread (either way) when only attachments are known
     "gyration_for_mass": 10.0,  # m: largest k for 1 kg, scaled by (m / 1 kg)^(1/3); a whole config in mm
+    "attachments_beyond_shape": 10.0,  # attachment reach / the known shape's reach: the rig in cm or mm?
 }
 """Thresholds of :func:`plausibility_warnings` (SI units)."""
 
@@ -809,7 +812,10 @@ def plausibility_warnings(scene: Scene) -> list[str]:
       and inertia, not the wire length, carry the rule: long wires on a small
       body are legitimate (the thesis's 500 m wires on a 100 kg plate with
       k = 1.6 m).  Checked only when the shape rule above is quiet (one
-      warning per slip).
+      warning per slip);
+    * an attachment point farther from the CoM than 10 times the known shape
+      (bounding box or parts) reaches along a body axis: the rig in cm or mm
+      beside a body in SI.
     """
     out = []
     L = scene.lengths
@@ -840,6 +846,13 @@ def plausibility_warnings(scene: Scene) -> list[str]:
         if bad:
             out.append(f"body: radius of gyration sqrt(I/m) = {k:.3g} m does not fit a body reaching {size:.3g} m "
                        f"from its centre of mass ({scene.support_source}); are the inertia and mass in kg m^2 and kg?")
+    if scene.support is not None:
+        reach = float(np.max(np.asarray(scene.support(np.vstack([d, -d])), dtype=float)))  # the shape alone
+        att = float(np.max(np.abs(scene.attachments)))
+        if att > PLAUSIBLE["attachments_beyond_shape"] * reach:
+            src = "body.bounding_box" if scene.support_source == "bounding_box" else "body.parts"
+            out.append(f"rig.attachments reach {att:.3g} m from the centre of mass along a body axis, but the body "
+                       f"({src}) only {reach:.3g} m; are the rig's coordinates in other units (cm, mm)?")
     k_max = PLAUSIBLE["gyration_for_mass"] * scene.mass ** (1.0 / 3.0)
     if not bad and k > k_max:
         out.append(f"body: radius of gyration sqrt(I/m) = {k:.3g} m is implausibly large for a {scene.mass:.3g} kg body "

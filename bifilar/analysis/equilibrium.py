@@ -143,6 +143,10 @@ def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray, jacobian: bool = True
     return c, R, res, at_bound
 
 
+#: smallest sine of the steepest wire's angle to horizontal at rest: below it every wire is straight across
+#: (tension > weight / (n 1e-5)), the sag below the solver's length tolerance, the pose set by rounding
+MIN_WIRE_SLOPE = 1e-5
+
 #: largest turn (rad) from the start orientation at which the Newton start's
 #: pose is taken without the global search
 NEWTON_START_MAX_TURN = 0.5
@@ -236,6 +240,26 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     return N, N.T @ K @ N, N.T @ M @ N, rank
 
 
+def tensions_determined(scene: Scene, rest: RestPose) -> bool:
+    """Whether the wire tensions at rest follow from statics alone: the wire
+    directions' constraint Jacobian has full rank n (else 4 or 5 dependent
+    wires, e.g. parallel vertical ones, admit a self-stress and the tensions
+    printed are only the least-squares split; the real one depends on the
+    wires' stretch).  Same rank tolerance as :func:`reduced_stiffness`."""
+    _, _, G = constraint_jacobian(scene, rest.com, rest.R)
+    s = np.linalg.svd(G, compute_uv=False)
+    return int(np.sum(s > 1e-12 * s[0])) == scene.n_wires
+
+
+def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
+    """The warning for a rig whose tensions statics cannot fix (see
+    :func:`tensions_determined`), or None."""
+    if tensions_determined(scene, rest):
+        return None
+    return (f"rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically indeterminate: "
+            "those shown are the least-squares split; the real one depends on the wires' stretch and length tolerances")
+
+
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,
               global_search: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.
@@ -284,6 +308,12 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
                                     "the anchors; check their order and the body frame")
         raise ConvergenceError(f"rest pose search failed: {res.message}")
     if at_bound:
+        if _yaw_share(scene, R0, np.zeros(3), matrix_to_rotvec(R @ R0.T)) > 0.5:
+            # it turns about the vertical by more than 90 degrees to hang: the anchors are turned against the attachments
+            raise UnstableRestError("rig.attachments", "the body cannot hang within 90 degrees of its start orientation: "
+                                    "it would turn about the vertical by more than that, as wires that cross or twist on "
+                                    "their way down make it (an anchor on the other side from its attachment); check the "
+                                    "order of rig.anchors against rig.attachments")
         # the body wants to turn over rather than hang in its start orientation
         raise UnstableRestError("rig.attachments", "the body cannot hang in its start orientation (it would turn over)"
                                 + _com_height_hint(scene, R0))
@@ -321,14 +351,27 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     bad = np.where(T < 1e-9 * weight)[0]
     if len(bad):
         _raise_slack(scene, bad, None, L, tensions=T)
+    steep = float(np.max(np.abs(d[:, 2]) / np.linalg.norm(d, axis=1)))  # largest sine of a wire's angle to horizontal
+    if steep < MIN_WIRE_SLOPE:
+        # every wire straight across: inextensible wires would need infinite tension; the sag found is rounding
+        raise InputError("rig.lengths", f"the wires are straight across: every wire is within {steep:.2g} rad of "
+                         f"horizontal at rest, so each carries ~{np.max(T) / weight:.3g} times the body's weight, "
+                         "a sag set by rounding; lengthen them so that they hang, or move the anchors up")
     N, Kr, Mr, rank = reduced_stiffness(scene, c, R, lam)
     if Kr.size:
-        ev = np.linalg.eigvalsh(0.5 * (Kr + Kr.T))
+        ev, vec = np.linalg.eigh(0.5 * (Kr + Kr.T))
         if ev[0] < -1e-9 * max(abs(ev[-1]), 1e-300):
+            x = N @ vec[:, 0]  # the unstable direction: (dr, dtheta), world
+            if _yaw_share(scene, R, x[:3], x[3:]) > 0.5:
+                hint = (": the unstable mode turns the body about the vertical, which no height of the attachments "
+                        "cures: the wires cross or twist on their way down (an anchor on the other side from its "
+                        "attachment); check the order of rig.anchors against rig.attachments")
+            else:
+                hint = _com_height_hint(scene, R)
             raise UnstableRestError(
                 "rig.attachments",
                 "the rest pose is unstable (a mode has negative stiffness: a small push makes the body turn over)"
-                + _com_height_hint(scene, R),
+                + hint,
             )
     lz = float(lowest_point_z(scene, c, R))
     return RestPose(
@@ -349,6 +392,14 @@ def _raise_slack(scene: Scene, idx, gap, L, tensions=None):
             parts.append(f"wire {i + 1} carries no tension at rest ({tensions[i]:.3g} N; slack by less than "
                          f"{1e-3 * np.max(L):.3g} mm): shorten it by a millimetre or so")
     raise SlackWireError([int(i) + 1 for i in idx], "; ".join(parts))
+
+
+def _yaw_share(scene: Scene, R: np.ndarray, dr: np.ndarray, dtheta: np.ndarray) -> float:
+    """Share of a pose change's kinetic-energy norm (translation dr, m, and small
+    rotation dtheta, rad, both world) in the turn about the vertical."""
+    Iw = R @ scene.inertia @ R.T
+    total = scene.mass * float(dr @ dr) + float(dtheta @ Iw @ dtheta)
+    return Iw[2, 2] * float(dtheta[2]) ** 2 / max(total, 1e-300)
 
 
 def _com_height_hint(scene: Scene, R: np.ndarray) -> str:

@@ -34,7 +34,7 @@ class RunSummary:
     """What every nonlinear run reports, single or batched (SI units, world frame).
 
     period : mean measured period, s (None if fewer than two crossings);
-        period_std : std of single-cycle periods, s; crossings : times, s.
+        period_std : std of single-cycle periods, s (None from one cycle); crossings : times, s.
     linear_period : the mode's linear period, s.
     max_constraint_violation : max | |d_i| - L_i | at the solver steps, m.
     energy_drift : max |E - E0| / |E0 - E_rest| at the solver steps.
@@ -192,11 +192,12 @@ def crossings(t: np.ndarray, c: np.ndarray, fine) -> np.ndarray:
 
 
 def measured_period(tc: np.ndarray) -> tuple[float | None, float | None]:
-    """Mean period and single-cycle std from successive upward crossing times."""
+    """Mean period and single-cycle std (s) from successive upward crossing times
+    (s); the std is None from a single cycle (no spread to measure, not zero)."""
     if len(tc) < 2:
         return None, None
     per = np.diff(tc)
-    return float((tc[-1] - tc[0]) / (len(tc) - 1)), float(per.std(ddof=1)) if len(per) > 1 else 0.0
+    return float((tc[-1] - tc[0]) / (len(tc) - 1)), float(per.std(ddof=1)) if len(per) > 1 else None
 
 
 def simulate(

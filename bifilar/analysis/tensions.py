@@ -9,7 +9,9 @@ and the wire directions only, so the two can be compared:
   valid when the two wires are mirror images (symmetric torsion, rest);
 * :func:`general_tensions` -- Newton's second law sum_i F_i u_i = m (a + g e_z)
   for n wires: 3 equations, n unknowns, solved in the least-squares sense
-  (the thesis's overdetermined 3 x 2 system) with its residual reported.
+  (the thesis's overdetermined 3 x 2 system) with its residual reported;
+  square for 3 wires; for 4 or 5 wires underdetermined: the minimum-norm
+  solution balances the forces but is not the wire tensions.
 
 Units: N, m, s; world frame, z up.  All functions are vectorised over time.
 """

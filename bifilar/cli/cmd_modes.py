@@ -8,10 +8,15 @@ from .common import check_output_path, console, emit_json, esc, fmt, handle_erro
 
 
 def modes_document(scene, rest, ms) -> dict:
-    """The JSON document of ``interface.md`` (plus extra fields)."""
+    """The JSON document of ``interface.md`` (plus extra fields); ``dof`` is
+    the number of modes (6 minus the rank of the wires, not 6 - n when wires
+    are dependent)."""
+    from ..analysis.equilibrium import tensions_determined
+
     return {
         "equilibrium": {
             "com": rest.com, "rotation": rest.R, "tensions": rest.tensions,
+            "tensions_determined": tensions_determined(scene, rest),
             "lowest_point_z": rest.lowest_z, "depth_below_ceiling": rest.depth,
             "clearance_source": scene.support_source, "kkt_residual": rest.kkt_residual,
         },
@@ -20,7 +25,7 @@ def modes_document(scene, rest, ms) -> dict:
              "frequency": (1.0 / m.period) if m.period else None, "description": m.description}
             for m in ms.modes
         ],
-        "scene": {"name": scene.name, "mass": scene.mass, "wires": scene.n_wires, "dof": scene.dof},
+        "scene": {"name": scene.name, "mass": scene.mass, "wires": scene.n_wires, "dof": len(ms.modes)},
         "body": body_document(scene),
     }
 
@@ -51,6 +56,10 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     scene = load_scene(config)
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
+    from ..analysis.equilibrium import indeterminate_warning
+
+    if (w := indeterminate_warning(scene, rest)) is not None:
+        click.echo(f"warning: {w}", err=True)
     if out_p:
         rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]
         write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)
@@ -60,7 +69,7 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     from rich.table import Table
 
     con = console()
-    con.print(f"[bold]{esc(scene.name)}[/bold]: {scene.mass:.6g} kg on {scene.n_wires} wires, {scene.dof} degrees of freedom")
+    con.print(f"[bold]{esc(scene.name)}[/bold]: {scene.mass:.6g} kg on {scene.n_wires} wires, {len(ms.modes)} degrees of freedom")
     body = body_document(scene)
     bt = Table(title="Body (inertia about the CoM, body axes)")
     bt.add_column("quantity")

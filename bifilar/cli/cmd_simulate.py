@@ -51,6 +51,10 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     scene = load_scene(config)
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
+    from ..analysis.equilibrium import indeterminate_warning
+
+    if (w := indeterminate_warning(scene, rest)) is not None:  # the tension figures are one split of many
+        click.echo(f"warning: {w}", err=True)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
 

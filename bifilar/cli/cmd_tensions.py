@@ -50,27 +50,48 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
     if motion is None:
         rest = rest_pose(scene)
+        from ..analysis.equilibrium import indeterminate_warning
+
+        if (w := indeterminate_warning(scene, rest)) is not None:  # the model's tensions are one split of many
+            click.echo(f"warning: {w}", err=True)
         ms = linear_modes(scene, rest)
         mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=1e-11,
                            samples_per_period=200, progress=upd)
         t, y, T_model = res.t, res.y, res.tensions
+        for w in res.warnings:  # a wire going slack: the 'tensions' after it are not physical
+            click.echo(f"warning: {w}", err=True)
         P = mx.params_from_scenes(scene)
         accel, alpha, _, _ = mx.solve_dynamics(y, P, stabilise=False)
         omega = y[:, 10:13]
         source = f"simulated mode {res.mode}, amplitude {amplitude:g}"
     else:
-        t, y, T_model, omega, accel, alpha = _read_motion(motion, scene)
+        t, y, T_model, omega, accel, alpha, alt = _read_motion(motion, scene)
         source = f"recorded motion {motion}"
     R = quat_to_matrix(y[:, 3:7])
     u = wire_units(scene, y[:, 0:3], R)
+    # how far the motion's poses are from the wire lengths (m): a record in another frame or of
+    # another rig gives wire directions, hence 'general' tensions and inertia, that are not this rig's
+    span = np.linalg.norm(y[:, None, 0:3] + np.einsum("kij,nj->kni", R, scene.attachments) - scene.anchors, axis=-1)
+    off = np.max(np.abs(span - scene.lengths), axis=0)
+    worst = int(np.argmax(off / scene.lengths))
+    if off[worst] > 0.01 * scene.lengths[worst]:
+        click.echo(f"warning: --motion: the recorded poses are up to {off[worst]:.3g} m off the length of wire "
+                   f"{worst + 1} ({off[worst] / scene.lengths[worst]:.1%}): the record does not fit this config's "
+                   "rig (another frame, units or rig?); the wire directions and all figures from them are suspect",
+                   err=True)
     F_gen, resid = general_tensions(scene.mass, scene.gravity, accel, u)
     doc = {"source": source, "samples": int(len(t)),
            "model": {"min": T_model.min(axis=0), "max": T_model.max(axis=0)},
            "general": {"min": F_gen.min(axis=0), "max": F_gen.max(axis=0),
                        "max_abs_difference_to_model": np.max(np.abs(F_gen - T_model), axis=0),
-                       "max_residual": float(resid.max())}}
+                       "max_residual": float(resid.max()),
+                       "determined": scene.n_wires <= 3},
+           "max_wire_length_mismatch": float(off.max())}
+    if scene.n_wires > 3:
+        doc["general"]["note"] = (f"underdetermined: {scene.n_wires} wires, 3 equations (Newton's law); the minimum-norm "
+                                  "tensions balance the forces but are not the wire tensions")
     F_sym = None
     if scene.n_wires == 2:
         F_sym = symmetric_tension(scene.mass, scene.gravity, accel[:, 2], u)
@@ -78,9 +99,18 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                             "max_abs_difference_to_model": np.max(np.abs(F_sym[:, None] - T_model), axis=0),
                             "note": "valid only for mirror-symmetric motion (thesis 7.2)"}
     est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps)
+    std = dict(est.std)
+    if motion is not None:
+        # the rates of a record are differentiated, not known: the spread between two differentiations
+        # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
+        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=comps)
+        std = {c: float(np.hypot(std[c], est.values[c] - other.values[c])) for c in comps}
     doc["inertia_from_tensions"] = {
-        c: {"value": est.values[c], "std": est.std[c], "config": float(scene.inertia[_idx(c)])} for c in comps}
-    doc["inertia_from_tensions_poorly_excited"] = est.poorly_excited
+        c: {"value": est.values[c], "std": std[c], "config": float(scene.inertia[_idx(c)])} for c in comps}
+    # the estimator's rule (relative std above 1 %) applied to the std with the differentiation term
+    poor = list(est.poorly_excited) + [c for c in comps if c not in est.poorly_excited
+                                       and not std[c] <= 0.01 * abs(est.values[c])]
+    doc["inertia_from_tensions_poorly_excited"] = poor
     doc["inertia_from_tensions_residual_rms"] = est.residual_rms
     if out_p:
         cols = [t, *T_model.T, *F_gen.T] + ([F_sym] if F_sym is not None else [])
@@ -100,6 +130,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         tab.add_row(str(i + 1), f"{T_model[:, i].min():.6g} .. {T_model[:, i].max():.6g}",
                     f"{F_gen[:, i].min():.6g} .. {F_gen[:, i].max():.6g}", f"{np.max(np.abs(F_gen[:, i] - T_model[:, i])):.2e}")
     con.print(tab)
+    if "note" in doc["general"]:
+        con.print(f"thesis general method: {doc['general']['note']}")
     if F_sym is not None:
         con.print(f"thesis symmetric formula: {F_sym.min():.6g} .. {F_sym.max():.6g} N "
                   f"(max difference to the model {np.max(np.abs(F_sym[:, None] - T_model)):.3g} N; valid for symmetric motion only)")
@@ -107,8 +139,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     for c in ("component", "estimate (kg m^2)", "std", "config value", "excited?"):
         it.add_column(c, justify="right")
     for c in comps:
-        it.add_row(c, f"{est.values[c]:.8g}", f"{est.std[c]:.2g}", f"{scene.inertia[_idx(c)]:.8g}",
-                   "POORLY" if c in est.poorly_excited else "yes")
+        it.add_row(c, f"{est.values[c]:.8g}", f"{std[c]:.2g}", f"{scene.inertia[_idx(c)]:.8g}",
+                   "POORLY" if c in poor else "yes")
     con.print(it)
 
 
@@ -117,7 +149,8 @@ def _idx(c):
 
 
 def _read_motion(path, scene):
-    """Read t, com, quaternion, tensions from CSV; derive omega, accelerations by differences."""
+    """Read t, com, quaternion, tensions from CSV; derive omega (body axes) and the accelerations
+    (see :func:`_derivatives`)."""
     import numpy as np
 
     from ..errors import InputError
@@ -142,19 +175,52 @@ def _read_motion(path, scene):
         raise InputError("--motion", f"missing columns {', '.join(missing)} (have {', '.join(names)})")
     if len(data) < 20:
         raise InputError("--motion", "fewer than 20 samples")
+    for n in need:  # a blank cell or a word reads as nan: name the first one (file line, header = line 1)
+        bad = np.flatnonzero(~np.isfinite(data[n]))
+        if len(bad):
+            raise InputError("--motion", f"column {n}, line {bad[0] + 2}: not a finite number "
+                             f"({len(bad)} such value(s) in the column)")
     t = data["t"]
     if np.any(np.diff(t) <= 0):
         raise InputError("--motion", "time column t must increase strictly")
     com = np.c_[data["com_x"], data["com_y"], data["com_z"]]
     q = np.c_[data["q_w"], data["q_x"], data["q_y"], data["q_z"]]
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    qn = np.linalg.norm(q, axis=1, keepdims=True)
+    if np.any(qn < 1e-6):
+        raise InputError("--motion", f"line {int(np.argmax(qn[:, 0] < 1e-6)) + 2}: the quaternion (q_w, q_x, q_y, q_z) "
+                         "is zero; it must be a rotation (unit length)")
+    q /= qn
     T = np.c_[tuple(data[f"tension_{i + 1}"] for i in range(scene.n_wires))]
-    qdot = np.gradient(q, t, axis=0, edge_order=2)
+    # second differences were biased by ~(omega h)^2 / 3, 0.3 % at 64 samples per period, far beyond the
+    # estimate's std; local quartic fits over 9 samples (Savitzky-Golay) err by ~1e-5 there and pass less
+    # noise; unevenly sampled records take quintic interpolating splines (as accurate, noisier)
     conj = q * np.array([1, -1, -1, -1])
-    omega = 2 * quat_multiply(conj, qdot)[:, 1:]
-    alpha = np.gradient(omega, t, axis=0, edge_order=2)
-    vel = np.gradient(com, t, axis=0, edge_order=2)
-    accel = np.gradient(vel, t, axis=0, edge_order=2)
+
+    def rates(spline):
+        qdot, qddot = _derivatives(t, q, spline)
+        # body axes; alpha is d/dt of omega: conj(qdot) qdot is a scalar for a unit q
+        return 2 * quat_multiply(conj, qdot)[:, 1:], 2 * quat_multiply(conj, qddot)[:, 1:]
+
+    omega, alpha = rates(False)
+    vel, accel = _derivatives(t, com, False)
     y = np.zeros((len(t), 13))
     y[:, 0:3], y[:, 3:7], y[:, 7:10], y[:, 10:13] = com, q, vel, omega
-    return t, y, T, omega, accel, alpha
+    return t, y, T, omega, accel, alpha, rates(True)
+
+
+def _derivatives(t, x, spline=False):
+    """First and second time derivatives of samples ``x`` (k, m) at times ``t`` (k,), s: local quartic
+    least-squares fits over 9 samples (Savitzky-Golay) when the sampling is even, else (or with
+    ``spline``) quintic interpolating splines."""
+    import numpy as np
+
+    dt = np.diff(t)
+    if not spline and np.ptp(dt) <= 1e-6 * np.median(dt):
+        from scipy.signal import savgol_filter
+
+        h = float(np.mean(dt))
+        return (savgol_filter(x, 9, 4, deriv=1, delta=h, axis=0), savgol_filter(x, 9, 4, deriv=2, delta=h, axis=0))
+    from scipy.interpolate import make_interp_spline
+
+    s = make_interp_spline(t, x, k=5, axis=0)
+    return s.derivative(1)(t), s.derivative(2)(t)
