@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -185,22 +184,21 @@ def test_example_measurements_file_cli():
         assert word in r.stdout
 
 
-def test_linear_inversion_is_fast():
-    # issue: < 100 ms after start-up for the exact linear method.  Timed in
-    # process (imports excluded) as the best of 3 in CPU time (other jobs on a
-    # shared machine do not count); the bound has a 3x margin for slow CI
-    # machines (a fall-back to the global rest-pose search per finite
-    # difference, which this guards against, costs ~2 s).
+def test_linear_inversion_needs_no_global_rest_pose_search(monkeypatch):
+    """The linear method's speed (< 100 ms after start-up, benchmarked in
+    scripts/, not asserted here) rests on every rest pose after the first
+    being found by Newton from a neighbour: a fall-back to the global SLSQP
+    search per sensitivity or scan point costs ~2 s.  Counted, not timed
+    (a timed assertion fails on a loaded machine and proves nothing)."""
+    from bifilar.analysis import equilibrium
+
+    calls = []
+    real = equilibrium._slsqp
+    monkeypatch.setattr(equilibrium, "_slsqp", lambda *a, **k: calls.append(1) or real(*a, **k))
     T = linear_period(LIN1, "torsion")
-    args = ["invert", str(LIN1), "--period", f"torsion={T!r}+-0.001", "--json"]
-    CliRunner().invoke(main, args)
-    best = math.inf
-    for _ in range(3):
-        t0 = time.process_time()
-        r = CliRunner().invoke(main, args)
-        best = min(best, time.process_time() - t0)
-        assert r.exit_code == 0
-    assert best < 0.3, best
+    r = CliRunner().invoke(main, ["invert", str(LIN1), "--period", f"torsion={T!r}+-0.001", "--json"])
+    assert r.exit_code == 0, r.stderr
+    assert len(calls) == 0, f"{len(calls)} global rest-pose searches"
 
 
 # --------------------------------------------------------------------------- bifilar period
