@@ -106,7 +106,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=comps)
         std = {c: float(np.hypot(std[c], est.values[c] - other.values[c])) for c in comps}
     doc["inertia_from_tensions"] = {
-        c: {"value": est.values[c], "std": std[c], "config": float(scene.inertia[_idx(c)])} for c in comps}
+        c: {"value": est.values[c], "std": std[c], "dof": est.dof.get(c), "interval_95": est.interval95(c, std[c]),
+            "config": float(scene.inertia[_idx(c)])} for c in comps}
     # the estimator's rule (relative std above 1 %) applied to the std with the differentiation term
     poor = list(est.poorly_excited) + [c for c in comps if c not in est.poorly_excited
                                        and not std[c] <= 0.01 * abs(est.values[c])]
@@ -136,11 +137,12 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         con.print(f"thesis symmetric formula: {F_sym.min():.6g} .. {F_sym.max():.6g} N "
                   f"(max difference to the model {np.max(np.abs(F_sym[:, None] - T_model)):.3g} N; valid for symmetric motion only)")
     it = Table(title="Inertia from tensions (least squares over Euler's equations, thesis 7.2.2)")
-    for c in ("component", "estimate (kg m^2)", "std", "config value", "excited?"):
+    for c in ("component", "estimate (kg m^2)", "std", "95 % (t, dof)", "config value", "excited?"):
         it.add_column(c, justify="right")
     for c in comps:
-        it.add_row(c, f"{est.values[c]:.8g}", f"{std[c]:.2g}", f"{scene.inertia[_idx(c)]:.8g}",
-                   "POORLY" if c in poor else "yes")
+        lo, hi = est.interval95(c, std[c])
+        it.add_row(c, f"{est.values[c]:.8g}", f"{std[c]:.2g}", f"{lo:.6g} .. {hi:.6g} ({est.dof.get(c, 0):.2g})",
+                   f"{scene.inertia[_idx(c)]:.8g}", "POORLY" if c in poor else "yes")
     con.print(it)
 
 

@@ -3,7 +3,10 @@
 Euler's equations in body axes, I alpha + w x (I w) = sum_i p_i x f_i (f_i
 the wire forces in body axes), are linear in the six tensor components.
 Stacking every time sample gives an overdetermined linear system solved by
-least squares, with the covariance from the residual variance.  The design
+least squares, with a sandwich covariance from the residuals (robust to
+torque rows of different noise and to serially correlated load-cell noise,
+:func:`_score_covariance`) and Student-t intervals with the std's effective
+degrees of freedom (tests/test_coverage_tensions.py).  The design
 matrix's conditioning says which axes the motion excites: a component whose
 relative standard uncertainty is large (or whose column is nearly dependent)
 is reported as poorly excited -- the thesis found the non-dominant axes
@@ -12,7 +15,7 @@ inaccurate for exactly this reason.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,6 +33,13 @@ class TensionInertia:
     correlation : (m, m) correlation matrix of the solved components.
     poorly_excited : components whose relative std exceeds ``threshold``.
     residual_rms : N m.  condition : condition number of the scaled design matrix.
+    lag_window : samples of residual serial correlation the std accounts for
+    (0: uncorrelated); see :func:`_score_covariance`.
+    dof : dict component -> effective degrees of freedom of its std
+    (Satterthwaite: ``3 (sum h_k^2)^2 / ((2 W + 1) sum h_k^4)``, ``h_k``
+    sample k's contribution to the component's error, ``W`` the lag
+    window; 3 = the fourth moment of a Gaussian; conservative for
+    correlated residuals), used by :meth:`interval95`.
     """
 
     components: tuple
@@ -40,6 +50,22 @@ class TensionInertia:
     residual_rms: float
     condition: float
     n_samples: int
+    lag_window: int = 0
+    dof: dict = field(default_factory=dict)
+
+    def interval95(self, c: str, std: float | None = None) -> list:
+        """[lo, hi] kg m^2: ``value +- t std``, Student's t with the std's
+        effective degrees of freedom ``dof[c]`` (the std is itself
+        estimated from the residuals; a serially correlated residual leaves
+        few independent stretches to estimate it from).  ``std`` (kg m^2):
+        a caller's larger std (the residual one with systematic terms added
+        in quadrature) in place of ``self.std[c]``, with the same t."""
+        from scipy import stats
+
+        s = self.std[c] if std is None else float(std)
+        nu = self.dof.get(c, np.inf)
+        k = float(stats.t.ppf(0.975, nu)) if np.isfinite(nu) and nu > 0 else 1.959963984540054
+        return [self.values[c] - k * s, self.values[c] + k * s]
 
 
 def euler_design(omega: np.ndarray, alpha: np.ndarray, components=COMPONENTS) -> np.ndarray:
@@ -93,7 +119,8 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     corr = np.full((len(components), len(components)), np.nan)
     corr[np.ix_(idx, idx)] = second.correlation
     return TensionInertia(tuple(components), values, std, corr, list(first.poorly_excited),
-                          second.residual_rms, second.condition, second.n_samples)
+                          second.residual_rms, second.condition, second.n_samples, second.lag_window,
+                          {**first.dof, **second.dof})
 
 
 def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold) -> TensionInertia:
@@ -127,11 +154,16 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     x, *_ = np.linalg.lstsq(A2 / scale, b2, rcond=None)
     x = x / scale
     r = A2 @ x - b2
-    dof = max(len(b2) - len(comps), 1)
-    s2 = float(r @ r) / dof
-    AtA = (A2 / scale).T @ (A2 / scale)
+    s2 = float(r @ r) / max(len(b2) - len(comps), 1)
+    As = A2 / scale
+    AtA = As.T @ As
     cond = float(np.linalg.cond(AtA)) ** 0.5
-    cov = s2 * np.linalg.pinv(AtA) / np.outer(scale, scale)
+    bread = np.linalg.pinv(AtA)
+    g = np.einsum("kim,ki->km", As.reshape(len(t), 3, -1), r.reshape(len(t), 3))  # scores, (k, m)
+    meat, lags = _score_covariance(g, len(comps))
+    cov = bread @ meat @ bread / np.outer(scale, scale)
+    h2 = (g @ bread) ** 2  # each sample's share of each component's error, squared
+    dof = 3 * h2.sum(axis=0) ** 2 / ((2 * lags + 1) * np.maximum((h2 ** 2).sum(axis=0), 1e-300))
     std = np.sqrt(np.maximum(np.diag(cov), 0))
     corr = cov / np.maximum(np.outer(std, std), 1e-300)
     values = dict(zip(comps, map(float, x)))
@@ -141,7 +173,42 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     excited = _excited(scene, com, R, tensions, A2, len(t))
     poor = [c for j, c in enumerate(comps) if not excited[j] or not np.isfinite(stds[c]) or stds[c] <= 0
             or stds[c] > threshold * max(abs(values[c]), 1e-300)]
-    return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)))
+    return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)), lags,
+                          dict(zip(comps, map(float, dof))))
+
+
+def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
+    """Covariance of the least-squares score ``sum_k A_k^T r_k`` (the
+    sandwich's meat), robust to what the white-noise ``s^2 A^T A`` assumes
+    away: the three torque rows of a sample share the same tension noise and
+    differ in size (a bifilar's z torque is tens of times quieter than its
+    x and y torques, so a pooled ``s^2`` overstated Izz's std ~20x), and a
+    load cell's low-pass makes the residuals serially correlated (which
+    made the white std too small).
+
+    ``g`` (k, m): the scores ``g_k = A_k^T r_k`` (scaled design ``A_k``
+    (3, m) of sample k, residuals ``r_k`` (3,), N m); the meat is
+    ``sum_{|l| <= W} Gamma(l)`` with ``Gamma(l) = sum_k g_k g_{k+l}^T``,
+    the lag window ``W`` chosen as the smallest with ``W >= 5 tau(W)``
+    (Sokal's self-consistent window; ``tau`` the largest integrated
+    autocorrelation time of the scores' components) and capped at k / 4,
+    negative eigenvalues of the truncated sum clipped to zero.  Scaled by
+    ``k / (k - m)`` for the fitted parameters.  Returns ``(meat, W)``.
+    """
+    k = g.shape[0]
+    g0 = g.T @ g
+    d0 = np.maximum(np.diag(g0), 1e-300)
+    meat, tau, W = g0.copy(), np.ones(m), 0
+    for lag in range(1, max(k // 4, 1) + 1):
+        if lag >= 5 * tau.max():
+            break
+        G = g[lag:].T @ g[:-lag]
+        meat += G + G.T
+        tau += 2 * np.diag(G) / d0
+        W = lag
+    w, V = np.linalg.eigh(meat)
+    meat = (V * np.maximum(w, 0)) @ V.T
+    return meat * k / max(k - m, 1), W
 
 
 EXCITATION_FLOOR = 1e-8

@@ -306,9 +306,16 @@ def period_from_trials(cycles: float, times: list[float], time_std: float | None
       trials that scatter less.
 
     ``sigma_T = sigma_trial / (sqrt(n) cycles)``.  The 95 % interval uses
-    Student's t with ``n - 1`` degrees of freedom when the scatter sets
-    ``sigma_trial`` (few trials estimate a std poorly), else the normal
-    1.96.
+    Student's t with ``n - 1`` degrees of freedom whenever the std is not
+    given and ``n >= 2`` -- also when the floor sets ``sigma_trial``: the
+    floor is a lower bound of a human's timing std, not its value, so a
+    true std above the floor whose trials happened to agree would otherwise
+    get the normal 1.96 (two trials with a true std of 2 floors covered 88 %
+    instead of 95 %).  ``max(scatter, floor) t`` is never shorter than the
+    exact Student interval ``scatter t``, so the coverage is at least 95 %
+    for Gaussian errors of any std, exact far above the floor and
+    conservative near or below it (tests/test_coverage_trials.py).  A given
+    ``time_std`` (or one trial) uses the normal 1.96.
 
     Returns ``(T [s], sigma_T [s], details)``; details has ``cycles``,
     ``times``, ``trial_std`` (s), ``trial_std_source``, ``scatter`` (s or
@@ -329,7 +336,7 @@ def period_from_trials(cycles: float, times: list[float], time_std: float | None
     elif scatter is not None and scatter > floor:
         s, how, dof = scatter, f"scatter of the {n} trials (Type A)", n - 1
     else:
-        s = floor
+        s, dof = floor, (n - 1 if n >= 2 else None)
         how = ("reaction-time floor trial_time (one trial)" if n < 2 else
                f"reaction-time floor trial_time (the trials' scatter {scatter:.3g} s is below it)")
     if s <= 0:
