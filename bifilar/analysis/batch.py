@@ -575,8 +575,11 @@ def simulate_batch(
         whatever other scenes share its batch or their order
         (tests/test_batch_determinism.py), which stacked LSODA (a shared
         step) and the one-scene float path (other arithmetic) do not give.
-        For results that must not depend on how work was split (a sweep's
-        points under ``--workers`` and ``--resume``).
+        For results that must not depend on how work was split (chunks of
+        work under ``--workers`` or ``--resume``).  Tensions are checked at
+        :data:`HEALTH_SAMPLES` a period (LSODA's rate).  Its cost pays from
+        hundreds of scenes; at a few it is several times the float path's
+        (docs/performance.md, "Batching across a sweep's points").
 
     Returns a list of :class:`SceneRun` in input order.
     """
