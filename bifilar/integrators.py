@@ -49,14 +49,41 @@ MAX_FACTOR = 10.0
 EXPONENT = -1.0 / 8.0  # error estimator of order 7
 
 
+def ordered_sum(X: np.ndarray) -> np.ndarray:
+    """Sum over the first axis of ``X``, term by term in order: the same
+    bits for a column whatever the other columns or their number
+    (``np.sum(X, 0)`` switches to a pairwise, unrolled order when the
+    other axes have length 1)."""
+    out = np.array(X[0], float, copy=True)
+    for i in range(1, len(X)):
+        out += X[i]
+    return out
+
+
+def _combine(c: np.ndarray, Kf: np.ndarray) -> np.ndarray:
+    """``c @ Kf`` for stage coefficients ``c`` (s,) or (r, s) and stages ``Kf``
+    (s, N), summed term by term in stage order: every column gets the same
+    operations in the same order, so a system's bits do not depend on its
+    column or on the batch's other systems (a BLAS product's do: its
+    kernels treat a block of columns and the tail differently, with or
+    without fused multiply-adds; tests/test_batch_determinism.py)."""
+    c = np.asarray(c, float)
+    if c.ndim == 2:
+        return np.stack([_combine(row, Kf) for row in c])
+    out = c[0] * Kf[0]
+    for i in range(1, len(c)):
+        out += c[i] * Kf[i]
+    return out
+
+
 def _error_norm(K13: np.ndarray, h, scale: np.ndarray, m: int):
     """scipy's DOP853 error norm; K13 (13, m, ...) stages, scale (m, ...)."""
     s = K13.shape[0]
     Kf = K13.reshape(s, -1)
-    e5 = (E5 @ Kf).reshape(scale.shape) / scale
-    e3 = (E3 @ Kf).reshape(scale.shape) / scale
-    n5 = np.sum(e5 * e5, axis=0)
-    n3 = np.sum(e3 * e3, axis=0)
+    e5 = _combine(E5, Kf).reshape(scale.shape) / scale
+    e3 = _combine(E3, Kf).reshape(scale.shape) / scale
+    n5 = ordered_sum(e5 * e5)
+    n3 = ordered_sum(e3 * e3)
     den = n5 + 0.01 * n3
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.abs(h) * n5 / np.sqrt(den * m)
@@ -74,14 +101,14 @@ def dense_coefficients(f: Callable, K: np.ndarray, y_old: np.ndarray, y_new: np.
     Kx = np.empty((16,) + K.shape[1:])
     Kx[:13] = K
     for s in range(13, 16):
-        dy = (A[s, :s] @ Kx[:s].reshape(s, -1)).reshape(y_old.shape)
+        dy = _combine(A[s, :s], Kx[:s].reshape(s, -1)).reshape(y_old.shape)
         Kx[s] = np.asarray(f(*(y_old + h * dy))[:m], dtype=float).reshape(y_old.shape)
     dlt = y_new - y_old
     F = np.empty((7,) + y_old.shape)
     F[0] = dlt
     F[1] = h * K[0] - dlt
     F[2] = 2.0 * dlt - h * (K[12] + K[0])
-    F[3:] = h * (D @ Kx.reshape(16, -1)).reshape((4,) + y_old.shape)
+    F[3:] = h * _combine(D, Kx.reshape(16, -1)).reshape((4,) + y_old.shape)
     return F
 
 
@@ -138,6 +165,7 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
     b = np.ones(P.shape[1])
     den = v1 - v0
     x = np.clip(np.where(den != 0, -v0 / np.where(den != 0, den, 1.0), 0.5), 0.0, 1.0)
+    live = np.ones(len(x), bool)  # each root stops on its own test: its bits do not depend on the others'
     for _ in range(iters):
         v = np.zeros_like(x)
         for cf in P[::-1]:
@@ -152,8 +180,9 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
         out = ~np.isfinite(xn) | (xn < a) | (xn > b)
         xn = np.where(out, 0.5 * (a + b), xn)
         dx = np.abs(xn - x)
-        x = xn
-        if np.all(dx < 1e-15) or np.all(v == 0):
+        x = np.where(live, xn, x)
+        live &= ~((dx < 1e-15) | (v == 0))
+        if not np.any(live):
             break
     return x
 
@@ -189,7 +218,7 @@ def sampled_crossings(c: np.ndarray, dt: float | np.ndarray = 1.0):
         start = np.clip(kk - 3, 0, K - 8)  # stencil start, shifted inside the record
         off = kk - start  # 3 unless shifted at an end of the record
         S = c[start[None, :] + np.arange(8)[:, None], bb[None, :]]  # (8, k)
-        P = _VINV @ S  # powers of (index - k) when off == 3
+        P = _combine(_VINV, S)  # powers of (index - k) when off == 3
         edge = np.nonzero(off != 3)[0]
         if len(edge):
             V0 = np.linalg.inv(np.vander(np.arange(8.0), 8, increasing=True))
@@ -396,9 +425,9 @@ def integrate_batch(make_f: Callable, y0: np.ndarray, t_end, rtol, atol, h0, obs
         k = len(idx)
         hs = np.minimum(h, tend - t)
         for s in range(1, N_STAGES):
-            Ys = Y + hs * (Ab[s] @ K[:s].reshape(s, -1)).reshape(m, k)
+            Ys = Y + hs * _combine(Ab[s], K[:s].reshape(s, -1)).reshape(m, k)
             K[s] = _rows(f(*Ys), m, k)
-        y_new = Y + hs * (B @ K[:12].reshape(12, -1)).reshape(m, k)
+        y_new = Y + hs * _combine(B, K[:12].reshape(12, -1)).reshape(m, k)
         out = f(*y_new)
         K[12] = _rows(out, m, k)
         nfev[idx] += 12

@@ -5,9 +5,18 @@ biases) on the thesis plate and the Solar Boat, beside one naive rest pose +
 linear modes solve of the same scene (the yardstick of issue 14); and the
 time of the 2-parameter Solar Boat plan of issue 14,
 ``bifilar plan configs/solar_boat.yaml --param spacing=1:4 --param length=2:5 --json``
-(a fresh process each time, start-up included).
+(a fresh process each time, start-up included); the cost per point of a
+whole 2-parameter Solar Boat sweep (``--param spacing=1:4:7 --param
+length=2:5:4``, 28 points, one process: total CPU / points); and, for that
+sweep, what batching across its points would give (``--engines``): its
+nonlinear runs scene by scene (what a point does) against the batched
+DOP853 engine (per-scene steps) on all of them at once, and its
+sigma-point scenes' rest poses + modes batched per point (what a point
+does) against all in one batch, with whether each scene's figures are
+bit-for-bit the same whatever else shares its batch (what ``--workers``
+and ``--resume`` need).
 
-    python scripts/bench_sweep.py [--repeats 5] [--json FILE] [--no-plan]
+    python scripts/bench_sweep.py [--repeats 5] [--json FILE] [--no-plan] [--engines]
 
 Medians of CPU time (the load-robust measure; wall clock alongside).
 Deterministic points, so every repeat does the same work.
@@ -85,17 +94,145 @@ def bench_plan(repeats: int = 3) -> dict:
     return {"plan_cpu_s": statistics.median(cpu), "plan_wall_s": statistics.median(wall), "evaluations": evals}
 
 
+GRID = ["spacing=1:4:7", "length=2:5:4"]
+
+
+def _grid(cfg: dict, path: Path) -> list[dict]:
+    from bifilar.studies.shorthands import check_param, parse_param
+
+    specs = [parse_param(p) for p in GRID]
+    for sp in specs:
+        check_param(cfg, sp.name, sp.values)
+    return sw.build_grid(specs)
+
+
+def bench_grid(repeats: int = 3) -> dict:
+    """CPU per point of the whole Solar Boat sweep (:data:`GRID`), one process."""
+    path = CASES["Solar Boat"][0]
+    cfg = read_yaml(path)
+    st = sw.resolve_settings(cfg)
+    grid = _grid(cfg, path)
+    sw.evaluate_point(cfg, str(path), grid[0], st)  # warm-up
+    pts = []
+    cpu, wall = timed(lambda: pts.append(sw.run_sweep(cfg, str(path), grid, st)), repeats)
+    valid = sum(p["valid"] for p in pts[-1])
+    return {"sweep_points": len(grid), "sweep_valid_points": valid, "sweep_cpu_s": cpu, "sweep_wall_s": wall,
+            "sweep_point_cpu_s": cpu / len(grid)}
+
+
+def _run_figures(r) -> tuple:
+    return (r.period, r.crossings.tobytes(), r.tension_min.tobytes(), r.tension_max.tobytes(), r.depth_max,
+            r.max_constraint_violation, r.energy_drift)
+
+
+def bench_engines() -> dict:
+    """Batching across the points of the :data:`GRID` sweep: cost and batch
+    independence of its nonlinear runs and of its sigma points' rest poses +
+    modes (module docstring).  CPU s, one pass each."""
+    import numpy as np
+
+    from bifilar.analysis.batch import modes_batch, rest_poses, simulate_batch
+    from bifilar.estimation import budget
+    from bifilar.studies import point as pt
+
+    path = CASES["Solar Boat"][0]
+    cfg = read_yaml(path)
+    st = sw.resolve_settings(cfg)
+    grid = _grid(cfg, path)
+    # the points' own nonlinear runs and sigma-point batches, recorded as the sweep makes them
+    jobs, sigma = [], []
+    real = budget._hanging_periods
+
+    def record(scenes, rest, base_modes):
+        sigma.append((list(scenes), rest))
+        return real(scenes, rest, base_modes)
+
+    budget._hanging_periods = record
+    try:
+        for params in grid:
+            try:
+                _, pre = pt._prepare(cfg, str(path), params, st)
+            except Exception:  # noqa: BLE001 - an invalid point has no runs
+                continue
+            jobs += [(pre.scene, pre.rest, pre.ms, pre.labels[k], pre.amplitude) for k in pre.runs]
+    finally:
+        budget._hanging_periods = real
+
+    def runs(sel, method):
+        return simulate_batch([jobs[i][0] for i in sel], mode=[jobs[i][3] for i in sel],
+                              amplitude=[jobs[i][4] for i in sel], periods=st.periods, rtol=st.rtol,
+                              rests=[jobs[i][1] for i in sel], modes=[jobs[i][2] for i in sel], method=method,
+                              errors="return", independent=method == "dop853")
+
+    n = len(jobs)
+    c0 = time.process_time()
+    single = [runs([i], "auto")[0] for i in range(n)]  # a point's engine: LSODA scene by scene
+    c1 = time.process_time()
+    dop = runs(list(range(n)), "dop853")
+    c2 = time.process_time()
+    by_size = {}
+    for size in (3, 24):  # one point's runs; a chunk of 8 points
+        c_ = time.process_time()
+        for j in range(0, n, size):
+            runs(list(range(j, min(n, j + size))), "dop853")
+        by_size[size] = (time.process_time() - c_) / n
+    dop_rev = runs(list(range(n))[::-1], "dop853")[::-1]
+    dop_half = runs(list(range(0, n, 2)), "dop853")
+    same_rev = sum(_run_figures(a) == _run_figures(b) for a, b in zip(dop, dop_rev))
+    same_half = sum(_run_figures(dop[i]) == _run_figures(r) for i, r in zip(range(0, n, 2), dop_half))
+    alone = list(range(0, n, 7))
+    same_alone = sum(_run_figures(dop[i]) == _run_figures(runs([i], "dop853")[0]) for i in alone)
+    dT = max(abs(a.period / b.period - 1) for a, b in zip(dop, single))
+    dTen = max(float(np.max(np.abs(a.tension_max / b.tension_max - 1))) for a, b in zip(dop, single))
+    # sigma points: per point (as now) against all of the sweep's in one batch
+    scenes = [s for sc, _ in sigma for s in sc]
+    guesses = [r for sc, r in sigma for _ in sc]
+    c3 = time.process_time()
+    for sc, r in sigma:
+        modes_batch(sc, rest_poses(sc, r, errors="return"))
+    c4 = time.process_time()
+    rs = rest_poses(scenes, guesses, errors="return")
+    modes_batch(scenes, rs)
+    c5 = time.process_time()
+    return {"runs": n, "runs_scene_by_scene_cpu_s": c1 - c0, "runs_dop853_one_batch_cpu_s": c2 - c1,
+            "run_dop853_cpu_s_in_batches_of": {str(k): v for k, v in by_size.items()},
+            "dop853_same_reversed": same_rev, "dop853_same_in_half_batch": same_half, "dop853_half_batch": len(dop_half),
+            "dop853_same_alone": same_alone, "dop853_alone": len(alone),
+            "dop853_vs_single_max_rel_period": dT, "dop853_vs_single_max_rel_tension_max": dTen,
+            "sigma_batches": len(sigma), "sigma_scenes": len(scenes), "sigma_per_point_cpu_s": c4 - c3,
+            "sigma_one_batch_cpu_s": c5 - c4}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", default=None, help="also write the results to this file")
     ap.add_argument("--no-plan", action="store_true", help="leave out the plan timing")
+    ap.add_argument("--engines", action="store_true", help="also measure batching across the sweep's points")
     args = ap.parse_args(argv)
     res = bench(args.repeats)
     for name, r in res.items():
         print(f"{name}: {1e3 * r['point_cpu_s']:.0f} ms CPU a point ({r['points_per_s_cpu']:.2f} points/s; "
               f"{1e3 * r['point_without_nonlinear_cpu_s']:.0f} ms without the nonlinear runs); one rest pose + modes "
               f"{1e3 * r['rest_and_modes_cpu_s']:.2f} ms: a point costs {r['ratio_to_rest_and_modes']:.0f}x that")
+    res["sweep"] = g = bench_grid(args.repeats)
+    print(f"Solar Boat sweep {' '.join('--param ' + p for p in GRID)}: {g['sweep_points']} points "
+          f"({g['sweep_valid_points']} valid), {g['sweep_cpu_s']:.2f} s CPU ({g['sweep_wall_s']:.2f} s wall): "
+          f"{1e3 * g['sweep_point_cpu_s']:.0f} ms CPU a point")
+    if args.engines:
+        res["engines"] = e = bench_engines()
+        print(f"its {e['runs']} nonlinear runs: scene by scene {1e3 * e['runs_scene_by_scene_cpu_s'] / e['runs']:.1f} "
+              f"ms a run, batched DOP853 {1e3 * e['runs_dop853_one_batch_cpu_s'] / e['runs']:.1f} ms a run in one batch ("
+              + ", ".join(f"{1e3 * v:.1f} in batches of {k}" for k, v in e['run_dop853_cpu_s_in_batches_of'].items())
+              + "); "
+              f"DOP853 bit-identical when the batch is reversed: {e['dop853_same_reversed']} of {e['runs']}, "
+              f"in half the batch: {e['dop853_same_in_half_batch']} of {e['dop853_half_batch']}, "
+              f"alone: {e['dop853_same_alone']} of {e['dop853_alone']}; "
+              f"DOP853 vs scene by scene: period {e['dop853_vs_single_max_rel_period']:.1e}, "
+              f"peak tension {e['dop853_vs_single_max_rel_tension_max']:.1e} (max relative)")
+        print(f"its sigma points: {e['sigma_scenes']} scenes in {e['sigma_batches']} batches, rest poses + modes "
+              f"{1e3 * e['sigma_per_point_cpu_s'] / e['sigma_scenes']:.3f} ms a scene batched per point, "
+              f"{1e3 * e['sigma_one_batch_cpu_s'] / e['sigma_scenes']:.3f} ms in one batch")
     if not args.no_plan:
         res["plan"] = p = bench_plan(args.repeats)
         print(f"Solar Boat 2-parameter plan: {p['plan_cpu_s']:.2f} s CPU ({p['plan_wall_s']:.2f} s wall), "

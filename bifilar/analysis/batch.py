@@ -527,6 +527,7 @@ def simulate_batch(
     health: bool = True,
     method: str = "auto",
     progress: Callable | None = None,
+    independent: bool = False,
 ) -> list[SceneRun]:
     """Integrate the nonlinear motion of many scenes, each from ``amplitude``
     x its mode shape, for ``periods`` linear periods of that mode.
@@ -568,6 +569,17 @@ def simulate_batch(
         and the DOP853 engine from there.  Results of the two agree to the
         tolerance (~1e-11 relative in the period at rtol 1e-10).
     progress : ``progress(done, total)`` called as the batch advances.
+    independent : every scene through the vectorised DOP853 engine whatever
+        the batch size (one scene included; ``method`` must be ``"auto"``
+        or ``"dop853"``): a scene's results are then the same to the bit
+        whatever other scenes share its batch or their order
+        (tests/test_batch_determinism.py), which stacked LSODA (a shared
+        step) and the one-scene float path (other arithmetic) do not give.
+        For results that must not depend on how work was split (chunks of
+        work under ``--workers`` or ``--resume``).  Tensions are checked at
+        :data:`HEALTH_SAMPLES` a period (LSODA's rate).  Its cost pays from
+        hundreds of scenes; at a few it is several times the float path's
+        (docs/performance.md, "Batching across a sweep's points").
 
     Returns a list of :class:`SceneRun` in input order.
     """
@@ -581,6 +593,10 @@ def simulate_batch(
         raise InputError("errors", "must be 'raise' or 'return'")
     if method not in ("auto", "lsoda", "dop853"):
         raise InputError("--method", f"batch method must be 'auto', 'lsoda' or 'dop853', got {method!r}")
+    if independent:
+        if method == "lsoda":
+            raise InputError("--method", "independent runs need the DOP853 engine, not 'lsoda'")
+        method = _STACKED
     if not (0 < rtol < 1e-2):
         raise InputError("--rtol", f"must be in (0, 1e-2), got {rtol}")
     modes_in = list(mode) if isinstance(mode, (list, tuple, np.ndarray)) else [mode] * Bn
@@ -675,12 +691,21 @@ the processor's cache and cost more per scene (docs/performance.md,
 ``scripts/bench_batch_memory.py``); memory stays bounded too."""
 
 
+HEALTH_SAMPLES = 64
+"""Samples a period at which ``simulate_batch(..., independent=True)``
+checks the tensions (the LSODA engine's rate)."""
+_STACKED = "dop853, stacked"
+"""``method`` of :func:`_run_group`: the vectorised DOP853 engine for every
+batch size (``simulate_batch(..., independent=True)``)."""
+
+
 def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
                method: str = "auto", health: bool = True) -> list[SceneRun]:
     Bn = len(scenes)
     if method == "auto":
         method = "lsoda" if Bn < LARGE_BATCH else "dop853"
-    if 1 < Bn < SMALL_BATCH:
+    stacked = method == _STACKED
+    if 1 < Bn < SMALL_BATCH and not stacked:
         out = []
         for j in range(Bn):
             out += _run_group(scenes[j:j + 1], rests[j:j + 1], mds[j:j + 1], amps[j:j + 1], pers[j:j + 1], rtol, atol,
@@ -700,6 +725,14 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             out += _run_group(scenes[sl], rests[sl], mds[sl], amps[sl], pers[sl], rtol, atol, on_slack, spp,
                               lowest_point, sub_progress, method, health)
         return out
+    keep_samples = bool(spp)
+    if stacked:
+        # health at >= 64 samples a period, as LSODA's: the parabola through
+        # coarse steps (~10 a period at rtol 1e-8) misplaces a tension peak
+        # by ~1e-4 of it, the samples' by ~1e-6 (docs/performance.md)
+        method = "dop853"
+        if health:
+            spp = max(HEALTH_SAMPLES, int(spp or 0))
     t_start = time.perf_counter()
     n = scenes[0].n_wires
     y0 = initial_states(scenes, rests, mds, amps)
@@ -737,9 +770,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         if spp:
             dense_times = [np.linspace(0.0, te, max(int(spp * te / tr), 200) + 1) for te, tr in zip(t_end, T_ref)]
         obs = Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest, progress, t_end,
-                     dense_times, health=health)
+                     dense_times, health=health, refine_steps=not stacked)
         h0 = _h0(T_ref, rt)
-        if Bn == 1:
+        if Bn == 1 and not stacked:
             nfev, nsteps, status, msg = _single(P.take(0), ys0[0], float(t_end[0]), float(rt[0]), at[:, 0],
                                                 float(h0[0]), obs, on_slack)
             nfev, nsteps, status, msgs = np.array([nfev]), np.array([nsteps]), np.array([status]), {0: msg} if msg else {}
@@ -786,7 +819,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         if period is None:
             warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
         t_s = y_s = None
-        if obs.samples is not None:
+        if obs.samples is not None and keep_samples:
             parts = obs.samples[b]
             if parts:
                 t_s = np.concatenate([p_[0] for p_ in parts])

@@ -139,8 +139,9 @@ class Health(itg.BatchObserver):
     figures stay NaN."""
 
     def __init__(self, Bn, n, e, mass, grav, inertia, L2, on_slack: str, lowest: "LowestPoint | None", progress,
-                 t_end, dense_times=None, health: bool = True):
+                 t_end, dense_times=None, health: bool = True, refine_steps: bool = True):
         self.n = n
+        self.refine_steps = refine_steps  # False: extremes refined on the dense samples only
         self.e = e  # (13, B)
         self.mass, self.grav, self.inertia, self.L2 = mass, grav, inertia, L2
         self.cross: list[list] = [[] for _ in range(Bn)]
@@ -229,7 +230,7 @@ class Health(itg.BatchObserver):
         # refine the extremes on the last three steps (parabola through them)
         tt = np.stack([self.prev_t[0, idx], self.prev_t[1, idx], t_new])
         TT = np.concatenate([self.prev_T[:, :, idx], T[:, None, :]], axis=1)
-        if np.all(np.isfinite(tt[0])):
+        if self.refine_steps and np.all(np.isfinite(tt[0])):
             merge_refined(self, idx, *refine_extremes(tt, TT))
         self.prev_t[0, idx] = self.prev_t[1, idx]
         self.prev_t[1, idx] = t_new
@@ -239,8 +240,8 @@ class Health(itg.BatchObserver):
 
     def _crossings_and_samples(self, idx, t_old, t_new, y_old, y_new, dense):
         e = self.e[:, idx]
-        c_old = np.sum(e * y_old, 0)
-        c_new = np.sum(e * y_new, 0)
+        c_old = itg.ordered_sum(e * y_old)  # in order: a scene's bits whatever its batch
+        c_new = itg.ordered_sum(e * y_new)
         up = np.nonzero((c_old < 0) & (c_new >= 0))[0]
         need = up
         if self.samples is not None:
@@ -251,7 +252,7 @@ class Health(itg.BatchObserver):
             pos = {int(j): k for k, j in enumerate(need)}
             if len(up):
                 cols = [pos[int(j)] for j in up]
-                Fc = np.einsum("kmj,mj->kj", F[:, :, cols], e[:, up])
+                Fc = itg.ordered_sum(np.swapaxes(F[:, :, cols] * e[None, :, up], 0, 1))  # (7, j)
                 x = itg.crossing_on_step(Fc, c_old[up], c_new[up])
                 tc = t_old[up] + x * (t_new[up] - t_old[up])
                 for b, tt in zip(idx[up], tc):
