@@ -230,8 +230,10 @@ def _render(ms, res) -> None:
         unit = "kg m^2" if n.startswith("I") else "m"
         if np.isfinite(s):
             lo, hi = res.interval[i] if res.interval is not None else (v - 1.96 * s, v + 1.96 * s)
+            nu = float(res.budget.effective_dof[i])
+            dof = f" (t, {nu:.3g} dof)" if np.isfinite(nu) else ""
             row = [f"{n} ({unit})", fmt(float(v), 8), fmt(float(s), 3), f"{s / abs(v):.2%}" if v else "-",
-                   f"{lo:.6g} .. {hi:.6g}"]
+                   f"{lo:.6g} .. {hi:.6g}{dof}"]
         else:  # res.std_unavailable says why (printed as a warning)
             row = [f"{n} ({unit})", fmt(float(v), 8), "cannot be given", "-", "-"]
         if mc is not None:

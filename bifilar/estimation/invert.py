@@ -144,6 +144,8 @@ class InversionResult:
             d = {"value": float(self.values[i]), "std": float(self.std[i])}  # NaN -> null (std_unavailable)
             if self.interval is not None:
                 d["interval_95"] = [float(self.interval[i, 0]), float(self.interval[i, 1])]
+                nu = float(self.budget.effective_dof[i])
+                d["dof"] = nu if math.isfinite(nu) else None  # Welch-Satterthwaite; null: infinite (normal)
             if self.monte_carlo is not None and self.monte_carlo.n_ok > 1:
                 d["std_monte_carlo"] = float(self.monte_carlo.std[i])
             if n in _IDX:
