@@ -183,3 +183,24 @@ def test_sampled_interval_is_the_student_quantile():
         smp = interval_95([10.0], b, ctx)[0] - 10.0
         assert np.allclose(lin, [-want, want], rtol=1e-9)
         assert np.allclose(smp, [-want, want], rtol=0.01)
+
+
+def test_monte_carlo_draws_the_timed_period_with_its_dof():
+    """``--monte-carlo`` draws a period from 3 timed trials as ``T + std
+    T_2`` (Student, 2 dof), not ``T + std z``: with the timing dominant,
+    5 % of the re-estimates fall outside ``value +- t_{0.975, 2} std``
+    (4.30 std; scipy's quantile), where normal draws put 0.002 %.  400
+    draws: binomial std 1.1 %, band 3 of those."""
+    from scipy import stats
+
+    from bifilar.estimation.montecarlo import monte_carlo_check
+
+    truth = plate()
+    T0 = _true_period(truth)
+    res = _invert(truth, CYCLES * T0 + SD * _unit_scatter(3), UNC_TINY)
+    mc = monte_carlo_check(res, 400, np.random.default_rng(11))
+    assert mc.n_ok >= 396
+    dev = np.abs(mc.samples[:, 0] - res.values[0]) / res.std[0]
+    outside = float(np.mean(dev > stats.t.ppf(0.975, 2)))
+    band = 3 * math.sqrt(0.05 * 0.95 / mc.n_ok)
+    assert abs(outside - 0.05) <= band, f"{outside:.3f} of the draws outside the Student interval"
