@@ -3,6 +3,7 @@ example files, which have their own tests)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -38,3 +39,15 @@ def thesis_plate():
 
 def close(a, b, rel):
     return np.all(np.abs(np.asarray(a) - np.asarray(b)) <= rel * np.maximum(np.abs(b), 1e-300))
+
+
+def measured_scene(truth, rng, unc):
+    """The scene an experimenter writes down: every input of ``truth`` off by a
+    normal error of the size in ``unc`` (m; ``mass`` relative; ``com`` a shift
+    of the attachments relative to the CoM), drawn from ``rng``."""
+    n = truth.n_wires
+    return replace(truth, mass=truth.mass * (1 + rng.normal(0, unc["mass"])),
+                   lengths=truth.lengths + rng.normal(0, unc["length"], n),
+                   anchors=truth.anchors + rng.normal(0, unc["position"], (n, 3)),
+                   attachments=truth.attachments + rng.normal(0, unc["position"], (n, 3))
+                   - rng.normal(0, unc["com"], 3))

@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from conftest import trapezoid
+from conftest import measured_scene, trapezoid
 
 from bifilar.analysis.batch import modes_batch, rest_poses, simulate_batch
 from bifilar.config import scene_from_dict
@@ -46,16 +46,6 @@ def _one(scene, T, std, amplitude):
 
 #: ten times finer inputs, so that an unstated amplitude dominates the budget
 UNC_FINE = {k: v / 10 for k, v in UNC.items()}
-
-
-def _measured(truth, rng, unc):
-    """The scene an experimenter writes down: every input off by its error."""
-    n = truth.n_wires
-    return replace(truth, mass=truth.mass * (1 + rng.normal(0, unc["mass"])),
-                   lengths=truth.lengths + rng.normal(0, unc["length"], n),
-                   anchors=truth.anchors + rng.normal(0, unc["position"], (n, 3)),
-                   attachments=truth.attachments + rng.normal(0, unc["position"], (n, 3))
-                   - rng.normal(0, unc["com"], 3))
 
 
 def _truth_period(truth, amplitudes=None):
@@ -83,7 +73,7 @@ def _coverage(truth, comp, seed, amplitude=0.0, amp_range=None, unc=UNC):
     res = invert(_one(truth, T_true.mean() if amp_range else T_true[0], unc["timing"], amplitude),
                  solve_for=[comp], unc=unc, ladder=False)
     lo, hi = res.interval[0] - res.value(comp)
-    draws = [_one(_measured(truth, rng, unc), T + rng.normal(0, unc["timing"]), unc["timing"], amplitude)
+    draws = [_one(measured_scene(truth, rng, unc), T + rng.normal(0, unc["timing"]), unc["timing"], amplitude)
              for T in T_true]
     est = solve_draws_batched(res, draws)[:, 0]
     ok = np.isfinite(est)

@@ -223,19 +223,29 @@ def _render(ms, res) -> None:
     for c in ("unknown", "estimate", "std", "rel. std", "95 % interval"):
         t.add_column(c, justify="left" if c == "unknown" else "right")
     mc = res.monte_carlo
+    # timed trials: Student draws (1-2 dof: no variance), so the Monte Carlo's
+    # interval is shown with its width relative to the budget's, not its std
+    mc_interval = mc is not None and bool(res.budget.dof)
     if mc is not None:
-        t.add_column("Monte Carlo std", justify="right")
+        t.add_column("Monte Carlo 95 %" if mc_interval else "Monte Carlo std", justify="right")
     for i, n in enumerate(res.names):
         v, s = res.values[i], res.std[i]
         unit = "kg m^2" if n.startswith("I") else "m"
         if np.isfinite(s):
             lo, hi = res.interval[i] if res.interval is not None else (v - 1.96 * s, v + 1.96 * s)
+            nu = float(res.budget.effective_dof[i])
+            dof = f" (t, {nu:.3g} dof)" if np.isfinite(nu) else ""
             row = [f"{n} ({unit})", fmt(float(v), 8), fmt(float(s), 3), f"{s / abs(v):.2%}" if v else "-",
-                   f"{lo:.6g} .. {hi:.6g}"]
+                   f"{lo:.6g} .. {hi:.6g}{dof}"]
         else:  # res.std_unavailable says why (printed as a warning)
             row = [f"{n} ({unit})", fmt(float(v), 8), "cannot be given", "-", "-"]
-        if mc is not None:
-            row.append(f"{mc.std[i]:.3g} (x{mc.ratio[i]:.2f})" if mc.n_ok > 1 else "-")
+        if mc is not None and mc.n_ok <= 1:
+            row.append("-")
+        elif mc_interval:
+            w = res.interval[i, 1] - res.interval[i, 0]
+            row.append(f"{mc.low[i]:.6g} .. {mc.high[i]:.6g} (x{(mc.high[i] - mc.low[i]) / w:.2f})")
+        elif mc is not None:
+            row.append(f"{mc.std[i]:.3g} (x{mc.ratio[i]:.2f})")
         t.add_row(*row)
     con.print(t)
     if res.ambiguous:

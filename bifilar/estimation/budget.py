@@ -323,14 +323,19 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
     cov = np.zeros_like(lin.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)
-    return LinearBudget(list(lin.names), cov, contrib, dict(lin.sigmas)), failed
+    return LinearBudget(list(lin.names), cov, contrib, dict(lin.sigmas), dict(lin.dof)), failed
 
 
 def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_samples=None) -> np.ndarray:
     """(P, 2) 95 % intervals of the unknowns (SI).  Linear budget: ``p +-
-    1.96 std``.  Second-order budget: the 2.5-97.5 % quantiles of the error
+    k std``, ``k std = sqrt(sum_j (t_j c_j)^2)`` with each contribution
+    expanded by its own Student factor (:attr:`LinearBudget.coverage_factor`;
+    1.96 when every term has infinitely many dof: only a period from ``n``
+    timed trials has ``n - 1``).  Second-order budget: the 2.5-97.5 % quantiles of the error
     model ``e = sum_j (a_j z_j + b_j z_j^2)`` plus the pair interactions of
-    ``ctx.cross`` (:func:`_pair_terms`) plus normal terms for the linear inputs and periods, taken with a random
+    ``ctx.cross`` (:func:`_pair_terms`) plus normal terms for the linear inputs and
+    periods (a period with ``nu`` finite degrees of freedom: ``c T_nu``, a
+    Student variate, whose 97.5 % quantile is ``c t_{0.975, nu}``), taken with a random
     sign ``s = +-1`` (the model and its mirror image, equally likely), plus
     ``D u`` with ``u = (A/A_max)^2``, ``A`` uniform, for an unstated
     amplitude.  Why the mirror: the model is built around the *measured*
@@ -342,16 +347,19 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
     (docs/invert.md, "The 95 % interval").  The unstated amplitude's term
     keeps its sign (an assumed distribution of the release amplitude,
     independent of the inputs).  With Monte Carlo re-estimates
-    ``mc_samples`` (n, P): ``p +- 1.96 std`` joined with their 2.5-97.5 %
+    ``mc_samples`` (n, P): the linear interval joined with their 2.5-97.5 %
     quantiles."""
     p = np.asarray(p_hat, float)
     sd = budget.std
-    lo, hi = p - 1.96 * sd, p + 1.96 * sd
+    half = budget.coverage_factor * sd
+    lo, hi = p - half, p + half
     skewed = ctx is not None and (ctx.surrogate or ctx.amplitude)
     if mc_samples is not None and len(mc_samples) > 1:
         q = np.quantile(np.asarray(mc_samples, float), [0.025, 0.975], axis=0)
         lo, hi = np.minimum(lo, q[0]), np.maximum(hi, q[1])
     elif skewed:
+        from scipy import stats
+
         rng = np.random.default_rng(20261123)
         N = _SURROGATE_SAMPLES
         err = np.zeros((N, len(p)))
@@ -359,7 +367,15 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
         for k, c in budget.contributions.items():
             if k in skip or k.endswith("(2nd order)"):
                 continue
-            err += rng.standard_normal(N)[:, None] * np.asarray(c)[None, :]
+            nu = budget.dof.get(k, math.inf)
+            if math.isfinite(nu):
+                # stratified Student variates (one per probability stratum, in
+                # random order): the heavy tail of 1-2 dof is sampled evenly
+                # (plain draws: ~5 % error in the 97.5 % quantile for nu = 1)
+                z = stats.t.ppf((rng.permutation(N) + rng.uniform(size=N)) / N, nu)
+            else:
+                z = rng.standard_normal(N)
+            err += z[:, None] * np.asarray(c)[None, :]
         zs = {}
         for key, (a, b) in ctx.surrogate.items():
             z = zs[key] = rng.standard_normal(N)[:, None]
@@ -500,7 +516,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     for m in pb.measurements:
         lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
         tn.append(f"timing[{lab}]")
-    budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn)
+    budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn,
+                       timing_dof=[m.dof for m in pb.measurements])
     # every input, degenerate ones too, with its standard uncertainty
     all_sig = dict(sigmas)
     for d in degenerate:

@@ -111,6 +111,16 @@ class Measurement:
     fit: Any = field(default=None, repr=False)
     signal: Any = field(default=None, repr=False)  # (t, y) of a recording, for plots
 
+    @property
+    def dof(self) -> float:
+        """Degrees of freedom of ``std``: ``n - 1`` for a period from ``n >=
+        2`` timed trials whose std is the trials' own (their scatter, or the
+        reaction-time floor standing in for it; :func:`period_from_trials`),
+        infinite (``math.inf``) otherwise: a stated ``time_std``, one trial,
+        a ``--period`` with its sigma, a fitted recording."""
+        nu = self.details.get("dof") if self.source == "timed" else None
+        return float(nu) if nu is not None else math.inf
+
     def to_json(self) -> dict:
         d = {"mode": self.label, "hanging": self.hanging, "source": self.source, "period": self.period,
              "std": self.std, "std_given": self.std_given, "amplitude": self.amplitude,

@@ -24,7 +24,10 @@ if TYPE_CHECKING:
 def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> list:
     """``n`` perturbed measurement sets for :func:`monte_carlo_check`: inputs,
     periods and amplitudes drawn from their assumed distributions (centred on
-    the measured values); the amplitude factor is scaled as ``r(A) = 1 + (r -
+    the measured values; normal, except a period from ``n`` timed trials:
+    ``T + std T_{n-1}``, Student's t with the trials' dof, whose spread is
+    what the trials support and whose 2.5-97.5 % quantiles are the
+    Student interval; for ``n <= 3`` it has no finite variance); the amplitude factor is scaled as ``r(A) = 1 + (r -
     1)(A/A0)^2`` (nonlinear method) and each drawn period is divided by it,
     so every draw is a linear-model problem.  Every input is perturbed,
     degenerate ones (no derivative) too: their finite-size effect is what the
@@ -56,7 +59,11 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                 hangs.append(replace(hm.hanging, scene=s2))
             meas = []
             for k, m in enumerate(pb.measurements):
-                T = m.period + rng.normal(0.0, m.std)
+                # a period from n timed trials: its std is estimated with
+                # nu = n - 1 dof, so the truth given the trials is T + std T_nu
+                # (Student), not T + std z: normal draws under-cover as 1.96 did
+                nu = m.dof
+                T = m.period + m.std * (rng.standard_t(nu) if math.isfinite(nu) else rng.normal())
                 r = res.factors[k]
                 if m.amplitude and res.method == "nonlinear":
                     sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * m.amplitude

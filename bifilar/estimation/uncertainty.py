@@ -44,6 +44,7 @@ attachments and the CoM shift in the body frame.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -221,6 +222,28 @@ def robust_sensitivity(scene: Scene, rest: RestPose, modes: ModeSet, names: list
     return Sensitivity([names[j] for j in keep], T0, J[:, keep], modes, rest), failed
 
 
+#: the normal 97.5 % quantile
+Z95 = 1.959963984540054
+
+
+def equivalent_dof(k: float) -> float:
+    """Degrees of freedom ``nu`` whose Student 97.5 % quantile is ``k``
+    (``inf`` for ``k <= 1.96``, the normal one; ``k`` above ``t_{0.975, 0.5}``
+    gives 0.5)."""
+    from scipy import optimize, stats
+
+    if not np.isfinite(k) or k <= Z95 * (1 + 1e-12):
+        return math.inf
+    def f(nu):
+        return float(stats.t.ppf(0.975, nu)) - k
+
+    if f(1e8) >= 0:
+        return math.inf
+    if f(0.5) <= 0:
+        return 0.5
+    return float(optimize.brentq(f, 0.5, 1e8, rtol=1e-10))
+
+
 # ---------------------------------------------------------------------------
 # linear propagation
 # ---------------------------------------------------------------------------
@@ -232,12 +255,44 @@ class LinearBudget:
     covariance : (P, P) in SI units squared.  std : (P,).
     contributions : {input: (P,) signed standard contribution c_j}.
     sigmas : {input: its standard uncertainty s_j (SI)}.
+    dof : {input: degrees of freedom of its standard uncertainty}; a term
+        not listed has infinitely many (a Type B input, a stated period
+        sigma); a period from ``n`` timed trials has ``n - 1``.
     """
 
     names: list[str]
     covariance: np.ndarray
     contributions: dict
     sigmas: dict = field(default_factory=dict)
+    dof: dict = field(default_factory=dict)
+
+    @property
+    def coverage_factor(self) -> np.ndarray:
+        """(P,) ``k`` of the 95 % interval ``p +- k std`` of a linear budget:
+        ``k std = sqrt(sum_j (t_j c_j)^2)``, each contribution ``c_j``
+        expanded by its own Student factor ``t_j = t_{0.975, nu_j}`` (1.96
+        for infinitely many dof) -- the quadrature of the terms' own 95 %
+        half-widths.  One term alone: its exact Student interval; no finite
+        dof: 1.96.  (docs/invert.md, "The 95 % interval", for why not
+        Welch-Satterthwaite.)"""
+        from scipy import stats
+
+        var = np.zeros(len(self.names))
+        exp2 = np.zeros(len(self.names))
+        for k, c in self.contributions.items():
+            c2 = np.asarray(c, float) ** 2
+            nu = self.dof.get(k, math.inf)
+            t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) else Z95
+            var += c2
+            exp2 += t * t * c2
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(var > 0, np.sqrt(exp2 / np.where(var > 0, var, 1.0)), Z95)
+
+    @property
+    def effective_dof(self) -> np.ndarray:
+        """(P,) degrees of freedom equivalent to :attr:`coverage_factor`: the
+        ``nu`` with ``t_{0.975, nu} = k`` (``inf`` when ``k`` is 1.96)."""
+        return np.array([equivalent_dof(k) for k in self.coverage_factor])
 
     @property
     def std(self) -> np.ndarray:
@@ -281,7 +336,7 @@ def gain_matrix(Jp: np.ndarray, sigma: np.ndarray) -> np.ndarray:
 
 def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np.ndarray,
               input_names: list[str], input_sigmas: np.ndarray, extra: dict | None = None,
-              timing_names: list[str] | None = None) -> LinearBudget:
+              timing_names: list[str] | None = None, timing_dof=None) -> LinearBudget:
     """Linear propagation (module docstring).
 
     Parameters
@@ -294,6 +349,8 @@ def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np
     extra : {name: (P,) signed contribution} added as independent terms
         (amplitude effects computed elsewhere, model bias).
     timing_names : names of the K timing terms (default ``timing[k]``).
+    timing_dof : (K,) degrees of freedom of each period's sigma (default:
+        all infinite; ``n - 1`` for a period from ``n`` timed trials).
     """
     Jp = np.atleast_2d(np.asarray(Jp, float))
     K = Jp.shape[0]
@@ -302,9 +359,12 @@ def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np
     contrib: dict[str, np.ndarray] = {}
     sigmas: dict[str, float] = {}
     tn = timing_names or [f"timing[{k}]" for k in range(K)]
+    dof: dict[str, float] = {}
     for k in range(K):
         contrib[tn[k]] = G[:, k] * sig[k]
         sigmas[tn[k]] = float(sig[k])
+        if timing_dof is not None and math.isfinite(timing_dof[k]):
+            dof[tn[k]] = float(timing_dof[k])
     for j, n in enumerate(input_names):
         s = float(input_sigmas[j])
         if s > 0:
@@ -316,7 +376,7 @@ def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np
     cov = np.zeros((P, P))
     for c in contrib.values():
         cov += np.outer(c, c)
-    return LinearBudget(list(names), cov, contrib, sigmas)
+    return LinearBudget(list(names), cov, contrib, sigmas, dof)
 
 
 # ---------------------------------------------------------------------------
