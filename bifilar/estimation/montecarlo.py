@@ -294,6 +294,13 @@ def _modes_or_none(modes_batch, scenes, rests) -> list:
         return out
 
 
+DRAW_SCHEME = 2
+"""Version of how the draws are made, part of a journal's key: 2 draws a
+period from n timed trials with Student's t (n - 1 dof), 1 drew it normal.
+A journal of another scheme is refused on ``--resume`` instead of mixing
+the two kinds of draws."""
+
+
 def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | None = None, resume: bool = False,
                           chunk: int = 100, progress=None, stop_after: int | None = None) -> MonteCarloSummary:
     """:func:`monte_carlo_check` in chunks of ``chunk`` draws, each appended to
@@ -314,7 +321,7 @@ def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | 
 
     path = Path(journal)
     key = hashlib.sha256(json.dumps([list(res.names), [float(v) for v in res.values], [float(v) for v in res.std],
-                                     int(n), int(chunk), res.method], sort_keys=True).encode()).hexdigest()[:16]
+                                     int(n), int(chunk), res.method, DRAW_SCHEME], sort_keys=True).encode()).hexdigest()[:16]
     n_chunks = (n + chunk - 1) // chunk
     done: dict[int, np.ndarray] = {}
     if path.exists():
