@@ -85,8 +85,9 @@ def test_stiff_body_is_refused_after_a_short_probe_with_an_estimate(monkeypatch)
     assert e.value.field == "--periods" and "stiff body" in str(e.value)
     est = float(str(e.value).split("needs about ")[1].split(" evaluations")[0])
     assert est > 1e5
-    # the probe is 1 % of the run: its evaluations are est / 100
-    assert calls[0] <= est / 100 + 1 and calls[0] < 2e4
+    # the probe is 1 % of the run: its evaluations are est / 100, est as printed with 2 significant
+    # figures (so up to 5 % below the exact count: 1730 evaluations print as 1.7e+05)
+    assert calls[0] <= 1.05 * est / 100 + 1 and calls[0] < 2e4
 
 
 def test_stiff_run_is_right_and_bounded_when_the_probe_underestimates(monkeypatch):
