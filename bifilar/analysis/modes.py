@@ -90,15 +90,32 @@ class ModeSet:
 
 def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     """All 6 - n linear modes about ``rest``, slowest first."""
+    return modes_of_inertia(scene, rest)(scene.inertia)
+
+
+def modes_of_inertia(scene: Scene, rest: RestPose):
+    """A function ``inertia -> ModeSet``: the :func:`linear_modes` about
+    ``rest`` of ``scene`` with its inertia tensor (3 x 3, body axes about
+    the CoM, kg m^2) replaced.  The rest pose and the reduced stiffness do
+    not depend on the inertia, so they are computed once; each call solves
+    only the eigenproblem (the same operations as :func:`linear_modes`, so
+    the same result to the last bit).  For a search over one inertia
+    component at a fixed geometry."""
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
-    N, Kr, Mr, rank = reduced_stiffness(scene, rest.com, rest.R, lam)
-    M = np.zeros((6, 6))
-    M[:3, :3] = scene.mass * np.eye(3)
-    M[3:, 3:] = rest.R @ scene.inertia @ rest.R.T
-    if N.shape[1] == 0:
-        return ModeSet([], M, N)
-    w2, Y = eigh_generalized(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
-    return mode_set(N, Y, w2, scene.mass, M, K=0.5 * (Kr + Kr.T))
+    N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
+    K = 0.5 * (Kr + Kr.T)
+
+    def modes(inertia) -> ModeSet:
+        M = np.zeros((6, 6))
+        M[:3, :3] = scene.mass * np.eye(3)
+        M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
+        if N.shape[1] == 0:
+            return ModeSet([], M, N)
+        Mr = N.T @ M @ N
+        w2, Y = eigh_generalized(K, 0.5 * (Mr + Mr.T))
+        return mode_set(N, Y, w2, scene.mass, M, K=K)
+
+    return modes
 
 
 def eigh_generalized(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
