@@ -333,7 +333,7 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> 
         # the std invert prints: second order where the linear one is wrong (a
         # shallow CoM), so a planner can penalise such a rig (issue 10)
         sds = honest_stds(scene, [(requests[i][0], requests[i][1] + 1) for i in todo], unc, unc["timing"],
-                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest)
+                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest, sens=sens)
         for i, sd in zip(todo, sds):
             out[i] = replace(out[i], value_sigma=sd)
     return out
