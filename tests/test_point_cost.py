@@ -125,3 +125,18 @@ def test_honest_stds_ignore_a_finite_difference_sensitivity():
     cache: dict = {}
     _seed_sensitivity(cache, scene, sens)
     assert cache == {}
+
+
+def test_hanging_model_locate_reuses_the_stiffness_only_at_its_geometry():
+    # inertia-only changes reuse the stiffness; a geometry change (and back) re-solves it: every answer
+    # equals linear_modes at locate's rest pose
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    other = perturb(scene, "length.1", 0.01)
+    for sc in (perturb(scene, "Izz", 5.0), other, perturb(other, "Ixx", -3.0), perturb(scene, "Iyy", 2.0)):
+        rest, ms, _ = hm.locate(sc)
+        ref = linear_modes(sc, rest_pose(sc, guess=rest, local_only=True))
+        assert [m.period for m in ms.modes] == pytest.approx([m.period for m in ref.modes], rel=1e-12)
