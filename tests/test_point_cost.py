@@ -140,3 +140,52 @@ def test_hanging_model_locate_reuses_the_stiffness_only_at_its_geometry():
         rest, ms, _ = hm.locate(sc)
         ref = linear_modes(sc, rest_pose(sc, guess=rest, local_only=True))
         assert [m.period for m in ms.modes] == pytest.approx([m.period for m in ref.modes], rel=1e-12)
+
+
+def test_clusters_match_the_plain_definition():
+    # chained from each cluster's first member, the larger tolerance of a pair applying
+    from bifilar.analysis.modes import clusters
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        w2 = np.sort(rng.choice([1.0, 1.0 + 1e-12, 2.0, 2.0 + 3e-11, 5.0], size=rng.integers(1, 6)))
+        tol = rng.choice([1e-11, 1e-10, 1e-13], size=len(w2))
+        ref, k = [], 0
+        while k < len(w2):
+            j = k + 1
+            while j < len(w2) and abs(w2[j] - w2[k]) <= max(tol[k], tol[j]):
+                j += 1
+            ref.append((k, j))
+            k = j
+        assert clusters(w2, tol) == ref
+        assert clusters(w2, 1e-10) == clusters(w2, np.full(len(w2), 1e-10))
+
+
+def test_thesis_models_of_one_hanging_share_the_kane_forcing():
+    # a model built on a hanging that already served another mode and component equals one built afresh
+    from bifilar.estimation.ladder import ThesisModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = trapezoid(h=0.5)
+
+    def fresh():
+        return HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+
+    shared = fresh()
+    ThesisModel(shared, shared.mode_index("pitch", "m"), "Ixx")
+    for label, comp in (("torsion", "Izz"), ("pitch", "Iyy")):
+        a = ThesisModel(shared, shared.mode_index(label, "m"), comp)
+        h = fresh()
+        b = ThesisModel(h, h.mode_index(label, "m"), comp)
+        assert a.which == b.which
+        for x in (0.9 * a.x0, a.x0, 1.2 * a.x0):
+            assert a.period(x) == b.period(x)
+        assert a.period(1.1 * a.x0) != a.period(a.x0)  # it does depend on the component
+    # another hanging's models use its own forcing, not the first one's
+    other = trapezoid(h=0.3)
+    h2 = HangingModel(Hanging("h2", other, np.eye(3)), other.inertia)
+    a = ThesisModel(h2, h2.mode_index("pitch", "m"), "Ixx")
+    ref = ThesisModel(shared, shared.mode_index("pitch", "m"), "Ixx")
+    assert a.period(a.x0) != pytest.approx(ref.period(ref.x0), rel=1e-6)
+    assert a.period(a.x0) == pytest.approx(h2.modes0.get("pitch").period, rel=0.05)
