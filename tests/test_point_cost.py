@@ -189,3 +189,27 @@ def test_thesis_models_of_one_hanging_share_the_kane_forcing():
     ref = ThesisModel(shared, shared.mode_index("pitch", "m"), "Ixx")
     assert a.period(a.x0) != pytest.approx(ref.period(ref.x0), rel=1e-6)
     assert a.period(a.x0) == pytest.approx(h2.modes0.get("pitch").period, rel=0.05)
+
+
+@pytest.mark.parametrize("params", [{"spacing": 3.0}, {"spacing": 6.0, "length": 5.0}])
+def test_knife_edge_point_takes_its_linear_budget_without_the_honest_pass(params, monkeypatch):
+    # CoM on the attachment line: a neutral mode, so the honest std has no second-order part and equals
+    # what the honest pass gives with the point's linear figure as fallback, without running it
+    from bifilar.estimation import honest
+    from bifilar.studies import point as pt
+
+    scene = _scene("thesis_plate_rest", params)
+    unc = default_uncertainty()
+    sens, _ = pt.point_sensitivity(scene, COMPS + measured_inputs(scene))
+    assert not np.all(np.isfinite(sens.periods))
+    req = [(c, best_mode_for(sens, c)) for c in COMPS if np.any(sens.column(c) != 0)]
+    lin = pt.predicted_budgets(sens, scene, req, unc, honest=False)
+    ref = honest.honest_stds(scene, [(c, k + 1) for c, k in req], unc, unc["timing"],
+                             fallbacks=[b.value_sigma for b in lin], rest=sens.rest)
+
+    def no_call(*a, **k):
+        raise AssertionError("the honest pass ran at a knife edge")
+
+    monkeypatch.setattr(honest, "honest_stds", no_call)
+    got = pt.predicted_budgets(sens, scene, req, unc)
+    assert [b.value_sigma for b in got] == pytest.approx(ref, rel=1e-12)

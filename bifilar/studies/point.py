@@ -326,9 +326,16 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> 
     out = [inertia_budget(sens, scene, comp, k, unc["timing"], unc) for comp, k in requests]
     # an input with no derivative (a knife edge, dependent wires): invert
     # gives no std there, and the honest figure would fall back to the
-    # linear one after a costly inversion (the known limit)
+    # linear one after a costly inversion (the known limit).  A scene with a
+    # neutral mode (a knife edge) gets no second-order terms either
+    # (budget.second_order: its sigma points are not treated yet), so its
+    # honest std is a linear budget, which the point's branch-following
+    # sensitivity already gives (the budget's own forward differences at a
+    # knife edge either fail, giving this fallback, or agree within
+    # LINEAR_ENOUGH, or jump to another branch)
+    neutral = not np.all(np.isfinite(np.asarray(sens.periods, float)))
     todo = [i for i, (_, k) in enumerate(requests)
-            if honest and np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
+            if honest and not neutral and np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
     if todo:
         # the std invert prints: second order where the linear one is wrong (a
         # shallow CoM), so a planner can penalise such a rig (issue 10)
