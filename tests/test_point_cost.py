@@ -213,3 +213,20 @@ def test_knife_edge_point_takes_its_linear_budget_without_the_honest_pass(params
     monkeypatch.setattr(honest, "honest_stds", no_call)
     got = pt.predicted_budgets(sens, scene, req, unc)
     assert [b.value_sigma for b in got] == pytest.approx(ref, rel=1e-12)
+
+
+def test_constraint_hessians_equal_the_skew_formula():
+    # built without np.stack; the same numbers as the cross-product-matrix formula, bit for bit
+    from bifilar.analysis.equilibrium import constraint_hessians
+    from bifilar.rotations import skew
+
+    rng = np.random.default_rng(3)
+    for n in (2, 3, 4):
+        d = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
+        w = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
+        H = constraint_hessians(d, w)
+        for i in range(n):
+            W = skew(w[i])
+            assert np.array_equal(H[i, :3, 3:], -W) and np.array_equal(H[i, 3:, :3], W)
+            ref = -W @ W + 0.5 * (np.outer(d[i], w[i]) + np.outer(w[i], d[i])) - np.dot(d[i], w[i]) * np.eye(3)
+            assert np.array_equal(H[i, 3:, 3:], ref)
