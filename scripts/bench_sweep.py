@@ -16,7 +16,10 @@ does) against all in one batch, with whether each scene's figures are
 bit-for-bit the same whatever else shares its batch (what ``--workers``
 and ``--resume`` need).
 
-    python scripts/bench_sweep.py [--repeats 5] [--json FILE] [--no-plan] [--engines]
+    python scripts/bench_sweep.py [--repeats 5] [--json FILE] [--no-plan] [--engines] [--parts]
+
+``--parts``: where one point's CPU goes (its sensitivity, the honest
+sigma with its sigma points, the nonlinear runs, the biases).
 
 Medians of CPU time (the load-robust measure; wall clock alongside).
 Deterministic points, so every repeat does the same work.
@@ -203,12 +206,64 @@ def bench_engines() -> dict:
             "sigma_one_batch_cpu_s": c5 - c4}
 
 
+#: the parts of a point timed by ``--parts``: (label, module, attribute); nested parts are inside the outer ones
+PARTS = [("sensitivity", "bifilar.studies.point", "point_sensitivity"),
+         ("honest sigma (all components)", "bifilar.estimation.honest", "honest_stds"),
+         ("  of which sigma-point scenes' rest poses + modes", "bifilar.estimation.budget", "_hanging_periods"),
+         ("  of which sigma points re-solved", "bifilar.estimation.budget", "_resolve"),
+         ("nonlinear runs", "bifilar.studies.point", "_nonlinear_runs"),
+         ("bias: thesis rung", "bifilar.studies.point", "_Ladder.thesis"),
+         ("bias: linear estimate", "bifilar.studies.point", "linear_estimate")]
+
+
+def bench_parts(repeats: int = 5) -> dict:
+    """CPU s a point spent in each of :data:`PARTS` (means over ``repeats``
+    points; the point's own rest pose, the small-angle rung and the
+    bookkeeping are the rest of the total)."""
+    import functools
+    import importlib
+
+    spent: dict = {}
+    undo = []
+    for label, mod, attr in PARTS:
+        owner = importlib.import_module(mod)
+        *path, name = attr.split(".")
+        for p in path:
+            owner = getattr(owner, p)
+        real = getattr(owner, name)
+
+        def wrapped(*a, _real=real, _label=label, **k):
+            c0 = time.process_time()
+            try:
+                return _real(*a, **k)
+            finally:
+                spent[_label] = spent.get(_label, 0.0) + time.process_time() - c0
+
+        setattr(owner, name, functools.wraps(real)(wrapped))
+        undo.append((owner, name, real))
+    out = {}
+    try:
+        for case, (path, params) in CASES.items():
+            cfg = read_yaml(path)
+            st = sw.resolve_settings(cfg)
+            sw.evaluate_point(cfg, str(path), params, st)
+            spent.clear()
+            total = timed(lambda: sw.evaluate_point(cfg, str(path), params, st), repeats)[0]
+            n = repeats
+            out[case] = {"point_cpu_s": total, **{k: v / n for k, v in spent.items()}}
+    finally:
+        for owner, name, real in undo:
+            setattr(owner, name, real)
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", default=None, help="also write the results to this file")
     ap.add_argument("--no-plan", action="store_true", help="leave out the plan timing")
     ap.add_argument("--engines", action="store_true", help="also measure batching across the sweep's points")
+    ap.add_argument("--parts", action="store_true", help="also time the parts of one point")
     args = ap.parse_args(argv)
     res = bench(args.repeats)
     for name, r in res.items():
@@ -233,6 +288,11 @@ def main(argv=None) -> int:
         print(f"its sigma points: {e['sigma_scenes']} scenes in {e['sigma_batches']} batches, rest poses + modes "
               f"{1e3 * e['sigma_per_point_cpu_s'] / e['sigma_scenes']:.3f} ms a scene batched per point, "
               f"{1e3 * e['sigma_one_batch_cpu_s'] / e['sigma_scenes']:.3f} ms in one batch")
+    if args.parts:
+        res["parts"] = bench_parts(args.repeats)
+        for case, r in res["parts"].items():
+            print(f"{case} point, {1e3 * r['point_cpu_s']:.1f} ms CPU (median), where it goes (mean ms): "
+                  + "; ".join(f"{k.strip()} {1e3 * r.get(k, 0.0):.1f}" for k, _, _ in PARTS))
     if not args.no_plan:
         res["plan"] = p = bench_plan(args.repeats)
         print(f"Solar Boat 2-parameter plan: {p['plan_cpu_s']:.2f} s CPU ({p['plan_wall_s']:.2f} s wall), "

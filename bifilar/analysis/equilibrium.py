@@ -74,7 +74,8 @@ def constraint_hessians(d: np.ndarray, w: np.ndarray) -> np.ndarray:
     H = np.zeros((n, 6, 6))
     eye = np.eye(3)
     for i in range(n):
-        W = skew(w[i])
+        x, y, z = w[i].tolist()
+        W = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])  # skew(w[i]), built without np.stack
         H[i, :3, :3] = eye
         H[i, :3, 3:] = -W
         H[i, 3:, :3] = W

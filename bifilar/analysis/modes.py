@@ -90,15 +90,32 @@ class ModeSet:
 
 def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     """All 6 - n linear modes about ``rest``, slowest first."""
+    return modes_of_inertia(scene, rest)(scene.inertia)
+
+
+def modes_of_inertia(scene: Scene, rest: RestPose):
+    """A function ``inertia -> ModeSet``: the :func:`linear_modes` about
+    ``rest`` of ``scene`` with its inertia tensor (3 x 3, body axes about
+    the CoM, kg m^2) replaced.  The rest pose and the reduced stiffness do
+    not depend on the inertia, so they are computed once; each call solves
+    only the eigenproblem (the same operations as :func:`linear_modes`, so
+    the same result to the last bit).  For a search over one inertia
+    component at a fixed geometry."""
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
-    N, Kr, Mr, rank = reduced_stiffness(scene, rest.com, rest.R, lam)
-    M = np.zeros((6, 6))
-    M[:3, :3] = scene.mass * np.eye(3)
-    M[3:, 3:] = rest.R @ scene.inertia @ rest.R.T
-    if N.shape[1] == 0:
-        return ModeSet([], M, N)
-    w2, Y = eigh_generalized(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T))
-    return mode_set(N, Y, w2, scene.mass, M, K=0.5 * (Kr + Kr.T))
+    N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
+    K = 0.5 * (Kr + Kr.T)
+
+    def modes(inertia) -> ModeSet:
+        M = np.zeros((6, 6))
+        M[:3, :3] = scene.mass * np.eye(3)
+        M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
+        if N.shape[1] == 0:
+            return ModeSet([], M, N)
+        Mr = N.T @ M @ N
+        w2, Y = eigh_generalized(K, 0.5 * (Mr + Mr.T))
+        return mode_set(N, Y, w2, scene.mass, M, K=K)
+
+    return modes
 
 
 def eigh_generalized(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -130,12 +147,14 @@ def clusters(w2: np.ndarray, tol) -> list[tuple[int, int]]:
     eigenvalue, the larger of the pair applying, see :func:`_noise`); chained
     from the first member, so the grouping does not depend on last-bit noise
     of the others."""
-    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2))
+    # Python floats: the same IEEE doubles as numpy's scalars, a tenth of the cost in this loop
+    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2)).tolist()
+    w = np.asarray(w2, float).tolist()
     out = []
     k = 0
-    while k < len(w2):
+    while k < len(w):
         j = k + 1
-        while j < len(w2) and abs(w2[j] - w2[k]) <= max(t[k], t[j]):
+        while j < len(w) and abs(w[j] - w[k]) <= max(t[k], t[j]):
             j += 1
         out.append((k, j))
         k = j
@@ -181,9 +200,11 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     """
     w2 = np.array(w2, float)
     tol = _noise(w2, np.array(Y, float), K)
-    Y = _align_degenerate(N, np.array(Y, float), w2, tol)
-    for a, b in clusters(w2, tol):
-        w2[a:b] = np.mean(w2[a:b])
+    groups = clusters(w2, tol)
+    Y = _align_degenerate(N, np.array(Y, float), w2, tol, groups)
+    for a, b in groups:
+        if b - a > 1:  # (the mean of one number is that number)
+            w2[a:b] = np.mean(w2[a:b])
     S = N @ Y
     absS = np.abs(S)
     # first component within 1e-9 of the largest: independent of last-bit noise
@@ -212,15 +233,16 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     return ModeSet(modes, M, N)
 
 
-def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol) -> np.ndarray:
+def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol, groups=None) -> np.ndarray:
     """Within clusters of (nearly) equal eigenvalues the eigenvectors are
     arbitrary; pick the combination whose shapes are aligned with the world
     axes: greedy row pivoting on the cluster's shapes (the world component
     with the largest remaining norm, ties within 1e-6 going to the first
     component), then the basis that is the identity on those components.
-    Deterministic: the same choice on every machine."""
+    Deterministic: the same choice on every machine.  ``groups``:
+    :func:`clusters` of ``w2`` and ``tol`` if already known."""
     Y = Y.copy()
-    for k, j in clusters(w2, tol):
+    for k, j in (groups if groups is not None else clusters(w2, tol)):
         if j - k < 2:
             continue
         S = N @ Y[:, k:j]  # (6, c)

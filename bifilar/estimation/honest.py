@@ -30,7 +30,7 @@ from .budget import LINEAR_ENOUGH, component_std
 
 
 def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitude: float | None = 0.0,
-                fallbacks=None, rest=None, rtol: float = 1e-10) -> list[float]:
+                fallbacks=None, rest=None, rtol: float = 1e-10, sens=None) -> list[float]:
     """The honest standard uncertainty (kg m^2) of each ``(component, mode)``
     of ``requests`` (body-axis inertia component, mode label or 1-based
     index) of ``scene``: :func:`~bifilar.estimation.budget.component_std`
@@ -38,7 +38,11 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     per-request ``fallbacks`` (kg m^2 or None; None raises where
     ``component_std`` raises), computed together (module docstring).
     ``rest``: the scene's rest pose if known.  ``rtol``: the tolerance of
-    the nonlinear runs of an unstated amplitude (``amplitude=None``)."""
+    the nonlinear runs of an unstated amplitude (``amplitude=None``).
+    ``sens``: the scene's :class:`~bifilar.estimation.sensitivity.Sensitivity`
+    about ``rest`` if known (a sweep point's); where it is analytic in every
+    measured input it serves the linear budget (the same Jacobian the budget
+    would compute, :func:`_seed_sensitivity`)."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from .invert import full_budget
@@ -49,6 +53,8 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     fallbacks = list(fallbacks) if fallbacks is not None else [None] * len(requests)
     out: list[float] = []
     cache: dict = {}
+    if sens is not None:
+        _seed_sensitivity(cache, scene, sens)
     ms = None
     for (comp, mode), fb in zip(requests, fallbacks):
         try:
@@ -88,3 +94,26 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
                 raise ConvergenceError(f"{comp}: the period of mode {mode} does not depend on it") from None
             out.append(float(fb))
     return out
+
+
+def _seed_sensitivity(cache: dict, scene, sens) -> None:
+    """Enter ``sens`` into the budget's ``cache`` as the sensitivity the
+    linear budget of ``scene`` looks up (:func:`bifilar.estimation.budget._budget`:
+    every measured input, via :func:`~bifilar.estimation.uncertainty.robust_sensitivity`),
+    when it is what that would compute: analytic in every measured input
+    (no finite-difference column, no neutral mode), so equal to rounding.
+    Anything else (a knife edge, repeated eigenvalues) is left to the
+    budget's own differences."""
+    from .budget import scene_key
+    from .sensitivity import Sensitivity, measured_inputs
+
+    names = measured_inputs(scene)
+    if (getattr(sens, "method", None) != "analytic" or sens.one_sided or sens.undefined
+            or not set(names) <= set(sens.names) or not np.all(np.isfinite(sens.periods))):
+        return
+    idx = [sens.names.index(n) for n in names]
+    jac = np.asarray(sens.jacobian, float)[:, idx]
+    if not np.all(np.isfinite(jac)):
+        return
+    cache[("sensitivity", scene_key(scene), tuple(names))] = (
+        Sensitivity(list(names), sens.periods, jac, sens.modes, sens.rest, method="analytic"), [])

@@ -73,6 +73,39 @@ def thesis_linearisation_for(mapping: KaneMapping, rest, mode) -> int:
     return int(np.argmax(np.abs(wn))) + 1
 
 
+def _thesis_cache(hm: HangingModel) -> dict:
+    """What the thesis's models of one hanging share, kept on ``hm``: its
+    Kane mapping and, at the prior rest pose, the mass matrix, forcing and
+    the forcing's Jacobian in the five angles (:func:`_thesis_forcing`).
+    They depend on the hanging only, not on the mode or component."""
+    c = getattr(hm, "_thesis_cache", None)
+    if c is None:
+        c = hm._thesis_cache = {}
+    if "mapping" not in c:
+        c["mapping"] = kane_mapping(hm.scene0, hm.rest0)
+    return c
+
+
+def _thesis_forcing(hm: HangingModel):
+    """(M_a, N0, dN) of :func:`_thesis_cache`: mass matrix and forcing at
+    rest and d forcing / d theta (complex step)."""
+    from ..models import kane
+
+    c = _thesis_cache(hm)
+    if "forcing" not in c:
+        p, th0, z5 = c["mapping"].params, c["mapping"].theta0, np.zeros(5)
+        M_a, N0 = kane.mass_matrix_and_forcing(th0, z5, p)
+        dN = np.zeros((5, 5))
+        hstep = 1e-30
+        for j in range(5):
+            e = np.zeros(5, complex)
+            e[j] = 1j * hstep
+            _, Nc = kane.mass_matrix_and_forcing(th0 + e, z5.astype(complex), p)
+            dN[:, j] = Nc.imag / hstep
+        c["forcing"] = (M_a, N0, dN)
+    return c["forcing"]
+
+
 class ThesisModel:
     """Periods of the thesis's 2x2 linearisation as a function of one inertia
     component (reference frame) of a hanging, with the eigenvalue followed
@@ -83,24 +116,17 @@ class ThesisModel:
 
         if component not in _IDX:
             raise NotApplicable("the thesis's linearisation estimates inertia components only")
-        self.mapping = kane_mapping(hm.scene0, hm.rest0)
+        self.mapping = _thesis_cache(hm)["mapping"]
         mode = hm.modes0.modes[mode_index]
         self.which = thesis_linearisation_for(self.mapping, hm.rest0, mode)
         self.idx = THESIS_COORDS[self.which]
         p = self.mapping.params
         th0 = self.mapping.theta0
         z5 = np.zeros(5)
-        M_a, N0 = kane.mass_matrix_and_forcing(th0, z5, p)
+        M_a, N0, dN = _thesis_forcing(hm)
         scale = p.mass * p.g * max(p.l, p.l_prime, p.b)
         if np.max(np.abs(N0[:4])) > 1e-7 * scale:
             raise NotApplicable("the thesis's model is not at equilibrium at this rest pose")
-        dN = np.zeros((5, 5))
-        hstep = 1e-30
-        for j in range(5):
-            e = np.zeros(5, complex)
-            e[j] = 1j * hstep
-            _, Nc = kane.mass_matrix_and_forcing(th0 + e, z5.astype(complex), p)
-            dN[:, j] = Nc.imag / hstep
         self.dN = dN
         self.x0 = float(hm.I_ref0[_IDX[component]])
         # M5 is linear in the inertia: M5(x) = M_a + (x - x0) dM

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..analysis.equilibrium import rest_pose
-from ..analysis.modes import linear_modes
+from ..analysis.modes import linear_modes, modes_of_inertia
 from ..errors import InputError
 from ..scene import Scene
 from .measurements import COM_UNKNOWNS, SOLVABLE, MeasurementSet
@@ -135,6 +135,7 @@ class HangingModel:
         # for a perturbed copy, base-mode k of ``like`` is mode map_like[k] here
         self.map_like = mac_match(like.modes0, self.modes0) if like is not None else None
         self._rest_cache = (self._geom_key(self.scene0), self.rest0)
+        self._modes_at = None  # (geometry key, modes_of_inertia at the cached rest pose)
         self.evaluations = 0
 
     @staticmethod
@@ -170,14 +171,19 @@ class HangingModel:
         return replace(self.scene0, inertia=I)
 
     def locate(self, scene: Scene):
-        """(rest, modes, match) with ``match[k]`` the index of base mode k."""
+        """(rest, modes, match) with ``match[k]`` the index of base mode k.
+        While only the inertia changes, the rest pose and the reduced
+        stiffness are reused (:func:`~bifilar.analysis.modes.modes_of_inertia`:
+        the same modes as :func:`linear_modes`, bit for bit)."""
         key = self._geom_key(scene)
         if key == self._rest_cache[0]:
             rest = self._rest_cache[1]
         else:
             rest = rest_pose(scene, guess=self._rest_cache[1])
             self._rest_cache = (key, rest)
-        ms = linear_modes(scene, rest)
+        if self._modes_at is None or self._modes_at[0] != key:
+            self._modes_at = (key, modes_of_inertia(scene, rest))
+        ms = self._modes_at[1](scene.inertia)
         self.evaluations += 1
         return rest, ms, mac_match(self.modes0, ms)
 

@@ -137,33 +137,39 @@ def point_sensitivity(scene, names: list[str], rest=None):
 
 
 def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slope: float,
-                    T0: float | None = None) -> float | None:
+                    T0: float | None = None, at=None) -> float | None:
     """The exact linear model's estimate of ``comp`` (kg m^2): the value for
     which the linear period of mode ``k`` of ``modes`` (tracked by MAC, rest
     poses warm-started from ``rest``) equals ``T_target`` (s), the other
     inputs as in ``scene``.  Secant iteration from ``slope`` = dT/dI (s per
     kg m^2) to 1e-13 in the period; ``T0`` the period at the scene's value
     (computed if None).  None if a step leaves the stable region.  The rest
-    pose does not depend on the inertia: the scene's (Newton from ``rest``)
-    is found once and serves every step."""
+    pose and the reduced stiffness do not depend on the inertia: the
+    scene's (Newton from ``rest``) are found once and serve every step
+    (:func:`~bifilar.analysis.modes.modes_of_inertia`).  ``at``: that
+    function for ``scene`` if already built (``rest`` then is the scene's
+    own rest pose, used as it is: one build serves every component of a
+    sweep point)."""
     from ..analysis.equilibrium import rest_pose
-    from ..analysis.modes import linear_modes
+    from ..analysis.modes import modes_of_inertia
     from ..estimation.sensitivity import matched_periods, perturb
-
-    def periods_of(sc, base, r):
-        return matched_periods(base, linear_modes(sc, r))
 
     I0 = float(scene.inertia[_IDX[comp]])
     try:
-        rest = rest_pose(scene, guess=rest, local_only=True)
+        if at is None:
+            at = modes_of_inertia(scene, rest_pose(scene, guess=rest, local_only=True))
+
+        def period(x):  # the linear period of mode k with comp changed by x (kg m^2)
+            return float(matched_periods(modes, at(perturb(scene, comp, x).inertia if x else scene.inertia))[k])
+
         if T0 is None:
-            T0 = float(periods_of(scene, modes, rest)[k])
+            T0 = period(0.0)
         x0, f0 = 0.0, float(T0 - T_target)
         if f0 == 0.0:
             return I0
         x1 = -f0 / float(slope)
         for _ in range(12):
-            f1 = float(periods_of(perturb(scene, comp, x1), modes, rest)[k] - T_target)
+            f1 = period(x1) - T_target
             if abs(f1) <= 1e-13 * T_target or f1 == f0:
                 return I0 + x1
             x0, f0, x1 = x1, f1, x1 - f1 * (x1 - x0) / (f1 - f0)
@@ -221,7 +227,8 @@ class _Ladder:
             return None, "pending: bifilar.estimation.invert (the thesis's linearisation) not available"
         try:
             if self._hm is None:
-                self._hm = inv.HangingModel(self._Hanging("sweep point", self.scene, np.eye(3)), self.scene.inertia)
+                self._hm = inv.HangingModel(self._Hanging("sweep point", self.scene, np.eye(3)), self.scene.inertia,
+                                            rest=self.rest)  # the point's rest pose: no second global search
             hm = self._hm
             tm = inv.ThesisModel(hm, hm.mode_index(mode_label, "mode"), comp)
             lo, hi = inv.physical_interval(self.scene.inertia, comp)
@@ -319,14 +326,21 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> 
     out = [inertia_budget(sens, scene, comp, k, unc["timing"], unc) for comp, k in requests]
     # an input with no derivative (a knife edge, dependent wires): invert
     # gives no std there, and the honest figure would fall back to the
-    # linear one after a costly inversion (the known limit)
+    # linear one after a costly inversion (the known limit).  A scene with a
+    # neutral mode (a knife edge) gets no second-order terms either
+    # (budget.second_order: its sigma points are not treated yet), so its
+    # honest std is a linear budget, which the point's branch-following
+    # sensitivity already gives (the budget's own forward differences at a
+    # knife edge either fail, giving this fallback, or agree within
+    # LINEAR_ENOUGH, or jump to another branch)
+    neutral = not np.all(np.isfinite(np.asarray(sens.periods, float)))
     todo = [i for i, (_, k) in enumerate(requests)
-            if honest and np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
+            if honest and not neutral and np.all(np.isfinite(np.asarray(sens.jacobian, float)[k]))]
     if todo:
         # the std invert prints: second order where the linear one is wrong (a
         # shallow CoM), so a planner can penalise such a rig (issue 10)
         sds = honest_stds(scene, [(requests[i][0], requests[i][1] + 1) for i in todo], unc, unc["timing"],
-                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest)
+                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest, sens=sens)
         for i, sd in zip(todo, sds):
             out[i] = replace(out[i], value_sigma=sd)
     return out
@@ -563,14 +577,17 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
     if screen:
         return res
     # biases at the prescribed amplitude
+    from ..analysis.modes import modes_of_inertia
+
     ladder = _Ladder(scene, rest)
+    at = modes_of_inertia(scene, rest) if chosen else None  # the linear estimates' eigenproblems, one stiffness
     for comp, k in chosen.items():
         e = res["components"][comp]
         T_lin = float(periods[k])
         T_nl = sims[k].period if k in sims else None
         T_ref = T_nl if T_nl is not None else T_lin
         bias, bnotes = ladder.biases(comp, labels[k], T_ref, e["axis_vertical"])
-        I_lin = linear_estimate(scene, comp, k, T_ref, ms, rest, sens.column(comp)[k], float(periods[k]))
+        I_lin = linear_estimate(scene, comp, k, T_ref, ms, rest, sens.column(comp)[k], float(periods[k]), at=at)
         bias["linear"] = (I_lin - e["value"]) / e["value"] if I_lin is not None and e["value"] else None
         e.update(nonlinear_period=T_nl, bias=bias, bias_reference="nonlinear" if T_nl else "linear",
                  bias_notes=bnotes)

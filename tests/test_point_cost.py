@@ -1,0 +1,232 @@
+"""The shortcuts that make a sweep point cheaper (issue 14, docs/performance.md
+"Sweep points and plan") give what the paths they replace give:
+
+* :func:`bifilar.analysis.modes.modes_of_inertia` (the reduced stiffness
+  once, only the eigenproblem per inertia) against :func:`linear_modes` of
+  the scene with that inertia, and against scipy's generalized eigensolver;
+* :func:`bifilar.studies.point.linear_estimate` sharing one stiffness over a
+  point's components (``at``) against its own Newton + stiffness, and its
+  root against the linear period it must reproduce;
+* :func:`bifilar.estimation.honest.honest_stds` fed the point's analytic
+  sensitivity (``sens``) against the budget's own Jacobian.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from bifilar.analysis.equilibrium import reduced_stiffness, rest_pose
+from bifilar.analysis.modes import linear_modes, modes_of_inertia
+from bifilar.config import read_yaml, scene_from_dict
+from bifilar.estimation.sensitivity import best_mode_for, matched_periods, measured_inputs, perturb, period_sensitivity
+from bifilar.estimation.uncertainty import default_uncertainty
+from bifilar.studies.point import linear_estimate
+from bifilar.studies.shorthands import apply_params
+
+from conftest import CONFIGS, trapezoid
+
+COMPS = ["Ixx", "Iyy", "Izz"]
+
+
+def _scene(name, params):
+    cfg, _ = apply_params(read_yaml(CONFIGS / f"{name}.yaml"), params, name)
+    return scene_from_dict(cfg, name, warn=False)
+
+
+SCENES = {"Solar Boat": ("solar_boat", {"spacing": 3.0}), "pitch rig": ("thesis_lin2_pitch", {}),
+          "trifilar": ("trifilar_kth", {})}
+
+
+@pytest.mark.parametrize("case", list(SCENES))
+def test_modes_of_inertia_equal_linear_modes(case):
+    scene = _scene(*SCENES[case])
+    rest = rest_pose(scene)
+    at = modes_of_inertia(scene, rest)
+    I2 = perturb(perturb(scene, "Izz", 0.3 * scene.inertia[2, 2]), "Ixy", 0.05 * scene.inertia[0, 0]).inertia
+    for inertia in (scene.inertia, I2):
+        ref = linear_modes(replace(scene, inertia=inertia), rest)
+        got = at(inertia)
+        assert [m.label for m in got.modes] == [m.label for m in ref.modes]
+        for a, b in zip(got.modes, ref.modes):
+            assert a.period == b.period  # the same operations: bit for bit
+            assert np.array_equal(a.shape, b.shape)
+    # and an independent solver of the same eigenproblem
+    from scipy.linalg import eigh
+
+    lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
+    N, Kr, Mr, _ = reduced_stiffness(replace(scene, inertia=I2), rest.com, rest.R, lam)
+    w2 = eigh(0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T), eigvals_only=True)
+    T_ref = np.sort(2 * np.pi / np.sqrt(w2[w2 > 0]))
+    T_got = np.sort([m.period for m in at(I2).modes if m.period])
+    assert T_got == pytest.approx(T_ref, rel=1e-10)
+
+
+@pytest.mark.parametrize("comp", COMPS)
+def test_linear_estimate_shared_stiffness(comp):
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    k = best_mode_for(sens, comp)
+    T_target = sens.periods[k] * (1 + 3e-4)  # a nonlinear period a little longer
+    slope = sens.column(comp)[k]
+    own = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, slope)
+    shared = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, slope,
+                             at=modes_of_inertia(scene, sens.rest))
+    assert shared == pytest.approx(own, rel=1e-13, abs=1e-13 * abs(own))
+    # the root reproduces the target period in the plain linear model
+    i = COMPS.index(comp)
+    moved = perturb(scene, comp, shared - float(scene.inertia[i, i]))
+    T = matched_periods(sens.modes, linear_modes(moved, rest_pose(moved, guess=sens.rest)))[k]
+    assert T == pytest.approx(T_target, rel=1e-12)
+
+
+def test_linear_estimate_other_scene_still_solves_its_rest():
+    # a measured scene (inputs off the truth) with the truth's rest as a start: the estimate must use the
+    # measured scene's own rest pose, not the start
+    truth = trapezoid(h=0.5)
+    sens = period_sensitivity(truth, COMPS)
+    k = best_mode_for(sens, "Izz")
+    measured = perturb(perturb(truth, "length.1", 2e-3), "attachment.2.y", -1e-3)
+    x = linear_estimate(measured, "Izz", k, sens.periods[k], sens.modes, sens.rest, sens.column("Izz")[k])
+    moved = perturb(measured, "Izz", x - float(measured.inertia[2, 2]))
+    T = matched_periods(sens.modes, linear_modes(moved, rest_pose(moved)))[k]
+    assert T == pytest.approx(sens.periods[k], rel=1e-12)
+
+
+@pytest.mark.parametrize("case", ["Solar Boat", "pitch rig"])
+def test_honest_stds_with_the_points_sensitivity(case, monkeypatch):
+    from bifilar.estimation import budget
+    from bifilar.estimation.honest import honest_stds
+
+    scene = _scene(*SCENES[case])
+    unc = default_uncertainty()
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    assert sens.method == "analytic"
+    req = [(c, best_mode_for(sens, c) + 1) for c in COMPS]
+    ref = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest)  # no fallback: the budget's own std
+
+    def no_call(*a, **k):
+        raise AssertionError("the budget recomputed the sensitivity it was given")
+
+    monkeypatch.setattr(budget, "robust_sensitivity", no_call)
+    got = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens)
+    # analytic both ways (the same derivative, columns picked by name): equal to rounding
+    assert got == pytest.approx(ref, rel=1e-12)
+
+
+def test_honest_stds_ignore_a_finite_difference_sensitivity():
+    # the knife-edge plate: the point's sensitivity has differenced columns, which the budget must not take
+    from bifilar.estimation.honest import _seed_sensitivity
+
+    scene = trapezoid()
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    cache: dict = {}
+    _seed_sensitivity(cache, scene, sens)
+    assert cache == {}
+
+
+def test_hanging_model_locate_reuses_the_stiffness_only_at_its_geometry():
+    # inertia-only changes reuse the stiffness; a geometry change (and back) re-solves it: every answer
+    # equals linear_modes at locate's rest pose
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    other = perturb(scene, "length.1", 0.01)
+    for sc in (perturb(scene, "Izz", 5.0), other, perturb(other, "Ixx", -3.0), perturb(scene, "Iyy", 2.0)):
+        rest, ms, _ = hm.locate(sc)
+        ref = linear_modes(sc, rest_pose(sc, guess=rest, local_only=True))
+        assert [m.period for m in ms.modes] == pytest.approx([m.period for m in ref.modes], rel=1e-12)
+
+
+def test_clusters_match_the_plain_definition():
+    # chained from each cluster's first member, the larger tolerance of a pair applying
+    from bifilar.analysis.modes import clusters
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        w2 = np.sort(rng.choice([1.0, 1.0 + 1e-12, 2.0, 2.0 + 3e-11, 5.0], size=rng.integers(1, 6)))
+        tol = rng.choice([1e-11, 1e-10, 1e-13], size=len(w2))
+        ref, k = [], 0
+        while k < len(w2):
+            j = k + 1
+            while j < len(w2) and abs(w2[j] - w2[k]) <= max(tol[k], tol[j]):
+                j += 1
+            ref.append((k, j))
+            k = j
+        assert clusters(w2, tol) == ref
+        assert clusters(w2, 1e-10) == clusters(w2, np.full(len(w2), 1e-10))
+
+
+def test_thesis_models_of_one_hanging_share_the_kane_forcing():
+    # a model built on a hanging that already served another mode and component equals one built afresh
+    from bifilar.estimation.ladder import ThesisModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = trapezoid(h=0.5)
+
+    def fresh():
+        return HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+
+    shared = fresh()
+    ThesisModel(shared, shared.mode_index("pitch", "m"), "Ixx")
+    for label, comp in (("torsion", "Izz"), ("pitch", "Iyy")):
+        a = ThesisModel(shared, shared.mode_index(label, "m"), comp)
+        h = fresh()
+        b = ThesisModel(h, h.mode_index(label, "m"), comp)
+        assert a.which == b.which
+        for x in (0.9 * a.x0, a.x0, 1.2 * a.x0):
+            assert a.period(x) == b.period(x)
+        assert a.period(1.1 * a.x0) != a.period(a.x0)  # it does depend on the component
+    # another hanging's models use its own forcing, not the first one's
+    other = trapezoid(h=0.3)
+    h2 = HangingModel(Hanging("h2", other, np.eye(3)), other.inertia)
+    a = ThesisModel(h2, h2.mode_index("pitch", "m"), "Ixx")
+    ref = ThesisModel(shared, shared.mode_index("pitch", "m"), "Ixx")
+    assert a.period(a.x0) != pytest.approx(ref.period(ref.x0), rel=1e-6)
+    assert a.period(a.x0) == pytest.approx(h2.modes0.get("pitch").period, rel=0.05)
+
+
+@pytest.mark.parametrize("params", [{"spacing": 3.0}, {"spacing": 6.0, "length": 5.0}])
+def test_knife_edge_point_takes_its_linear_budget_without_the_honest_pass(params, monkeypatch):
+    # CoM on the attachment line: a neutral mode, so the honest std has no second-order part and equals
+    # what the honest pass gives with the point's linear figure as fallback, without running it
+    from bifilar.estimation import honest
+    from bifilar.studies import point as pt
+
+    scene = _scene("thesis_plate_rest", params)
+    unc = default_uncertainty()
+    sens, _ = pt.point_sensitivity(scene, COMPS + measured_inputs(scene))
+    assert not np.all(np.isfinite(sens.periods))
+    req = [(c, best_mode_for(sens, c)) for c in COMPS if np.any(sens.column(c) != 0)]
+    lin = pt.predicted_budgets(sens, scene, req, unc, honest=False)
+    ref = honest.honest_stds(scene, [(c, k + 1) for c, k in req], unc, unc["timing"],
+                             fallbacks=[b.value_sigma for b in lin], rest=sens.rest)
+
+    def no_call(*a, **k):
+        raise AssertionError("the honest pass ran at a knife edge")
+
+    monkeypatch.setattr(honest, "honest_stds", no_call)
+    got = pt.predicted_budgets(sens, scene, req, unc)
+    assert [b.value_sigma for b in got] == pytest.approx(ref, rel=1e-12)
+
+
+def test_constraint_hessians_equal_the_skew_formula():
+    # built without np.stack; the same numbers as the cross-product-matrix formula, bit for bit
+    from bifilar.analysis.equilibrium import constraint_hessians
+    from bifilar.rotations import skew
+
+    rng = np.random.default_rng(3)
+    for n in (2, 3, 4):
+        d = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
+        w = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
+        H = constraint_hessians(d, w)
+        for i in range(n):
+            W = skew(w[i])
+            assert np.array_equal(H[i, :3, 3:], -W) and np.array_equal(H[i, 3:, :3], W)
+            ref = -W @ W + 0.5 * (np.outer(d[i], w[i]) + np.outer(w[i], d[i])) - np.dot(d[i], w[i]) * np.eye(3)
+            assert np.array_equal(H[i, 3:, 3:], ref)
