@@ -43,7 +43,7 @@ import numpy as np
 import yaml
 
 from .errors import ConfigErrors, InputError
-from .scene import Scene
+from .scene import Scene, obeys_triangle
 
 log = logging.getLogger(__name__)
 
@@ -394,9 +394,8 @@ def check_inertia_tensor(I: np.ndarray, path: str, chk: _Checker) -> bool:
     if ev[0] <= 1e-12 * scale:
         chk.error(path, f"inertia tensor must be positive definite; principal moments are {_fmt(ev)} kg m^2")
         return False
-    # slack for values rounded to 5 significant digits (each off by up to 5e-5 of itself, so I1 + I2 - I3 by up
-    # to ~1e-4 I3): a thin plate sits exactly on the limit, and README's [208.33, 52.08, 260.42] is one
-    if ev[0] + ev[1] < ev[2] * (1 - 1e-4):
+    # the allowance for rounded values (TRIANGLE_SLACK) is the one invert's admissible set uses
+    if not obeys_triangle(ev):
         chk.error(
             path,
             f"principal moments {_fmt(ev)} kg m^2 break the triangle inequality I1 + I2 >= I3 "

@@ -80,8 +80,8 @@ from .montecarlo import (  # noqa: F401
     solve_draws_batched,
     solve_draws_loop,
 )
-from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval, triangle_ok  # noqa: F401
-from .problem import TRIANGLE_SLACK, admissible, admissible_interval, problem_at, start_guesses
+from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
+from .problem import admissible, admissible_interval, problem_at, start_guesses
 from .roots import EDGE_Z, Root, find_roots, fit_statistics, labelled_periods, separating_measurement
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
@@ -388,7 +388,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))
-            if not admissible(I, rel=2 * TRIANGLE_SLACK):
+            if not admissible(I):
                 warnings.append(f"with {n} = {p_hat[i]:.6g} and the other components at their prior the tensor "
                                 "violates the triangle inequality (no real body has it): check the config's "
                                 "inertia or solve for more components")

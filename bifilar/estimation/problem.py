@@ -18,7 +18,7 @@ import numpy as np
 from ..analysis.equilibrium import rest_pose
 from ..analysis.modes import linear_modes
 from ..errors import InputError
-from ..scene import Scene
+from ..scene import TRIANGLE_SLACK, Scene, obeys_triangle
 from .measurements import COM_UNKNOWNS, SOLVABLE, MeasurementSet
 from .sensitivity import INERTIA_COMPONENTS, mac_match
 from .uncertainty import default_uncertainty
@@ -43,17 +43,6 @@ def physical_interval(I: np.ndarray, name: str) -> tuple[float, float]:
     lo = max([-1.0 / m for m in mu if m > 1e-15] or [-math.inf])
     hi = min([-1.0 / m for m in mu if m < -1e-15] or [math.inf])
     return x0 + lo, x0 + hi
-
-
-def triangle_ok(I: np.ndarray, rel: float = 1e-6) -> bool:
-    """Principal moments satisfy the triangle inequality (a real body)."""
-    ev = np.linalg.eigvalsh(I)
-    return bool(ev[0] > 0 and ev[0] + ev[1] >= ev[2] * (1 - rel))
-
-
-#: relative slack of the triangle inequality in the admissible set (rounding
-#: of a thin plate's moments, which sit exactly on the limit I1 + I2 = I3)
-TRIANGLE_SLACK = 1e-6
 
 
 def _psd_interval(A: np.ndarray, B: np.ndarray) -> tuple[float, float]:
@@ -84,35 +73,39 @@ def _psd_interval(A: np.ndarray, B: np.ndarray) -> tuple[float, float]:
     return lo, hi
 
 
-def admissible_interval(I: np.ndarray, name: str, rel: float = TRIANGLE_SLACK) -> tuple[float, float]:
+def admissible_interval(I: np.ndarray, name: str) -> tuple[float, float]:
     """Values of inertia component ``name`` (kg m^2; the other components
     fixed at ``I``, whose own value of ``name`` is ignored) for which the
-    tensor is physical: positive definite and its principal moments obey the
-    triangle inequality ``I1 + I2 >= I3`` (with relative slack ``rel``).
+    tensor is physical (:func:`admissible`): positive definite and its
+    principal moments obey the triangle inequality ``I1 + I2 >= (1 - s) I3``,
+    ``s`` = :data:`~bifilar.scene.TRIANGLE_SLACK`, the config loader's rule.
 
-    The triangle inequality is ``lambda_max <= tr/2``, i.e. ``(1 + rel) tr/2
-    Id - I`` positive semi-definite, and with one component free both that
-    matrix and ``I`` are affine in it: each set is an interval whose ends
-    are roots of a 3x3 determinant.  Returns ``(lo, hi)``; ``lo > hi`` when
-    no value is physical.  The positive-definite ends are open (a singular
-    tensor), the triangle ends closed; for a diagonal component the interval
-    is bounded by the triangle inequality, for a product by definiteness."""
+    The triangle inequality is ``lambda_max <= tr/(2 - s)`` (``I1 + I2 = tr -
+    I3``), i.e. ``tr/(2 - s) Id - I`` positive semi-definite, and with one
+    component free both that matrix and ``I`` are affine in it: each set is
+    an interval whose ends are roots of a 3x3 determinant.  Returns ``(lo,
+    hi)``; ``lo > hi`` when no value is physical.  The positive-definite ends
+    are open (a singular tensor), the triangle ends closed; for a diagonal
+    component the interval is bounded by the triangle inequality, for a
+    product by definiteness or the triangle inequality."""
     i, j = _IDX[name]
     I0 = np.array(I, float)
     I0[i, j] = I0[j, i] = 0.0
     E = basis(name)
     lo1, hi1 = _psd_interval(I0, E)
-    c = 0.5 * (1.0 + rel)
+    c = 1.0 / (2.0 - TRIANGLE_SLACK)
     J0 = c * np.trace(I0) * np.eye(3) - I0
     D = (c * np.trace(E)) * np.eye(3) - E
     lo2, hi2 = _psd_interval(J0, D)
     return max(lo1, lo2), min(hi1, hi2)
 
 
-def admissible(I: np.ndarray, rel: float = TRIANGLE_SLACK) -> bool:
-    """Positive definite with principal moments obeying the triangle inequality."""
+def admissible(I: np.ndarray) -> bool:
+    """Positive definite with principal moments obeying the triangle
+    inequality within the config loader's allowance for rounded values
+    (:func:`bifilar.scene.obeys_triangle`): the tensors a config may state."""
     ev = np.linalg.eigvalsh(0.5 * (I + I.T))
-    return bool(ev[0] > 0 and ev[0] + ev[1] >= ev[2] * (1 - rel))
+    return bool(ev[0] > 0 and obeys_triangle(ev))
 
 
 class HangingModel:
