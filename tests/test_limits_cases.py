@@ -103,3 +103,125 @@ def test_config_at_the_loaders_allowance_inverts_without_being_inadmissible(labe
     assert res.value(comp) == pytest.approx(x_true, rel=1e-7)
     assert not res.roots[0]["edge"]
     assert not any("triangle" in w or "edge of the physical set" in w for w in res.warnings), res.warnings
+
+
+# --------------------------------------------------------------------------- 1. intervals cut at the physical limit
+
+
+def test_interval_at_the_triangle_edge_is_cut_there_and_says_so(tmp_path):
+    """The README plate's Iyy from its own pitch period: Izz = Ixx + Iyy
+    (to rounding), so Iyy cannot be below (1 - s) Izz - Ixx (closed form,
+    s = TRIANGLE_SLACK) with the other moments as given; the budget's
+    interval (value +- 1.96 std) reached 51.57, past it."""
+    import json
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+    from bifilar.scene import TRIANGLE_SLACK
+
+    s = plate()
+    T = period_of(s, "pitch")
+    res = invert(one(s, "pitch", T, std=1e-3), solve_for=["Iyy"], ladder=False)
+    limit = (1 - TRIANGLE_SLACK) * README_PLATE[2] - README_PLATE[0]
+    v, sd = res.value("Iyy"), res.sigma("Iyy")
+    lo_raw, hi_raw = res.interval_unclipped[0]
+    assert lo_raw < limit  # the case: the uncut interval crosses the limit
+    z = 1.959963984540054  # the normal's 97.5 % quantile
+    assert lo_raw == pytest.approx(v - z * sd, rel=1e-12) and hi_raw == pytest.approx(v + z * sd, rel=1e-12)
+    assert res.interval[0, 0] == pytest.approx(limit, rel=1e-12) and res.interval[0, 1] == hi_raw
+    assert res.interval_clipped == ["triangle"]
+    assert admissible(with_component(s, "Iyy", res.interval[0, 0]).inertia)
+    assert v == pytest.approx(README_PLATE[1], rel=1e-9)  # value and std untouched by the cut
+
+    cfg = tmp_path / "plate.yaml"
+    cfg.write_text(f"body: {{mass: 100.0, inertia: {{principal: {README_PLATE}}}}}\n"
+                   "rig: {anchors: [[0,-5,0],[0,5,0]], attachments: [[0,-2.5,0.5],[0,2.5,0.5]], lengths: [5.0,5.0]}\n")
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--period", f"pitch={T!r}+-0.001", "--amplitude", "0", "--json"])
+    assert r.exit_code == 0, r.stderr
+    d = json.loads(r.stdout)["inertia"]["Iyy"]
+    assert d["interval_clipped"] == "triangle"
+    assert d["interval_95"][0] == pytest.approx(limit, rel=1e-12)
+    assert d["interval_95_unclipped"][0] == pytest.approx(lo_raw, rel=1e-9)
+    assert d["value"] == pytest.approx(v, rel=1e-12) and d["std"] == pytest.approx(sd, rel=1e-12)
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--period", f"pitch={T!r}+-0.001", "--amplitude", "0"],
+                           env={"COLUMNS": "200"})
+    assert r.exit_code == 0 and "cut at the triangle limit" in r.stdout
+
+
+def test_cut_interval_covers_the_truth_as_often_as_the_uncut_one():
+    """Coverage by simulation at the edge: a thin plate (Izz = Ixx + Iyy
+    exactly, the truth on the limit), 40 experiments whose true mass is off
+    by its stated 0.1 % and whose torsion period is timed with its stated
+    1 ms (the other inputs stated exact, so the budget is those two).  The
+    truth is physical, so it lies inside the limits: the cut interval holds
+    it exactly when the uncut one does (checked per experiment), while the
+    cut removes the part no body can have (nearly every experiment)."""
+    from bifilar.scene import TRIANGLE_SLACK
+
+    s = plate([100 * 5**2 / 12, 100 * 2.5**2 / 12, 100 * (5**2 + 2.5**2) / 12])
+    truth = float(s.inertia[2, 2])
+    edge = (s.inertia[0, 0] + s.inertia[1, 1]) / (1 - TRIANGLE_SLACK)
+    rng = np.random.default_rng(7)
+    exact = {"length": 0.0, "position": 0.0, "com": 0.0}
+    covered_raw = covered_cut = n_cut = n_done = 0
+    for _ in range(40):
+        world = replace(s, mass=s.mass * (1 + 1e-3 * rng.standard_normal()))
+        T = period_of(world, "torsion") + 1e-3 * rng.standard_normal()
+        ms = replace(one(s, "torsion", T, std=1e-3), uncertainty=exact)
+        try:
+            res = invert(ms, solve_for=["Izz"], ladder=False)
+        except Exception as exc:  # a period > 2 sigma beyond the edge is refused: no interval to judge
+            assert "no physical Izz" in str(exc)
+            continue
+        n_done += 1
+        raw, cut = res.interval_unclipped[0], res.interval[0]
+        in_raw, in_cut = raw[0] <= truth <= raw[1], cut[0] <= truth <= cut[1]
+        assert in_raw == in_cut
+        assert raw[0] <= cut[0] <= cut[1] <= raw[1] and cut[1] <= edge * (1 + 1e-12)
+        covered_raw += in_raw
+        covered_cut += in_cut
+        n_cut += res.interval_clipped[0] == "triangle"
+    assert n_done >= 35 and covered_cut == covered_raw >= 0.8 * n_done and n_cut >= 10
+
+
+def _random_body(rng):
+    """A physical tensor: principal moments obeying the triangle inequality
+    (some on the limit), turned by a random rotation."""
+    from bifilar.rotations import rotvec_to_matrix
+
+    a, b = rng.uniform(0.1, 1.0, 2)
+    c = rng.uniform(abs(a - b), a + b) if rng.uniform() < 0.7 else a + b
+    R = rotvec_to_matrix(rng.normal(size=3))
+    return R @ np.diag([a, b, c]) @ R.T
+
+
+def test_physical_limits_hold_for_every_body_whatever_the_other_unknowns_are():
+    """The limits with other unknowns free use only the fixed components and
+    hold for every real body (so a cut never uncovers a truth whose other
+    components are estimated too); with none free they are the admissible
+    interval.  Checked on 60 random bodies against their own components."""
+    from itertools import combinations
+
+    from bifilar.estimation.problem import physical_limits
+
+    rng = np.random.default_rng(3)
+    names = list(_IDX)
+    for _ in range(60):
+        I = _random_body(rng)
+        sc = float(np.trace(I))
+        for name in names:
+            lo, hi = admissible_interval(I, name)
+            (l0, _), (h0, _) = physical_limits(I, name)
+            assert (l0, h0) == (lo, hi)
+            for k in (1, 2):
+                for free in combinations([n for n in names if n != name], k):
+                    (l, _), (h, _) = physical_limits(I, name, free)
+                    x = I[_IDX[name]]
+                    assert l - 1e-12 * sc <= x <= h + 1e-12 * sc, (name, free, l, x, h)
+                    assert l <= lo + 1e-12 * sc and h >= hi - 1e-12 * sc  # never tighter than the exact interval
+                    # the free components' values are not used
+                    J = I.copy()
+                    for f in free:
+                        J[_IDX[f]] = J[_IDX[f][::-1]] = rng.normal()
+                    assert physical_limits(J, name, free) == physical_limits(I, name, free)

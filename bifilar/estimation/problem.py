@@ -108,6 +108,61 @@ def admissible(I: np.ndarray) -> bool:
     return bool(ev[0] > 0 and obeys_triangle(ev))
 
 
+#: the physical limits' names (why an end of a 95 % interval was cut)
+TRIANGLE_LIMIT, DEFINITE_LIMIT = "triangle", "positive definite"
+
+
+def physical_limits(I: np.ndarray, name: str, free=()) -> tuple[tuple[float, str | None], tuple[float, str | None]]:
+    """Bounds ``((lo, why), (hi, why))`` of inertia component ``name``
+    (kg m^2) that hold for *every* physical tensor (:func:`admissible`)
+    whose components are those of ``I`` except ``name`` and the components
+    in ``free`` (other unknowns, any value); ``why`` names the limit
+    (:data:`TRIANGLE_LIMIT`, :data:`DEFINITE_LIMIT`; None for an infinite
+    end).  With no other component free this is the admissible interval
+    itself (:func:`admissible_interval`, exact).  With others free it is
+    what the fixed components alone imply, in any axes (``s`` =
+    :data:`~bifilar.scene.TRIANGLE_SLACK`): a moment ``Ic`` lies in
+    ``[max((1 - s) Ia - Ib, (1 - s) Ib - Ia), (Ia + Ib) / (1 - s)]`` when the
+    other two moments are fixed (each diagonal entry is at most the largest
+    principal moment, ``tr/(2 - s)``), else it is only positive; a product
+    ``|Iij| <= min(sqrt(Iii Ijj), sqrt((c - Iii)(c - Ijj)))``, ``c = tr/(2 -
+    s)`` (2x2 minors of ``I`` and of ``c Id - I``), each bound when the
+    moments it needs are fixed.  The truth obeys these bounds whatever the
+    other unknowns' truth is, so cutting an interval at them never
+    uncovers it."""
+    i, j = _IDX[name]
+    free = {n for n in free if n in _IDX and n != name}
+    scale = float(np.max(np.abs(np.linalg.eigvalsh(0.5 * (I + I.T)))))
+    if not free:
+        lo_a, hi_a = admissible_interval(I, name)
+        lo_p, hi_p = physical_interval(I, name)
+
+        def why(a, p):
+            if not math.isfinite(a):
+                return None
+            return DEFINITE_LIMIT if math.isfinite(p) and abs(a - p) <= 1e-9 * scale else TRIANGLE_LIMIT
+
+        return (lo_a, why(lo_a, lo_p)), (hi_a, why(hi_a, hi_p))
+    diag = [float(I[k, k]) for k in range(3)]
+    fixed = [f"I{c}{c}" not in free for c in "xyz"]
+    if i == j:
+        a, b = [k for k in range(3) if k != i]
+        if fixed[a] and fixed[b]:
+            lo = max((1 - TRIANGLE_SLACK) * diag[a] - diag[b], (1 - TRIANGLE_SLACK) * diag[b] - diag[a])
+            hi = (diag[a] + diag[b]) / (1 - TRIANGLE_SLACK)
+            return ((lo, TRIANGLE_LIMIT) if lo > 0 else (0.0, DEFINITE_LIMIT)), (hi, TRIANGLE_LIMIT)
+        return (0.0, DEFINITE_LIMIT), (math.inf, None)
+    bound, why_b = math.inf, None
+    if fixed[i] and fixed[j]:
+        bound, why_b = math.sqrt(diag[i] * diag[j]), DEFINITE_LIMIT
+    if all(fixed):
+        c = sum(diag) / (2 - TRIANGLE_SLACK)
+        b_tr = math.sqrt(max(0.0, (c - diag[i]) * (c - diag[j])))
+        if b_tr < bound:
+            bound, why_b = b_tr, TRIANGLE_LIMIT
+    return (-bound, why_b), (bound, why_b)
+
+
 class HangingModel:
     """Linear periods of one hanging's modes as functions of the unknowns.
 
