@@ -225,3 +225,55 @@ def test_physical_limits_hold_for_every_body_whatever_the_other_unknowns_are():
                     for f in free:
                         J[_IDX[f]] = J[_IDX[f][::-1]] = rng.normal()
                     assert physical_limits(J, name, free) == physical_limits(I, name, free)
+
+
+# --------------------------------------------------------------------------- 3. a sweep with no valid point
+
+
+def test_sweep_with_no_point_that_can_hang_exits_2_with_the_common_reason(tmp_path):
+    """The thesis plate's anchors are 10 m apart and its attachments 5 m:
+    wires of L < 2.5 m cannot span the 5 m between them (closed form), so
+    no point of length = 0.5 .. 1.5 m can hang.  The sweep exited 0 with a
+    table of invalid rows; it now refuses as `plan` does, one line, nothing
+    on stdout, and still writes the per-point CSV."""
+    import csv
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+    from conftest import CONFIGS
+
+    lengths = [0.5, 1.0, 1.5]
+    assert all(2 * L + 5.0 < 10.0 for L in lengths)
+    out = tmp_path / "s.csv"
+    r = CliRunner().invoke(main, ["sweep", str(CONFIGS / "thesis_plate_rest.yaml"), "--param", "length=0.5:1.5:3",
+                                  "--no-tensions", "--json", "--out", str(out)])
+    assert r.exit_code == 2 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: --param: no point of the sweep is valid"), r.stderr
+    assert "3 of 3 points" in lines[0] and "cannot reach" in lines[0] and str(out) in lines[0]
+    rows = list(csv.DictReader(out.open()))
+    assert [float(x["length"]) for x in rows] == lengths
+    assert all(x["valid"] == "False" and "cannot reach" in x["error"] for x in rows)
+    assert not (tmp_path / "s.csv.partial.jsonl").exists()
+    # one valid point is enough for the sweep to answer (exit 0)
+    r = CliRunner().invoke(main, ["sweep", str(CONFIGS / "thesis_plate_rest.yaml"), "--param", "length=1.0,5.0",
+                                  "--no-tensions", "--json"])
+    assert r.exit_code == 0, r.stderr
+
+
+def test_most_common_reason_groups_wordings_and_breaks_ties_in_grid_order():
+    from bifilar.studies.ranking import why_invalid
+
+    slack = "rig.lengths: wire {} is slack at rest by {} m; shorten it"
+    reach = "rig.lengths: wires 1 and 2 cannot reach: they span {} m"
+    pts = [{"params": {"length": 1.0}, "valid": False, "error": reach.format(6)},
+           {"params": {"length": 2.0}, "valid": False, "error": slack.format(2, 0.1)},
+           {"params": {"length": 3.0}, "valid": True},
+           {"params": {"length": 4.0}, "valid": False, "error": slack.format(3, 1.5e-3)},
+           {"params": {"length": 5.0}, "valid": False, "error": reach.format(7.5)}]
+    msg = why_invalid(pts[:4])  # slack twice (other wires, other amounts), reach once
+    assert "(2 of 4 points, e.g. at length = 2)" in msg and slack.format(2, 0.1) in msg
+    assert "1 other reason(s)" in msg
+    msg = why_invalid(pts)  # 2 against 2: the reason met first on the grid
+    assert "(2 of 5 points, e.g. at length = 1)" in msg and reach.format(6) in msg
