@@ -149,6 +149,21 @@ def test_interval_at_the_triangle_edge_is_cut_there_and_says_so(tmp_path):
     assert r.exit_code == 0 and "cut at the triangle limit" in r.stdout
 
 
+def test_monte_carlo_quantiles_are_cut_at_the_same_limit():
+    """The Monte Carlo check re-solves each draw within definiteness only,
+    so its 2.5 % quantile of the README plate's Iyy fell past the triangle
+    limit as the budget's did (51.56 < 52.064); it is cut there too."""
+    from bifilar.scene import TRIANGLE_SLACK
+
+    s = plate()
+    T = period_of(s, "pitch")
+    res = invert(one(s, "pitch", T, std=1e-3), solve_for=["Iyy"], ladder=False, monte_carlo=40, seed=3)
+    limit = (1 - TRIANGLE_SLACK) * README_PLATE[2] - README_PLATE[0]
+    mc = res.monte_carlo
+    assert mc.n_ok > 30 and np.min(mc.samples[:, 0]) < limit  # draws do land past the limit
+    assert mc.low[0] == pytest.approx(limit, rel=1e-12) and mc.high[0] > res.value("Iyy")
+
+
 def test_cut_interval_covers_the_truth_as_often_as_the_uncut_one():
     """Coverage by simulation at the edge: a thin plate (Izz = Ixx + Iyy
     exactly, the truth on the limit), 40 experiments whose true mass is off

@@ -422,9 +422,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if res.std_unavailable:
         res.interval = np.full_like(res.interval, np.nan)
     # no inertia outside what a real body can have (the truth is one, so the cut keeps the coverage)
+    I_hat = pb.models[0].inertia_ref(pb.values(p_hat))
     res.interval_unclipped = res.interval
-    res.interval, res.interval_clipped = clip_interval(res.interval, p_hat, pb.unknowns,
-                                                       pb.models[0].inertia_ref(pb.values(p_hat)))
+    res.interval, res.interval_clipped = clip_interval(res.interval, p_hat, pb.unknowns, I_hat)
     for i, why in enumerate(res.interval_clipped):
         if why:
             lo, hi = res.interval_unclipped[i]
@@ -461,6 +461,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             res.monte_carlo = monte_carlo_check(res, n_mc, np.random.default_rng(seed if seed is not None else ms.seed),
                                                 progress=progress)
         mc = res.monte_carlo
+        if mc.n_ok > 1:  # its quantiles cut at the same limits (draws re-solved past them are no body either)
+            cut, _ = clip_interval(np.column_stack([mc.low, mc.high]), p_hat, pb.unknowns, I_hat)
+            mc.low, mc.high = cut[:, 0], cut[:, 1]
         if res.budget.dof:
             # timed trials: their Student draws have heavy tails (no variance
             # for n <= 3), so the check compares the 95 % intervals' widths
