@@ -428,9 +428,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     for i, why in enumerate(res.interval_clipped):
         if why:
             lo, hi = res.interval_unclipped[i]
-            res.notes.append(f"the 95 % interval of {pb.unknowns[i]} is cut at the physical limit ({why} inequality: no "
-                         f"real body lies beyond it; {lo:.6g} .. {hi:.6g} uncut); the truth is a real body, so the cut "
-                         "interval covers it as often, value and std unchanged")
+            res.notes.append(f"the 95 % interval of {pb.unknowns[i]} is cut where no real body lies (the {why} "
+                             f"limit; {lo:.6g} .. {hi:.6g} uncut): the truth is a real body, so the cut interval "
+                             "covers it as often; value and std unchanged")
     res.fit = fit
     res.roots = [_root_entry(pb, p_hat, r_hat, budget, roots[0].edge, fit)]
     for r, pb_r in zip(roots[1:], root_pbs[1:]):
