@@ -149,6 +149,20 @@ def test_interval_at_the_triangle_edge_is_cut_there_and_says_so(tmp_path):
     assert r.exit_code == 0 and "cut at the triangle limit" in r.stdout
 
 
+def test_interval_near_zero_is_cut_at_zero_by_definiteness():
+    """A thin rod along y (Iyy = 0.002 beside Ixx = Izz = 1 kg m^2) on two
+    wires, CoM 5 cm below them: its pitch about its own axis timed with a
+    coarse 50 ms gives Iyy +- 80 %, and value - t < 0.  The triangle bound
+    (1 - s) Izz - Ixx is negative here, so the limit is definiteness: 0."""
+    s = scene_from_dict({"body": {"mass": 10.0, "inertia": {"principal": [1.0, 0.002, 1.0]}},
+                         "rig": {"anchors": [[0, -0.5, 0], [0, 0.5, 0]], "attachments": [[0, -0.5, 0.05], [0, 0.5, 0.05]],
+                                 "lengths": [1.5, 1.5]}}, warn=False)
+    res = invert(one(s, "pitch", period_of(s, "pitch"), std=0.05), solve_for=["Iyy"], ladder=False)
+    assert res.interval_unclipped[0, 0] < 0 < res.value("Iyy")
+    assert abs(res.interval[0, 0]) <= 1e-12 and res.interval[0, 1] == res.interval_unclipped[0, 1]
+    assert res.interval_clipped == ["positive definite"]
+
+
 def test_monte_carlo_quantiles_are_cut_at_the_same_limit():
     """The Monte Carlo check re-solves each draw within definiteness only,
     so its 2.5 % quantile of the README plate's Iyy fell past the triangle
