@@ -100,3 +100,24 @@ def lowest_point_z(scene: Scene, com: np.ndarray, R: np.ndarray) -> np.ndarray:
     flat = down_body.reshape(-1, 3)
     h = scene.body_support(flat).reshape(down_body.shape[:-1])
     return com[..., 2] - h
+
+
+#: Relative allowance of the triangle inequality of the principal moments,
+#: ``I1 + I2 >= (1 - TRIANGLE_SLACK) I3``, for values rounded to 5 significant
+#: digits (each off by up to 5e-5 of itself, so ``I1 + I2 - I3`` by up to
+#: ~1e-4 of I3): a thin plate sits exactly on the limit, and the README's
+#: [208.33, 52.08, 260.42] is one.  The one rule of what a real body is: the
+#: config loader accepts exactly the tensors `invert` calls admissible
+#: (:func:`obeys_triangle`; ``bifilar.estimation.problem.admissible`` and
+#: ``admissible_interval``).
+TRIANGLE_SLACK = 1e-4
+#: eigenvalues of a computed tensor are good to ~1e-16 of the largest: a
+#: tensor on the limit (an estimate clamped to it) passes whatever its last bits
+_TRIANGLE_ROUNDING = 1e-12
+
+
+def obeys_triangle(principal: np.ndarray) -> bool:
+    """The principal moments (kg m^2, ascending) obey the triangle
+    inequality ``I1 + I2 >= I3`` within :data:`TRIANGLE_SLACK`."""
+    ev = np.asarray(principal, float)
+    return bool(ev[0] + ev[1] >= ev[2] * (1.0 - TRIANGLE_SLACK - _TRIANGLE_ROUNDING))

@@ -51,7 +51,7 @@ def test_config_names_with_markup_print_literally(tmp_path, name):
     p = tmp_path / "named.yaml"
     p.write_text(yaml.safe_dump(cfg))
     for args in (["modes", p], ["invert", p, "--period", "torsion=1.9053513+-0.001", "--no-ladder"],
-                 ["sweep", p, "--param", "length=[1.0]", "--no-tensions"]):
+                 ["sweep", p, "--param", "length=[5.0]", "--no-tensions"]):  # a valid point: none exits 2
         code, out, err = run(args)
         assert code == 0, err
         assert name in out, out  # not interpreted as markup (nor as an emoji code), not dropped

@@ -235,6 +235,8 @@ def _render(ms, res) -> None:
             lo, hi = res.interval[i] if res.interval is not None else (v - 1.96 * s, v + 1.96 * s)
             nu = float(res.budget.effective_dof[i])
             dof = f" (t, {nu:.3g} dof)" if np.isfinite(nu) else ""
+            cut = res.interval_clipped[i] if res.interval_clipped else None
+            dof += f" (cut at the {cut} limit)" if cut else ""  # a note says more
             row = [f"{n} ({unit})", fmt(float(v), 8), fmt(float(s), 3), f"{s / abs(v):.2%}" if v else "-",
                    f"{lo:.6g} .. {hi:.6g}{dof}"]
         else:  # res.std_unavailable says why (printed as a warning)

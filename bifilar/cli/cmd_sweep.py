@@ -270,7 +270,19 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                        f"{journal}: rerun the same command with --resume to continue", err=True)
         raise
     runtime = time.perf_counter() - t0
+    names = [s.name for s in specs]
+
+    def write_out() -> None:
+        sw.write_points_csv(out_p, points, names, list(settings.components))
+        journal.unlink(missing_ok=True)
+
     rec = sw.assess(points, cons, target)
+    if not rec["n_valid"]:
+        # nothing to rank, draw or recommend: refuse as `plan` does; the CSV keeps every point's reason
+        if out_p:
+            write_out()
+        raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
+                         + (f"; every point's reason is in {out_p}" if out_p else ""))
     remedies_for(rec, points, cfg, config, settings)
     if rec.get("best") is not None:
         rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
@@ -278,15 +290,13 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                       hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
     elif wm_p or hangings:
         raise InputError("--hangings", "no recommended point to plan the hangings at: " + rec["reason"])
-    names = [s.name for s in specs]
     if wc_p:
         if rec.get("best") is None:
             raise InputError("--write-config", "no recommended point to write: " + rec["reason"])
         write_point_config(wc_p, cfg, config, points[rec["best"]], f"point {rec['best']} recommended by bifilar sweep")
         rec["config_written"] = str(wc_p)
     if out_p:
-        sw.write_points_csv(out_p, points, names, list(settings.components))
-        journal.unlink(missing_ok=True)
+        write_out()
     if plot_p:
         from pathlib import Path
 

@@ -48,7 +48,7 @@ import numpy as np
 
 from ..errors import BifilarError, ConvergenceError
 from .measurements import COM_UNKNOWNS
-from .problem import Problem
+from .problem import _IDX, Problem, physical_limits
 from .sensitivity import input_sigma, mac_match, measured_inputs, perturb
 from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
 
@@ -392,6 +392,34 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
         q = np.quantile(err + amp, [0.025, 0.975], axis=0)
         lo, hi = p + q[0], p + q[1]
     return np.column_stack([lo, hi])
+
+
+def clip_interval(interval, p_hat, names, I_hat) -> tuple[np.ndarray, list]:
+    """The 95 % intervals (P, 2) cut at the physical limits of the inertia
+    components (kg m^2; :func:`~bifilar.estimation.problem.physical_limits`
+    at the estimate ``I_hat``, reference body axes, with the other inertia
+    unknowns free), and per unknown why it was cut (``"triangle"``,
+    ``"positive definite"``, both joined by " and ", or None).  The truth is
+    a physical tensor, so it lies within the limits: the cut interval covers
+    it exactly when the uncut one does, and is never wider (docs/invert.md,
+    "The 95 % interval").  Values and stds are not touched; an estimate
+    outside the limits (a method that may leave the physical set, which
+    then warns) keeps its interval."""
+    out = np.array(interval, float)
+    why: list = [None] * len(names)
+    free = [n for n in names if n in _IDX]
+    tol = 1e-9 * float(np.max(np.abs(np.linalg.eigvalsh(0.5 * (I_hat + I_hat.T)))))
+    for i, n in enumerate(names):
+        if n not in _IDX or not np.all(np.isfinite(out[i])):
+            continue
+        (lo, why_lo), (hi, why_hi) = physical_limits(I_hat, n, free)
+        v = float(p_hat[i])
+        if not lo - tol <= v <= hi + tol:
+            continue
+        cut = ([why_lo] if out[i, 0] < lo - tol else []) + ([why_hi] if out[i, 1] > hi + tol else [])
+        out[i] = np.clip(out[i], min(lo, v), max(hi, v))
+        why[i] = " and ".join(dict.fromkeys(cut)) or None
+    return out, why
 
 
 def default_amplitude_range(scene, mode) -> float:

@@ -68,7 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
-from .budget import DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, interval_95, second_order
+from .budget import DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95, second_order
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
 from .ladder import small_angle_geometry, small_angle_vertical_inertia, thesis_linearisation_for  # noqa: F401
 from .measurements import METHODS, MeasurementSet
@@ -80,8 +80,8 @@ from .montecarlo import (  # noqa: F401
     solve_draws_batched,
     solve_draws_loop,
 )
-from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval, triangle_ok  # noqa: F401
-from .problem import TRIANGLE_SLACK, admissible, admissible_interval, problem_at, start_guesses
+from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
+from .problem import admissible, admissible_interval, problem_at, start_guesses
 from .roots import EDGE_Z, Root, find_roots, fit_statistics, labelled_periods, separating_measurement
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
@@ -115,6 +115,10 @@ class InversionResult:
     runtime: float = 0.0
     monte_carlo: MonteCarloSummary | None = None
     interval: np.ndarray | None = None
+    #: per unknown, why its interval was cut at a physical limit (``"triangle"``, ``"positive definite"``) or None
+    interval_clipped: list | None = None
+    #: the 95 % intervals before that cut
+    interval_unclipped: np.ndarray | None = None
     #: why no std can be given (degenerate inputs), or None; then ``std`` is NaN
     std_unavailable: str | None = None
     problem: Problem | None = field(default=None, repr=False)
@@ -144,6 +148,9 @@ class InversionResult:
             d = {"value": float(self.values[i]), "std": float(self.std[i])}  # NaN -> null (std_unavailable)
             if self.interval is not None:
                 d["interval_95"] = [float(self.interval[i, 0]), float(self.interval[i, 1])]
+                if self.interval_clipped and self.interval_clipped[i]:
+                    d["interval_clipped"] = self.interval_clipped[i]
+                    d["interval_95_unclipped"] = [float(x) for x in self.interval_unclipped[i]]
                 nu = float(self.budget.effective_dof[i])
                 d["dof"] = nu if math.isfinite(nu) else None  # Welch-Satterthwaite; null: infinite (normal)
             if self.monte_carlo is not None and self.monte_carlo.n_ok > 1:
@@ -388,7 +395,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))
-            if not admissible(I, rel=2 * TRIANGLE_SLACK):
+            if not admissible(I):
                 warnings.append(f"with {n} = {p_hat[i]:.6g} and the other components at their prior the tensor "
                                 "violates the triangle inequality (no real body has it): check the config's "
                                 "inertia or solve for more components")
@@ -414,11 +421,16 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     res.interval = interval_95(p_hat, res.budget, bctx)
     if res.std_unavailable:
         res.interval = np.full_like(res.interval, np.nan)
+    # no inertia outside what a real body can have (the truth is one, so the cut keeps the coverage)
     I_hat = pb.models[0].inertia_ref(pb.values(p_hat))
-    for i, n in enumerate(pb.unknowns):
-        if n in _IDX:  # no inertia outside the positive-definite interval (others at the estimate)
-            lo, hi = physical_interval(I_hat, n)
-            res.interval[i] = np.clip(res.interval[i], lo, hi)
+    res.interval_unclipped = res.interval
+    res.interval, res.interval_clipped = clip_interval(res.interval, p_hat, pb.unknowns, I_hat)
+    for i, why in enumerate(res.interval_clipped):
+        if why:
+            lo, hi = res.interval_unclipped[i]
+            res.notes.append(f"the 95 % interval of {pb.unknowns[i]} is cut where no real body lies (the {why} "
+                             f"limit; {lo:.6g} .. {hi:.6g} uncut): the truth is a real body, so the cut interval "
+                             "covers it as often; value and std unchanged")
     res.fit = fit
     res.roots = [_root_entry(pb, p_hat, r_hat, budget, roots[0].edge, fit)]
     for r, pb_r in zip(roots[1:], root_pbs[1:]):
@@ -449,6 +461,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             res.monte_carlo = monte_carlo_check(res, n_mc, np.random.default_rng(seed if seed is not None else ms.seed),
                                                 progress=progress)
         mc = res.monte_carlo
+        if mc.n_ok > 1:  # its quantiles cut at the same limits (draws re-solved past them are no body either)
+            cut, _ = clip_interval(np.column_stack([mc.low, mc.high]), p_hat, pb.unknowns, I_hat)
+            mc.low, mc.high = cut[:, 0], cut[:, 1]
         if res.budget.dof:
             # timed trials: their Student draws have heavy tails (no variance
             # for n <= 3), so the check compares the 95 % intervals' widths

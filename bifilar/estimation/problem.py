@@ -18,7 +18,7 @@ import numpy as np
 from ..analysis.equilibrium import rest_pose
 from ..analysis.modes import linear_modes, modes_of_inertia
 from ..errors import InputError
-from ..scene import Scene
+from ..scene import TRIANGLE_SLACK, Scene, obeys_triangle
 from .measurements import COM_UNKNOWNS, SOLVABLE, MeasurementSet
 from .sensitivity import INERTIA_COMPONENTS, mac_match
 from .uncertainty import default_uncertainty
@@ -43,17 +43,6 @@ def physical_interval(I: np.ndarray, name: str) -> tuple[float, float]:
     lo = max([-1.0 / m for m in mu if m > 1e-15] or [-math.inf])
     hi = min([-1.0 / m for m in mu if m < -1e-15] or [math.inf])
     return x0 + lo, x0 + hi
-
-
-def triangle_ok(I: np.ndarray, rel: float = 1e-6) -> bool:
-    """Principal moments satisfy the triangle inequality (a real body)."""
-    ev = np.linalg.eigvalsh(I)
-    return bool(ev[0] > 0 and ev[0] + ev[1] >= ev[2] * (1 - rel))
-
-
-#: relative slack of the triangle inequality in the admissible set (rounding
-#: of a thin plate's moments, which sit exactly on the limit I1 + I2 = I3)
-TRIANGLE_SLACK = 1e-6
 
 
 def _psd_interval(A: np.ndarray, B: np.ndarray) -> tuple[float, float]:
@@ -84,35 +73,94 @@ def _psd_interval(A: np.ndarray, B: np.ndarray) -> tuple[float, float]:
     return lo, hi
 
 
-def admissible_interval(I: np.ndarray, name: str, rel: float = TRIANGLE_SLACK) -> tuple[float, float]:
+def admissible_interval(I: np.ndarray, name: str) -> tuple[float, float]:
     """Values of inertia component ``name`` (kg m^2; the other components
     fixed at ``I``, whose own value of ``name`` is ignored) for which the
-    tensor is physical: positive definite and its principal moments obey the
-    triangle inequality ``I1 + I2 >= I3`` (with relative slack ``rel``).
+    tensor is physical (:func:`admissible`): positive definite and its
+    principal moments obey the triangle inequality ``I1 + I2 >= (1 - s) I3``,
+    ``s`` = :data:`~bifilar.scene.TRIANGLE_SLACK`, the config loader's rule.
 
-    The triangle inequality is ``lambda_max <= tr/2``, i.e. ``(1 + rel) tr/2
-    Id - I`` positive semi-definite, and with one component free both that
-    matrix and ``I`` are affine in it: each set is an interval whose ends
-    are roots of a 3x3 determinant.  Returns ``(lo, hi)``; ``lo > hi`` when
-    no value is physical.  The positive-definite ends are open (a singular
-    tensor), the triangle ends closed; for a diagonal component the interval
-    is bounded by the triangle inequality, for a product by definiteness."""
+    The triangle inequality is ``lambda_max <= tr/(2 - s)`` (``I1 + I2 = tr -
+    I3``), i.e. ``tr/(2 - s) Id - I`` positive semi-definite, and with one
+    component free both that matrix and ``I`` are affine in it: each set is
+    an interval whose ends are roots of a 3x3 determinant.  Returns ``(lo,
+    hi)``; ``lo > hi`` when no value is physical.  The positive-definite ends
+    are open (a singular tensor), the triangle ends closed; for a diagonal
+    component the interval is bounded by the triangle inequality, for a
+    product by definiteness or the triangle inequality."""
     i, j = _IDX[name]
     I0 = np.array(I, float)
     I0[i, j] = I0[j, i] = 0.0
     E = basis(name)
     lo1, hi1 = _psd_interval(I0, E)
-    c = 0.5 * (1.0 + rel)
+    c = 1.0 / (2.0 - TRIANGLE_SLACK)
     J0 = c * np.trace(I0) * np.eye(3) - I0
     D = (c * np.trace(E)) * np.eye(3) - E
     lo2, hi2 = _psd_interval(J0, D)
     return max(lo1, lo2), min(hi1, hi2)
 
 
-def admissible(I: np.ndarray, rel: float = TRIANGLE_SLACK) -> bool:
-    """Positive definite with principal moments obeying the triangle inequality."""
+def admissible(I: np.ndarray) -> bool:
+    """Positive definite with principal moments obeying the triangle
+    inequality within the config loader's allowance for rounded values
+    (:func:`bifilar.scene.obeys_triangle`): the tensors a config may state."""
     ev = np.linalg.eigvalsh(0.5 * (I + I.T))
-    return bool(ev[0] > 0 and ev[0] + ev[1] >= ev[2] * (1 - rel))
+    return bool(ev[0] > 0 and obeys_triangle(ev))
+
+
+#: the physical limits' names (why an end of a 95 % interval was cut)
+TRIANGLE_LIMIT, DEFINITE_LIMIT = "triangle", "positive definite"
+
+
+def physical_limits(I: np.ndarray, name: str, free=()) -> tuple[tuple[float, str | None], tuple[float, str | None]]:
+    """Bounds ``((lo, why), (hi, why))`` of inertia component ``name``
+    (kg m^2) that hold for *every* physical tensor (:func:`admissible`)
+    whose components are those of ``I`` except ``name`` and the components
+    in ``free`` (other unknowns, any value); ``why`` names the limit
+    (:data:`TRIANGLE_LIMIT`, :data:`DEFINITE_LIMIT`; None for an infinite
+    end).  With no other component free this is the admissible interval
+    itself (:func:`admissible_interval`, exact).  With others free it is
+    what the fixed components alone imply, in any axes (``s`` =
+    :data:`~bifilar.scene.TRIANGLE_SLACK`): a moment ``Ic`` lies in
+    ``[max((1 - s) Ia - Ib, (1 - s) Ib - Ia), (Ia + Ib) / (1 - s)]`` when the
+    other two moments are fixed (each diagonal entry is at most the largest
+    principal moment, ``tr/(2 - s)``), else it is only positive; a product
+    ``|Iij| <= min(sqrt(Iii Ijj), sqrt((c - Iii)(c - Ijj)))``, ``c = tr/(2 -
+    s)`` (2x2 minors of ``I`` and of ``c Id - I``), each bound when the
+    moments it needs are fixed.  The truth obeys these bounds whatever the
+    other unknowns' truth is, so cutting an interval at them never
+    uncovers it."""
+    i, j = _IDX[name]
+    free = {n for n in free if n in _IDX and n != name}
+    scale = float(np.max(np.abs(np.linalg.eigvalsh(0.5 * (I + I.T)))))
+    if not free:
+        lo_a, hi_a = admissible_interval(I, name)
+        lo_p, hi_p = physical_interval(I, name)
+
+        def why(a, p):
+            if not math.isfinite(a):
+                return None
+            return DEFINITE_LIMIT if math.isfinite(p) and abs(a - p) <= 1e-9 * scale else TRIANGLE_LIMIT
+
+        return (lo_a, why(lo_a, lo_p)), (hi_a, why(hi_a, hi_p))
+    diag = [float(I[k, k]) for k in range(3)]
+    fixed = [f"I{c}{c}" not in free for c in "xyz"]
+    if i == j:
+        a, b = [k for k in range(3) if k != i]
+        if fixed[a] and fixed[b]:
+            lo = max((1 - TRIANGLE_SLACK) * diag[a] - diag[b], (1 - TRIANGLE_SLACK) * diag[b] - diag[a])
+            hi = (diag[a] + diag[b]) / (1 - TRIANGLE_SLACK)
+            return ((lo, TRIANGLE_LIMIT) if lo > 0 else (0.0, DEFINITE_LIMIT)), (hi, TRIANGLE_LIMIT)
+        return (0.0, DEFINITE_LIMIT), (math.inf, None)
+    bound, why_b = math.inf, None
+    if fixed[i] and fixed[j]:
+        bound, why_b = math.sqrt(diag[i] * diag[j]), DEFINITE_LIMIT
+    if all(fixed):
+        c = sum(diag) / (2 - TRIANGLE_SLACK)
+        b_tr = math.sqrt(max(0.0, (c - diag[i]) * (c - diag[j])))
+        if b_tr < bound:
+            bound, why_b = b_tr, TRIANGLE_LIMIT
+    return (-bound, why_b), (bound, why_b)
 
 
 class HangingModel:

@@ -16,6 +16,7 @@ the text and the plot show and what ``min_separation`` limits.
 from __future__ import annotations
 
 import math
+import re
 
 from ..jsonable import to_jsonable as _plain
 from .settings import Constraints
@@ -89,12 +90,35 @@ CONSTRAINT_FLAGS = {"max_tension": "--max-tension", "max_depth": "--max-depth",
                     "slack": "--amplitude", "valid": "--param"}
 
 
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def why_invalid(points: list[dict]) -> str:
+    """The most common reason of the invalid points, in one line: the
+    reasons grouped by their wording with the numbers left out (``wires 1
+    and 2 cannot reach ... 0.5 + 0.5 m`` and ``... 1 + 1 m`` are one
+    reason), the largest group's first point quoted with its parameters and
+    the count (and how many other reasons there are); a tie goes to the
+    group met first in grid order."""
+    bad = [(i, p) for i, p in enumerate(points) if not p.get("valid")]
+    if not bad:
+        return "every point is valid"
+    groups: dict[str, list] = {}
+    for i, p in bad:
+        groups.setdefault(_NUMBER.sub("#", p.get("error") or "?"), []).append(i)
+    first = max(groups.values(), key=len)  # max keeps the first of equal counts: grid order
+    i = first[0]
+    at = ", ".join(f"{k} = {v:.6g}" for k, v in points[i].get("params", {}).items())
+    more = f" ({len(groups) - 1} other reason(s) for the rest)" if len(groups) > 1 else ""
+    return (f"the most common reason ({len(first)} of {len(points)} points" + (f", e.g. at {at}" if at else "")
+            + f"): {points[i].get('error') or '?'}{more}")
+
+
 def binding_constraint(points: list[dict], c: Constraints, target: str | None, among=None) -> tuple[str, str]:
     """Which limit leaves no point feasible: (flag name, message)."""
     valid = [p for p in points if p.get("valid")]
     if not valid:
-        reasons = sorted({p.get("error") or "?" for p in points})
-        return "--param", "no valid configuration in the range: " + "; ".join(reasons[:3])
+        return "--param", "no valid configuration in the range: " + why_invalid(points)
     finite = [p for p in valid if math.isfinite(objective(p, target, among))]
     if not finite:
         what = target or "no component"

@@ -80,7 +80,7 @@ from .point import (IDENTIFIABLE_MIN, TURN_MAX, _Ladder, _nonlinear_runs, _one_l
                     evaluate_point, evaluate_points, linear_estimate, point_sensitivity, predicted_budget, rig_of,
                     timed_separation)
 from .ranking import (CONSTRAINT_FLAGS, assess, binding_constraint, explain, measurable_components,  # noqa: F401
-                      objective, pareto_front, point_separation, violations)
+                      objective, pareto_front, point_separation, violations, why_invalid)
 from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Constraints,  # noqa: F401
                        SweepSettings, build_grid,
                        check_component, plan_block, resolve_constraints, resolve_settings, resolve_target,
