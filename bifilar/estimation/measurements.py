@@ -50,7 +50,8 @@ word ``identity``, ``{axis: [x, y, z], angle_deg: a}`` (or ``angle`` in rad),
 ``{rotvec_deg: [...]}`` / ``{rotvec: [...]}``, or a list of elementary
 rotations about the fixed axes applied in order, e.g. ``[{x: 90}, {z: 45}]``
 (degrees).  The inertia of every hanging's config after the first is
-ignored: it follows from the reference inertia and the rotation.
+ignored: it follows from the reference inertia and the rotation.  The body
+mass and gravity must agree with the first hanging's (refused otherwise).
 """
 
 from __future__ import annotations
@@ -700,6 +701,8 @@ def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs
         errs.append(exc)
         R = np.eye(3)
     h_index = len(ms.hangings)
+    if scene is not None and ms.hangings:
+        errs.extend(_same_body(ms.hangings[0], scene, f"{pre}config"))
     if scene is not None:
         ms.hangings.append(Hanging(str(name), scene, R, str(cfg) if isinstance(cfg, str) else "inline"))
     if meas is None:
@@ -719,6 +722,26 @@ def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs
             errs.extend(exc.errors)
         except InputError as exc:
             errs.append(exc)
+
+
+#: relative difference below which two hangings' masses (or gravities) are the same number
+SAME_BODY_RTOL = 1e-9
+
+
+def _same_body(ref: Hanging, scene, fld: str) -> list[InputError]:
+    """Refusals of a hanging whose config gives another body mass (kg) or
+    gravity (m/s^2) than the reference hanging ``ref``: every hanging is
+    the same body on the same planet, and the joint fit uses each hanging's
+    own values, so a typo in one config would bias the estimate silently.
+    Equal within :data:`SAME_BODY_RTOL` (relative)."""
+    out = []
+    for key, what, unit, a, b in (("body.mass", "body mass", "kg", ref.scene.mass, scene.mass),
+                                  ("gravity", "gravity", "m/s^2", ref.scene.gravity, scene.gravity)):
+        if abs(a - b) > SAME_BODY_RTOL * max(abs(a), abs(b)):
+            out.append(InputError(f"{fld}.{key}", f"{what} {b:.10g} {unit} differs from {a:.10g} {unit} of the "
+                                  f"reference hanging '{ref.name}': every hanging is the same body on the same rig "
+                                  "site; give the same value in each config"))
+    return out
 
 
 def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:

@@ -1,0 +1,65 @@
+"""Second audit of cases nobody here wrote (docs/errors.md): several
+hangings of one body, unit slips in periods and timed totals, recordings
+from other tools and rigs, and the plausibility of a recommended point.
+Each case is checked against an independent calculation or the project's
+rules (exit 2 with one line naming the field, warnings on stderr and in
+the JSON document)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+from click.testing import CliRunner
+
+from bifilar.cli import main
+from conftest import CONFIGS
+
+TRIFILAR_RIG = {"anchors": [[0.0, 0.3, 0.0], [-0.259808, -0.15, 0.0], [0.259808, -0.15, 0.0]],
+                "attachments": [[0.0, 0.3, 0.02], [-0.259808, -0.15, 0.02], [0.259808, -0.15, 0.02]],
+                "lengths": [1.0, 1.0, 1.0]}
+
+
+def run(args):
+    r = CliRunner().invoke(main, [str(a) for a in args])
+    return r.exit_code, r.stdout, r.stderr
+
+
+def _two_hangings(tmp_path, mass2=4.0, gravity2=9.81):
+    body = {"mass": 4.0, "inertia": {"principal": [0.25, 0.25, 0.35]}}
+    doc = {"solve_for": ["Ixx", "Izz"], "hangings": [
+        {"name": "z-up", "config": {"body": body, "rig": TRIFILAR_RIG},
+         "measurements": [{"mode": "torsion", "cycles": 10, "times": [21.14, 21.15, 21.16]}]},
+        {"name": "x-up", "config": {"gravity": gravity2, "body": {**body, "mass": mass2}, "rig": TRIFILAR_RIG},
+         "rotation": {"axis": [0, 1, 0], "angle_deg": -90},
+         "measurements": [{"mode": "torsion", "cycles": 10, "times": [18.30, 18.32, 18.31]}]}]}
+    p = tmp_path / "hangings.yaml"
+    p.write_text(yaml.safe_dump(doc))
+    return p
+
+
+# -- 1. hangings of one body agree on its mass and on gravity ----------------
+
+def test_hangings_with_different_mass_are_refused_naming_both_values(tmp_path):
+    code, out, err = run(["invert", "--measurements", _two_hangings(tmp_path, mass2=4.4), "--json"])
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err
+    assert lines[0].startswith("error: hangings.1.config.body.mass:")
+    assert "4.4 kg" in lines[0] and "4 kg" in lines[0]
+
+
+def test_hangings_with_different_gravity_are_refused(tmp_path):
+    code, out, err = run(["invert", "--measurements", _two_hangings(tmp_path, gravity2=9.70), "--json"])
+    assert code == 2 and out == ""
+    assert err.strip().startswith("error: hangings.1.config.gravity:") and "9.7 " in err and "9.81 " in err
+
+
+def test_hangings_equal_to_rounding_are_accepted(tmp_path):
+    """A mass equal to 1e-12 relative (e.g. summed from parts) is the same mass."""
+    code, out, err = run(["invert", "--measurements", _two_hangings(tmp_path, mass2=4.0 * (1 + 1e-12)),
+                          "--amplitude", "0", "--json"])
+    assert code == 0, err
+    assert set(json.loads(out)["inertia"]) == {"Ixx", "Izz"}
