@@ -63,3 +63,48 @@ def test_hangings_equal_to_rounding_are_accepted(tmp_path):
                           "--amplitude", "0", "--json"])
     assert code == 0, err
     assert set(json.loads(out)["inertia"]) == {"Ixx", "Izz"}
+
+
+# -- 2. an implausible period warns about a unit slip ------------------------
+
+SLOW = {"name": "wide disc on close vertical wires",  # torsion T = 2 pi (k/r) sqrt(h/g) ~ 127 s
+        "body": {"mass": 10.0, "inertia": {"principal": [45.0, 45.0, 90.0]}},
+        "rig": {"anchors": [[0.0, -0.15, 0.0], [0.0, 0.15, 0.0]],
+                "attachments": [[0.0, -0.15, 0.05], [0.0, 0.15, 0.05]], "lengths": [10.0, 10.0]}}
+
+
+def _slow(tmp_path):
+    p = tmp_path / "slow.yaml"
+    p.write_text(yaml.safe_dump(SLOW))
+    return p
+
+
+def test_implausibly_long_period_warns_about_a_unit_slip_but_runs(tmp_path):
+    """110 s is reachable on this rig (the vertical bifilar's torsion
+    2 pi sqrt(Izz h / (m g r^2)) gives 110 s for Izz = 67.6), so it is
+    estimated, with a warning in the JSON and on stderr."""
+    code, out, err = run(["invert", _slow(tmp_path), "--period", "torsion=110+-0.1", "--amplitude", "0", "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    slip = [w for w in doc["warnings"] if "unit slip" in w]
+    assert len(slip) == 1 and slip[0].startswith("--period:") and "ms" in slip[0] and "0.11 s" in slip[0]
+    assert "unit slip" in err
+    m, g, r, h = 10.0, 9.81, 0.15, 10.0
+    assert doc["inertia"]["Izz"]["value"] == pytest.approx(110**2 * m * g * r**2 / (4 * np.pi**2 * h), rel=2e-3)
+
+
+def test_plausible_period_does_not_warn_about_units():
+    code, out, err = run(["invert", CONFIGS / "thesis_plate_rest.yaml", "--period", "torsion=1.8+-0.001",
+                          "--amplitude", "0", "--json"])
+    assert code == 0, err
+    assert not [w for w in json.loads(out)["warnings"] if "unit slip" in w] and "unit slip" not in err
+
+
+def test_plausibility_rule_bounds():
+    from bifilar.estimation.measurements import PLAUSIBLE_PERIOD, implausible_period
+
+    lo, hi = PLAUSIBLE_PERIOD
+    assert implausible_period(lo, "torsion", "--period") is None
+    assert implausible_period(hi, "torsion", "--period") is None
+    assert "minutes" in implausible_period(lo / 2, "torsion", "--period")
+    assert "ms" in implausible_period(hi * 2, "torsion", "--period")

@@ -223,6 +223,40 @@ def check_period_sigma(T: float, s: float | None, fld: str) -> None:
                          "measurement says nothing about the period; give the period's standard uncertainty")
 
 
+PLAUSIBLE_PERIOD = (0.05, 100.0)
+"""Periods (s) a pendulum rig plausibly shows: a torsion period of 100 s
+needs a radius of gyration 30x the attachments' on 10 m wires, one of
+0.05 s wires of a few mm.  Outside, a unit slip (ms, the total time of
+several cycles) is likelier than the rig: :func:`implausible_period` warns."""
+
+
+def implausible_period(T: float, label: str, fld: str, cycles: float | None = None) -> str | None:
+    """A warning (text, no ``warning:`` prefix) when the period ``T`` (s) of
+    mode ``label`` lies outside :data:`PLAUSIBLE_PERIOD`, naming the likely
+    unit slip; None when it is plausible.  ``cycles``: the period comes from
+    timed trials of that many cycles each (their totals / cycles), whose
+    totals may have been typed in ms.  Only a warning: whether a period is
+    reachable at all is for the inversion to decide (it refuses one that no
+    physical inertia gives, naming the slip)."""
+    lo, hi = PLAUSIBLE_PERIOD
+    if lo <= T <= hi:
+        return None
+    head = (f"{fld}: a period of {T:.6g} s for mode '{label}' is outside the {lo:g} .. {hi:g} s a pendulum rig "
+            "plausibly shows; a unit slip?")
+    if cycles is not None:
+        tot = T * cycles
+        if T > hi:
+            return head + (f" the trials' totals ({tot:.6g} on average for {cycles:g} cycles) look like ms "
+                           f"(they would give {T / 1000:.6g} s)")
+        return head + (f" the trials' totals ({tot:.6g} on average for {cycles:g} cycles) look like minutes "
+                       f"(they would give {T * 60:.6g} s), or the cycles and the totals are swapped")
+    if T > hi:
+        return head + (f" in ms it would be {T / 1000:.6g} s; or the total time of N cycles entered as a period "
+                       "(divide by N)")
+    return head + (f" in minutes it would be {T * 60:.6g} s; a frequency in Hz would be a period of "
+                   f"{1 / T:.6g} s")
+
+
 _TIMED = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(?:cycles?|periods?|x)?\s*(?::|@|in)\s*(.+)$", re.I)
 
 
