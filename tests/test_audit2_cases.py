@@ -108,3 +108,29 @@ def test_plausibility_rule_bounds():
     assert implausible_period(hi, "torsion", "--period") is None
     assert "minutes" in implausible_period(lo / 2, "torsion", "--period")
     assert "ms" in implausible_period(hi * 2, "torsion", "--period")
+
+
+# -- 9. timed totals typed in ms warn ------------------------------------------
+
+def test_period_timed_totals_in_ms_warn():
+    code, out, err = run(["period", "--timed", "torsion=10:15200,15210", "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["period"] == pytest.approx(1520.5)
+    (w,) = doc["warnings"]
+    assert w.startswith("--timed:") and "ms" in w and "1.5205 s" in w
+    assert err.strip() == f"warning: {w}"
+
+
+def test_period_timed_plausible_totals_do_not_warn():
+    code, out, err = run(["period", "--timed", "torsion=10:15.20,15.21", "--json"])
+    assert code == 0 and json.loads(out)["warnings"] == [] and err == ""
+
+
+def test_invert_timed_totals_in_ms_warn_when_reachable(tmp_path):
+    """The same rule as --period (one function): totals of 10 cycles
+    typed as 1100 'seconds' give 110 s, which the slow rig reaches."""
+    code, out, err = run(["invert", _slow(tmp_path), "--timed", "torsion=10:1100,1101", "--amplitude", "0", "--json"])
+    assert code == 0, err
+    slip = [w for w in json.loads(out)["warnings"] if "unit slip" in w]
+    assert len(slip) == 1 and slip[0].startswith("--timed:") and "look like ms" in slip[0]

@@ -152,6 +152,7 @@ def _timed(spec, target, uncertainty, as_json):
     label, n, times = mm.parse_timed_spec(spec)
     unc = mm.parse_uncertainty_overrides(uncertainty)
     T, s, det = mm.period_from_trials(n, times, None, unc)
+    warnings = [w for w in (mm.implausible_period(T, label, "--timed", cycles=n),) if w]
     plan = None
     if target is not None:
         goal = mm.parse_target(target, T)
@@ -161,7 +162,10 @@ def _timed(spec, target, uncertainty, as_json):
         doc = {"period": T, "std": s, "damping_ratio": None, "label": label, "timed": det}
         if plan is not None:
             doc["target"] = plan
+        doc["warnings"] = warnings
         emit_json(doc)
+        for w in warnings:
+            click.echo(f"warning: {w}", err=True)
         return
     from rich.table import Table
 
@@ -185,3 +189,5 @@ def _timed(spec, target, uncertainty, as_json):
             tp.add_row(str(o["trials"]), str(o["cycles"]), f"{o['seconds_per_trial']:.4g}", f"{o['std']:.2g}")
         con.print(tp)
         con.print("[dim]note: assumes the oscillation lasts that many cycles with a visible amplitude[/dim]")
+    for w in warnings:
+        con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")
