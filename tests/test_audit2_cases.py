@@ -134,3 +134,81 @@ def test_invert_timed_totals_in_ms_warn_when_reachable(tmp_path):
     assert code == 0, err
     slip = [w for w in json.loads(out)["warnings"] if "unit slip" in w]
     assert len(slip) == 1 and slip[0].startswith("--timed:") and "look like ms" in slip[0]
+
+
+# -- 5. an unreachable period's refusal names the likely slip ------------------
+
+PLATE = CONFIGS / "thesis_plate_rest.yaml"
+# the plate's torsion period over its whole physical Izz range (the refusal's own range)
+PLATE_TORSION = (1.47587681, 1.90535322)
+
+
+@pytest.mark.parametrize("period, slip", [
+    ("1523", "reachable as 1.523 s: was it entered in ms?"),            # 1.523 s in ms
+    ("15.2", "8, 9, 10 times a reachable period"),                      # 15.2 / 8..10 = 1.9 .. 1.52
+    ("0.8", "1/N of a reachable period for N = 2 (1.6 s)"),             # a half period
+    ("2.5", None),                                                      # 1.25 s, 5 s, 2.5 ms: none reachable
+    ("1e300", None),
+])
+def test_unreachable_period_names_only_a_slip_that_reaches_the_range(period, slip):
+    code, out, err = run(["invert", PLATE, "--period", f"torsion={period}", "--json"])
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and err.startswith("error: --period: no physical Izz")
+    if slip is None:
+        assert "likely slip" not in err
+    else:
+        assert "likely slip" in err and slip in err
+
+
+def test_slip_hint_only_names_slips_landing_in_the_range():
+    from bifilar.estimation.roots import slip_hint
+
+    rng = [PLATE_TORSION]
+    assert slip_hint(1523.0, rng).count("ms") == 1 and "cycles" not in slip_hint(1523.0, rng)
+    assert slip_hint(3.2, rng) == "; likely slip: it is 2 times a reachable period (1.6 s): is it the total time of " \
+                                  "that many cycles?"
+    assert slip_hint(1000.0, rng) == ""         # 1 s, 10 .. 11.1 s or 0.1 .. 0.2 ks: none inside
+    assert slip_hint(1.0, [(1.5, 1.6), (3.5, 3.6)]) == ""   # gaps of the range count as unreachable
+    assert "N = 2" not in slip_hint(0.3, rng) and "N = 5, 6" in slip_hint(0.3, rng)
+
+
+def test_timed_totals_in_ms_refused_naming_ms_when_unreachable():
+    """Item 9: totals of 10 cycles in ms give 1800 s, which no Izz reaches:
+    the refusal (not merely a warning) names the slip."""
+    code, out, err = run(["invert", PLATE, "--timed", "torsion=10:18000,18010", "--json"])
+    assert code == 2 and out == ""
+    assert err.startswith("error: --timed: no physical Izz") and "reachable as 1.8005 s" in err
+
+
+def test_several_unknowns_refusal_names_the_ms_slip(tmp_path):
+    """The fit-check refusal of several periods and unknowns: the pitch period
+    typed in ms (1913.6 for 1.9136 s)."""
+    doc = yaml.safe_load((CONFIGS / "measurements_example.yaml").read_text())
+    doc["config"] = str(CONFIGS / doc["config"])
+    doc["measurements"][1]["period"] = "1913.6 +- 0.5"
+    p = tmp_path / "m.yaml"
+    p.write_text(yaml.safe_dump(doc))
+    code, out, err = run(["invert", "--measurements", p, "--json"])
+    assert code == 2 and out == ""
+    assert err.startswith("error: measurements.1.period:") and "reachable as 1.9136 s: was it entered in ms?" in err
+
+
+def test_refuse_unreachable_names_the_slip():
+    from bifilar.estimation.measurements import load_measurements
+    from bifilar.estimation.problem import build_problem
+    from bifilar.estimation.roots import _refuse_unreachable
+    from bifilar.errors import InputError
+
+    ms = load_measurements(CONFIGS / "measurements_example.yaml")
+    pb = build_problem(ms, ms.solve_for, ms.uncertainty)
+    targets = np.array([m.period for m in pb.measurements])
+    ms_targets = targets.copy()
+    ms_targets[1] *= 1000
+    pb.measurements[1].period = ms_targets[1]
+    with pytest.raises(InputError) as exc:
+        _refuse_unreachable(pb, ms_targets)
+    assert exc.value.field == "measurements.1.period" and "was it entered in ms?" in exc.value.message
+    pb.measurements[1].period = 1e300
+    with pytest.raises(InputError) as exc:
+        _refuse_unreachable(pb, np.array([targets[0], 1e300, targets[2]]))
+    assert "likely slip" not in exc.value.message
