@@ -212,3 +212,39 @@ def test_refuse_unreachable_names_the_slip():
     with pytest.raises(InputError) as exc:
         _refuse_unreachable(pb, np.array([targets[0], 1e300, targets[2]]))
     assert "likely slip" not in exc.value.message
+
+
+# -- 4. --solve-for a component no given period depends on -----------------
+
+def test_solving_ixx_from_a_torsion_period_names_the_mode_that_measures_it():
+    """The plate's torsion period is the same for every physical Ixx (its
+    own range refusal printed 1.90535131 s .. 1.90535131 s), and at that very
+    period the solver failed with an internal error (singular matrix)."""
+    for period in ("1.9", "1.90535131+-0.001"):
+        code, out, err = run(["invert", PLATE, "--period", f"torsion={period}", "--solve-for", "Ixx", "--json"])
+        assert code == 2 and out == "", err
+        (line,) = err.strip().splitlines()
+        assert line.startswith("error: --solve-for: Ixx cannot be solved for: no measured period ('torsion')")
+        assert "time mode 'swing-y'" in line
+
+
+def test_swing_y_does_measure_ixx_as_the_refusal_says():
+    """The mode the refusal names really measures Ixx: timing it, Ixx is
+    solved (the plate's swing-y period at its own Ixx gives that Ixx back)."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.config import load_scene
+
+    sc = load_scene(PLATE)
+    T = linear_modes(sc, rest_pose(sc)).get("swing-y").period
+    code, out, err = run(["invert", PLATE, "--period", f"swing-y={T!r}+-0.0001", "--solve-for", "Ixx",
+                          "--amplitude", "0", "--json", "--no-ladder"])
+    assert code == 0, err
+    assert json.loads(out)["inertia"]["Ixx"]["value"] == pytest.approx(sc.inertia[0, 0], rel=1e-6)
+
+
+def test_component_no_mode_of_the_hanging_measures_is_refused():
+    code, out, err = run(["invert", PLATE, "--period", "torsion=1.9", "--period", "swing-x=4.17",
+                          "--solve-for", "Iyy", "--solve-for", "Izz", "--json"])
+    assert code == 2 and out == ""
+    assert err.startswith("error: --solve-for: Iyy cannot be solved for") and "hang the body another way" in err

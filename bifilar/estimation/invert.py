@@ -81,7 +81,7 @@ from .montecarlo import (  # noqa: F401
     solve_draws_loop,
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
-from .problem import admissible, admissible_interval, problem_at, start_guesses
+from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
 from .roots import EDGE_Z, Root, find_roots, fit_statistics, labelled_periods, separating_measurement
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
@@ -260,6 +260,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
     notes += start_notes
     pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
+    if solve_for or ms.solve_for:  # chosen by the user, not picked per period: each must be measured
+        refuse_unmeasured(pb)
     pb.unc = unc_all
     K, P = len(pb.measurements), len(pb.unknowns)
     scalar = K == 1 and P == 1
