@@ -8,9 +8,10 @@ Memory is bounded by the number of samples: text tables are parsed by
 :func:`numpy.loadtxt` (or, when that fails on missing cells, streamed line by
 line into two float arrays), never held as a list of lines; the time column
 is checked (strictly increasing, no gap longer than ``MAX_GAP_FRACTION`` of
-the record, samples covering at least ``MIN_COVERAGE`` of the span) before
-anything is resampled on a uniform grid, so nothing is ever allocated in
-proportion to the time span.
+the record, samples covering at least ``MIN_COVERAGE`` of the span, a
+uniform grid at the median step at most ``MAX_GRID_FACTOR`` times the
+samples) before anything is resampled on a uniform grid, so nothing is ever
+allocated in proportion to the time span.
 """
 
 from __future__ import annotations
@@ -32,8 +33,16 @@ MAX_NAN_FRACTION = 0.01
 #: ``GAP_MIN_STEPS`` median steps) is a gap that is refused
 MAX_GAP_FRACTION = 0.02
 GAP_MIN_STEPS = 3.0
-#: the samples must cover at least this fraction of the span at the median step
+#: the samples must cover at least this fraction of the span: the span less
+#: the steps longer than ``GAP_MEAN_STEPS`` mean steps (gaps; random
+#: sampling intervals, e.g. exponential ones, are not gaps: an exponential
+#: step exceeds 10 means with probability 5e-5)
 MIN_COVERAGE = 0.75
+GAP_MEAN_STEPS = 10.0
+#: the uniform grid at the median step may hold at most this many times the
+#: samples (exponential intervals need 1.44x; bursts of near-coincident
+#: samples would need arbitrarily many)
+MAX_GRID_FACTOR = 4.0
 
 _TIME_RE = re.compile(
     r"^(t|time)([\s_]*[\(\[]\s*(s|sec|seconds)\s*[\)\]]|[\s_]+(s|sec|seconds))?$"
@@ -405,9 +414,13 @@ def check_time(t) -> np.ndarray:
     Refused (``SignalError`` on ``time``): a step that is not positive
     (time not strictly increasing); a single step longer than
     ``MAX_GAP_FRACTION`` of the record and than ``GAP_MIN_STEPS`` median
-    steps (a gap the fit would have to bridge by interpolation); a span that would need more than ``1 / MIN_COVERAGE``
-    times as many samples at the median step as there are (many gaps).  The
-    checks cost O(n) and allocate O(n), whatever the span.
+    steps (a gap the fit would have to bridge by interpolation); gaps
+    (steps longer than ``GAP_MEAN_STEPS`` mean steps) leaving less than
+    ``MIN_COVERAGE`` of the span covered (many gaps); a span whose uniform
+    grid at the median step would hold more than ``MAX_GRID_FACTOR`` times
+    the samples.  Irregular sampling is accepted: random intervals (a
+    logger's jitter, exponential intervals) or a change of sample rate.
+    The checks cost O(n) and allocate O(n), whatever the span.
     """
     dt = np.diff(t)
     bad = np.nonzero(~(dt > 0))[0]
@@ -424,11 +437,19 @@ def check_time(t) -> np.ndarray:
         raise SignalError("time", f"gap of {dt[i]:g} s between t = {t[i]:g} s and {t[i + 1]:g} s is "
                                   f"{dt[i] / span:.0%} of the record (more than {MAX_GAP_FRACTION:.0%}); "
                                   f"cut the record at the gap (--t-start/--t-stop) or fix the time column")
-    need = span / med + 1
-    if need > t.size / MIN_COVERAGE:
-        raise SignalError("time", f"the {t.size} samples cover only {t.size / need:.0%} of the "
-                                  f"{span:g} s span at the median step {med:g} s (less than "
-                                  f"{MIN_COVERAGE:.0%}): too many gaps")
+    long_ = dt > GAP_MEAN_STEPS * span / dt.size
+    covered = 1.0 - float(np.sum(dt[long_])) / span
+    if covered < MIN_COVERAGE:
+        raise SignalError("time", f"the samples cover only {covered:.0%} of the {span:g} s span (less than "
+                                  f"{MIN_COVERAGE:.0%}): {int(np.sum(long_))} gaps longer than "
+                                  f"{GAP_MEAN_STEPS:g} mean steps; cut the record to a part without gaps "
+                                  "(--t-start/--t-stop) or fix the time column")
+    grid = span / med + 1
+    if grid > MAX_GRID_FACTOR * t.size:
+        raise SignalError("time", f"the samples are bunched: a uniform grid at their median step {med:g} s "
+                                  f"would need {grid:.3g} samples over the {span:g} s span, more than "
+                                  f"{MAX_GRID_FACTOR:g} x the {t.size} recorded; fix the time column or give "
+                                  "--sample-rate")
     return dt
 
 
