@@ -313,3 +313,71 @@ def test_bunched_samples_are_refused_without_a_huge_grid():
     with pytest.raises(SignalError) as e:
         check_time(t)
     assert e.value.field == "time" and "bunched" in e.value.message
+
+
+# -- 7. a decimal-comma CSV from a European spreadsheet ---------------------------
+
+def _recording(seed=3):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 20, 0.01)
+    return t, 0.05 * _damped(t, T=1.3, zeta=0.002) + rng.normal(0, 1e-4, t.size)
+
+
+def _euro(path, t, y, header="t;angle", sep=";", fmt="{:.4f}{sep}{:.6f}"):
+    lines = [header] + [fmt.format(a, b, sep=sep).replace(".", ",") for a, b in zip(t, y)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_decimal_comma_semicolon_csv_reads_as_the_same_numbers_with_points(tmp_path):
+    t, y = _recording()
+    euro = _euro(tmp_path / "euro.csv", t, y)
+    plain = tmp_path / "plain.csv"
+    plain.write_text("t,angle\n" + "".join(f"{a:.4f},{b:.6f}\n" for a, b in zip(t, y)))
+    from bifilar.estimation.signal import read_signal
+
+    te, ye, me = read_signal(euro)
+    tp, yp, _ = read_signal(plain)
+    assert me["decimal"] == "comma" and np.array_equal(te, tp) and np.array_equal(ye, yp)
+    code, out, err = run(["period", euro, "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["signal"]["decimal"] == "comma"
+    assert abs(doc["period"] - 1.3) < 4 * doc["std"]
+
+
+def test_decimal_comma_without_header_and_with_tabs(tmp_path):
+    t, y = _recording()
+    p = _euro(tmp_path / "tabs.txt", t, y, header="time\tangle", sep="\t")
+    code, out, err = run(["period", p, "--json"])
+    assert code == 0, err
+    assert abs(json.loads(out)["period"] - 1.3) < 1e-3
+    lines = p.read_text().splitlines()[1:]
+    q = tmp_path / "noheader.csv"
+    q.write_text("\n".join(ln.replace("\t", ";") for ln in lines) + "\n")
+    code, out, err = run(["period", q, "--sample-rate", "100", "--column", "col2", "--json"])
+    assert code == 0, err
+    assert abs(json.loads(out)["period"] - 1.3) < 1e-3
+
+
+@pytest.mark.parametrize("header, sep, fmt, fragment", [
+    ("t,angle", ",", "{:.4f}{sep}{:.6f}", "decimal commas in a comma-separated table"),
+    ("t;angle", ";", "{:.4f}{sep}1.{:.6f}", "has both a comma and a point"),     # 1.0,05 style thousands
+])
+def test_ambiguous_decimal_marks_are_refused_with_one_line(tmp_path, header, sep, fmt, fragment):
+    t, y = _recording()
+    p = _euro(tmp_path / "amb.csv", t, y, header=header, sep=sep, fmt=fmt)
+    if "1." in fmt:  # put the point back into the second cell: '1.0,050204'
+        p.write_text(p.read_text().replace(";1,", ";1."))
+    code, out, err = run(["period", p, "--json"])
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and fragment in err and "amb.csv" in err
+
+
+def test_mixed_decimal_marks_are_refused(tmp_path):
+    t, y = _recording()
+    text = "t;angle\n" + "".join(f"{a:.4f};{b:.6f}\n".replace(".", ",", 1) for a, b in zip(t, y))
+    p = tmp_path / "mixed.csv"
+    p.write_text(text)  # time '0,0100', angle '0.049681'
+    code, out, err = run(["period", p, "--json"])
+    assert code == 2 and "decimal comma" in err and "decimal point" in err

@@ -80,7 +80,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
         from ..figures import plot_fit
 
         plot_fit(plot_p, fit, t, y, title=Path(signal).name)
-    sig = {k: meta.get(k) for k in ("path", "format", "column", "columns", "time_source", "sample_rate",
+    sig = {k: meta.get(k) for k in ("path", "format", "decimal", "column", "columns", "time_source", "sample_rate",
                                     "sample_rate_source", "n_samples", "n_dropped", "duration", "warnings")}
     sig["path"] = str(sig["path"]) if sig["path"] is not None else str(signal)
     if as_json:

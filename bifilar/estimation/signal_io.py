@@ -142,6 +142,11 @@ def read_signal(path, column: str | None = None, sample_rate: float | None = Non
 
 
 def _sniff_delimiter(line: str) -> str | None:
+    if "," in line and ";" in line and "\t" not in line:
+        # a ';' table whose commas are decimal commas (a European spreadsheet's row)
+        cells = [c.strip().strip('"') for c in line.split(";")]
+        if all(_COMMA_NUMBER.match(c) or "," not in c for c in cells):
+            return ";"
     for d in ("\t", ",", ";"):
         if d in line:
             return d
@@ -221,18 +226,25 @@ def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str
     return [np.frombuffer(a, dtype=float).copy() if len(a) else np.empty(0) for a in out]
 
 
-def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split):
+def _comma_float(s: str) -> float:
+    return float(s.replace(",", "."))
+
+
+def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split, comma: bool = False):
     """Columns ``cols`` of the data rows as float arrays: :func:`numpy.loadtxt`
     (C parser, memory ~ 8 bytes per value) when the table is clean, else the
-    line-by-line parser with its NaN rules and precise messages."""
+    line-by-line parser with its NaN rules and precise messages.  ``comma``:
+    the numbers have a decimal comma (:func:`_decimal_comma`)."""
     if not _has_interior_blank_line(p):
         try:
             with open(p, encoding="utf-8-sig") as fh:
                 a = np.loadtxt(fh, delimiter=delim, comments="#", skiprows=start, usecols=cols,
-                               ndmin=2, dtype=float, quotechar='"')
+                               ndmin=2, dtype=float, quotechar='"', converters=_comma_float if comma else None)
             return [a[:, k].copy() for k in range(len(cols))]
         except (ValueError, IndexError):
             pass
+    if comma:
+        return _stream_columns(p, start, lambda ln: [c.replace(",", ".") for c in split(ln)], cols, names)
     return _stream_columns(p, start, split, cols, names)
 
 
@@ -251,6 +263,60 @@ def _plausible_header(names: list[str]) -> bool:
     return any(n[:1].isalpha() for n in names)
 
 
+_COMMA_NUMBER = re.compile(r"^[+-]?(\d+,\d*|,\d+)([eE][+-]?\d+)?$")
+_POINT_NUMBER = re.compile(r"^[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d+)?$")
+#: data rows looked at to tell a decimal comma from a decimal point
+SNIFF_ROWS = 50
+
+
+def _first_rows(p: Path, start: int, n: int = SNIFF_ROWS) -> list[str]:
+    """Up to ``n`` data lines from 0-based line ``start`` (comments and blank
+    lines skipped; reads only those lines)."""
+    out: list[str] = []
+    with open(p, encoding="utf-8-sig") as fh:
+        for i, ln in enumerate(fh):
+            if i < start or not ln.strip() or ln.lstrip().startswith("#"):
+                continue
+            out.append(ln.rstrip("\r\n"))
+            if len(out) >= n:
+                break
+    return out
+
+
+def _decimal_comma(p: Path, rows: list[list[str]], delim, n_fields: int) -> bool:
+    """Whether the cells of a text table's first data ``rows`` write numbers
+    with a decimal comma (``1,234`` = 1.234, as European spreadsheets do with
+    a ``;`` or tab separator).  Only when it is unambiguous: the separator
+    is not a comma, and the cells hold comma numbers but no point numbers.
+    Refused (``SignalError`` on ``signal``, one line naming the file): a
+    comma-separated table whose rows have more fields than its header (decimal
+    commas that split the numbers), cells mixing both marks (``1.234,5``:
+    thousands separators) or commas in some cells and points in others."""
+    cells = [c for r in rows for c in r if c]
+    commas = [c for c in cells if _COMMA_NUMBER.match(c)]
+    if delim == ",":
+        widths = {len(r) for r in rows}
+        if rows and min(widths) > n_fields:
+            raise SignalError("signal", f"{p.name}: the rows have {min(widths)} or more comma-separated fields but "
+                                        f"the header {n_fields}: decimal commas in a comma-separated table cannot "
+                                        "be told apart from separators; export it with ';' as the separator or "
+                                        "with decimal points")
+        return False
+    if not commas:
+        return False
+    both = [c for c in cells if "," in c and "." in c]
+    if both:
+        raise SignalError("signal", f"{p.name}: the number {both[0]!r} has both a comma and a point (a "
+                                    "thousands separator?): the decimal mark is ambiguous; export the numbers "
+                                    "without thousands separators")
+    points = [c for c in cells if _POINT_NUMBER.match(c)]
+    if points:
+        raise SignalError("signal", f"{p.name}: some numbers have a decimal comma ({commas[0]!r}) and others a "
+                                    f"decimal point ({points[0]!r}): the decimal mark is ambiguous; export the "
+                                    "table with one decimal mark")
+    return True
+
+
 def _read_text(p: Path, column, fs):
     hline, first, delim = _header(p)
 
@@ -260,6 +326,11 @@ def _read_text(p: Path, column, fs):
 
     warnings_: list[str] = []
     header = split(first)
+    numeric_header = all(_is_number(c) or _COMMA_NUMBER.match(c) for c in header)
+    sample = [split(r) for r in _first_rows(p, hline if numeric_header else hline + 1)]
+    comma = _decimal_comma(p, sample, delim, len(header))
+    if comma:
+        header = [c.replace(",", ".") for c in header] if numeric_header else header
     if all(_is_number(c) for c in header):
         names = [f"col{i + 1}" for i in range(len(header))]
         start = hline
@@ -295,10 +366,11 @@ def _read_text(p: Path, column, fs):
             f"{p.name} has no time column (named 't' or 'time'; columns: "
             f"{', '.join(names)}); give the sample rate in Hz")
     cols = [col_idx] if fs is not None else [col_idx, time_idx]
-    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split)
+    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split, comma)
     y = arrays[0]
     meta: dict[str, Any] = {
         "path": str(p), "format": "text", "delimiter": delim or "whitespace",
+        "decimal": "comma" if comma else "point",
         "column": names[col_idx], "columns": list(names), "warnings": warnings_,
     }
     if fs is not None:
