@@ -381,3 +381,53 @@ def test_mixed_decimal_marks_are_refused(tmp_path):
     p.write_text(text)  # time '0,0100', angle '0.049681'
     code, out, err = run(["period", p, "--json"])
     assert code == 2 and "decimal comma" in err and "decimal point" in err
+
+
+# -- 8. a refused recording names its columns -----------------------------------
+
+def _table(path, header, row):
+    t = np.arange(0, 20, 0.01)
+    y = np.cos(2 * np.pi * t / 1.3)
+    path.write_text(header + "\n" + "".join(row(a, b, i) for i, (a, b) in enumerate(zip(t, y))))
+    return path
+
+
+def _refused(args, field):
+    code, out, err = run(args)
+    assert code == 2 and out == "", err
+    (line,) = err.strip().splitlines()
+    assert line.startswith(f"error: {field}:")
+    return line
+
+
+def test_no_numeric_column_lists_the_columns(tmp_path):
+    p = _table(tmp_path / "text.csv", "t,label,note", lambda a, b, i: f"{a:.4f},run1,ok\n")
+    line = _refused(["period", p, "--json"], "signal")
+    assert "no numeric column" in line and "columns found: t, label, note" in line
+
+
+def test_a_text_column_given_lists_the_numeric_ones(tmp_path):
+    p = _table(tmp_path / "mixed.csv", "t,label,angle", lambda a, b, i: f"{a:.4f},run1,{b:.6f}\n")
+    line = _refused(["period", p, "--column", "label", "--json"], "--column")
+    assert "'label'" in line and "numeric columns: t, angle" in line and "columns found: t, label, angle" in line
+    line = _refused(["period", p, "--column", "angel", "--json"], "--column")
+    assert "t, label, angle" in line
+
+
+def test_default_column_skips_a_leading_text_column_and_says_so(tmp_path):
+    p = _table(tmp_path / "mixed.csv", "t,label,angle", lambda a, b, i: f"{a:.4f},run1,{b:.6f}\n")
+    code, out, err = run(["period", p, "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["signal"]["column"] == "angle" and abs(doc["period"] - 1.3) < 1e-6
+    assert "'label' skipped" in err
+
+
+def test_text_later_in_the_file_and_empty_column_list_the_columns(tmp_path):
+    p = _table(tmp_path / "late.csv", "t,angle",
+               lambda a, b, i: f"{a:.4f},{'oops' if i == 1500 else f'{b:.6f}'}\n")
+    line = _refused(["period", p, "--json"], "signal")
+    assert "'oops'" in line and "line 1502" in line and "columns found: t, angle" in line
+    q = _table(tmp_path / "empty.csv", "t,angle,rate", lambda a, b, i: f"{a:.4f},,{b:.6f}\n")
+    line = _refused(["period", q, "--json"], "signal")
+    assert "NaN or missing" in line and "columns found: t, angle, rate" in line

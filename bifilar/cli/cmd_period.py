@@ -13,7 +13,7 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "thr
 
 @click.command("period")
 @click.argument("signal", type=click.Path(dir_okay=False), required=False)
-@click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time one.")
+@click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time numeric one.")
 @click.option("--sample-rate", default=None, help="Sample rate, Hz (ignores a time column).")
 @click.option("--model", default="auto", show_default=True,
               help="Fit model: viscous, quadratic (drag ~ v^2), quadratic+viscous, two_mode (beating), "

@@ -190,7 +190,7 @@ def _has_interior_blank_line(p: Path, chunk: int = 1 << 22) -> bool:
             tail = buf[-256:]
 
 
-def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str]):
+def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str], found: str = ""):
     """Parse the data rows (from 0-based line ``start``) of columns ``cols``
     one line at a time into float arrays; missing cells and blank lines
     between rows are NaN (so times derived from a sample rate stay right),
@@ -222,7 +222,8 @@ def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str
                         a.append(nan)
                     else:
                         raise SignalError("signal", f"non-numeric value {cell!r} in column {name!r} "
-                                                    f"at line {i + 1} of {p.name}") from None
+                                                    f"at line {i + 1} of {p.name}"
+                                                    + (f"; {found}" if found else "")) from None
     return [np.frombuffer(a, dtype=float).copy() if len(a) else np.empty(0) for a in out]
 
 
@@ -230,7 +231,8 @@ def _comma_float(s: str) -> float:
     return float(s.replace(",", "."))
 
 
-def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split, comma: bool = False):
+def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split, comma: bool = False,
+                  found: str = ""):
     """Columns ``cols`` of the data rows as float arrays: :func:`numpy.loadtxt`
     (C parser, memory ~ 8 bytes per value) when the table is clean, else the
     line-by-line parser with its NaN rules and precise messages.  ``comma``:
@@ -244,8 +246,8 @@ def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str],
         except (ValueError, IndexError):
             pass
     if comma:
-        return _stream_columns(p, start, lambda ln: [c.replace(",", ".") for c in split(ln)], cols, names)
-    return _stream_columns(p, start, split, cols, names)
+        return _stream_columns(p, start, lambda ln: [c.replace(",", ".") for c in split(ln)], cols, names, found)
+    return _stream_columns(p, start, split, cols, names, found)
 
 
 #: a column name: letters, digits and a few signs, at most 64 characters
@@ -345,11 +347,32 @@ def _read_text(p: Path, column, fs):
                                         "names (expected e.g. 't,x' with numbers below, or a .mat file)")
     time_idx = next((i for i, n in enumerate(names) if _is_time_name(n)), None)
 
+    def numeric(i: int):
+        """What column ``i`` holds in the first rows: numbers (True, also
+        with a stray bad cell, which the reader then names with its line),
+        only text (its first cell: a label or note column) or only missing
+        cells (None)."""
+        vals = [r[i] for r in sample if i < len(r) and r[i].strip().lower() not in _MISSING]
+        if not vals:
+            return None
+        if any(_is_number(v.replace(",", ".") if comma else v) for v in vals):
+            return True
+        return vals[0]
+
+    found = f"columns found: {', '.join(names)}"
     if column is None:
         cand = [i for i in range(len(names)) if i != time_idx]
         if not cand:
-            raise SignalError("--column", f"{p.name} has only a time column ({names[time_idx]!r})")
-        col_idx = cand[0]
+            raise SignalError("--column", f"{p.name} has only a time column ({names[time_idx]!r}); {found}")
+        usable = [i for i in cand if numeric(i) in (True, None)]  # text columns (labels, notes) are skipped
+        if not usable:
+            raise SignalError("signal", f"{p.name} has no numeric column besides the time column (in its first "
+                                        f"rows); {found}")
+        col_idx = usable[0]
+        if col_idx != cand[0]:
+            skipped = ", ".join(repr(names[i]) for i in cand if i < col_idx)
+            warnings_.append(f"column(s) {skipped} skipped: text in their first rows; using "
+                             f"{names[col_idx]!r} (choose with --column)")
     else:
         col = str(column)
         col_idx = next((i for i, n in enumerate(names) if n == col), None)
@@ -360,13 +383,18 @@ def _read_text(p: Path, column, fs):
         if col_idx == time_idx and fs is None:
             raise SignalError("--column", f"{col!r} is the time column of {p.name}; "
                                           f"choose one of {', '.join(n for n in names if n != col)}")
+        kind = numeric(col_idx)
+        if isinstance(kind, str):
+            nums = [names[i] for i in range(len(names)) if numeric(i) is True]
+            raise SignalError("--column", f"column {names[col_idx]!r} of {p.name} is not numeric ({kind!r}); "
+                                          f"numeric columns: {', '.join(nums) or 'none'} ({found})")
     if fs is None and time_idx is None:
         raise SignalError(
             "--sample-rate",
             f"{p.name} has no time column (named 't' or 'time'; columns: "
             f"{', '.join(names)}); give the sample rate in Hz")
     cols = [col_idx] if fs is not None else [col_idx, time_idx]
-    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split, comma)
+    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split, comma, found)
     y = arrays[0]
     meta: dict[str, Any] = {
         "path": str(p), "format": "text", "delimiter": delim or "whitespace",
@@ -466,7 +494,8 @@ def _finish(t: np.ndarray, y: np.ndarray, meta: dict):
     if nb:
         if nb > max(1, int(MAX_NAN_FRACTION * n)):
             raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN or missing "
-                                        f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording")
+                                        f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording or choose "
+                                        f"another column (columns found: {', '.join(map(str, meta['columns']))})")
         t, y = t[~bad], y[~bad]
         meta["warnings"].append(f"dropped {nb} NaN/missing sample(s) of {n}")
     if len(y) < MIN_SAMPLES:
