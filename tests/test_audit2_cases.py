@@ -431,3 +431,56 @@ def test_text_later_in_the_file_and_empty_column_list_the_columns(tmp_path):
     q = _table(tmp_path / "empty.csv", "t,angle,rate", lambda a, b, i: f"{a:.4f},,{b:.6f}\n")
     line = _refused(["period", q, "--json"], "signal")
     assert "NaN or missing" in line and "columns found: t, angle, rate" in line
+
+
+# -- 3. a leading stretch at rest is left out of the period fit ---------------------
+
+def _rest_then_decay(seed=0, t_rest=5.0, T=1.7, zeta=0.003, noise=0.002, duration=25.0, fs=100.0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, duration, 1 / fs)
+    w = 2 * np.pi / T
+    tau = t - t_rest
+    y = np.where(tau >= 0, np.exp(-zeta * w * tau) * np.sin(w * tau), 0.0)
+    return t, y + rng.normal(0, noise, t.size)
+
+
+def test_leading_rest_is_detected_and_the_fit_starts_at_the_onset():
+    """5 s of noise, then a damped sinusoid from t = 5 s.  The reference is
+    the same record cut at the true onset (an independent fit of the decay
+    alone): the period must agree within its std and the std must not be
+    inflated (it was x1600, the flat stretch fitted as part of the decay)."""
+    from bifilar.estimation.signal import fit_period
+
+    t, y = _rest_then_decay()
+    fit = fit_period(t, y, model="viscous")
+    ref = fit_period(t[t >= 5.0], y[t >= 5.0], model="viscous")
+    rest = fit.oscillation["leading_rest"]
+    assert abs(rest["onset"] - 5.0) < 1.7 / 10                       # onset within a tenth of a period
+    assert 5.0 < fit.t0 == rest["t_start"] < 5.0 + 1.7                 # the fit starts after it, within a period
+    assert abs(fit.period - 1.7) < 4 * fit.std
+    assert fit.std < 2 * ref.std
+    assert any(n.startswith("leading rest:") for n in fit.notes)
+
+
+def test_leading_rest_through_the_cli_reports_the_start_used(tmp_path):
+    t, y = _rest_then_decay(seed=1, t_rest=4.2)
+    p = _write_csv(tmp_path / "rest.csv", t, y)
+    code, out, err = run(["period", p, "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    rest = doc["oscillation"]["leading_rest"]
+    assert abs(rest["onset"] - 4.2) < 0.17 and doc["t0"] == pytest.approx(rest["t_start"])
+    assert abs(doc["period"] - 1.7) < 4 * doc["std"] and doc["std"] < 1e-4
+    code, out, err = run(["period", p])
+    assert code == 0 and "leading rest" in out and "fit starts at t =" in out
+
+
+def test_a_record_that_starts_oscillating_is_fitted_whole():
+    from bifilar.estimation.signal import fit_period
+
+    t, y = _rest_then_decay(t_rest=0.0)
+    fit = fit_period(t, y, model="viscous")
+    assert "leading_rest" not in fit.oscillation and fit.t0 == t[0]
+    t2, y2 = _rest_then_decay(t_rest=5.0)
+    fixed = fit_period(t2, y2, model="viscous", t_start=2.0)  # an explicit window is the user's choice
+    assert "leading_rest" not in fixed.oscillation and fixed.t0 >= 2.0
