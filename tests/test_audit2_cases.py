@@ -484,3 +484,39 @@ def test_a_record_that_starts_oscillating_is_fitted_whole():
     t2, y2 = _rest_then_decay(t_rest=5.0)
     fixed = fit_period(t2, y2, model="viscous", t_start=2.0)  # an explicit window is the user's choice
     assert "leading_rest" not in fixed.oscillation and fixed.t0 >= 2.0
+
+
+# -- 6. the point plan/sweep recommends gets the config plausibility checks -------
+
+def test_sweep_recommended_point_gets_the_plausibility_warnings():
+    """Attachments 30 m from the CoM of a plate whose bounding box reaches
+    2.5 m: the config rule (more than 10x the body) calls that a rig in other
+    units; the recommended point never went through it."""
+    from bifilar.config import plausibility_warnings, scene_from_dict
+
+    code, out, err = run(["sweep", PLATE, "--param", "spacing=60", "--param", "ceiling_spacing=65", "--zip", "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    (w,) = doc["warnings"]
+    assert w.startswith("the recommended point: rig.attachments reach 30 m") and "2.5 m" in w
+    assert f"warning: {w}" in err.splitlines()
+    # the same words as the config loader gives for that rig written out
+    cfg = yaml.safe_load(PLATE.read_text())
+    cfg["rig"]["attachments"] = [[0.0, -30.0, 0.0], [0.0, 30.0, 0.0]]
+    cfg["rig"]["anchors"] = [[0.0, -32.5, 0.0], [0.0, 32.5, 0.0]]
+    assert w.split(": ", 1)[1] in plausibility_warnings(scene_from_dict(cfg, warn=False))
+
+
+def test_plan_planned_point_gets_the_plausibility_warnings():
+    code, out, err = run(["plan", PLATE, "--param", "spacing=54:60", "--param", "ceiling_spacing=59:65", "--zip",
+                          "--json"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert len(doc["warnings"]) == 1 and doc["warnings"][0].startswith("the planned point: rig.attachments reach")
+    assert "warning: the planned point:" in err
+
+
+def test_a_plausible_recommended_point_does_not_warn():
+    code, out, err = run(["sweep", PLATE, "--param", "spacing=4,5", "--json"])
+    assert code == 0, err
+    assert json.loads(out)["warnings"] == [] and "warning" not in err
