@@ -416,7 +416,7 @@ def test_a_text_column_given_lists_the_numeric_ones(tmp_path):
 
 def test_default_column_skips_a_leading_text_column_and_says_so(tmp_path):
     p = _table(tmp_path / "mixed.csv", "t,label,angle", lambda a, b, i: f"{a:.4f},run1,{b:.6f}\n")
-    code, out, err = run(["period", p, "--json"])
+    code, out, err = run(["period", p, "--model", "viscous", "--json"])
     assert code == 0, err
     doc = json.loads(out)
     assert doc["signal"]["column"] == "angle" and abs(doc["period"] - 1.3) < 1e-6
