@@ -287,8 +287,10 @@ def test_unidentifiable_unknowns_are_refused():
     ms = MeasurementSet([Hanging("ref", s, np.eye(3))],
                         [Measurement("torsion", T, 1e-4, "period", "--period"),
                          Measurement("torsion", T * 1.00001, 1e-4, "period", "--period")])
+    with pytest.raises(InputError, match="Ixx cannot be solved for: no measured period"):
+        invert(ms, solve_for=["Izz", "Ixx"])  # the torsion period does not depend on Ixx at all
     with pytest.raises(InputError, match="cannot separate"):
-        invert(ms, solve_for=["Izz", "Ixx"])
+        invert(ms, solve_for=["Izz", "Iyz"])  # it does on Iyz (at second order), but not separably from Izz
 
 
 # --------------------------------------------------------------------------- uncertainty

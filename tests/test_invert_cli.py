@@ -305,10 +305,10 @@ def test_guessed_and_null_priors_on_the_command_line(tmp_path):
     # not solved for, it is a known value and checked as such on load
     bad = run("invert", hi, "--period", f"torsion={T!r}")
     assert bad.exit_code == 2 and "body.inertia.principal" in bad.stderr and "triangle" in bad.stderr
-    # solving for Ixx instead, Izz = 300 is given: no physical Ixx reproduces the period (torsion barely
-    # depends on Ixx), a refusal naming the period
+    # solving for Ixx instead, Izz = 300 is given: the torsion period does not depend on Ixx (less than
+    # 1e-6 over its physical range), a refusal naming the component and the mode that would measure it
     bad = run("invert", hi, "--period", f"torsion={T!r}", "--solve-for", "Ixx")
-    assert bad.exit_code == 2 and bad.stderr.startswith("error: --period: no physical Ixx")
+    assert bad.exit_code == 2 and bad.stderr.startswith("error: --solve-for: Ixx cannot be solved for")
     # Izz unknown (null): solved for without --solve-for, the start said in a note
     nul = tmp_path / "null.yaml"
     nul.write_text(text.replace("260.4166666667", "null"))

@@ -88,11 +88,23 @@ def test_huge_gap_refused_without_allocating_by_the_span(last, fragment):
 
 
 def test_many_small_gaps_refused():
-    # dense first half, then every third sample: no gap above 3 median steps
-    # ... but the samples cover only ~2/3 of the span at the median step
+    # 30 steps of 0.31 s (30 samples removed each: 1.6 % of the record, under
+    # the single-gap limit) leave 1 - 30 x 0.31 / 19.99 = 53 % of the span covered
+    keep = np.ones(T_GRID.size, bool)
+    for k in range(30):
+        keep[60 * k + 20:60 * k + 50] = False
     with pytest.raises(SignalError) as e:
-        check_time(np.r_[T_GRID[:600], T_GRID[600::3]])
-    assert e.value.field == "time" and "cover only" in str(e.value)
+        check_time(T_GRID[keep])
+    assert e.value.field == "time" and "cover only 53%" in str(e.value)
+
+
+def test_a_change_of_sample_rate_is_not_a_gap():
+    # dense first third, then every third sample: irregular sampling, no gap
+    # (it was refused as covering ~2/3 of the span at the median step)
+    t = np.r_[T_GRID[:600], T_GRID[600::3]]
+    check_time(t)
+    fit = fit_period(t, np.cos(2 * np.pi * t / 1.3) + np.random.default_rng(0).normal(0, 0.01, t.size))
+    assert abs(fit.period - 1.3) < 4 * fit.std
 
 
 def test_cli_refusals_exit_2_with_one_line(tmp_path):

@@ -16,7 +16,7 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
               help="Timed trials: CYCLES cycles took T1, T2, ... s (e.g. torsion=10:26.81,26.79,26.84); repeatable.")
 @click.option("--signal", "signals", multiple=True, metavar="LABEL=PATH",
               help="A recording of the mode's oscillation (CSV or .mat, see `bifilar period`); repeatable.")
-@click.option("--column", default=None, help="Signal column / MAT variable (default: first non-time one).")
+@click.option("--column", default=None, help="Signal column / MAT variable (default: first non-time numeric one).")
 @click.option("--sample-rate", default=None, help="Signal sample rate, Hz (when the file has no time column).")
 @click.option("--signal-model", default="auto", show_default=True,
               help="Signal fit model: viscous, quadratic, two_mode, three_mode or auto.")

@@ -13,7 +13,7 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "thr
 
 @click.command("period")
 @click.argument("signal", type=click.Path(dir_okay=False), required=False)
-@click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time one.")
+@click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time numeric one.")
 @click.option("--sample-rate", default=None, help="Sample rate, Hz (ignores a time column).")
 @click.option("--model", default="auto", show_default=True,
               help="Fit model: viscous, quadratic (drag ~ v^2), quadratic+viscous, two_mode (beating), "
@@ -80,7 +80,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
         from ..figures import plot_fit
 
         plot_fit(plot_p, fit, t, y, title=Path(signal).name)
-    sig = {k: meta.get(k) for k in ("path", "format", "column", "columns", "time_source", "sample_rate",
+    sig = {k: meta.get(k) for k in ("path", "format", "decimal", "column", "columns", "time_source", "sample_rate",
                                     "sample_rate_source", "n_samples", "n_dropped", "duration", "warnings")}
     sig["path"] = str(sig["path"]) if sig["path"] is not None else str(signal)
     if as_json:
@@ -152,6 +152,7 @@ def _timed(spec, target, uncertainty, as_json):
     label, n, times = mm.parse_timed_spec(spec)
     unc = mm.parse_uncertainty_overrides(uncertainty)
     T, s, det = mm.period_from_trials(n, times, None, unc)
+    warnings = [w for w in (mm.implausible_period(T, label, "--timed", cycles=n),) if w]
     plan = None
     if target is not None:
         goal = mm.parse_target(target, T)
@@ -161,7 +162,10 @@ def _timed(spec, target, uncertainty, as_json):
         doc = {"period": T, "std": s, "damping_ratio": None, "label": label, "timed": det}
         if plan is not None:
             doc["target"] = plan
+        doc["warnings"] = warnings
         emit_json(doc)
+        for w in warnings:
+            click.echo(f"warning: {w}", err=True)
         return
     from rich.table import Table
 
@@ -185,3 +189,5 @@ def _timed(spec, target, uncertainty, as_json):
             tp.add_row(str(o["trials"]), str(o["cycles"]), f"{o['seconds_per_trial']:.4g}", f"{o['std']:.2g}")
         con.print(tp)
         con.print("[dim]note: assumes the oscillation lasts that many cycles with a visible amplitude[/dim]")
+    for w in warnings:
+        con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, multi_hanging, render_identifiability,
-                        render_multi_hanging, render_rig, render_timing, resolve_all, timing_advice, write_point_config)
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, multi_hanging, point_warnings,
+                        render_identifiability, render_multi_hanging, render_rig, render_timing, resolve_all,
+                        timing_advice, write_point_config)
 from .common import check_output_path, check_workers, console, emit_json, esc, handle_errors, progress_bar
 
 
@@ -54,6 +55,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     with progress_bar("planning", enabled=True) as upd:
         res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
     doc = res.to_json()
+    doc["warnings"] = point_warnings(cfg, config, res.best["params"], "the planned point")
     doc["settings"] = settings.describe()
     doc["how_to_time"] = timing_advice(res.best, reaction, sensor)
     ident = doc["identifiability"]

@@ -111,6 +111,18 @@ def point_config(base_cfg: dict, source: str, point: dict) -> dict:
     return cfg
 
 
+def point_warnings(cfg: dict, source: str, params: dict, what: str) -> list[str]:
+    """The config plausibility warnings of a recommended or planned point
+    (:func:`bifilar.studies.sweep.point_warnings`), each logged to stderr now
+    (``warning: WHAT: ...``) and returned for the JSON document."""
+    from ..studies.sweep import point_warnings as check
+
+    out = [f"{what}: {w}" for w in check(cfg, source, params)]
+    for w in out:
+        click.echo(f"warning: {w}", err=True)
+    return out
+
+
 def write_point_config(path, base_cfg: dict, source: str, point: dict, what: str) -> None:
     """Write a point's config (YAML, atomically) with its parameters and
     planned periods in a header comment; `bifilar modes` reproduces them."""
@@ -284,7 +296,9 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
     remedies_for(rec, points, cfg, config, settings)
+    warnings = []
     if rec.get("best") is not None:
+        warnings = point_warnings(cfg, config, rec["params"], "the recommended point")
         rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
         multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                       hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
@@ -307,7 +321,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                    title=f"{cfg.get('name', Path(config).stem)}: sweep of {', '.join(names)}")
     if as_json:
         emit_json({"points": points, "recommendation": rec, "settings": settings.describe(),
-                   "parameters": names, "zip": zip_, "runtime_s": runtime})
+                   "parameters": names, "zip": zip_, "runtime_s": runtime, "warnings": warnings})
         return
     render(cfg, config, points, names, settings, cons, rec, runtime)
 

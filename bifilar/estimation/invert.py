@@ -71,7 +71,7 @@ from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
 from .budget import DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95, second_order
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
 from .ladder import small_angle_geometry, small_angle_vertical_inertia, thesis_linearisation_for  # noqa: F401
-from .measurements import METHODS, MeasurementSet
+from .measurements import METHODS, MeasurementSet, implausible_period
 from .montecarlo import (  # noqa: F401
     batched_applies,
     draw_monte_carlo,
@@ -81,7 +81,7 @@ from .montecarlo import (  # noqa: F401
     solve_draws_loop,
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
-from .problem import admissible, admissible_interval, problem_at, start_guesses
+from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
 from .roots import EDGE_Z, Root, find_roots, fit_statistics, labelled_periods, separating_measurement
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
@@ -253,9 +253,15 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     unc_all = default_uncertainty({**ms.uncertainty, **(unc or {})})
     warnings: list[str] = []
     notes: list[str] = list(ms.notes)
+    for m in ms.measurements:  # a unit slip that still gives a reachable period runs, with a warning
+        w = implausible_period(m.period, m.label, m.field, m.details.get("cycles") if m.source == "timed" else None)
+        if w:
+            warnings.append(w)
     ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
     notes += start_notes
     pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
+    if solve_for or ms.solve_for:  # chosen by the user, not picked per period: each must be measured
+        refuse_unmeasured(pb)
     pb.unc = unc_all
     K, P = len(pb.measurements), len(pb.unknowns)
     scalar = K == 1 and P == 1

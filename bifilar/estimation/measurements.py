@@ -50,7 +50,8 @@ word ``identity``, ``{axis: [x, y, z], angle_deg: a}`` (or ``angle`` in rad),
 ``{rotvec_deg: [...]}`` / ``{rotvec: [...]}``, or a list of elementary
 rotations about the fixed axes applied in order, e.g. ``[{x: 90}, {z: 45}]``
 (degrees).  The inertia of every hanging's config after the first is
-ignored: it follows from the reference inertia and the rotation.
+ignored: it follows from the reference inertia and the rotation.  The body
+mass and gravity must agree with the first hanging's (refused otherwise).
 """
 
 from __future__ import annotations
@@ -220,6 +221,40 @@ def check_period_sigma(T: float, s: float | None, fld: str) -> None:
     if s is not None and s >= T:
         raise InputError(fld, f"the uncertainty {s:g} s is not smaller than the period {T:g} s: such a "
                          "measurement says nothing about the period; give the period's standard uncertainty")
+
+
+PLAUSIBLE_PERIOD = (0.05, 100.0)
+"""Periods (s) a pendulum rig plausibly shows: a torsion period of 100 s
+needs a radius of gyration 30x the attachments' on 10 m wires, one of
+0.05 s wires of a few mm.  Outside, a unit slip (ms, the total time of
+several cycles) is likelier than the rig: :func:`implausible_period` warns."""
+
+
+def implausible_period(T: float, label: str, fld: str, cycles: float | None = None) -> str | None:
+    """A warning (text, no ``warning:`` prefix) when the period ``T`` (s) of
+    mode ``label`` lies outside :data:`PLAUSIBLE_PERIOD`, naming the likely
+    unit slip; None when it is plausible.  ``cycles``: the period comes from
+    timed trials of that many cycles each (their totals / cycles), whose
+    totals may have been typed in ms.  Only a warning: whether a period is
+    reachable at all is for the inversion to decide (it refuses one that no
+    physical inertia gives, naming the slip)."""
+    lo, hi = PLAUSIBLE_PERIOD
+    if lo <= T <= hi:
+        return None
+    head = (f"{fld}: a period of {T:.6g} s for mode '{label}' is outside the {lo:g} .. {hi:g} s a pendulum rig "
+            "plausibly shows; a unit slip?")
+    if cycles is not None:
+        tot = T * cycles
+        if T > hi:
+            return head + (f" the trials' totals ({tot:.6g} on average for {cycles:g} cycles) look like ms "
+                           f"(they would give {T / 1000:.6g} s)")
+        return head + (f" the trials' totals ({tot:.6g} on average for {cycles:g} cycles) look like minutes "
+                       f"(they would give {T * 60:.6g} s), or the cycles and the totals are swapped")
+    if T > hi:
+        return head + (f" in ms it would be {T / 1000:.6g} s; or the total time of N cycles entered as a period "
+                       "(divide by N)")
+    return head + (f" in minutes it would be {T * 60:.6g} s; a frequency in Hz would be a period of "
+                   f"{1 / T:.6g} s")
 
 
 _TIMED = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(?:cycles?|periods?|x)?\s*(?::|@|in)\s*(.+)$", re.I)
@@ -700,6 +735,8 @@ def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs
         errs.append(exc)
         R = np.eye(3)
     h_index = len(ms.hangings)
+    if scene is not None and ms.hangings:
+        errs.extend(_same_body(ms.hangings[0], scene, f"{pre}config"))
     if scene is not None:
         ms.hangings.append(Hanging(str(name), scene, R, str(cfg) if isinstance(cfg, str) else "inline"))
     if meas is None:
@@ -719,6 +756,26 @@ def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs
             errs.extend(exc.errors)
         except InputError as exc:
             errs.append(exc)
+
+
+#: relative difference below which two hangings' masses (or gravities) are the same number
+SAME_BODY_RTOL = 1e-9
+
+
+def _same_body(ref: Hanging, scene, fld: str) -> list[InputError]:
+    """Refusals of a hanging whose config gives another body mass (kg) or
+    gravity (m/s^2) than the reference hanging ``ref``: every hanging is
+    the same body on the same planet, and the joint fit uses each hanging's
+    own values, so a typo in one config would bias the estimate silently.
+    Equal within :data:`SAME_BODY_RTOL` (relative)."""
+    out = []
+    for key, what, unit, a, b in (("body.mass", "body mass", "kg", ref.scene.mass, scene.mass),
+                                  ("gravity", "gravity", "m/s^2", ref.scene.gravity, scene.gravity)):
+        if abs(a - b) > SAME_BODY_RTOL * max(abs(a), abs(b)):
+            out.append(InputError(f"{fld}.{key}", f"{what} {b:.10g} {unit} differs from {a:.10g} {unit} of the "
+                                  f"reference hanging '{ref.name}': every hanging is the same body on the same rig "
+                                  "site; give the same value in each config"))
+    return out
 
 
 def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..analysis.equilibrium import rest_pose
 from ..analysis.modes import linear_modes, modes_of_inertia
-from ..errors import InputError
+from ..errors import BifilarError, InputError
 from ..scene import TRIANGLE_SLACK, Scene, obeys_triangle
 from .measurements import COM_UNKNOWNS, SOLVABLE, MeasurementSet
 from .sensitivity import INERTIA_COMPONENTS, mac_match
@@ -325,6 +325,62 @@ def build_problem(ms: MeasurementSet, solve_for: list | None = None, unc: dict |
                                         f"{len(ms.measurements)} measured period(s): measure more modes or "
                                         "hangings, or solve for fewer components")
     return pb
+
+
+#: relative change of a period over an unknown's whole admissible range
+#: below which the period does not measure it (the periods' own rounding is
+#: ~1e-13)
+INSENSITIVE = 1e-6
+
+
+def refuse_unmeasured(pb: Problem) -> None:
+    """Raise an :class:`InputError` (``--solve-for``) for an unknown that no
+    measured period depends on, e.g. Ixx from a torsion period: every
+    measured period changes by less than :data:`INSENSITIVE` (relative) as
+    the unknown moves over its admissible range (inertia: 10, 50 and 90 %
+    of :func:`admissible_interval`; a CoM shift: +-5 % of the longest wire),
+    the others at the prior -- a range, not a derivative, so a product of
+    inertia that acts at second order at a symmetric prior counts as
+    measured.  The message names the mode of the hangings in use whose
+    period changes most, or says that none does.  Three mode computations
+    per unknown and hanging (the rest pose is reused for inertia)."""
+    p0 = pb.prior
+    Lmax = max(float(np.max(hm.scene0.lengths)) for hm in pb.models)
+    T0 = [hm.periods(pb.values(p0)) for hm in pb.models]
+    for j, n in enumerate(pb.unknowns):
+        if n in _IDX:
+            lo, hi = admissible_interval(pb.I_ref0, n)
+            if not (lo < hi and math.isfinite(lo) and math.isfinite(hi)):
+                continue  # no range to sample: the solver's own checks decide
+        else:
+            lo, hi = p0[j] - 0.05 * Lmax, p0[j] + 0.05 * Lmax
+        change = [np.zeros_like(T) for T in T0]  # per hanging and mode: largest relative change
+        seen = 0
+        for f in (0.1, 0.5, 0.9):
+            p = p0.copy()
+            p[j] = lo + f * (hi - lo)
+            for h, hm in enumerate(pb.models):
+                try:
+                    T = hm.periods(pb.values(p))
+                except BifilarError:  # a CoM shift that cannot hang: that point says nothing
+                    continue
+                seen += 1
+                with np.errstate(invalid="ignore"):
+                    change[h] = np.fmax(change[h], np.abs(T / T0[h] - 1))
+        measured = [change[m.hanging][pb.mode_index[k]] for k, m in enumerate(pb.measurements)]
+        if not seen or any(np.isfinite(c) and c >= INSENSITIVE for c in measured):
+            continue
+        what = ", ".join(sorted({f"'{m.label}'" for m in pb.measurements}))
+        best = max(((float(c[i]), h, i) for h, c in enumerate(change) for i in range(len(c)) if np.isfinite(c[i])),
+                   default=(0.0, 0, 0))
+        if best[0] >= INSENSITIVE:
+            hm = pb.models[best[1]]
+            how = (f"time mode '{hm.modes0.modes[best[2]].label}' (hanging '{hm.hanging.name}'), whose period "
+                   "depends on it, or do not solve for it")
+        else:
+            how = "no mode of these hangings depends on it: hang the body another way, or do not solve for it"
+        raise InputError("--solve-for", f"{n} cannot be solved for: no measured period ({what}) depends on it "
+                                        f"(they change by less than {INSENSITIVE:g} over its physical range); {how}")
 
 
 def relative_sensitivities(pb: Problem, k: int) -> dict:

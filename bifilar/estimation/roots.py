@@ -358,7 +358,49 @@ def scalar_roots(pb: Problem, target: float | None = None) -> list[Root]:
     x = scan.edge_root(target, m.std)
     if x is not None:
         return [Root(np.array([x]), edge=True)]
-    raise InputError(m.field, scan.range_message(target) + _triangle_hint(scan, target))
+    raise InputError(m.field, scan.range_message(target) + _triangle_hint(scan, target)
+                     + slip_hint(target, scan.attainable()))
+
+
+#: the largest number of cycles a period may be the total time of (a
+#: stopwatch trial times 5-50 cycles), and the largest N of a 1/N alias
+SLIP_MAX_CYCLES = 100
+SLIP_MAX_ALIAS = 10
+
+
+def _ns(ns: list[int]) -> str:
+    return ", ".join(map(str, ns)) if len(ns) <= 4 else f"{ns[0]} to {ns[-1]}"
+
+
+def _span(a: float, b: float) -> str:
+    return f"{a:.6g} s" if f"{a:.6g}" == f"{b:.6g}" else f"{a:.6g} .. {b:.6g} s"
+
+
+def slip_hint(target: float, ranges: list[tuple[float, float]]) -> str:
+    """Name the input slips that would bring an unreachable period
+    ``target`` (s) into the reachable ``ranges`` (s, ``[(lo, hi), ...]``):
+    entered in ms (``target / 1000`` reachable), the total time of ``N``
+    cycles entered as a period (``target / N``, ``2 <= N <=``
+    :data:`SLIP_MAX_CYCLES`) or a shorter alias (``N target``, ``2 <= N <=``
+    :data:`SLIP_MAX_ALIAS`: a half period between zero crossings, a
+    harmonic).  Only slips that land inside a range are named; ``""`` when
+    none does (the message then stands as it is)."""
+    def inside(x: float) -> bool:
+        return any(a * (1 - 1e-9) <= x <= b * (1 + 1e-9) for a, b in ranges)
+
+    hints = []
+    if inside(target / 1000):
+        hints.append(f"it is reachable as {target / 1000:.6g} s: was it entered in ms?")
+    longer = [n for n in range(2, SLIP_MAX_CYCLES + 1) if inside(target / n)]
+    if longer and not hints:
+        hints.append(f"it is {_ns(longer)} times a reachable period ({_span(target / longer[-1], target / longer[0])}"
+                     "): is it the total time of that many cycles?")
+    shorter = [n for n in range(2, SLIP_MAX_ALIAS + 1) if inside(target * n)]
+    if shorter:
+        half = " (N = 2: a half period, timed between successive zero crossings)" if shorter[0] == 2 else ""
+        hints.append(f"it is 1/N of a reachable period for N = {_ns(shorter)} ({_span(target * shorter[0], target * shorter[-1])}"
+                     f"): a shorter alias{half} or a harmonic?")
+    return ("; likely slip: " + "; or ".join(hints)) if hints else ""
 
 
 def _triangle_hint(scan: ScalarScan, target: float) -> str:
@@ -446,13 +488,29 @@ def _refuse_unreachable(pb: Problem, targets: np.ndarray) -> None:
     takes over the admissible start design (a sample of the admissible set):
     a 1e300 s period makes every least-squares misfit overflow, which is bad
     input, not a solver failure."""
-    T = np.array([labelled_periods(pb, p) for p in start_design(pb)])  # (starts, K) s
-    for k, m in enumerate(pb.measurements):
-        col = T[:, k][np.isfinite(T[:, k])]
+    for k, (m, col) in enumerate(zip(pb.measurements, _sampled_periods(pb))):
         if col.size and not col.min() / UNREACHABLE_FACTOR <= targets[k] <= col.max() * UNREACHABLE_FACTOR:
             raise InputError(m.field, f"no admissible inertia gives a period near {m.period:.6g} s for the "
                              f"mode labelled {m.label!r}: over {col.size} admissible tensors sampled its period "
-                             f"ranges over {col.min():.6g} .. {col.max():.6g} s (check the units and the label)")
+                             f"ranges over {col.min():.6g} .. {col.max():.6g} s (check the units and the label)"
+                             + slip_hint(m.period, [(float(col.min()), float(col.max()))]))
+
+
+def _sampled_periods(pb: Problem) -> list[np.ndarray]:
+    """Per measurement, the finite periods (s) its labelled mode takes over
+    the admissible start design (:func:`start_design`)."""
+    T = np.array([labelled_periods(pb, p) for p in start_design(pb)])  # (starts, K) s
+    return [T[:, k][np.isfinite(T[:, k])] for k in range(T.shape[1])]
+
+
+def _sampled_slip(pb: Problem, k: int) -> str:
+    """:func:`slip_hint` for measurement ``k`` when its period lies outside
+    the range its mode spans over the start design, else ``""``."""
+    col = _sampled_periods(pb)[k]
+    T = pb.measurements[k].period
+    if not col.size or col.min() <= T <= col.max():
+        return ""
+    return slip_hint(T, [(float(col.min()), float(col.max()))])
 
 
 def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Root], dict]:
@@ -518,7 +576,7 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None) -> list[Root]:
     raise InputError(pb.measurements[k].field,
                      f"no physical tensor reproduces the measured periods: the best admissible fit ({vals}) "
                      f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); check the "
-                     "periods, their modes and the config, or solve for other components")
+                     "periods, their modes and the config, or solve for other components" + _sampled_slip(pb, k))
 
 
 def separating_measurement(pbs: list, roots: list, sigma: float) -> dict | None:

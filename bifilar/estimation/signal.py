@@ -90,6 +90,7 @@ from .signal_models import (
     _fit_three_mode,
     _fit_two_mode,
     _fit_viscous,
+    _leading_rest,
     _linear_amplitudes,
     _solve,
 )
@@ -191,7 +192,13 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     trim_k : float
         Threshold of ``trim="auto"`` in units of the noise std.
     t_start, t_stop : float, optional
-        Explicit fit window, s.
+        Explicit fit window, s.  Without ``t_start``, a leading stretch at
+        rest (at least one period, envelope below ``REST_FRACTION`` of its
+        largest) is left out: the fit starts a quarter period after the
+        onset found from the one-period envelope
+        (:func:`.signal_models._leading_rest`), said in ``notes`` and in
+        ``oscillation["leading_rest"]`` (``onset``, ``t_start`` = the first
+        sample fitted, s; ``samples_left_out``).
     drift : bool
         Fit the linear drift ``c1`` (else fixed at 0).
     viscous_term : bool
@@ -236,6 +243,17 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     notes: list[str] = []
     t, y = _block_average(t, y, notes)
     osc = require_oscillation(t, y)
+    if t_start is None:
+        rest = _leading_rest(t, y, 1.0 / osc["frequency"])
+        if rest is not None and int(np.sum(t >= rest[1])) >= MIN_SAMPLES \
+                and (t[-1] - rest[1]) * osc["frequency"] >= 3:
+            keep = t >= rest[1]
+            t_on, t_fit = rest[0], float(t[keep][0])  # the first sample fitted
+            notes.append(f"leading rest: the record is at rest until the oscillation starts at t = {t_on:.4g} s "
+                         f"(envelope); the fit starts at t = {t_fit:.4g} s, leaving out {int((~keep).sum())} "
+                         "samples (give --t-start to choose)")
+            osc = dict(osc, leading_rest={"onset": t_on, "t_start": t_fit, "samples_left_out": int((~keep).sum())})
+            t, y = t[keep], y[keep]
     try:
         fit = _fit_period(t, y, model, trim, trim_k, drift, freq_guess, tuple(candidates),
                           criterion.upper(), crossing_check, split_check, notes)

@@ -8,9 +8,10 @@ Memory is bounded by the number of samples: text tables are parsed by
 :func:`numpy.loadtxt` (or, when that fails on missing cells, streamed line by
 line into two float arrays), never held as a list of lines; the time column
 is checked (strictly increasing, no gap longer than ``MAX_GAP_FRACTION`` of
-the record, samples covering at least ``MIN_COVERAGE`` of the span) before
-anything is resampled on a uniform grid, so nothing is ever allocated in
-proportion to the time span.
+the record, samples covering at least ``MIN_COVERAGE`` of the span, a
+uniform grid at the median step at most ``MAX_GRID_FACTOR`` times the
+samples) before anything is resampled on a uniform grid, so nothing is ever
+allocated in proportion to the time span.
 """
 
 from __future__ import annotations
@@ -32,8 +33,16 @@ MAX_NAN_FRACTION = 0.01
 #: ``GAP_MIN_STEPS`` median steps) is a gap that is refused
 MAX_GAP_FRACTION = 0.02
 GAP_MIN_STEPS = 3.0
-#: the samples must cover at least this fraction of the span at the median step
+#: the samples must cover at least this fraction of the span: the span less
+#: the steps longer than ``GAP_MEAN_STEPS`` mean steps (gaps; random
+#: sampling intervals, e.g. exponential ones, are not gaps: an exponential
+#: step exceeds 10 means with probability 5e-5)
 MIN_COVERAGE = 0.75
+GAP_MEAN_STEPS = 10.0
+#: the uniform grid at the median step may hold at most this many times the
+#: samples (exponential intervals need 1.44x; bursts of near-coincident
+#: samples would need arbitrarily many)
+MAX_GRID_FACTOR = 4.0
 
 _TIME_RE = re.compile(
     r"^(t|time)([\s_]*[\(\[]\s*(s|sec|seconds)\s*[\)\]]|[\s_]+(s|sec|seconds))?$"
@@ -133,6 +142,11 @@ def read_signal(path, column: str | None = None, sample_rate: float | None = Non
 
 
 def _sniff_delimiter(line: str) -> str | None:
+    if "," in line and ";" in line and "\t" not in line:
+        # a ';' table whose commas are decimal commas (a European spreadsheet's row)
+        cells = [c.strip().strip('"') for c in line.split(";")]
+        if all(_COMMA_NUMBER.match(c) or "," not in c for c in cells):
+            return ";"
     for d in ("\t", ",", ";"):
         if d in line:
             return d
@@ -176,7 +190,7 @@ def _has_interior_blank_line(p: Path, chunk: int = 1 << 22) -> bool:
             tail = buf[-256:]
 
 
-def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str]):
+def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str], found: str = ""):
     """Parse the data rows (from 0-based line ``start``) of columns ``cols``
     one line at a time into float arrays; missing cells and blank lines
     between rows are NaN (so times derived from a sample rate stay right),
@@ -208,23 +222,32 @@ def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str
                         a.append(nan)
                     else:
                         raise SignalError("signal", f"non-numeric value {cell!r} in column {name!r} "
-                                                    f"at line {i + 1} of {p.name}") from None
+                                                    f"at line {i + 1} of {p.name}"
+                                                    + (f"; {found}" if found else "")) from None
     return [np.frombuffer(a, dtype=float).copy() if len(a) else np.empty(0) for a in out]
 
 
-def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split):
+def _comma_float(s: str) -> float:
+    return float(s.replace(",", "."))
+
+
+def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str], split, comma: bool = False,
+                  found: str = ""):
     """Columns ``cols`` of the data rows as float arrays: :func:`numpy.loadtxt`
     (C parser, memory ~ 8 bytes per value) when the table is clean, else the
-    line-by-line parser with its NaN rules and precise messages."""
+    line-by-line parser with its NaN rules and precise messages.  ``comma``:
+    the numbers have a decimal comma (:func:`_decimal_comma`)."""
     if not _has_interior_blank_line(p):
         try:
             with open(p, encoding="utf-8-sig") as fh:
                 a = np.loadtxt(fh, delimiter=delim, comments="#", skiprows=start, usecols=cols,
-                               ndmin=2, dtype=float, quotechar='"')
+                               ndmin=2, dtype=float, quotechar='"', converters=_comma_float if comma else None)
             return [a[:, k].copy() for k in range(len(cols))]
         except (ValueError, IndexError):
             pass
-    return _stream_columns(p, start, split, cols, names)
+    if comma:
+        return _stream_columns(p, start, lambda ln: [c.replace(",", ".") for c in split(ln)], cols, names, found)
+    return _stream_columns(p, start, split, cols, names, found)
 
 
 #: a column name: letters, digits and a few signs, at most 64 characters
@@ -242,6 +265,60 @@ def _plausible_header(names: list[str]) -> bool:
     return any(n[:1].isalpha() for n in names)
 
 
+_COMMA_NUMBER = re.compile(r"^[+-]?(\d+,\d*|,\d+)([eE][+-]?\d+)?$")
+_POINT_NUMBER = re.compile(r"^[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d+)?$")
+#: data rows looked at to tell a decimal comma from a decimal point
+SNIFF_ROWS = 50
+
+
+def _first_rows(p: Path, start: int, n: int = SNIFF_ROWS) -> list[str]:
+    """Up to ``n`` data lines from 0-based line ``start`` (comments and blank
+    lines skipped; reads only those lines)."""
+    out: list[str] = []
+    with open(p, encoding="utf-8-sig") as fh:
+        for i, ln in enumerate(fh):
+            if i < start or not ln.strip() or ln.lstrip().startswith("#"):
+                continue
+            out.append(ln.rstrip("\r\n"))
+            if len(out) >= n:
+                break
+    return out
+
+
+def _decimal_comma(p: Path, rows: list[list[str]], delim, n_fields: int) -> bool:
+    """Whether the cells of a text table's first data ``rows`` write numbers
+    with a decimal comma (``1,234`` = 1.234, as European spreadsheets do with
+    a ``;`` or tab separator).  Only when it is unambiguous: the separator
+    is not a comma, and the cells hold comma numbers but no point numbers.
+    Refused (``SignalError`` on ``signal``, one line naming the file): a
+    comma-separated table whose rows have more fields than its header (decimal
+    commas that split the numbers), cells mixing both marks (``1.234,5``:
+    thousands separators) or commas in some cells and points in others."""
+    cells = [c for r in rows for c in r if c]
+    commas = [c for c in cells if _COMMA_NUMBER.match(c)]
+    if delim == ",":
+        widths = {len(r) for r in rows}
+        if rows and min(widths) > n_fields:
+            raise SignalError("signal", f"{p.name}: the rows have {min(widths)} or more comma-separated fields but "
+                                        f"the header {n_fields}: decimal commas in a comma-separated table cannot "
+                                        "be told apart from separators; export it with ';' as the separator or "
+                                        "with decimal points")
+        return False
+    if not commas:
+        return False
+    both = [c for c in cells if "," in c and "." in c]
+    if both:
+        raise SignalError("signal", f"{p.name}: the number {both[0]!r} has both a comma and a point (a "
+                                    "thousands separator?): the decimal mark is ambiguous; export the numbers "
+                                    "without thousands separators")
+    points = [c for c in cells if _POINT_NUMBER.match(c)]
+    if points:
+        raise SignalError("signal", f"{p.name}: some numbers have a decimal comma ({commas[0]!r}) and others a "
+                                    f"decimal point ({points[0]!r}): the decimal mark is ambiguous; export the "
+                                    "table with one decimal mark")
+    return True
+
+
 def _read_text(p: Path, column, fs):
     hline, first, delim = _header(p)
 
@@ -251,6 +328,11 @@ def _read_text(p: Path, column, fs):
 
     warnings_: list[str] = []
     header = split(first)
+    numeric_header = all(_is_number(c) or _COMMA_NUMBER.match(c) for c in header)
+    sample = [split(r) for r in _first_rows(p, hline if numeric_header else hline + 1)]
+    comma = _decimal_comma(p, sample, delim, len(header))
+    if comma:
+        header = [c.replace(",", ".") for c in header] if numeric_header else header
     if all(_is_number(c) for c in header):
         names = [f"col{i + 1}" for i in range(len(header))]
         start = hline
@@ -265,11 +347,32 @@ def _read_text(p: Path, column, fs):
                                         "names (expected e.g. 't,x' with numbers below, or a .mat file)")
     time_idx = next((i for i, n in enumerate(names) if _is_time_name(n)), None)
 
+    def numeric(i: int):
+        """What column ``i`` holds in the first rows: numbers (True, also
+        with a stray bad cell, which the reader then names with its line),
+        only text (its first cell: a label or note column) or only missing
+        cells (None)."""
+        vals = [r[i] for r in sample if i < len(r) and r[i].strip().lower() not in _MISSING]
+        if not vals:
+            return None
+        if any(_is_number(v.replace(",", ".") if comma else v) for v in vals):
+            return True
+        return vals[0]
+
+    found = f"columns found: {', '.join(names)}"
     if column is None:
         cand = [i for i in range(len(names)) if i != time_idx]
         if not cand:
-            raise SignalError("--column", f"{p.name} has only a time column ({names[time_idx]!r})")
-        col_idx = cand[0]
+            raise SignalError("--column", f"{p.name} has only a time column ({names[time_idx]!r}); {found}")
+        usable = [i for i in cand if numeric(i) in (True, None)]  # text columns (labels, notes) are skipped
+        if not usable:
+            raise SignalError("signal", f"{p.name} has no numeric column besides the time column (in its first "
+                                        f"rows); {found}")
+        col_idx = usable[0]
+        if col_idx != cand[0]:
+            skipped = ", ".join(repr(names[i]) for i in cand if i < col_idx)
+            warnings_.append(f"column(s) {skipped} skipped: text in their first rows; using "
+                             f"{names[col_idx]!r} (choose with --column)")
     else:
         col = str(column)
         col_idx = next((i for i, n in enumerate(names) if n == col), None)
@@ -280,16 +383,22 @@ def _read_text(p: Path, column, fs):
         if col_idx == time_idx and fs is None:
             raise SignalError("--column", f"{col!r} is the time column of {p.name}; "
                                           f"choose one of {', '.join(n for n in names if n != col)}")
+        kind = numeric(col_idx)
+        if isinstance(kind, str):
+            nums = [names[i] for i in range(len(names)) if numeric(i) is True]
+            raise SignalError("--column", f"column {names[col_idx]!r} of {p.name} is not numeric ({kind!r}); "
+                                          f"numeric columns: {', '.join(nums) or 'none'} ({found})")
     if fs is None and time_idx is None:
         raise SignalError(
             "--sample-rate",
             f"{p.name} has no time column (named 't' or 'time'; columns: "
             f"{', '.join(names)}); give the sample rate in Hz")
     cols = [col_idx] if fs is not None else [col_idx, time_idx]
-    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split)
+    arrays = _load_columns(p, start, delim, cols, [names[c] for c in cols], split, comma, found)
     y = arrays[0]
     meta: dict[str, Any] = {
         "path": str(p), "format": "text", "delimiter": delim or "whitespace",
+        "decimal": "comma" if comma else "point",
         "column": names[col_idx], "columns": list(names), "warnings": warnings_,
     }
     if fs is not None:
@@ -385,7 +494,8 @@ def _finish(t: np.ndarray, y: np.ndarray, meta: dict):
     if nb:
         if nb > max(1, int(MAX_NAN_FRACTION * n)):
             raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN or missing "
-                                        f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording")
+                                        f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording or choose "
+                                        f"another column (columns found: {', '.join(map(str, meta['columns']))})")
         t, y = t[~bad], y[~bad]
         meta["warnings"].append(f"dropped {nb} NaN/missing sample(s) of {n}")
     if len(y) < MIN_SAMPLES:
@@ -405,9 +515,13 @@ def check_time(t) -> np.ndarray:
     Refused (``SignalError`` on ``time``): a step that is not positive
     (time not strictly increasing); a single step longer than
     ``MAX_GAP_FRACTION`` of the record and than ``GAP_MIN_STEPS`` median
-    steps (a gap the fit would have to bridge by interpolation); a span that would need more than ``1 / MIN_COVERAGE``
-    times as many samples at the median step as there are (many gaps).  The
-    checks cost O(n) and allocate O(n), whatever the span.
+    steps (a gap the fit would have to bridge by interpolation); gaps
+    (steps longer than ``GAP_MEAN_STEPS`` mean steps) leaving less than
+    ``MIN_COVERAGE`` of the span covered (many gaps); a span whose uniform
+    grid at the median step would hold more than ``MAX_GRID_FACTOR`` times
+    the samples.  Irregular sampling is accepted: random intervals (a
+    logger's jitter, exponential intervals) or a change of sample rate.
+    The checks cost O(n) and allocate O(n), whatever the span.
     """
     dt = np.diff(t)
     bad = np.nonzero(~(dt > 0))[0]
@@ -424,11 +538,19 @@ def check_time(t) -> np.ndarray:
         raise SignalError("time", f"gap of {dt[i]:g} s between t = {t[i]:g} s and {t[i + 1]:g} s is "
                                   f"{dt[i] / span:.0%} of the record (more than {MAX_GAP_FRACTION:.0%}); "
                                   f"cut the record at the gap (--t-start/--t-stop) or fix the time column")
-    need = span / med + 1
-    if need > t.size / MIN_COVERAGE:
-        raise SignalError("time", f"the {t.size} samples cover only {t.size / need:.0%} of the "
-                                  f"{span:g} s span at the median step {med:g} s (less than "
-                                  f"{MIN_COVERAGE:.0%}): too many gaps")
+    long_ = dt > GAP_MEAN_STEPS * span / dt.size
+    covered = 1.0 - float(np.sum(dt[long_])) / span
+    if covered < MIN_COVERAGE:
+        raise SignalError("time", f"the samples cover only {covered:.0%} of the {span:g} s span (less than "
+                                  f"{MIN_COVERAGE:.0%}): {int(np.sum(long_))} gaps longer than "
+                                  f"{GAP_MEAN_STEPS:g} mean steps; cut the record to a part without gaps "
+                                  "(--t-start/--t-stop) or fix the time column")
+    grid = span / med + 1
+    if grid > MAX_GRID_FACTOR * t.size:
+        raise SignalError("time", f"the samples are bunched: a uniform grid at their median step {med:g} s "
+                                  f"would need {grid:.3g} samples over the {span:g} s span, more than "
+                                  f"{MAX_GRID_FACTOR:g} x the {t.size} recorded; fix the time column or give "
+                                  "--sample-rate")
     return dt
 
 

@@ -446,16 +446,61 @@ def _auto_trim(t, y, raw: _Raw, k: float):
     if noise <= 0:
         return None, noise
     T = 2 * math.pi / raw.p[4]
-    dt = float(np.median(np.diff(t)))
-    m = max(int(round(T / dt)), 1)
-    yd = y - raw.p[0] - raw.p[1] * (t - raw.tm)
-    if m >= yd.size:
+    env, m = _moving_envelope(t, y - raw.p[0] - raw.p[1] * (t - raw.tm), T, noise)
+    if env is None:
         return None, noise
-    ms = np.convolve(yd ** 2, np.ones(m) / m, mode="same")
-    env = np.sqrt(2 * np.clip(ms - noise ** 2, 0, None))
     above = np.nonzero(env >= k * noise)[0]
     if above.size == 0:
         return None, noise
     return float(t[min(above[-1] + m // 2, t.size - 1)]), noise
+
+
+def _moving_envelope(t, yd, T: float, noise: float):
+    """Envelope ([y]) of the offset-free signal ``yd``: sqrt 2 x its moving
+    RMS over one period ``T`` (s; centred window of ``m`` samples at the
+    median step), the noise power ``noise^2`` removed.  Returns ``(env,
+    m)``, ``(None, m)`` when the record is shorter than one period."""
+    dt = float(np.median(np.diff(t)))
+    m = max(int(round(T / dt)), 1)
+    if m >= yd.size:
+        return None, m
+    ms = np.convolve(yd ** 2, np.ones(m) / m, mode="same")
+    return np.sqrt(2 * np.clip(ms - noise ** 2, 0, None)), m
+
+
+#: a leading stretch is at rest when it lasts at least one period and its
+#: envelope stays below this fraction of the largest one
+REST_FRACTION = 0.2
+
+
+def _leading_rest(t, y, T: float):
+    """Onset of an oscillation that follows a stretch at rest (the body still
+    hanging before the release), or None when the record starts oscillating.
+
+    With ``env`` the one-period moving envelope (:func:`_moving_envelope`,
+    about the median level, noise from second differences) and ``A`` its
+    maximum: the first sample where ``env >= A / 2`` lies ``T / 4`` before
+    a sudden onset (a centred window of one period sees half the amplitude
+    there), so the oscillation starts near ``t_half + T / 4``.  A stretch
+    counts as rest when ``t_half - t[0] >= T`` and the envelope before
+    ``t_half - T / 2`` stays below ``REST_FRACTION A``.  Returns ``(t_onset,
+    t_start)`` in s: the estimated onset and the first time to fit,
+    ``t_half + T / 2`` (a quarter period after the onset, so no sample at
+    rest is fitted as part of the decay)."""
+    noise = _noise_sigma(y)
+    env, m = _moving_envelope(t, y - np.median(y), T, noise)
+    if env is None:
+        return None
+    A = float(np.max(env))
+    if not A > 0:
+        return None
+    i = int(np.argmax(env >= 0.5 * A))
+    t_half = float(t[i])
+    if t_half - float(t[0]) < T:
+        return None
+    quiet = env[t <= t_half - 0.5 * T]
+    if quiet.size == 0 or float(np.max(quiet)) > REST_FRACTION * A:
+        return None
+    return t_half + 0.25 * T, t_half + 0.5 * T
 
 

@@ -104,6 +104,21 @@ class SweepInterrupted(KeyboardInterrupt):
         self.total = total
 
 
+def point_warnings(base_cfg: dict, source: str, params: dict) -> list[str]:
+    """The config plausibility warnings (:func:`bifilar.config.plausibility_warnings`:
+    a rig in cm beside a body in m, kilometre wires, ...) of the point
+    ``params`` of ``base_cfg``, for a recommended or planned point: the
+    studies build their scenes with ``warn=False``, so a point the base
+    config's checks never saw is checked here.  Those the base config
+    gives word for word are left out (already said when it was loaded)."""
+    from ..config import plausibility_warnings, scene_from_dict
+    from .shorthands import apply_params
+
+    base = set(plausibility_warnings(scene_from_dict(base_cfg, source, warn=False)))
+    cfg, _ = apply_params(base_cfg, params, source)
+    return [w for w in plausibility_warnings(scene_from_dict(cfg, source, warn=False)) if w not in base]
+
+
 def point_key(params: dict) -> str:
     """Canonical text of a point's parameters (exact floats)."""
     return json.dumps({k: float(v) for k, v in params.items()}, sort_keys=True)
