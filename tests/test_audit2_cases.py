@@ -122,6 +122,27 @@ def test_period_timed_totals_in_ms_warn():
     assert err.strip() == f"warning: {w}"
 
 
+def test_period_of_a_recording_with_its_time_column_in_ms_warns(tmp_path):
+    # a damped 1.3 s oscillation whose time column was written in ms: the fit is right in the column's
+    # unit (1300 "s"), and the warning names the ms reading (1.3 s) and where the time scale came from
+    t = np.arange(0.0, 20.0, 0.01)
+    y = np.exp(-0.05 * t) * np.sin(2 * np.pi * t / 1.3) + 0.01 * np.random.default_rng(1).normal(size=t.size)
+    for scale, warns in ((1000.0, True), (1.0, False)):
+        p = tmp_path / f"rec{scale:g}.csv"
+        np.savetxt(p, np.c_[t * scale, y], delimiter=",", header="t,x", comments="")
+        code, out, err = run(["period", p, "--json"])
+        assert code == 0, err
+        doc = json.loads(out)
+        assert doc["period"] == pytest.approx(1.3 * scale, rel=1e-3)
+        ws = [w for w in doc["signal"]["warnings"] if "unit slip" in w]
+        if warns:
+            (w,) = ws
+            assert "in ms it would be 1.3" in w and "column 't'" in w and "cycles" not in w
+            assert f"warning: {w}" in err
+        else:
+            assert ws == []
+
+
 def test_period_timed_plausible_totals_do_not_warn():
     code, out, err = run(["period", "--timed", "torsion=10:15.20,15.21", "--json"])
     assert code == 0 and json.loads(out)["warnings"] == [] and err == ""

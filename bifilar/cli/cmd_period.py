@@ -74,6 +74,12 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     check_signal_scale(t, y, "SIGNAL")
     fit = fit_period(t, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"],
                      trim="auto" if trim else None)
+    from ..estimation.measurements import implausible_period
+
+    slip = implausible_period(fit.period, None, "SIGNAL")
+    if slip:  # e.g. a time column in ms read as s, or a wrong --sample-rate
+        slip += f" (the time scale came from {meta.get('time_source')}: check its unit)"
+        meta["warnings"] = list(meta.get("warnings") or []) + [slip]
     if plot_p is not None:
         from pathlib import Path
 

@@ -230,9 +230,10 @@ needs a radius of gyration 30x the attachments' on 10 m wires, one of
 several cycles) is likelier than the rig: :func:`implausible_period` warns."""
 
 
-def implausible_period(T: float, label: str, fld: str, cycles: float | None = None) -> str | None:
+def implausible_period(T: float, label: str | None, fld: str, cycles: float | None = None) -> str | None:
     """A warning (text, no ``warning:`` prefix) when the period ``T`` (s) of
-    mode ``label`` lies outside :data:`PLAUSIBLE_PERIOD`, naming the likely
+    mode ``label`` (None: a recording's, no mode named) lies outside
+    :data:`PLAUSIBLE_PERIOD`, naming the likely
     unit slip; None when it is plausible.  ``cycles``: the period comes from
     timed trials of that many cycles each (their totals / cycles), whose
     totals may have been typed in ms.  Only a warning: whether a period is
@@ -241,7 +242,8 @@ def implausible_period(T: float, label: str, fld: str, cycles: float | None = No
     lo, hi = PLAUSIBLE_PERIOD
     if lo <= T <= hi:
         return None
-    head = (f"{fld}: a period of {T:.6g} s for mode '{label}' is outside the {lo:g} .. {hi:g} s a pendulum rig "
+    of = f" for mode '{label}'" if label is not None else ""
+    head = (f"{fld}: a period of {T:.6g} s{of} is outside the {lo:g} .. {hi:g} s a pendulum rig "
             "plausibly shows; a unit slip?")
     if cycles is not None:
         tot = T * cycles
@@ -251,8 +253,8 @@ def implausible_period(T: float, label: str, fld: str, cycles: float | None = No
         return head + (f" the trials' totals ({tot:.6g} on average for {cycles:g} cycles) look like minutes "
                        f"(they would give {T * 60:.6g} s), or the cycles and the totals are swapped")
     if T > hi:
-        return head + (f" in ms it would be {T / 1000:.6g} s; or the total time of N cycles entered as a period "
-                       "(divide by N)")
+        cyc = "" if label is None else "; or the total time of N cycles entered as a period (divide by N)"
+        return head + f" in ms it would be {T / 1000:.6g} s{cyc}"
     return head + (f" in minutes it would be {T * 60:.6g} s; a frequency in Hz would be a period of "
                    f"{1 / T:.6g} s")
 
