@@ -143,6 +143,27 @@ def test_period_of_a_recording_with_its_time_column_in_ms_warns(tmp_path):
             assert ws == []
 
 
+@pytest.mark.parametrize("header, scale, sep, comma", [
+    ("time [ms],x", 1000.0, ",", False), ("t_ms,x", 1000.0, ",", False), ("Zeit;Winkel", 1.0, ";", True),
+    ("temps (s),x", 1.0, ",", False)])
+def test_time_columns_named_in_ms_or_another_language_are_read(tmp_path, header, scale, sep, comma):
+    # the same 1.3 s recording: a time column whose name says ms is converted to s, a German or French
+    # name is recognised as time; each gives the period of the plain 't,x' file (same samples)
+    t = np.arange(0.0, 20.0, 0.01)
+    y = np.exp(-0.05 * t) * np.sin(2 * np.pi * t / 1.3) + 0.01 * np.random.default_rng(1).normal(size=t.size)
+    ref = tmp_path / "ref.csv"
+    np.savetxt(ref, np.c_[t, y], delimiter=",", header="t,x", comments="", fmt="%.9g")
+    p = tmp_path / "rec.csv"
+    rows = [f"{a:.9g}{sep}{b:.9g}" for a, b in zip(t * scale, y)]
+    p.write_text("\n".join([header] + [r.replace(".", ",") if comma else r for r in rows]) + "\n")
+    (c0, o0, e0), (c1, o1, e1) = run(["period", ref, "--json"]), run(["period", p, "--json"])
+    assert c0 == 0 and c1 == 0, e1
+    d0, d1 = json.loads(o0), json.loads(o1)
+    assert d1["period"] == pytest.approx(d0["period"], rel=1e-9) and d1["period"] == pytest.approx(1.3, rel=1e-3)
+    assert not [w for w in d1["signal"]["warnings"] if "unit slip" in w]
+    assert ("ms, converted to s" in d1["signal"]["time_source"]) == (scale != 1.0)
+
+
 def test_period_timed_plausible_totals_do_not_warn():
     code, out, err = run(["period", "--timed", "torsion=10:15.20,15.21", "--json"])
     assert code == 0 and json.loads(out)["warnings"] == [] and err == ""

@@ -44,9 +44,14 @@ GAP_MEAN_STEPS = 10.0
 #: samples would need arbitrarily many)
 MAX_GRID_FACTOR = 4.0
 
+#: names of a time column: t or time, also in other languages a spreadsheet
+#: may use (de Zeit, nl/da tijd/tid, fr temps, es tiempo, it/pt tempo), with an
+#: optional unit, s or ms ("time_s", "Zeit [ms]", "t (sec)")
 _TIME_RE = re.compile(
-    r"^(t|time)([\s_]*[\(\[]\s*(s|sec|seconds)\s*[\)\]]|[\s_]+(s|sec|seconds))?$"
+    r"^(t|time|zeit|tijd|tid|temps|tiempo|tempo)"
+    r"(?:[\s_]*[\(\[]\s*(s|sec|seconds|ms|msec|milliseconds)\s*[\)\]]|[\s_]+(s|sec|seconds|ms|msec|milliseconds))?$"
 )
+_MS_UNITS = {"ms", "msec", "milliseconds"}
 _RATE_NAMES = {
     "actualrate", "samplerate", "sample_rate", "samplingrate", "sampling_rate",
     "fs", "srate", "rate", "samplefrequency", "sample_frequency", "fsample",
@@ -72,6 +77,21 @@ class SignalError(InputError):
 
 def _is_time_name(name: str) -> bool:
     return bool(_TIME_RE.match(str(name).strip().lower()))
+
+
+def _time_scale(name: str) -> float:
+    """Seconds per unit of a time column named ``name`` (1e-3 when its name
+    gives ms, else 1: a time column is in seconds unless its name says ms)."""
+    m = _TIME_RE.match(str(name).strip().lower())
+    unit = (m.group(2) or m.group(3)) if m else None
+    return 1e-3 if unit in _MS_UNITS else 1.0
+
+
+def _time_column(name: str, values: np.ndarray, kind: str) -> tuple[np.ndarray, str]:
+    """(t in s, time_source) from a time column or variable named ``name``."""
+    scale = _time_scale(name)
+    src = f"{kind} {name!r}" + (" (ms, converted to s)" if scale != 1.0 else "")
+    return values * scale if scale != 1.0 else values, src
 
 
 def _check_rate(sample_rate) -> float | None:
@@ -104,7 +124,9 @@ def read_signal(path, column: str | None = None, sample_rate: float | None = Non
         Sample rate in Hz.  When given, ``t = arange(n) / sample_rate`` and a
         time column, if any, is ignored.  Otherwise text files need a time
         column named ``t`` or ``time`` (case-insensitive, seconds; ``time_s``
-        and ``time (s)`` also accepted) and MAT files a scalar variable named
+        and ``time (s)`` also accepted; ``time [ms]``, ``t_ms`` are read as ms
+        and converted; ``Zeit``, ``tijd``, ``tid``, ``temps``, ``tiempo``,
+        ``tempo`` as well) and MAT files a scalar variable named
         like ``ActualRate``, ``SampleRate`` or ``fs`` (Hz) or a time vector.
 
     Returns
@@ -407,8 +429,8 @@ def _read_text(p: Path, column, fs):
         if time_idx is not None:
             warnings_.append(f"time column {names[time_idx]!r} ignored: sample_rate given")
     else:
-        t = arrays[1]
-        meta.update(time_source=f"column {names[time_idx]!r}", sample_rate=None,
+        t, src = _time_column(names[time_idx], arrays[1], "column")
+        meta.update(time_source=src, sample_rate=None,
                     sample_rate_source=f"median step of column {names[time_idx]!r}")
     return t, y, meta
 
@@ -479,9 +501,10 @@ def _read_mat(p: Path, column, fs):
         return t, y, meta
     tvar = next((k for k in numeric if _is_time_name(k) and _as_1d_numeric(vars_[k]).size == y.size), None)
     if tvar is not None:
-        meta.update(time_source=f"variable {tvar!r}", sample_rate=None,
+        t, src = _time_column(tvar, _as_1d_numeric(vars_[tvar]), "variable")
+        meta.update(time_source=src, sample_rate=None,
                     sample_rate_source=f"median step of variable {tvar!r}")
-        return _as_1d_numeric(vars_[tvar]), y, meta
+        return t, y, meta
     raise SignalError("--sample-rate", f"{p.name} has no sample-rate variable (ActualRate, SampleRate, fs) "
                                        f"and no time vector; give the sample rate in Hz")
 
