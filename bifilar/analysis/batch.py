@@ -65,6 +65,7 @@ from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, s
 from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, mode_set
 from .simulate import RunSummary, measured_period
+from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
     "rest_poses", "modes_batch", "rest_and_modes", "initial_states", "simulate_batch", "SceneRun", "run_one",
@@ -352,76 +353,44 @@ def rest_and_modes(scenes: Sequence[Scene], guess=None, *, errors: str = "raise"
 # --------------------------------------------------------------------------
 # initial states
 # --------------------------------------------------------------------------
-def _project(a, p, L, m, I, com, R, hold=None, iters: int = 50):
-    """Mass-weighted closest poses on which every wire has its length, the
-    coordinates ``hold`` (B,) (0..5 of [dx, dy, dz, rx, ry, rz]) unchanged
-    (:func:`~bifilar.analysis.simulate.project_to_wires`, vectorised)."""
-    Minv = np.concatenate([np.repeat((1.0 / m)[:, None], 3, 1),
-                           np.repeat((1.0 / np.linalg.eigvalsh(I).mean(axis=1))[:, None], 3, 1)], axis=1)
-    if hold is not None:
-        Minv[np.arange(len(m)), np.asarray(hold)] = 0.0
-    Lm = L.max(axis=1)
-    active = np.ones(len(m), bool)
-    for _ in range(iters):
-        ii = np.nonzero(active)[0]
-        if not len(ii):
-            break
-        _, _, G, phi = _constraints(a, p, L, com, R, ii)
-        done = np.abs(phi).max(axis=1) < 1e-15 * Lm[ii] ** 2
-        active[ii[done]] = False
-        ii, G, phi = ii[~done], G[~done], phi[~done]
-        if not len(ii):
-            break
-        GM = G * Minv[ii][:, None, :]
-        S = GM @ np.swapaxes(G, 1, 2)
-        try:
-            lamb = np.linalg.solve(S, phi[..., None])
-        except np.linalg.LinAlgError:
-            lamb = np.stack([np.linalg.lstsq(Sb, pb, rcond=None)[0] for Sb, pb in zip(S, phi)])[..., None]
-        dx = -(np.swapaxes(GM, 1, 2) @ lamb)[..., 0]
-        com[ii] = com[ii] + dx[:, :3]
-        R[ii] = rotvec_to_matrix(dx[:, 3:]) @ R[ii]
-    return com, R
-
-
-def _wire_residual(a, p, L, com, R) -> np.ndarray:
-    """max_i | |d_i| - L_i | / L_max (B,) at the poses."""
-    d, _, _ = _jacobian(a, p, com, R)
-    return np.abs(np.linalg.norm(d, axis=2) - L).max(axis=1) / L.max(axis=1)
-
-
-def _start_poses(scenes, rests, modes, amplitude):
-    """Projected displaced poses: (com (B,3), R (B,3,3), wire residual (B,), amplitudes (B,))."""
-    a, p, L, m, g, I = _stack(scenes)
+def _start_poses(scenes, rests, modes, amplitude) -> StartPoses:
+    """:func:`~bifilar.analysis.start_pose.start_poses` per wire-count group, in input order."""
+    scenes = list(scenes)
     amp = np.broadcast_to(np.asarray(amplitude, float), (len(scenes),))
-    S = np.array([md.shape for md in modes])
-    com = np.array([r.com for r in rests]) + amp[:, None] * S[:, :3]
-    R = rotvec_to_matrix(amp[:, None] * S[:, 3:]) @ np.array([r.R for r in rests])
-    com, R = _project(a, p, L, m, I, com, R, hold=[md.dominant for md in modes])
-    return com, R, _wire_residual(a, p, L, com, R), amp
+    parts = [(ii, start_poses([scenes[k] for k in ii], [rests[k] for k in ii], [modes[k] for k in ii], amp[ii]))
+             for ii in _groups(scenes)]
+    if len(parts) == 1:
+        return parts[0][1]
+    out = StartPoses(**{f: np.zeros((len(scenes),) + getattr(parts[0][1], f).shape[1:], getattr(parts[0][1], f).dtype)
+                        for f in StartPoses.__dataclass_fields__})
+    for ii, sp in parts:
+        for f in StartPoses.__dataclass_fields__:
+            getattr(out, f)[ii] = getattr(sp, f)
+    return out
 
 
 def initial_states(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude) -> np.ndarray:
     """States (B, 13) at rest displaced by ``amplitude`` (scalar or (B,)) x
-    each scene's mode shape, projected onto the wires, at rest (zero
-    velocity), the mode's dominant coordinate held at its displaced value:
-    :func:`~bifilar.analysis.simulate.initial_state` for many.  Raises
-    :class:`InputError` (``--amplitude``) when no such pose exists."""
-    com, R, res, amp = _start_poses(scenes, rests, modes, amplitude)
-    bad = np.nonzero(res > 1e-9)[0]
+    each scene's mode shape, put back on the wires with the mode's dominant
+    coordinate held at its displaced value, at rest (zero velocity):
+    :func:`~bifilar.analysis.simulate.initial_state` for many (the same
+    solver, :mod:`bifilar.analysis.start_pose`).  Raises :class:`InputError`
+    (``--amplitude``) when no such pose exists."""
+    sp = _start_poses(scenes, rests, modes, amplitude)
+    bad = np.nonzero(~sp.feasible)[0]
     if len(bad):
         b = int(bad[0])
-        raise InputError("--amplitude", f"amplitude {amp[b]:g} is too large for scene {b + 1} ('{scenes[b].name}'): "
-                         f"no pose with the {modes[b].label} coordinate displaced that far keeps every wire at its "
-                         "length; reduce the amplitude")
-    return np.concatenate([com, matrix_to_quat(R), np.zeros((len(scenes), 6))], axis=1)
+        raise refusal(scenes[b], modes[b], float(sp.amplitude[b]), float(sp.gap[b]),
+                      f"scene {b + 1} ('{scenes[b].name}')")
+    return np.concatenate([sp.com, sp.q, np.zeros((len(scenes), 6))], axis=1)
 
 
 def feasible_amplitudes(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude
                         ) -> np.ndarray:
     """(B,) bool: whether each displaced start pose can be reached with every
-    wire at its length (relative residual <= 1e-9; what :func:`initial_states` needs)."""
-    return _start_poses(scenes, rests, modes, amplitude)[2] <= 1e-9
+    wire at its length (what :func:`initial_states` needs;
+    :data:`~bifilar.analysis.start_pose.FEASIBLE_TOL`)."""
+    return _start_poses(scenes, rests, modes, amplitude).feasible
 
 
 # --------------------------------------------------------------------------
@@ -635,17 +604,19 @@ def simulate_batch(
                 continue
             runnable.append((k, j, md))
         if runnable:
-            ok = feasible_amplitudes([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],
-                                     [md for _, _, md in runnable], amps[[k for k, _, _ in runnable]])
+            sub_md = [md for _, _, md in runnable]
+            sp = _start_poses([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable], sub_md,
+                              amps[[k for k, _, _ in runnable]])
+            ok = sp.feasible
             if not np.all(ok):
-                if errors != "return":
-                    k0 = runnable[int(np.argmin(ok))][0]
-                    raise InputError("--amplitude", f"amplitude {amps[k0]:g} is too large for scene {k0 + 1}: no "
-                                     "start pose keeps every wire at its length; reduce the amplitude")
-                for (k, _, _), good in zip(runnable, ok):
-                    if not good:
-                        out[k] = _failed(f"--amplitude: {amps[k]:g} is too large (no start pose keeps every wire "
-                                         "at its length)", modes_in[k], amps[k], nw, rtol)
+                for jr, ((k, _, md), good) in enumerate(zip(runnable, ok)):
+                    if good:
+                        continue
+                    exc = refusal(scenes[k], md, float(amps[k]), float(sp.gap[jr]),
+                                  f"scene {k + 1} ('{scenes[k].name}')")
+                    if errors != "return":
+                        raise exc
+                    out[k] = _failed(str(exc), modes_in[k], amps[k], nw, rtol)
                 runnable = [x for x, good in zip(runnable, ok) if good]
         if runnable:
             res = _run_group([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],

@@ -23,10 +23,11 @@ from scipy.optimize import brentq
 
 from ..errors import IntegrationError, InputError
 from ..models import maximal as mx
-from ..rotations import quat_multiply, quat_to_rotvec, rotvec_to_matrix, matrix_to_quat
+from ..rotations import quat_multiply, quat_to_rotvec
 from ..scene import Scene, lowest_point_z
-from .equilibrium import RestPose, constraint_jacobian, rest_pose
+from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, linear_modes
+from .start_pose import refusal, start_poses
 
 
 @dataclass
@@ -115,36 +116,14 @@ def run_json(r, integrator: dict) -> dict:
     }
 
 
-def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 50,
-                     hold: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Closest pose (mass-weighted) on which every wire has its length.
-
-    Gauss-Newton on phi(x) = 0 with the minimum-norm correction in the metric
-    of the mass matrix; converges quadratically from any nearby pose.
-    ``hold``: index (0..5 of [dx, dy, dz, rx, ry, rz]) of a coordinate the
-    correction must not change -- the coordinate the experimenter displaced.
-    """
-    Minv = np.concatenate([np.full(3, 1.0 / scene.mass), 1.0 / np.linalg.eigvalsh(scene.inertia).mean() * np.ones(3)])
-    L = scene.lengths
-    for _ in range(iters):
-        d, w, G = constraint_jacobian(scene, com, R)
-        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
-        if np.max(np.abs(phi)) < 1e-15 * np.max(L) ** 2:
-            break
-        W = Minv.copy()
-        if hold is not None:
-            W[hold] = 0.0
-        GM = G * W
-        dx = -GM.T @ np.linalg.lstsq(GM @ G.T, phi, rcond=None)[0]
-        com = com + dx[:3]
-        R = rotvec_to_matrix(dx[3:]) @ R
-    return com, R
-
-
 def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) -> np.ndarray:
-    """State (13,) at rest displaced by ``amplitude`` x the mode shape, projected
-    back onto the wires with the mode's dominant coordinate held at its
-    displaced value (as an experimenter sets the initial angle), zero velocity."""
+    """State (13,) at rest displaced by ``amplitude`` x the mode shape, put
+    back on the wires with the mode's dominant coordinate held at exactly
+    ``amplitude x shape[dominant]`` (as an experimenter sets the initial
+    angle; measured by :func:`relative_pose`) and the other coordinates the
+    mass-weighted closest on the wires (:mod:`bifilar.analysis.start_pose`),
+    zero velocity.  Raises :class:`InputError` (``--amplitude``) when no such
+    pose keeps every wire at its length, saying how far off the closest is."""
     if not np.isfinite(amplitude):
         raise InputError("--amplitude", f"must be finite, got {amplitude}")
     limit = np.pi if mode.dominant >= 3 else 2.0 * float(np.max(scene.lengths))
@@ -152,20 +131,10 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
         unit = "rad" if mode.dominant >= 3 else "m"
         raise InputError("--amplitude", f"{amplitude:g} {unit} is beyond any reachable start of the {mode.label} "
                                         f"mode (|amplitude| <= {limit:.4g} {unit})")
-    dr = amplitude * mode.shape[:3]
-    dth = amplitude * mode.shape[3:]
-    com = rest.com + dr
-    R = rotvec_to_matrix(dth) @ rest.R
-    com, R = project_to_wires(scene, com, R, hold=mode.dominant)
-    d = com + scene.attachments @ R.T - scene.anchors
-    gap = float(np.max(np.abs(np.linalg.norm(d, axis=1) - scene.lengths)))
-    if not gap <= 1e-9 * float(np.max(scene.lengths)):
-        raise InputError(
-            "--amplitude",
-            f"{amplitude:g} x the {mode.label} shape cannot be reached with every wire at its length "
-            f"(closest start is {gap:.3g} m off the wires); use a smaller amplitude",
-        )
-    return mx.pack(com, matrix_to_quat(R))
+    sp = start_poses([scene], [rest], [mode], amplitude)
+    if not sp.feasible[0]:
+        raise refusal(scene, mode, amplitude, float(sp.gap[0]))
+    return mx.pack(sp.com[0], sp.q[0])
 
 
 def relative_pose(y: np.ndarray, rest: RestPose) -> np.ndarray:
