@@ -64,7 +64,7 @@ from ..scene import Scene, lowest_point_z
 from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, sample_health
 from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, mode_set
-from .simulate import RunSummary, measured_period
+from .simulate import RunSummary, measured_period, no_period_warning
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -410,7 +410,8 @@ class SceneRun(RunSummary):
         crossings); period_std : std of single cycles, s; crossings (k,) s.
     linear_period : the mode's linear period, s.
     max_constraint_violation : max | |d_i| - L_i |, m.
-    energy_drift : max |E - E0| / |E0 - E_rest|.
+    energy_drift : max |E - E0| / |E0 - E_rest| over the steps and, where
+        samples are taken (``samples_per_period``, LSODA's own), the samples.
     tension_min, tension_max : (n,) N.  slack : [(wire 1-based, t s)].
     lowest_z_min : lowest world z of the body, m; depth_max : ceiling minus
         that, m.  t, y : dense samples (only with ``samples_per_period``).
@@ -768,6 +769,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 obs.Tmin[b] = np.minimum(obs.Tmin[b], T_.min(axis=1))
                 obs.Tmax[b] = np.maximum(obs.Tmax[b], T_.max(axis=1))
                 merge_refined(obs, np.array([b]), *refine_extremes(ts_[:, None], T_[:, :, None]))
+                # the energy at the samples too (dense output: interpolation error included)
+                E_ = obs._energy(np.full(len(ts_), b), ys_.T)
+                obs.dE[b] = max(obs.dE[b], float(np.max(np.abs(E_ - obs.E0[b]))))
     runtime = (time.perf_counter() - t_start) / Bn
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
@@ -788,7 +792,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         if obs.viol[b] > 1e-6 * Lmax[b]:
             warnings.append(f"constraint violation {obs.viol[b]:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
         if period is None:
-            warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
+            warnings.append(no_period_warning(float(amps[b]), status[b] == 1))
         t_s = y_s = None
         if obs.samples is not None and keep_samples:
             parts = obs.samples[b]
