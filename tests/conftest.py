@@ -51,3 +51,21 @@ def measured_scene(truth, rng, unc):
                    anchors=truth.anchors + rng.normal(0, unc["position"], (n, 3)),
                    attachments=truth.attachments + rng.normal(0, unc["position"], (n, 3))
                    - rng.normal(0, unc["com"], 3))
+
+
+# the KTH trifilar table (configs/trifilar_kth.yaml, copied so that tests do not follow that file; R = 1 m,
+# wires 0.995 m) with an off-centre test mass: twisted toward 2 asin(L / 2R) = 1.0424 rad its wires near
+# the horizontal go slack in the motion (tests/test_cli.py, tests/test_start_pose.py)
+TRIFILAR = """\
+body:
+  parts:
+    - {shape: slender_beam, mass: 0.282667, length: 1.7320508, position: [-0.25, 0.4330127, 0.0], axis: [-0.8660254, -0.5, 0.0]}
+    - {shape: slender_beam, mass: 0.282667, length: 1.7320508, position: [-0.25, -0.4330127, 0.0], axis: [0.8660254, -0.5, 0.0]}
+    - {shape: slender_beam, mass: 0.282666, length: 1.7320508, position: [0.5, 0.0, 0.0], axis: [0.0, 1.0, 0.0]}
+    - {shape: point_mass, mass: 0.02094, position: [0.5, 0.0, 0.0]}
+rig:
+  attachments_frame: parts
+  anchors:     [[1.0, 0.0, 0.995], [-0.5, 0.8660254, 0.995], [-0.5, -0.8660254, 0.995]]
+  attachments: [[1.0, 0.0, 0.0], [-0.5, 0.8660254, 0.0], [-0.5, -0.8660254, 0.0]]
+  lengths:     [0.995, 0.995, 0.995]
+"""

@@ -99,10 +99,12 @@ def test_stiff_run_is_right_and_bounded_when_the_probe_underestimates(monkeypatc
     scene = rod()
     T = 2 * np.pi * np.sqrt(1.0 * 1.5 / (1.0 * G * 0.5**2))
     calls = counted(monkeypatch)
+    # the probe's estimate (2.7e4 .. 3.1e4) and the run's need (9.5e4 .. 1.0e5) move with the rounding-level
+    # roll of the start (rx ~ 2e-14 rad excites a 1.9e-4 s roll): a budget well between the two
     with pytest.raises(InputError) as e:
-        simulate(scene, mode="torsion", periods=2, max_evaluations=3e4)
+        simulate(scene, mode="torsion", periods=2, max_evaluations=5e4)
     assert e.value.field == "--periods" and "reached t = " in str(e.value)
-    assert calls[0] <= 3e4 + 3e2 + 1  # the budget, the probe (~270) and the refused call
+    assert calls[0] <= 5e4 + 4e2 + 1  # the budget, the probe (~300) and the refused call
     res = simulate(scene, mode="torsion", amplitude=0.05, periods=2)
     assert any(w.startswith("stiff body:") for w in res.warnings)
     # amplitude 0.05 rad: the period grows by ~theta^2/16 = 1.6e-4

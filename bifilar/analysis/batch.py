@@ -8,14 +8,11 @@ gives the results of the single-scene functions
 :func:`~bifilar.analysis.simulate.simulate`) to rounding or to the
 integration tolerance:
 
-* :func:`rest_poses`: Newton's method on the KKT equations, all scenes at
-  once, warm-started from a guess (a neighbour's rest pose, by default the
-  first scene's); a scene whose Newton run does not end at a taut, stable
-  equilibrium falls back to :func:`rest_pose` (global search and its
-  one-line errors).
-* :func:`modes_batch`: null space of the constraint Jacobian, reduced
-  stiffness and mass, and the generalised eigenproblem by batched Cholesky
-  and ``eigh``; labels as :func:`linear_modes`.
+* :func:`rest_poses`, :func:`modes_batch`, :func:`rest_and_modes`: rest
+  poses (Newton on the KKT equations, all scenes at once) and linear modes,
+  in :mod:`bifilar.analysis.batch_rest`, re-exported here.
+* :func:`initial_states`: the start poses
+  (:mod:`bifilar.analysis.start_pose`, the solver ``simulate`` uses).
 * :func:`simulate_batch`: the maximal-coordinate model
   (:mod:`bifilar.models.maximal`, compiled kernel) integrated from each
   scene's displaced rest pose, with per-scene health (constraint violation,
@@ -57,14 +54,15 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .. import integrators as itg
-from ..errors import BifilarError, InputError
+from ..errors import InputError
 from ..models import maximal as mx
-from ..rotations import matrix_to_quat, rotvec_to_matrix
-from ..scene import Scene, lowest_point_z
+from ..scene import Scene
 from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, sample_health
-from .equilibrium import RestPose, rest_pose
-from .modes import COMPONENTS, Mode, ModeSet, mode_set
-from .simulate import RunSummary, measured_period
+from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
+from .equilibrium import RestPose
+from .modes import COMPONENTS, Mode, ModeSet
+from .simulate import RunSummary, measured_period, no_period_warning
+from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
     "rest_poses", "modes_batch", "rest_and_modes", "initial_states", "simulate_batch", "SceneRun", "run_one",
@@ -72,356 +70,46 @@ __all__ = [
 
 
 # --------------------------------------------------------------------------
-# geometry helpers, vectorised over scenes
-# --------------------------------------------------------------------------
-def _stack(scenes: Sequence[Scene]):
-    a = np.array([s.anchors for s in scenes])
-    p = np.array([s.attachments for s in scenes])
-    L = np.array([s.lengths for s in scenes])
-    m = np.array([s.mass for s in scenes])
-    g = np.array([s.gravity for s in scenes])
-    I = np.array([s.inertia for s in scenes])
-    return a, p, L, m, g, I
-
-
-def _groups(scenes: Sequence[Scene]) -> list[list[int]]:
-    """Indices of the scenes grouped by wire count (arrays need one count)."""
-    out: dict[int, list[int]] = {}
-    for k, s in enumerate(scenes):
-        out.setdefault(s.n_wires, []).append(k)
-    return [out[n] for n in sorted(out)]
-
-
-def _per_group(fn, scenes, *lists, **kw) -> list:
-    """Apply ``fn(sub_scenes, *sub_lists, **kw) -> list`` per wire-count group
-    and reassemble the results in input order (lists may be None)."""
-    out: list = [None] * len(scenes)
-    for ii in _groups(scenes):
-        subs = [None if x is None else [x[k] for k in ii] for x in lists]
-        for k, r in zip(ii, fn([scenes[k] for k in ii], *subs, **kw)):
-            out[k] = r
-    return out
-
-
-def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Cross product over the last axis (faster than np.cross on small batches)."""
-    ux, uy, uz = u[..., 0], u[..., 1], u[..., 2]
-    vx, vy, vz = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx], axis=-1)
-
-
-def _jacobian(a, p, com, R):
-    """Wire vectors d, lever arms w = R p (B, n, 3) and G = [d, w x d] (B, n, 6)."""
-    w = np.einsum("bij,bnj->bni", R, p)
-    d = com[:, None, :] + w - a
-    return d, w, np.concatenate([d, _cross(w, d)], axis=-1)
-
-
-def _constraints(a, p, L, com, R, ii):
-    """d, w, G (as :func:`_jacobian`) and phi = (|d|^2 - L^2)/2 (k, n) for the scenes ``ii``."""
-    d, w, G = _jacobian(a[ii], p[ii], com[ii], R[ii])
-    return d, w, G, 0.5 * (np.einsum("bni,bni->bn", d, d) - L[ii] ** 2)
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros(v.shape[:-1])
-    x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
-
-
-def _hessian(d, w, lam):
-    """sum_i lam_i H_i (B, 6, 6): the constraint Hessians of
-    :func:`~bifilar.analysis.equilibrium.constraint_hessians`, weighted."""
-    W = _skew(w)  # (B, n, 3, 3)
-    eye = np.eye(3)
-    dw = np.einsum("bni,bni->bn", d, w)
-    Hrr = -np.einsum("bnij,bnjk->bnik", W, W) + 0.5 * (d[..., :, None] * w[..., None, :] + w[..., :, None] * d[..., None, :]) \
-        - dw[..., None, None] * eye
-    H = np.empty(d.shape[:1] + (6, 6))
-    ls = lam.sum(axis=1)
-    H[:, :3, :3] = ls[:, None, None] * eye
-    H[:, :3, 3:] = -np.einsum("bn,bnij->bij", lam, W)
-    H[:, 3:, :3] = np.einsum("bn,bnij->bij", lam, W)
-    H[:, 3:, 3:] = np.einsum("bn,bnij->bij", lam, Hrr)
-    return H
-
-
-# --------------------------------------------------------------------------
-# rest poses
-# --------------------------------------------------------------------------
-def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
-    """Newton on grad V + G^T lam = 0, phi = 0 for every scene (damped like
-    the single-scene solver).  Returns com, R, lam, kkt residual (B,)."""
-    Bn, n = L.shape
-    gradV = np.zeros((Bn, 6))
-    gradV[:, 2] = m * g
-    fscale = m * g
-    Lmax = L.max(axis=1)
-    active = np.ones(Bn, bool)
-    res = np.full(Bn, np.inf)
-    for _ in range(iters):
-        ii = np.nonzero(active)[0]
-        if not len(ii):
-            break
-        d, w, G, phi = _constraints(a, p, L, com, R, ii)
-        r1 = gradV[ii] + np.einsum("bni,bn->bi", G, lam[ii])
-        res[ii] = np.maximum(np.abs(r1).max(axis=1) / fscale[ii], np.abs(phi).max(axis=1) / Lmax[ii] ** 2)
-        conv = res[ii] < 1e-15
-        active[ii[conv]] = False
-        if np.all(conv):
-            break
-        keep = ~conv
-        ii, d, w, G, phi, r1 = ii[keep], d[keep], w[keep], G[keep], phi[keep], r1[keep]
-        K = np.zeros((len(ii), 6 + n, 6 + n))
-        K[:, :6, :6] = _hessian(d, w, lam[ii])
-        K[:, :6, 6:] = np.swapaxes(G, 1, 2)
-        K[:, 6:, :6] = G
-        rhs = -np.concatenate([r1, phi], axis=1)
-        try:
-            step = np.linalg.solve(K, rhs[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            step = np.stack([np.linalg.lstsq(Kb, rb, rcond=None)[0] for Kb, rb in zip(K, rhs)])
-        dx = step[:, :6]
-        lim = 0.2 * Lmax[ii]
-        s = np.minimum(1.0, np.minimum(lim / np.maximum(np.abs(dx[:, :3]).max(axis=1), 1e-300),
-                                       0.5 / np.maximum(np.abs(dx[:, 3:]).max(axis=1), 1e-300)))
-        com[ii] = com[ii] + s[:, None] * dx[:, :3]
-        R[ii] = rotvec_to_matrix(s[:, None] * dx[:, 3:]) @ R[ii]
-        lam[ii] = lam[ii] + s[:, None] * step[:, 6:]
-    # final residual everywhere
-    d, w, G, phi = _constraints(a, p, L, com, R, slice(None))
-    r1 = gradV + np.einsum("bni,bn->bi", G, lam)
-    res = np.maximum(np.abs(r1).max(axis=1) / fscale, np.abs(phi).max(axis=1) / Lmax**2)
-    return com, R, lam, res
-
-
-def _null_space(G: np.ndarray):
-    """Orthonormal null-space bases (B, 6, 6-n) of full-rank G (B, n, 6) and
-    whether each G has full rank (tolerance of :func:`reduced_stiffness`)."""
-    _, s, vt = np.linalg.svd(G)
-    n = G.shape[1]
-    full = s[:, -1] > 1e-12 * s[:, 0]
-    return np.swapaxes(vt[:, n:, :], 1, 2), full
-
-
-def _mass_matrix(m, I, R):
-    M = np.zeros((len(m), 6, 6))
-    M[:, 0, 0] = M[:, 1, 1] = M[:, 2, 2] = m
-    M[:, 3:, 3:] = R @ I @ np.swapaxes(R, 1, 2)
-    return M
-
-
-def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | None = None, *,
-               errors: str = "raise") -> list:
-    """Rest poses of many scenes (same number of wires), vectorised.
-
-    Parameters
-    ----------
-    guess : a RestPose used as the start of every scene, or one per scene;
-        default: the rest pose of the first scene (global search).
-    errors : ``"raise"``: the first scene that cannot hang raises its
-        error (:class:`SlackWireError`, ...); ``"return"``: its entry in
-        the list is the exception instead.
-
-    Returns a list of :class:`RestPose` (or exceptions), in input order,
-    equal to :func:`rest_pose` of each scene to its convergence tolerance
-    (KKT residual < 1e-9 relative; ~1e-15 in practice).
-    """
-    scenes = list(scenes)
-    if not scenes:
-        return []
-    if len(_groups(scenes)) > 1:
-        if isinstance(guess, RestPose) or guess is None:
-            return _per_group(lambda sc: rest_poses(sc, guess, errors=errors), scenes)
-        return _per_group(lambda sc, gs: rest_poses(sc, gs, errors=errors), scenes, list(guess))
-    out = [None] * len(scenes)
-    if guess is None:
-        try:
-            g0 = rest_pose(scenes[0])
-        except BifilarError as exc:
-            if errors != "return":
-                raise
-            out[0] = exc
-            g0 = next((r for r in _first_rest(scenes[1:]) if r is not None), None)
-            if g0 is None:
-                return [_rest_or_error(s, None, errors) for s in scenes]
-        guesses = [g0] * len(scenes)
-    elif isinstance(guess, RestPose):
-        guesses = [guess] * len(scenes)
-    else:
-        guesses = list(guess)
-    a, p, L, m, g, I = _stack(scenes)
-    com = np.array([q.com for q in guesses], float)
-    R = np.array([q.R for q in guesses], float)
-    lam = np.array([q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in guesses], float)
-    com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
-    d, w, G = _jacobian(a, p, com, R)
-    T = lam * np.linalg.norm(d, axis=2)
-    ok = (kkt < 1e-9) & np.all(T > 1e-9 * (m * g)[:, None], axis=1)
-    # stability: reduced stiffness positive semi-definite (as rest_pose checks)
-    N, full = _null_space(G)
-    ok &= full
-    if N.shape[2]:
-        Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
-        ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
-        ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
-    q = matrix_to_quat(R)
-    for k, s in enumerate(scenes):
-        if out[k] is not None:
-            continue
-        if ok[k]:
-            lz = float(lowest_point_z(s, com[k], R[k]))
-            out[k] = RestPose(com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
-                              wire_vectors=d[k].copy(), lowest_z=lz, depth=s.ceiling_z - lz, kkt_residual=float(kkt[k]))
-        else:
-            out[k] = _rest_or_error(s, guesses[k], errors)
-    return out
-
-
-def _first_rest(scenes):
-    for s in scenes:
-        try:
-            yield rest_pose(s)
-        except BifilarError:
-            yield None
-
-
-def _rest_or_error(scene: Scene, guess, errors: str):
-    try:
-        return rest_pose(scene, guess=guess)
-    except BifilarError as exc:
-        if errors != "return":
-            raise
-        return exc
-
-
-# --------------------------------------------------------------------------
-# linear modes
-# --------------------------------------------------------------------------
-def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[ModeSet]:
-    """:func:`~bifilar.analysis.modes.linear_modes` of many scenes at once
-    (same number of wires).  Periods agree with the single-scene function to
-    ~1e-12 relative, shapes to ~1e-10 (both solve the same symmetric
-    generalised eigenproblem; here by Cholesky and ``numpy.linalg.eigh``)."""
-    scenes = list(scenes)
-    if not scenes:
-        return []
-    if len(_groups(scenes)) > 1:
-        return _per_group(modes_batch, scenes, list(rests))
-    a, p, L, m, g, I = _stack(scenes)
-    com = np.array([r.com for r in rests])
-    R = np.array([r.R for r in rests])
-    d, w, G = _jacobian(a, p, com, R)
-    lam = np.array([r.tensions for r in rests]) / np.linalg.norm(d, axis=2)
-    N, full = _null_space(G)
-    M = _mass_matrix(m, I, R)
-    Nt = np.swapaxes(N, 1, 2)
-    Kr = Nt @ _hessian(d, w, lam) @ N
-    Mr = Nt @ M @ N
-    Kr = 0.5 * (Kr + np.swapaxes(Kr, 1, 2))
-    Mr = 0.5 * (Mr + np.swapaxes(Mr, 1, 2))
-    k = N.shape[2]
-    if k == 0:
-        return [ModeSet([], M[b], N[b]) for b in range(len(scenes))]
-    Lc = np.linalg.cholesky(Mr)
-    Li = np.linalg.inv(Lc)
-    w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
-    Y = np.swapaxes(Li, 1, 2) @ Z
-    out = []
-    for b in range(len(scenes)):
-        if not full[b]:
-            from .modes import linear_modes
-
-            out.append(linear_modes(scenes[b], rests[b]))
-            continue
-        out.append(mode_set(N[b], Y[b], w2[b], m[b], M[b], K=Kr[b]))
-    return out
-
-
-def rest_and_modes(scenes: Sequence[Scene], guess=None, *, errors: str = "raise"):
-    """(rests, modesets) of many scenes; failed scenes (``errors="return"``)
-    have the exception as rest and None as modes."""
-    rests = rest_poses(scenes, guess, errors=errors)
-    good = [k for k, r in enumerate(rests) if isinstance(r, RestPose)]
-    ms: list = [None] * len(rests)
-    for k, x in zip(good, modes_batch([scenes[k] for k in good], [rests[k] for k in good])):
-        ms[k] = x
-    return rests, ms
-
-
-# --------------------------------------------------------------------------
 # initial states
 # --------------------------------------------------------------------------
-def _project(a, p, L, m, I, com, R, hold=None, iters: int = 50):
-    """Mass-weighted closest poses on which every wire has its length, the
-    coordinates ``hold`` (B,) (0..5 of [dx, dy, dz, rx, ry, rz]) unchanged
-    (:func:`~bifilar.analysis.simulate.project_to_wires`, vectorised)."""
-    Minv = np.concatenate([np.repeat((1.0 / m)[:, None], 3, 1),
-                           np.repeat((1.0 / np.linalg.eigvalsh(I).mean(axis=1))[:, None], 3, 1)], axis=1)
-    if hold is not None:
-        Minv[np.arange(len(m)), np.asarray(hold)] = 0.0
-    Lm = L.max(axis=1)
-    active = np.ones(len(m), bool)
-    for _ in range(iters):
-        ii = np.nonzero(active)[0]
-        if not len(ii):
-            break
-        _, _, G, phi = _constraints(a, p, L, com, R, ii)
-        done = np.abs(phi).max(axis=1) < 1e-15 * Lm[ii] ** 2
-        active[ii[done]] = False
-        ii, G, phi = ii[~done], G[~done], phi[~done]
-        if not len(ii):
-            break
-        GM = G * Minv[ii][:, None, :]
-        S = GM @ np.swapaxes(G, 1, 2)
-        try:
-            lamb = np.linalg.solve(S, phi[..., None])
-        except np.linalg.LinAlgError:
-            lamb = np.stack([np.linalg.lstsq(Sb, pb, rcond=None)[0] for Sb, pb in zip(S, phi)])[..., None]
-        dx = -(np.swapaxes(GM, 1, 2) @ lamb)[..., 0]
-        com[ii] = com[ii] + dx[:, :3]
-        R[ii] = rotvec_to_matrix(dx[:, 3:]) @ R[ii]
-    return com, R
-
-
-def _wire_residual(a, p, L, com, R) -> np.ndarray:
-    """max_i | |d_i| - L_i | / L_max (B,) at the poses."""
-    d, _, _ = _jacobian(a, p, com, R)
-    return np.abs(np.linalg.norm(d, axis=2) - L).max(axis=1) / L.max(axis=1)
-
-
-def _start_poses(scenes, rests, modes, amplitude):
-    """Projected displaced poses: (com (B,3), R (B,3,3), wire residual (B,), amplitudes (B,))."""
-    a, p, L, m, g, I = _stack(scenes)
+def _start_poses(scenes, rests, modes, amplitude) -> StartPoses:
+    """:func:`~bifilar.analysis.start_pose.start_poses` per wire-count group, in input order."""
+    scenes = list(scenes)
     amp = np.broadcast_to(np.asarray(amplitude, float), (len(scenes),))
-    S = np.array([md.shape for md in modes])
-    com = np.array([r.com for r in rests]) + amp[:, None] * S[:, :3]
-    R = rotvec_to_matrix(amp[:, None] * S[:, 3:]) @ np.array([r.R for r in rests])
-    com, R = _project(a, p, L, m, I, com, R, hold=[md.dominant for md in modes])
-    return com, R, _wire_residual(a, p, L, com, R), amp
+    parts = [(ii, start_poses([scenes[k] for k in ii], [rests[k] for k in ii], [modes[k] for k in ii], amp[ii]))
+             for ii in _groups(scenes)]
+    if len(parts) == 1:
+        return parts[0][1]
+    out = StartPoses(**{f: np.zeros((len(scenes),) + getattr(parts[0][1], f).shape[1:], getattr(parts[0][1], f).dtype)
+                        for f in StartPoses.__dataclass_fields__})
+    for ii, sp in parts:
+        for f in StartPoses.__dataclass_fields__:
+            getattr(out, f)[ii] = getattr(sp, f)
+    return out
 
 
 def initial_states(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude) -> np.ndarray:
     """States (B, 13) at rest displaced by ``amplitude`` (scalar or (B,)) x
-    each scene's mode shape, projected onto the wires, at rest (zero
-    velocity), the mode's dominant coordinate held at its displaced value:
-    :func:`~bifilar.analysis.simulate.initial_state` for many.  Raises
-    :class:`InputError` (``--amplitude``) when no such pose exists."""
-    com, R, res, amp = _start_poses(scenes, rests, modes, amplitude)
-    bad = np.nonzero(res > 1e-9)[0]
+    each scene's mode shape, put back on the wires with the mode's dominant
+    coordinate held at its displaced value, at rest (zero velocity):
+    :func:`~bifilar.analysis.simulate.initial_state` for many (the same
+    solver, :mod:`bifilar.analysis.start_pose`).  Raises :class:`InputError`
+    (``--amplitude``) when no such pose exists."""
+    sp = _start_poses(scenes, rests, modes, amplitude)
+    bad = np.nonzero(~sp.feasible)[0]
     if len(bad):
         b = int(bad[0])
-        raise InputError("--amplitude", f"amplitude {amp[b]:g} is too large for scene {b + 1} ('{scenes[b].name}'): "
-                         f"no pose with the {modes[b].label} coordinate displaced that far keeps every wire at its "
-                         "length; reduce the amplitude")
-    return np.concatenate([com, matrix_to_quat(R), np.zeros((len(scenes), 6))], axis=1)
+        raise refusal(scenes[b], modes[b], float(sp.amplitude[b]), float(sp.gap[b]),
+                      f"scene {b + 1} ('{scenes[b].name}')")
+    return np.concatenate([sp.com, sp.q, np.zeros((len(scenes), 6))], axis=1)
 
 
 def feasible_amplitudes(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude
                         ) -> np.ndarray:
     """(B,) bool: whether each displaced start pose can be reached with every
-    wire at its length (relative residual <= 1e-9; what :func:`initial_states` needs)."""
-    return _start_poses(scenes, rests, modes, amplitude)[2] <= 1e-9
+    wire at its length (what :func:`initial_states` needs;
+    :data:`~bifilar.analysis.start_pose.FEASIBLE_TOL`)."""
+    return _start_poses(scenes, rests, modes, amplitude).feasible
 
 
 # --------------------------------------------------------------------------
@@ -441,7 +129,8 @@ class SceneRun(RunSummary):
         crossings); period_std : std of single cycles, s; crossings (k,) s.
     linear_period : the mode's linear period, s.
     max_constraint_violation : max | |d_i| - L_i |, m.
-    energy_drift : max |E - E0| / |E0 - E_rest|.
+    energy_drift : max |E - E0| / |E0 - E_rest| over the steps and, where
+        samples are taken (``samples_per_period``, LSODA's own), the samples.
     tension_min, tension_max : (n,) N.  slack : [(wire 1-based, t s)].
     lowest_z_min : lowest world z of the body, m; depth_max : ceiling minus
         that, m.  t, y : dense samples (only with ``samples_per_period``).
@@ -635,17 +324,19 @@ def simulate_batch(
                 continue
             runnable.append((k, j, md))
         if runnable:
-            ok = feasible_amplitudes([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],
-                                     [md for _, _, md in runnable], amps[[k for k, _, _ in runnable]])
+            sub_md = [md for _, _, md in runnable]
+            sp = _start_poses([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable], sub_md,
+                              amps[[k for k, _, _ in runnable]])
+            ok = sp.feasible
             if not np.all(ok):
-                if errors != "return":
-                    k0 = runnable[int(np.argmin(ok))][0]
-                    raise InputError("--amplitude", f"amplitude {amps[k0]:g} is too large for scene {k0 + 1}: no "
-                                     "start pose keeps every wire at its length; reduce the amplitude")
-                for (k, _, _), good in zip(runnable, ok):
-                    if not good:
-                        out[k] = _failed(f"--amplitude: {amps[k]:g} is too large (no start pose keeps every wire "
-                                         "at its length)", modes_in[k], amps[k], nw, rtol)
+                for jr, ((k, _, md), good) in enumerate(zip(runnable, ok)):
+                    if good:
+                        continue
+                    exc = refusal(scenes[k], md, float(amps[k]), float(sp.gap[jr]),
+                                  f"scene {k + 1} ('{scenes[k].name}')")
+                    if errors != "return":
+                        raise exc
+                    out[k] = _failed(str(exc), modes_in[k], amps[k], nw, rtol)
                 runnable = [x for x, good in zip(runnable, ok) if good]
         if runnable:
             res = _run_group([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],
@@ -797,6 +488,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 obs.Tmin[b] = np.minimum(obs.Tmin[b], T_.min(axis=1))
                 obs.Tmax[b] = np.maximum(obs.Tmax[b], T_.max(axis=1))
                 merge_refined(obs, np.array([b]), *refine_extremes(ts_[:, None], T_[:, :, None]))
+                # the energy at the samples too (dense output: interpolation error included)
+                E_ = obs._energy(np.full(len(ts_), b), ys_.T)
+                obs.dE[b] = max(obs.dE[b], float(np.max(np.abs(E_ - obs.E0[b]))))
     runtime = (time.perf_counter() - t_start) / Bn
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
@@ -817,7 +511,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         if obs.viol[b] > 1e-6 * Lmax[b]:
             warnings.append(f"constraint violation {obs.viol[b]:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
         if period is None:
-            warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
+            warnings.append(no_period_warning(float(amps[b]), status[b] == 1))
         t_s = y_s = None
         if obs.samples is not None and keep_samples:
             parts = obs.samples[b]

@@ -57,6 +57,7 @@ from ..scene import Scene
 from . import batch as bt
 from .equilibrium import RestPose, rest_pose
 from .modes import Mode, ModeSet, linear_modes
+from .start_pose import start_poses
 
 RUNGS = ("closed-form", "reduced-1dof", "linear", "full")
 KAPPA_SAFETY = 1.25
@@ -168,12 +169,8 @@ _PHI_W = 0.25 * np.pi * _GL_W
 def _path(scene: Scene, rest: RestPose, md: Mode, s: np.ndarray):
     """Projected displaced poses (com (k,3), R (k,3,3)) at mode coordinates s (k,):
     what :func:`~bifilar.analysis.simulate.initial_state` builds for amplitude s."""
-    k = len(s)
-    a, p, L, m, g, I = bt._stack([scene])
-    com = rest.com + s[:, None] * md.shape[:3]
-    R = rotvec_to_matrix(s[:, None] * md.shape[3:]) @ rest.R
-    return bt._project(np.repeat(a, k, 0), np.repeat(p, k, 0), np.repeat(L, k, 0), np.repeat(m, k),
-                       np.repeat(I, k, 0), com, R, hold=np.full(k, md.dominant))
+    sp = start_poses([scene] * len(s), [rest] * len(s), [md] * len(s), s)
+    return sp.com, sp.R
 
 
 def _potential(scene: Scene, rest: RestPose, com: np.ndarray) -> np.ndarray:

@@ -23,10 +23,11 @@ from scipy.optimize import brentq
 
 from ..errors import IntegrationError, InputError
 from ..models import maximal as mx
-from ..rotations import quat_multiply, quat_to_rotvec, rotvec_to_matrix, matrix_to_quat
+from ..rotations import quat_multiply, quat_to_rotvec
 from ..scene import Scene, lowest_point_z
-from .equilibrium import RestPose, constraint_jacobian, rest_pose
+from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, linear_modes
+from .start_pose import refusal, start_poses
 
 
 @dataclass
@@ -37,7 +38,8 @@ class RunSummary:
         period_std : std of single-cycle periods, s (None from one cycle); crossings : times, s.
     linear_period : the mode's linear period, s.
     max_constraint_violation : max | |d_i| - L_i | at the solver steps, m.
-    energy_drift : max |E - E0| / |E0 - E_rest| at the solver steps.
+    energy_drift : max |E - E0| / |E0 - E_rest| over the solver's steps and
+        the reported samples (dense output: its interpolation error included).
     tension_min, tension_max : (n,) N.  slack : list of (wire 1-based, t).
     lowest_z_min : lowest world z reached by the body, m; depth_max the
         corresponding depth below the ceiling, m.
@@ -115,36 +117,14 @@ def run_json(r, integrator: dict) -> dict:
     }
 
 
-def project_to_wires(scene: Scene, com: np.ndarray, R: np.ndarray, iters: int = 50,
-                     hold: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Closest pose (mass-weighted) on which every wire has its length.
-
-    Gauss-Newton on phi(x) = 0 with the minimum-norm correction in the metric
-    of the mass matrix; converges quadratically from any nearby pose.
-    ``hold``: index (0..5 of [dx, dy, dz, rx, ry, rz]) of a coordinate the
-    correction must not change -- the coordinate the experimenter displaced.
-    """
-    Minv = np.concatenate([np.full(3, 1.0 / scene.mass), 1.0 / np.linalg.eigvalsh(scene.inertia).mean() * np.ones(3)])
-    L = scene.lengths
-    for _ in range(iters):
-        d, w, G = constraint_jacobian(scene, com, R)
-        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
-        if np.max(np.abs(phi)) < 1e-15 * np.max(L) ** 2:
-            break
-        W = Minv.copy()
-        if hold is not None:
-            W[hold] = 0.0
-        GM = G * W
-        dx = -GM.T @ np.linalg.lstsq(GM @ G.T, phi, rcond=None)[0]
-        com = com + dx[:3]
-        R = rotvec_to_matrix(dx[3:]) @ R
-    return com, R
-
-
 def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) -> np.ndarray:
-    """State (13,) at rest displaced by ``amplitude`` x the mode shape, projected
-    back onto the wires with the mode's dominant coordinate held at its
-    displaced value (as an experimenter sets the initial angle), zero velocity."""
+    """State (13,) at rest displaced by ``amplitude`` x the mode shape, put
+    back on the wires with the mode's dominant coordinate held at exactly
+    ``amplitude x shape[dominant]`` (as an experimenter sets the initial
+    angle; measured by :func:`relative_pose`) and the other coordinates the
+    mass-weighted closest on the wires (:mod:`bifilar.analysis.start_pose`),
+    zero velocity.  Raises :class:`InputError` (``--amplitude``) when no such
+    pose keeps every wire at its length, saying how far off the closest is."""
     if not np.isfinite(amplitude):
         raise InputError("--amplitude", f"must be finite, got {amplitude}")
     limit = np.pi if mode.dominant >= 3 else 2.0 * float(np.max(scene.lengths))
@@ -152,20 +132,10 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
         unit = "rad" if mode.dominant >= 3 else "m"
         raise InputError("--amplitude", f"{amplitude:g} {unit} is beyond any reachable start of the {mode.label} "
                                         f"mode (|amplitude| <= {limit:.4g} {unit})")
-    dr = amplitude * mode.shape[:3]
-    dth = amplitude * mode.shape[3:]
-    com = rest.com + dr
-    R = rotvec_to_matrix(dth) @ rest.R
-    com, R = project_to_wires(scene, com, R, hold=mode.dominant)
-    d = com + scene.attachments @ R.T - scene.anchors
-    gap = float(np.max(np.abs(np.linalg.norm(d, axis=1) - scene.lengths)))
-    if not gap <= 1e-9 * float(np.max(scene.lengths)):
-        raise InputError(
-            "--amplitude",
-            f"{amplitude:g} x the {mode.label} shape cannot be reached with every wire at its length "
-            f"(closest start is {gap:.3g} m off the wires); use a smaller amplitude",
-        )
-    return mx.pack(com, matrix_to_quat(R))
+    sp = start_poses([scene], [rest], [mode], amplitude)
+    if not sp.feasible[0]:
+        raise refusal(scene, mode, amplitude, float(sp.gap[0]))
+    return mx.pack(sp.com[0], sp.q[0])
 
 
 def relative_pose(y: np.ndarray, rest: RestPose) -> np.ndarray:
@@ -335,6 +305,10 @@ def simulate(
         yy[:, 0:3] += rest.com
         return yy
 
+    # and at the samples: what the run reports (t, y, tensions, crossings) comes from the dense output, whose
+    # interpolation error in the energy is 10-20x the drift at the steps with DOP853
+    if denom > 0:
+        drift = max(drift, float(np.max(np.abs(mx.energy(Y, P) - E[0])) / denom))
     T = mx.tensions(Y, P)
     if sol.status == 1:
         warnings.append(f"run stopped at t = {t_stop:.4g} s because a wire went slack")
@@ -442,6 +416,18 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     )
 
 
+def no_period_warning(amplitude: float | None, stopped: bool) -> str:
+    """Why a run measured no period (fewer than two upward crossings):
+    ``amplitude`` of the mode (None for an explicit start state), ``stopped``
+    whether the run ended early (a wire went slack with ``on_slack="stop"``)."""
+    if amplitude is not None and amplitude == 0:
+        return ("amplitude 0: the body starts at rest and stays there; there is no oscillation to time "
+                "(give a nonzero --amplitude)")
+    if stopped:
+        return "fewer than two crossings of the rest value before the run stopped: no period measured"
+    return "fewer than two crossings of the rest value: no period measured; integrate longer"
+
+
 def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,
                   T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
                   atol: float, nfev: int, runtime: float, warnings: list) -> SimulationResult:
@@ -472,7 +458,8 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     if viol > 1e-6 * Lmax:
         warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
     if period is None:
-        warnings.append("fewer than two crossings of the rest value: no period measured; integrate longer")
+        stopped = any(w.startswith("run stopped at t = ") for w in warnings)
+        warnings.append(no_period_warning(amplitude if m is not None else None, stopped))
     return SimulationResult(
         t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
         period=period, period_std=pstd, crossings=tc, linear_period=m.period if m is not None else None,

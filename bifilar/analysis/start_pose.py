@@ -1,0 +1,427 @@
+"""Start poses of nonlinear runs: rest displaced along a mode, put back on the wires.
+
+One solver for one scene (:func:`~bifilar.analysis.simulate.initial_state`)
+and for many (:func:`~bifilar.analysis.batch.initial_states`,
+:func:`~bifilar.analysis.batch.feasible_amplitudes`, the backbone curve of
+:mod:`~bifilar.analysis.fidelity`).  The problem it solves is defined
+without reference to any solver path, so its answer (and whether there is
+one) does not depend on iteration counts or on the machine's rounding:
+
+* The pose is written in the chart of
+  :func:`~bifilar.analysis.simulate.relative_pose`: x = (dr, theta), CoM =
+  rest CoM + dr (m, world frame), R = exp([theta]x) R_rest (theta a world
+  rotation vector, rad).
+* The experimenter displaces the mode's dominant coordinate to
+  ``amplitude x shape[dominant]`` and holds it there: that coordinate of x is
+  set to exactly this value and never changed.
+* The other five coordinates are the point of the wire manifold
+  (every |d_i| = L_i) closest to the displaced pose x0 = amplitude x shape
+  in the metric W = diag(m, m, m, I, I, I) (I the mean principal moment):
+  min (x - x0)^T W (x - x0) subject to phi_i(x) = (|d_i|^2 - L_i^2) / 2 = 0.
+  Its first-order conditions, W (x - x0) = G^T mu and phi = 0, are what the
+  solver drives to zero; G is the Jacobian of phi in the chart,
+  G_i = [d_i, (w_i x d_i)^T J_l(theta)] (dR = [J_l(theta) dtheta]x R).
+
+Solver: Gauss-Newton on those conditions (each step the minimum-W-norm pose
+from x0 that satisfies the constraints linearised at the current pose,
+x+ = x0 + W^-1 G^T mu), with a backtracking line search on the wire
+residual, vectorised over scenes.  A scene not converged after
+:data:`ITERATIONS` steps goes to a fallback: ``scipy.optimize.least_squares``
+minimises the wire residual over the five free coordinates from x0; if its
+minimum is at most :data:`FEASIBLE_TOL` the Gauss-Newton iteration restarts
+from that pose (on the wires).  A start is refused (infeasible) only when
+the least-squares minimum of max_i | |d_i| - L_i | exceeds
+:data:`FEASIBLE_TOL` x L_max: no pose with the held coordinate at its value
+puts every wire within 1e-9 of its length.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..rotations import quat_multiply, rotvec_to_matrix, rotvec_to_quat, skew
+from ..scene import Scene
+from .equilibrium import RestPose
+from .modes import COMPONENTS
+
+ITERATIONS = 200
+"""Gauss-Newton steps before a scene goes to the fallback."""
+CONTINUATION_STEPS = 8
+"""Fallback: the amplitude is raised from 0 in this many steps ..."""
+CONTINUATION_HALVINGS = 6
+"""... each halved at most this many times where it fails."""
+_NEAR = 0.05
+"""The least-squares estimate of how far off the wires an unreachable start
+is counts only within this of the branch's end (0.05 L_max, 0.05 rad)."""
+_THETA_MAX = np.pi - 1e-6
+"""Poses with |theta| beyond this are outside the chart of ``relative_pose``
+(its rotation vectors have |theta| <= pi)."""
+FEASIBLE_TOL = 1e-9
+"""A start is on the wires when max_i | |d_i| - L_i | <= FEASIBLE_TOL x L_max;
+it is refused when the fallback's minimum of that residual is above it."""
+_RES_DONE = 1e-15
+"""On the wires: max |phi_i| / L_max^2 below this."""
+_STEP_DONE = 1e-9
+"""The closest pose is found when a Newton step (back on the wires) moves it
+less than this (|dr| / L_max and |dtheta|, rad): Newton's next step would be
+~1e-18 where the constraints are regular; where dependent wires make them
+singular, putting a pose back on them is only good to ~1e-8 (a double root)."""
+
+
+@dataclass
+class StartPoses:
+    """Start poses of B scenes (SI units, world frame).
+
+    com (B, 3) m; R (B, 3, 3); q (B, 4) unit quaternions (w >= 0);
+    x (B, 6) the pose in the chart of ``relative_pose`` (dr m, theta rad);
+    residual (B,) max_i | |d_i| - L_i | / L_max at the pose; feasible (B,)
+    residual <= :data:`FEASIBLE_TOL`; gap (B,) m: max_i | |d_i| - L_i | of
+    the closest start found (0 where feasible); amplitude (B,).
+    """
+
+    com: np.ndarray
+    R: np.ndarray
+    q: np.ndarray
+    x: np.ndarray
+    residual: np.ndarray
+    feasible: np.ndarray
+    gap: np.ndarray
+    amplitude: np.ndarray
+
+
+def left_jacobian(theta: np.ndarray) -> np.ndarray:
+    """J_l(theta) (..., 3, 3) of SO(3): d exp([theta]x) = [J_l dtheta]x exp([theta]x)
+    (theta rad, any leading axes); series below 1e-4 rad."""
+    theta = np.asarray(theta, float)
+    a2 = np.einsum("...i,...i->...", theta, theta)
+    a = np.sqrt(a2)
+    small = a < 1e-4
+    safe = np.where(small, 1.0, a)
+    b = np.where(small, 0.5 - a2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    c = np.where(small, 1.0 / 6.0 - a2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    K = skew(theta)
+    return np.eye(3) + b[..., None, None] * K + c[..., None, None] * (K @ K)
+
+
+class _Rig:
+    """The arrays of B scenes (same wire count) and their rest poses."""
+
+    def __init__(self, scenes: Sequence[Scene], rests: Sequence[RestPose]):
+        self.a = np.array([s.anchors for s in scenes], float)
+        self.p = np.array([s.attachments for s in scenes], float)
+        self.L = np.array([s.lengths for s in scenes], float)
+        self.Lmax = self.L.max(axis=1)
+        m = np.array([s.mass for s in scenes], float)
+        Ibar = np.array([np.linalg.eigvalsh(s.inertia).mean() for s in scenes], float)
+        self.W = np.concatenate([np.repeat(m[:, None], 3, 1), np.repeat(Ibar[:, None], 3, 1)], axis=1)
+        self.com0 = np.array([r.com for r in rests], float)
+        self.R0 = np.array([r.R for r in rests], float)
+        self.q0 = np.array([r.q for r in rests], float)
+
+    def take(self, ii) -> "_Rig":
+        out = object.__new__(_Rig)
+        for k, v in self.__dict__.items():
+            out.__dict__[k] = v[ii]
+        return out
+
+    def pose(self, x: np.ndarray):
+        """CoM (B, 3) and R (B, 3, 3) of chart poses x (B, 6)."""
+        return self.com0 + x[:, :3], rotvec_to_matrix(x[:, 3:]) @ self.R0
+
+    def wires(self, x: np.ndarray):
+        """Wire vectors d (B, n, 3), lever arms w (B, n, 3) and phi (B, n), m^2."""
+        com, R = self.pose(x)
+        w = np.einsum("bij,bnj->bni", R, self.p)
+        d = com[:, None, :] + w - self.a
+        return d, w, 0.5 * (np.einsum("bni,bni->bn", d, d) - self.L**2)
+
+    def jacobian(self, x: np.ndarray, d: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """G (B, n, 6) = d phi / d x in the chart (theta through J_l)."""
+        wxd = np.cross(w, d)
+        return np.concatenate([d, np.einsum("bni,bij->bnj", wxd, left_jacobian(x[:, 3:]))], axis=-1)
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        """max_i | |d_i| - L_i | / L_max (B,)."""
+        d, _, _ = self.wires(x)
+        return np.abs(np.linalg.norm(d, axis=2) - self.L).max(axis=1) / self.Lmax
+
+
+def _pinv_solve(S: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """mu (B, n) = S^+ rhs for symmetric positive semi-definite S (B, n, n):
+    eigenvalues below 1e-15 of the largest dropped (dependent wires give a
+    singular S; the minimum-norm mu is then the one taken)."""
+    ev, V = np.linalg.eigh(S)
+    keep = ev > 1e-15 * np.maximum(ev[:, -1:], 1e-300)
+    inv = np.where(keep, 1.0 / np.where(keep, ev, 1.0), 0.0)
+    return np.einsum("bij,bj->bi", V, inv * np.einsum("bji,bj->bi", V, rhs))
+
+
+def _scale(rig: _Rig) -> np.ndarray:
+    """(B, 6) size of each chart coordinate: L_max for dr, 1 rad for theta."""
+    return np.concatenate([np.repeat(rig.Lmax[:, None], 3, 1), np.ones((len(rig.Lmax), 3))], axis=1)
+
+
+def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Newton onto the wires from poses x (B, 6): each step the
+    minimum-W-norm correction of the linearised constraints (the held
+    coordinate has Winv = 0, so it never moves), shortened by backtracking
+    until the wire residual |phi| / L_max^2 (2-norm, along which the step is
+    a descent direction even where dependent wires make the linearised
+    system inconsistent) falls (Armijo) and the pose stays inside the chart.
+    Returns (x, on the wires: max |phi| / L_max^2 < 1e-15)."""
+    x = x.copy()
+    L2 = rig.Lmax**2
+    d, w, phi = rig.wires(x)
+    res = np.abs(phi).max(axis=1) / L2
+    merit = np.linalg.norm(phi, axis=1) / L2
+    active = res >= _RES_DONE
+    weak = np.zeros(len(x), int)  # consecutive steps that lowered the residual by less than 0.05 %
+    for _ in range(iters):
+        ii = np.nonzero(active)[0]
+        if not len(ii):
+            break
+        sub = rig.take(ii)
+        G = sub.jacobian(x[ii], d[ii], w[ii])
+        GW = G * Winv[ii][:, None, :]
+        dx = -np.einsum("bnj,bn->bj", GW, _pinv_solve(GW @ np.swapaxes(G, 1, 2), phi[ii]))
+        alpha = np.ones(len(ii))
+        todo = np.ones(len(ii), bool)
+        before = merit[ii].copy()
+        for _h in range(20):  # down to a step of 1e-6
+            jj = np.nonzero(todo)[0]
+            if not len(jj):
+                break
+            xt = x[ii[jj]] + alpha[jj, None] * dx[jj]
+            dt, wt, pt = sub.take(jj).wires(xt)
+            mt = np.linalg.norm(pt, axis=1) / L2[ii[jj]]
+            ok = np.isfinite(mt) & (mt <= (1.0 - 1e-4 * alpha[jj]) * merit[ii[jj]])
+            ok &= np.linalg.norm(xt[:, 3:], axis=1) < _THETA_MAX
+            acc, kk = jj[ok], ii[jj[ok]]
+            x[kk], d[kk], w[kk], phi[kk], merit[kk] = xt[ok], dt[ok], wt[ok], pt[ok], mt[ok]
+            res[kk] = np.abs(pt[ok]).max(axis=1) / L2[kk]
+            todo[acc] = False
+            alpha[jj[~ok]] *= 0.5
+        weak[ii] = np.where(merit[ii] > 0.9995 * before, weak[ii] + 1, 0)
+        # done, or stalled: no step lowered the residual, or it creeps toward a nonzero minimum (on a solvable
+        # system it falls quadratically, by a factor 4 a step at a fold, and by 0.2-3 % a step while dependent
+        # wires make the system nearly singular: a four-wire rectangle's torsion, tests/test_audit_cases.py)
+        active[ii[todo | (res[ii] < _RES_DONE) | (weak[ii] >= 8)]] = False
+    return x, res < _RES_DONE
+
+
+def _kkt(rig: _Rig, x0: np.ndarray, x: np.ndarray, mu: np.ndarray, Winv: np.ndarray):
+    """Residuals of the closest-pose conditions at (x, mu): F1 (B, 6) =
+    W (x - x0) + G^T mu on the free coordinates (0 on the held one), phi (B, n),
+    and G (B, n, 6)."""
+    d, w, phi = rig.wires(x)
+    G = rig.jacobian(x, d, w)
+    free = Winv > 0
+    F1 = np.where(free, (x - x0) / np.where(free, Winv, 1.0) + np.einsum("bnj,bn->bj", G, mu), 0.0)
+    return F1, phi, G
+
+
+def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: int) -> tuple[np.ndarray, np.ndarray]:
+    """Newton's method on the first-order conditions of the closest pose
+    (module doc) from poses x on the wires; constraint Hessians by central
+    differences of the analytic Jacobian (their error, ~1e-10, slows the
+    convergence a little and does not move the solution, whose residuals are
+    analytic).  Returns (x, converged)."""
+    B = len(x)
+    x = x.copy()
+    scale = _scale(rig)
+    free = Winv > 0
+    Wd = np.where(free, 1.0 / np.where(free, Winv, 1.0), 0.0)
+    # multipliers from the stationarity condition in the least-squares sense
+    d, w, phi = rig.wires(x)
+    G = rig.jacobian(x, d, w)
+    GW = G * Winv[:, None, :]
+    mu = -_pinv_solve(GW @ np.swapaxes(G, 1, 2), np.einsum("bnj,bj->bn", G * free[:, None, :], x - x0))
+    n = mu.shape[1]
+    conv = np.zeros(B, bool)
+    active = np.ones(B, bool)
+    for _ in range(iters):
+        ii = np.nonzero(active)[0]
+        if not len(ii):
+            break
+        sub = rig.take(ii)
+        F1, phi, G = _kkt(sub, x0[ii], x[ii], mu[ii], Winv[ii])
+        H = np.zeros((len(ii), 6, 6))
+        for j in range(6):
+            h = 1e-6 * scale[ii, j]
+            e = np.zeros((len(ii), 6))
+            e[:, j] = h
+            dp, wp, _ = sub.wires(x[ii] + e)
+            dm, wm, _ = sub.wires(x[ii] - e)
+            dG = (sub.jacobian(x[ii] + e, dp, wp) - sub.jacobian(x[ii] - e, dm, wm)) / (2.0 * h[:, None, None])
+            H[:, :, j] = np.einsum("bn,bni->bi", mu[ii], dG)
+        H = 0.5 * (H + np.swapaxes(H, 1, 2)) + Wd[ii][:, :, None] * np.eye(6)
+        fr = free[ii]
+        H = np.where(fr[:, :, None] & fr[:, None, :], H, np.eye(6))
+        Gf = G * fr[:, None, :]
+        K = np.zeros((len(ii), 6 + n, 6 + n))
+        K[:, :6, :6] = H
+        K[:, :6, 6:] = np.swapaxes(Gf, 1, 2)
+        K[:, 6:, :6] = Gf
+        rhs = -np.concatenate([F1, phi], axis=1)
+        step = np.einsum("bij,bj->bi", np.linalg.pinv(K, rcond=1e-13), rhs)
+        # back onto the wires after each step (dependent wires curve the constraints at second order where
+        # the linearised ones cannot follow: a four-wire rectangle's torsion)
+        xt, on = _to_wires(sub, x[ii] + step[:, :6], Winv[ii], ITERATIONS)
+        on &= np.all(np.isfinite(xt), axis=1)
+        small = on & (np.max(np.abs(xt - x[ii]) / scale[ii], axis=1) < _STEP_DONE)
+        x[ii[on]] = xt[on]
+        mu[ii[on]] = mu[ii[on]] + step[on, 6:]
+        conv[ii[small]] = True
+        active[ii[small | ~on]] = False
+    return x, conv
+
+
+def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray):
+    """Closest poses to x0 on the wires, from x: onto the wires, then Newton.
+    Returns (x, converged, on the wires within :data:`FEASIBLE_TOL`: where
+    dependent wires make the constraints singular, Gauss-Newton can stop a
+    hair off them, e.g. 2e-11 of the length for a four-wire rectangle
+    twisted by 0.01 rad)."""
+    x, on = _to_wires(rig, x, Winv, ITERATIONS)
+    out = x.copy()
+    conv = np.zeros(len(x), bool)
+    ii = np.nonzero(on)[0]
+    if len(ii):
+        xc, cc = _closest(rig.take(ii), x0[ii], x[ii], Winv[ii], ITERATIONS)
+        out[ii], conv[ii] = xc, cc
+    return out, conv, rig.residual(out) <= FEASIBLE_TOL
+
+
+def _least_squares(rig: _Rig, x0: np.ndarray, hold: int) -> tuple[np.ndarray, float]:
+    """Fallback for one scene (rig of one): least_squares on (|d_i| - L_i) / L_max
+    over the five free coordinates from x0.  Returns (x (6,), its residual)."""
+    from scipy.optimize import least_squares
+
+    free = np.array([j for j in range(6) if j != hold])
+    Lmax = float(rig.Lmax[0])
+
+    def full(z):
+        x = x0.copy()
+        x[free] = z
+        return x[None, :]
+
+    def fun(z):
+        d, _, _ = rig.wires(full(z))
+        return (np.linalg.norm(d[0], axis=1) - rig.L[0]) / Lmax
+
+    def jac(z):
+        x = full(z)
+        d, w, _ = rig.wires(x)
+        G = rig.jacobian(x, d, w)[0]
+        return G[:, free] / (np.linalg.norm(d[0], axis=1)[:, None] * Lmax)
+
+    xs = np.where(free < 3, Lmax, 1.0)
+    sol = least_squares(fun, x0[free], jac=jac, method="trf", x_scale=xs, ftol=1e-10, xtol=1e-10, gtol=1e-10,
+                        max_nfev=200)
+    x = full(sol.x)
+    return x[0], float(rig.residual(x)[0])
+
+
+def _continuation(rig: _Rig, x0: np.ndarray, Winv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Scenes whose direct solve did not converge: follow each branch of start
+    poses from rest (amplitude 0) to the displaced pose x0 (B, 6) in steps of
+    the amplitude (:data:`CONTINUATION_STEPS`, halved where a step fails, at
+    most :data:`CONTINUATION_HALVINGS` times), each solved from the previous
+    pose, all scenes in step.  Returns (x (B, 6): the pose at x0 or the last
+    pose reached with the held coordinate then moved to its value, whether x0
+    was reached (B,))."""
+    B = len(x0)
+    s = np.zeros(B)
+    ds = np.full(B, 1.0 / CONTINUATION_STEPS)
+    x = np.zeros((B, 6))
+    reached = np.zeros(B, bool)
+    failed = np.zeros(B, bool)
+    while True:
+        ii = np.nonzero(~reached & ~failed)[0]
+        if not len(ii):
+            break
+        t = np.minimum(1.0, s[ii] + ds[ii])
+        xt, ct, _ = _solve(rig.take(ii), t[:, None] * x0[ii], x[ii] + (t - s[ii])[:, None] * x0[ii], Winv[ii])
+        ok, kk = ct, ii[ct]
+        s[kk], x[kk] = t[ok], xt[ok]
+        ds[kk] = np.minimum(2.0 * ds[kk], 1.0 / CONTINUATION_STEPS)
+        reached[kk[t[ok] >= 1.0]] = True
+        kb = ii[~ct]
+        ds[kb] *= 0.5
+        failed[kb[ds[kb] < 0.5**CONTINUATION_HALVINGS / CONTINUATION_STEPS]] = True
+    held = Winv == 0.0
+    x = np.where(held & ~reached[:, None], x + (1.0 - s)[:, None] * x0, x)
+    return x, reached
+
+
+def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Chart poses x (B, 6) of the start problem for displaced poses x0 (B, 6)
+    with coordinate ``hold`` (B,) fixed; returns (x, residual (B,) relative,
+    gap (B,) m: where no start is on the wires, the least-squares minimum of
+    max_i | |d_i| - L_i | near the end of the branch, else 0)."""
+    B = len(x0)
+    Winv = 1.0 / rig.W
+    Winv[np.arange(B), hold] = 0.0
+    x, conv, on = _solve(rig, x0, x0, Winv)
+    gap = np.zeros(B)
+    ii = np.nonzero(~conv)[0]
+    if len(ii):
+        xc, reached = _continuation(rig.take(ii), x0[ii], Winv[ii])
+        # a start on the wires whose closest pose was not pinned down (neither directly nor along the branch)
+        # is kept as it is: the held coordinate is exact and every wire at its length
+        keep = on[ii] & ~reached
+        x[ii[~keep]] = xc[~keep]
+        far = ii[~reached & ~keep]
+        if len(far):
+            # how far off the wires the closest start is: Gauss-Newton from the branch's end with the held
+            # coordinate at its value, then least squares from there, kept only while it stays near (a pose
+            # it finds far away lies on another branch: not a start of this mode)
+            sub = rig.take(far)
+            xe, _ = _to_wires(sub, x[far], Winv[far], ITERATIONS)
+            x[far] = xe
+            for j, b in enumerate(far):
+                one = sub.take([j])
+                xl, res = _least_squares(one, xe[j], int(hold[b]))
+                near = np.max(np.abs(xl - xe[j]) / _scale(one)[0]) <= _NEAR
+                gap[b] = (res if near else float(one.residual(xe[j][None, :])[0])) * float(rig.Lmax[b])
+                gap[b] = max(gap[b], 2.0 * FEASIBLE_TOL * float(rig.Lmax[b]))
+    res = rig.residual(x)
+    feasible = (gap == 0.0) & (res <= FEASIBLE_TOL)
+    return x, res, np.where(feasible, 0.0, np.where(gap > 0.0, gap, res * rig.Lmax))
+
+
+def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, amplitude) -> StartPoses:
+    """Start poses of scenes (same number of wires) displaced by ``amplitude``
+    (scalar or (B,), rad or m) x each mode's shape, the dominant coordinate
+    held (see the module doc).  Never raises for an unreachable start: see
+    ``feasible`` and ``gap``."""
+    scenes = list(scenes)
+    B = len(scenes)
+    amp = np.broadcast_to(np.asarray(amplitude, float), (B,)).copy()
+    rig = _Rig(scenes, rests)
+    S = np.array([md.shape for md in modes], float)
+    hold = np.array([md.dominant for md in modes], int)
+    x0 = amp[:, None] * S
+    x0[np.arange(B), hold] = amp * S[np.arange(B), hold]  # the held value, exactly amplitude x shape
+    x, res, gap = solve_start_poses(rig, x0, hold)
+    com, R = rig.pose(x)
+    q = quat_multiply(rotvec_to_quat(x[:, 3:]), rig.q0)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return StartPoses(com=com, R=R, q=q, x=x, residual=res, feasible=gap == 0.0, gap=gap, amplitude=amp)
+
+
+def refusal(scene: Scene, mode, amplitude: float, gap: float, which: str = "") -> InputError:
+    """The :class:`InputError` (``--amplitude``) for a start no pose reaches;
+    ``gap`` (m) how far the closest start found is off the wires; ``which``
+    names the scene in a batch (e.g. "scene 3 ('name')")."""
+    unit = "rad" if mode.dominant >= 3 else "m"
+    where = f" for {which}" if which else ""
+    return InputError("--amplitude", f"{amplitude:g} {unit} of the {mode.label} mode is too large{where}: no pose with "
+                                     f"the {COMPONENTS[mode.dominant]} coordinate held there keeps every wire at its "
+                                     f"length (the closest start is {gap:.3g} m off the wires, more than "
+                                     f"{FEASIBLE_TOL:g} of the longest wire); use a smaller amplitude")
