@@ -560,7 +560,10 @@ def test_fuzz_sweep_outputs_and_journals(workdir, opts, data, flags, journal):
         argv += ["--no-tensions"]  # keep valid runs short
     res = CliRunner().invoke(main, argv)
     assert_clean_outcome(res, as_json="--json" in argv and res.exit_code == 0)
-    assert config.read_text() == INPUTS["good.yaml"]
+    # good.yaml is the input unless the config is the journal-named copy: then it is just a file in the
+    # directory, which `--out good.yaml --force` may replace as asked (found by Hypothesis: not a bug)
+    if journal != "config-is-journal" or not ("--force" in argv and str(config) in argv):
+        assert config.read_text() == INPUTS["good.yaml"]
     if journal == "config-is-journal":
         assert (workdir / "cfg.csv.partial.jsonl").read_text() == INPUTS["good.yaml"]
         (workdir / "cfg.csv.partial.jsonl").unlink()
