@@ -325,10 +325,16 @@ def test_rest_tensions_hold_the_body(name):
     assert np.all(np.array(tn["model"]["min"]) <= T) and np.all(T <= np.array(tn["model"]["max"]))
     for comp, v in tn["inertia_from_tensions"].items():
         # inertia from the simulated tensions (thesis 7.2.2): the interval
-        # holds the config's (poorly excited components have few dof and
-        # wide intervals, and say so)
+        # holds the config's; a component the torsion does not excite has no
+        # std (its first-pass value is not determined: the Solar Boat's Iyy
+        # came out 236 +- 3 for 317), and is listed as such
         assert v["config"] == pytest.approx(truth(name)[IDX[comp]], rel=1e-12)
+        if v["std"] is None:
+            assert comp in tn["inertia_from_tensions_poorly_excited"] and v["interval_95"] == [None, None]
+            continue
         assert v["interval_95"][0] <= v["config"] <= v["interval_95"][1], (comp, v)
+    # the torsion excites Izz (about the vertical): always determined
+    assert tn["inertia_from_tensions"]["Izz"]["std"] is not None
 
 
 def test_planned_hangings_give_back_the_inertia_with_the_planned_sigma(tmp_path):
