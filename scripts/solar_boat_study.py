@@ -431,9 +431,11 @@ def plan_section(w: dict) -> str:
       f"per trial) as reach the assumed {1e3 * hp['uncertainty']['timing']:g} ms per period:\n")
     A(_hanging_table(hp))
     A("")
-    A("**Predicted uncertainty** from the joint weighted least-squares fit of every timed period (`(J^T W J)^-1`, W "
-      "the inverse covariance of the periods: timing and every measured input of each hanging), beside the "
-      "single-hanging estimate of each moment from its own mode at the same rig:\n")
+    A("**Predicted uncertainty** of the joint least-squares fit `bifilar invert --measurements` makes of every "
+      "timed period (weighted by the timing variance; `(J^T J)^-1 J^T S J (J^T J)^-1`, S the covariance of the "
+      "periods: timing, the rig's inputs of each hanging, the body's mass and CoM shared by all hangings), beside "
+      "the single-hanging estimate of each moment from its own mode at the same rig.  (A fit weighted by S^-1 "
+      "would bring Ixx to about 0.3 %; invert does not make it, and the plan reports what invert delivers.)\n")
     A(table(["inertia", "value (kg m^2)", "joint fit sigma", "relative", "one mode, one hanging"],
             [[f"{th} ({c})", f"{hp['accuracy'][c]['value']:.2f}", f"{hp['accuracy'][c]['sigma']:.3g}",
               f"{100 * hp['accuracy'][c]['rel_sigma']:.2g} %", f"{100 * b['components'][c]['rel_sigma']:.2g} %"]

@@ -220,7 +220,7 @@ def monte_carlo_of_plan(hp, n, rng, offset):
     """Re-run the planned experiment n times: the true body differs from the prior by ``offset`` (relative,
     per component), every hanging's measured inputs are off by draws of their uncertainty, each period
     has the timing error; the periods are exact linear periods of the perturbed hangings, and the
-    estimate is a weighted Gauss-Newton fit (two steps, exact model periods) of the prior scenes."""
+    estimate is invert's Gauss-Newton fit (timing-weighted; two steps, exact model periods) of the prior scenes."""
     from dataclasses import replace
 
     from bifilar.estimation.sensitivity import measured_inputs, periods_of
@@ -242,13 +242,11 @@ def monte_carlo_of_plan(hp, n, rng, offset):
             for mm in hp.measurements if mm["hanging"] == h.name] for h in hp.hangings]
     blocks = []
     for h, ks in zip(hp.hangings, idx):
-        J, Sx = _rows(h, comps, hp.unc)
-        blocks.append((J[ks], Sx[np.ix_(ks, ks)]))
+        J, Sx, Js = _rows(h, comps, hp.unc)
+        blocks.append((J[ks], Sx[np.ix_(ks, ks)], Js[ks]))
     C, rank, _ = joint_covariance(blocks, hp.unc["timing"])
     J = np.vstack([b[0] for b in blocks])
-    W = np.linalg.inv(np.block([[blocks[a][1] + hp.unc["timing"] ** 2 * np.eye(len(blocks[a][0])) if a == b else
-                                 np.zeros((len(blocks[a][0]), len(blocks[b][0]))) for b in range(len(blocks))]
-                                for a in range(len(blocks))]))
+    G = np.linalg.solve(J.T @ J, J.T)  # invert's step: least squares weighted by the (equal) timing variances
     theta0 = np.array([hp.values[c] for c in comps])
     theta_true = theta0 * (1 + offset)
     I_true = tensor(theta_true)
@@ -259,17 +257,23 @@ def monte_carlo_of_plan(hp, n, rng, offset):
 
     nominal = [h.scene for h in hp.hangings]
     est = []
+    shared = ("mass", "com.x", "com.y", "com.z")
     for _ in range(n):
         meas = []
+        # the body's own inputs err once for every hanging (one weighing; one
+        # CoM, reference body axes, d_h = R d_ref); the rig's once per hanging
+        body = draw_deltas(hp.hangings[0].scene, list(shared), rng, hp.unc)
+        d_ref = np.array([body["com.x"], body["com.y"], body["com.z"]])
         for h, ks in zip(hp.hangings, idx):
-            true_sc = perturb_many(replace(h.scene, inertia=h.R @ I_true @ h.R.T),
-                                   draw_deltas(h.scene, measured_inputs(h.scene), rng, hp.unc))
+            deltas = draw_deltas(h.scene, [x for x in measured_inputs(h.scene) if x not in shared], rng, hp.unc)
+            deltas.update({"mass": body["mass"], **dict(zip(("com.x", "com.y", "com.z"), h.R @ d_ref))})
+            true_sc = perturb_many(replace(h.scene, inertia=h.R @ I_true @ h.R.T), deltas)
             T = periods_of(true_sc, h.sens.modes, h.sens.rest)[ks]
             meas.append(T + hp.unc["timing"] * rng.standard_normal(len(ks)))
         y = np.concatenate(meas)
         theta = theta0.copy()
         for _ in range(2):
-            theta = theta + C @ J.T @ W @ (y - model(theta, nominal))
+            theta = theta + G @ (y - model(theta, nominal))
         est.append(theta)
     return np.array(est), theta_true
 

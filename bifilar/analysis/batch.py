@@ -61,7 +61,7 @@ from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, s
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
-from .simulate import RunSummary, measured_period, no_period_warning
+from .simulate import RunSummary, measured_period, no_period_warning, state_scale
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -436,11 +436,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     t_end = pers * T_ref
     omega = 2 * np.pi / T_ref
     Lmax = P.lengths.max(axis=1)
-    amp = np.maximum(np.abs(amps), 1e-6)
     rt = np.full(Bn, float(rtol))
     if atol is None:
-        at = rt * np.concatenate([np.repeat((amp * Lmax)[None], 3, 0), np.repeat(amp[None], 4, 0),
-                                  np.repeat((amp * omega * Lmax)[None], 3, 0), np.repeat((amp * omega)[None], 3, 0)])
+        at = rt * state_scale(amps, np.array([md.dominant for md in mds]), Lmax, omega)
     else:
         at = np.broadcast_to(np.asarray(atol, float).reshape(-1, 1) if np.ndim(atol) else float(atol), (13, Bn)).copy()
     e = np.array([_coordinate_vector(md.dominant, r.q) for md, r in zip(mds, rests)]).T  # (13, B)

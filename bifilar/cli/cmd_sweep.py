@@ -168,7 +168,7 @@ def render_multi_hanging(con, doc: dict) -> None:
         return
     from ..studies.hangings import describe_json
 
-    con.print("[bold]multi-hanging plan[/bold] (joint weighted least-squares fit of every timed period):")
+    con.print("[bold]multi-hanging plan[/bold] (joint least-squares fit of every timed period, as invert --measurements makes it):")
     for line in describe_json(mh):
         con.print(f"  - {line}")
     if doc.get("measurements_written"):

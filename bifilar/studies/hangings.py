@@ -13,13 +13,19 @@ whose period is separated from every other mode of that hanging by at least
 The joint fit: the unknowns ``theta`` are the requested components (kg m^2,
 reference body axes); each timed period ``T_m`` (s) depends on them through
 ``J[m, c] = dT_m / dI_c`` (chain rule through ``R``).  The periods'
-covariance ``S`` holds the timing variance ``sigma_T^2`` of each period and,
-within a hanging, the measured inputs' errors propagated to its periods
-(``Jx Sx Jx^T``: wire lengths, anchor and attachment coordinates, mass, CoM,
-re-measured for every hanging, so independent between hangings).  The
-weighted least-squares estimate with ``W = S^-1`` has the covariance
-``C = (J^T W J)^-1``; the plan reports ``sqrt(C_cc)`` per component and the
-correlations.
+covariance ``S`` holds the timing variance ``sigma_T^2`` of each period,
+within a hanging the errors of the inputs re-measured for it propagated to
+its periods (``Jx Sx Jx^T``: wire lengths, anchor and attachment
+coordinates; independent between hangings), and across hangings those of
+the body's own inputs (mass, CoM in reference body axes: one error for
+every hanging).  The estimate is the one ``bifilar invert --measurements``
+makes, least squares weighted by the timing variances, with the covariance
+``C = (J^T J)^-1 J^T S J (J^T J)^-1``; the plan reports ``sqrt(C_cc)`` per
+component and the correlations.  The selection below ranks measurements by
+the fit weighted by ``S^-1`` (``C = (J^T S^-1 J)^-1``, the best one), which
+does better where the inputs dominate (2x on the KTH trifilar's Ixx), but
+the plan reports what invert delivers: it reported the weighted fit and was
+2x optimistic.
 
 Selection (greedy, cheapest first): add the measurement that most increases
 the rank of ``J`` (relative sensitivities, tolerance
@@ -120,34 +126,58 @@ def candidate_hangings(base_cfg: dict, source: str, params: dict) -> list[Hangin
     return out
 
 
+SHARED_INPUTS = ("mass", "com.x", "com.y", "com.z")
+"""Inputs of the body itself, the same error in every hanging (one weighing,
+one CoM: reference body axes), as ``bifilar invert --measurements`` has them."""
+
+
 def _rows(h: Hanging, comps: list[str], unc: dict):
-    """Per mode of a hanging: dT/dtheta (K, C) and the input part of the
-    periods' covariance (K, K), s^2."""
+    """Per mode of a hanging: dT/dtheta (K, C), the part of the periods'
+    covariance (K, K, s^2) from the inputs re-measured for this hanging
+    (wire lengths, anchors, attachments), and dT/dx times sigma_x (K, 4, s)
+    for the body's own inputs (:data:`SHARED_INPUTS`; the CoM in reference
+    body axes, ``d_h = R d_ref``)."""
     J = np.column_stack([reference_column(h.sens, h.R, c) for c in comps])
-    xs = [j for j, n in enumerate(h.sens.names) if n not in _IDX]
-    sx = np.array([input_sigma(h.scene, h.sens.names[j], unc) for j in xs])
+    names = h.sens.names
+    xs = [j for j, n in enumerate(names) if n not in _IDX and n not in SHARED_INPUTS]
+    sx = np.array([input_sigma(h.scene, names[j], unc) for j in xs])
     Jx = h.sens.jacobian[:, xs] * sx
-    return J, Jx @ Jx.T
+    col = {n: (h.sens.column(n) if n in names else np.zeros(len(J))) for n in SHARED_INPUTS}
+    Jcom = np.column_stack([col["com.x"], col["com.y"], col["com.z"]]) @ h.R
+    Js = np.column_stack([col["mass"] * input_sigma(h.scene, "mass", unc), Jcom * input_sigma(h.scene, "com.x", unc)])
+    return J, Jx @ Jx.T, Js
 
 
-def joint_covariance(blocks: list[tuple[np.ndarray, np.ndarray]], timing: float):
-    """(C, rank, unresolved) of the joint fit: C = (J^T W J)^-1 over hangings
-    (W = S^-1, S block diagonal: timing^2 I + the input covariance of each
-    hanging's chosen modes; ``blocks``: per hanging (J rows, input
-    covariance)); C is inf when J^T W J is singular, ``unresolved`` then a
-    boolean per unknown: it has weight in the null space."""
+def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True):
+    """(C, rank, unresolved) of the joint fit over hangings; S = timing^2 I
+    + the input covariance of each hanging's chosen modes (block diagonal)
+    + the body's shared inputs' ``Js Js^T`` across hangings; ``blocks``: per
+    hanging (J rows, input covariance, shared-input rows ``Js``).
+    ``as_invert``: the fit ``bifilar invert`` makes (least squares weighted
+    by the timing variance, equal for every period), C = (J^T J)^-1 J^T S J
+    (J^T J)^-1; else the best one, weighted by S^-1, C = (J^T S^-1 J)^-1
+    (the selection's criterion).  C is inf when J^T J is singular,
+    ``unresolved`` then a boolean per unknown: it has weight in the null
+    space."""
     n = blocks[0][0].shape[1] if blocks else 0
     F = np.zeros((n, n))
-    for J, Sx in blocks:
-        S = Sx + timing**2 * np.eye(len(J))
-        F = F + J.T @ np.linalg.solve(S, J)
+    if blocks:
+        Jall = np.vstack([b[0] for b in blocks])
+        Js = np.vstack([b[2] for b in blocks])
+        S = timing**2 * np.eye(len(Jall)) + Js @ Js.T
+        k = 0
+        for J, Sx, _ in blocks:
+            S[k:k + len(J), k:k + len(J)] += Sx
+            k += len(J)
+        F = Jall.T @ Jall if as_invert else Jall.T @ np.linalg.solve(S, Jall)
     w, V = np.linalg.eigh(F)
     ok = w > max(float(w.max()) if w.size else 0.0, 0.0) * 1e-12
     rank = int(np.sum(ok)) if w.size else 0
     if rank < n:
         null = V[:, ~ok]
         return np.full((n, n), np.inf), rank, np.max(np.abs(null), axis=1) > 1e-6
-    return V @ np.diag(1 / w) @ V.T, rank, np.zeros(n, bool)
+    Finv = V @ np.diag(1 / w) @ V.T
+    return (Finv @ Jall.T @ S @ Jall @ Finv if as_invert else Finv), rank, np.zeros(n, bool)
 
 
 def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSettings, components: list[str],
@@ -178,14 +208,14 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                 cands.append((hi, k))
     chosen: list[tuple[int, int]] = []
 
-    def evaluate(sel):
+    def evaluate(sel, as_invert=False):
         blocks = []
         for hi in sorted({a for a, _ in sel}):
             ks = [k for a, k in sel if a == hi]
-            J, Sx = data[hi]
+            J, Sx, Js = data[hi]
             scale = np.array([scales[c] for c in components])
-            blocks.append((J[ks] * scale, Sx[np.ix_(ks, ks)]))  # in units of each component's scale
-        C, rank, unresolved = joint_covariance(blocks, timing)
+            blocks.append((J[ks] * scale, Sx[np.ix_(ks, ks)], Js[ks]))  # in units of each component's scale
+        C, rank, unresolved = joint_covariance(blocks, timing, as_invert)
         worst = float(np.sqrt(np.max(np.diag(C)))) if rank == len(components) else math.inf
         return rank, worst, C, unresolved
 
@@ -211,7 +241,8 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
             break
         chosen.append(m)
         rank, worst = r, w
-    rank, worst, C, unresolved = evaluate(chosen) if chosen else (0, math.inf, np.full((len(components),) * 2, np.inf),
+    # chosen for the best fit; reported for the fit invert makes of them
+    rank, worst, C, unresolved = evaluate(chosen, as_invert=True) if chosen else (0, math.inf, np.full((len(components),) * 2, np.inf),
                                                                      np.ones(len(components), bool))
     sc = np.array([scales[c] for c in components])
     C = C * np.outer(sc, sc)
