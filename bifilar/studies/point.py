@@ -255,12 +255,13 @@ class _Ladder:
         return bias, notes
 
 
-def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: SweepSettings) -> list:
+def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: SweepSettings, starts=None) -> list:
     """One nonlinear run per mode label from ``amplitude`` x its shape, all
     in one call of the batched engine (:func:`bifilar.analysis.batch.simulate_batch`;
     :func:`bifilar.analysis.simulate.simulate` one by one if it is absent).
     Each result has .period, .tension_min/.tension_max (n,) N, .slack,
-    .depth_max m, .mode, .warnings."""
+    .depth_max m, .mode, .warnings.  ``starts``: their start poses if already
+    solved and checked (``simulate_batch(..., starts=)``)."""
     if not labels:
         return []
     try:
@@ -271,7 +272,7 @@ def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: Sw
         return [simulate(scene, lab, amplitude, st.periods, rest=rest, modes=ms, rtol=st.rtol) for lab in labels]
     n = len(labels)
     return simulate_batch([scene] * n, mode=labels, amplitude=amplitude, periods=st.periods, rtol=st.rtol,
-                          rests=[rest] * n, modes=[ms] * n)
+                          rests=[rest] * n, modes=[ms] * n, starts=starts)
 
 
 def point_uncertainty(st: SweepSettings, params: dict) -> dict:
@@ -524,10 +525,11 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [])
     if st.tensions:
         pre.runs = sorted(set(chosen.values()))
-        from ..analysis.simulate import initial_state
+        from ..analysis.simulate import checked_start_poses
 
-        for k in pre.runs:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
-            initial_state(scene, rest, ms.modes[k], amplitude)
+        # the refusal `simulate` gives (InputError) rather than a run from an unreachable start; the start poses
+        # go on to the runs (solved once)
+        pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
     return res, pre
 
 
@@ -544,6 +546,7 @@ class _Prepared:
     chosen: dict
     amplitude: float
     runs: list  # mode indices to run nonlinearly (empty: none)
+    starts: Any = None  # their start poses (StartPoses, in the order of runs), checked
 
 
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
@@ -551,7 +554,7 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, scre
     sims: dict[int, Any] = {}
     if pre.runs:
         sims = dict(zip(pre.runs, _nonlinear_runs(pre.scene, pre.rest, pre.ms, [pre.labels[k] for k in pre.runs],
-                                                  pre.amplitude, st)))
+                                                  pre.amplitude, st, pre.starts)))
     return _finish(res, pre, sims, st, screen)
 
 
