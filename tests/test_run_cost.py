@@ -143,3 +143,17 @@ def test_checked_start_poses_refuses_as_initial_state_in_turn():
         with pytest.raises(InputError) as exc:
             checked_start_poses(s, rest, modes, amp)
         assert str(exc.value) == first
+
+
+def test_quat_to_matrix_filled_entry_by_entry_is_the_rotation():
+    from scipy.linalg import expm
+
+    from bifilar.rotations import quat_to_matrix, rotvec_to_quat, skew
+
+    v = np.random.default_rng(3).normal(size=(2, 5, 3))
+    R = quat_to_matrix(2.5 * rotvec_to_quat(v))  # any scale of q
+    assert R.shape == (2, 5, 3, 3)
+    for i in range(2):
+        for j in range(5):
+            assert np.allclose(R[i, j], expm(skew(v[i, j])), rtol=0, atol=1e-13)
+    assert np.allclose(quat_to_matrix(np.array([1.0, 0, 0, 0])), np.eye(3), rtol=0, atol=0)
