@@ -184,7 +184,9 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
 
     Returns a list of :class:`RestPose` (or exceptions), in input order,
     equal to :func:`rest_pose` of each scene to its convergence tolerance
-    (KKT residual < 1e-9 relative; ~1e-15 in practice).
+    (KKT residual < 1e-9 relative; ~1e-15 in practice).  Each pose's
+    ``lowest_z`` and ``depth`` are computed when first read (most batched
+    callers never read them).
     """
     scenes = list(scenes)
     if not scenes:
