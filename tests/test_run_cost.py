@@ -157,3 +157,27 @@ def test_quat_to_matrix_filled_entry_by_entry_is_the_rotation():
         for j in range(5):
             assert np.allclose(R[i, j], expm(skew(v[i, j])), rtol=0, atol=1e-13)
     assert np.allclose(quat_to_matrix(np.array([1.0, 0, 0, 0])), np.eye(3), rtol=0, atol=0)
+
+
+def test_evaluate_points_hands_each_points_starts_to_the_batch(monkeypatch):
+    """A planner's screens (``evaluate_points``): each point's start poses are
+    solved once, by its check, and the batch of all points' runs uses them;
+    the figures are those of the batch solving its own starts."""
+    import json
+
+    from bifilar.studies import point as pt
+    from bifilar.studies.shorthands import parse_param
+
+    cfg = read_yaml(CONFIGS / "thesis_plate_rest.yaml")
+    st = sw.resolve_settings(cfg)
+    grid = sw.build_grid([parse_param(p) for p in ["spacing=2:4:3", "amplitude=0.05,1.2"]])
+    solves = _counting(monkeypatch, spm, "solve_start_poses")
+    got = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
+    assert sum(p["valid"] for p in got) >= 4 and not all(p["valid"] for p in got)  # refusals among them
+    assert len(solves) == len(grid)  # one a point (its check), none in the batch, a refused point's not repeated
+    for p, params in zip(got, grid):
+        if not p["valid"]:  # the error a point alone gives
+            assert p == sw.evaluate_point(cfg, "thesis_plate_rest", params, st, screen=True)
+    monkeypatch.setattr(spm.StartPoses, "concat", staticmethod(lambda parts: None))  # the batch solves its own
+    ref = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
+    assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)

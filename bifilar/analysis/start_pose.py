@@ -97,6 +97,11 @@ class StartPoses:
         ii = np.asarray(ii, int)
         return StartPoses(**{f: getattr(self, f)[ii] for f in StartPoses.__dataclass_fields__})
 
+    @staticmethod
+    def concat(parts: Sequence["StartPoses"]) -> "StartPoses":
+        """The start poses of ``parts`` one after the other."""
+        return StartPoses(**{f: np.concatenate([getattr(sp, f) for sp in parts]) for f in StartPoses.__dataclass_fields__})
+
     def states(self) -> np.ndarray:
         """(B, 13) states of :mod:`bifilar.models.maximal`: CoM, quaternion, zero velocity."""
         return np.concatenate([self.com, self.q, np.zeros((len(self.com), 6))], axis=1)
