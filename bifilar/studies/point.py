@@ -536,7 +536,8 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
 
         # the refusal `simulate` gives (InputError) rather than a run from an unreachable start; the start poses
         # go on to the runs (solved once)
-        pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
+        if pre.runs:
+            pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
     return res, pre
 
 
