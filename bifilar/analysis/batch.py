@@ -101,7 +101,7 @@ def initial_states(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Se
         b = int(bad[0])
         raise refusal(scenes[b], modes[b], float(sp.amplitude[b]), float(sp.gap[b]),
                       f"scene {b + 1} ('{scenes[b].name}')")
-    return np.concatenate([sp.com, sp.q, np.zeros((len(scenes), 6))], axis=1)
+    return sp.states()
 
 
 def feasible_amplitudes(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Sequence[Mode], amplitude
@@ -217,6 +217,7 @@ def simulate_batch(
     method: str = "auto",
     progress: Callable | None = None,
     independent: bool = False,
+    starts: StartPoses | None = None,
 ) -> list[SceneRun]:
     """Integrate the nonlinear motion of many scenes, each from ``amplitude``
     x its mode shape, for ``periods`` linear periods of that mode.
@@ -269,6 +270,12 @@ def simulate_batch(
         :data:`HEALTH_SAMPLES` a period (LSODA's rate).  Its cost pays from
         hundreds of scenes; at a few it is several times the float path's
         (docs/performance.md, "Batching across a sweep's points").
+    starts : the scenes' start poses if already solved: what
+        :func:`~bifilar.analysis.start_pose.start_poses` gives for these
+        scenes, rest poses, modes and amplitudes (e.g.
+        :func:`~bifilar.analysis.simulate.checked_start_poses`, the input
+        checks of a point); used instead of solving them again.  Each start
+        is solved once either way (its feasibility and the run's state).
 
     Returns a list of :class:`SceneRun` in input order.
     """
@@ -325,8 +332,11 @@ def simulate_batch(
             runnable.append((k, j, md))
         if runnable:
             sub_md = [md for _, _, md in runnable]
-            sp = _start_poses([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable], sub_md,
-                              amps[[k for k, _, _ in runnable]])
+            if starts is None:
+                sp = _start_poses([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable], sub_md,
+                                  amps[[k for k, _, _ in runnable]])
+            else:
+                sp = starts.take([k for k, _, _ in runnable])
             ok = sp.feasible
             if not np.all(ok):
                 for jr, ((k, _, md), good) in enumerate(zip(runnable, ok)):
@@ -338,11 +348,12 @@ def simulate_batch(
                         raise exc
                     out[k] = _failed(str(exc), modes_in[k], amps[k], nw, rtol)
                 runnable = [x for x, good in zip(runnable, ok) if good]
+            y0 = sp.states()[ok]
         if runnable:
             res = _run_group([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable],
                              [md for _, _, md in runnable], amps[[k for k, _, _ in runnable]],
                              pers[[k for k, _, _ in runnable]], rtol, atol, on_slack, samples_per_period,
-                             lowest_point, progress, method, health)
+                             lowest_point, progress, method, health, y0)
             for (k, _, _), r in zip(runnable, res):
                 out[k] = r
     return out
@@ -391,7 +402,9 @@ batch size (``simulate_batch(..., independent=True)``)."""
 
 
 def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
-               method: str = "auto", health: bool = True) -> list[SceneRun]:
+               method: str = "auto", health: bool = True, y0: np.ndarray | None = None) -> list[SceneRun]:
+    """Runs of scenes with one wire count; ``y0`` (B, 13) their start states
+    if already solved (:func:`initial_states`' values), else solved here."""
     Bn = len(scenes)
     if method == "auto":
         method = "lsoda" if Bn < LARGE_BATCH else "dop853"
@@ -400,7 +413,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         out = []
         for j in range(Bn):
             out += _run_group(scenes[j:j + 1], rests[j:j + 1], mds[j:j + 1], amps[j:j + 1], pers[j:j + 1], rtol, atol,
-                              on_slack, spp, lowest_point, None, method, health)
+                              on_slack, spp, lowest_point, None, method, health, None if y0 is None else y0[j:j + 1])
             if progress is not None:
                 progress((j + 1) / Bn, 1.0)
         return out
@@ -414,7 +427,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 def sub_progress(done, total, c=c):
                     progress((c + done / total) / len(starts), 1.0)
             out += _run_group(scenes[sl], rests[sl], mds[sl], amps[sl], pers[sl], rtol, atol, on_slack, spp,
-                              lowest_point, sub_progress, method, health)
+                              lowest_point, sub_progress, method, health, None if y0 is None else y0[sl])
         return out
     keep_samples = bool(spp)
     if stacked:
@@ -426,7 +439,8 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             spp = max(HEALTH_SAMPLES, int(spp or 0))
     t_start = time.perf_counter()
     n = scenes[0].n_wires
-    y0 = initial_states(scenes, rests, mds, amps)
+    if y0 is None:
+        y0 = initial_states(scenes, rests, mds, amps)
     com0 = np.array([r.com for r in rests])
     ys0 = y0.copy()
     ys0[:, :3] -= com0  # integrate relative to the rest CoM (tolerances apply to the oscillation)
@@ -452,7 +466,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                                                 com0, health, on_slack, progress)
         except _BatchFailed:  # one scene spoils the shared run: run them one by one
             return [_run_group([s_], [r_], [m_], amps[j:j + 1], pers[j:j + 1], rtol, atol, on_slack, spp,
-                               lowest_point, None, method, health)[0]
+                               lowest_point, None, method, health, y0[j:j + 1])[0]
                     for j, (s_, r_, m_) in enumerate(zip(scenes, rests, mds))]
     else:
         dense_times = None

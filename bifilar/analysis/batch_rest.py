@@ -184,7 +184,9 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
 
     Returns a list of :class:`RestPose` (or exceptions), in input order,
     equal to :func:`rest_pose` of each scene to its convergence tolerance
-    (KKT residual < 1e-9 relative; ~1e-15 in practice).
+    (KKT residual < 1e-9 relative; ~1e-15 in practice).  Each pose's
+    ``lowest_z`` and ``depth`` are computed when first read (most batched
+    callers never read them).
     """
     scenes = list(scenes)
     if not scenes:
@@ -229,12 +231,45 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
         if out[k] is not None:
             continue
         if ok[k]:
-            lz = float(lowest_point_z(s, com[k], R[k]))
-            out[k] = RestPose(com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
-                              wire_vectors=d[k].copy(), lowest_z=lz, depth=s.ceiling_z - lz, kkt_residual=float(kkt[k]))
+            out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
+                                    wire_vectors=d[k].copy(), kkt_residual=float(kkt[k]))
         else:
             out[k] = _rest_or_error(s, guesses[k], errors)
     return out
+
+
+_LAZY = ("lowest_z", "depth")
+
+
+class _LazyDepthRest(RestPose):
+    """A :class:`RestPose` whose ``lowest_z`` and ``depth`` are computed on
+    first read (then kept), with the same expression as before: the body's
+    lowest point (:func:`~bifilar.scene.lowest_point_z`, one support-function
+    call a scene) was ~45 % of a batch's cost, and most batched rest poses
+    (the sigma points of the honest budget) never read it.  Pickled and
+    copied as the plain :class:`RestPose` with those values.  ``scene`` None
+    (``dataclasses.replace``): every field must be given."""
+
+    def __init__(self, scene: Scene | None = None, **fields):  # noqa: D107 - RestPose's fields, or all but the lazy two
+        for name, v in fields.items():
+            object.__setattr__(self, name, v)
+        object.__setattr__(self, "_scene", scene)
+
+    def __getattr__(self, name):  # only called for attributes not yet set: the lazy two
+        if name not in _LAZY or "_scene" not in self.__dict__:
+            raise AttributeError(name)
+        s = self.__dict__["_scene"]
+        lz = float(lowest_point_z(s, self.com, self.R))
+        object.__setattr__(self, "lowest_z", lz)
+        object.__setattr__(self, "depth", s.ceiling_z - lz)
+        return self.__dict__[name]
+
+    def __reduce__(self):
+        return (_plain_rest, ({f: getattr(self, f) for f in RestPose.__dataclass_fields__},))
+
+
+def _plain_rest(fields: dict) -> RestPose:
+    return RestPose(**fields)
 
 
 def _first_rest(scenes):

@@ -27,7 +27,7 @@ from ..rotations import quat_multiply, quat_to_rotvec
 from ..scene import Scene, lowest_point_z
 from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, linear_modes
-from .start_pose import refusal, start_poses
+from .start_pose import StartPoses, refusal, start_poses
 
 
 @dataclass
@@ -125,17 +125,34 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
     mass-weighted closest on the wires (:mod:`bifilar.analysis.start_pose`),
     zero velocity.  Raises :class:`InputError` (``--amplitude``) when no such
     pose keeps every wire at its length, saying how far off the closest is."""
+    sp = checked_start_poses(scene, rest, [mode], amplitude)
+    return mx.pack(sp.com[0], sp.q[0])
+
+
+def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitude: float) -> StartPoses:
+    """Start poses of one scene displaced along each of ``modes`` (solved
+    together, :func:`~bifilar.analysis.start_pose.start_poses`) with
+    :func:`initial_state`'s checks: raises what :func:`initial_state` of
+    each mode in turn raises first.  For a point's refusal check whose
+    start poses then go to ``simulate_batch(..., starts=)``: solved once."""
     if not np.isfinite(amplitude):
         raise InputError("--amplitude", f"must be finite, got {amplitude}")
-    limit = np.pi if mode.dominant >= 3 else 2.0 * float(np.max(scene.lengths))
-    if abs(amplitude) > limit:
-        unit = "rad" if mode.dominant >= 3 else "m"
-        raise InputError("--amplitude", f"{amplitude:g} {unit} is beyond any reachable start of the {mode.label} "
-                                        f"mode (|amplitude| <= {limit:.4g} {unit})")
-    sp = start_poses([scene], [rest], [mode], amplitude)
-    if not sp.feasible[0]:
-        raise refusal(scene, mode, amplitude, float(sp.gap[0]))
-    return mx.pack(sp.com[0], sp.q[0])
+    beyond = None
+    for j, mode in enumerate(modes):
+        limit = np.pi if mode.dominant >= 3 else 2.0 * float(np.max(scene.lengths))
+        if abs(amplitude) > limit:
+            unit = "rad" if mode.dominant >= 3 else "m"
+            beyond = InputError("--amplitude", f"{amplitude:g} {unit} is beyond any reachable start of the "
+                                               f"{mode.label} mode (|amplitude| <= {limit:.4g} {unit})")
+            modes = modes[:j]  # the modes before it are checked first, as one by one
+            break
+    sp = start_poses([scene] * len(modes), [rest] * len(modes), modes, amplitude) if modes else None
+    for j, mode in enumerate(modes):
+        if not sp.feasible[j]:
+            raise refusal(scene, mode, amplitude, float(sp.gap[j]))
+    if beyond is not None:
+        raise beyond
+    return sp
 
 
 def relative_pose(y: np.ndarray, rest: RestPose) -> np.ndarray:

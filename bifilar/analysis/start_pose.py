@@ -92,6 +92,20 @@ class StartPoses:
     gap: np.ndarray
     amplitude: np.ndarray
 
+    def take(self, ii) -> "StartPoses":
+        """The start poses of scenes ``ii`` (indices), in that order."""
+        ii = np.asarray(ii, int)
+        return StartPoses(**{f: getattr(self, f)[ii] for f in StartPoses.__dataclass_fields__})
+
+    @staticmethod
+    def concat(parts: Sequence["StartPoses"]) -> "StartPoses":
+        """The start poses of ``parts`` one after the other."""
+        return StartPoses(**{f: np.concatenate([getattr(sp, f) for sp in parts]) for f in StartPoses.__dataclass_fields__})
+
+    def states(self) -> np.ndarray:
+        """(B, 13) states of :mod:`bifilar.models.maximal`: CoM, quaternion, zero velocity."""
+        return np.concatenate([self.com, self.q, np.zeros((len(self.com), 6))], axis=1)
+
 
 def left_jacobian(theta: np.ndarray) -> np.ndarray:
     """J_l(theta) (..., 3, 3) of SO(3): d exp([theta]x) = [J_l dtheta]x exp([theta]x)

@@ -255,12 +255,13 @@ class _Ladder:
         return bias, notes
 
 
-def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: SweepSettings) -> list:
+def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: SweepSettings, starts=None) -> list:
     """One nonlinear run per mode label from ``amplitude`` x its shape, all
     in one call of the batched engine (:func:`bifilar.analysis.batch.simulate_batch`;
     :func:`bifilar.analysis.simulate.simulate` one by one if it is absent).
     Each result has .period, .tension_min/.tension_max (n,) N, .slack,
-    .depth_max m, .mode, .warnings."""
+    .depth_max m, .mode, .warnings.  ``starts``: their start poses if already
+    solved and checked (``simulate_batch(..., starts=)``)."""
     if not labels:
         return []
     try:
@@ -271,7 +272,7 @@ def _nonlinear_runs(scene, rest, ms, labels: list[str], amplitude: float, st: Sw
         return [simulate(scene, lab, amplitude, st.periods, rest=rest, modes=ms, rtol=st.rtol) for lab in labels]
     n = len(labels)
     return simulate_batch([scene] * n, mode=labels, amplitude=amplitude, periods=st.periods, rtol=st.rtol,
-                          rests=[rest] * n, modes=[ms] * n)
+                          rests=[rest] * n, modes=[ms] * n, starts=starts)
 
 
 def point_uncertainty(st: SweepSettings, params: dict) -> dict:
@@ -397,11 +398,16 @@ def evaluate_point(base_cfg: dict, source: str, params: dict, settings: SweepSet
         out["valid"] = True
     except (KeyboardInterrupt, SystemExit):
         raise
-    except BifilarError as exc:
-        out["error"] = _one_line(exc)
     except Exception as exc:  # noqa: BLE001 - a sweep point must never crash the sweep
-        out["error"] = f"internal error ({type(exc).__name__}: {_one_line(exc)})"
+        out["error"] = _error_text(exc)
     return _plain(out)
+
+
+def _error_text(exc: Exception) -> str:
+    """A bad point's one-line ``error``."""
+    if isinstance(exc, BifilarError):
+        return _one_line(exc)
+    return f"internal error ({type(exc).__name__}: {_one_line(exc)})"
 
 
 def evaluate_points(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings, *,
@@ -426,18 +432,20 @@ def evaluate_points(base_cfg: dict, source: str, grid: list[dict], settings: Swe
             prepared.append((i, *_prepare(base_cfg, source, params, settings, screen)))
         except (KeyboardInterrupt, SystemExit):
             raise
-        except Exception:  # noqa: BLE001 - the point alone gives its error as evaluate_point does
-            out[i] = evaluate_point(base_cfg, source, params, settings, screen=screen)
+        except Exception as exc:  # noqa: BLE001 - the error evaluate_point gives (its _prepare raises the same),
+            out[i]["error"] = _error_text(exc)  # not evaluated again: a refused amplitude costs 0.1-0.3 s
+            out[i] = _plain(out[i])
     jobs = [(i, k, pre) for i, _, pre in prepared for k in pre.runs]
     runs: list = []
     if jobs:
         from ..analysis.batch import simulate_batch
+        from ..analysis.start_pose import StartPoses
 
         st = settings
         runs = simulate_batch([pre.scene for _, _, pre in jobs], mode=[pre.labels[k] for _, k, pre in jobs],
                               amplitude=[pre.amplitude for _, _, pre in jobs], periods=st.periods, rtol=st.rtol,
                               rests=[pre.rest for _, _, pre in jobs], modes=[pre.ms for _, _, pre in jobs],
-                              errors="return")
+                              errors="return", starts=StartPoses.concat([pre.starts for _, _, pre in prepared if pre.runs]))
     sims: dict = {i: {} for i, _, _ in prepared}
     for (i, k, _), r in zip(jobs, runs):
         sims[i][k] = r
@@ -524,10 +532,12 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [])
     if st.tensions:
         pre.runs = sorted(set(chosen.values()))
-        from ..analysis.simulate import initial_state
+        from ..analysis.simulate import checked_start_poses
 
-        for k in pre.runs:  # the refusal `simulate` gives (InputError) rather than a run from an unreachable start
-            initial_state(scene, rest, ms.modes[k], amplitude)
+        # the refusal `simulate` gives (InputError) rather than a run from an unreachable start; the start poses
+        # go on to the runs (solved once)
+        if pre.runs:
+            pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
     return res, pre
 
 
@@ -544,6 +554,7 @@ class _Prepared:
     chosen: dict
     amplitude: float
     runs: list  # mode indices to run nonlinearly (empty: none)
+    starts: Any = None  # their start poses (StartPoses, in the order of runs), checked
 
 
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
@@ -551,7 +562,7 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, scre
     sims: dict[int, Any] = {}
     if pre.runs:
         sims = dict(zip(pre.runs, _nonlinear_runs(pre.scene, pre.rest, pre.ms, [pre.labels[k] for k in pre.runs],
-                                                  pre.amplitude, st)))
+                                                  pre.amplitude, st, pre.starts)))
     return _finish(res, pre, sims, st, screen)
 
 

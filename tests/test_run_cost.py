@@ -1,0 +1,183 @@
+"""Work a sweep point no longer does (docs/performance.md, "Sweep points and
+plan"), and that leaving it out changes no number:
+
+* batched rest poses (:func:`bifilar.analysis.batch_rest.rest_poses`) compute
+  the body's lowest point only when ``lowest_z`` / ``depth`` is read (the
+  honest budget's sigma points never read it), and then the value
+  :func:`bifilar.scene.lowest_point_z` and :func:`rest_pose` give;
+* a point's start poses are solved once (its refusal check,
+  :func:`bifilar.analysis.simulate.checked_start_poses`, hands them to
+  ``simulate_batch(..., starts=)``), where they were solved three times (the
+  check by ``initial_state``, ``feasible_amplitudes`` and ``initial_states``),
+  with the same runs as without ``starts``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import pickle
+
+import numpy as np
+import pytest
+
+import bifilar.analysis.batch_rest as br
+import bifilar.analysis.start_pose as spm
+from bifilar.analysis.batch import simulate_batch
+from bifilar.analysis.equilibrium import RestPose, rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.analysis.simulate import checked_start_poses, initial_state
+from bifilar.config import read_yaml, scene_from_dict
+from bifilar.errors import InputError
+from bifilar.scene import lowest_point_z
+from bifilar.studies import sweep as sw
+from bifilar.studies.shorthands import apply_params
+
+from conftest import CONFIGS
+
+
+def _scene(name, params):
+    cfg, _ = apply_params(read_yaml(CONFIGS / f"{name}.yaml"), params, name)
+    return scene_from_dict(cfg, name, warn=False)
+
+
+def _counting(monkeypatch, module, name):
+    calls = []
+    real = getattr(module, name)
+
+    def counted(*a, **kw):
+        calls.append(1)
+        return real(*a, **kw)
+
+    monkeypatch.setattr(module, name, counted)
+    return calls
+
+
+# the thesis plate hangs on a knife edge (a neutral pitch): the batch's warm start may leave it pitched, so
+# its depth is compared with the eager expression at that pose only
+@pytest.mark.parametrize("name, neutral", [("solar_boat", False), ("thesis_plate_rest", True), ("drone_parallel", False)])
+def test_lazy_depth_equals_rest_pose_and_is_computed_only_when_read(name, neutral, monkeypatch):
+    base = _scene(name, {})
+    scenes = [_scene(name, {"length": L}) for L in (3.0, 4.0, 5.0)] if name != "drone_parallel" else [base]
+    calls = _counting(monkeypatch, br, "lowest_point_z")
+    rests = br.rest_poses(scenes)
+    assert calls == []  # no scene's lowest point before it is read
+    for s, r in zip(scenes, rests):
+        ref = rest_pose(s) if not neutral else r
+        assert r.depth == pytest.approx(ref.depth, rel=1e-12, abs=1e-12)
+        assert r.lowest_z == pytest.approx(ref.lowest_z, rel=1e-12, abs=1e-12)
+        # exactly the expression of the eager code it replaces
+        lz = float(lowest_point_z(s, r.com, r.R))
+        assert (r.lowest_z, r.depth) == (lz, s.ceiling_z - lz)
+    assert len(calls) == len(scenes)  # once a scene, kept after the first read
+    rests[0].depth
+    assert len(calls) == len(scenes)
+
+
+def test_lazy_rest_pose_pickles_copies_and_replaces_as_a_rest_pose():
+    s = _scene("solar_boat", {})
+    r = br.rest_poses([s, s])[1]
+    for other in (pickle.loads(pickle.dumps(r)), copy.deepcopy(r), dataclasses.replace(r, kkt_residual=0.0)):
+        assert isinstance(other, RestPose)
+        assert other.depth == r.depth and other.lowest_z == r.lowest_z
+        assert np.array_equal(other.com, r.com) and np.array_equal(other.R, r.R)
+    assert type(pickle.loads(pickle.dumps(r))) is RestPose  # the scene (its support callable) is not pickled
+    with pytest.raises(AttributeError):
+        r.no_such_field
+
+
+def test_a_point_solves_its_start_poses_once(monkeypatch):
+    cfg = read_yaml(CONFIGS / "solar_boat.yaml")
+    st = sw.resolve_settings(cfg)
+    runs = []
+    real = simulate_batch
+
+    def batch(*a, **kw):
+        runs.append(len(a[0]))
+        return real(*a, **kw)
+
+    import bifilar.analysis.batch as bt
+
+    monkeypatch.setattr(bt, "simulate_batch", batch)
+    solves = _counting(monkeypatch, spm, "solve_start_poses")
+    p = sw.evaluate_point(cfg, "solar_boat", {"spacing": 3.0}, st)
+    assert p["valid"] and runs and runs[0] >= 2  # a point with several runs ...
+    assert len(solves) == 1  # ... solves their start poses once (was 1 + 2 + one a run)
+
+
+@pytest.mark.parametrize("name, amplitude", [("solar_boat", 0.05), ("thesis_plate_rest", 0.6)])
+def test_runs_from_checked_starts_equal_runs_solving_their_own(name, amplitude):
+    s = _scene(name, {"spacing": 3.0})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    sp = checked_start_poses(s, rest, modes, amplitude)
+    for j, m in enumerate(modes):  # the one-scene check's states, to the solver's convergence
+        assert np.allclose(sp.states()[j], initial_state(s, rest, m, amplitude), rtol=0, atol=1e-12)
+    kw = dict(mode=[m.label for m in modes], amplitude=amplitude, periods=1.0, rtol=1e-8, rests=[rest] * len(modes),
+              modes=[ms] * len(modes))
+    own = simulate_batch([s] * len(modes), **kw)
+    given = simulate_batch([s] * len(modes), starts=sp, **kw)
+    for a, b in zip(own, given):  # the same start states, so the same runs bit for bit
+        assert (a.period, a.depth_max) == (b.period, b.depth_max)
+        assert np.array_equal(a.tension_max, b.tension_max) and np.array_equal(a.crossings, b.crossings)
+
+
+def test_checked_start_poses_refuses_as_initial_state_in_turn():
+    s = _scene("thesis_plate_rest", {"spacing": 3.0})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    swing = next(m for m in ms.modes if m.dominant < 3)
+    twist = next(m for m in ms.modes if m.dominant >= 3)
+    for modes, amp in [([twist, swing], 1.2), ([swing, twist], 1.2), ([twist, swing], 4.0), ([swing], np.nan)]:
+        first = None
+        for m in modes:  # initial_state one mode at a time: the first refusal
+            try:
+                initial_state(s, rest, m, amp)
+            except InputError as exc:
+                first = str(exc)
+                break
+        if first is None:
+            checked_start_poses(s, rest, modes, amp)
+            continue
+        with pytest.raises(InputError) as exc:
+            checked_start_poses(s, rest, modes, amp)
+        assert str(exc.value) == first
+
+
+def test_quat_to_matrix_filled_entry_by_entry_is_the_rotation():
+    from scipy.linalg import expm
+
+    from bifilar.rotations import quat_to_matrix, rotvec_to_quat, skew
+
+    v = np.random.default_rng(3).normal(size=(2, 5, 3))
+    R = quat_to_matrix(2.5 * rotvec_to_quat(v))  # any scale of q
+    assert R.shape == (2, 5, 3, 3)
+    for i in range(2):
+        for j in range(5):
+            assert np.allclose(R[i, j], expm(skew(v[i, j])), rtol=0, atol=1e-13)
+    assert np.allclose(quat_to_matrix(np.array([1.0, 0, 0, 0])), np.eye(3), rtol=0, atol=0)
+
+
+def test_evaluate_points_hands_each_points_starts_to_the_batch(monkeypatch):
+    """A planner's screens (``evaluate_points``): each point's start poses are
+    solved once, by its check, and the batch of all points' runs uses them;
+    the figures are those of the batch solving its own starts."""
+    import json
+
+    from bifilar.studies import point as pt
+    from bifilar.studies.shorthands import parse_param
+
+    cfg = read_yaml(CONFIGS / "thesis_plate_rest.yaml")
+    st = sw.resolve_settings(cfg)
+    grid = sw.build_grid([parse_param(p) for p in ["spacing=2:4:3", "amplitude=0.05,1.2"]])
+    solves = _counting(monkeypatch, spm, "solve_start_poses")
+    got = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
+    assert sum(p["valid"] for p in got) >= 4 and not all(p["valid"] for p in got)  # refusals among them
+    assert len(solves) == len(grid)  # one a point (its check), none in the batch, a refused point's not repeated
+    for p, params in zip(got, grid):
+        if not p["valid"]:  # the error a point alone gives
+            assert p == sw.evaluate_point(cfg, "thesis_plate_rest", params, st, screen=True)
+    monkeypatch.setattr(spm.StartPoses, "concat", staticmethod(lambda parts: None))  # the batch solves its own
+    ref = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
+    assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)
