@@ -331,3 +331,163 @@ def test_default_amplitude_range_is_ten_degrees():
     assert default_amplitude_range(scene, NS(dominant=5)) == pytest.approx(math.pi / 18, rel=1e-12)
     assert default_amplitude_range(scene, NS(dominant=3)) == pytest.approx(math.pi / 18, rel=1e-12)
     assert default_amplitude_range(scene, NS(dominant=0)) == pytest.approx(2.5 * math.sin(math.pi / 18), rel=1e-12)
+
+
+def _ctx(surrogate=None, amplitude=None):
+    from bifilar.estimation.budget import BudgetContext
+
+    return BudgetContext([], {}, np.zeros((1, 1)), np.ones(1), [], [], [], [], [],
+                         surrogate=surrogate or {}, amplitude=amplitude or {})
+
+
+def _budget_of(contrib, dof=None):
+    from bifilar.estimation.uncertainty import LinearBudget
+
+    cov = sum(np.outer(c, c) for c in contrib.values())
+    return LinearBudget(["p"], np.atleast_2d(cov), contrib, dof=dof or {})
+
+
+# the surrogate's 97.5 % quantile from 20000 draws: sampling error ~2 %; 7 % is 3 sigma
+_Q_TOL = 0.07
+
+
+@pytest.mark.parametrize("a,b,half", [
+    (2.0, 0.0, 2.0 * 1.959963984540054),   # linear: the normal 95 % half-width
+    (0.0, 1.0, 3.841458820694124),         # b z^2 with a random sign: chi2(1) 95 % point (table: 3.841)
+])
+def test_second_order_interval_is_the_analytic_quantile(a, b, half):
+    """Kills budget.py ``interval_95`` mutants in the surrogate branch (the
+    0.025 / 0.975 quantiles, ``a z + b z^2`` terms, the mirror sign): for
+    ``e = s (a z + b z^2)``, ``s = +-1``, the 95 % interval is ``+- 1.96 a``
+    when b = 0 and ``+- b chi2_{0.95}(1)`` when a = 0 (P(|e| <= t) = 0.95)."""
+    from bifilar.estimation.budget import interval_95
+
+    ctx = _ctx(surrogate={"x": (np.array([a]), np.array([b]))})
+    bud = _budget_of({"x": np.array([a]), "x (2nd order)": np.array([math.sqrt(2) * b])})
+    lo, hi = interval_95(np.array([10.0]), bud, ctx)[0]
+    assert hi - 10.0 == pytest.approx(half, rel=_Q_TOL)
+    assert 10.0 - lo == pytest.approx(half, rel=_Q_TOL)
+
+
+def test_second_order_interval_uses_the_student_quantile_of_a_timed_period():
+    """Kills interval_95's Student branch (``stats.t.ppf`` strata, the dof
+    lookup): a period term with 3 dof alone (the quadratic input ~0) gives
+    ``+- t_{0.975}(3) c`` = 3.182 c (t table)."""
+    from bifilar.estimation.budget import interval_95
+
+    ctx = _ctx(surrogate={"x": (np.array([0.0]), np.array([1e-9]))})
+    bud = _budget_of({"timing[torsion]": np.array([0.5]), "x": np.array([0.0])}, dof={"timing[torsion]": 3.0})
+    lo, hi = interval_95(np.array([0.0]), bud, ctx)[0]
+    assert hi == pytest.approx(3.182446305284263 * 0.5, rel=0.03)
+    assert -lo == pytest.approx(3.182446305284263 * 0.5, rel=0.03)
+
+
+def test_unstated_amplitude_interval_is_the_quantiles_of_d_u():
+    """Kills interval_95's amplitude branch (``u = U^2``, its sign kept, the
+    quantiles): the truth is ``p + D u``, ``u = (A / A_max)^2`` with A
+    uniform, so the 2.5 / 97.5 % points are ``D 0.025^2`` and ``D 0.975^2``;
+    nothing else in the budget."""
+    from bifilar.estimation.budget import interval_95
+
+    D = np.array([-4.0])
+    ctx = _ctx(amplitude={"torsion": D})
+    bud = _budget_of({"amplitude[torsion]": D * math.sqrt(4 / 45), "offset": D / 3})
+    lo, hi = interval_95(np.array([1.0]), bud, ctx)[0]
+    assert lo == pytest.approx(1.0 - 4 * 0.975 ** 2, abs=0.02)
+    assert hi == pytest.approx(1.0 - 4 * 0.025 ** 2, abs=0.02)
+
+
+def test_monte_carlo_interval_is_joined_with_the_linear_one():
+    """Kills interval_95's Monte Carlo branch (its quantiles, min / max): the
+    2.5 / 97.5 % points of 0..100 are 2.5 and 97.5; the linear interval
+    50 +- 1.96 * 10 lies inside, so the join is the Monte Carlo one; a
+    narrow sample keeps the linear one."""
+    from bifilar.estimation.budget import interval_95
+
+    bud = _budget_of({"x": np.array([10.0])})
+    wide = interval_95(np.array([50.0]), bud, None, mc_samples=np.arange(101.0)[:, None])[0]
+    np.testing.assert_allclose(wide, [2.5, 97.5], rtol=1e-12)
+    narrow = interval_95(np.array([50.0]), bud, None, mc_samples=np.linspace(49, 51, 101)[:, None])[0]
+    np.testing.assert_allclose(narrow, [50 - 19.59963984540054, 50 + 19.59963984540054], rtol=1e-12)
+
+
+def test_fixed_products_of_inertia_are_taken_from_their_own_tensor_entries():
+    """Kills from_tensions.py ``_solve``'s index map of the fixed components
+    (``idx = {"Ixx": (0, 0), ...}``: any entry pointing at another element;
+    the suite's scenes are principal, so a product read from the wrong
+    place is 0 either way).  A body with three distinct products of inertia
+    in torsion on the KTH trifilar, exact model tensions and
+    accelerations: solving for Izz alone, with the other five fixed at the
+    scene's (true) values, must give the true Izz (Euler's equations hold
+    exactly for the truth)."""
+    from dataclasses import replace
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.analysis.simulate import simulate
+    from bifilar.config import load_scene
+    from bifilar.estimation.from_tensions import inertia_from_tensions
+    from bifilar.models import maximal as mx
+    from bifilar.rotations import quat_to_matrix
+
+    from conftest import CONFIGS
+
+    base = load_scene(CONFIGS / "trifilar_kth.yaml")
+    d = np.diag(base.inertia)
+    I = np.diag(d)
+    I[0, 1] = I[1, 0] = 0.04 * d.min()
+    I[0, 2] = I[2, 0] = -0.07 * d.min()
+    I[1, 2] = I[2, 1] = 0.10 * d.min()
+    s = replace(base, inertia=I)
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    r = simulate(s, ms.modes[-1].label, 0.1, 2, rest=rest, modes=ms, rtol=1e-11, samples_per_period=100)
+    _, alpha, _, _ = mx.solve_dynamics(r.y, mx.params_from_scenes(s), stabilise=False)
+    args = (s, r.t, r.y[:, 0:3], quat_to_matrix(r.y[:, 3:7]), r.y[:, 10:13], r.tensions)
+    for comp, (i, j) in (("Izz", (2, 2)), ("Ixx", (0, 0)), ("Iyy", (1, 1))):
+        est = inertia_from_tensions(*args, alpha=alpha, components=(comp,), fix_poorly_excited=False)
+        assert est.values[comp] == pytest.approx(I[i, j], rel=1e-5), comp
+
+
+def test_a_body_at_rest_excites_nothing_and_says_so():
+    """Kills from_tensions.py ``scale[scale == 0] = 1.0`` -> ``scale == 1``
+    (a column of exact zeros then divides 0 by 0).  A body hanging at rest
+    (omega = alpha = 0, the rest pose's own tensions) has an all-zero
+    design: no component can be estimated, every one must be flagged
+    poorly excited, and nothing may be NaN-poisoned into a value."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.estimation.from_tensions import inertia_from_tensions
+
+    from conftest import trapezoid
+
+    s = trapezoid(h=0.5)
+    rest = rest_pose(s)
+    k = 50
+    t = np.linspace(0.0, 5.0, k)
+    com = np.tile(rest.com, (k, 1))
+    R = np.tile(rest.R, (k, 1, 1))
+    z = np.zeros((k, 3))
+    est = inertia_from_tensions(s, t, com, R, z, np.tile(rest.tensions, (k, 1)), alpha=z)
+    assert set(est.poorly_excited) == {"Ixx", "Iyy", "Izz"}
+    assert all(np.isfinite(v) for v in est.values.values())
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.6])
+def test_score_covariance_is_the_long_run_variance_of_an_ar1(rho):
+    """Kills from_tensions.py ``_score_covariance`` mutants (``G + G.T``, the
+    ``tau`` update, the window rule): the meat of scores that follow an
+    AR(1) ``g_k = rho g_{k-1} + e_k`` (unit innovations) is k times their
+    long-run variance, 1 / (1 - rho)^2 (analytic), and the window reaches
+    a few integrated autocorrelation times tau = (1 + rho) / (1 - rho).
+    k = 40000 samples: the estimate's relative sd is ~sqrt(2 (2W + 1) / k) < 5 %."""
+    from scipy.signal import lfilter
+
+    from bifilar.estimation.from_tensions import _score_covariance
+
+    k = 40000
+    e = np.random.default_rng(21).standard_normal((k, 1))
+    g = lfilter([1.0], [1.0, -rho], e, axis=0)
+    meat, W = _score_covariance(g, 1)
+    assert meat[0, 0] / k == pytest.approx(1 / (1 - rho) ** 2, rel=0.15)
+    tau = (1 + rho) / (1 - rho)
+    assert 3 * tau <= W + 1 <= 8 * tau
