@@ -500,7 +500,7 @@ def test_residual_rms_is_the_rms_of_eulers_equation_at_the_estimate():
     wires minus I alpha + w x I w over the 3 k rows, with 3 k - m degrees
     of freedom.  Also ``cond = cond(A^T A) ** 0.5`` (``** -> *``, ``0.5 ->
     1``): the condition number of the column-scaled design, by SVD of the
-    design itself."""
+    design itself.  And the correlation matrix's definition."""
     from bifilar.analysis.simulate import simulate
     from bifilar.estimation.from_tensions import inertia_from_tensions, wire_torque_body
     from bifilar.models import maximal as mx
@@ -527,6 +527,11 @@ def test_residual_rms_is_the_rms_of_eulers_equation_at_the_estimate():
     A = euler_design(w, alpha, ("Ixx", "Iyy", "Izz")).reshape(-1, 3)
     sv = np.linalg.svd(A / np.linalg.norm(A, axis=0), compute_uv=False)
     assert est.condition == pytest.approx(sv[0] / sv[-1], rel=1e-6)
+    # a correlation matrix by definition: unit diagonal, symmetric, |rho| <= 1
+    # (kills ``corr = cov / outer(std, std)`` -> ``cov * ...``)
+    np.testing.assert_allclose(np.diag(est.correlation), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(est.correlation, est.correlation.T, rtol=1e-12)
+    assert np.all(np.abs(est.correlation) <= 1 + 1e-12)
 
 
 def test_tension_std_dof_is_the_spread_of_the_variance_estimate():
