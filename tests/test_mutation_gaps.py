@@ -569,3 +569,49 @@ def test_tension_std_dof_is_the_spread_of_the_variance_estimate():
     var = np.array(var)
     nu_emp = 2 * var.mean() ** 2 / var.var(ddof=1)
     assert 0.7 < np.mean(dof) / nu_emp < 1.4
+
+
+def test_pair_terms_recover_a_known_biquadratic(monkeypatch):
+    """Kills budget.py ``_pair_terms`` mutants (the 3 x 3 grid's indices into
+    ``_coefs3``, the signs with which ``k21``, ``k12``, ``k22`` enter the
+    contributions and the offset), which the coverage tests let through.
+    The re-solve is replaced by a response chosen by hand,
+    ``p(z_i, z_j) = sum_{p,q <= 2} K_pq z_i^p z_j^q`` evaluated where the
+    inputs are moved (z = move / sigma): the biquadratic through the grid is
+    then exact, so the interaction coefficients must be K11, K21, K12, K22,
+    ``contrib[j] += K21``, ``contrib[i] += K12``, both quadratic terms
+    ``+= sqrt 2 K22``, the cross terms listed with their Hermite weights
+    and the returned offset K22."""
+    from bifilar.estimation import budget as bm
+
+    K = {(0, 0): 5.0, (1, 0): 0.7, (0, 1): -0.4, (2, 0): 0.3, (0, 2): 0.2,
+         (1, 1): 0.11, (2, 1): -0.05, (1, 2): 0.07, (2, 2): 0.013}
+    sig = {"a": 0.01, "b": 2.0}
+
+    def p_of(moves):
+        z = {"a": 0.0, "b": 0.0}
+        for key, d in moves:
+            z[key] = d / sig[key]
+        return np.array([sum(c * z["a"] ** i * z["b"] ** j for (i, j), c in K.items())])
+
+    monkeypatch.setattr(bm, "_solve_points", lambda pb, ctx, p_hat, r_hat, pts: {pid: p_of(mv) for pid, mv in pts.items()})
+    h = bm.SIGMA_POINT
+    ctx = _ctx(surrogate={"a": (np.zeros(1), np.zeros(1)), "b": (np.zeros(1), np.zeros(1))})
+    ctx.sigmas.update(sig)
+    ctx.nonlinear = ["a"]
+    sol = {(k, s): p_of([(k, s * h * sig[k])]) for k in sig for s in (1, -1)}
+    contrib = {"a": np.array([1.0]), "b": np.array([2.0]), "a (2nd order)": np.array([0.5]),
+               "b (2nd order)": np.array([0.25])}
+    offset = bm._pair_terms(None, ctx, p_of([]), None, sol, contrib, np.array([1.0]))
+    k11, k21, k12, k22 = (float(np.asarray(c)[0]) for c in ctx.cross[("a", "b")])
+    assert (k11, k21, k12, k22) == pytest.approx((K[1, 1], K[2, 1], K[1, 2], K[2, 2]), rel=1e-9)
+    r2 = math.sqrt(2)
+    assert contrib["b"][0] == pytest.approx(2.0 + K[2, 1], rel=1e-12)
+    assert contrib["a"][0] == pytest.approx(1.0 + K[1, 2], rel=1e-12)
+    assert contrib["a (2nd order)"][0] == pytest.approx(0.5 + r2 * K[2, 2], rel=1e-12)
+    assert contrib["b (2nd order)"][0] == pytest.approx(0.25 + r2 * K[2, 2], rel=1e-12)
+    assert contrib["a x b (2nd order)"][0] == pytest.approx(K[1, 1], rel=1e-9)
+    assert contrib["a^2 x b (2nd order)"][0] == pytest.approx(r2 * K[2, 1], rel=1e-9)
+    assert contrib["a x b^2 (2nd order)"][0] == pytest.approx(r2 * K[1, 2], rel=1e-9)
+    assert contrib["a^2 x b^2 (2nd order)"][0] == pytest.approx(2 * K[2, 2], rel=1e-9)
+    assert offset[0] == pytest.approx(K[2, 2], rel=1e-9)
