@@ -615,3 +615,35 @@ def test_pair_terms_recover_a_known_biquadratic(monkeypatch):
     assert contrib["a x b^2 (2nd order)"][0] == pytest.approx(r2 * K[1, 2], rel=1e-9)
     assert contrib["a^2 x b^2 (2nd order)"][0] == pytest.approx(2 * K[2, 2], rel=1e-9)
     assert offset[0] == pytest.approx(K[2, 2], rel=1e-9)
+
+
+@pytest.mark.parametrize("p,q", [(1, 1), (2, 1), (1, 2), (2, 2)])
+def test_second_order_interval_of_a_pure_interaction_is_its_analytic_quantile(p, q):
+    """Kills interval_95's pair-interaction line (``err += zi * zj * (k11 +
+    k21 zi + k12 zj + k22 zi zj)``: any operator there), which no other
+    test reaches.  One interaction term alone, ``e = c z_i^p z_j^q`` (z_i,
+    z_j independent standard normals) with the random mirror sign: the
+    95 % half-width t solves P(|z_i|^p |z_j|^q <= t / c) = 0.95, i.e.
+    int phi(x) (2 Phi((t / (c |x|^p))^(1/q)) - 1) dx = 0.95 -- computed
+    here by quadrature, independently of the sampling (for p = q = 1 it
+    is the product-normal law, t = 2.18 c)."""
+    from scipy import integrate, optimize, stats
+
+    from bifilar.estimation.budget import interval_95
+
+    def inside(t):
+        f = lambda x: stats.norm.pdf(x) * (2 * stats.norm.cdf((t / max(abs(x) ** p, 1e-300)) ** (1 / q)) - 1)
+        return 2 * integrate.quad(f, 0, np.inf, limit=200)[0]
+
+    t95 = optimize.brentq(lambda t: inside(t) - 0.95, 0.1, 100.0)
+    c = 0.3
+    k = {(1, 1): 0, (2, 1): 1, (1, 2): 2, (2, 2): 3}[(p, q)]
+    cross = [np.zeros(1) for _ in range(4)]
+    cross[k] = np.array([c])
+    ctx = _ctx(surrogate={"a": (np.zeros(1), np.zeros(1)), "b": (np.zeros(1), np.zeros(1))})
+    ctx.cross[("a", "b")] = tuple(cross)
+    bud = _budget_of({"a x b (2nd order)": np.array([c])})
+    lo, hi = interval_95(np.array([0.0]), bud, ctx)[0]
+    # the quantile's sampling error at 20000 draws is a few %
+    assert hi == pytest.approx(c * t95, rel=0.1)
+    assert -lo == pytest.approx(c * t95, rel=0.1)
