@@ -647,3 +647,38 @@ def test_second_order_interval_of_a_pure_interaction_is_its_analytic_quantile(p,
     # the quantile's sampling error at 20000 draws is a few %
     assert hi == pytest.approx(c * t95, rel=0.1)
     assert -lo == pytest.approx(c * t95, rel=0.1)
+
+
+@pytest.mark.parametrize("b", [0.0, 0.8])
+def test_second_order_std_is_the_rms_of_the_quadratic_error(monkeypatch, b):
+    """Kills budget.py ``second_order`` mutants (``sqrt(2) b`` -> ``sqrt(3) b``,
+    the sigma-point coefficients ``(p+ - p-) / 2h`` and ``(p+ + p- - 2p) / 6``,
+    the offset): with the re-solve replaced by an exact quadratic response
+    ``p(z) = p0 + a z + b z^2`` (z = move / sigma), the reported variance
+    must be E[(a z + b z^2)^2] + c_t^2 = a^2 + 3 b^2 + c_t^2 (normal
+    moments: E z^2 = 1, E z^3 = 0, E z^4 = 3), the distance of the truth
+    from the estimate; b = 0 keeps the linear budget unchanged."""
+    from types import SimpleNamespace as NS
+
+    from bifilar.estimation import budget as bm
+    from bifilar.estimation.uncertainty import LinearBudget
+
+    a, ct, s, p0 = 0.5, 0.3, 0.002, 7.0
+
+    def p_of(moves):
+        z = sum(d for _, d in moves) / s
+        return np.array([p0 + a * z + b * z * z])
+
+    monkeypatch.setattr(bm, "_solve_points", lambda pb, ctx, p_hat, r_hat, pts: {pid: p_of(mv) for pid, mv in pts.items()})
+    lin = LinearBudget(["Izz"], np.array([[a * a + ct * ct]]), {"x": np.array([a]), "timing[t]": np.array([ct])})
+    ctx = _ctx()
+    ctx.inputs, ctx.sigmas = ["x"], {"x": s}
+    out, failed = bm.second_order(NS(unknowns=["Izz"]), np.array([p0]), None, ctx, lin)
+    assert failed == []
+    assert out.covariance[0, 0] == pytest.approx(a * a + 3 * b * b + ct * ct, rel=1e-9)
+    if b:
+        sa, sb = ctx.surrogate["x"]
+        assert (sa[0], sb[0]) == pytest.approx((a, b), rel=1e-9)
+        assert out.contributions["offset"][0] == pytest.approx(b, rel=1e-9)  # the mean of b z^2
+    else:
+        assert out is lin and not ctx.surrogate
