@@ -682,3 +682,29 @@ def test_second_order_std_is_the_rms_of_the_quadratic_error(monkeypatch, b):
         assert out.contributions["offset"][0] == pytest.approx(b, rel=1e-9)  # the mean of b z^2
     else:
         assert out is lin and not ctx.surrogate
+
+
+@pytest.mark.parametrize("scheme,rel", [("forward", 1e-4), ("central", 1e-6)])
+def test_finite_difference_jacobian_matches_the_analytic_one(scheme, rel):
+    """Kills uncertainty.py ``input_jacobian`` mutants of the forward scheme
+    (``(Tp - T0) / (side * h)`` -> ``* (side * h)``), which the budget uses
+    wherever the analytic Jacobian does not exist and no test ran.  Another
+    formulation: the analytic period Jacobian (one eigen-solve, exact to
+    rounding) of a regular scene; forward differences agree to ~h (1e-6
+    relative steps), central ones to ~h^2."""
+    from bifilar.analysis.derivatives import analytic_period_jacobian
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.estimation.uncertainty import input_jacobian
+
+    from conftest import trapezoid
+
+    s = trapezoid(l1=5.0, l2=4.6, h=0.5)
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    names = ["Izz", "Ixx", "length.1", "mass", "attachment.2.y"]
+    J, failed = input_jacobian(s, names, rest, ms, scheme=scheme)
+    Ja = analytic_period_jacobian(s, rest, ms, names)
+    assert failed == []
+    scale = np.max(np.abs(Ja), axis=0)  # per input: the largest period derivative
+    assert np.all(np.abs(J - Ja) <= rel * scale[None, :] + 1e-12)
