@@ -644,9 +644,11 @@ def test_second_order_interval_of_a_pure_interaction_is_its_analytic_quantile(p,
     ctx.cross[("a", "b")] = tuple(cross)
     bud = _budget_of({"a x b (2nd order)": np.array([c])})
     lo, hi = interval_95(np.array([0.0]), bud, ctx)[0]
-    # the quantile's sampling error at 20000 draws is a few %
-    assert hi == pytest.approx(c * t95, rel=0.1)
-    assert -lo == pytest.approx(c * t95, rel=0.1)
+    # the quantile's sampling error at 20000 draws: measured 0.96-1.11 x t95
+    # over six sample sizes for the heaviest tail (z_i^2 z_j^2); wrong
+    # operators there give e.g. c z^2 (0.81 x) or c z (0.41 x)
+    assert hi == pytest.approx(c * t95, rel=0.15)
+    assert -lo == pytest.approx(c * t95, rel=0.15)
 
 
 @pytest.mark.parametrize("b", [0.0, 0.8])
