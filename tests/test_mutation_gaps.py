@@ -378,8 +378,9 @@ def test_second_order_interval_uses_the_student_quantile_of_a_timed_period():
     ctx = _ctx(surrogate={"x": (np.array([0.0]), np.array([1e-9]))})
     bud = _budget_of({"timing[torsion]": np.array([0.5]), "x": np.array([0.0])}, dof={"timing[torsion]": 3.0})
     lo, hi = interval_95(np.array([0.0]), bud, ctx)[0]
-    assert hi == pytest.approx(3.182446305284263 * 0.5, rel=0.03)
-    assert -lo == pytest.approx(3.182446305284263 * 0.5, rel=0.03)
+    # sampling: 0.97-1.03 x measured over seven sample sizes; t(3) vs the normal is 1.62 x
+    assert hi == pytest.approx(3.182446305284263 * 0.5, rel=0.06)
+    assert -lo == pytest.approx(3.182446305284263 * 0.5, rel=0.06)
 
 
 def test_unstated_amplitude_interval_is_the_quantiles_of_d_u():
