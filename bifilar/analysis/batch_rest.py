@@ -6,7 +6,8 @@
   once, warm-started from a guess (a neighbour's rest pose, by default the
   first scene's); a scene whose Newton run does not end at a taut, stable
   equilibrium falls back to :func:`~bifilar.analysis.equilibrium.rest_pose`
-  (global search and its one-line errors).
+  (global search and its one-line errors); a knife edge's pose is turned
+  to the canonical member of its neutral circle, as ``rest_pose`` does.
 * :func:`modes_batch`: null space of the constraint Jacobian, reduced
   stiffness and mass, and the generalised eigenproblem by batched Cholesky
   and ``eigh``; labels as :func:`~bifilar.analysis.modes.linear_modes`.
@@ -24,7 +25,7 @@ import numpy as np
 from ..errors import BifilarError
 from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
-from .equilibrium import RestPose, rest_pose
+from .equilibrium import RestPose, canonical_attitude, knife_edge_axes, rest_pose
 from .modes import ModeSet, mode_set
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
@@ -216,6 +217,12 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     R = np.array([q.R for q in guesses], float)
     lam = np.array([q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in guesses], float)
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
+    # a knife edge (CoM on the attachment line) rests anywhere on a neutral circle; Newton's end
+    # there depends on the warm start: take the canonical member, as rest_pose does
+    axis = knife_edge_axes(p)
+    edge = np.all(np.isfinite(axis), axis=1)
+    if edge.any():
+        R[edge] = canonical_attitude(R[edge], axis[edge])
     d, w, G = _jacobian(a, p, com, R)
     T = lam * np.linalg.norm(d, axis=2)
     ok = (kkt < 1e-9) & np.all(T > 1e-9 * (m * g)[:, None], axis=1)

@@ -23,6 +23,10 @@ A wire left slack by stage 2, or a negative tension in stage 3, is a
 :class:`~bifilar.errors.SlackWireError` naming the wire and by how much to
 shorten it; a reduced stiffness that is not positive definite is an
 :class:`~bifilar.errors.UnstableRestError`.
+
+A knife edge (CoM on the line through every attachment point) rests anywhere
+on a circle of turns about that line; its rest pose is the turn nearest the
+start orientation (:func:`canonical_attitude`), whatever the start.
 """
 
 from __future__ import annotations
@@ -342,9 +346,57 @@ def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
         return None
 
 
+#: the CoM and every attachment point lie on one line (a knife edge) when each
+#: attachment is off the line through the CoM and the farthest attachment by at
+#: most this fraction of that farthest one's distance from the CoM: turning the
+#: body about the line then moves the wire ends by less than the rest pose's tolerance
+KNIFE_EDGE_RTOL = 1e-12
+
+
+def knife_edge_axes(attachments: np.ndarray) -> np.ndarray:
+    """Unit body-frame direction (..., 3) of the line through the CoM (the
+    body origin) and every attachment point, for attachments (..., n, 3)
+    (body frame, m); NaN where they are not on one line (within
+    :data:`KNIFE_EDGE_RTOL`).  On such a rig (the thesis plate, CoM on CD)
+    turning the body about that line changes neither a wire nor the CoM
+    height: a neutral direction, every turn an equilibrium (see
+    :func:`canonical_attitude`).  The sign of the direction is immaterial
+    there.  Vectorised over leading axes."""
+    p = np.asarray(attachments, float)
+    r = np.sqrt(np.einsum("...ni,...ni->...n", p, p))
+    k = np.argmax(r, axis=-1)
+    rk = np.take_along_axis(r, k[..., None], axis=-1)  # (..., 1)
+    u = np.take_along_axis(p, k[..., None, None], axis=-2)[..., 0, :] / np.where(rk > 0, rk, 1.0)
+    off = p - np.einsum("...ni,...i->...n", p, u)[..., None] * u[..., None, :]
+    on = (rk[..., 0] > 0) & np.all(np.sqrt(np.einsum("...ni,...ni->...n", off, off)) <= KNIFE_EDGE_RTOL * rk, axis=-1)
+    return np.where(on[..., None], u, np.nan)
+
+
+def canonical_attitude(R: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """The rest attitude of a knife edge: ``R`` (..., 3, 3, body -> world)
+    turned about the body axis ``axis`` (..., 3, unit, from
+    :func:`knife_edge_axes`) to the turn nearest the start orientation (body
+    axes along the world axes): largest trace, i.e. least rotation angle from
+    the identity.  Closed form: tr(R exp(phi [n]x)) = tr R + A sin(phi) +
+    B (1 - cos(phi)), A = tr(R [n]x), B = n.R n - tr R, largest at
+    phi = atan2(A, -B).  It depends on the scene alone, not on the pose
+    Newton ended at on the neutral circle (a neighbour's warm start, the
+    batch, rounding).  Wire vectors, CoM and multipliers are unchanged to
+    rounding (the attachments are on the axis).  Vectorised over leading axes."""
+    R = np.asarray(R, float)
+    n = np.asarray(axis, float)
+    A = np.einsum("...ij,...ji->...", R, skew(n))
+    B = np.einsum("...i,...ij,...j->...", n, R, n) - np.einsum("...ii->...", R)
+    phi = np.arctan2(A, -B)
+    return R @ rotvec_to_matrix(phi[..., None] * n)
+
+
 def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     if not (kkt < 1e-9):
         raise ConvergenceError(f"rest pose did not converge (KKT residual {kkt:.2e})")
+    axis = knife_edge_axes(scene.attachments)
+    if np.all(np.isfinite(axis)):  # a neutral circle of equilibria: take its canonical member
+        R = canonical_attitude(R, axis)
     L = scene.lengths
     d, w, G = constraint_jacobian(scene, c, R)
     T = lam * np.linalg.norm(d, axis=1)
