@@ -38,10 +38,15 @@ class TensionInertia:
     lag_window : samples of residual serial correlation the std accounts for
     (0: uncorrelated); see :func:`_score_covariance`.
     dof : dict component -> effective degrees of freedom of its std
-    (Satterthwaite: ``3 (sum h_k^2)^2 / ((2 W + 1) sum h_k^4)``, ``h_k``
+    (Satterthwaite: ``3 (sum h_k^2)^2 / ((2 W + 3) sum h_k^4)``, ``h_k``
     sample k's contribution to the component's error, ``W`` the lag
-    window; 3 = the fourth moment of a Gaussian; conservative for
-    correlated residuals), used by :meth:`interval95`.
+    window; 3 = the fourth moment of a Gaussian; ``2 W + 3``, one lag
+    more each side than the window sums: the window is chosen from the
+    same data, and its spread adds variance that the fixed-window count
+    ``2 W + 1`` ignores -- with it the dof was 1.2-1.5x the measured
+    ``2 E[v]^2 / var(v)`` on 201-481-sample records, with ``2 W + 3``
+    0.84-1.17 (white noise; conservative for correlated residuals), see
+    tests/test_mutation_gaps.py), used by :meth:`interval95`.
     """
 
     components: tuple
@@ -168,7 +173,7 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     meat, lags = _score_covariance(g, len(comps))
     cov = bread @ meat @ bread / np.outer(scale, scale)
     h2 = (g @ bread) ** 2  # each sample's share of each component's error, squared
-    dof = 3 * h2.sum(axis=0) ** 2 / ((2 * lags + 1) * np.maximum((h2 ** 2).sum(axis=0), 1e-300))
+    dof = 3 * h2.sum(axis=0) ** 2 / ((2 * lags + 3) * np.maximum((h2 ** 2).sum(axis=0), 1e-300))
     std = np.sqrt(np.maximum(np.diag(cov), 0))
     corr = cov / np.maximum(np.outer(std, std), 1e-300)
     values = dict(zip(comps, map(float, x)))
@@ -217,24 +222,33 @@ def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
 
 
 EXCITATION_FLOOR = 1e-8
-"""A component is excited when the torque its column explains (at the scale
-of the largest principal moment) exceeds this fraction of the gross torque
-of the wires (the sum of the magnitudes of each wire's torque about the
-CoM).  Rounding leaves the net torque of a body at rest at ~1e-16 of the
-gross one; differentiating rounding-level angular velocities for the
-acceleration amplifies that by 1 / (omega dt) ~ 1e2-1e3.  1e-8 keeps four
-orders of margin above that, while a motion of 1e-8 rad still counts."""
+"""A component is excited when the torque its column explains about some
+body axis (at the scale of the largest principal moment) exceeds this
+fraction of the gross torque of the wires about that axis (the sum of the
+magnitudes of each wire's torque component).  Rounding is relative to
+what is summed: the net torque of a body at rest is ~1e-16 of the gross
+one about each axis; differentiating rounding-level angular velocities for
+the acceleration amplifies that by 1 / (omega dt) ~ 1e2-1e3.  1e-8 keeps
+four orders of margin above that, while a motion of 1e-8 rad still counts.
+
+The relative-std check cannot replace it: rounding is not random noise,
+and a symmetric torsion's unmoving roll axis fits its rounding-level
+torques with a relative std of 0.2 % (Ixx 202.7 for 208.3 kg m^2,
+tests/test_mutation_gaps.py).  Per axis, not against the gross torque of
+all three axes: a tiny torsion (1e-9 rad) has z torques at 1e-9 of the
+wires' x torques but computed to rounding of their own size, and
+determines Izz to ~1e-16."""
 
 
 def _excited(scene: Scene, com, R, tensions, A2: np.ndarray, k: int) -> np.ndarray:
     """(m,) bool: whether each design column of ``A2`` ((3k, m), 1/s^2)
-    carries a torque above :data:`EXCITATION_FLOOR` of the gross wire
-    torque (N m, RMS over the k samples)."""
+    carries, about some body axis, a torque above :data:`EXCITATION_FLOOR`
+    of the gross wire torque about that axis (N m, RMS over the k samples)."""
     u = wire_units(scene, com, R)  # world, attachment -> anchor
     f_body = np.einsum("kji,knj->kni", R, tensions[..., None] * u)
-    gross = np.linalg.norm(np.cross(scene.attachments[None, :, :], f_body), axis=-1).sum(axis=1)  # (k,) N m
-    floor = EXCITATION_FLOOR * float(np.sqrt(np.mean(gross ** 2)))
+    gross = np.abs(np.cross(scene.attachments[None, :, :], f_body)).sum(axis=1)  # (k, 3) N m
+    floor = EXCITATION_FLOOR * np.sqrt(np.mean(gross ** 2, axis=0))  # (3,)
     I_scale = float(np.max(np.linalg.eigvalsh(scene.inertia)))  # kg m^2
-    explained = I_scale * np.linalg.norm(A2, axis=0) / np.sqrt(max(k, 1))  # RMS over samples, N m
-    return explained > floor
-
+    A = A2.reshape(k, 3, -1)
+    explained = I_scale * np.sqrt(np.mean(A ** 2, axis=0))  # (3, m) RMS over samples, N m
+    return np.any(explained > floor[:, None], axis=0)
