@@ -352,8 +352,14 @@ def test_require_oscillation_accepts_a_tone_and_refuses_noise_and_too_few_cycles
         sc.require_oscillation(t, rng.normal(0, 1, t.size))
     with pytest.raises(SignalError, match="fewer than"):
         sc.require_oscillation(t, np.cos(2 * np.pi * (1.0 / 20) * t) + rng.normal(0, 1e-3, t.size))
-    with pytest.raises(SignalError, match="constant"):
-        sc.require_oscillation(t, np.zeros(t.size))
+    # constant or straight records, whose detrending leaves only rounding
+    # (not exact zeros), are called so -- not "fewer than 2 cycles"
+    for flat in (np.zeros(t.size), np.full(t.size, 2.0), 0.4 * t + 1.0):
+        with pytest.raises(SignalError, match="constant"):
+            sc.require_oscillation(t, flat)
+    # a tiny but real oscillation on an offset is still one
+    assert sc.require_oscillation(t, 5.0 + 1e-8 * np.cos(2 * np.pi * 0.75 * t))["frequency"] == \
+        pytest.approx(0.75, abs=1 / 20)
     with pytest.raises(SignalError, match="constant"):
         sc.require_oscillation(t[:7], np.cos(t[:7]))
 
