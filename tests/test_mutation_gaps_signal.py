@@ -304,6 +304,8 @@ def test_autocov_is_the_lagged_sum():
 
 
 def test_peak_threshold_is_the_bonferroni_exponential_quantile():
+    # docs/real_data.md: ln(m / 10^-3)
+    assert sc.peak_threshold(1000) == pytest.approx(math.log(1000 / 1e-3), rel=1e-12)
     # P(I/S > c) = exp(-c) per bin; m bins at family level alpha: c = ln(m / alpha)
     for m in (1, 10, 4096):
         assert math.exp(-sc.peak_threshold(m)) * m == pytest.approx(sc.PEAK_ALPHA, rel=1e-12)
@@ -312,13 +314,17 @@ def test_peak_threshold_is_the_bonferroni_exponential_quantile():
 def test_local_level_is_the_mean_of_an_exponential_from_its_median():
     rng = np.random.default_rng(9)
     I = rng.exponential(2.5, 4001)
-    I[2000] = 1e6
-    I[1998:2003] = 1e6  # the peak's own +-3 bins do not count
+    I[1997:2004] = 1e6  # the peak's own +-3 bins do not count
     # median of an exponential of mean mu is mu ln 2; +-1000 bins around
     # k = 2000 (std of the estimate ~ 2.5 / sqrt(2000) ~ 2 %)
     assert sc._local_level(I, 2000) == pytest.approx(2.5, rel=0.08)
     # near the edge: at least 50 bins each side where they exist
     assert sc._local_level(I, 10) == pytest.approx(2.5, rel=0.35)
+    # the level is local: a coloured spectrum (mean 1 below bin 1000, 100
+    # above) gives each region its own level (window k/2 .. 3k/2)
+    J = rng.exponential(1.0, 6000) * np.where(np.arange(6000) < 1000, 1.0, 100.0)
+    assert sc._local_level(J, 500) == pytest.approx(1.0, rel=0.15)
+    assert sc._local_level(J, 3000) == pytest.approx(100.0, rel=0.1)
 
 
 def test_residual_peaks_finds_a_tone_and_names_a_harmonic():
@@ -350,6 +356,8 @@ def test_require_oscillation_accepts_a_tone_and_refuses_noise_and_too_few_cycles
     assert got["threshold"] == pytest.approx(math.log(t.size // 2 / sc.PEAK_ALPHA), rel=1e-12)
     with pytest.raises(SignalError, match="no significant"):
         sc.require_oscillation(t, rng.normal(0, 1, t.size))
+    # two cycles exactly are enough (the strongest bin sits at k = 2)
+    assert sc.require_oscillation(t, np.cos(2 * np.pi * (2.0 / 20) * t))["cycles"] == pytest.approx(2.0)
     with pytest.raises(SignalError, match="fewer than"):
         sc.require_oscillation(t, np.cos(2 * np.pi * (1.0 / 20) * t) + rng.normal(0, 1e-3, t.size))
     # constant or straight records, whose detrending leaves only rounding
