@@ -339,6 +339,9 @@ def test_residual_peaks_finds_a_tone_and_names_a_harmonic():
     assert pk[0]["harmonic"] == 3
     assert pk[1]["frequency"] == pytest.approx(1.37, abs=1 / 40)
     assert pk[1]["harmonic"] is None
+    # the test is scale-free: the same record in units 1e4 times smaller
+    small = sc.residual_peaks(t, 1e-4 * r, f0)
+    assert [p["frequency"] for p in small] == pytest.approx([p["frequency"] for p in pk])
     # white noise alone: a false alarm at most at rate PEAK_ALPHA
     assert sc.residual_peaks(t, rng.normal(0, 0.1, t.size), f0) == []
 
