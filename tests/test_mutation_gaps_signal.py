@@ -292,6 +292,8 @@ def test_ljung_box_is_the_textbook_statistic():
     r8 = np.array([np.sum(d8[:-k] * d8[k:]) for k in range(1, 11)]) / np.sum(d8 * d8)
     Q8 = 40 * 42 * sum(r8[k - 1] ** 2 / (40 - k) for k in range(1, 11))
     assert sc.ljung_box(x8, 20)[0] == pytest.approx(Q8, rel=1e-9)
+    # scale-free: the same record in units 1e3 times smaller
+    assert sc.ljung_box(1e-3 * x, h)[0] == pytest.approx(Q, rel=1e-9)
     assert sc.ljung_box(np.full(50, 2.0)) == (0.0, 1.0)
     assert sc.ljung_box(np.arange(3.0)) == (0.0, 1.0)
 
@@ -391,6 +393,8 @@ def test_serial_factor_of_ar1_noise_is_its_spectral_ratio():
         fac, p = sc.serial_factor(x, f0, dt)
         assert p >= 1
         assert fac == pytest.approx(want, rel=0.05)
+    # scale-free: the same noise in units 1e3 times smaller
+    assert sc.serial_factor(1e-3 * x, 0.5, dt)[0] == pytest.approx(sc.serial_factor(x, 0.5, dt)[0], rel=1e-9)
     # white noise: no inflation (the factor is at least 1 and near it)
     fac, _ = sc.serial_factor(e, 0.5, dt)
     assert 1.0 <= fac < 1.05
