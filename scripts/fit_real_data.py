@@ -244,7 +244,8 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
       "record (and 3 median steps) or samples covering less than 75 % of the span (the span less "
       "its gaps, steps longer than 10 mean steps), or a uniform grid at the median step over 4x the "
       "samples (bunched samples) (checked before any resampling); irregular sampling is not a gap: "
-      "random intervals (exponential ones included) or a change of sample rate are accepted; no significant spectral peak (periodogram peak / local median·ln 2 below "
+      "random intervals (exponential ones included) or a change of sample rate are accepted; a constant record or a "
+      "straight line (nothing left after detrending but rounding, below 1e-9 of the largest sample); no significant spectral peak (periodogram peak / local median·ln 2 below "
       "ln(m/10⁻³), m bins: false-alarm probability 10⁻³ for noise); fewer than two cycles; a fit "
       "with r² < 0.1. Records over 200 000 samples are averaged in blocks first (a 10-million-row "
       "CSV runs in 426 MiB peak RSS, `scripts/bench_period_memory.py`).")
