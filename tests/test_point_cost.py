@@ -142,22 +142,32 @@ def test_hanging_model_locate_reuses_the_stiffness_only_at_its_geometry():
         assert [m.period for m in ms.modes] == pytest.approx([m.period for m in ref.modes], rel=1e-12)
 
 
-def test_clusters_match_the_plain_definition():
-    # chained from each cluster's first member, the larger tolerance of a pair applying
+def test_clusters_by_hand_and_by_their_defining_properties():
+    # hand-worked cases: equal within tol (the larger of a pair's tolerances), chained from each
+    # cluster's FIRST member (0, 0.6, 1.2 at tol 1: 1.2 is 1.2 from 0, so it starts a new cluster
+    # although it is within 1 of 0.6)
     from bifilar.analysis.modes import clusters
 
+    w = [1.0, 1.0 + 1e-12, 2.0, 2.0 + 3e-11, 5.0]
+    assert clusters(w, 1e-10) == [(0, 2), (2, 4), (4, 5)]
+    assert clusters(w, 1e-11) == [(0, 2), (2, 3), (3, 4), (4, 5)]
+    assert clusters([0.0, 0.6, 1.2], 1.0) == [(0, 2), (2, 3)]
+    assert clusters([1.0, 1.0 + 5e-11], [1e-11, 1e-10]) == [(0, 2)]
+    assert clusters([1.0, 1.0 + 5e-11], [1e-11, 1e-11]) == [(0, 1), (1, 2)]
+    assert clusters([3.0], 1e-10) == [(0, 1)]
+    # random cases against the properties that define the grouping (not a copy of the loop): the
+    # ranges tile 0..n; every member is within the pair tolerance of its cluster's first member; the
+    # member after a cluster is not
     rng = np.random.default_rng(7)
     for _ in range(200):
         w2 = np.sort(rng.choice([1.0, 1.0 + 1e-12, 2.0, 2.0 + 3e-11, 5.0], size=rng.integers(1, 6)))
         tol = rng.choice([1e-11, 1e-10, 1e-13], size=len(w2))
-        ref, k = [], 0
-        while k < len(w2):
-            j = k + 1
-            while j < len(w2) and abs(w2[j] - w2[k]) <= max(tol[k], tol[j]):
-                j += 1
-            ref.append((k, j))
-            k = j
-        assert clusters(w2, tol) == ref
+        out = clusters(w2, tol)
+        assert [k for k, _ in out] == [0] + [j for _, j in out[:-1]] and out[-1][1] == len(w2)
+        for k, j in out:
+            assert all(abs(w2[i] - w2[k]) <= max(tol[k], tol[i]) for i in range(k, j))
+            if j < len(w2):
+                assert abs(w2[j] - w2[k]) > max(tol[k], tol[j])
         assert clusters(w2, 1e-10) == clusters(w2, np.full(len(w2), 1e-10))
 
 
