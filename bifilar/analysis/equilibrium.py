@@ -31,6 +31,7 @@ start orientation (:func:`canonical_attitude`), whatever the start.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -468,14 +469,34 @@ def line_turns(attachments: np.ndarray, R: np.ndarray):
     return np.where(bad, np.nan, psi), n
 
 
+def _line_turn_one(p: np.ndarray, R: np.ndarray) -> float:
+    """psi of :func:`line_turns` for one two-wire pose (p (2, 3), R (3, 3)),
+    in plain floats, without its NaN cases (knife edge: psi is rounding there;
+    vertical line: 0).  A filter for :func:`_hang_below_line`."""
+    (x0, y0, z0), (x1, y1, z1) = p.tolist()
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    ux, uy, uz = x1 - x0, y1 - y0, z1 - z0
+    t = (x0 * ux + y0 * uy + z0 * uz) / (ux * ux + uy * uy + uz * uz)
+    fx, fy, fz = x0 - t * ux, y0 - t * uy, z0 - t * uz  # CoM -> its foot on the line, body
+    vx, vy, vz = -(r00 * fx + r01 * fy + r02 * fz), -(r10 * fx + r11 * fy + r12 * fz), -(r20 * fx + r21 * fy + r22 * fz)
+    nx, ny, nz = r00 * ux + r01 * uy + r02 * uz, r10 * ux + r11 * uy + r12 * uz, r20 * ux + r21 * uy + r22 * uz
+    # down across the line ~ -(z - (z.n) n / |n|^2); side = n x down: only their directions matter for atan2
+    nn = nx * nx + ny * ny + nz * nz
+    dx, dy, dz = nz * nx / nn, nz * ny / nn, nz * nz / nn - 1.0
+    sx, sy, sz = ny * dz - nz * dy, nz * dx - nx * dz, nx * dy - ny * dx
+    return math.atan2(-(vx * sx + vy * sy + vz * sz) / math.sqrt(nn), vx * dx + vy * dy + vz * dz)
+
+
 def _hang_below_line(scene: Scene, c: np.ndarray, R: np.ndarray):
     """The pose (com, R) turned about a two-wire rig's attachment line (the
     line through its attachment points, fixed in the world) so that the CoM
     hangs straight below it, when that turn (:func:`line_turns`) exceeds
     :data:`LINE_TURN_TOL`; else None.  The wires are unchanged (their ends
     are on the axis of the turn)."""
+    if scene.n_wires != 2 or not abs(_line_turn_one(scene.attachments, R)) > LINE_TURN_TOL:
+        return None  # the common case, decided without the vectorised machinery (a Newton end costs ~20 of these)
     psi, n = line_turns(scene.attachments, R)
-    if not abs(psi) > LINE_TURN_TOL:  # NaN too: 3+ wires, knife edge, vertical line
+    if not abs(psi) > LINE_TURN_TOL:  # NaN: knife edge, vertical line
         return None
     Q = rotvec_to_matrix(float(psi) * n)
     a1 = c + R @ scene.attachments[0]
@@ -513,7 +534,7 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
             else:
                 hint = _com_height_hint(scene, R)
             raise UnstableRestError("rig.attachments", _UNSTABLE + hint)
-    if np.max(np.abs(matrix_to_rotvec(R))) > START_BOX:
+    if (np.trace(R) - 1) / 2 < math.cos(START_BOX) and np.max(np.abs(matrix_to_rotvec(R))) > START_BOX:
         # the rotation from the start orientation (the identity, _initial_pose) leaves the 90-degree box
         # the global search is confined to: refused there (SLSQP at its bound), so here too, whichever
         # path (a warm start, a Newton start, a turn about the attachment line) led to it
