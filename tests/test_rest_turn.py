@@ -32,10 +32,11 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
+from bifilar.analysis.batch import rest_poses
 from bifilar.analysis.equilibrium import KNIFE_EDGE_RTOL, rest_pose
 from bifilar.cli import main
 from bifilar.config import load_scene
-from bifilar.errors import UnstableRestError
+from bifilar.errors import BifilarError, UnstableRestError
 from bifilar.rotations import matrix_to_rotvec
 from conftest import CONFIGS
 
@@ -148,3 +149,70 @@ def test_cli_refuses_the_com_beside_the_line_in_one_line(tmp_path):
     lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
     assert res.exit_code == 2 and res.stdout == "" and len(lines) == 1, res.stderr
     assert lines[0].startswith("error: rig.attachments: ") and "centre of mass" in lines[0], lines[0]
+
+
+# --------------------------------------------------------------------------- batch against single
+
+
+def _scenes():
+    """Two-wire scenes of every kind: knife edges, near knife edges (CoM h below the line, some
+    also beside it), beside the line (level: refused; tilted: turned), just above it, a
+    neighbour hanging turned by 89.4 degrees (CoM 1e-3 m beside, 1e-5 m below), the
+    two-wire example configs; and the trifilar, hanging and with its CoM 2 m above the attachments."""
+    out = [PLATE, TILTED, load_scene(CONFIGS / "thesis_lin1_torsion.yaml", warn=False)]
+    out += [beside(PLATE, 0.0, h) for h in (1e-11, 1e-7, 1e-3)] + [beside(TILTED, 3e-10, 1e-9)]
+    out += [beside(PLATE, e) for e in (1e-10, 1e-7, 1e-3)] + [beside(TILTED, e) for e in (1e-10, 1e-6, 1e-3)]
+    out += [beside(PLATE, 1e-6, -1e-9), beside(TILTED, 1e-9, -1e-11), beside(PLATE, 1e-3, 1e-5)]
+    for name in ("thesis_lin2_pitch", "thesis_lin3_roll", "thesis_cylinder_6_4", "drone_parallel", "solar_boat"):
+        out.append(load_scene(CONFIGS / f"{name}.yaml", warn=False))
+    tri = load_scene(CONFIGS / "trifilar_kth.yaml", warn=False)  # three wires: its own group in the batch
+    return out + [tri, tri.with_changes(attachments=tri.attachments - [0.0, 0.0, 2.0])]  # the second turns over
+
+
+def _single(scene):
+    try:
+        return rest_pose(scene)
+    except BifilarError as exc:
+        return exc
+
+
+def _attitude_tol(scene) -> float:
+    """Resolution of the attitude (rad): eps r / d for a CoM d from the attachment line
+    (the turn about it has stiffness ~ m g d), 1e-9 otherwise (knife edges: canonical turn)."""
+    p = scene.attachments
+    u = (p[1] - p[0]) / np.linalg.norm(p[1] - p[0])
+    d = np.linalg.norm(p[0] - (p[0] @ u) * u)
+    r = float(np.max(np.linalg.norm(p, axis=1)))
+    return 1e-9 if len(p) != 2 or knife_edge(scene) else 1e-9 + 8 * EPS * r / d
+
+
+def test_batch_agrees_with_the_single_path_in_any_order_and_warm_start():
+    """Every scene: the batch (forward and reversed, default warm start, the turned
+    neighbour's pose as every scene's start, each scene started from another's pose) accepts
+    exactly what rest_pose accepts, with the same pose (to the attitude's resolution), and
+    refuses the rest with the same error.  The turned neighbour's start led the batch to the
+    90-degree pose of the level plate with its CoM beside the line, which rest_pose refuses;
+    a start from the pose at the plate's identity accepted the level pose of the CoM level with
+    the line (1e-10 m beside it); and that two-wire pose as the start of the trifilar group
+    raised a broadcasting error (now ignored there: no start for another wire count)."""
+    scenes = _scenes()
+    singles = [_single(s) for s in scenes]
+    accepted = [r for r in singles if not isinstance(r, Exception)]
+    assert 0 < len(accepted) < len(scenes)  # both verdicts present
+    turned = singles[-8]  # beside(PLATE, 1e-3, 1e-5): hangs turned by atan(100)
+    assert not isinstance(turned, Exception) and np.max(np.abs(matrix_to_rotvec(turned.R))) > 1.5
+    for order in (list(range(len(scenes))), list(range(len(scenes)))[::-1]):
+        sc = [scenes[k] for k in order]
+        others = [accepted[(j * 5) % len(accepted)] for j in range(len(sc))]
+        for guess in (None, turned, others):
+            for k, r in zip(order, rest_poses(sc, guess, errors="return")):
+                s, want = scenes[k], singles[k]
+                if isinstance(want, Exception):
+                    assert type(r) is type(want) and str(r) == str(want), (k, r, want)
+                    continue
+                assert not isinstance(r, Exception), (k, r)
+                L = float(np.max(s.lengths))
+                tol = _attitude_tol(s)
+                assert np.max(np.abs(r.R - want.R)) <= tol, (k, np.max(np.abs(r.R - want.R)), tol)
+                assert np.max(np.abs(r.com - want.com)) <= 1e-9 * L + 2 * R_ATT * tol, k
+                assert np.max(np.abs(r.tensions - want.tensions)) <= 1e-9 * np.max(want.tensions), k
