@@ -590,13 +590,15 @@ def _turn_refusal(scene: Scene, R0: np.ndarray, R: np.ndarray) -> UnstableRestEr
 
 
 def _com_height_hint(scene: Scene, R: np.ndarray) -> str:
-    """Message tail: where the CoM is relative to the attachment points (world z)."""
+    """Message tail: where the CoM is relative to the attachment points (world z, attitude ``R``);
+    for two wires whose CoM is not straight below their attachment line, where it is relative to
+    that line and the turn about it the body would make."""
     h = -float(np.mean(scene.attachments @ R.T, axis=0)[2])  # CoM height above the attachments' mean, m
     if h > 0:
         return (f": the centre of mass is {h:.3g} m above the attachment points (their mean); "
                 "attach the wires above the centre of mass")
     psi, _ = line_turns(scene.attachments, R)
-    if np.isfinite(psi):  # two wires: the CoM hangs straight below their attachment line, whatever the anchors
+    if abs(psi) > LINE_TURN_TOL:  # two wires, CoM not below their line: it hangs straight below it, whatever the anchors
         _, down, side, v, _ = _line_frame(scene.attachments, R)
         below, beside = float(v @ down), abs(float(v @ side))
         level = abs(below) <= KNIFE_EDGE_RTOL * float(np.max(np.linalg.norm(scene.attachments, axis=1)))
