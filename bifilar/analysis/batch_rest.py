@@ -7,7 +7,11 @@
   first scene's); a scene whose Newton run does not end at a taut, stable
   equilibrium falls back to :func:`~bifilar.analysis.equilibrium.rest_pose`
   (global search and its one-line errors); a knife edge's pose is turned
-  to the canonical member of its neutral circle, as ``rest_pose`` does.
+  to the canonical member of its neutral circle, as ``rest_pose`` does; a
+  pose ``rest_pose`` would not accept (rotation from the start orientation
+  beyond its 90-degree box, a two-wire rig's CoM not straight below its
+  attachment line) falls back too, so the warm start and the batch order
+  change no scene's verdict.
 * :func:`modes_batch`: null space of the constraint Jacobian, reduced
   stiffness and mass, and the generalised eigenproblem by batched Cholesky
   and ``eigh``; labels as :func:`~bifilar.analysis.modes.linear_modes`.
@@ -23,9 +27,9 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BifilarError
-from ..rotations import matrix_to_quat, rotvec_to_matrix
+from ..rotations import matrix_to_quat, quat_to_rotvec, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
-from .equilibrium import RestPose, canonical_attitude, knife_edge_axes, rest_pose
+from .equilibrium import LINE_TURN_TOL, START_BOX, RestPose, canonical_attitude, knife_edge_axes, line_turns, rest_pose
 from .modes import ModeSet, mode_set
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
@@ -178,7 +182,8 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     Parameters
     ----------
     guess : a RestPose used as the start of every scene, or one per scene;
-        default: the rest pose of the first scene (global search).
+        default: the rest pose of the first scene (global search), also
+        used for a group of scenes (same wire count) a guess does not fit.
     errors : ``"raise"``: the first scene that cannot hang raises its
         error (:class:`SlackWireError`, ...); ``"return"``: its entry in
         the list is the exception instead.
@@ -197,6 +202,9 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
             return _per_group(lambda sc: rest_poses(sc, guess, errors=errors), scenes)
         return _per_group(lambda sc, gs: rest_poses(sc, gs, errors=errors), scenes, list(guess))
     out = [None] * len(scenes)
+    n = scenes[0].n_wires
+    if guess is not None and any(len(q.tensions) != n for q in ([guess] if isinstance(guess, RestPose) else guess)):
+        guess = None  # another rig's pose (one guess for a batch of several wire counts): no start for these
     if guess is None:
         try:
             g0 = rest_pose(scenes[0])
@@ -234,6 +242,13 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
         ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
         ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
     q = matrix_to_quat(R)
+    # the single path's acceptance rules, whatever the warm start: a two-wire rig's CoM straight below its
+    # attachment line, and the rotation from the start orientation (the identity) within the 90-degree box
+    # (a neighbour's turned pose leads Newton to equilibria rest_pose refuses); a scene failing either goes
+    # to rest_pose, which turns it about the line or refuses it
+    ok &= ~(np.abs(line_turns(p, R)[0]) > LINE_TURN_TOL)
+    far = q[:, 0] < np.cos(START_BOX / 2)  # turned by more than START_BOX (q w >= 0): a component may leave the box
+    ok[far] &= np.max(np.abs(quat_to_rotvec(q[far])), axis=1) <= START_BOX
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue

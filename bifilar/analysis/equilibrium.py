@@ -31,6 +31,7 @@ start orientation (:func:`canonical_attitude`), whatever the start.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -144,8 +145,25 @@ def _slsqp(scene: Scene, com0: np.ndarray, R0: np.ndarray, jacobian: bool = True
         constraints=[{"type": "ineq", "fun": cons, **({"jac": cons_jac} if jacobian else {})}], options={"maxiter": 500, "ftol": 1e-14},
     )
     c, R = pose(res.x)
-    at_bound = bool(np.any(np.abs(res.x[3:]) > np.pi / 2 - 1e-3))
+    at_bound = bool(np.any(np.abs(res.x[3:]) > START_BOX))
     return c, R, res, at_bound
+
+
+#: margin (rad) of the 90-degree box about the start orientation: a rest pose
+#: whose rotation vector from the start has a component beyond ``START_BOX`` =
+#: pi/2 - this margin is refused (the body would turn over), by the global
+#: search (SLSQP at its bound) and by every other path alike (:func:`_finish`)
+START_BOX_MARGIN = 1e-3
+START_BOX = np.pi / 2 - START_BOX_MARGIN
+
+#: a two-wire rig's CoM is taken to hang straight below its attachment line
+#: when the turn about that line which would put it there is at most this
+#: (rad); a larger one (a Newton end with the CoM beside the line, e.g. level
+#: with it, where that turn has no stiffness, or straight above it, where the
+#: stiffness m g h is negative but too small for the eigenvalue test when h
+#: is) is turned about the line in closed form (:func:`_hang_below_line`)
+#: and polished again
+LINE_TURN_TOL = 1e-6
 
 
 #: smallest sine of the steepest wire's angle to horizontal at rest: below it every wire is straight across
@@ -168,7 +186,7 @@ def _newton_start(scene: Scene, com0: np.ndarray, R0: np.ndarray) -> RestPose | 
     SLSQP, which names slack wires and flips, and finds the pose a larger
     turn leads to)."""
     try:
-        c, R, lam, kkt = _newton_kkt(scene, com0.copy(), R0.copy(), iters=40)
+        c, R, lam, kkt = _polish(scene, com0.copy(), R0.copy(), iters=40)
     except np.linalg.LinAlgError:
         return None
     if not (kkt < 1e-9) or not np.all(lam > 0):
@@ -228,6 +246,20 @@ def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | 
     phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
     res = max(np.max(np.abs(gradV + G.T @ lam)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
     return com, R, lam, res
+
+
+def _polish(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | None = None, iters: int = 60):
+    """:func:`_newton_kkt`; where it leaves a two-wire rig's CoM beside the
+    attachment line (not straight below or above it: no equilibrium, though
+    the residual may be within tolerance when the CoM is level with the line,
+    where the turn about it has no stiffness and gravity's moment is only
+    m g times the offset), the closed-form turn about the line
+    (:func:`_hang_below_line`) and Newton again from there.  Same returns."""
+    c, R, lam, kkt = _newton_kkt(scene, com, R, lam, iters=iters)
+    turned = _hang_below_line(scene, c, R)
+    if turned is None:
+        return c, R, lam, kkt
+    return _newton_kkt(scene, *turned, iters=iters)
 
 
 def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray):
@@ -311,28 +343,26 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
             raise UnstableRestError("rig.attachments", "the body cannot hang within 90 degrees of its start "
                                     "orientation (body axes along the world axes): the attachments do not face "
                                     "the anchors; check their order and the body frame")
+        if np.isfinite(line_turns(scene.attachments, R)[0]):
+            # two wires, CoM off their line: SLSQP fails where the turn about the line is all but free (CoM
+            # within a hair of the line), but that turn is known in closed form (_polish): Newton from here
+            c, R, lam, kkt = _polish(scene, c, R)
+            if kkt < 1e-9 and np.all(lam > 0):
+                return _finish(scene, c, R, lam, kkt)
         raise ConvergenceError(f"rest pose search failed: {res.message}")
     if at_bound:
-        if _yaw_share(scene, R0, np.zeros(3), matrix_to_rotvec(R @ R0.T)) > 0.5:
-            # it turns about the vertical by more than 90 degrees to hang: the anchors are turned against the attachments
-            raise UnstableRestError("rig.attachments", "the body cannot hang within 90 degrees of its start orientation: "
-                                    "it would turn about the vertical by more than that, as wires that cross or twist on "
-                                    "their way down make it (an anchor on the other side from its attachment); check the "
-                                    "order of rig.anchors against rig.attachments")
-        # the body wants to turn over rather than hang in its start orientation
-        raise UnstableRestError("rig.attachments", "the body cannot hang in its start orientation (it would turn over)"
-                                + _com_height_hint(scene, R0))
+        raise _turn_refusal(scene, R0, R)
     slack = np.where(stretch < -tol)[0]
     if len(slack):
         _raise_slack(scene, slack, -stretch[slack], L)
-    return _finish(scene, *_newton_kkt(scene, c, R))
+    return _finish(scene, *_polish(scene, c, R))
 
 
 def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
     lam0 = guess.tensions / np.linalg.norm(guess.wire_vectors, axis=1)
     if lam0.shape[0] != scene.n_wires:
         return None
-    c, R, lam, kkt = _newton_kkt(scene, guess.com.copy(), guess.R.copy(), lam0.copy(), iters=30)
+    c, R, lam, kkt = _polish(scene, guess.com.copy(), guess.R.copy(), lam0.copy(), iters=30)
     if not kkt < 1e-9 or np.any(lam <= 0):
         return None
     # a neutral direction (CoM on the attachment line) lets Newton wander to a far pose:
@@ -391,6 +421,88 @@ def canonical_attitude(R: np.ndarray, axis: np.ndarray) -> np.ndarray:
     return R @ rotvec_to_matrix(phi[..., None] * n)
 
 
+#: a two-wire rig's attachment line counts as vertical (no "below" across it) when
+#: the sine of its angle to the vertical is below this
+_VERTICAL_LINE = 1e-6
+
+
+def _line_frame(attachments: np.ndarray, R: np.ndarray):
+    """World frame of a two-wire rig's attachment line in attitude ``R``
+    (..., 3, 3, body -> world; attachments (..., 2, 3), body frame, m):
+    n, the line's direction (attachment 1 to 2); down, the unit vector across
+    the line in the vertical plane through it, pointing down; side = n x down
+    (horizontal); and v, the CoM minus its foot on the line (m, across the
+    line).  Vectorised over leading axes."""
+    p = np.asarray(attachments, float)
+    u = p[..., 1, :] - p[..., 0, :]
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+    foot = p[..., 0, :] - np.einsum("...i,...i->...", p[..., 0, :], u)[..., None] * u  # CoM -> line, body
+    n = np.einsum("...ij,...j->...i", R, u)
+    v = -np.einsum("...ij,...j->...i", R, foot)
+    zp = np.array([0.0, 0.0, 1.0]) - n[..., 2:3] * n  # vertical, across the line
+    nz = np.linalg.norm(zp, axis=-1, keepdims=True)
+    down = -zp / np.where(nz > 0, nz, 1.0)
+    return n, down, np.cross(n, down), v, nz[..., 0]
+
+
+def line_turns(attachments: np.ndarray, R: np.ndarray):
+    """Two-wire rig (attachments (..., 2, 3), body frame, m) in attitude
+    ``R`` (..., 3, 3, body -> world): the turn psi (rad, in (-pi, pi],
+    right-handed about n) that brings the CoM straight below the attachment
+    line, and n (..., 3), the line's world direction (attachment 1 to 2).
+
+    The wires pull on points of that line only, so at rest gravity has no
+    moment about it: the CoM lies in the vertical plane through the line,
+    and below it when stable (the stiffness of the turn about the line is
+    m g times the CoM's depth below it, whatever the wires).  psi is NaN for
+    3+ wires, a knife edge (CoM on the line, :func:`knife_edge_axes`: no
+    turn is preferred) and a line within :data:`_VERTICAL_LINE` of vertical.
+    Vectorised over leading axes."""
+    p = np.asarray(attachments, float)
+    R = np.asarray(R, float)
+    shape = np.broadcast_shapes(p.shape[:-2], R.shape[:-2])
+    if p.shape[-2] != 2:
+        return np.full(shape, np.nan), np.full(shape + (3,), np.nan)
+    n, down, side, v, nz = _line_frame(p, R)
+    psi = np.arctan2(-np.einsum("...i,...i->...", v, side), np.einsum("...i,...i->...", v, down))
+    bad = ~np.all(np.isnan(knife_edge_axes(p)), axis=-1) | (nz < _VERTICAL_LINE)
+    return np.where(bad, np.nan, psi), n
+
+
+def _line_turn_one(p: np.ndarray, R: np.ndarray) -> float:
+    """psi of :func:`line_turns` for one two-wire pose (p (2, 3), R (3, 3)),
+    in plain floats, without its NaN cases (knife edge: psi is rounding there;
+    vertical line: 0).  A filter for :func:`_hang_below_line`."""
+    (x0, y0, z0), (x1, y1, z1) = p.tolist()
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    ux, uy, uz = x1 - x0, y1 - y0, z1 - z0
+    t = (x0 * ux + y0 * uy + z0 * uz) / (ux * ux + uy * uy + uz * uz)
+    fx, fy, fz = x0 - t * ux, y0 - t * uy, z0 - t * uz  # CoM -> its foot on the line, body
+    vx, vy, vz = -(r00 * fx + r01 * fy + r02 * fz), -(r10 * fx + r11 * fy + r12 * fz), -(r20 * fx + r21 * fy + r22 * fz)
+    nx, ny, nz = r00 * ux + r01 * uy + r02 * uz, r10 * ux + r11 * uy + r12 * uz, r20 * ux + r21 * uy + r22 * uz
+    # down across the line ~ -(z - (z.n) n / |n|^2); side = n x down: only their directions matter for atan2
+    nn = nx * nx + ny * ny + nz * nz
+    dx, dy, dz = nz * nx / nn, nz * ny / nn, nz * nz / nn - 1.0
+    sx, sy, sz = ny * dz - nz * dy, nz * dx - nx * dz, nx * dy - ny * dx
+    return math.atan2(-(vx * sx + vy * sy + vz * sz) / math.sqrt(nn), vx * dx + vy * dy + vz * dz)
+
+
+def _hang_below_line(scene: Scene, c: np.ndarray, R: np.ndarray):
+    """The pose (com, R) turned about a two-wire rig's attachment line (the
+    line through its attachment points, fixed in the world) so that the CoM
+    hangs straight below it, when that turn (:func:`line_turns`) exceeds
+    :data:`LINE_TURN_TOL`; else None.  The wires are unchanged (their ends
+    are on the axis of the turn)."""
+    if scene.n_wires != 2 or not abs(_line_turn_one(scene.attachments, R)) > LINE_TURN_TOL:
+        return None  # the common case, decided without the vectorised machinery (a Newton end costs ~20 of these)
+    psi, n = line_turns(scene.attachments, R)
+    if not abs(psi) > LINE_TURN_TOL:  # NaN: knife edge, vertical line
+        return None
+    Q = rotvec_to_matrix(float(psi) * n)
+    a1 = c + R @ scene.attachments[0]
+    return a1 + Q @ (c - a1), Q @ R
+
+
 def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     if not (kkt < 1e-9):
         raise ConvergenceError(f"rest pose did not converge (KKT residual {kkt:.2e})")
@@ -421,11 +533,12 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
                         "attachment); check the order of rig.anchors against rig.attachments")
             else:
                 hint = _com_height_hint(scene, R)
-            raise UnstableRestError(
-                "rig.attachments",
-                "the rest pose is unstable (a mode has negative stiffness: a small push makes the body turn over)"
-                + hint,
-            )
+            raise UnstableRestError("rig.attachments", _UNSTABLE + hint)
+    if (np.trace(R) - 1) / 2 < math.cos(START_BOX) and np.max(np.abs(matrix_to_rotvec(R))) > START_BOX:
+        # the rotation from the start orientation (the identity, _initial_pose) leaves the 90-degree box
+        # the global search is confined to: refused there (SLSQP at its bound), so here too, whichever
+        # path (a warm start, a Newton start, a turn about the attachment line) led to it
+        raise _turn_refusal(scene, np.eye(3), R)
     lz = float(lowest_point_z(scene, c, R))
     return RestPose(
         com=c, R=R, q=matrix_to_quat(R), tensions=T, wire_vectors=d,
@@ -455,12 +568,44 @@ def _yaw_share(scene: Scene, R: np.ndarray, dr: np.ndarray, dtheta: np.ndarray) 
     return Iw[2, 2] * float(dtheta[2]) ** 2 / max(total, 1e-300)
 
 
+_UNSTABLE = "the rest pose is unstable (a mode has negative stiffness: a small push makes the body turn over)"
+
+
+def _turn_refusal(scene: Scene, R0: np.ndarray, R: np.ndarray) -> UnstableRestError:
+    """The refusal of a body whose rest attitude ``R`` is turned from its
+    start orientation ``R0`` by 90 degrees or more (beyond :data:`START_BOX`)."""
+    if abs(line_turns(scene.attachments, R0)[0]) > np.pi - LINE_TURN_TOL:
+        # two wires, the CoM straight above their line at the start: that pose balances, unstably (the turn about
+        # the line has stiffness -m g h), and is the one the search meets: said as the stiffness test says it
+        return UnstableRestError("rig.attachments", _UNSTABLE + _com_height_hint(scene, R0))
+    if _yaw_share(scene, R0, np.zeros(3), matrix_to_rotvec(R @ R0.T)) > 0.5:
+        # it turns about the vertical by more than 90 degrees to hang: the anchors are turned against the attachments
+        return UnstableRestError("rig.attachments", "the body cannot hang within 90 degrees of its start orientation: "
+                                 "it would turn about the vertical by more than that, as wires that cross or twist on "
+                                 "their way down make it (an anchor on the other side from its attachment); check the "
+                                 "order of rig.anchors against rig.attachments")
+    # the body wants to turn over rather than hang in its start orientation
+    return UnstableRestError("rig.attachments", "the body cannot hang in its start orientation (it would turn over)"
+                             + _com_height_hint(scene, R0))
+
+
 def _com_height_hint(scene: Scene, R: np.ndarray) -> str:
-    """Message tail: where the CoM is relative to the attachment points (world z)."""
+    """Message tail: where the CoM is relative to the attachment points (world z, attitude ``R``);
+    for two wires whose CoM is not straight below their attachment line, where it is relative to
+    that line and the turn about it the body would make."""
     h = -float(np.mean(scene.attachments @ R.T, axis=0)[2])  # CoM height above the attachments' mean, m
     if h > 0:
         return (f": the centre of mass is {h:.3g} m above the attachment points (their mean); "
                 "attach the wires above the centre of mass")
+    psi, _ = line_turns(scene.attachments, R)
+    if abs(psi) > LINE_TURN_TOL:  # two wires, CoM not below their line: it hangs straight below it, whatever the anchors
+        _, down, side, v, _ = _line_frame(scene.attachments, R)
+        below, beside = float(v @ down), abs(float(v @ side))
+        level = abs(below) <= KNIFE_EDGE_RTOL * float(np.max(np.linalg.norm(scene.attachments, axis=1)))
+        where = "level with" if level else f"{abs(below):.3g} m {'below' if below > 0 else 'above'}"
+        return (f": the centre of mass is {where} the attachment line and {beside:.3g} m beside it, and hangs "
+                f"straight below that line, so the body would turn about it by {np.degrees(abs(float(psi))):.3g} "
+                "degrees; attach the wires above the centre of mass")
     return (f": the centre of mass is only {-h:.3g} m below the attachment points (their mean), too little for "
             "this wire layout; attach the wires higher on the body or bring the anchors further apart")
 
