@@ -181,3 +181,35 @@ def test_evaluate_points_hands_each_points_starts_to_the_batch(monkeypatch):
     monkeypatch.setattr(spm.StartPoses, "concat", staticmethod(lambda parts: None))  # the batch solves its own
     ref = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
     assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)
+
+
+def _figures(r):
+    """Every figure of a run, as bits."""
+    return (r.period, r.period_std, r.crossings.tobytes(), r.tension_min.tobytes(), r.tension_max.tobytes(),
+            r.slack, r.depth_max, r.lowest_z_min, r.max_constraint_violation, r.energy_drift, r.nfev, r.warnings,
+            r.t_final, r.y_final.tobytes())
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
+def test_runs_of_one_scene_build_its_parameters_and_kernels_once(name, monkeypatch):
+    """A point's runs (one scene, one rest pose, its modes) share the scene's
+    parameters and so the compiled kernels cached on them: built once for
+    all runs (were built for each run, twice: the right-hand side's and
+    the health's); every figure the same as a run building its own
+    (``run_one``), bit for bit."""
+    import bifilar.models.maximal as mx
+    from bifilar.analysis.batch import run_one
+
+    s = _scene(name, {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    builds = _counting(monkeypatch, mx, "_param_values")
+    runs = simulate_batch([s] * 3, mode=[m.label for m in modes], amplitude=0.05, periods=3.0, rtol=1e-8,
+                          rests=[rest] * 3, modes=[ms] * 3)
+    assert len(builds) == 2  # the right-hand side's kernel and the health's (extras), once for the 3 runs
+    for m, r in zip(modes, runs):
+        own = run_one(s, rest, m, 0.05, 3.0, rtol=1e-8)
+        assert _figures(r) == _figures(own)
+        assert r.period is not None and abs(r.period / m.period - 1) < 1e-2
+

@@ -401,19 +401,38 @@ _STACKED = "dop853, stacked"
 batch size (``simulate_batch(..., independent=True)``)."""
 
 
+def _shifted_params(scenes, com0: np.ndarray) -> mx.RigParams:
+    """:func:`~bifilar.models.maximal.params_from_scenes` with the anchors
+    relative to each scene's rest CoM ``com0`` (B, 3), m: the frame the
+    runs integrate in."""
+    P = mx.params_from_scenes(scenes)
+    return mx.RigParams(**{**{k: getattr(P, k) for k in P.__dataclass_fields__}, "anchors": P.anchors - com0[:, None, :]})
+
+
 def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
-               method: str = "auto", health: bool = True, y0: np.ndarray | None = None) -> list[SceneRun]:
+               method: str = "auto", health: bool = True, y0: np.ndarray | None = None,
+               params: tuple | None = None) -> list[SceneRun]:
     """Runs of scenes with one wire count; ``y0`` (B, 13) their start states
-    if already solved (:func:`initial_states`' values), else solved here."""
+    if already solved (:func:`initial_states`' values), else solved here.
+    ``params``: for one scene, (its :func:`_shifted_params`, their
+    ``take(0)``) if already built: runs of one scene from one rest pose (a
+    sweep point's modes) share them and so the compiled kernels cached on
+    them, the same parameters built once (tests/test_run_cost.py)."""
     Bn = len(scenes)
     if method == "auto":
         method = "lsoda" if Bn < LARGE_BATCH else "dop853"
     stacked = method == _STACKED
     if 1 < Bn < SMALL_BATCH and not stacked:
         out = []
+        shared: dict = {}  # (scene, rest CoM) -> its parameters, built for its first run
         for j in range(Bn):
+            key = (id(scenes[j]), np.asarray(rests[j].com, float).tobytes())
+            if key not in shared:
+                Pj = _shifted_params(scenes[j:j + 1], np.array([rests[j].com], float))
+                shared[key] = (Pj, Pj.take(0))
             out += _run_group(scenes[j:j + 1], rests[j:j + 1], mds[j:j + 1], amps[j:j + 1], pers[j:j + 1], rtol, atol,
-                              on_slack, spp, lowest_point, None, method, health, None if y0 is None else y0[j:j + 1])
+                              on_slack, spp, lowest_point, None, method, health, None if y0 is None else y0[j:j + 1],
+                              shared[key])
             if progress is not None:
                 progress((j + 1) / Bn, 1.0)
         return out
@@ -444,8 +463,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     com0 = np.array([r.com for r in rests])
     ys0 = y0.copy()
     ys0[:, :3] -= com0  # integrate relative to the rest CoM (tolerances apply to the oscillation)
-    P = mx.params_from_scenes(scenes)
-    P = mx.RigParams(**{**{k: getattr(P, k) for k in P.__dataclass_fields__}, "anchors": P.anchors - com0[:, None, :]})
+    P, P1 = params if params is not None else (_shifted_params(scenes, com0), None)
     T_ref = np.array([md.period for md in mds])
     t_end = pers * T_ref
     omega = 2 * np.pi / T_ref
@@ -463,7 +481,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                      [None] * Bn if spp else None, health=health)
         try:
             nfev, nsteps, status, msgs = _lsoda(P, ys0, T_ref, pers, float(rtol), at, max(64, int(spp or 0)), obs,
-                                                com0, health, on_slack, progress)
+                                                com0, health, on_slack, progress, P1)
         except _BatchFailed:  # one scene spoils the shared run: run them one by one
             return [_run_group([s_], [r_], [m_], amps[j:j + 1], pers[j:j + 1], rtol, atol, on_slack, spp,
                                lowest_point, None, method, health, y0[j:j + 1])[0]
@@ -614,7 +632,7 @@ def _single_health(obs: Health, run, idx, idx0, Y, n: int, ns: int) -> None:
 
 
 def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0,
-           health: bool, on_slack: str, progress):
+           health: bool, on_slack: str, progress, P1: mx.RigParams | None = None):
     """The whole group as one ODE in normalised time tau = t / T_ref (every
     scene oscillates at ~1 per unit tau, so one step sequence suits all; a
     single scene in physical time, which is the same ODE without the scaling),
@@ -641,12 +659,13 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
     if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
-        k1 = mx.compiled_kernel(P.take(0))
+        P1 = P.take(0) if P1 is None else P1  # ``P1``: the scene's float parameters with their kernels cached
+        k1 = mx.compiled_kernel(P1)
         tscale = float(T_ref[0])
 
         def f(y, t):
             return k1(*y.tolist())
-        kx = mx.compiled_kernel(P.take(0), extras=True)
+        kx = mx.compiled_kernel(P1, extras=True)
     else:
         kb = mx.compiled_kernel(P)
         Tcol = T_ref[:, None]
