@@ -213,3 +213,53 @@ def test_runs_of_one_scene_build_its_parameters_and_kernels_once(name, monkeypat
         assert _figures(r) == _figures(own)
         assert r.period is not None and abs(r.period / m.period - 1) < 1e-2
 
+
+def test_stage_sums_of_all_rows_at_once_equal_row_by_row():
+    """``integrators._combine`` of a coefficient matrix (the crossings'
+    interpolation, the dense output) takes all rows at once: each entry the
+    1-D sum's bits (term by term in stage order), and the product."""
+    from bifilar.integrators import _combine
+
+    rng = np.random.default_rng(7)
+    for r, s_, N in [(8, 8, 3), (4, 16, 26), (1, 5, 1)]:
+        c = rng.normal(size=(r, s_))
+        Kf = rng.normal(size=(s_, N)) * 10.0 ** rng.integers(-8, 8, size=(s_, N))
+        got = _combine(c, Kf)
+        assert got.shape == (r, N)
+        assert np.array_equal(got, np.stack([_combine(row, Kf) for row in c]))
+        assert np.allclose(got, c @ Kf, rtol=1e-12, atol=1e-12 * np.abs(c) @ np.abs(Kf))
+
+
+def test_few_crossing_roots_on_floats_equal_the_vectorised_iteration():
+    """Up to ``SCALAR_ROOTS`` roots ``poly_root_unit`` iterates on Python
+    floats: the same bits as the vectorised iteration (the same roots among
+    many), each a root of its polynomial inside [0, 1]; edge cases
+    included (a root at 0 or 1, a flat derivative, an exact zero)."""
+    from bifilar import integrators as itg
+
+    rng = np.random.default_rng(11)
+    cols = []
+    while len(cols) < 40:
+        p = rng.normal(size=8) * 10.0 ** rng.integers(-3, 3, size=8)
+        v0, v1 = p[0], p.sum()
+        if v0 < 0 <= v1:
+            cols.append(p)
+    cols += [np.array([-1.0, 0, 0, 3.0, 0, 0, 0, 0]),  # p'(0) = 0: Newton's first step has no slope
+             np.array([-1e-300, 1.0, 0, 0, 0, 0, 0, 0]),  # root at ~0
+             np.array([-1.0, 1.0, 0, 0, 0, 0, 0, 0]),  # p(1) = 0: root at 1
+             np.array([-0.5, 1.0, 0, 0, 0, 0, 0, 0])]  # p(0.5) = 0 exactly, the secant's first guess
+    P = np.array(cols).T
+    v0 = P[0].copy()
+    v1 = np.array([np.polynomial.polynomial.polyval(1.0, P[:, j]) for j in range(P.shape[1])])
+    assert P.shape[1] > itg.SCALAR_ROOTS
+    many = itg.poly_root_unit(P, v0, v1)  # the vectorised iteration
+    for j0 in range(0, P.shape[1], 3):
+        sl = slice(j0, j0 + 3)
+        few = itg.poly_root_unit(P[:, sl], v0[sl], v1[sl])
+        assert np.array_equal(few, many[sl])
+    assert np.all((many >= 0) & (many <= 1))
+    for j, x in enumerate(many):
+        p = np.polynomial.Polynomial(P[:, j])
+        scale = np.polynomial.Polynomial(np.abs(P[:, j]))(1.0)
+        assert abs(p(x)) <= 1e-12 * scale
+    assert many[-1] == 0.5 and many[-2] == 1.0
