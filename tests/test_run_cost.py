@@ -263,3 +263,37 @@ def test_few_crossing_roots_on_floats_equal_the_vectorised_iteration():
         scale = np.polynomial.Polynomial(np.abs(P[:, j]))(1.0)
         assert abs(p(x)) <= 1e-12 * scale
     assert many[-1] == 0.5 and many[-2] == 1.0
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "thesis_plate_rest", "drone_parallel"])
+def test_runs_of_a_group_fold_their_lowest_points_once(name, monkeypatch):
+    """The runs of a small group (a point's modes; other scenes beside them)
+    put their states into one shared running minimum, folded once at the
+    end (were folded run by run: a support-function call each); each run's
+    lowest point and depth those of the run alone, bit for bit."""
+    import bifilar.analysis.batch_health as bh
+    from bifilar.analysis.batch import run_one
+
+    s, other = _scene(name, {}), _scene(name, {"length": 4.0})
+    rests = [rest_pose(s), rest_pose(other)]
+    mss = [linear_modes(x, r) for x, r in zip((s, other), rests)]
+    modes = [m for m in mss[0].modes if m.period][:2]
+    folds = []
+    real = bh.LowestPoint.fold
+
+    def fold(self):
+        if self._buf:
+            folds.append(len(self.scenes))
+        return real(self)
+
+    monkeypatch.setattr(bh.LowestPoint, "fold", fold)
+    labels = [modes[0].label, modes[1].label, mss[1].modes[0].label]
+    runs = simulate_batch([s, s, other], mode=labels, amplitude=0.05, periods=2.0, rtol=1e-8,
+                          rests=[rests[0], rests[0], rests[1]], modes=[mss[0], mss[0], mss[1]])
+    assert folds == [3]  # one fold of the three runs' states
+    monkeypatch.setattr(bh.LowestPoint, "fold", real)
+    for r, x, rest, m in zip(runs, (s, s, other), (rests[0], rests[0], rests[1]),
+                             (modes[0], modes[1], mss[1].modes[0])):
+        own = run_one(x, rest, m, 0.05, 2.0, rtol=1e-8)
+        assert _figures(r) == _figures(own)
+        assert np.isfinite(r.depth_max) and r.depth_max >= rest.depth - 1e-9 * x.lengths.max()

@@ -57,7 +57,7 @@ from .. import integrators as itg
 from ..errors import InputError
 from ..models import maximal as mx
 from ..scene import Scene
-from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, sample_health
+from .batch_health import Health, LowestPoint, SharedLowestPoint, merge_refined, refine_extremes, sample_health
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
@@ -411,13 +411,16 @@ def _shifted_params(scenes, com0: np.ndarray) -> mx.RigParams:
 
 def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
                method: str = "auto", health: bool = True, y0: np.ndarray | None = None,
-               params: tuple | None = None) -> list[SceneRun]:
+               params: tuple | None = None, lowest: SharedLowestPoint | None = None) -> list[SceneRun]:
     """Runs of scenes with one wire count; ``y0`` (B, 13) their start states
     if already solved (:func:`initial_states`' values), else solved here.
     ``params``: for one scene, (its :func:`_shifted_params`, their
     ``take(0)``) if already built: runs of one scene from one rest pose (a
     sweep point's modes) share them and so the compiled kernels cached on
-    them, the same parameters built once (tests/test_run_cost.py)."""
+    them, the same parameters built once (tests/test_run_cost.py).
+    ``lowest``: for one scene, where its lowest point goes (its
+    ``lowest_z_min`` and ``depth_max`` are then left NaN for the caller to
+    fill in from the shared fold)."""
     Bn = len(scenes)
     if method == "auto":
         method = "lsoda" if Bn < LARGE_BATCH else "dop853"
@@ -425,6 +428,8 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     if 1 < Bn < SMALL_BATCH and not stacked:
         out = []
         shared: dict = {}  # (scene, rest CoM) -> its parameters, built for its first run
+        # the runs' lowest points, folded together at the end (one support-function call a body)
+        low = LowestPoint(scenes, np.array([r.com for r in rests])) if (lowest_point and health) else None
         for j in range(Bn):
             key = (id(scenes[j]), np.asarray(rests[j].com, float).tobytes())
             if key not in shared:
@@ -432,9 +437,12 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 shared[key] = (Pj, Pj.take(0))
             out += _run_group(scenes[j:j + 1], rests[j:j + 1], mds[j:j + 1], amps[j:j + 1], pers[j:j + 1], rtol, atol,
                               on_slack, spp, lowest_point, None, method, health, None if y0 is None else y0[j:j + 1],
-                              shared[key])
+                              shared[key], None if low is None else SharedLowestPoint(low, j))
             if progress is not None:
                 progress((j + 1) / Bn, 1.0)
+        if low is not None:
+            for r, s_, lz in zip(out, scenes, low.z):
+                r.lowest_z_min, r.depth_max = float(lz), float(s_.ceiling_z - lz)
         return out
     if Bn > CHUNK:  # chunks: the same cost per scene and bounded memory however many scenes
         out = []
@@ -475,7 +483,8 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         at = np.broadcast_to(np.asarray(atol, float).reshape(-1, 1) if np.ndim(atol) else float(atol), (13, Bn)).copy()
     e = np.array([_coordinate_vector(md.dominant, r.q) for md, r in zip(mds, rests)]).T  # (13, B)
     L2 = (P.lengths**2).T
-    lowest = LowestPoint(scenes, com0) if (lowest_point and health) else None
+    if lowest is None and lowest_point and health:
+        lowest = LowestPoint(scenes, com0)
     if method == "lsoda":
         obs = Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest, progress, t_end,
                      [None] * Bn if spp else None, health=health)

@@ -84,6 +84,30 @@ class LowestPoint:
         return np.where(np.isfinite(self._zmin), self._zmin, np.nan)
 
 
+class SharedLowestPoint:
+    """Scene ``j`` of a :class:`LowestPoint` ``shared`` seen as a batch of
+    one (its index 0 is the shared batch's ``j``), for runs made one at a
+    time whose lowest points are folded together afterwards: one fold and
+    one call of each support function for all of them (a sweep point's 2-3
+    runs of one body) instead of one a run.  Every state is folded by the
+    same expressions, row by row, so a run's minimum is what its own
+    :class:`LowestPoint` gives (tests/test_run_cost.py).  :attr:`z` is NaN
+    until the caller reads ``shared.z``."""
+
+    def __init__(self, shared: LowestPoint, j: int):
+        self.shared, self.j = shared, int(j)
+
+    def add_states(self, idx: np.ndarray, y: np.ndarray) -> None:
+        self.shared.add_states(np.asarray(idx) + self.j, y)
+
+    def add(self, idx: np.ndarray, z: np.ndarray, q: np.ndarray) -> None:
+        self.shared.add(np.asarray(idx) + self.j, z, q)
+
+    @property
+    def z(self) -> np.ndarray:
+        return np.full(1, np.nan)
+
+
 def refine_extremes(t: np.ndarray, T: np.ndarray):
     """Extremes of sampled tensions refined by the parabola through each
     interior local extremum and its two neighbours.
