@@ -297,3 +297,37 @@ def test_runs_of_a_group_fold_their_lowest_points_once(name, monkeypatch):
         own = run_one(x, rest, m, 0.05, 2.0, rtol=1e-8)
         assert _figures(r) == _figures(own)
         assert np.isfinite(r.depth_max) and r.depth_max >= rest.depth - 1e-9 * x.lengths.max()
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
+def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(name):
+    """The closest-pose Newton step's constraint Hessian
+    (``start_pose._mu_hessian``) evaluates the 12 displaced poses of its
+    central differences at once: bit for bit the Hessian of one
+    displacement at a time (the loop it replaces), and the second
+    derivative it stands for (differences of a 100x larger step agree)."""
+    s = _scene(name, {"spacing": 3.0} if name == "solar_boat" else {})
+    rest = rest_pose(s)
+    rig = spm._Rig([s, s, s], [rest] * 3)
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.normal(scale=0.02 * rig.Lmax[0], size=(3, 3)), rng.normal(scale=0.1, size=(3, 3))], 1)
+    mu = rng.normal(size=(3, s.n_wires))
+    scale = spm._scale(rig)
+    got = spm._mu_hessian(rig, x, mu, scale)
+
+    def one_at_a_time(step):
+        H = np.zeros((3, 6, 6))
+        for j in range(6):
+            h = step * scale[:, j]
+            e = np.zeros((3, 6))
+            e[:, j] = h
+            dp, wp, _ = rig.wires(x + e)
+            dm, wm, _ = rig.wires(x - e)
+            dG = (rig.jacobian(x + e, dp, wp) - rig.jacobian(x - e, dm, wm)) / (2.0 * h[:, None, None])
+            H[:, :, j] = np.einsum("bn,bni->bi", mu, dG)
+        return H
+
+    assert np.array_equal(got, one_at_a_time(1e-6))
+    coarse = one_at_a_time(1e-4)
+    assert np.allclose(got, coarse, rtol=0, atol=1e-5 * np.abs(coarse).max())
+    assert np.allclose(got, np.swapaxes(got, 1, 2), rtol=0, atol=1e-5 * np.abs(got).max())  # a Hessian
