@@ -331,3 +331,53 @@ def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(
     coarse = one_at_a_time(1e-4)
     assert np.allclose(got, coarse, rtol=0, atol=1e-5 * np.abs(coarse).max())
     assert np.allclose(got, np.swapaxes(got, 1, 2), rtol=0, atol=1e-5 * np.abs(got).max())  # a Hessian
+
+
+def _health_window(monkeypatch, name):
+    """The arguments of one LSODA window's ``sample_health`` call in a point-like run."""
+    import bifilar.analysis.batch as bt
+
+    cap = []
+    real = bt.sample_health
+    monkeypatch.setattr(bt, "sample_health", lambda *a: (cap.append(a), real(*a))[1])
+    s = _scene(name, {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    simulate_batch(s, mode=next(m for m in ms.modes if m.period).label, amplitude=0.05, periods=3.0, rtol=1e-8,
+                   rests=[rest], modes=[ms])
+    monkeypatch.setattr(bt, "sample_health", real)
+    return s, cap[-1]
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
+def test_sample_health_ignores_masked_samples_and_reads_the_tensions(name, monkeypatch):
+    """``sample_health`` (NaN-ignoring fmin / fmax reductions, masks only
+    where a run stopped): a window whose run stopped after k samples gives
+    the figures of the first k samples alone, bit for bit; and its
+    tension extremes are those of the model's tensions at the samples."""
+    import copy
+
+    import bifilar.analysis.batch_health as bh
+    import bifilar.models.maximal as mx
+
+    s, (Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first) = _health_window(monkeypatch, name)
+
+    def health(Y, t, stop):
+        o = copy.copy(obs)
+        o.lowest = None
+        for f in ("Tmin", "Tmax", "viol", "dE", "slack_t"):
+            setattr(o, f, np.full_like(getattr(obs, f), np.inf if f == "Tmin" else -np.inf if f == "Tmax" else
+                                       np.nan if f == "slack_t" else 0.0))
+        bh.sample_health(Y, t, o, kx, n, com0, T_ref, np.array([stop], float), on_slack, first)
+        return tuple(getattr(o, f).tobytes() for f in ("Tmin", "Tmax", "viol", "dE", "E0"))
+
+    k = len(tt) // 5  # 0.6 of a period: not every extreme reached
+    assert health(Ys, tt, tt[k - 1]) == health(Ys[:k], tt[:k], tt[-1])  # masked = left out
+    assert health(Ys, tt, tt[k - 1]) != health(Ys, tt, tt[-1])  # and the rest of the window counts
+    P = mx.params_from_scenes(s)
+    y = Ys[:, 0, :].copy()
+    y[:, :3] += com0[0]
+    T = mx.tensions(y, P)  # (k, n), an independent evaluation
+    o = copy.copy(obs)
+    assert np.allclose(o.Tmax, T.max(axis=0), rtol=1e-6) and np.allclose(o.Tmin, T.min(axis=0), rtol=1e-6)
+    assert np.all(o.Tmax >= T.max(axis=0) * (1 - 1e-9)) and np.all(o.Tmin <= T.min(axis=0) * (1 + 1e-9))
