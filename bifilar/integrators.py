@@ -194,12 +194,12 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
     return x
 
 
-SCALAR_ROOTS = 8
+SCALAR_ROOTS = 16
 """Up to this many roots :func:`poly_root_unit` iterates on Python floats,
 root by root (:func:`_root_unit_scalar`): the same IEEE operations in the
 same order as the vectorised iteration (a root's bits do not depend on the
 path), without ~15 numpy calls an iteration on a few elements (a sweep
-point's run has ~3 crossings)."""
+point's 2-3 runs of 3 periods have ~6-10 crossings; break-even ~10-20)."""
 
 
 def _root_unit_scalar(p: list, dp: list, v0: float, v1: float, iters: int) -> float:

@@ -381,3 +381,53 @@ def test_sample_health_ignores_masked_samples_and_reads_the_tensions(name, monke
     o = copy.copy(obs)
     assert np.allclose(o.Tmax, T.max(axis=0), rtol=1e-6) and np.allclose(o.Tmin, T.min(axis=0), rtol=1e-6)
     assert np.all(o.Tmax >= T.max(axis=0) * (1 - 1e-9)) and np.all(o.Tmin <= T.min(axis=0) * (1 + 1e-9))
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "thesis_plate_rest", "trifilar_kth"])
+def test_runs_of_one_scene_take_their_samples_through_crossings_and_health_together(name, monkeypatch):
+    """A point's LSODA runs (one scene, one rest pose, one length) are each
+    integrated as alone and their samples go through the crossings and the
+    health in one pass (``batch._lsoda_joint``): every figure the run
+    alone gives, bit for bit; runs of different lengths (or that fail) are
+    taken one by one, with the same figures."""
+    import bifilar.analysis.batch as bt
+    from bifilar.analysis.batch import run_one
+
+    s = _scene(name, {"spacing": 3.0} if name != "trifilar_kth" else {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    for periods in ([3.0, 3.0, 3.0], [3.0, 2.0, 3.0]):
+        passes = _counting(monkeypatch, bt, "sample_health")
+        runs = simulate_batch([s] * 3, mode=[m.label for m in modes], amplitude=0.05, periods=periods, rtol=1e-8,
+                              rests=[rest] * 3, modes=[ms] * 3)
+        assert len(passes) == (1 if periods[0] == periods[1] else 3)
+        for m, p, r in zip(modes, periods, runs):
+            assert _figures(r) == _figures(run_one(s, rest, m, 0.05, p, rtol=1e-8))
+        monkeypatch.undo()
+
+
+@pytest.mark.parametrize("on_slack", ["continue", "stop"])
+def test_joint_runs_with_a_slack_wire_equal_the_runs_alone(on_slack, monkeypatch):
+    """Runs taken through the health together where a wire goes slack (the
+    trifilar of tests/test_batch.py, wire 1 unloaded by a 0.6 m swing):
+    slack times, a run stopped there (``on_slack="stop"``) and the figures
+    of each run alone, bit for bit."""
+    import bifilar.analysis.batch as bt
+    from bifilar.analysis.batch import run_one
+
+    ang = np.radians([0, 120, 240])
+    pts = np.c_[0.5 * np.cos(ang), 0.5 * np.sin(ang), np.zeros(3)]
+    s = scene_from_dict({"body": {"mass": 3.0, "inertia": {"principal": [0.3, 0.3, 0.4]}},
+                         "rig": {"anchors": pts.tolist(), "attachments": (pts + [0.23, 0, 0.1]).tolist(),
+                                 "lengths": [2.0] * 3}})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    passes = _counting(monkeypatch, bt, "sample_health")
+    runs = simulate_batch([s, s], mode=["swing-x", "swing-y"], amplitude=0.6, periods=3.0, rtol=1e-9,
+                          rests=[rest] * 2, modes=[ms] * 2, on_slack=on_slack)
+    assert len(passes) == 1 and runs[0].slack
+    if on_slack == "stop":
+        assert runs[0].t_final < 3 * runs[0].linear_period
+    for lab, r in zip(["swing-x", "swing-y"], runs):
+        assert _figures(r) == _figures(run_one(s, rest, ms.get(lab), 0.6, 3.0, rtol=1e-9, on_slack=on_slack))

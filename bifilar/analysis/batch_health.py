@@ -85,27 +85,28 @@ class LowestPoint:
 
 
 class SharedLowestPoint:
-    """Scene ``j`` of a :class:`LowestPoint` ``shared`` seen as a batch of
-    one (its index 0 is the shared batch's ``j``), for runs made one at a
-    time whose lowest points are folded together afterwards: one fold and
-    one call of each support function for all of them (a sweep point's 2-3
-    runs of one body) instead of one a run.  Every state is folded by the
-    same expressions, row by row, so a run's minimum is what its own
-    :class:`LowestPoint` gives (tests/test_run_cost.py).  :attr:`z` is NaN
-    until the caller reads ``shared.z``."""
+    """Scenes ``rows`` of a :class:`LowestPoint` ``shared`` seen as a batch of
+    their own (its index k is the shared batch's ``rows[k]``), for runs
+    made a few at a time whose lowest points are folded together
+    afterwards: one fold and one call of each support function for all of
+    them (a sweep point's 2-3 runs of one body) instead of one a run.
+    Every state is folded by the same expressions, row by row, so a run's
+    minimum is what its own :class:`LowestPoint` gives
+    (tests/test_run_cost.py).  :attr:`z` is NaN until the caller reads
+    ``shared.z``."""
 
-    def __init__(self, shared: LowestPoint, j: int):
-        self.shared, self.j = shared, int(j)
+    def __init__(self, shared: LowestPoint, rows):
+        self.shared, self.rows = shared, np.asarray(rows, int)
 
     def add_states(self, idx: np.ndarray, y: np.ndarray) -> None:
-        self.shared.add_states(np.asarray(idx) + self.j, y)
+        self.shared.add_states(self.rows[np.asarray(idx)], y)
 
     def add(self, idx: np.ndarray, z: np.ndarray, q: np.ndarray) -> None:
-        self.shared.add(np.asarray(idx) + self.j, z, q)
+        self.shared.add(self.rows[np.asarray(idx)], z, q)
 
     @property
     def z(self) -> np.ndarray:
-        return np.full(1, np.nan)
+        return np.full(len(self.rows), np.nan)
 
 
 def refine_extremes(t: np.ndarray, T: np.ndarray):
