@@ -427,9 +427,8 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     low = LowestPoint(scenes, np.array([r.com for r in rests])) if (lowest_point and health) else None
     done = 0
     for js in groups.values():
-        j0 = js[0]
-        P0 = _shifted_params(scenes[j0:j0 + 1], np.array([rests[j0].com], float))
-        P1 = P0.take(0)
+        Pg = _shifted_params([scenes[j] for j in js], np.array([rests[j].com for j in js], float))
+        P0, P1 = Pg.take([0]), Pg.take(0)  # one run's (rows of one scene and rest: the same values)
 
         def run(ii, params, joint=False):
             ii = list(ii)
@@ -440,7 +439,6 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
 
         runs = None
         if len(js) > 1 and method == "lsoda" and not spp:
-            Pg = _shifted_params([scenes[j] for j in js], np.array([rests[j].com for j in js], float))
             try:
                 runs = run(js, (Pg, P1), joint=True)
             except _NotJoint:
