@@ -431,3 +431,17 @@ def test_joint_runs_with_a_slack_wire_equal_the_runs_alone(on_slack, monkeypatch
         assert runs[0].t_final < 3 * runs[0].linear_period
     for lab, r in zip(["swing-x", "swing-y"], runs):
         assert _figures(r) == _figures(run_one(s, rest, ms.get(lab), 0.6, 3.0, rtol=1e-9, on_slack=on_slack))
+
+
+def test_start_pose_jacobian_cross_product_is_numpys():
+    """The start pose's constraint Jacobian takes w x d by the explicit
+    components (``batch_rest._cross``) in place of ``np.cross``: the same
+    products and differences, so the same bits, on any magnitudes and
+    leading axes."""
+    from bifilar.analysis.batch_rest import _cross
+
+    rng = np.random.default_rng(13)
+    for shape in [(3,), (3, 2, 3), (36, 4, 3)]:
+        u = rng.normal(size=shape) * 10.0 ** rng.integers(-6, 6, size=shape)
+        v = rng.normal(size=shape) * 10.0 ** rng.integers(-6, 6, size=shape)
+        assert np.array_equal(_cross(u, v), np.cross(u, v))

@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import InputError
 from ..rotations import quat_multiply, rotvec_to_matrix, rotvec_to_quat, skew
 from ..scene import Scene
+from .batch_rest import _cross
 from .equilibrium import RestPose
 from .modes import COMPONENTS
 
@@ -155,7 +156,7 @@ class _Rig:
 
     def jacobian(self, x: np.ndarray, d: np.ndarray, w: np.ndarray) -> np.ndarray:
         """G (B, n, 6) = d phi / d x in the chart (theta through J_l)."""
-        wxd = np.cross(w, d)
+        wxd = _cross(w, d)  # np.cross's products and differences, without its axis handling
         return np.concatenate([d, np.einsum("bni,bij->bnj", wxd, left_jacobian(x[:, 3:]))], axis=-1)
 
     def residual(self, x: np.ndarray) -> np.ndarray:
