@@ -707,13 +707,8 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
     if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
-        P1 = P.take(0) if P1 is None else P1  # ``P1``: the scene's float parameters with their kernels cached
-        k1 = mx.compiled_kernel(P1)
+        f, kx = _one_scene_kernels(P.take(0) if P1 is None else P1)
         tscale = float(T_ref[0])
-
-        def f(y, t):
-            return k1(*y.tolist())
-        kx = mx.compiled_kernel(P1, extras=True)
     else:
         kb = mx.compiled_kernel(P)
         Tcol = T_ref[:, None]
@@ -766,6 +761,17 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
             break
     _close(obs, tt, y.reshape(Bn, 13), stop_tau, T_ref, pers, status, cross_cols, cross_t)
     return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
+
+
+def _one_scene_kernels(P1: mx.RigParams):
+    """(odeint's ``f(y, t)``, the health's kernel with extras) of one scene's
+    float parameters ``P1`` (the kernels cached on it): what :func:`_lsoda`
+    integrates a scene alone with, and :func:`_lsoda_joint` each of its runs."""
+    k1 = mx.compiled_kernel(P1)
+
+    def f(y, t):
+        return k1(*y.tolist())
+    return f, mx.compiled_kernel(P1, extras=True)
 
 
 def _sample_grid(pers, spp: int):
@@ -843,11 +849,7 @@ def _lsoda_joint(P1: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, 
     tau_end, K_total, taus = _sample_grid(pers, spp)
     if not 0 < K_total <= _window_samples(spp, 1):
         raise _NotJoint
-    k1 = mx.compiled_kernel(P1)
-    kx = mx.compiled_kernel(P1, extras=True)
-
-    def f(y, t):
-        return k1(*y.tolist())
+    f, kx = _one_scene_kernels(P1)
     Ys = np.empty((K_total + 1, Bn, 13))
     nfe, nst = np.zeros(Bn, int), np.zeros(Bn, int)
     for b in range(Bn):
