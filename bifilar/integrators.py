@@ -30,6 +30,7 @@ same for uniformly sampled signals (degree-7 local interpolation) and
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -68,8 +69,11 @@ def _combine(c: np.ndarray, Kf: np.ndarray) -> np.ndarray:
     kernels treat a block of columns and the tail differently, with or
     without fused multiply-adds; tests/test_batch_determinism.py)."""
     c = np.asarray(c, float)
-    if c.ndim == 2:
-        return np.stack([_combine(row, Kf) for row in c])
+    if c.ndim == 2:  # all rows at once, each entry the 1-D sum's operations in its order (no BLAS)
+        out = c[:, :1] * Kf[0]
+        for i in range(1, c.shape[1]):
+            out += c[:, i:i + 1] * Kf[i]
+        return out
     out = c[0] * Kf[0]
     for i in range(1, len(c)):
         out += c[i] * Kf[i]
@@ -161,6 +165,9 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
     """
     d = P.shape[0] - 1
     dP = P[1:] * np.arange(1, d + 1)[:, None]
+    if P.shape[1] <= SCALAR_ROOTS:
+        return np.array([_root_unit_scalar(P[:, j].tolist(), dP[:, j].tolist(), float(v0[j]), float(v1[j]), iters)
+                         for j in range(P.shape[1])], float)
     a = np.zeros(P.shape[1])
     b = np.ones(P.shape[1])
     den = v1 - v0
@@ -183,6 +190,45 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
         x = np.where(live, xn, x)
         live &= ~((dx < 1e-15) | (v == 0))
         if not np.any(live):
+            break
+    return x
+
+
+SCALAR_ROOTS = 16
+"""Up to this many roots :func:`poly_root_unit` iterates on Python floats,
+root by root (:func:`_root_unit_scalar`): the same IEEE operations in the
+same order as the vectorised iteration (a root's bits do not depend on the
+path), without ~15 numpy calls an iteration on a few elements (a sweep
+point's 2-3 runs of 3 periods have ~6-10 crossings; break-even ~10-20)."""
+
+
+def _root_unit_scalar(p: list, dp: list, v0: float, v1: float, iters: int) -> float:
+    """One root of :func:`poly_root_unit` on floats: ``p`` ascending
+    coefficients, ``dp`` those of its derivative, ``v0 = p(0) < 0 <= v1 = p(1)``."""
+    a, b = 0.0, 1.0
+    den = v1 - v0
+    x = min(max(-v0 / den if den != 0 else 0.5, 0.0), 1.0)
+    inf = float("inf")
+    for _ in range(iters):
+        v = 0.0
+        for cf in reversed(p):
+            v = v * x + cf
+        dv = 0.0
+        for cf in reversed(dp):
+            dv = dv * x + cf
+        if v < 0:
+            a = x
+        if v >= 0:
+            b = x
+        if dv != 0:
+            xn = x - v / dv
+        else:  # numpy's x - v / 0: -+inf, or NaN for 0 / 0
+            xn = x - (v * inf if v != 0 else float("nan"))
+        if not math.isfinite(xn) or xn < a or xn > b:
+            xn = 0.5 * (a + b)
+        dx = abs(xn - x)
+        x = xn
+        if dx < 1e-15 or v == 0:
             break
     return x
 

@@ -211,6 +211,7 @@ PARTS = [("sensitivity", "bifilar.studies.point", "point_sensitivity"),
          ("honest sigma (all components)", "bifilar.estimation.honest", "honest_stds"),
          ("  of which sigma-point scenes' rest poses + modes", "bifilar.estimation.budget", "_hanging_periods"),
          ("  of which sigma points re-solved", "bifilar.estimation.budget", "_resolve"),
+         ("start poses of the runs (checked)", "bifilar.analysis.simulate", "checked_start_poses"),
          ("nonlinear runs", "bifilar.studies.point", "_nonlinear_runs"),
          ("bias: thesis rung", "bifilar.studies.point", "_Ladder.thesis"),
          ("bias: linear estimate", "bifilar.studies.point", "linear_estimate")]

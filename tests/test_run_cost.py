@@ -181,3 +181,267 @@ def test_evaluate_points_hands_each_points_starts_to_the_batch(monkeypatch):
     monkeypatch.setattr(spm.StartPoses, "concat", staticmethod(lambda parts: None))  # the batch solves its own
     ref = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
     assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)
+
+
+def _figures(r):
+    """Every figure of a run, as bits."""
+    return (r.period, r.period_std, r.crossings.tobytes(), r.tension_min.tobytes(), r.tension_max.tobytes(),
+            r.slack, r.depth_max, r.lowest_z_min, r.max_constraint_violation, r.energy_drift, r.nfev, r.warnings,
+            r.t_final, r.y_final.tobytes())
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
+def test_runs_of_one_scene_build_its_parameters_and_kernels_once(name, monkeypatch):
+    """A point's runs (one scene, one rest pose, its modes) share the scene's
+    parameters and so the compiled kernels cached on them: built once for
+    all runs (were built for each run, twice: the right-hand side's and
+    the health's); every figure the same as a run building its own
+    (``run_one``), bit for bit."""
+    import bifilar.models.maximal as mx
+    from bifilar.analysis.batch import run_one
+
+    s = _scene(name, {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    builds = _counting(monkeypatch, mx, "_param_values")
+    runs = simulate_batch([s] * 3, mode=[m.label for m in modes], amplitude=0.05, periods=3.0, rtol=1e-8,
+                          rests=[rest] * 3, modes=[ms] * 3)
+    assert len(builds) == 2  # the right-hand side's kernel and the health's (extras), once for the 3 runs
+    for m, r in zip(modes, runs):
+        own = run_one(s, rest, m, 0.05, 3.0, rtol=1e-8)
+        assert _figures(r) == _figures(own)
+        assert r.period is not None and abs(r.period / m.period - 1) < 1e-2
+
+
+def test_stage_sums_of_all_rows_at_once_equal_row_by_row():
+    """``integrators._combine`` of a coefficient matrix (the crossings'
+    interpolation, the dense output) takes all rows at once: each entry the
+    1-D sum's bits (term by term in stage order), and the product."""
+    from bifilar.integrators import _combine
+
+    rng = np.random.default_rng(7)
+    for r, s_, N in [(8, 8, 3), (4, 16, 26), (1, 5, 1)]:
+        c = rng.normal(size=(r, s_))
+        Kf = rng.normal(size=(s_, N)) * 10.0 ** rng.integers(-8, 8, size=(s_, N))
+        got = _combine(c, Kf)
+        assert got.shape == (r, N)
+        assert np.array_equal(got, np.stack([_combine(row, Kf) for row in c]))
+        assert np.allclose(got, c @ Kf, rtol=1e-12, atol=1e-12 * np.abs(c) @ np.abs(Kf))
+
+
+def test_few_crossing_roots_on_floats_equal_the_vectorised_iteration():
+    """Up to ``SCALAR_ROOTS`` roots ``poly_root_unit`` iterates on Python
+    floats: the same bits as the vectorised iteration (the same roots among
+    many), each a root of its polynomial inside [0, 1]; edge cases
+    included (a root at 0 or 1, a flat derivative, an exact zero)."""
+    from bifilar import integrators as itg
+
+    rng = np.random.default_rng(11)
+    cols = []
+    while len(cols) < 40:
+        p = rng.normal(size=8) * 10.0 ** rng.integers(-3, 3, size=8)
+        v0, v1 = p[0], p.sum()
+        if v0 < 0 <= v1:
+            cols.append(p)
+    cols += [np.array([-1.0, 0, 0, 3.0, 0, 0, 0, 0]),  # p'(0) = 0: Newton's first step has no slope
+             np.array([-1e-300, 1.0, 0, 0, 0, 0, 0, 0]),  # root at ~0
+             np.array([-1.0, 1.0, 0, 0, 0, 0, 0, 0]),  # p(1) = 0: root at 1
+             np.array([-0.5, 1.0, 0, 0, 0, 0, 0, 0])]  # p(0.5) = 0 exactly, the secant's first guess
+    P = np.array(cols).T
+    v0 = P[0].copy()
+    v1 = np.array([np.polynomial.polynomial.polyval(1.0, P[:, j]) for j in range(P.shape[1])])
+    assert P.shape[1] > itg.SCALAR_ROOTS
+    many = itg.poly_root_unit(P, v0, v1)  # the vectorised iteration
+    for j0 in range(0, P.shape[1], 3):
+        sl = slice(j0, j0 + 3)
+        few = itg.poly_root_unit(P[:, sl], v0[sl], v1[sl])
+        assert np.array_equal(few, many[sl])
+    assert np.all((many >= 0) & (many <= 1))
+    for j, x in enumerate(many):
+        p = np.polynomial.Polynomial(P[:, j])
+        scale = np.polynomial.Polynomial(np.abs(P[:, j]))(1.0)
+        assert abs(p(x)) <= 1e-12 * scale
+    assert many[-1] == 0.5 and many[-2] == 1.0
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "thesis_plate_rest", "drone_parallel"])
+def test_runs_of_a_group_fold_their_lowest_points_once(name, monkeypatch):
+    """The runs of a small group (a point's modes; other scenes beside them)
+    put their states into one shared running minimum, folded once at the
+    end (were folded run by run: a support-function call each); each run's
+    lowest point and depth those of the run alone, bit for bit."""
+    import bifilar.analysis.batch_health as bh
+    from bifilar.analysis.batch import run_one
+
+    s, other = _scene(name, {}), _scene(name, {"length": 4.0})
+    rests = [rest_pose(s), rest_pose(other)]
+    mss = [linear_modes(x, r) for x, r in zip((s, other), rests)]
+    modes = [m for m in mss[0].modes if m.period][:2]
+    folds = []
+    real = bh.LowestPoint.fold
+
+    def fold(self):
+        if self._buf:
+            folds.append(len(self.scenes))
+        return real(self)
+
+    monkeypatch.setattr(bh.LowestPoint, "fold", fold)
+    labels = [modes[0].label, modes[1].label, mss[1].modes[0].label]
+    runs = simulate_batch([s, s, other], mode=labels, amplitude=0.05, periods=2.0, rtol=1e-8,
+                          rests=[rests[0], rests[0], rests[1]], modes=[mss[0], mss[0], mss[1]])
+    assert folds == [3]  # one fold of the three runs' states
+    monkeypatch.setattr(bh.LowestPoint, "fold", real)
+    for r, x, rest, m in zip(runs, (s, s, other), (rests[0], rests[0], rests[1]),
+                             (modes[0], modes[1], mss[1].modes[0])):
+        own = run_one(x, rest, m, 0.05, 2.0, rtol=1e-8)
+        assert _figures(r) == _figures(own)
+        assert np.isfinite(r.depth_max) and r.depth_max >= rest.depth - 1e-9 * x.lengths.max()
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
+def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(name):
+    """The closest-pose Newton step's constraint Hessian
+    (``start_pose._mu_hessian``) evaluates the 12 displaced poses of its
+    central differences at once: bit for bit the Hessian of one
+    displacement at a time (the loop it replaces), and the second
+    derivative it stands for (differences of a 100x larger step agree)."""
+    s = _scene(name, {"spacing": 3.0} if name == "solar_boat" else {})
+    rest = rest_pose(s)
+    rig = spm._Rig([s, s, s], [rest] * 3)
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.normal(scale=0.02 * rig.Lmax[0], size=(3, 3)), rng.normal(scale=0.1, size=(3, 3))], 1)
+    mu = rng.normal(size=(3, s.n_wires))
+    scale = spm._scale(rig)
+    got = spm._mu_hessian(rig, x, mu, scale)
+
+    def one_at_a_time(step):
+        H = np.zeros((3, 6, 6))
+        for j in range(6):
+            h = step * scale[:, j]
+            e = np.zeros((3, 6))
+            e[:, j] = h
+            dp, wp, _ = rig.wires(x + e)
+            dm, wm, _ = rig.wires(x - e)
+            dG = (rig.jacobian(x + e, dp, wp) - rig.jacobian(x - e, dm, wm)) / (2.0 * h[:, None, None])
+            H[:, :, j] = np.einsum("bn,bni->bi", mu, dG)
+        return H
+
+    assert np.array_equal(got, one_at_a_time(1e-6))
+    coarse = one_at_a_time(1e-4)
+    assert np.allclose(got, coarse, rtol=0, atol=1e-5 * np.abs(coarse).max())
+    assert np.allclose(got, np.swapaxes(got, 1, 2), rtol=0, atol=1e-5 * np.abs(got).max())  # a Hessian
+
+
+def _health_window(monkeypatch, name):
+    """The arguments of one LSODA window's ``sample_health`` call in a point-like run."""
+    import bifilar.analysis.batch as bt
+
+    cap = []
+    real = bt.sample_health
+    monkeypatch.setattr(bt, "sample_health", lambda *a: (cap.append(a), real(*a))[1])
+    s = _scene(name, {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    simulate_batch(s, mode=next(m for m in ms.modes if m.period).label, amplitude=0.05, periods=3.0, rtol=1e-8,
+                   rests=[rest], modes=[ms])
+    monkeypatch.setattr(bt, "sample_health", real)
+    return s, cap[-1]
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
+def test_sample_health_ignores_masked_samples_and_reads_the_tensions(name, monkeypatch):
+    """``sample_health`` (NaN-ignoring fmin / fmax reductions, masks only
+    where a run stopped): a window whose run stopped after k samples gives
+    the figures of the first k samples alone, bit for bit; and its
+    tension extremes are those of the model's tensions at the samples."""
+    import copy
+
+    import bifilar.analysis.batch_health as bh
+    import bifilar.models.maximal as mx
+
+    s, (Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first) = _health_window(monkeypatch, name)
+
+    def health(Y, t, stop):
+        o = copy.copy(obs)
+        o.lowest = None
+        for f in ("Tmin", "Tmax", "viol", "dE", "slack_t"):
+            setattr(o, f, np.full_like(getattr(obs, f), np.inf if f == "Tmin" else -np.inf if f == "Tmax" else
+                                       np.nan if f == "slack_t" else 0.0))
+        bh.sample_health(Y, t, o, kx, n, com0, T_ref, np.array([stop], float), on_slack, first)
+        return tuple(getattr(o, f).tobytes() for f in ("Tmin", "Tmax", "viol", "dE", "E0"))
+
+    k = len(tt) // 5  # 0.6 of a period: not every extreme reached
+    assert health(Ys, tt, tt[k - 1]) == health(Ys[:k], tt[:k], tt[-1])  # masked = left out
+    assert health(Ys, tt, tt[k - 1]) != health(Ys, tt, tt[-1])  # and the rest of the window counts
+    P = mx.params_from_scenes(s)
+    y = Ys[:, 0, :].copy()
+    y[:, :3] += com0[0]
+    T = mx.tensions(y, P)  # (k, n), an independent evaluation
+    o = copy.copy(obs)
+    assert np.allclose(o.Tmax, T.max(axis=0), rtol=1e-6) and np.allclose(o.Tmin, T.min(axis=0), rtol=1e-6)
+    assert np.all(o.Tmax >= T.max(axis=0) * (1 - 1e-9)) and np.all(o.Tmin <= T.min(axis=0) * (1 + 1e-9))
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "thesis_plate_rest", "trifilar_kth"])
+def test_runs_of_one_scene_take_their_samples_through_crossings_and_health_together(name, monkeypatch):
+    """A point's LSODA runs (one scene, one rest pose, one length) are each
+    integrated as alone and their samples go through the crossings and the
+    health in one pass (``batch._lsoda_joint``): every figure the run
+    alone gives, bit for bit; runs of different lengths (or that fail) are
+    taken one by one, with the same figures."""
+    import bifilar.analysis.batch as bt
+    from bifilar.analysis.batch import run_one
+
+    s = _scene(name, {"spacing": 3.0} if name != "trifilar_kth" else {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    for periods in ([3.0, 3.0, 3.0], [3.0, 2.0, 3.0]):
+        passes = _counting(monkeypatch, bt, "sample_health")
+        runs = simulate_batch([s] * 3, mode=[m.label for m in modes], amplitude=0.05, periods=periods, rtol=1e-8,
+                              rests=[rest] * 3, modes=[ms] * 3)
+        assert len(passes) == (1 if periods[0] == periods[1] else 3)
+        for m, p, r in zip(modes, periods, runs):
+            assert _figures(r) == _figures(run_one(s, rest, m, 0.05, p, rtol=1e-8))
+        monkeypatch.undo()
+
+
+@pytest.mark.parametrize("on_slack", ["continue", "stop"])
+def test_joint_runs_with_a_slack_wire_equal_the_runs_alone(on_slack, monkeypatch):
+    """Runs taken through the health together where a wire goes slack (the
+    trifilar of tests/test_batch.py, wire 1 unloaded by a 0.6 m swing):
+    slack times, a run stopped there (``on_slack="stop"``) and the figures
+    of each run alone, bit for bit."""
+    import bifilar.analysis.batch as bt
+    from bifilar.analysis.batch import run_one
+
+    ang = np.radians([0, 120, 240])
+    pts = np.c_[0.5 * np.cos(ang), 0.5 * np.sin(ang), np.zeros(3)]
+    s = scene_from_dict({"body": {"mass": 3.0, "inertia": {"principal": [0.3, 0.3, 0.4]}},
+                         "rig": {"anchors": pts.tolist(), "attachments": (pts + [0.23, 0, 0.1]).tolist(),
+                                 "lengths": [2.0] * 3}})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    passes = _counting(monkeypatch, bt, "sample_health")
+    runs = simulate_batch([s, s], mode=["swing-x", "swing-y"], amplitude=0.6, periods=3.0, rtol=1e-9,
+                          rests=[rest] * 2, modes=[ms] * 2, on_slack=on_slack)
+    assert len(passes) == 1 and runs[0].slack
+    if on_slack == "stop":
+        assert runs[0].t_final < 3 * runs[0].linear_period
+    for lab, r in zip(["swing-x", "swing-y"], runs):
+        assert _figures(r) == _figures(run_one(s, rest, ms.get(lab), 0.6, 3.0, rtol=1e-9, on_slack=on_slack))
+
+
+def test_start_pose_jacobian_cross_product_is_numpys():
+    """The start pose's constraint Jacobian takes w x d by the explicit
+    components (``batch_rest._cross``) in place of ``np.cross``: the same
+    products and differences, so the same bits, on any magnitudes and
+    leading axes."""
+    from bifilar.analysis.batch_rest import _cross
+
+    rng = np.random.default_rng(13)
+    for shape in [(3,), (3, 2, 3), (36, 4, 3)]:
+        u = rng.normal(size=shape) * 10.0 ** rng.integers(-6, 6, size=shape)
+        v = rng.normal(size=shape) * 10.0 ** rng.integers(-6, 6, size=shape)
+        assert np.array_equal(_cross(u, v), np.cross(u, v))

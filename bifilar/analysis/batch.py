@@ -57,7 +57,7 @@ from .. import integrators as itg
 from ..errors import InputError
 from ..models import maximal as mx
 from ..scene import Scene
-from .batch_health import Health, LowestPoint, merge_refined, refine_extremes, sample_health
+from .batch_health import Health, LowestPoint, SharedLowestPoint, merge_refined, refine_extremes, sample_health
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
@@ -401,22 +401,84 @@ _STACKED = "dop853, stacked"
 batch size (``simulate_batch(..., independent=True)``)."""
 
 
+def _shifted_params(scenes, com0: np.ndarray) -> mx.RigParams:
+    """:func:`~bifilar.models.maximal.params_from_scenes` with the anchors
+    relative to each scene's rest CoM ``com0`` (B, 3), m: the frame the
+    runs integrate in."""
+    P = mx.params_from_scenes(scenes)
+    return mx.RigParams(**{**{k: getattr(P, k) for k in P.__dataclass_fields__}, "anchors": P.anchors - com0[:, None, :]})
+
+
+def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress, method,
+                    health, y0) -> list[SceneRun]:
+    """A small group (fewer than :data:`SMALL_BATCH` runs) run by run, each
+    as it runs alone (its own ODE, on floats), in input order.  Runs of one
+    scene from one rest pose (a sweep point's modes) share its parameters
+    and compiled kernels and, on LSODA with one length and no samples
+    kept, have their samples processed together (:func:`_lsoda_joint`);
+    every run's lowest point goes into one fold at the end (one
+    support-function call a body).  The same figures, bit for bit, as each
+    run alone (tests/test_run_cost.py, tests/test_batch_determinism.py)."""
+    Bn = len(scenes)
+    out: list = [None] * Bn
+    groups: dict = {}  # (scene, rest CoM) -> its runs
+    for j in range(Bn):
+        groups.setdefault((id(scenes[j]), np.asarray(rests[j].com, float).tobytes()), []).append(j)
+    low = LowestPoint(scenes, np.array([r.com for r in rests])) if (lowest_point and health) else None
+    done = 0
+    for js in groups.values():
+        Pg = _shifted_params([scenes[j] for j in js], np.array([rests[j].com for j in js], float))
+        P0, P1 = Pg.take([0]), Pg.take(0)  # one run's (rows of one scene and rest: the same values)
+
+        def run(ii, params, joint=False):
+            ii = list(ii)
+            return _run_group([scenes[j] for j in ii], [rests[j] for j in ii], [mds[j] for j in ii], amps[ii], pers[ii],
+                              rtol, atol, on_slack, spp, lowest_point, None, method, health,
+                              None if y0 is None else y0[ii], params,
+                              None if low is None else SharedLowestPoint(low, ii), joint)
+
+        runs = None
+        if len(js) > 1 and method == "lsoda" and not spp:
+            try:
+                runs = run(js, (Pg, P1), joint=True)
+            except _NotJoint:
+                runs = None
+        if runs is None:
+            runs = [run([j], (P0, P1))[0] for j in js]
+        for j, r in zip(js, runs):
+            out[j] = r
+        done += len(js)
+        if progress is not None:
+            progress(done / Bn, 1.0)
+    if low is not None:
+        for r, s_, lz in zip(out, scenes, low.z):
+            r.lowest_z_min, r.depth_max = float(lz), float(s_.ceiling_z - lz)
+    return out
+
+
 def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
-               method: str = "auto", health: bool = True, y0: np.ndarray | None = None) -> list[SceneRun]:
+               method: str = "auto", health: bool = True, y0: np.ndarray | None = None,
+               params: tuple | None = None, lowest: SharedLowestPoint | None = None,
+               joint: bool = False) -> list[SceneRun]:
     """Runs of scenes with one wire count; ``y0`` (B, 13) their start states
-    if already solved (:func:`initial_states`' values), else solved here."""
+    if already solved (:func:`initial_states`' values), else solved here.
+    ``params``: (the scenes' :func:`_shifted_params`, the float parameters
+    ``take(0)`` of their one scene) if already built: runs of one scene
+    from one rest pose (a sweep point's modes) share them and so the
+    compiled kernels cached on them (tests/test_run_cost.py).
+    ``lowest``: where their lowest points go (``lowest_z_min`` and
+    ``depth_max`` are then left NaN for the caller to fill in from the
+    shared fold).  ``joint``: LSODA runs of one scene and one length, each
+    integrated as alone, their samples processed together
+    (:func:`_lsoda_joint`; raises :class:`_NotJoint` where that does not
+    apply)."""
     Bn = len(scenes)
     if method == "auto":
         method = "lsoda" if Bn < LARGE_BATCH else "dop853"
     stacked = method == _STACKED
-    if 1 < Bn < SMALL_BATCH and not stacked:
-        out = []
-        for j in range(Bn):
-            out += _run_group(scenes[j:j + 1], rests[j:j + 1], mds[j:j + 1], amps[j:j + 1], pers[j:j + 1], rtol, atol,
-                              on_slack, spp, lowest_point, None, method, health, None if y0 is None else y0[j:j + 1])
-            if progress is not None:
-                progress((j + 1) / Bn, 1.0)
-        return out
+    if 1 < Bn < SMALL_BATCH and not stacked and not joint:
+        return _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress,
+                               method, health, y0)
     if Bn > CHUNK:  # chunks: the same cost per scene and bounded memory however many scenes
         out = []
         starts = list(range(0, Bn, CHUNK))
@@ -444,8 +506,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     com0 = np.array([r.com for r in rests])
     ys0 = y0.copy()
     ys0[:, :3] -= com0  # integrate relative to the rest CoM (tolerances apply to the oscillation)
-    P = mx.params_from_scenes(scenes)
-    P = mx.RigParams(**{**{k: getattr(P, k) for k in P.__dataclass_fields__}, "anchors": P.anchors - com0[:, None, :]})
+    P, P1 = params if params is not None else (_shifted_params(scenes, com0), None)
     T_ref = np.array([md.period for md in mds])
     t_end = pers * T_ref
     omega = 2 * np.pi / T_ref
@@ -457,13 +518,18 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         at = np.broadcast_to(np.asarray(atol, float).reshape(-1, 1) if np.ndim(atol) else float(atol), (13, Bn)).copy()
     e = np.array([_coordinate_vector(md.dominant, r.q) for md, r in zip(mds, rests)]).T  # (13, B)
     L2 = (P.lengths**2).T
-    lowest = LowestPoint(scenes, com0) if (lowest_point and health) else None
+    if lowest is None and lowest_point and health:
+        lowest = LowestPoint(scenes, com0)
     if method == "lsoda":
         obs = Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest, progress, t_end,
                      [None] * Bn if spp else None, health=health)
         try:
-            nfev, nsteps, status, msgs = _lsoda(P, ys0, T_ref, pers, float(rtol), at, max(64, int(spp or 0)), obs,
-                                                com0, health, on_slack, progress)
+            if joint:
+                nfev, nsteps, status, msgs = _lsoda_joint(P1, ys0, T_ref, pers, float(rtol), at, 64, obs, com0, health,
+                                                          on_slack)
+            else:
+                nfev, nsteps, status, msgs = _lsoda(P, ys0, T_ref, pers, float(rtol), at, max(64, int(spp or 0)),
+                                                    obs, com0, health, on_slack, progress, P1)
         except _BatchFailed:  # one scene spoils the shared run: run them one by one
             return [_run_group([s_], [r_], [m_], amps[j:j + 1], pers[j:j + 1], rtol, atol, on_slack, spp,
                                lowest_point, None, method, health, y0[j:j + 1])[0]
@@ -614,7 +680,7 @@ def _single_health(obs: Health, run, idx, idx0, Y, n: int, ns: int) -> None:
 
 
 def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0,
-           health: bool, on_slack: str, progress):
+           health: bool, on_slack: str, progress, P1: mx.RigParams | None = None):
     """The whole group as one ODE in normalised time tau = t / T_ref (every
     scene oscillates at ~1 per unit tau, so one step sequence suits all; a
     single scene in physical time, which is the same ODE without the scaling),
@@ -641,12 +707,8 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
     if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
-        k1 = mx.compiled_kernel(P.take(0))
+        f, kx = _one_scene_kernels(P.take(0) if P1 is None else P1)
         tscale = float(T_ref[0])
-
-        def f(y, t):
-            return k1(*y.tolist())
-        kx = mx.compiled_kernel(P.take(0), extras=True)
     else:
         kb = mx.compiled_kernel(P)
         Tcol = T_ref[:, None]
@@ -656,12 +718,9 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
             out = kb(*y.reshape(Bn, 13).T)
             return (np.array(out).T * Tcol).ravel()
         kx = mx.compiled_kernel(P, extras=True)
-    tau_end = float(np.max(pers))
-    K_total = int(np.ceil(tau_end * spp - 1e-9))
-    taus = np.arange(K_total + 1) / spp
-    taus[-1] = min(taus[-1], tau_end) if K_total else tau_end
+    tau_end, K_total, taus = _sample_grid(pers, spp)
     stop_tau = pers.astype(float).copy()  # per-scene end (earlier if a wire goes slack and on_slack == "stop")
-    chunk = max(4 * spp, int(4e6 / (13 * Bn)))
+    chunk = _window_samples(spp, Bn)
     y = ys0.ravel().copy()
     tail_c = None  # last 7 samples of the previous window (crossing stencils)
     nfe = nst = 0
@@ -692,40 +751,127 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
         Ys = Y.reshape(len(tt), Bn, 13)
         if not first:  # the window's first sample repeats the previous window's last
             Ys, tt = Ys[1:], tt[1:]
-        # crossings of the timed coordinate
-        c = np.einsum("kbm,mb->kb", Ys, obs.e)
-        cc = c if tail_c is None else np.concatenate([tail_c, c])
-        base = 0 if tail_c is None else len(tail_c)
-        tau0 = tt[0] - base / spp
-        col, tx, kl = itg.sampled_crossings(cc, 1.0 / spp)
-        keep = kl >= base - 1  # pairs ending in this window (earlier ones were found before)
-        cross_cols.append(col[keep])
-        cross_t.append(tx[keep] + tau0)
-        tail_c = cc[-7:]
-        if health:
-            sample_health(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first)
-        if obs.samples is not None:
-            for b in range(Bn):
-                sel = tt <= stop_tau[b] + 1e-12
-                if np.any(sel):
-                    obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :].copy()))  # com0 added at the end
+        tail_c = _window(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first, health, spp, tail_c,
+                         cross_cols, cross_t)
         if progress is not None:
             progress(min(float(tt[-1]) / tau_end, 1.0), 1.0)
         first = False
         k0 = k1_
         if status[0] == -1 and Bn == 1:
             break
+    _close(obs, tt, y.reshape(Bn, 13), stop_tau, T_ref, pers, status, cross_cols, cross_t)
+    return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
+
+
+def _one_scene_kernels(P1: mx.RigParams):
+    """(odeint's ``f(y, t)``, the health's kernel with extras) of one scene's
+    float parameters ``P1`` (the kernels cached on it): what :func:`_lsoda`
+    integrates a scene alone with, and :func:`_lsoda_joint` each of its runs."""
+    k1 = mx.compiled_kernel(P1)
+
+    def f(y, t):
+        return k1(*y.tolist())
+    return f, mx.compiled_kernel(P1, extras=True)
+
+
+def _sample_grid(pers, spp: int):
+    """(tau_end, K, taus (K + 1,)): the LSODA engine's sample times in
+    normalised time, ``spp`` a period, up to the longest run."""
+    tau_end = float(np.max(pers))
+    K_total = int(np.ceil(tau_end * spp - 1e-9))
+    taus = np.arange(K_total + 1) / spp
+    taus[-1] = min(taus[-1], tau_end) if K_total else tau_end
+    return tau_end, K_total, taus
+
+
+def _window_samples(spp: int, Bn: int) -> int:
+    """Samples a window of the LSODA engine holds (~50 MB of states)."""
+    return max(4 * spp, int(4e6 / (13 * Bn)))
+
+
+def _window(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first, health, spp, tail_c, cross_cols,
+            cross_t):
+    """The crossings (appended to ``cross_cols``, ``cross_t``), health and
+    kept samples of one window of the LSODA engine: Ys (k, B, 13) at
+    normalised times tt (k,); returns the tail the next window's crossing
+    stencils need."""
+    # crossings of the timed coordinate
+    c = np.einsum("kbm,mb->kb", Ys, obs.e)
+    cc = c if tail_c is None else np.concatenate([tail_c, c])
+    base = 0 if tail_c is None else len(tail_c)
+    tau0 = tt[0] - base / spp
+    col, tx, kl = itg.sampled_crossings(cc, 1.0 / spp)
+    keep = kl >= base - 1  # pairs ending in this window (earlier ones were found before)
+    cross_cols.append(col[keep])
+    cross_t.append(tx[keep] + tau0)
+    if health:
+        sample_health(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first)
+    if obs.samples is not None:
+        for b in range(Ys.shape[1]):
+            sel = tt <= stop_tau[b] + 1e-12
+            if np.any(sel):
+                obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :].copy()))  # com0 added at the end
+    return cc[-7:]
+
+
+def _close(obs: Health, tt, y_last, stop_tau, T_ref, pers, status, cross_cols, cross_t) -> None:
+    """End of the LSODA engine's runs: final times and states, each scene's
+    crossings (s) up to its end, status 1 for a run stopped early."""
     obs.t_final[:] = np.minimum(tt[-1], stop_tau) * T_ref
-    obs.y_final[:] = y.reshape(Bn, 13)
+    obs.y_final[:] = y_last
     cols = np.concatenate(cross_cols) if cross_cols else np.zeros(0, int)
     tcs = np.concatenate(cross_t) if cross_t else np.zeros(0)
-    for b in range(Bn):
+    for b in range(len(T_ref)):
         sel = tcs[cols == b]
         obs.cross[b] = list(np.sort(sel[sel <= stop_tau[b] + 1e-12]) * T_ref[b])
         if stop_tau[b] < pers[b] - 1e-12 and status[b] == 0:
             status[b] = 1
-    return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
+
+
+def _lsoda_joint(P1: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0, health: bool,
+                 on_slack: str):
+    """Runs of one scene (its float parameters ``P1``: one compiled kernel
+    for all), each integrated as :func:`_lsoda` integrates a scene alone
+    (its own ODE in physical time, the same odeint call: the same steps and
+    samples, bit for bit), their samples then taken through the crossings
+    and the health together: one pass of numpy calls for the 2-3 runs of a
+    sweep point instead of one a run, row by row the same expressions
+    (tests/test_run_cost.py, tests/test_batch_determinism.py).  Needs runs
+    of one length in one window of samples that all succeed: else raises
+    :class:`_NotJoint` before anything is recorded (the caller runs them
+    one by one)."""
+    from scipy.integrate import odeint
+
+    Bn = len(T_ref)
+    n = int(P1.lengths.shape[-1])
+    if np.any(pers != pers[0]):
+        raise _NotJoint
+    tau_end, K_total, taus = _sample_grid(pers, spp)
+    if not 0 < K_total <= _window_samples(spp, 1):
+        raise _NotJoint
+    f, kx = _one_scene_kernels(P1)
+    Ys = np.empty((K_total + 1, Bn, 13))
+    nfe, nst = np.zeros(Bn, int), np.zeros(Bn, int)
+    for b in range(Bn):
+        Y, info = odeint(f, ys0[b].copy(), taus * float(T_ref[b]), rtol=rtol, atol=np.ascontiguousarray(at[:, b]),
+                         full_output=True, mxstep=100000, ml=12, mu=12)
+        if info["message"] != "Integration successful." or not np.all(np.isfinite(Y)):
+            raise _NotJoint
+        Ys[:, b] = Y
+        nfe[b] = int(info["nfe"][-1]) if len(info["nfe"]) else 0
+        nst[b] = int(info["nst"][-1]) if len(info["nst"]) else 0
+    stop_tau = pers.astype(float).copy()
+    cross_cols: list = []
+    cross_t: list = []
+    status = np.zeros(Bn, int)
+    _window(Ys, taus, obs, kx, n, com0, T_ref, stop_tau, on_slack, True, health, spp, None, cross_cols, cross_t)
+    _close(obs, taus, Ys[-1], stop_tau, T_ref, pers, status, cross_cols, cross_t)
+    return nfe, nst, status, {}
 
 
 class _BatchFailed(Exception):
     pass
+
+
+class _NotJoint(Exception):
+    """Runs :func:`_lsoda_joint` cannot take together (run them one by one)."""

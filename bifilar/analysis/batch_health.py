@@ -84,6 +84,31 @@ class LowestPoint:
         return np.where(np.isfinite(self._zmin), self._zmin, np.nan)
 
 
+class SharedLowestPoint:
+    """Scenes ``rows`` of a :class:`LowestPoint` ``shared`` seen as a batch of
+    their own (its index k is the shared batch's ``rows[k]``), for runs
+    made a few at a time whose lowest points are folded together
+    afterwards: one fold and one call of each support function for all of
+    them (a sweep point's 2-3 runs of one body) instead of one a run.
+    Every state is folded by the same expressions, row by row, so a run's
+    minimum is what its own :class:`LowestPoint` gives
+    (tests/test_run_cost.py).  :attr:`z` is NaN until the caller reads
+    ``shared.z``."""
+
+    def __init__(self, shared: LowestPoint, rows):
+        self.shared, self.rows = shared, np.asarray(rows, int)
+
+    def add_states(self, idx: np.ndarray, y: np.ndarray) -> None:
+        self.shared.add_states(self.rows[np.asarray(idx)], y)
+
+    def add(self, idx: np.ndarray, z: np.ndarray, q: np.ndarray) -> None:
+        self.shared.add(self.rows[np.asarray(idx)], z, q)
+
+    @property
+    def z(self) -> np.ndarray:
+        return np.full(len(self.rows), np.nan)
+
+
 def refine_extremes(t: np.ndarray, T: np.ndarray):
     """Extremes of sampled tensions refined by the parabola through each
     interior local extremum and its two neighbours.
@@ -270,6 +295,16 @@ class Health(itg.BatchObserver):
                         self.samples[b].append((sel, ys))
 
 
+def _stacked(cols) -> np.ndarray:
+    """The kernel's outputs ``cols`` (arrays of one shape, or constants among
+    them) as one array (len(cols), ...): ``np.array(np.broadcast_arrays(*cols))``,
+    without broadcasting when every output is already an array of that shape."""
+    shape = np.shape(cols[0])
+    if all(type(c) is np.ndarray and c.shape == shape for c in cols):
+        return np.array(cols)
+    return np.array(np.broadcast_arrays(*cols))
+
+
 def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first):
     """Health figures at the samples of one window of the LSODA engine
     (blocks of ~50k values): Ys (k, B, 13) states relative to the rest CoM
@@ -285,8 +320,8 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         if Bn == 1:
             comps = [cmp[:, 0] for cmp in comps]
         out = kx(*comps)
-        lam = np.array(np.broadcast_arrays(*out[13:13 + n])).reshape(n, len(tb), Bn)
-        phi = np.array(np.broadcast_arrays(*out[13 + n:13 + 2 * n])).reshape(n, len(tb), Bn)
+        lam = _stacked(out[13:13 + n]).reshape(n, len(tb), Bn)
+        phi = _stacked(out[13 + n:13 + 2 * n]).reshape(n, len(tb), Bn)
         L2 = obs.L2[:, None, :]
         dl = np.sqrt(L2 + 2.0 * phi)
         T = -lam * dl  # (n, kb, B)
@@ -298,16 +333,19 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
                 for b in np.nonzero(kfirst >= 0)[0]:
                     stop_tau[b] = min(stop_tau[b], tb[kfirst[b]])
                 valid = tb[:, None] <= stop_tau[None, :] + 1e-12
+        every = bool(valid.all())  # (no run stopped in this block: the masks below change nothing)
+        vT = T if every else np.where(valid[None], T, np.nan)
         if len(tb) >= 3:
-            Tv = np.where(valid[None], T, np.nan)
-            rmin, rt_, rmax = refine_extremes(np.broadcast_to(tb[:, None], valid.shape), Tv)
+            rmin, rt_, rmax = refine_extremes(np.broadcast_to(tb[:, None], valid.shape), vT)
             merge_refined(obs, np.arange(Bn), np.where(np.isfinite(rmin), rmin, np.inf), rt_,
                            np.where(np.isfinite(rmax), rmax, -np.inf), T_ref)
-        vT = np.where(valid[None], T, np.nan)
+        # extremes ignoring NaN (masked samples): fmin / fmax reductions, what nanmin / nanmax give, without
+        # their copies
         with np.errstate(all="ignore"):
-            obs.Tmin = np.fmin(obs.Tmin, np.nanmin(vT, axis=1).T) if np.any(valid) else obs.Tmin
-            obs.Tmax = np.fmax(obs.Tmax, np.nanmax(vT, axis=1).T) if np.any(valid) else obs.Tmax
-            obs.viol = np.fmax(obs.viol, np.nanmax(np.where(valid[None], viol, np.nan), axis=(0, 1)))
+            obs.Tmin = np.fmin(obs.Tmin, np.fmin.reduce(vT, axis=1).T) if np.any(valid) else obs.Tmin
+            obs.Tmax = np.fmax(obs.Tmax, np.fmax.reduce(vT, axis=1).T) if np.any(valid) else obs.Tmax
+            obs.viol = np.fmax(obs.viol, np.fmax.reduce((viol if every else np.where(valid[None], viol, np.nan))
+                                                        .reshape(-1, Bn), axis=0))
         neg = (T <= 0) & valid[None]
         if np.any(neg):
             for i, kk, b in zip(*np.nonzero(neg)):
@@ -319,7 +357,8 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         E = 0.5 * obs.mass * np.sum(v * v, -1) + 0.5 * np.sum(w * Iw, -1) + obs.mass * obs.grav * Yb[:, :, 2]
         if first and s0 == 0:
             obs.E0 = E[0].copy()
-        obs.dE = np.fmax(obs.dE, np.nanmax(np.where(valid, np.abs(E - obs.E0), np.nan), axis=0))
+        dE = np.abs(E - obs.E0)
+        obs.dE = np.fmax(obs.dE, np.fmax.reduce(dE if every else np.where(valid, dE, np.nan), axis=0))
         if obs.lowest is not None:
             kk, bb = np.nonzero(valid)
             obs.lowest.add(bb, Yb[kk, bb, 2] + com0[bb, 2], Yb[kk, bb, 3:7])

@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import InputError
 from ..rotations import quat_multiply, rotvec_to_matrix, rotvec_to_quat, skew
 from ..scene import Scene
+from .batch_rest import _cross
 from .equilibrium import RestPose
 from .modes import COMPONENTS
 
@@ -155,7 +156,7 @@ class _Rig:
 
     def jacobian(self, x: np.ndarray, d: np.ndarray, w: np.ndarray) -> np.ndarray:
         """G (B, n, 6) = d phi / d x in the chart (theta through J_l)."""
-        wxd = np.cross(w, d)
+        wxd = _cross(w, d)  # np.cross's products and differences, without its axis handling
         return np.concatenate([d, np.einsum("bni,bij->bnj", wxd, left_jacobian(x[:, 3:]))], axis=-1)
 
     def residual(self, x: np.ndarray) -> np.ndarray:
@@ -238,6 +239,27 @@ def _kkt(rig: _Rig, x0: np.ndarray, x: np.ndarray, mu: np.ndarray, Winv: np.ndar
     return F1, phi, G
 
 
+def _mu_hessian(rig: _Rig, x: np.ndarray, mu: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """sum_i mu_i d^2 phi_i / dx^2 (B, 6, 6) at poses x (B, 6), by central
+    differences of the analytic Jacobian with steps 1e-6 ``scale`` (B, 6);
+    column j from the displacements +-h_j e_j.  The 12 displaced poses of
+    all scenes go through one evaluation: row by row the expressions of
+    one displacement at a time, so the same bits (tests/test_run_cost.py)."""
+    m = len(x)
+    hs = 1e-6 * scale
+    E = np.zeros((6, m, 6))
+    E[np.arange(6), :, np.arange(6)] = hs.T
+    Xs = np.concatenate([x + E, x - E]).reshape(12 * m, 6)  # +h_0 e_0 .. +h_5 e_5, then -h_0 e_0 .. -h_5 e_5
+    big = rig.take(np.tile(np.arange(m), 12))
+    ds, ws, _ = big.wires(Xs)
+    Gs = big.jacobian(Xs, ds, ws).reshape(12, m, -1, 6)
+    H = np.zeros((m, 6, 6))
+    for j in range(6):
+        dG = (Gs[j] - Gs[6 + j]) / (2.0 * hs[:, j][:, None, None])
+        H[:, :, j] = np.einsum("bn,bni->bi", mu, dG)
+    return H
+
+
 def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: int) -> tuple[np.ndarray, np.ndarray]:
     """Newton's method on the first-order conditions of the closest pose
     (module doc) from poses x on the wires; constraint Hessians by central
@@ -263,15 +285,7 @@ def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: 
             break
         sub = rig.take(ii)
         F1, phi, G = _kkt(sub, x0[ii], x[ii], mu[ii], Winv[ii])
-        H = np.zeros((len(ii), 6, 6))
-        for j in range(6):
-            h = 1e-6 * scale[ii, j]
-            e = np.zeros((len(ii), 6))
-            e[:, j] = h
-            dp, wp, _ = sub.wires(x[ii] + e)
-            dm, wm, _ = sub.wires(x[ii] - e)
-            dG = (sub.jacobian(x[ii] + e, dp, wp) - sub.jacobian(x[ii] - e, dm, wm)) / (2.0 * h[:, None, None])
-            H[:, :, j] = np.einsum("bn,bni->bi", mu[ii], dG)
+        H = _mu_hessian(sub, x[ii], mu[ii], scale[ii])
         H = 0.5 * (H + np.swapaxes(H, 1, 2)) + Wd[ii][:, :, None] * np.eye(6)
         fr = free[ii]
         H = np.where(fr[:, :, None] & fr[:, None, :], H, np.eye(6))
