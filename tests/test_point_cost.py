@@ -248,3 +248,63 @@ def test_constraint_hessians_equal_the_skew_formula():
             assert np.array_equal(H[i, :3, 3:], -W) and np.array_equal(H[i, 3:, :3], W)
             ref = -W @ W + 0.5 * (np.outer(d[i], w[i]) + np.outer(w[i], d[i])) - np.dot(d[i], w[i]) * np.eye(3)
             assert np.array_equal(H[i, 3:, 3:], ref)
+
+
+def _knife_edges():
+    """Knife edges (CoM exactly on the attachment line): the thesis plate over a grid of spacings and
+    lengths, thesis_lin1, and random rigs (line direction with a tilt, unequal arms, anchors at
+    different heights and offsets, a full inertia tensor)."""
+    out = [_scene("thesis_plate_rest", {"spacing": s, "length": L}) for s in (1.0, 3.0, 4.5) for L in (5.0, 7.0)]
+    out.append(_scene("thesis_lin1_torsion", {}))
+    rng = np.random.default_rng(11)
+    while len(out) < 16:
+        u = rng.normal(size=3) * [1.0, 1.0, 0.2]
+        u /= np.linalg.norm(u)
+        att = np.array([-rng.uniform(0.3, 2.0) * u, rng.uniform(0.3, 2.0) * u])
+        anc = att + [0.0, 0.0, 0.0] + rng.normal(scale=0.3, size=(2, 3)) * [1, 1, 0] + [[0, 0, 3.0], [0, 0, 3.5]]
+        Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        I = Q @ np.diag(rng.uniform(1.0, 1.8, 3)) @ Q.T
+        scene = scene_from_dict({"body": {"mass": float(rng.uniform(5, 50)), "inertia": {"tensor": I.tolist()}},
+                                 "rig": {"anchors": anc.tolist(), "attachments": att.tolist(),
+                                         "lengths": (np.linalg.norm(anc - att, axis=1) + rng.uniform(0, 0.2, 2)).tolist()}},
+                                warn=False)
+        try:
+            r = rest_pose(scene)
+        except Exception:  # noqa: BLE001 - a rig that cannot hang: draw another
+            continue
+        if not all(m.period for m in linear_modes(scene, r).modes):
+            out.append(scene)
+    return out
+
+
+def test_knife_edge_inputs_pushing_hard_are_left_out_without_their_differences(monkeypatch):
+    # at a knife edge an input pushing along the neutral direction (NO_BRANCH_PUSH) is left out at once;
+    # the differences it skips (NO_BRANCH_PUSH = inf: the path before) find no side either: the same
+    # Jacobian bit for bit and the same notes, over 16 knife edges
+    from bifilar.analysis import equilibrium as eq
+    from bifilar.studies import point as pt
+
+    newton = []
+    real = eq._from_guess
+
+    def counted(*a, **k):
+        newton.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(eq, "_from_guess", counted)
+    skipped = 0
+    for scene in _knife_edges():
+        names = COMPS + measured_inputs(scene)
+        rest = rest_pose(scene)
+        newton.clear()
+        got, notes = pt.point_sensitivity(scene, names, rest)
+        n_got = len(newton)
+        with monkeypatch.context() as m:
+            m.setattr(pt, "NO_BRANCH_PUSH", np.inf)
+            newton.clear()
+            ref, ref_notes = pt.point_sensitivity(scene, names, rest)
+        assert notes == ref_notes
+        assert np.array_equal(got.jacobian, ref.jacobian, equal_nan=True)
+        assert np.array_equal(got.periods, ref.periods, equal_nan=True)
+        skipped += len(newton) - n_got
+    assert skipped >= 16 * 2  # the shortcut was taken (two sides of at least one input a scene)

@@ -46,6 +46,15 @@ def _fd_step(scene, name: str, rel_step: float = 1e-6) -> float:
 
 #: rad: a neighbour (1e-6 relative input step) whose rest pose turned more than this jumped branch
 TURN_MAX = 1e-3
+#: at a knife edge (CoM exactly on the attachment line), an input whose push along the neutral
+#: direction (:func:`bifilar.analysis.derivatives.analytic_period_jacobian`, ``push``: relative
+#: residual of the pose derivative, 0 to rounding for the inputs with a derivative, 0.3-0.6 for
+#: a sideways shift of the plate's CoM or attachments) is at least this has no neighbour within
+#: :data:`TURN_MAX` either way: the circle of equilibria is exactly neutral, so any such change
+#: turns the body until the CoM offset it makes hangs straight down, a finite angle (about 90
+#: degrees for a sideways offset).  Its differences (two Newton runs that end turned over, ~1 ms
+#: each) are not tried; a weaker push (between the derivative's 1e-8 and this) still is
+NO_BRANCH_PUSH = 1e-2
 
 
 def _neighbour_rest(scene, base, global_search: bool):
@@ -81,12 +90,14 @@ def point_sensitivity(scene, names: list[str], rest=None):
     of the uncertainty budget (its column set to 0) with a note.  The inputs
     with an analytic derivative at the neutral scene (the branch's
     derivative, :mod:`bifilar.analysis.derivatives`) take it instead: only
-    those pushing along the neutral direction are differenced.  Regular
+    those pushing along the neutral direction are differenced, except at an
+    exact knife edge those pushing hard (:data:`NO_BRANCH_PUSH`), which are
+    left out at once as having no side.  Regular
     scenes take :func:`~bifilar.estimation.sensitivity.period_sensitivity`
     (analytic).  Returns (Sensitivity, notes).
     """
     from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
-    from ..analysis.equilibrium import rest_pose
+    from ..analysis.equilibrium import knife_edge_axes, rest_pose
     from ..analysis.modes import linear_modes
     from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
 
@@ -102,12 +113,13 @@ def point_sensitivity(scene, names: list[str], rest=None):
     jac = np.zeros((len(T0), len(names)))
     notes = []
     todo = list(range(len(names)))
+    no_branch: set = set()
     if neutral:
         # the analytic derivative where it exists (the branch's derivative, exact: what a
         # one-sided difference approximates to O(h)); the branch-following differences
         # below only for the inputs that push along the neutral direction
         try:
-            an = analytic_period_jacobian(scene, rest, ms, names)
+            an, push = analytic_period_jacobian(scene, rest, ms, names, push=True)
         except NotDifferentiable:
             an = None
         if an is not None:
@@ -115,11 +127,13 @@ def point_sensitivity(scene, names: list[str], rest=None):
             todo = [j for j in todo if np.all(np.isnan(an[live, j]))]
             keep = [j for j in range(len(names)) if j not in todo]
             jac[:, keep] = an[:, keep]
+            if np.all(np.isfinite(knife_edge_axes(scene.attachments))):
+                no_branch = {j for j in todo if push[j] >= NO_BRANCH_PUSH}
     for j in todo:
         name = names[j]
         h = _fd_step(scene, name)
         side = {}
-        for sgn in (1.0, -1.0):
+        for sgn in (() if j in no_branch else (1.0, -1.0)):
             sc = perturb(scene, name, sgn * h)
             r = _neighbour_rest(sc, rest, global_search=not neutral)
             if r is not None:
