@@ -308,3 +308,77 @@ def test_knife_edge_inputs_pushing_hard_are_left_out_without_their_differences(m
         assert np.array_equal(got.periods, ref.periods, equal_nan=True)
         skipped += len(newton) - n_got
     assert skipped >= 16 * 2  # the shortcut was taken (two sides of at least one input a scene)
+
+
+def _honest_cases():
+    from test_honest_budget import _cases
+
+    out = {k: v for k, v in _cases().items() if k != "Solar Boat"}
+    drone = read_yaml(CONFIGS / "drone_parallel.yaml")
+    out["drone"] = (drone, COMPS)  # Izz: the quadratic term in com.x (docs/performance.md)
+    out["Solar Boat"] = (apply_params(read_yaml(CONFIGS / "solar_boat.yaml"), {"spacing": 3.0}, "boat")[0], COMPS)
+    return out
+
+
+@pytest.mark.parametrize("case", list(_honest_cases()))
+def test_honest_stds_share_one_hanging_model(case, monkeypatch):
+    # every component's problem shares one HangingModel (its stiffness and the mode sets it solved);
+    # against a model built afresh for each component (the path before): the same stds, bit for bit,
+    # second-order terms included (the wheel, the drone), with and without the linear fallback
+    from bifilar.estimation import honest, problem
+
+    cfg, comps = _honest_cases()[case]
+    scene = scene_from_dict(cfg, case, warn=False)
+    unc = default_uncertainty()
+    sens = period_sensitivity(scene, list(dict.fromkeys(COMPS + comps)) + measured_inputs(scene))
+    req = [(c, best_mode_for(sens, c) + 1) for c in comps
+           if np.nanmax(np.abs(sens.column(c)) * component_scale(scene.inertia, c) / sens.periods) >= 1e-6]
+    lin = [b.value_sigma for b in (inertia_budget_of(sens, scene, c, k - 1, unc) for c, k in req)]
+    built = []
+    real = problem.build_problem
+
+    def counted(*a, **k):
+        pb = real(*a, **k)
+        built.append(id(pb.models[0]))
+        return pb
+
+    monkeypatch.setattr(problem, "build_problem", counted)
+    got = [honest.honest_stds(scene, req, unc, unc["timing"], fallbacks=fb, rest=sens.rest, sens=sens)
+           for fb in (None, lin)]
+    assert len(set(built)) == 2  # one model per call, shared by its components
+
+    def fresh(*a, models=None, **k):  # the path before: a model per component
+        return real(*a, **k)
+
+    monkeypatch.setattr(problem, "build_problem", fresh)
+    ref = [honest.honest_stds(scene, req, unc, unc["timing"], fallbacks=fb, rest=sens.rest, sens=sens)
+           for fb in (None, lin)]
+    assert got == ref
+
+
+def inertia_budget_of(sens, scene, comp, k, unc):
+    from bifilar.estimation.sensitivity import inertia_budget
+
+    return inertia_budget(sens, scene, comp, k, unc["timing"], unc)
+
+
+def test_hanging_model_locate_returns_the_mode_set_it_solved_at_an_inertia():
+    # a second locate at an inertia (the prior and another) gives what a fresh model's stiffness gives,
+    # bit for bit; when modes0 is replaced (roots.relabel) the match is against the new base modes
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    other = perturb(scene, "Izz", 40.0)
+    for sc in (scene, other, scene, other):
+        rest, ms, match = hm.locate(sc)
+        ref = modes_of_inertia(sc, rest_pose(sc))(sc.inertia)
+        assert [m.period for m in ms.modes] == [m.period for m in ref.modes]
+        assert all(np.array_equal(a.shape, b.shape) for a, b in zip(ms.modes, ref.modes))
+    assert hm.locate(scene)[1] is hm.modes0
+    hm.modes0 = hm.locate(other)[1]
+    _, _, match = hm.locate(scene)
+    from bifilar.estimation.sensitivity import mac_match
+
+    assert list(match) == list(mac_match(hm.modes0, hm.locate(scene)[1]))

@@ -55,7 +55,7 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     cache: dict = {}
     if sens is not None:
         _seed_sensitivity(cache, scene, sens)
-    ms = None
+    ms = models = None
     for (comp, mode), fb in zip(requests, fallbacks):
         try:
             if ms is None:
@@ -72,7 +72,8 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
                                   [Measurement(md.label, float(md.period), s, "period", "--period",
                                                amplitude=amplitude)])
             unc_all = default_uncertainty({**meas.uncertainty, **(unc or {})})
-            pb = build_problem(meas, [comp], unc_all, rests=[rest])
+            pb = build_problem(meas, [comp], unc_all, rests=[rest], models=models)
+            models = pb.models  # one hanging model (and its mode sets) for every component
             pb.unc = unc_all
             p = pb.prior
             r = np.ones(1)
