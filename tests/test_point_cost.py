@@ -382,3 +382,50 @@ def test_hanging_model_locate_returns_the_mode_set_it_solved_at_an_inertia():
     from bifilar.estimation.sensitivity import mac_match
 
     assert list(match) == list(mac_match(hm.modes0, hm.locate(scene)[1]))
+
+
+def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
+    # budget._one_step takes the first Gauss-Newton step of every sigma point (and pair corner) at once;
+    # against _resolve point by point (the path before): the same re-solved unknowns, bit for bit, over
+    # the honest cases (second order and pair terms: the wheel, the drone) and an inversion of three
+    # modes for three components (K = P = 3, the example measurements file)
+    from bifilar.estimation import budget, honest
+    from bifilar.estimation.invert import invert
+    from bifilar.estimation.measurements import load_measurements
+
+    seen: list = []
+    real_solve, real_one = budget._solve_points, budget._one_step
+
+    def record(*a, **k):
+        out = real_solve(*a, **k)
+        seen.append(out)
+        return out
+
+    def counted(*a, **k):
+        out = real_one(*a, **k)
+        settled.append(len(out))
+        return out
+
+    def run():
+        seen.clear()
+        out = []
+        for case, (cfg, comps) in _honest_cases().items():
+            scene = scene_from_dict(cfg, case, warn=False)
+            unc = default_uncertainty()
+            sens = period_sensitivity(scene, list(dict.fromkeys(COMPS + comps)) + measured_inputs(scene))
+            req = [(c, best_mode_for(sens, c) + 1) for c in comps
+                   if np.nanmax(np.abs(sens.column(c)) * component_scale(scene.inertia, c) / sens.periods) >= 1e-6]
+            out.append(honest.honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens))
+        res = invert(load_measurements(CONFIGS / "measurements_example.yaml"), ladder=False)
+        out.append((res.values.tolist(), res.std.tolist()))
+        return out, [{k: None if v is None else v.tolist() for k, v in d.items()} for d in seen]
+
+    settled: list = []
+    monkeypatch.setattr(budget, "_solve_points", record)
+    monkeypatch.setattr(budget, "_one_step", counted)
+    got, got_points = run()
+    assert sum(settled) >= 100  # the one-step path did the work
+    monkeypatch.setattr(budget, "_one_step", lambda *a, **k: {})
+    ref, ref_points = run()
+    assert got_points == ref_points
+    assert got == ref
