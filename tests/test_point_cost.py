@@ -429,3 +429,48 @@ def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
     ref, ref_points = run()
     assert got_points == ref_points
     assert got == ref
+
+
+def _mode_set_fields(ms):
+    return ([(m.label, m.period, m.omega2, m.shape.tobytes(), m.energy_share.tobytes(), m.dominant) for m in ms.modes],
+            np.asarray(ms.mass_matrix).tobytes(), np.asarray(ms.basis).tobytes(), ms.basis.strides)
+
+
+def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
+    # modes_batch labels its scenes with mode_sets (the elementwise arithmetic on the whole batch); against
+    # mode_set scene by scene (the path before): the same mode sets bit for bit, over batches of sigma-point
+    # scenes of the Solar Boat, the drone, the trifilar (degenerate swings: mode_set itself) and the
+    # knife-edge plate (a neutral mode)
+    from bifilar.analysis import batch_rest
+    from bifilar.analysis import modes as md
+    from bifilar.analysis.batch import modes_batch, rest_poses
+
+    def scene_by_scene(N, Y, w2, m, M, K, which=None):
+        out = [None] * len(w2)
+        for b in (range(len(w2)) if which is None else which):
+            out[b] = md.mode_set(N[b], Y[b], w2[b], m[b], M[b], K=K[b])
+        return out
+
+    rng = np.random.default_rng(5)
+    cases = [_scene("solar_boat", {"spacing": 3.0}), _scene("drone_parallel", {}), _scene("trifilar_kth", {}),
+             _scene("thesis_plate_rest", {})]
+    n_modes = neutral = 0
+    alone: list = []
+    for base in cases:
+        names = measured_inputs(base)
+        scenes = [perturb(base, n, float(rng.normal()) * 2e-3) for n in names] + [base]
+        rests = rest_poses(scenes, rest_pose(base), errors="return")
+        scenes = [s for s, r in zip(scenes, rests) if not isinstance(r, Exception)]
+        rests = [r for r in rests if not isinstance(r, Exception)]
+        real = md.mode_set
+        with monkeypatch.context() as m:
+            m.setattr(md, "mode_set", lambda *a, **k: alone.append(1) or real(*a, **k))
+            got = modes_batch(scenes, rests)
+        with monkeypatch.context() as m:
+            m.setattr(batch_rest, "mode_sets", scene_by_scene)
+            ref = modes_batch(scenes, rests)
+        assert [_mode_set_fields(a) for a in got] == [_mode_set_fields(b) for b in ref]
+        n_modes += sum(len(a.modes) for a in got)
+        neutral += sum(m.period is None for a in got for m in a.modes)
+    assert n_modes > 200 and neutral > 0
+    assert 0 < len(alone) < n_modes / 8  # the trifilar's degenerate swings went through mode_set, few else

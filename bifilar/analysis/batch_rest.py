@@ -26,7 +26,7 @@ from ..errors import BifilarError
 from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
 from .equilibrium import RestPose, canonical_attitude, knife_edge_axes, rest_pose
-from .modes import ModeSet, mode_set
+from .modes import ModeSet, mode_sets
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
 
@@ -328,14 +328,12 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[Mode
     Li = np.linalg.inv(Lc)
     w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
     Y = np.swapaxes(Li, 1, 2) @ Z
-    out = []
-    for b in range(len(scenes)):
-        if not full[b]:
-            from .modes import linear_modes
+    # mode_set of each full-rank scene, its arithmetic batched where exact (mode_sets: the same mode sets)
+    out = mode_sets(N, Y, w2, m, M, Kr, which=np.nonzero(full)[0])
+    for b in np.nonzero(~full)[0]:
+        from .modes import linear_modes
 
-            out.append(linear_modes(scenes[b], rests[b]))
-            continue
-        out.append(mode_set(N[b], Y[b], w2[b], m[b], M[b], K=Kr[b]))
+        out[b] = linear_modes(scenes[b], rests[b])
     return out
 
 
