@@ -474,3 +474,20 @@ def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
         neutral += sum(m.period is None for a in got for m in a.modes)
     assert n_modes > 200 and neutral > 0
     assert 0 < len(alone) < n_modes / 8  # the trifilar's degenerate swings went through mode_set, few else
+
+
+def test_rest_poses_from_one_guess_equal_those_from_copies_of_it():
+    # the multipliers of a guess shared by every scene are computed once; against a copy per scene (each
+    # its own computation, the path before): the same poses bit for bit
+    import copy
+
+    from bifilar.analysis.batch import rest_poses
+
+    base = _scene("solar_boat", {"spacing": 3.0})
+    guess = rest_pose(base)
+    scenes = [perturb(base, n, 1e-3) for n in measured_inputs(base)]
+    one = rest_poses(scenes, guess)
+    each = rest_poses(scenes, [copy.deepcopy(guess) for _ in scenes])
+    for a, b in zip(one, each):
+        for f in ("com", "R", "q", "tensions", "wire_vectors", "kkt_residual"):
+            assert np.array_equal(getattr(a, f), getattr(b, f))

@@ -213,9 +213,11 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     else:
         guesses = list(guess)
     a, p, L, m, g, I = _stack(scenes)
+    # each distinct guess's multipliers once (one guess for all: the honest budget's sigma points)
+    lam_of = {id(q): q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in {id(q): q for q in guesses}.values()}
     com = np.array([q.com for q in guesses], float)
     R = np.array([q.R for q in guesses], float)
-    lam = np.array([q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in guesses], float)
+    lam = np.array([lam_of[id(q)] for q in guesses], float)
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
     # a knife edge (CoM on the attachment line) rests anywhere on a neutral circle; Newton's end
     # there depends on the warm start: take the canonical member, as rest_pose does
