@@ -250,6 +250,18 @@ def test_constraint_hessians_equal_the_skew_formula():
             assert np.array_equal(H[i, 3:, 3:], ref)
 
 
+def _count_calls(monkeypatch, owner, name, real) -> list:
+    """Replace ``owner.name`` by ``real`` counting its calls: the list gets a 1 per call."""
+    calls: list = []
+
+    def counted(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(owner, name, counted)
+    return calls
+
+
 def _knife_edges():
     """Knife edges (CoM exactly on the attachment line): the thesis plate over a grid of spacings and
     lengths, thesis_lin1, and random rigs (line direction with a tilt, unequal arms, anchors at
@@ -284,14 +296,7 @@ def test_knife_edge_inputs_pushing_hard_are_left_out_without_their_differences(m
     from bifilar.analysis import equilibrium as eq
     from bifilar.studies import point as pt
 
-    newton = []
-    real = eq._from_guess
-
-    def counted(*a, **k):
-        newton.append(1)
-        return real(*a, **k)
-
-    monkeypatch.setattr(eq, "_from_guess", counted)
+    newton = _count_calls(monkeypatch, eq, "_from_guess", eq._from_guess)
     skipped = 0
     for scene in _knife_edges():
         names = COMPS + measured_inputs(scene)
@@ -491,3 +496,25 @@ def test_rest_poses_from_one_guess_equal_those_from_copies_of_it():
     for a, b in zip(one, each):
         for f in ("com", "R", "q", "tensions", "wire_vectors", "kkt_residual"):
             assert np.array_equal(getattr(a, f), getattr(b, f))
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_plate_rest", {"spacing": 2.0}),
+                                         ("drone_parallel", {}), ("trifilar_kth", {"spacing": 0.6})])
+def test_point_builds_its_reduced_stiffness_once(name, params, monkeypatch):
+    # one modes_of_inertia a point serves its modes, the honest pass's and the thesis rung's hanging models
+    # and the linear estimates; against each building its own (the path before): the same point, bit for bit
+    from bifilar.analysis import equilibrium as eq
+    from bifilar.analysis import modes as md
+    from bifilar.studies import point as pt
+    from bifilar.studies.settings import resolve_settings
+
+    cfg = read_yaml(CONFIGS / f"{name}.yaml")
+    st = resolve_settings(cfg)
+    built = _count_calls(monkeypatch, md, "reduced_stiffness", eq.reduced_stiffness)
+    got = pt.evaluate_point(cfg, name, params, st)
+    n_shared = len(built)  # 1, plus the neighbours' of finite differences (the trifilar's repeated swings)
+    monkeypatch.setattr(pt, "_stiffness", lambda scene, rest: None)
+    built.clear()
+    ref = pt.evaluate_point(cfg, name, params, st)
+    assert got["valid"] and len(built) >= n_shared + 2
+    assert got == ref

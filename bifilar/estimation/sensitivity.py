@@ -190,7 +190,7 @@ class Sensitivity:
 
 
 def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: float = 1e-6, *,
-                       rest: RestPose | None = None, method: str = "analytic") -> Sensitivity:
+                       rest: RestPose | None = None, method: str = "analytic", modes: ModeSet | None = None) -> Sensitivity:
     """Sensitivities dT_k/dx_j (s per unit input) of all linear periods to ``names``.
 
     ``method="analytic"`` (default): derivatives of the rest pose and of the
@@ -201,8 +201,9 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
     ``undefined``), and a scene with repeated eigenvalues (a symmetric
     trifilar's two swings) falls back to :func:`period_sensitivity_fd` for
     the whole Jacobian.  ``method="fd"``: :func:`period_sensitivity_fd`.
-    ``rest``: the rest pose of ``scene`` if already known.  The method used
-    is in ``Sensitivity.method``.
+    ``rest``: the rest pose of ``scene`` if already known; ``modes``: its
+    :func:`~bifilar.analysis.modes.linear_modes` about ``rest`` if already
+    solved.  The method used is in ``Sensitivity.method``.
     """
     from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
 
@@ -210,7 +211,7 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
     if method not in ("analytic", "fd"):
         raise ValueError(f"method must be 'analytic' or 'fd', not {method!r}")
     rest = rest if rest is not None else rest_pose(scene)
-    ms = linear_modes(scene, rest)
+    ms = modes if modes is not None else linear_modes(scene, rest)
     T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
     if method == "fd":
         return _fd_sensitivity(scene, names, rel_step, rest, ms, T0, "finite-difference")

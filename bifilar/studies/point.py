@@ -76,7 +76,7 @@ def _neighbour_rest(scene, base, global_search: bool):
     return r
 
 
-def point_sensitivity(scene, names: list[str], rest=None):
+def point_sensitivity(scene, names: list[str], rest=None, at=None):
     """:func:`~bifilar.estimation.sensitivity.period_sensitivity`, robust at
     the edge of stability.
 
@@ -94,7 +94,9 @@ def point_sensitivity(scene, names: list[str], rest=None):
     exact knife edge those pushing hard (:data:`NO_BRANCH_PUSH`), which are
     left out at once as having no side.  Regular
     scenes take :func:`~bifilar.estimation.sensitivity.period_sensitivity`
-    (analytic).  Returns (Sensitivity, notes).
+    (analytic).  ``at``: :func:`~bifilar.analysis.modes.modes_of_inertia`
+    of ``scene`` about ``rest`` if built (its modes at the scene's inertia
+    are the linear modes).  Returns (Sensitivity, notes).
     """
     from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
     from ..analysis.equilibrium import knife_edge_axes, rest_pose
@@ -102,12 +104,12 @@ def point_sensitivity(scene, names: list[str], rest=None):
     from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
 
     rest = rest if rest is not None else rest_pose(scene)
-    ms = linear_modes(scene, rest)
+    ms = at(scene.inertia) if at is not None else linear_modes(scene, rest)
     T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
     neutral = not np.all(np.isfinite(T0))
     if not neutral:
         try:
-            return period_sensitivity(scene, names, rest=rest), []
+            return period_sensitivity(scene, names, rest=rest, modes=ms), []
         except (UnstableRestError, SlackWireError, ConvergenceError):
             pass
     jac = np.zeros((len(T0), len(names)))
@@ -203,8 +205,8 @@ class _Ladder:
     (and marks the thesis's method pending) when that module is absent.
     """
 
-    def __init__(self, scene, rest):
-        self.scene, self.rest = scene, rest
+    def __init__(self, scene, rest, at=None):
+        self.scene, self.rest, self.at = scene, rest, at  # at: modes_of_inertia about rest, if built
         try:
             from ..estimation import invert as inv
             from ..estimation.measurements import Hanging
@@ -242,7 +244,7 @@ class _Ladder:
         try:
             if self._hm is None:
                 self._hm = inv.HangingModel(self._Hanging("sweep point", self.scene, np.eye(3)), self.scene.inertia,
-                                            rest=self.rest)  # the point's rest pose: no second global search
+                                            rest=self.rest, at=self.at)  # the point's rest pose and stiffness
             hm = self._hm
             tm = inv.ThesisModel(hm, hm.mode_index(mode_label, "mode"), comp)
             lo, hi = inv.physical_interval(self.scene.inertia, comp)
@@ -327,12 +329,14 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
     return predicted_budgets(sens, scene, [(comp, k)], unc)[0]
 
 
-def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> list:
+def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True, at=None) -> list:
     """:func:`predicted_budget` of each ``(component, mode index k)`` of
     ``requests`` (0-based k), the honest stds of all of them computed
     together at the scene's truth (:func:`bifilar.estimation.honest.honest_stds`:
     one sensitivity, one set of sigma points for every component).
-    ``honest=False``: the linear budgets only (a planner's screen)."""
+    ``honest=False``: the linear budgets only (a planner's screen).  ``at``:
+    :func:`~bifilar.analysis.modes.modes_of_inertia` of ``scene`` about
+    ``sens.rest`` if built (shared with the honest pass)."""
     from dataclasses import replace
 
     from ..estimation.honest import honest_stds
@@ -355,7 +359,7 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> 
         # the std invert prints: second order where the linear one is wrong (a
         # shallow CoM), so a planner can penalise such a rig (issue 10)
         sds = honest_stds(scene, [(requests[i][0], requests[i][1] + 1) for i in todo], unc, unc["timing"],
-                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest, sens=sens)
+                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest, sens=sens, at=at)
         for i, sd in zip(todo, sds):
             out[i] = replace(out[i], value_sigma=sd)
     return out
@@ -492,7 +496,8 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
     unc = point_uncertainty(st, params)
     names = list(st.components) + measured_inputs(scene)
-    sens, notes = point_sensitivity(scene, names, rest0)
+    at = _stiffness(scene, rest0)
+    sens, notes = point_sensitivity(scene, names, rest0, at=at)
     ms, rest = sens.modes, sens.rest
     labels = [m.label for m in ms.modes]
     periods = sens.periods
@@ -523,7 +528,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             continue
         chosen[comp] = best_mode_for(sens, comp)
         res["components"][comp] = entry
-    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen)))
+    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen, at=at)))
     for comp, k in chosen.items():
         entry = res["components"][comp]
         scale = component_scale(scene.inertia, comp)
@@ -543,7 +548,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         )
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
-    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [])
+    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at)
     if st.tensions:
         pre.runs = sorted(set(chosen.values()))
         from ..analysis.simulate import checked_start_poses
@@ -553,6 +558,17 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         if pre.runs:
             pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
     return res, pre
+
+
+def _stiffness(scene, rest):
+    """The point's reduced stiffness about its rest pose, built once
+    (:func:`~bifilar.analysis.modes.modes_of_inertia`): its linear modes,
+    the honest pass's and the thesis rung's hanging models and the linear
+    estimates' eigenproblems all use it (each built its own before, the
+    same numbers)."""
+    from ..analysis.modes import modes_of_inertia
+
+    return modes_of_inertia(scene, rest)
 
 
 @dataclass
@@ -569,6 +585,7 @@ class _Prepared:
     amplitude: float
     runs: list  # mode indices to run nonlinearly (empty: none)
     starts: Any = None  # their start poses (StartPoses, in the order of runs), checked
+    at: Any = None  # modes_of_inertia of scene about rest (_stiffness), or None
 
 
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
@@ -602,10 +619,12 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
     if screen:
         return res
     # biases at the prescribed amplitude
-    from ..analysis.modes import modes_of_inertia
+    at = pre.at  # the linear estimates' eigenproblems: the point's one stiffness
+    if at is None and chosen:
+        from ..analysis.modes import modes_of_inertia
 
-    ladder = _Ladder(scene, rest)
-    at = modes_of_inertia(scene, rest) if chosen else None  # the linear estimates' eigenproblems, one stiffness
+        at = modes_of_inertia(scene, rest)
+    ladder = _Ladder(scene, rest, pre.at)
     for comp, k in chosen.items():
         e = res["components"][comp]
         T_lin = float(periods[k])
