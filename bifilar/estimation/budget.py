@@ -49,7 +49,7 @@ import numpy as np
 from ..errors import BifilarError, ConvergenceError
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
-from .sensitivity import input_sigma, mac_match, measured_inputs, perturb
+from .sensitivity import input_sigma, mac_match, mac_matches, measured_inputs, perturb
 from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
 
 #: sigma points at +- sqrt(3) standard uncertainties (3-point Gauss-Hermite)
@@ -132,10 +132,8 @@ def _hanging_periods(scenes, rest, base_modes) -> list:
     if not good:
         return out
     mss = _modes_or_none(modes_batch, [scenes[q] for q in good], [rests[q] for q in good])
-    for q, ms in zip(good, mss):
-        if ms is None or len(ms.modes) != len(base_modes.modes):
-            continue
-        col = mac_match(base_modes, ms)
+    kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and len(ms.modes) == len(base_modes.modes)]
+    for (q, ms), col in zip(kept, mac_matches(base_modes, [ms for _, ms in kept])):
         T = np.array([ms.modes[c].period or np.nan for c in col])
         out[q] = (T, scenes[q], rests[q], ms, col)
     return out
