@@ -382,6 +382,8 @@ def test_hanging_model_locate_returns_the_mode_set_it_solved_at_an_inertia():
         assert [m.period for m in ms.modes] == [m.period for m in ref.modes]
         assert all(np.array_equal(a.shape, b.shape) for a, b in zip(ms.modes, ref.modes))
     assert hm.locate(scene)[1] is hm.modes0
+    first = hm.locate(scene)[2]
+    assert hm.locate(scene)[2] is first  # the match too, while modes0 stands
     hm.modes0 = hm.locate(other)[1]
     _, _, match = hm.locate(scene)
     from bifilar.estimation.sensitivity import mac_match
@@ -544,3 +546,29 @@ def test_stacked_mac_matches_equal_mac_match_one_by_one():
             assert list(g) == list(mac_match(ms0, ms))
         n += len(mss)
     assert n > 60
+
+
+def test_modes_of_inertia_returns_the_mode_set_it_solved_and_input_sigma_without_the_merge():
+    # modes_of_inertia hands an inertia asked for again the mode set it solved (the same object), equal to a
+    # fresh function's; input_sigma looks keys up without merging the defaults in: the same sigmas
+    from bifilar.estimation.sensitivity import DEFAULT_UNCERTAINTY, input_sigma
+
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    rest = rest_pose(scene)
+    at = modes_of_inertia(scene, rest)
+    I2 = perturb(scene, "Izz", 7.0).inertia
+    first = at(scene.inertia)
+    at(I2)
+    assert at(scene.inertia) is first
+    for inertia in (scene.inertia, I2):
+        ref = modes_of_inertia(scene, rest)(inertia)
+        assert [(m.period, m.shape.tobytes()) for m in at(inertia).modes] == [(m.period, m.shape.tobytes())
+                                                                               for m in ref.modes]
+    for unc in (None, {}, {"mass": 0.02, "length": 0.003}, {"position": 1e-4, "com": 2e-3, "gravity": 1e-4}):
+        merged = {**DEFAULT_UNCERTAINTY, **(unc or {})}
+        for name in ["mass", "gravity", "Ixx"] + measured_inputs(scene):
+            head = name.split(".")[0]
+            want = {"mass": merged["mass"] * scene.mass, "gravity": merged["gravity"] * scene.gravity,
+                    "length": merged["length"], "anchor": merged["position"], "attachment": merged["position"],
+                    "com": merged["com"]}.get(head, 0.0)
+            assert input_sigma(scene, name, unc) == want

@@ -100,12 +100,24 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     not depend on the inertia, so they are computed once; each call solves
     only the eigenproblem (the same operations as :func:`linear_modes`, so
     the same result to the last bit).  For a search over one inertia
-    component at a fixed geometry."""
+    component at a fixed geometry.  An inertia asked for again (the same
+    bytes) returns the mode set solved for it the first time (the same
+    object: read only; a sweep point's consumers share one function)."""
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
     N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
     K = 0.5 * (Kr + Kr.T)
+    solved: dict = {}
 
     def modes(inertia) -> ModeSet:
+        key = np.asarray(inertia, float).tobytes()
+        ms = solved.get(key)
+        if ms is None:
+            ms = _solve(inertia)
+            if len(solved) < 8:
+                solved[key] = ms
+        return ms
+
+    def _solve(inertia) -> ModeSet:
         M = np.zeros((6, 6))
         M[:3, :3] = scene.mass * np.eye(3)
         M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T

@@ -191,6 +191,7 @@ class HangingModel:
         # the mode sets already solved at this geometry: inertia bytes -> ModeSet (a budget asks for the
         # prior's several times, and every component of one truth shares the model: honest.honest_stds)
         self._solved: dict = {self.scene0.inertia.tobytes(): self.modes0}
+        self._matched: dict = {}  # inertia bytes -> (the modes0 matched against, the match)
         self.evaluations = 0
 
     @staticmethod
@@ -238,7 +239,7 @@ class HangingModel:
             self._rest_cache = (key, rest)
         if self._modes_at[0] != key:
             self._modes_at = (key, modes_of_inertia(scene, rest))
-            self._solved = {}
+            self._solved, self._matched = {}, {}
         ik = np.asarray(scene.inertia, float).tobytes()
         ms = self._solved.get(ik)
         if ms is None:
@@ -246,7 +247,11 @@ class HangingModel:
             if len(self._solved) < 16:
                 self._solved[ik] = ms
         self.evaluations += 1
-        return rest, ms, mac_match(self.modes0, ms)
+        base, match = self._matched.get(ik, (None, None))
+        if base is not self.modes0:  # (roots.relabel may replace modes0)
+            match = mac_match(self.modes0, ms)
+            self._matched[ik] = (self.modes0, match)
+        return rest, ms, match
 
     def periods(self, values: dict) -> np.ndarray:
         """Linear periods (s) of the base modes (NaN if neutral) at ``values``."""

@@ -107,18 +107,22 @@ def measured_inputs(scene: Scene) -> list[str]:
 
 def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
     """Standard uncertainty of input ``name`` from a dict like :data:`DEFAULT_UNCERTAINTY`."""
-    u = {**DEFAULT_UNCERTAINTY, **(unc or {})}
+    unc = unc or {}
+
+    def u(key):  # unc's value, else the default (as {**DEFAULT_UNCERTAINTY, **unc}[key], without the merge)
+        return unc[key] if key in unc else DEFAULT_UNCERTAINTY[key]
+
     if name == "mass":
-        return u["mass"] * scene.mass
+        return u("mass") * scene.mass
     if name == "gravity":
-        return u["gravity"] * scene.gravity
+        return u("gravity") * scene.gravity
     head = name.split(".")[0]
     if head == "length":
-        return u["length"]
+        return u("length")
     if head in ("anchor", "attachment"):
-        return u["position"]
+        return u("position")
     if head == "com":
-        return u["com"]
+        return u("com")
     return 0.0  # inertia components: the unknowns
 
 
