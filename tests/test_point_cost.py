@@ -572,3 +572,19 @@ def test_modes_of_inertia_returns_the_mode_set_it_solved_and_input_sigma_without
                     "length": merged["length"], "anchor": merged["position"], "attachment": merged["position"],
                     "com": merged["com"]}.get(head, 0.0)
             assert input_sigma(scene, name, unc) == want
+
+
+def test_constraint_jacobian_equals_the_np_cross_formula():
+    # [d, w x d] written out with np.cross's operations: the same numbers as np.hstack([d, np.cross(w, d)]),
+    # bit for bit
+    from bifilar.analysis.equilibrium import constraint_jacobian
+    from bifilar.rotations import rotvec_to_matrix
+
+    rng = np.random.default_rng(4)
+    for name in ("solar_boat", "trifilar_kth", "drone_parallel", "thesis_plate_rest"):
+        scene = _scene(name, {})
+        for _ in range(20):
+            com = rng.normal(size=3) * 10.0 ** rng.uniform(-2, 1)
+            R = rotvec_to_matrix(rng.normal(size=3))
+            d, w, G = constraint_jacobian(scene, com, R)
+            assert np.array_equal(G, np.hstack([d, np.cross(w, d)]))

@@ -68,7 +68,13 @@ def constraint_jacobian(scene: Scene, com: np.ndarray, R: np.ndarray) -> tuple[n
     dtheta a small world-frame rotation vector (R -> exp(dtheta) R)."""
     w = scene.attachments @ R.T
     d = com + w - scene.anchors
-    G = np.hstack([d, np.cross(w, d)])
+    # [d, w x d], the cross product written out with np.cross's own operations (a1 b2 - a2 b1, ...:
+    # the same numbers) without its per-call overhead (every Newton step and stiffness calls this)
+    G = np.empty((d.shape[0], 6), dtype=np.result_type(d, w))
+    G[:, :3] = d
+    G[:, 3] = w[:, 1] * d[:, 2] - w[:, 2] * d[:, 1]
+    G[:, 4] = w[:, 2] * d[:, 0] - w[:, 0] * d[:, 2]
+    G[:, 5] = w[:, 0] * d[:, 1] - w[:, 1] * d[:, 0]
     return d, w, G
 
 
