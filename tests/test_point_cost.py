@@ -588,3 +588,74 @@ def test_constraint_jacobian_equals_the_np_cross_formula():
             R = rotvec_to_matrix(rng.normal(size=3))
             d, w, G = constraint_jacobian(scene, com, R)
             assert np.array_equal(G, np.hstack([d, np.cross(w, d)]))
+
+
+# equilibrium._newton_kkt as it was before its loop invariants (scales, L^2, the damping limit) were hoisted
+# out of the loop, kept verbatim as the reference the hoisted one must equal bit for bit
+from bifilar.analysis import equilibrium as eq  # noqa: E402
+
+
+def _newton_kkt_before(scene, com, R, lam=None, iters=60):
+    """Newton on grad V + G^T lam = 0, phi = 0.  Returns com, R, lam, residual."""
+    m, g = scene.mass, scene.gravity
+    n = scene.n_wires
+    gradV = np.array([0, 0, m * g, 0, 0, 0], float)
+    L = scene.lengths
+    d, w, G = eq.constraint_jacobian(scene, com, R)
+    if lam is None:
+        lam = -np.linalg.lstsq(G.T, gradV, rcond=None)[0]
+    force_scale = m * g
+    prev = np.inf
+    for _ in range(iters):
+        d, w, G = eq.constraint_jacobian(scene, com, R)
+        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
+        r1 = gradV + G.T @ lam
+        res = max(np.max(np.abs(r1)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
+        # converged, or at the rounding floor (a singular system: dependent
+        # wires or a neutral direction stall at ~1e-14 instead of 1e-15)
+        if res < 1e-15 or (res < 1e-12 and res > 0.5 * prev):
+            break
+        prev = res
+        H = np.einsum("i,ijk->jk", lam, eq.constraint_hessians(d, w))
+        K = np.zeros((6 + n, 6 + n))
+        K[:6, :6] = H
+        K[:6, 6:] = G.T
+        K[6:, :6] = G
+        # solved dimensionless (unknowns dr / L, dtheta, dlam L^2 / (m g); rows force / (m g), moment / (m g L),
+        # phi / L^2), by least squares: the Newton step when K is regular, the minimum-norm step when a
+        # neutral direction (CoM on the attachment line) or dependent wires make it singular
+        Ls = float(np.max(L))
+        cs = np.concatenate([np.full(3, Ls), np.ones(3), np.full(n, force_scale / Ls**2)])
+        rs = np.concatenate([np.full(3, 1 / force_scale), np.full(3, 1 / (force_scale * Ls)), np.full(n, 1 / Ls**2)])
+        step = cs * np.linalg.lstsq(rs[:, None] * K * cs[None, :], -rs * np.concatenate([r1, phi]), rcond=None)[0]
+        # damp huge steps (far from the solution)
+        dx = step[:6]
+        lim = 0.2 * np.max(L)
+        s = min(1.0, lim / max(np.max(np.abs(dx[:3])), 1e-300), 0.5 / max(np.max(np.abs(dx[3:])), 1e-300))
+        com = com + s * dx[:3]
+        R = eq.rotvec_to_matrix(s * dx[3:]) @ R
+        lam = lam + s * step[6:]
+    d, w, G = eq.constraint_jacobian(scene, com, R)
+    phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
+    res = max(np.max(np.abs(gradV + G.T @ lam)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
+    return com, R, lam, res
+
+
+def test_newton_with_hoisted_scales_equals_the_loop_before():
+    # rest poses from cold starts, from a neighbour's pose (finite differences, sigma points) and at a knife
+    # edge (the least-squares step): the same com, R, multipliers and residual, bit for bit
+    rng = np.random.default_rng(6)
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("drone_parallel", {}),
+                         ("thesis_plate_rest", {})):
+        scene = _scene(name, params)
+        rest = rest_pose(scene)
+        lam0 = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
+        starts = [(*eq._initial_pose(scene), None, 40)]
+        for nm in measured_inputs(scene)[:8]:
+            sc = perturb(scene, nm, float(rng.normal()) * 1e-3)
+            starts.append((rest.com, rest.R, lam0, 30, sc))
+        for com, R, lam, iters, *sc in starts:
+            s = sc[0] if sc else scene
+            got = eq._newton_kkt(s, com.copy(), R.copy(), None if lam is None else lam.copy(), iters=iters)
+            ref = _newton_kkt_before(s, com.copy(), R.copy(), None if lam is None else lam.copy(), iters=iters)
+            assert all(np.array_equal(a, b) for a, b in zip(got, ref))
