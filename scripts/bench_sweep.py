@@ -211,6 +211,7 @@ PARTS = [("sensitivity", "bifilar.studies.point", "point_sensitivity"),
          ("honest sigma (all components)", "bifilar.estimation.honest", "honest_stds"),
          ("  of which sigma-point scenes' rest poses + modes", "bifilar.estimation.budget", "_hanging_periods"),
          ("  of which sigma points re-solved", "bifilar.estimation.budget", "_resolve"),
+         ("  of which sigma points re-solved", "bifilar.estimation.budget", "_one_step"),  # their first steps, batched
          ("start poses of the runs (checked)", "bifilar.analysis.simulate", "checked_start_poses"),
          ("nonlinear runs", "bifilar.studies.point", "_nonlinear_runs"),
          ("bias: thesis rung", "bifilar.studies.point", "_Ladder.thesis"),
@@ -293,7 +294,7 @@ def main(argv=None) -> int:
         res["parts"] = bench_parts(args.repeats)
         for case, r in res["parts"].items():
             print(f"{case} point, {1e3 * r['point_cpu_s']:.1f} ms CPU (median), where it goes (mean ms): "
-                  + "; ".join(f"{k.strip()} {1e3 * r.get(k, 0.0):.1f}" for k, _, _ in PARTS))
+                  + "; ".join(f"{k.strip()} {1e3 * r.get(k, 0.0):.1f}" for k in dict.fromkeys(k for k, _, _ in PARTS)))
     if not args.no_plan:
         res["plan"] = p = bench_plan(args.repeats)
         print(f"Solar Boat 2-parameter plan: {p['plan_cpu_s']:.2f} s CPU ({p['plan_wall_s']:.2f} s wall), "

@@ -30,7 +30,7 @@ from ..errors import BifilarError
 from ..rotations import matrix_to_quat, quat_to_rotvec, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
 from .equilibrium import LINE_TURN_TOL, START_BOX, RestPose, canonical_attitude, knife_edge_axes, line_turns, rest_pose
-from .modes import ModeSet, mode_set
+from .modes import ModeSet, mode_sets
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
 
@@ -221,9 +221,11 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     else:
         guesses = list(guess)
     a, p, L, m, g, I = _stack(scenes)
+    # each distinct guess's multipliers once (one guess for all: the honest budget's sigma points)
+    lam_of = {id(q): q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in {id(q): q for q in guesses}.values()}
     com = np.array([q.com for q in guesses], float)
     R = np.array([q.R for q in guesses], float)
-    lam = np.array([q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in guesses], float)
+    lam = np.array([lam_of[id(q)] for q in guesses], float)
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
     # a knife edge (CoM on the attachment line) rests anywhere on a neutral circle; Newton's end
     # there depends on the warm start: take the canonical member, as rest_pose does
@@ -343,14 +345,12 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[Mode
     Li = np.linalg.inv(Lc)
     w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
     Y = np.swapaxes(Li, 1, 2) @ Z
-    out = []
-    for b in range(len(scenes)):
-        if not full[b]:
-            from .modes import linear_modes
+    # mode_set of each full-rank scene, its arithmetic batched where exact (mode_sets: the same mode sets)
+    out = mode_sets(N, Y, w2, m, M, Kr, which=np.nonzero(full)[0])
+    for b in np.nonzero(~full)[0]:
+        from .modes import linear_modes
 
-            out.append(linear_modes(scenes[b], rests[b]))
-            continue
-        out.append(mode_set(N[b], Y[b], w2[b], m[b], M[b], K=Kr[b]))
+        out[b] = linear_modes(scenes[b], rests[b])
     return out
 
 

@@ -198,9 +198,14 @@ def _scales(scene: Scene):
     return rs, cs
 
 
-def _pose_derivative(scene: Scene, rest: RestPose, dirs: dict, singular: float = 1e-12, consistent: float = 1e-8):
+def _pose_derivative(scene: Scene, rest: RestPose, dirs: dict, singular: float = 1e-12, consistent: float = 1e-8,
+                     push: bool = False):
     """dx (J, 6) = (dcom, dtheta) and dlam (J, n) per unit of each input,
-    and a mask (J,) of the inputs whose derivative does not exist.
+    and a mask (J,) of the inputs whose derivative does not exist; with
+    ``push``, also each input's push along the neutral direction (J,): the
+    least-squares residual relative to the right-hand side (0 to rounding
+    where the derivative exists, O(1) for an input that moves the CoM off a
+    knife edge's line sideways).
 
     The KKT system is solved in the dimensionless scaling of the Newton
     solver.  When the KKT matrix is singular (smallest singular value below
@@ -221,8 +226,11 @@ def _pose_derivative(scene: Scene, rest: RestPose, dirs: dict, singular: float =
     coef = (U[:, keep].T @ b) / s[keep, None]
     z = Vt[keep].T @ coef
     resid = np.linalg.norm(b - As @ z, axis=0)
-    bad = resid > consistent * np.linalg.norm(b, axis=0)
+    bnorm = np.linalg.norm(b, axis=0)
+    bad = resid > consistent * bnorm
     z = cs[:, None] * z
+    if push:
+        return z[:6].T, z[6:].T, bad, resid / np.where(bnorm > 0, bnorm, 1.0)
     return z[:6].T, z[6:].T, bad
 
 
@@ -246,24 +254,28 @@ def rest_derivative(scene: Scene, rest: RestPose, names: list[str]) -> RestDeriv
     return RestDerivative(list(names), dx[:, :3], dx[:, 3:], dT, dlam)
 
 
-def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: list[str]) -> np.ndarray:
+def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: list[str], push: bool = False):
     """dT_k/dp_j (s per unit input), (K, J), for the modes of ``ms`` (the
     linear modes of ``scene`` about ``rest``), analytic (module docstring).
 
     A neutral mode (no period) has a NaN row; an input without a derivative
     (singular KKT matrix and the input pushing along its neutral direction)
     a NaN column: the caller differences those columns.  Raises
-    :class:`NotDifferentiable` for repeated eigenvalues.
+    :class:`NotDifferentiable` for repeated eigenvalues.  ``push``: return
+    ``(jacobian, push)``, ``push`` (J,) how hard each input pushes along the
+    neutral direction (:func:`_pose_derivative`; dimensionless, 0 to
+    rounding where the column is finite).
     """
     if not ms.modes:
-        return np.zeros((0, len(names)))
+        z = np.zeros((0, len(names)))
+        return (z, np.zeros(len(names))) if push else z
     w2 = np.array([m.omega2 for m in ms.modes])
     live = np.array([m.period is not None for m in ms.modes])
     scale = float(np.max(np.abs(w2)))
     if degenerate_clusters(np.sort(w2[live]), scale):
         raise NotDifferentiable("repeated eigenvalues: each mode's derivative depends on the perturbation")
     dirs = input_directions(scene, names)
-    dx, dlam, bad = _pose_derivative(scene, rest, dirs)
+    dx, dlam, bad, rel = _pose_derivative(scene, rest, dirs, push=True)
     _, G, K, M = _kkt_matrix(scene, rest)
     _, Gs, Ks, Ms = _parts(*_stepped(scene, rest, dirs, dx, dlam))
     dG, dK, dM = Gs.imag / _H, Ks.imag / _H, Ms.imag / _H
@@ -277,4 +289,4 @@ def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: l
     jac = -(T / (2 * np.where(live, w2, 1.0)))[:, None] * dw2
     jac[~live] = np.nan
     jac[:, bad] = np.nan
-    return jac
+    return (jac, rel) if push else jac

@@ -69,7 +69,13 @@ def constraint_jacobian(scene: Scene, com: np.ndarray, R: np.ndarray) -> tuple[n
     dtheta a small world-frame rotation vector (R -> exp(dtheta) R)."""
     w = scene.attachments @ R.T
     d = com + w - scene.anchors
-    G = np.hstack([d, np.cross(w, d)])
+    # [d, w x d], the cross product written out with np.cross's own operations (a1 b2 - a2 b1, ...:
+    # the same numbers) without its per-call overhead (every Newton step and stiffness calls this)
+    G = np.empty((d.shape[0], 6), dtype=np.result_type(d, w))
+    G[:, :3] = d
+    G[:, 3] = w[:, 1] * d[:, 2] - w[:, 2] * d[:, 1]
+    G[:, 4] = w[:, 2] * d[:, 0] - w[:, 0] * d[:, 2]
+    G[:, 5] = w[:, 0] * d[:, 1] - w[:, 1] * d[:, 0]
     return d, w, G
 
 
@@ -212,12 +218,20 @@ def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | 
     if lam is None:
         lam = -np.linalg.lstsq(G.T, gradV, rcond=None)[0]
     force_scale = m * g
+    # solved dimensionless (unknowns dr / L, dtheta, dlam L^2 / (m g); rows force / (m g), moment / (m g L),
+    # phi / L^2), by least squares: the Newton step when K is regular, the minimum-norm step when a
+    # neutral direction (CoM on the attachment line) or dependent wires make it singular; the scales
+    # (and L^2) once, not every step
+    Ls = float(np.max(L))
+    cs = np.concatenate([np.full(3, Ls), np.ones(3), np.full(n, force_scale / Ls**2)])
+    rs = np.concatenate([np.full(3, 1 / force_scale), np.full(3, 1 / (force_scale * Ls)), np.full(n, 1 / Ls**2)])
+    L2, Lsq, lim = L**2, np.max(L) ** 2, 0.2 * np.max(L)  # lim: the largest CoM step (damping)
     prev = np.inf
     for _ in range(iters):
         d, w, G = constraint_jacobian(scene, com, R)
-        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L**2)
+        phi = 0.5 * (np.einsum("ij,ij->i", d, d) - L2)
         r1 = gradV + G.T @ lam
-        res = max(np.max(np.abs(r1)) / force_scale, np.max(np.abs(phi)) / np.max(L) ** 2)
+        res = max(np.max(np.abs(r1)) / force_scale, np.max(np.abs(phi)) / Lsq)
         # converged, or at the rounding floor (a singular system: dependent
         # wires or a neutral direction stall at ~1e-14 instead of 1e-15)
         if res < 1e-15 or (res < 1e-12 and res > 0.5 * prev):
@@ -228,16 +242,9 @@ def _newton_kkt(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | 
         K[:6, :6] = H
         K[:6, 6:] = G.T
         K[6:, :6] = G
-        # solved dimensionless (unknowns dr / L, dtheta, dlam L^2 / (m g); rows force / (m g), moment / (m g L),
-        # phi / L^2), by least squares: the Newton step when K is regular, the minimum-norm step when a
-        # neutral direction (CoM on the attachment line) or dependent wires make it singular
-        Ls = float(np.max(L))
-        cs = np.concatenate([np.full(3, Ls), np.ones(3), np.full(n, force_scale / Ls**2)])
-        rs = np.concatenate([np.full(3, 1 / force_scale), np.full(3, 1 / (force_scale * Ls)), np.full(n, 1 / Ls**2)])
         step = cs * np.linalg.lstsq(rs[:, None] * K * cs[None, :], -rs * np.concatenate([r1, phi]), rcond=None)[0]
         # damp huge steps (far from the solution)
         dx = step[:6]
-        lim = 0.2 * np.max(L)
         s = min(1.0, lim / max(np.max(np.abs(dx[:3])), 1e-300), 0.5 / max(np.max(np.abs(dx[3:])), 1e-300))
         com = com + s * dx[:3]
         R = rotvec_to_matrix(s * dx[3:]) @ R

@@ -100,12 +100,24 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     not depend on the inertia, so they are computed once; each call solves
     only the eigenproblem (the same operations as :func:`linear_modes`, so
     the same result to the last bit).  For a search over one inertia
-    component at a fixed geometry."""
+    component at a fixed geometry.  An inertia asked for again (the same
+    bytes) returns the mode set solved for it the first time (the same
+    object: read only; a sweep point's consumers share one function)."""
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
     N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
     K = 0.5 * (Kr + Kr.T)
+    solved: dict = {}
 
     def modes(inertia) -> ModeSet:
+        key = np.asarray(inertia, float).tobytes()
+        ms = solved.get(key)
+        if ms is None:
+            ms = _solve(inertia)
+            if len(solved) < 8:
+                solved[key] = ms
+        return ms
+
+    def _solve(inertia) -> ModeSet:
         M = np.zeros((6, 6))
         M[:3, :3] = scene.mass * np.eye(3)
         M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
@@ -220,6 +232,14 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
     zero = (np.abs(w2) <= np.maximum(tol, NEUTRAL_RTOL * scale)) | (w2 <= 0)
     periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
+    return _assemble(S, share, w2, zero, periods, i, M, N)
+
+
+def _assemble(S, share, w2, zero, periods, i, M, N) -> ModeSet:
+    """The :class:`ModeSet` of one solved eigenproblem from :func:`mode_set`'s
+    arrays (shapes S (6, k), energy shares (6, k), omega^2, neutral flags,
+    periods, index of each shape's unit component): ordered slowest first,
+    neutral last, ties by the dominant world component; labelled."""
     dom_e = np.argmax(share, axis=0)
     order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
     seen: dict[str, int] = {}
@@ -231,6 +251,51 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
         modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
                           S[:, j].copy(), share[:, j].copy(), int(i[j])))
     return ModeSet(modes, M, N)
+
+
+def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M: np.ndarray,
+              K: np.ndarray, which=None) -> list[ModeSet]:
+    """:func:`mode_set` of each of a batch of solved eigenproblems (leading
+    axis B: ``N`` (B, 6, k), ``Y`` (B, k, k), ``w2`` (B, k) ascending,
+    ``mass`` (B,) kg, ``M`` (B, 6, 6), ``K`` (B, k, k)), the same mode
+    sets bit for bit with less numpy call overhead: each scene's
+    resolution, clusters, ``N @ Y`` and energy-share sums are the very
+    calls :func:`mode_set` makes on it; only elementwise operations and
+    maxima, exact in any order, run on the whole batch.  A scene with a
+    degenerate cluster goes through :func:`mode_set` itself.  ``which``:
+    the scenes to do (indices; the others' entries are None), default all.
+    Each ModeSet holds ``N[b]`` and ``M[b]`` (views) as :func:`mode_set`
+    given them does."""
+    B = len(w2)
+    out: list = [None] * B
+    rows, S, tols = [], [], []
+    for b in (range(B) if which is None else which):
+        wb, Yb = np.array(w2[b], float), np.array(Y[b], float)
+        tol = _noise(wb, Yb, K[b])
+        if any(j - a > 1 for a, j in clusters(wb, tol)):
+            out[b] = mode_set(N[b], Y[b], w2[b], mass[b], M[b], K=K[b])
+            continue
+        rows.append(b)
+        S.append(N[b] @ Yb)
+        tols.append(tol)
+    if not rows:
+        return out
+    S = np.array(S)  # (R, 6, k)
+    w2r = np.array(w2, float)[rows]
+    tol = np.array(tols)
+    absS = np.abs(S)
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (R, k)
+    S = S / np.take_along_axis(S, i[:, None, :], axis=1)
+    diagM = np.diagonal(np.asarray(M)[rows], axis1=1, axis2=2)[:, 3:]
+    share = np.concatenate([np.asarray(mass, float)[rows, None, None] * S[:, :3] ** 2,
+                            diagM[:, :, None] * S[:, 3:] ** 2], axis=1)
+    share = np.array([sh / sh.sum(axis=0) for sh in share])  # each scene's own sum, as mode_set
+    scale = np.maximum(np.max(np.abs(w2r), axis=1), 1e-300)
+    zero = (np.abs(w2r) <= np.maximum(tol, NEUTRAL_RTOL * scale[:, None])) | (w2r <= 0)
+    periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2r)))
+    for q, b in enumerate(rows):
+        out[b] = _assemble(S[q], share[q], w2r[q], zero[q], periods[q], i[q], M[b], N[b])
+    return out
 
 
 def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol, groups=None) -> np.ndarray:

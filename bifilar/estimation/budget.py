@@ -49,7 +49,7 @@ import numpy as np
 from ..errors import BifilarError, ConvergenceError
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
-from .sensitivity import input_sigma, mac_match, measured_inputs, perturb
+from .sensitivity import input_sigma, mac_match, mac_matches, measured_inputs, perturb
 from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
 
 #: sigma points at +- sqrt(3) standard uncertainties (3-point Gauss-Hermite)
@@ -132,10 +132,8 @@ def _hanging_periods(scenes, rest, base_modes) -> list:
     if not good:
         return out
     mss = _modes_or_none(modes_batch, [scenes[q] for q in good], [rests[q] for q in good])
-    for q, ms in zip(good, mss):
-        if ms is None or len(ms.modes) != len(base_modes.modes):
-            continue
-        col = mac_match(base_modes, ms)
+    kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and len(ms.modes) == len(base_modes.modes)]
+    for (q, ms), col in zip(kept, mac_matches(base_modes, [ms for _, ms in kept])):
         T = np.array([ms.modes[c].period or np.nan for c in col])
         out[q] = (T, scenes[q], rests[q], ms, col)
     return out
@@ -194,10 +192,11 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
     jobs: dict[int, list] = {h: [] for h in range(len(pb.models))}
     res: dict = {pid: {} for pid in points}
     cache = ctx.cache
+    skeys = [scene_key(s) for s in ctx.scenes] if cache is not None else None
     for pid, moves in points.items():
         for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
             if any(m.hanging == h for m in pb.measurements):
-                ck = ("sigma point", scene_key(ctx.scenes[h]), tuple(moves)) if cache is not None else None
+                ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
                 if ck is not None and ck in cache:
                     res[pid][h] = cache[ck]
                 else:
@@ -208,9 +207,34 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
                 res[pid][h] = o
                 if ck is not None:
                     cache[ck] = o
-    return {pid: (_resolve(pb, ctx, p_hat, r_hat, points[pid], hits)
-                  if all(v is not None for v in hits.values()) else None)
-            for pid, hits in res.items()}
+    whole = {pid: hits for pid, hits in res.items() if all(v is not None for v in hits.values())}
+    done = _one_step(pb, ctx, p_hat, r_hat, whole)
+    return {pid: (done[pid] if pid in done else _resolve(pb, ctx, p_hat, r_hat, points[pid], hits))
+            if pid in whole else None for pid, hits in res.items()}
+
+
+def _one_step(pb: Problem, ctx: BudgetContext, p_hat, r_hat, hits_of: dict) -> dict:
+    """{point id: re-solved unknowns} for the points of ``hits_of`` ({id:
+    hits of :func:`_resolve`}) that :func:`_resolve` settles in its first
+    Gauss-Newton step (every period finite and within 1e-2 of the
+    estimate's: the common case), that step for all of them at once with
+    the same arithmetic (elementwise, then ``G @`` per point); the others
+    are left out, for :func:`_resolve`."""
+    pids = list(hits_of)
+    if not pids:
+        return {}
+    T = np.tile(np.asarray(ctx.T_hat, float), (len(pids), 1))
+    r = np.asarray(r_hat, float)
+    for h in sorted({h for hits in hits_of.values() for h in hits}):
+        ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
+        idx = [ctx.match[h][pb.mode_index[k]] for k in ks]
+        rows = [q for q, pid in enumerate(pids) if h in hits_of[pid]]
+        T[np.ix_(rows, ks)] = r[ks] * np.array([hits_of[pids[q]][h][0][idx] for q in rows])
+    with np.errstate(invalid="ignore"):
+        ok = np.all(np.isfinite(T), axis=1) & (np.max(np.abs(T / ctx.T_hat - 1), axis=1) < 1e-2)
+    inc = (ctx.T_hat ** 2 - T ** 2) / (2 * ctx.T_hat)
+    p0 = np.asarray(p_hat, float)
+    return {pids[q]: p0 + ctx.G @ inc[q] for q in np.nonzero(ok)[0]}
 
 
 def _coefs3(vm, v0, vp):

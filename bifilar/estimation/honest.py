@@ -30,7 +30,7 @@ from .budget import LINEAR_ENOUGH, component_std
 
 
 def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitude: float | None = 0.0,
-                fallbacks=None, rest=None, rtol: float = 1e-10, sens=None) -> list[float]:
+                fallbacks=None, rest=None, rtol: float = 1e-10, sens=None, at=None) -> list[float]:
     """The honest standard uncertainty (kg m^2) of each ``(component, mode)``
     of ``requests`` (body-axis inertia component, mode label or 1-based
     index) of ``scene``: :func:`~bifilar.estimation.budget.component_std`
@@ -42,7 +42,9 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     ``sens``: the scene's :class:`~bifilar.estimation.sensitivity.Sensitivity`
     about ``rest`` if known (a sweep point's); where it is analytic in every
     measured input it serves the linear budget (the same Jacobian the budget
-    would compute, :func:`_seed_sensitivity`)."""
+    would compute, :func:`_seed_sensitivity`), and its modes serve as the
+    scene's when it is about ``rest``.  ``at``: :func:`~bifilar.analysis.modes.modes_of_inertia`
+    of ``scene`` about ``rest`` if built (the hanging model's stiffness)."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from .invert import full_budget
@@ -55,12 +57,12 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     cache: dict = {}
     if sens is not None:
         _seed_sensitivity(cache, scene, sens)
-    ms = None
+    ms = models = None
     for (comp, mode), fb in zip(requests, fallbacks):
         try:
             if ms is None:
                 rest = rest if rest is not None else rest_pose(scene)
-                ms = linear_modes(scene, rest)
+                ms = sens.modes if sens is not None and sens.rest is rest else linear_modes(scene, rest)
             if comp not in _IDX or not admissible(scene.inertia):
                 # the inversion would start elsewhere (start guesses) or solve a CoM: its own way
                 out.append(component_std(scene, comp, mode, unc, timing, amplitude, fb))
@@ -72,7 +74,8 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
                                   [Measurement(md.label, float(md.period), s, "period", "--period",
                                                amplitude=amplitude)])
             unc_all = default_uncertainty({**meas.uncertainty, **(unc or {})})
-            pb = build_problem(meas, [comp], unc_all, rests=[rest])
+            pb = build_problem(meas, [comp], unc_all, rests=[rest], models=models, ats=[at])
+            models = pb.models  # one hanging model (and its mode sets) for every component
             pb.unc = unc_all
             p = pb.prior
             r = np.ones(1)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..analysis.equilibrium import rest_pose
-from ..analysis.modes import linear_modes, modes_of_inertia
+from ..analysis.modes import modes_of_inertia
 from ..errors import BifilarError, InputError
 from ..scene import TRIANGLE_SLACK, Scene, obeys_triangle
 from .measurements import COM_UNKNOWNS, SOLVABLE, MeasurementSet
@@ -172,18 +172,26 @@ class HangingModel:
     are tracked by MAC against the modes at the prior.
     """
 
-    def __init__(self, hanging, I_ref0: np.ndarray, like: "HangingModel | None" = None, rest=None):
+    def __init__(self, hanging, I_ref0: np.ndarray, like: "HangingModel | None" = None, rest=None, at=None):
         self.hanging = hanging
         self.R = np.asarray(hanging.rotation, float)
         self.I_ref0 = np.asarray(I_ref0, float)
         self.scene0 = replace(hanging.scene, inertia=self.R @ self.I_ref0 @ self.R.T)
-        # ``rest``: the rest pose of this geometry (it does not depend on the inertia)
+        # ``rest``: the rest pose of this geometry (it does not depend on the inertia); ``at``: with it,
+        # modes_of_inertia of this geometry about ``rest`` if already built (its reduced stiffness)
         self.rest0 = rest if rest is not None else rest_pose(self.scene0, guess=like.rest0 if like is not None else None)
-        self.modes0 = linear_modes(self.scene0, self.rest0)
+        key = self._geom_key(self.scene0)
+        # (geometry key, modes_of_inertia at the cached rest pose): built once here and reused by
+        # locate at this geometry; modes0 is linear_modes(scene0, rest0), the same operations
+        self._modes_at = (key, at if at is not None and rest is not None else modes_of_inertia(self.scene0, self.rest0))
+        self.modes0 = self._modes_at[1](self.scene0.inertia)
         # for a perturbed copy, base-mode k of ``like`` is mode map_like[k] here
         self.map_like = mac_match(like.modes0, self.modes0) if like is not None else None
-        self._rest_cache = (self._geom_key(self.scene0), self.rest0)
-        self._modes_at = None  # (geometry key, modes_of_inertia at the cached rest pose)
+        self._rest_cache = (key, self.rest0)
+        # the mode sets already solved at this geometry: inertia bytes -> ModeSet (a budget asks for the
+        # prior's several times, and every component of one truth shares the model: honest.honest_stds)
+        self._solved: dict = {self.scene0.inertia.tobytes(): self.modes0}
+        self._matched: dict = {}  # inertia bytes -> (the modes0 matched against, the match)
         self.evaluations = 0
 
     @staticmethod
@@ -229,11 +237,21 @@ class HangingModel:
         else:
             rest = rest_pose(scene, guess=self._rest_cache[1])
             self._rest_cache = (key, rest)
-        if self._modes_at is None or self._modes_at[0] != key:
+        if self._modes_at[0] != key:
             self._modes_at = (key, modes_of_inertia(scene, rest))
-        ms = self._modes_at[1](scene.inertia)
+            self._solved, self._matched = {}, {}
+        ik = np.asarray(scene.inertia, float).tobytes()
+        ms = self._solved.get(ik)
+        if ms is None:
+            ms = self._modes_at[1](scene.inertia)
+            if len(self._solved) < 16:
+                self._solved[ik] = ms
         self.evaluations += 1
-        return rest, ms, mac_match(self.modes0, ms)
+        base, match = self._matched.get(ik, (None, None))
+        if base is not self.modes0:  # (roots.relabel may replace modes0)
+            match = mac_match(self.modes0, ms)
+            self._matched[ik] = (self.modes0, match)
+        return rest, ms, match
 
     def periods(self, values: dict) -> np.ndarray:
         """Linear periods (s) of the base modes (NaN if neutral) at ``values``."""
@@ -290,16 +308,23 @@ class Problem:
 
 
 def build_problem(ms: MeasurementSet, solve_for: list | None = None, unc: dict | None = None,
-                  like: Problem | None = None, rests: list | None = None) -> Problem:
+                  like: Problem | None = None, rests: list | None = None, models: list | None = None,
+                  ats: list | None = None) -> Problem:
     """Hanging models at the prior, mode indices and the unknowns (picked
     per measurement as the component its period is most sensitive to,
     relatively, when ``solve_for`` is empty).  ``rests``: the hangings'
-    rest poses when known (the same geometry with another inertia)."""
+    rest poses when known (the same geometry with another inertia).
+    ``models``: the :class:`HangingModel` of each hanging of ``ms`` at
+    this prior if already built (another problem of the same hangings:
+    they are shared, with their caches).  ``ats``: with ``rests``, each
+    hanging's :func:`~bifilar.analysis.modes.modes_of_inertia` about its
+    rest pose if already built (None where not)."""
     h0 = ms.hangings[0]
     I_ref0 = h0.rotation.T @ h0.scene.inertia @ h0.rotation
-    models = [HangingModel(h, I_ref0, like=like.models[i] if like is not None else None,
-                           rest=rests[i] if rests is not None else None)
-              for i, h in enumerate(ms.hangings)]
+    if models is None:
+        models = [HangingModel(h, I_ref0, like=like.models[i] if like is not None else None,
+                               rest=rests[i] if rests is not None else None, at=ats[i] if ats is not None else None)
+                  for i, h in enumerate(ms.hangings)]
     idx = []
     for k, m in enumerate(ms.measurements):
         if like is not None:

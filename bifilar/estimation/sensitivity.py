@@ -107,18 +107,22 @@ def measured_inputs(scene: Scene) -> list[str]:
 
 def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
     """Standard uncertainty of input ``name`` from a dict like :data:`DEFAULT_UNCERTAINTY`."""
-    u = {**DEFAULT_UNCERTAINTY, **(unc or {})}
+    unc = unc or {}
+
+    def u(key):  # unc's value, else the default (as {**DEFAULT_UNCERTAINTY, **unc}[key], without the merge)
+        return unc[key] if key in unc else DEFAULT_UNCERTAINTY[key]
+
     if name == "mass":
-        return u["mass"] * scene.mass
+        return u("mass") * scene.mass
     if name == "gravity":
-        return u["gravity"] * scene.gravity
+        return u("gravity") * scene.gravity
     head = name.split(".")[0]
     if head == "length":
-        return u["length"]
+        return u("length")
     if head in ("anchor", "attachment"):
-        return u["position"]
+        return u("position")
     if head == "com":
-        return u["com"]
+        return u("com")
     return 0.0  # inertia components: the unknowns
 
 
@@ -139,6 +143,34 @@ def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarr
 def mac_match(base: ModeSet, other: ModeSet) -> np.ndarray:
     """Index into ``other.modes`` of the mode matching each base mode (MAC)."""
     return _mac_assignment(base, other)[1]
+
+
+def mac_matches(base: ModeSet, others: list) -> list:
+    """:func:`mac_match` of ``base`` with each of ``others``, the MAC
+    matrices of those with as many modes as ``base`` in one stacked product
+    (the rest one by one).  The products are grouped as in
+    :func:`_mac_assignment` (the MAC matrices came out bit for bit the same
+    on 93 sigma-point scenes of five rigs); a stacked product could round
+    differently in the last bits on another BLAS, which moves no assignment
+    but an exact tie's (tests/test_point_cost.py: the same assignments)."""
+    from scipy.optimize import linear_sum_assignment
+
+    k = len(base.modes)
+    same = [q for q, o in enumerate(others) if len(o.modes) == k]
+    out = [None] * len(others)
+    if same and k:
+        M = base.mass_matrix
+        A = np.array([m.shape for m in base.modes])
+        B = np.array([[m.shape for m in others[q].modes] for q in same])  # (S, k, 6)
+        num = ((A @ M) @ np.swapaxes(B, 1, 2)) ** 2
+        den = np.einsum("ij,jk,ik->i", A, M, A)[None, :, None] * np.einsum("sij,jk,sik->si", B, M, B)[:, None, :]
+        mac = num / np.maximum(den, 1e-300)
+        for q, m in zip(same, mac):
+            out[q] = linear_sum_assignment(-m)[1]
+    for q, o in enumerate(others):
+        if out[q] is None:
+            out[q] = mac_match(base, o)
+    return out
 
 
 def matched_periods(base: ModeSet, other: ModeSet) -> np.ndarray:
@@ -190,7 +222,7 @@ class Sensitivity:
 
 
 def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: float = 1e-6, *,
-                       rest: RestPose | None = None, method: str = "analytic") -> Sensitivity:
+                       rest: RestPose | None = None, method: str = "analytic", modes: ModeSet | None = None) -> Sensitivity:
     """Sensitivities dT_k/dx_j (s per unit input) of all linear periods to ``names``.
 
     ``method="analytic"`` (default): derivatives of the rest pose and of the
@@ -201,8 +233,9 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
     ``undefined``), and a scene with repeated eigenvalues (a symmetric
     trifilar's two swings) falls back to :func:`period_sensitivity_fd` for
     the whole Jacobian.  ``method="fd"``: :func:`period_sensitivity_fd`.
-    ``rest``: the rest pose of ``scene`` if already known.  The method used
-    is in ``Sensitivity.method``.
+    ``rest``: the rest pose of ``scene`` if already known; ``modes``: its
+    :func:`~bifilar.analysis.modes.linear_modes` about ``rest`` if already
+    solved.  The method used is in ``Sensitivity.method``.
     """
     from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
 
@@ -210,7 +243,7 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
     if method not in ("analytic", "fd"):
         raise ValueError(f"method must be 'analytic' or 'fd', not {method!r}")
     rest = rest if rest is not None else rest_pose(scene)
-    ms = linear_modes(scene, rest)
+    ms = modes if modes is not None else linear_modes(scene, rest)
     T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
     if method == "fd":
         return _fd_sensitivity(scene, names, rel_step, rest, ms, T0, "finite-difference")

@@ -46,6 +46,15 @@ def _fd_step(scene, name: str, rel_step: float = 1e-6) -> float:
 
 #: rad: a neighbour (1e-6 relative input step) whose rest pose turned more than this jumped branch
 TURN_MAX = 1e-3
+#: at a knife edge (CoM exactly on the attachment line), an input whose push along the neutral
+#: direction (:func:`bifilar.analysis.derivatives.analytic_period_jacobian`, ``push``: relative
+#: residual of the pose derivative, 0 to rounding for the inputs with a derivative, 0.3-0.6 for
+#: a sideways shift of the plate's CoM or attachments) is at least this has no neighbour within
+#: :data:`TURN_MAX` either way: the circle of equilibria is exactly neutral, so any such change
+#: turns the body until the CoM offset it makes hangs straight down, a finite angle (about 90
+#: degrees for a sideways offset).  Its differences (two Newton runs that end turned over, ~1 ms
+#: each) are not tried; a weaker push (between the derivative's 1e-8 and this) still is
+NO_BRANCH_PUSH = 1e-2
 
 
 def _neighbour_rest(scene, base, global_search: bool):
@@ -67,7 +76,7 @@ def _neighbour_rest(scene, base, global_search: bool):
     return r
 
 
-def point_sensitivity(scene, names: list[str], rest=None):
+def point_sensitivity(scene, names: list[str], rest=None, at=None):
     """:func:`~bifilar.estimation.sensitivity.period_sensitivity`, robust at
     the edge of stability.
 
@@ -81,33 +90,38 @@ def point_sensitivity(scene, names: list[str], rest=None):
     of the uncertainty budget (its column set to 0) with a note.  The inputs
     with an analytic derivative at the neutral scene (the branch's
     derivative, :mod:`bifilar.analysis.derivatives`) take it instead: only
-    those pushing along the neutral direction are differenced.  Regular
+    those pushing along the neutral direction are differenced, except at an
+    exact knife edge those pushing hard (:data:`NO_BRANCH_PUSH`), which are
+    left out at once as having no side.  Regular
     scenes take :func:`~bifilar.estimation.sensitivity.period_sensitivity`
-    (analytic).  Returns (Sensitivity, notes).
+    (analytic).  ``at``: :func:`~bifilar.analysis.modes.modes_of_inertia`
+    of ``scene`` about ``rest`` if built (its modes at the scene's inertia
+    are the linear modes).  Returns (Sensitivity, notes).
     """
     from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
-    from ..analysis.equilibrium import rest_pose
+    from ..analysis.equilibrium import knife_edge_axes, rest_pose
     from ..analysis.modes import linear_modes
     from ..estimation.sensitivity import Sensitivity, perturb, period_sensitivity, periods_of
 
     rest = rest if rest is not None else rest_pose(scene)
-    ms = linear_modes(scene, rest)
+    ms = at(scene.inertia) if at is not None else linear_modes(scene, rest)
     T0 = np.array([m.period if m.period else np.nan for m in ms.modes])
     neutral = not np.all(np.isfinite(T0))
     if not neutral:
         try:
-            return period_sensitivity(scene, names, rest=rest), []
+            return period_sensitivity(scene, names, rest=rest, modes=ms), []
         except (UnstableRestError, SlackWireError, ConvergenceError):
             pass
     jac = np.zeros((len(T0), len(names)))
     notes = []
     todo = list(range(len(names)))
+    no_branch: set = set()
     if neutral:
         # the analytic derivative where it exists (the branch's derivative, exact: what a
         # one-sided difference approximates to O(h)); the branch-following differences
         # below only for the inputs that push along the neutral direction
         try:
-            an = analytic_period_jacobian(scene, rest, ms, names)
+            an, push = analytic_period_jacobian(scene, rest, ms, names, push=True)
         except NotDifferentiable:
             an = None
         if an is not None:
@@ -115,11 +129,13 @@ def point_sensitivity(scene, names: list[str], rest=None):
             todo = [j for j in todo if np.all(np.isnan(an[live, j]))]
             keep = [j for j in range(len(names)) if j not in todo]
             jac[:, keep] = an[:, keep]
+            if np.all(np.isfinite(knife_edge_axes(scene.attachments))):
+                no_branch = {j for j in todo if push[j] >= NO_BRANCH_PUSH}
     for j in todo:
         name = names[j]
         h = _fd_step(scene, name)
         side = {}
-        for sgn in (1.0, -1.0):
+        for sgn in (() if j in no_branch else (1.0, -1.0)):
             sc = perturb(scene, name, sgn * h)
             r = _neighbour_rest(sc, rest, global_search=not neutral)
             if r is not None:
@@ -189,8 +205,8 @@ class _Ladder:
     (and marks the thesis's method pending) when that module is absent.
     """
 
-    def __init__(self, scene, rest):
-        self.scene, self.rest = scene, rest
+    def __init__(self, scene, rest, at=None):
+        self.scene, self.rest, self.at = scene, rest, at  # at: modes_of_inertia about rest, if built
         try:
             from ..estimation import invert as inv
             from ..estimation.measurements import Hanging
@@ -228,7 +244,7 @@ class _Ladder:
         try:
             if self._hm is None:
                 self._hm = inv.HangingModel(self._Hanging("sweep point", self.scene, np.eye(3)), self.scene.inertia,
-                                            rest=self.rest)  # the point's rest pose: no second global search
+                                            rest=self.rest, at=self.at)  # the point's rest pose and stiffness
             hm = self._hm
             tm = inv.ThesisModel(hm, hm.mode_index(mode_label, "mode"), comp)
             lo, hi = inv.physical_interval(self.scene.inertia, comp)
@@ -313,12 +329,14 @@ def predicted_budget(sens, scene, comp: str, k: int, unc: dict, column=None):
     return predicted_budgets(sens, scene, [(comp, k)], unc)[0]
 
 
-def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> list:
+def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True, at=None) -> list:
     """:func:`predicted_budget` of each ``(component, mode index k)`` of
     ``requests`` (0-based k), the honest stds of all of them computed
     together at the scene's truth (:func:`bifilar.estimation.honest.honest_stds`:
     one sensitivity, one set of sigma points for every component).
-    ``honest=False``: the linear budgets only (a planner's screen)."""
+    ``honest=False``: the linear budgets only (a planner's screen).  ``at``:
+    :func:`~bifilar.analysis.modes.modes_of_inertia` of ``scene`` about
+    ``sens.rest`` if built (shared with the honest pass)."""
     from dataclasses import replace
 
     from ..estimation.honest import honest_stds
@@ -341,7 +359,7 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True) -> 
         # the std invert prints: second order where the linear one is wrong (a
         # shallow CoM), so a planner can penalise such a rig (issue 10)
         sds = honest_stds(scene, [(requests[i][0], requests[i][1] + 1) for i in todo], unc, unc["timing"],
-                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest, sens=sens)
+                          fallbacks=[out[i].value_sigma for i in todo], rest=sens.rest, sens=sens, at=at)
         for i, sd in zip(todo, sds):
             out[i] = replace(out[i], value_sigma=sd)
     return out
@@ -478,7 +496,8 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
     unc = point_uncertainty(st, params)
     names = list(st.components) + measured_inputs(scene)
-    sens, notes = point_sensitivity(scene, names, rest0)
+    at = _stiffness(scene, rest0)
+    sens, notes = point_sensitivity(scene, names, rest0, at=at)
     ms, rest = sens.modes, sens.rest
     labels = [m.label for m in ms.modes]
     periods = sens.periods
@@ -509,7 +528,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             continue
         chosen[comp] = best_mode_for(sens, comp)
         res["components"][comp] = entry
-    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen)))
+    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen, at=at)))
     for comp, k in chosen.items():
         entry = res["components"][comp]
         scale = component_scale(scene.inertia, comp)
@@ -529,7 +548,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         )
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
-    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [])
+    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at)
     if st.tensions:
         pre.runs = sorted(set(chosen.values()))
         from ..analysis.simulate import checked_start_poses
@@ -539,6 +558,17 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         if pre.runs:
             pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
     return res, pre
+
+
+def _stiffness(scene, rest):
+    """The point's reduced stiffness about its rest pose, built once
+    (:func:`~bifilar.analysis.modes.modes_of_inertia`): its linear modes,
+    the honest pass's and the thesis rung's hanging models and the linear
+    estimates' eigenproblems all use it (each built its own before, the
+    same numbers)."""
+    from ..analysis.modes import modes_of_inertia
+
+    return modes_of_inertia(scene, rest)
 
 
 @dataclass
@@ -555,6 +585,7 @@ class _Prepared:
     amplitude: float
     runs: list  # mode indices to run nonlinearly (empty: none)
     starts: Any = None  # their start poses (StartPoses, in the order of runs), checked
+    at: Any = None  # modes_of_inertia of scene about rest (_stiffness), or None
 
 
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
@@ -588,10 +619,12 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
     if screen:
         return res
     # biases at the prescribed amplitude
-    from ..analysis.modes import modes_of_inertia
+    at = pre.at  # the linear estimates' eigenproblems: the point's one stiffness
+    if at is None and chosen:
+        from ..analysis.modes import modes_of_inertia
 
-    ladder = _Ladder(scene, rest)
-    at = modes_of_inertia(scene, rest) if chosen else None  # the linear estimates' eigenproblems, one stiffness
+        at = modes_of_inertia(scene, rest)
+    ladder = _Ladder(scene, rest, pre.at)
     for comp, k in chosen.items():
         e = res["components"][comp]
         T_lin = float(periods[k])
