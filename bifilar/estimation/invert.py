@@ -402,8 +402,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if fit.get("chi2_with_inputs") is not None:
         notes.append(f"the periods disagree beyond their timing uncertainty alone (chi2 {fit['chi2']:.3g} for "
                      f"{fit['dof']} degrees of freedom) but agree within the input uncertainties (chi2 "
-                     f"{fit['chi2_with_inputs']:.3g} with them): the measured inputs (lengths, positions, mass, "
-                     "CoM) are probably off within their stated std, which the budget carries")
+                     f"{fit['chi2_with_inputs']:.3g} with them and the assumed release amplitudes): the measured "
+                     "inputs (lengths, positions, mass, CoM) are probably off within their stated std, or a period "
+                     "was timed at a large amplitude; the budget carries both")
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))

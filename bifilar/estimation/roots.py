@@ -134,11 +134,42 @@ def input_period_covariance(pb: Problem, p, r=None) -> np.ndarray:
     return C
 
 
+def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarray:
+    """(K,) second moment (s^2) of the lengthening of each period timed at an
+    unstated release amplitude (``amplitude is None``; 0 for the others), as
+    the budget assumes it (:func:`~bifilar.estimation.budget.amplitude_systematic`:
+    amplitudes uniform in 0 .. A_max, ``T = T_lin (1 + (r_max - 1) u)``,
+    ``u = (A / A_max)^2``, ``E[u^2] = 1/5``): ``(T_lin (r_max - 1))^2 / 5``.
+    Different modes are released independently.  One short simulation per
+    such measurement at ``p``."""
+    from .budget import default_amplitude_range
+    from .solve import amplitude_factor
+
+    vals = pb.values(p)
+    out = np.zeros(len(pb.measurements))
+    for k, m in enumerate(pb.measurements):
+        if m.amplitude is not None:
+            continue
+        hm = pb.models[m.hanging]
+        _, ms, match = hm.locate(hm.scene(vals))
+        mode = ms.modes[match[pb.mode_index[k]]]
+        if not mode.period:
+            continue
+        A = default_amplitude_range(hm.scene(vals), mode)
+        try:
+            r_max, _ = amplitude_factor(hm, vals, pb.mode_index[k], A, 3, rtol)
+        except BifilarError:
+            continue
+        out[k] = (mode.period * (r_max - 1)) ** 2 / 5
+    return out
+
+
 def chi2_with_inputs(pb: Problem, p, z, r=None, extra_var=None) -> float:
     """The fit's chi-square with the measured inputs' uncertainty counted:
     the periods' covariance is ``C = diag(sigma_T^2) + C_x`` (timing plus
     :func:`input_period_covariance`, plus ``extra_var`` (K,) s^2 on the
-    diagonal), and the statistic is the generalised least-squares residual
+    diagonal, and the spread of periods timed at an unstated amplitude,
+    :func:`unstated_amplitude_variance`), and the statistic is the generalised least-squares residual
     ``min_dp |L^-1 (res + J_p dp)|^2`` (``C = L L^T``, ``res = z sigma_T``
     the residuals at ``p``, ``J_p`` the periods' Jacobian in the unknowns),
     chi-square with ``K - P`` degrees of freedom for a model linear over
@@ -155,7 +186,7 @@ def chi2_with_inputs(pb: Problem, p, z, r=None, extra_var=None) -> float:
     res = np.asarray(z, float) * sig
     if not np.all(np.isfinite(res)):
         return math.inf
-    C = np.diag(sig ** 2) + input_period_covariance(pb, p, r)
+    C = np.diag(sig ** 2 + unstated_amplitude_variance(pb, p)) + input_period_covariance(pb, p, r)
     if extra_var is not None:
         C += np.diag(np.asarray(extra_var, float))
     L = np.linalg.cholesky(C)
