@@ -90,16 +90,36 @@ def test_no_refusal_and_coverage_over_input_errors():
 
 
 def test_agrees_with_timing_only_chi2_without_input_errors():
-    """With every input uncertainty zero the statistic is the timing chi-square sum z^2."""
-    from bifilar.estimation.roots import chi2_with_inputs
+    """With every input uncertainty zero the fit statistic is the timing chi-square sum z^2."""
+    from bifilar.estimation.roots import input_fit_check
 
     zero = {**UNC, "length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0}
     T_t, T_s = _closed_form(L)
-    res = invert(_ms(_plate(), (T_t, T_s + 3e-4), 1e-3), solve_for=["Izz"], unc=zero, ladder=False)
+    res = invert(_ms(_plate(), (T_t, T_s + 3e-4), 1e-3), solve_for=["Izz"], unc=zero, ladder=False, method="linear")
+    z = np.array([m["normalised_residual"] for m in res.to_json()["residuals"]])
+    pb = replace(res.problem, unc={**res.problem.unc, **zero}, measurements=[
+        replace(m, amplitude=0.0) for m in res.problem.measurements])
+    ok, chi2_fit, dist, _ = input_fit_check(pb, res.values, z)
+    assert chi2_fit == pytest.approx(float(z @ z), rel=1e-6)
+    assert dist < 1e-6  # at the least-squares solution
+
+
+def test_a_tensor_away_from_the_fit_is_not_accepted_because_another_fits():
+    """The data fit within the inputs' uncertainty, but an Izz 10 std away from the estimate does not
+    reproduce them: the check is made at the tensor, not only of the data (the generalised residual alone
+    minimises over the unknowns and would accept any tensor)."""
+    from bifilar.estimation.roots import input_fit_check, labelled_periods
+
+    periods = _closed_form(L + 1e-3)
+    res = invert(_ms(_plate(), periods, UNC["timing"]), solve_for=["Izz"], unc=UNC, ladder=False)
     pb = res.problem
-    z = np.array([r for r in (m["normalised_residual"] for m in res.to_json()["residuals"])])
-    pb = replace(pb, unc={**pb.unc, **zero})
-    assert chi2_with_inputs(pb, res.values, z) == pytest.approx(float(z @ z), rel=1e-6)
+    sig = np.array([m.std for m in pb.measurements])
+    for p, passes in ((res.values, True), (res.values + 10 * res.std, False)):
+        z = (labelled_periods(pb, p) - np.array(periods)) / sig
+        ok, chi2_fit, dist, _ = input_fit_check(pb, p, z)
+        assert ok is passes
+        assert chi2_fit < 10.8  # the data fit either way
+        assert (dist < 10.83) is passes  # 10 std away: distance ~100
 
 
 def test_a_swing_released_at_the_assumed_amplitude_limit_is_answered():
@@ -118,3 +138,4 @@ def test_a_swing_released_at_the_assumed_amplitude_limit_is_answered():
     assert res.fit["passed"] and res.fit["chi2"] > 10.83
     lo, hi = res.interval[0]
     assert lo <= IZZ <= hi
+

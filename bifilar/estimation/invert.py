@@ -82,7 +82,7 @@ from .montecarlo import (  # noqa: F401
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
-from .roots import EDGE_Z, Root, chi2_limit, chi2_with_inputs, find_roots, fit_statistics, input_fit_test, labelled_periods
+from .roots import EDGE_Z, Root, find_roots, fit_statistics, input_fit_check, labelled_periods
 from .roots import separating_measurement
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
@@ -588,13 +588,13 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
     ok, chi2, test = fit_statistics(z, P)
     if edge and K <= P:
         ok, test = bool(np.all(np.abs(z) <= EDGE_Z)), f"|residual| <= {EDGE_Z:g} sigma (on the edge of the physical set)"
-    chi2_in = None
+    chi2_in = chi2_at = None
     if not ok and K > P and np.all(np.isfinite(z)):
-        # the inputs' errors shift the periods together: the check counts them (roots.chi2_with_inputs)
-        chi2_in = chi2_with_inputs(pb, p, z, r, _amplitude_variance(pb, p, r, method, pb.unc))
-        ok, test = chi2_in <= chi2_limit(K, P), input_fit_test(K, P)
+        # the inputs' errors shift the periods together: the check counts them (roots.input_fit_check)
+        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, r, method, pb.unc))
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
-           "chi2_with_inputs": chi2_in, "max_abs_normalised_residual": float(np.max(np.abs(z)))}
+           "chi2_with_inputs": chi2_in, "distance_from_fit": chi2_at,
+           "max_abs_normalised_residual": float(np.max(np.abs(z)))}
     if not ok and method in ("linear", "nonlinear"):
         zs = ", ".join(f"{m.label} {zk:+.3g}" for m, zk in zip(pb.measurements, z))
         raise ConvergenceError(f"the {method} estimate does not reproduce the measurements (normalised residuals "

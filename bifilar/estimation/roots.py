@@ -164,43 +164,59 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarr
     return out
 
 
-def chi2_with_inputs(pb: Problem, p, z, r=None, extra_var=None) -> float:
-    """The fit's chi-square with the measured inputs' uncertainty counted:
-    the periods' covariance is ``C = diag(sigma_T^2) + C_x`` (timing plus
-    :func:`input_period_covariance`, plus ``extra_var`` (K,) s^2 on the
-    diagonal, and the spread of periods timed at an unstated amplitude,
-    :func:`unstated_amplitude_variance`), and the statistic is the generalised least-squares residual
-    ``min_dp |L^-1 (res + J_p dp)|^2`` (``C = L L^T``, ``res = z sigma_T``
-    the residuals at ``p``, ``J_p`` the periods' Jacobian in the unknowns),
-    chi-square with ``K - P`` degrees of freedom for a model linear over
-    the uncertainties.  An input error shifts every period it touches
-    together (a wire 1 mm long lengthens each swing period of that hanging),
-    which timing alone calls a misfit; with ``C_x = 0`` it equals ``sum
-    z^2`` at the weighted least-squares solution, and it is never larger
-    (``C >= diag(sigma_T^2)``)."""
-    from scipy.linalg import solve_triangular
+def input_fit_check(pb: Problem, p, z, r=None, extra_var=None) -> tuple[bool, float, float, str]:
+    """The fit check with the measured inputs' uncertainty counted: (passes,
+    chi2 of the fit, distance of ``p`` from the fit, description).
 
-    K = len(pb.measurements)
+    The periods' covariance is ``C = diag(sigma_T^2) + C_x`` (timing plus
+    :func:`input_period_covariance`, the spread of periods timed at an
+    unstated amplitude, :func:`unstated_amplitude_variance`, and
+    ``extra_var`` (K,) s^2 on the diagonal).  With ``C = L L^T``, ``res = z
+    sigma_T`` the residuals at ``p`` and ``J_p`` the periods' Jacobian in the
+    unknowns:
+
+    * the data must fit the model: ``min_dp |L^-1 (res + J_p dp)|^2`` (the
+      generalised least-squares residual; with ``C_x = 0`` it equals ``sum
+      z^2`` at the weighted least-squares solution) at most its 99.9 %
+      quantile with ``K - P`` degrees of freedom;
+    * ``p`` must be the fit, not only near a tensor that fits: the step
+      ``d = G res`` from ``p`` to the weighted least-squares solution (``G``
+      the budget's gain matrix, timing weights) in the metric of that
+      estimate's covariance ``G C G^T``, ``d^T (G C G^T)^-1 d``, at most
+      its 99.9 % quantile with ``P`` degrees of freedom (0 at the solution;
+      the truth passes 99.9 % of the time), so that a point on the edge of
+      the physical set away from the fit is not accepted.
+
+    An input error shifts every period it touches together (a wire 1 mm
+    long lengthens each swing period of that hanging), which timing alone
+    calls a misfit."""
+    from scipy.linalg import solve_triangular
+    from scipy.stats import chi2 as chi2_dist
+
+    from .uncertainty import gain_matrix
+
+    K, P = len(pb.measurements), len(pb.unknowns)
     r = np.ones(K) if r is None else np.asarray(r, float)
     sig = np.array([m.std for m in pb.measurements])
     res = np.asarray(z, float) * sig
+    lim_fit, lim_p = chi2_limit(K, P), float(chi2_dist.ppf(1 - CHI2_P, P))
+    test = (f"with the input uncertainties: fit chi2 <= {lim_fit:.4g} ({K - P} degrees of freedom) and the estimate's "
+            f"distance from the fit <= {lim_p:.4g} ({P} degrees of freedom), p = {CHI2_P:g}")
     if not np.all(np.isfinite(res)):
-        return math.inf
+        return False, math.inf, math.inf, test
     C = np.diag(sig ** 2 + unstated_amplitude_variance(pb, p)) + input_period_covariance(pb, p, r)
     if extra_var is not None:
         C += np.diag(np.asarray(extra_var, float))
     L = np.linalg.cholesky(C)
+    Jp = pb.jacobian(p) * r[:, None]
     rw = solve_triangular(L, res, lower=True)
-    Jw = solve_triangular(L, pb.jacobian(p) * r[:, None], lower=True)
-    dp = np.linalg.lstsq(Jw, rw, rcond=None)[0]
-    e = rw - Jw @ dp
-    return float(e @ e)
-
-
-def input_fit_test(K: int, P: int) -> str:
-    """Description of the fit check with the inputs' uncertainty (:func:`chi2_with_inputs`)."""
-    return (f"chi2 with the input uncertainties <= {chi2_limit(K, P):.4g} ({K - P} degrees of freedom, "
-            f"p = {CHI2_P:g})")
+    Jw = solve_triangular(L, Jp, lower=True)
+    e = rw - Jw @ np.linalg.lstsq(Jw, rw, rcond=None)[0]
+    G = gain_matrix(Jp, sig)
+    d = G @ res
+    dist = float(d @ np.linalg.solve(G @ C @ G.T, d))
+    chi2_fit = float(e @ e)
+    return bool(chi2_fit <= lim_fit and dist <= lim_p), chi2_fit, dist, test
 
 
 def labelled_periods(pb: Problem, p) -> np.ndarray:
@@ -647,15 +663,14 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
         elif not any(np.max(np.abs(p - q["p"]) / sc) < 1e-6 for q in misfits):
             misfits.append({"p": p, "z": z, "chi2": chi2, "test": test})
     # a misfit by timing alone may still fit within the inputs' uncertainty:
-    # an input error shifts the periods together (chi2_with_inputs)
+    # an input error shifts the periods together (input_fit_check)
     K = len(sig)
     for q in misfits:
         if any(np.max(np.abs(q["p"] - f) / sc) < 1e-6 for f in found):
             continue
         if K > P and np.all(np.isfinite(q["z"])):
-            q["chi2"] = chi2_with_inputs(pb, q["p"], q["z"])
-            q["test"] = input_fit_test(K, P)
-            if q["chi2"] <= chi2_limit(K, P):
+            ok, q["chi2"], _, q["test"] = input_fit_check(pb, q["p"], q["z"])
+            if ok:
                 found.append(q["p"])
                 continue
         if not best or q["chi2"] < best["chi2"]:
