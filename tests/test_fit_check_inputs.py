@@ -139,3 +139,38 @@ def test_a_swing_released_at_the_assumed_amplitude_limit_is_answered():
     lo, hi = res.interval[0]
     assert lo <= IZZ <= hi
 
+
+def test_thin_plate_on_the_triangle_edge_gives_one_root_the_least_squares_on_the_edge():
+    """The thesis plate (Ixx + Iyy = Izz: the truth on the triangle limit), Izz and Iyy from torsion, pitch
+    and swing-y with the torsion 1 sigma long: the unconstrained fit lies outside the physical set, so the
+    answer is the least-squares point on its edge.  Gauss-Newton stopped wherever each start met the edge
+    and reported every such point as a root (6 'physical tensors reproduce the periods', the first with
+    chi2 68).  Checked against a scan of the misfit along the edge, Izz = (Ixx + Iyy) / (1 - s), by the
+    forward model."""
+    from conftest import PLATE_I, trapezoid
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.scene import TRIANGLE_SLACK
+
+    truth = trapezoid(h=0.5)
+    rest = rest_pose(truth)
+    labels = ("torsion", "pitch", "swing-y")
+    ms = linear_modes(truth, rest)
+    T = np.array([ms.get(lab).period for lab in labels]) + np.array([1e-3, 0.0, 0.0])
+    meas = [Measurement(lab, float(t), 1e-3, "period", "--period", amplitude=0.0) for lab, t in zip(labels, T)]
+    res = invert(MeasurementSet([Hanging("ref", truth, np.eye(3))], meas), solve_for=["Izz", "Iyy"],
+                 unc={**UNC, "timing": 1e-3}, ladder=False)
+    assert not res.ambiguous and len(res.roots) == 1
+    iyy, izz = res.value("Iyy"), res.value("Izz")
+    ixx = PLATE_I[0]
+    assert izz == pytest.approx((ixx + iyy) / (1 - TRIANGLE_SLACK), rel=1e-7)  # on the edge
+
+    def chi2(y):
+        s = replace(truth, inertia=np.diag([ixx, y, (ixx + y) / (1 - TRIANGLE_SLACK)]))
+        m = linear_modes(s, rest)  # the rest pose does not depend on the inertia
+        return float(np.sum(((np.array([m.get(lab).period for lab in labels]) - T) / 1e-3) ** 2))
+
+    ys = iyy + np.linspace(-0.5, 0.5, 21)
+    assert chi2(iyy) <= min(chi2(y) for y in ys) + 1e-6
+    assert abs(iyy - PLATE_I[1]) < 2 * res.sigma("Iyy") and abs(izz - PLATE_I[2]) < 2 * res.sigma("Izz")

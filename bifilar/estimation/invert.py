@@ -306,7 +306,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
     pb = root_pbs[0]
     p_start = np.asarray(roots[0].p, float)
-    if roots[0].edge:
+    if roots[0].edge and not scalar:
+        warnings.append("the estimate lies on the edge of the physical set (triangle inequality I1 + I2 = I3, a thin "
+                        "flat body): the least-squares fit among physical tensors; the fit check below still holds")
+    elif roots[0].edge:
         warnings.append(f"no physical tensor reproduces the period exactly: the estimate lies on the edge of the "
                         f"physical set (triangle inequality I1 + I2 = I3, a thin flat body), within {EDGE_Z:g} sigma "
                         "of the measurement")

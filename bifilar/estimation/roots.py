@@ -680,7 +680,9 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
         raise ConvergenceError(f"the least-squares solver failed from every start point: {errors[0]}")
     # ascending, compared at 1e-9 of the scales so that last-bit noise cannot reorder them
     found.sort(key=lambda q: tuple(np.round(q / sc, 9)))
-    return [Root(q) for q in found], best
+    from .solve import EDGE_MARGIN, admissible_margin
+
+    return [Root(q, edge=admissible_margin(pb, q) < EDGE_MARGIN) for q in found], best
 
 
 def find_roots(pb: Problem, targets: np.ndarray | None = None) -> list[Root]:
