@@ -164,14 +164,15 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarr
     return out
 
 
-def input_fit_check(pb: Problem, p, z, r=None, extra_var=None) -> tuple[bool, float, float, str]:
+def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> tuple[bool, float, float, str]:
     """The fit check with the measured inputs' uncertainty counted: (passes,
     chi2 of the fit, distance of ``p`` from the fit, description).
 
     The periods' covariance is ``C = diag(sigma_T^2) + C_x`` (timing plus
     :func:`input_period_covariance`, the spread of periods timed at an
     unstated amplitude, :func:`unstated_amplitude_variance`, and
-    ``extra_var`` (K,) s^2 on the diagonal).  With ``C = L L^T``, ``res = z
+    ``extra_var`` (K,) s^2 on the diagonal; ``amp_var``: the former when
+    computed already, it hardly depends on ``p``).  With ``C = L L^T``, ``res = z
     sigma_T`` the residuals at ``p`` and ``J_p`` the periods' Jacobian in the
     unknowns:
 
@@ -204,7 +205,8 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None) -> tuple[bool, fl
             f"distance from the fit <= {lim_p:.4g} ({P} degrees of freedom), p = {CHI2_P:g}")
     if not np.all(np.isfinite(res)):
         return False, math.inf, math.inf, test
-    C = np.diag(sig ** 2 + unstated_amplitude_variance(pb, p)) + input_period_covariance(pb, p, r)
+    amp_var = unstated_amplitude_variance(pb, p) if amp_var is None else amp_var
+    C = np.diag(sig ** 2 + amp_var) + input_period_covariance(pb, p, r)
     if extra_var is not None:
         C += np.diag(np.asarray(extra_var, float))
     L = np.linalg.cholesky(C)
@@ -665,11 +667,13 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
     # a misfit by timing alone may still fit within the inputs' uncertainty:
     # an input error shifts the periods together (input_fit_check)
     K = len(sig)
+    amp_var = None  # one set of simulations for every misfit
     for q in misfits:
         if any(np.max(np.abs(q["p"] - f) / sc) < 1e-6 for f in found):
             continue
         if K > P and np.all(np.isfinite(q["z"])):
-            ok, q["chi2"], _, q["test"] = input_fit_check(pb, q["p"], q["z"])
+            amp_var = unstated_amplitude_variance(pb, q["p"]) if amp_var is None else amp_var
+            ok, q["chi2"], _, q["test"] = input_fit_check(pb, q["p"], q["z"], amp_var=amp_var)
             if ok:
                 found.append(q["p"])
                 continue
