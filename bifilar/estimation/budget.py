@@ -494,16 +494,19 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
     return out
 
 
-def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None):
-    """Linear budget at the estimate; returns (LinearBudget, degenerate
-    inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
-    ``cache``: a dict shared by budgets of other unknowns at the same
-    scenes (:attr:`BudgetContext.cache`), or None."""
+def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = None, rows=None):
+    """The input sensitivities of the measured periods at the unknowns
+    ``vals``: ({input key: (K,) dT_k/dx, s per SI unit, times the amplitude
+    factor ``r[k]``}, {key: standard uncertainty}, degenerate keys (no
+    derivative; solved CoM components left out), and per hanging the scene,
+    rest pose, modes and base-mode match at ``vals``).  Keys as in the
+    budget (``length.1``, ``<hanging>:length.1`` with several hangings;
+    ``mass``, ``gravity`` and ``com.*`` shared by every hanging, a CoM shift
+    in the reference frame).  ``rows(h, modes, match, k)``: the index in
+    hanging ``h``'s modes of measurement ``k``'s mode (default: the base
+    mode ``pb.mode_index[k]`` tracked by MAC)."""
     K = len(pb.measurements)
-    vals = pb.values(p_hat)
-    T_lin = pb.linear_periods(p_hat)
-    Jp = pb.jacobian(p_hat) * r_hat[:, None]
-    sig = np.array([m.std for m in pb.measurements])
+    r = np.asarray(r, float)
     multi = len(pb.models) > 1
     cols: dict[str, np.ndarray] = {}
     sigmas: dict[str, float] = {}
@@ -531,10 +534,11 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
                 cache[ck] = (sens, failed)
         pre = f"{hm.hanging.name}:" if multi else ""
         degenerate += [(n if n.startswith("com.") or n in ("mass", "gravity") else pre + n) for n in failed]
+        row = {k: (match[pb.mode_index[k]] if rows is None else rows(h, ms_h, match, k)) for k in ks}
         for j, n in enumerate(sens.names):
             col = np.zeros(K)
             for k in ks:
-                col[k] = sens.jacobian[match[pb.mode_index[k]], j] * r_hat[k]
+                col[k] = (sens.jacobian[row[k], j] if row[k] is not None else np.nan) * r[k]
             if n.startswith("com."):
                 # shared: a CoM shift in the reference frame (com_h = R com_ref)
                 ax = "xyz".index(n[-1])
@@ -551,6 +555,21 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
                 cols[pre + n] = col
                 sigmas[pre + n] = input_sigma(scene, n, unc)
     degenerate = [d for d in dict.fromkeys(degenerate) if d not in solved_com]
+    return cols, sigmas, degenerate, scenes, rests, modes, matches
+
+
+def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None):
+    """Linear budget at the estimate; returns (LinearBudget, degenerate
+    inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
+    ``cache``: a dict shared by budgets of other unknowns at the same
+    scenes (:attr:`BudgetContext.cache`), or None."""
+    K = len(pb.measurements)
+    vals = pb.values(p_hat)
+    T_lin = pb.linear_periods(p_hat)
+    Jp = pb.jacobian(p_hat) * r_hat[:, None]
+    sig = np.array([m.std for m in pb.measurements])
+    multi = len(pb.models) > 1
+    cols, sigmas, degenerate, scenes, rests, modes, matches = input_columns(pb, vals, r_hat, unc, cache)
     in_names = list(cols)
     Jx = np.column_stack([cols[n] for n in in_names]) if in_names else np.zeros((K, 0))
     in_sig = np.array([sigmas[n] for n in in_names])

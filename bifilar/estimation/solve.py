@@ -132,7 +132,8 @@ def solve_linear(pb: Problem, targets: np.ndarray | None = None, p0=None) -> np.
 
 
 def gauss_newton(pb: Problem, targets: np.ndarray, p0: np.ndarray, max_iter: int = 40, *,
-                 admissible_only: bool = False, relabel: bool = False, known: list | None = None):
+                 admissible_only: bool = False, relabel: bool = False, known: list | None = None,
+                 edge_refine: bool = True):
     """Weighted least squares ``min sum ((T_k(p) - target_k) / sigma_k)^2``.
 
     ``admissible_only``: keep every iterate physical (positive definite and
@@ -140,7 +141,10 @@ def gauss_newton(pb: Problem, targets: np.ndarray, p0: np.ndarray, max_iter: int
     re-decide the measured modes by label at every iterate
     (:func:`bifilar.estimation.roots.relabel`).  ``known``: solutions found
     already; returns None as soon as an iterate comes within 1e-6 scales of
-    one (the same root again)."""
+    one (the same root again).  ``edge_refine``: where the iterates stop at
+    the edge of the physical set, continue to the least-squares point along
+    it (:func:`_edge_minimum`), and from there inside when the misfit falls
+    that way."""
     from .roots import relabel as _relabel
 
     sig = np.array([m.std for m in pb.measurements])
@@ -188,7 +192,110 @@ def gauss_newton(pb: Problem, targets: np.ndarray, p0: np.ndarray, max_iter: int
             c, res = cost(p)
         if small:
             break
+    if admissible_only and edge_refine and admissible_margin(pb, p) < EDGE_MARGIN:
+        # stopped by the edge of the physical set, maybe not at its minimum
+        # there: the least squares along the edge (one point, not wherever
+        # each start first met the edge, each once reported as a root)
+        pe = _edge_minimum(pb, cost, p, c, sc)
+        if pe is not None:
+            p = pe
+            if relabel:
+                _relabel(pb, p)
+            n = _edge_normal(pb, p, sc)
+            J = pb.jacobian(p) / sig[:, None] * sc[None, :]
+            step = -np.linalg.lstsq(J, cost(p)[1], rcond=None)[0]
+            if n is not None and n @ step > 0:
+                # the misfit falls into the set: not a minimum of the physical
+                # set but a way to one inside (found from there)
+                return gauss_newton(pb, targets, p, max_iter, admissible_only=True, relabel=relabel, known=known,
+                                    edge_refine=False)
     return p
+
+
+#: an iterate this close to the edge of the physical set (relative margin) is on it
+EDGE_MARGIN = 1e-6
+
+
+def admissible_margin(pb: Problem, p) -> float:
+    """How far the tensor at unknowns ``p`` is inside the physical set,
+    relative to the largest prior moment: the smaller of its least
+    eigenvalue and ``tr I / (2 - s) - I_max`` (the triangle inequality with
+    the config loader's slack ``s``); negative outside.  Both are concave in
+    ``p`` (the set is convex)."""
+    from ..scene import TRIANGLE_SLACK
+
+    ev = np.linalg.eigvalsh(pb.models[0].inertia_ref(pb.values(p)))
+    scale = float(np.max(np.linalg.eigvalsh(pb.I_ref0)))
+    return float(min(ev[0], ev.sum() / (2.0 - TRIANGLE_SLACK) - ev[-1]) / scale)
+
+
+def _edge_minimum(pb: Problem, cost, p, c, sc, iters: int = 30):
+    """The least-squares point of ``cost`` (misfit, residuals) along the edge
+    of the physical set from ``p``, where Gauss-Newton stopped at it:
+    Gauss-Newton steps in the edge's tangent plane (the normal ``n`` the
+    gradient of :func:`admissible_margin`, in units of the scales ``sc``),
+    each pulled back into the (convex) set along ``n`` and halved until the
+    misfit drops.  None when no lower physical point is found."""
+    sig = np.array([m.std for m in pb.measurements])
+    p = np.asarray(p, float)
+    best = None
+    for _ in range(iters):
+        n = _edge_normal(pb, p, sc)
+        if n is None:
+            break
+        N = np.linalg.svd(n[None, :])[2][1:].T  # (P, P - 1) tangent basis
+        J = pb.jacobian(p) / sig[:, None] * sc[None, :]
+        res = cost(p)[1]
+        if res is None or N.shape[1] == 0:
+            break
+        step = N @ -np.linalg.lstsq(J @ N, res, rcond=None)[0]
+        t, moved = 1.0, False
+        for _ in range(30):
+            q = _pull_inside(pb, p + t * step * sc, n, sc)
+            if q is not None:
+                cq = cost(q)[0]
+                if cq < c:
+                    moved = True
+                    break
+            t *= 0.5
+        if not moved:
+            break
+        small = np.max(np.abs(q - p) / sc) < 1e-12
+        p, c, best = q, cq, q
+        if small:
+            break
+    return best
+
+
+def _edge_normal(pb: Problem, p, sc, h: float = 1e-7):
+    """Unit inward normal of the physical set's edge at ``p`` (the gradient
+    of :func:`admissible_margin` in units of the scales ``sc``, forward
+    differences), or None where it vanishes."""
+    m0 = admissible_margin(pb, p)
+    n = np.array([(admissible_margin(pb, p + h * e * sc) - m0) / h for e in np.eye(len(p))])
+    if not np.all(np.isfinite(n)) or not np.any(n):
+        return None
+    return n / np.linalg.norm(n)
+
+
+def _pull_inside(pb: Problem, q, n, sc):
+    """``q`` moved along the inward normal ``n`` (scaled units) by the least
+    amount (bisection to 1e-12 of the scales) that makes it physical; None
+    when 0.1 scales are not enough."""
+    if _admissible(pb, q):
+        return q
+    lo, hi = 0.0, 1e-3
+    while not _admissible(pb, q + hi * n * sc):
+        hi *= 10
+        if hi > 0.1:
+            return None
+    while hi - lo > 1e-12:
+        mid = 0.5 * (lo + hi)
+        if _admissible(pb, q + mid * n * sc):
+            hi = mid
+        else:
+            lo = mid
+    return q + hi * n * sc
 
 
 def _admissible(pb: Problem, p) -> bool:
