@@ -258,11 +258,13 @@ def _leverage_correction(As3: np.ndarray, r3: np.ndarray, bread: np.ndarray, W: 
     """
     k, _, m = As3.shape
     P = np.einsum("mn,kin->kmi", bread, As3)  # (k, m, 3)
-    Y = P @ (r3.T @ r3 / k)
+    P2 = P.reshape(k * m, 3)  # rows (sample, component): one matrix product a lag
+    Y2 = P2 @ (r3.T @ r3 / k)
     for d in range(1, W + 1):
         C = r3[d:].T @ r3[:-d] / k  # C(d): r_{l+d} r_l^T
-        Y[:-d] += P[d:] @ C
-        Y[d:] += P[:-d] @ C.T
+        Y2[:-d * m] += P2[d * m:] @ C
+        Y2[d * m:] += P2[:-d * m] @ C.T
+    Y = Y2.reshape(k, m, 3)
     omega = np.einsum("kmi,kni->mn", Y, P)
     omega = (omega + omega.T) / 2
     expected = np.diag(omega).copy()
