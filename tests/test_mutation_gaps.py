@@ -597,6 +597,34 @@ def test_leverage_correction_of_a_mean_is_k_over_k_minus_1():
     assert f[0] == pytest.approx(k / (k - 1), rel=1e-12)
 
 
+def test_score_covariance_window_stops_at_a_quarter_of_the_record():
+    """Kills from_tensions.py ``_score_covariance``'s lag cap mutants
+    (``k // 4 -> k // 5``, ``+ 1 -> - 1`` / ``+ 2``): the documented cap
+    of the window, k / 4 lags.  Scores so correlated (AR(1), rho = 0.99:
+    tau ~ 200) that Sokal's rule would want ~1000 lags reach the cap on a
+    40-sample record: W = 10 exactly."""
+    from scipy.signal import lfilter
+
+    from bifilar.estimation.from_tensions import _score_covariance
+
+    e = np.random.default_rng(8).standard_normal((40, 1))
+    g = lfilter([1.0], [1.0, -0.99], e, axis=0)
+    assert _score_covariance(g, 1)[1] == 10
+
+
+def test_leverage_correction_is_one_without_residual_variance():
+    """Kills from_tensions.py ``_leverage_correction``'s fallback ``1.0 ->
+    2.0``: residuals all zero (an exact fit) give the working model no
+    variance to correct; the documented factor is then 1, not a division
+    by zero."""
+    from bifilar.estimation.from_tensions import _leverage_correction
+
+    As3 = np.random.default_rng(4).standard_normal((12, 3, 2))
+    bread = np.linalg.inv(As3.reshape(-1, 2).T @ As3.reshape(-1, 2))
+    f = _leverage_correction(As3, np.zeros((12, 3)), bread, 2)
+    np.testing.assert_array_equal(f, [1.0, 1.0])
+
+
 def test_residual_rms_is_the_rms_of_eulers_equation_at_the_estimate():
     """Kills from_tensions.py ``s2 = r @ r / max(len(b2) - len(comps), 1)``
     mutants (``/ -> *``, ``- -> +``): the reported residual is recomputed

@@ -259,6 +259,8 @@ def _leverage_correction(As3: np.ndarray, r3: np.ndarray, bread: np.ndarray, W: 
     motion's oscillation lose less over a long window than white ones,
     and the white model's factor overstated an AR(1) 0.8 std by 10 % on
     200 samples.  Coverage it buys on 100-2000-sample records: docs/design.md.
+    A factor of 1 where the model has no positive variance to correct
+    (residuals all zero: an exact fit).
     """
     k, _, m = As3.shape
     P = np.einsum("mn,kin->kmi", bread, As3)  # (k, m, 3)
