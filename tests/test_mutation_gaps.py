@@ -523,6 +523,36 @@ def test_a_tiny_real_motion_is_excited_and_determines_its_inertia():
     assert 0 < est.std["Izz"] < 1e-9 * s.inertia[2, 2]
 
 
+@pytest.mark.parametrize("size", [1e-3, 1.0, 1e3])
+def test_excitation_floor_is_the_documented_fraction_of_the_rms_gross_torque(size):
+    """Kills from_tensions.py ``_excited``'s RMS mutants (``gross ** 2 ->
+    gross * 2``, ``** 2 -> ** 3``), which the torsion tests above leave
+    alive (their columns are 8 orders from the floor either way).  The
+    definition (:data:`EXCITATION_FLOOR`), written out here: a column is
+    excited when ``I_max`` times its RMS over the samples about some body
+    axis exceeds 1e-8 of the RMS gross wire torque about that axis
+    (``sum_i |(p_i x R^T T_i u_i)_axis|``).  Synthetic columns at 2x and
+    0.5x that floor about z must come out excited and not, whatever the
+    size of the torques (tensions x ``size``: the rule is in proportion)."""
+    from bifilar.analysis.tensions import wire_units
+    from bifilar.estimation.from_tensions import EXCITATION_FLOOR, _excited
+
+    s, args, _ = _torsion_record(0.05, h=0.5)
+    _, t, com, R, _, T = args
+    T = T * size
+    k = len(t)
+    u = wire_units(s, com, R)
+    f_body = np.einsum("kji,knj->kni", R, T[..., None] * u)
+    gross = np.abs(np.cross(s.attachments[None], f_body)).sum(axis=1)  # (k, 3)
+    floor_z = EXCITATION_FLOOR * math.sqrt(np.mean(gross[:, 2] ** 2))
+    I_max = float(np.max(np.linalg.eigvalsh(s.inertia)))
+    shape = np.sin(np.linspace(0.0, 7.0, k))  # any column shape: its RMS is what counts
+    A = np.zeros((k, 3, 2))
+    for j, times in enumerate((2.0, 0.5)):
+        A[:, 2, j] = times * floor_z / I_max * shape / math.sqrt(np.mean(shape ** 2))
+    assert list(_excited(s, com, R, T, A.reshape(-1, 2), k)) == [True, False]
+
+
 @pytest.mark.parametrize("rho", [0.0, 0.6])
 def test_score_covariance_is_the_long_run_variance_of_an_ar1(rho):
     """Kills from_tensions.py ``_score_covariance`` mutants (``G + G.T``, the
