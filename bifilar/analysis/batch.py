@@ -640,12 +640,9 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     sq = np.sqrt(Bn)
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
-    if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
-        k1 = mx.compiled_kernel(P.take(0))
+    if Bn == 1:  # in physical time t = tau T: the kernel itself is odeint's f(y, t) (no wrapper, no scaling)
+        f = mx.compiled_kernel(P.take(0), signature="odeint")
         tscale = float(T_ref[0])
-
-        def f(y, t):
-            return k1(*y.tolist())
         kx = mx.compiled_kernel(P.take(0), extras=True)
     else:
         kb = mx.compiled_kernel(P)
