@@ -74,7 +74,7 @@ def test_kernel_agrees_with_the_naive_right_hand_side(name, scene):
     scale = np.max(np.abs(ref), axis=1, keepdims=True)  # the largest component of each derivative
     floats = np.array([mx.compiled_kernel(P)(*y.tolist()) for y in Y])
     odeint_f = mx.compiled_kernel(P, signature="odeint")
-    flat = np.array([odeint_f(y, 0.0) for y in Y])
+    flat = np.array([odeint_f(y, 0.0).copy() for y in Y])  # the kernel owns (and reuses) its output array
     arrays = mx.rhs(0.0, Y, P)  # the batch path: the same source on numpy arrays
     for got in (floats, flat, arrays):
         assert np.max(np.abs(got - ref) / scale) < 3e-14
@@ -110,10 +110,13 @@ def test_kernel_multipliers_are_the_naive_ones(name, scene):
         np.testing.assert_allclose(out[13 + n:], phi, rtol=1e-12, atol=1e-15)
 
 
-def test_odeint_signature_is_refused_unless_known():
-    P = mx.params_from_scenes(SCENES[0][1])
+def test_odeint_signature_is_refused_unless_known_and_for_one_scene():
+    scene = SCENES[0][1]
+    P = mx.params_from_scenes(scene)
     with pytest.raises(ValueError, match="signature"):
         mx.compiled_kernel(P, signature="fortran")
+    with pytest.raises(ValueError, match="one scene"):
+        mx.compiled_kernel(mx.params_from_scenes([scene, scene]), signature="odeint")
 
 
 def test_default_engine_meets_the_period_criterion_of_the_benchmark():

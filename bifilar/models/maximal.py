@@ -41,6 +41,7 @@ array code (not in the hot loop).
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -356,8 +357,12 @@ def _param_values(P: "RigParams") -> dict:
 
 SIGNATURES = ("args", "odeint")
 """Call signatures of a compiled kernel: ``"args"`` ``f(rx, ..., wz)`` (13
-floats or arrays), ``"odeint"`` ``f(y, t)`` for :func:`scipy.integrate.odeint`
-on one scene (``y`` an array (13,), unpacked with one ``tolist``)."""
+floats or arrays) returning a tuple; ``"odeint"`` ``f(y, t)`` for
+:func:`scipy.integrate.odeint` on one scene (``y`` an array (13,), unpacked
+with one ``tolist``) returning an array (13,) (+ extras) that the kernel
+owns and overwrites on its next call: copy it to keep it (odeint copies it
+at once; :func:`scipy.integrate.solve_ivp` keeps references, so it takes
+the ``"args"`` form)."""
 
 
 def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
@@ -474,15 +479,19 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         out += [f"mass*mu{i}" for i in range(n)] + [C.v(f"phi{i}") for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
     if signature == "odeint":
-        head = f"    def f(y, t):\n        {', '.join(_STATE_NAMES)} = y.tolist()\n"
+        # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
+        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call
+        head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
+                f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
+                f"    def f(y, t):\n        {', '.join(_STATE_NAMES)} = y.tolist()\n")
+        tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
     elif signature == "args":
         head = f"    def f({', '.join(_STATE_NAMES)}):\n"
+        tail = f"        return ({', '.join(out)},)\n"
     else:
         raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
     body = "\n".join("        " + ln for ln in C.lines)
-    src = (f"def make({', '.join(params)}):\n{head}{body}\n"
-           f"        return ({', '.join(out)},)\n"
-           f"    return f\n")
+    src = f"def make({', '.join(params)}):\n{head}{body}\n{tail}    return f\n"
     return src, params
 
 
@@ -554,9 +563,11 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     (m^2).  The arguments are floats for a single scene (fastest) or arrays
     broadcasting against ``P.batch_shape``; with ``signature="odeint"``
     (one scene) the function is ``f(y, t)`` on an array ``y`` (13,), the
-    right-hand side :func:`scipy.integrate.odeint` calls, without a wrapper
-    (see :data:`SIGNATURES`).  Cached on ``P``.
+    right-hand side :func:`scipy.integrate.odeint` calls, without a wrapper,
+    returning an array it reuses (see :data:`SIGNATURES`).  Cached on ``P``.
     """
+    if signature == "odeint" and P.batch_shape != ():
+        raise ValueError("signature='odeint' is for one scene (parameters of batch shape ())")
     cache = P.__dict__.get("_kernels")
     if cache is None:
         cache = {}
@@ -569,7 +580,7 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
             src, params = _kernel_source(n, zero, stabilise, extras, signature)
-            ns: dict = {"_min_norm": _min_norm}
+            ns: dict = {"_min_norm": _min_norm, "_np": np, "_struct": struct}
             exec(compile(src, f"<bifilar.maximal kernel n={n}>", "exec"), ns)  # noqa: S102 - generated here
             _FACTORY_CACHE[fkey] = (ns["make"], params)
         make, params = _FACTORY_CACHE[fkey]
