@@ -314,7 +314,7 @@ class _Code:
 
 def _param_names(n: int) -> list[str]:
     names = ["mass", "g", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "Nxx", "Nyy", "Nzz", "Nxy", "Nxz", "Nyz",
-             "Mxx", "Myy", "Mzz", "Mxy", "Mxz", "Myz", "bga", "hb"]
+             "Mxx", "Myy", "Mzz", "Mxy", "Mxz", "Myz", "Ex", "Ey", "Ez", "bga", "hb"]
     for i in range(n):
         names += [f"ax{i}", f"ay{i}", f"az{i}", f"px{i}", f"py{i}", f"pz{i}", f"L2{i}", f"hbL{i}"]
     return names
@@ -331,7 +331,8 @@ def _param_values(P: "RigParams") -> dict:
 
     ``I..``/``N..`` the inertia and its inverse (body axes), ``M..`` = mass x
     the inverse inertia (the kernel solves for the multipliers divided by the
-    mass, see :func:`_kernel_source`), ``bga`` = 2 alpha, ``hb`` = beta^2 / 2
+    mass, see :func:`_kernel_source`), ``E.`` Euler's coefficients
+    ``(I_yy - I_zz) / I_xx``, ... (principal body axes), ``bga`` = 2 alpha, ``hb`` = beta^2 / 2
     and ``hbL<i>`` = beta^2 L_i^2 / 2 (the Baumgarte terms folded into
     ``bga phidot + hb |d|^2 - hbL``), ``L2<i>`` = L_i^2.
     """
@@ -346,6 +347,9 @@ def _param_values(P: "RigParams") -> dict:
     for pre, M in (("I", I), ("N", N), ("M", np.asarray(P.mass)[..., None, None] * N)):
         for k, (i, j) in zip(("xx", "yy", "zz", "xy", "xz", "yz"), ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))):
             vals[pre + k] = c(0.5 * (M[..., i, j] + M[..., j, i]))
+    d = [I[..., k, k] for k in range(3)]
+    for k in range(3):  # Euler's coefficients (I_yy - I_zz) / I_xx, ... (used when the body axes are principal)
+        vals["E" + _AX[k]] = c((d[(k + 1) % 3] - d[(k + 2) % 3]) / d[k])
     for i in range(P.lengths.shape[-1]):
         for k in range(3):
             vals[f"a{_AX[k]}{i}"] = c(P.anchors[..., i, k])
@@ -396,14 +400,19 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         C.let(f"vb{_AX[a]}", [(1, R[b][a], "v" + _AX[b]) for b in range(3)])
     Iname = {(0, 0): "xx", (1, 1): "yy", (2, 2): "zz", (0, 1): "xy", (1, 0): "xy", (0, 2): "xz", (2, 0): "xz",
              (1, 2): "yz", (2, 1): "yz"}
-    for a in range(3):
-        C.let(f"Iw{_AX[a]}", [(1, "I" + Iname[a, b], w[b]) for b in range(3)])
     L.append("w2 = wx*wx + wy*wy + wz*wz")
-    C.let("taux", [(-1, "wy", "Iwz"), (1, "wz", "Iwy")])
-    C.let("tauy", [(-1, "wz", "Iwx"), (1, "wx", "Iwz")])
-    C.let("tauz", [(-1, "wx", "Iwy"), (1, "wy", "Iwx")])
-    for a in range(3):
-        C.let(f"Nt{_AX[a]}", [(1, "N" + Iname[a, b], "tau" + _AX[b]) for b in range(3)])
+    if {"Ixy", "Ixz", "Iyz"} <= C.zero:  # principal body axes: Euler's equations, I^-1 (-w x I w)_x = Ex wy wz, ...
+        C.let("Ntx", [(1, "Ex", "wy", "wz")])
+        C.let("Nty", [(1, "Ey", "wz", "wx")])
+        C.let("Ntz", [(1, "Ez", "wx", "wy")])
+    else:
+        for a in range(3):
+            C.let(f"Iw{_AX[a]}", [(1, "I" + Iname[a, b], w[b]) for b in range(3)])
+        C.let("taux", [(-1, "wy", "Iwz"), (1, "wz", "Iwy")])
+        C.let("tauy", [(-1, "wz", "Iwx"), (1, "wx", "Iwz")])
+        C.let("tauz", [(-1, "wx", "Iwy"), (1, "wy", "Iwx")])
+        for a in range(3):
+            C.let(f"Nt{_AX[a]}", [(1, "N" + Iname[a, b], "tau" + _AX[b]) for b in range(3)])
     for i in range(n):
         p = [f"px{i}", f"py{i}", f"pz{i}"]
         # attachment offset (world), wire vector anchor -> attachment, and in body axes
