@@ -300,6 +300,11 @@ class _Code:
             out += ("-" if sign < 0 else "") + p if not out else (" - " if sign < 0 else " + ") + p
         return out or None
 
+    def ops(self, terms) -> int:
+        """Arithmetic operations of the expression of ``terms``."""
+        live = [fac for sign, *fac in terms if not any(f in self.zero for f in fac)]
+        return sum(len(fac) - 1 for fac in live) + max(len(live) - 1, 0)
+
     def let(self, name: str, terms) -> str:
         e = self.expr(terms)
         if e is None:
@@ -317,6 +322,8 @@ def _param_names(n: int) -> list[str]:
              "Mxx", "Myy", "Mzz", "Mxy", "Mxz", "Myz", "Ex", "Ey", "Ez", "bga", "hb"]
     for i in range(n):
         names += [f"ax{i}", f"ay{i}", f"az{i}", f"px{i}", f"py{i}", f"pz{i}", f"L2{i}", f"hbL{i}"]
+        if i > 0:
+            names += [f"Da{a}{i}" for a in _AX] + [f"Dp{a}{i}" for a in _AX]
     return names
 
 
@@ -334,7 +341,9 @@ def _param_values(P: "RigParams") -> dict:
     mass, see :func:`_kernel_source`), ``E.`` Euler's coefficients
     ``(I_yy - I_zz) / I_xx``, ... (principal body axes), ``bga`` = 2 alpha, ``hb`` = beta^2 / 2
     and ``hbL<i>`` = beta^2 L_i^2 / 2 (the Baumgarte terms folded into
-    ``bga phidot + hb |d|^2 - hbL``), ``L2<i>`` = L_i^2.
+    ``bga phidot + hb |d|^2 - hbL``), ``L2<i>`` = L_i^2, ``Da.<i>`` = a_0 -
+    a_i (world) and ``Dp.<i>`` = p_i - p_0 (body), for wire i's vector in
+    body axes from wire 0's.
     """
     single = P.mass.ndim == 0
 
@@ -356,6 +365,10 @@ def _param_values(P: "RigParams") -> dict:
             vals[f"p{_AX[k]}{i}"] = c(P.attachments[..., i, k])
         vals[f"L2{i}"] = c(P.lengths[..., i] ** 2)
         vals[f"hbL{i}"] = c(0.5 * bgb * P.lengths[..., i] ** 2)
+        if i > 0:
+            for k in range(3):
+                vals[f"Da{_AX[k]}{i}"] = c(P.anchors[..., 0, k] - P.anchors[..., i, k])
+                vals[f"Dp{_AX[k]}{i}"] = c(P.attachments[..., i, k] - P.attachments[..., 0, k])
     return vals
 
 
@@ -420,8 +433,14 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
             C.let(f"Rp{_AX[a]}{i}", [(1, R[a][b], p[b]) for b in range(3)])
         for a in range(3):
             C.let(f"d{_AX[a]}{i}", [(1, "r" + _AX[a]), (1, f"Rp{_AX[a]}{i}"), (-1, f"a{_AX[a]}{i}")])
+        e_terms = [[(1, R[b][a], f"d{_AX[b]}{i}") for b in range(3)] for a in range(3)]  # R^T d
+        if i > 0:  # e_i = e_0 + R^T (a_0 - a_i) + (p_i - p_0): fewer terms when anchors differ along few axes
+            via0 = [[(1, f"e{_AX[a]}0")] + [(1, R[b][a], f"Da{_AX[b]}{i}") for b in range(3)] + [(1, f"Dp{_AX[a]}{i}")]
+                    for a in range(3)]
+            if sum(map(C.ops, via0)) < sum(map(C.ops, e_terms)):
+                e_terms = via0
         for a in range(3):
-            C.let(f"e{_AX[a]}{i}", [(1, R[b][a], f"d{_AX[b]}{i}") for b in range(3)])
+            C.let(f"e{_AX[a]}{i}", e_terms[a])
         # attachment velocity in body axes: R^T v + w x p
         C.let(f"sx{i}", [(1, "vbx"), (1, "wy", p[2]), (-1, "wz", p[1])])
         C.let(f"sy{i}", [(1, "vby"), (1, "wz", p[0]), (-1, "wx", p[2])])
