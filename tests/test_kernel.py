@@ -131,3 +131,15 @@ def test_default_engine_meets_the_period_criterion_of_the_benchmark():
                      lowest_point=False).period
     got = simulate(scene, "torsion", 0.05, 210, rest=rest, modes=ms, rtol=1e-9, method="auto").period
     assert abs(got / ref - 1) < 1e-9
+
+
+def test_tensions_of_a_long_record_are_those_of_each_state():
+    """A record longer than ``TENSION_CHUNK`` is taken in chunks: every state
+    keeps the tensions it has alone (float path)."""
+    scene = SCENES[0][1]
+    P = mx.params_from_scenes(scene)
+    Y = _random_states(scene, np.random.default_rng(9), mx.TENSION_CHUNK + 37)
+    T = mx.tensions(Y, P)
+    assert T.shape == (len(Y), scene.n_wires)
+    for k in (0, mx.TENSION_CHUNK - 1, mx.TENSION_CHUNK, len(Y) - 1):
+        np.testing.assert_allclose(T[k], mx.tensions(Y[k], P), rtol=1e-14)
