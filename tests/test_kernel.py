@@ -134,12 +134,26 @@ def test_default_engine_meets_the_period_criterion_of_the_benchmark():
 
 
 def test_tensions_of_a_long_record_are_those_of_each_state():
-    """A record longer than ``TENSION_CHUNK`` is taken in chunks: every state
+    """A record longer than ``CACHE_CHUNK`` is taken in chunks: every state
     keeps the tensions it has alone (float path)."""
     scene = SCENES[0][1]
     P = mx.params_from_scenes(scene)
-    Y = _random_states(scene, np.random.default_rng(9), mx.TENSION_CHUNK + 37)
+    Y = _random_states(scene, np.random.default_rng(9), mx.CACHE_CHUNK + 37)
     T = mx.tensions(Y, P)
     assert T.shape == (len(Y), scene.n_wires)
-    for k in (0, mx.TENSION_CHUNK - 1, mx.TENSION_CHUNK, len(Y) - 1):
+    for k in (0, mx.CACHE_CHUNK - 1, mx.CACHE_CHUNK, len(Y) - 1):
         np.testing.assert_allclose(T[k], mx.tensions(Y[k], P), rtol=1e-14)
+
+
+def test_chunked_kernel_gives_the_kernels_values():
+    scene = SCENES[1][1]
+    P = mx.params_from_scenes(scene)
+    k = mx.compiled_kernel(P, extras=True)
+    Y = np.ascontiguousarray(_random_states(scene, np.random.default_rng(10), 2 * 1000 + 3).T)
+    whole = k(*Y)
+    parts = mx.chunked(k, 1000)(*Y)
+    assert len(parts) == len(whole)
+    for a, b in zip(parts, whole):
+        np.testing.assert_allclose(a, np.broadcast_to(b, a.shape), rtol=1e-15, atol=0)
+    y0 = Y[:, 0].tolist()  # floats go through unchanged
+    np.testing.assert_allclose(mx.chunked(k, 1000)(*y0), k(*y0), rtol=1e-15)

@@ -643,7 +643,7 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     if Bn == 1:  # in physical time t = tau T: the kernel itself is odeint's f(y, t) (no wrapper, no scaling)
         f = mx.compiled_kernel(P.take(0), signature="odeint")
         tscale = float(T_ref[0])
-        kx = mx.compiled_kernel(P.take(0), extras=True)
+        kx = mx.chunked(mx.compiled_kernel(P.take(0), extras=True))  # on the samples: in cache-sized chunks
     else:
         kb = mx.compiled_kernel(P)
         Tcol = T_ref[:, None]

@@ -229,20 +229,37 @@ def make_flat_rhs(P: RigParams, stabilise: bool = True):
     return f
 
 
-TENSION_CHUNK = 4096
-"""States a kernel call of :func:`tensions` takes at once for a record of one
-scene: the kernel's ~300 temporaries then stay in the processor's cache (a
-13 000-sample record in one call costs ~2x more)."""
+CACHE_CHUNK = 4096
+"""States a kernel call takes at once from a long record of one scene
+(:func:`chunked`): the kernel's ~300 temporaries then stay in the
+processor's cache (a 13 000-sample record in one call costs ~2x more)."""
+
+
+def chunked(kernel, size: int = CACHE_CHUNK):
+    """``kernel`` (a :func:`compiled_kernel` of one scene's parameters) applied
+    to 1-D arrays of states (a record) ``size`` states at a time, its outputs
+    concatenated: the same values, faster for long records.  Other
+    arguments (floats, batches of shape (k, B)) go through unchanged."""
+
+    def f(*comps):
+        if np.ndim(comps[0]) != 1 or len(comps[0]) <= size:
+            return kernel(*comps)
+        K = len(comps[0])
+        parts = [kernel(*(c[k:k + size] for c in comps)) for k in range(0, K, size)]
+        lens = [min(size, K - k) for k in range(0, K, size)]
+        return tuple(np.concatenate([np.broadcast_to(p[i], (m,)) for p, m in zip(parts, lens)])
+                     for i in range(len(parts[0])))
+
+    return f
 
 
 def tensions(y: np.ndarray, P: RigParams) -> np.ndarray:
     """Wire tensions (..., n), N; positive = pulling.  Uses the unstabilised
     multipliers so that the value is the physical one on the manifold."""
     y = np.asarray(y, dtype=float)
-    if y.ndim == 2 and P.batch_shape == () and len(y) > TENSION_CHUNK:  # a record: in cache-sized chunks
-        return np.concatenate([tensions(y[k:k + TENSION_CHUNK], P) for k in range(0, len(y), TENSION_CHUNK)])
     n = int(P.lengths.shape[-1])
-    out = compiled_kernel(P, False, extras=True)(*_components(y))
+    k = compiled_kernel(P, False, extras=True)
+    out = (chunked(k) if P.batch_shape == () else k)(*_components(y))  # chunks of one scene's states only
     lead = np.broadcast_shapes(y.shape[:-1], P.batch_shape)
     lam = _stack(out[13:13 + n], lead)
     phi = _stack(out[13 + n:13 + 2 * n], lead)
