@@ -706,7 +706,7 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     sq = np.sqrt(Bn)
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
-    if Bn == 1:  # in physical time t = tau T: the kernel's tuple goes to odeint as it is (no array, no scaling)
+    if Bn == 1:  # in physical time t = tau T: the kernel itself is odeint's f(y, t) (no wrapper, no scaling)
         f, kx = _one_scene_kernels(P.take(0) if P1 is None else P1)
         tscale = float(T_ref[0])
     else:
@@ -767,11 +767,8 @@ def _one_scene_kernels(P1: mx.RigParams):
     """(odeint's ``f(y, t)``, the health's kernel with extras) of one scene's
     float parameters ``P1`` (the kernels cached on it): what :func:`_lsoda`
     integrates a scene alone with, and :func:`_lsoda_joint` each of its runs."""
-    k1 = mx.compiled_kernel(P1)
-
-    def f(y, t):
-        return k1(*y.tolist())
-    return f, mx.compiled_kernel(P1, extras=True)
+    return (mx.compiled_kernel(P1, signature="odeint"),
+            mx.chunked(mx.compiled_kernel(P1, extras=True)))  # on the samples: in cache-sized chunks
 
 
 def _sample_grid(pers, spp: int):

@@ -316,7 +316,7 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         Yb = Ys[s0:s0 + blk]  # (kb, B, 13)
         tb = tt[s0:s0 + blk]
         valid = tb[:, None] <= stop_tau[None, :] + 1e-12  # (kb, B)
-        comps = [Yb[:, :, j] for j in range(13)]
+        comps = list(np.ascontiguousarray(np.moveaxis(Yb, -1, 0)))  # contiguous rows: a faster kernel
         if Bn == 1:
             comps = [cmp[:, 0] for cmp in comps]
         out = kx(*comps)

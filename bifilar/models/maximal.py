@@ -31,14 +31,17 @@ Speed: :func:`rhs`, :func:`solve_dynamics`, :func:`tensions` and
 :func:`make_flat_rhs` run a *compiled kernel* (:func:`compiled_kernel`): the
 equations above written out component by component as straight-line Python,
 generated once per wire count and pattern of zero parameters, which runs on
-Python floats for one state (~5 us a call against ~260 us for the array
-code it replaced) and on arrays for a batch (one numpy operation per term).
+Python floats for one state (~2.5 us a call for two wires against ~260 us
+for the array code it replaced; ``signature="odeint"`` is odeint's own
+``f(y, t)``, no wrapper) and on arrays for a batch (one numpy operation per
+term).
 :func:`kinematics`, :func:`energy` and :func:`constraint_violation` stay
 array code (not in the hot loop).
 """
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -143,7 +146,9 @@ def _components(y: np.ndarray):
     y = np.asarray(y, dtype=float)
     if y.ndim == 1:
         return y.tolist()
-    return list(np.moveaxis(y, -1, 0))
+    # contiguous rows: the kernel's elementwise operations on strided columns of a
+    # (k, 13) record cost ~40 % more than the copy
+    return list(np.ascontiguousarray(np.moveaxis(y, -1, 0)))
 
 
 def _stack(parts, lead_shape) -> np.ndarray:
@@ -224,12 +229,37 @@ def make_flat_rhs(P: RigParams, stabilise: bool = True):
     return f
 
 
+CACHE_CHUNK = 4096
+"""States a kernel call takes at once from a long record of one scene
+(:func:`chunked`): the kernel's ~300 temporaries then stay in the
+processor's cache (a 13 000-sample record in one call costs ~2x more)."""
+
+
+def chunked(kernel, size: int = CACHE_CHUNK):
+    """``kernel`` (a :func:`compiled_kernel` of one scene's parameters) applied
+    to 1-D arrays of states (a record) ``size`` states at a time, its outputs
+    concatenated: the same values, faster for long records.  Other
+    arguments (floats, batches of shape (k, B)) go through unchanged."""
+
+    def f(*comps):
+        if np.ndim(comps[0]) != 1 or len(comps[0]) <= size:
+            return kernel(*comps)
+        K = len(comps[0])
+        parts = [kernel(*(c[k:k + size] for c in comps)) for k in range(0, K, size)]
+        lens = [min(size, K - k) for k in range(0, K, size)]
+        return tuple(np.concatenate([np.broadcast_to(p[i], (m,)) for p, m in zip(parts, lens)])
+                     for i in range(len(parts[0])))
+
+    return f
+
+
 def tensions(y: np.ndarray, P: RigParams) -> np.ndarray:
     """Wire tensions (..., n), N; positive = pulling.  Uses the unstabilised
     multipliers so that the value is the physical one on the manifold."""
     y = np.asarray(y, dtype=float)
     n = int(P.lengths.shape[-1])
-    out = compiled_kernel(P, False, extras=True)(*_components(y))
+    k = compiled_kernel(P, False, extras=True)
+    out = (chunked(k) if P.batch_shape == () else k)(*_components(y))  # chunks of one scene's states only
     lead = np.broadcast_shapes(y.shape[:-1], P.batch_shape)
     lam = _stack(out[13:13 + n], lead)
     phi = _stack(out[13 + n:13 + 2 * n], lead)
@@ -284,14 +314,21 @@ class _Code:
         self.lines: list[str] = []
 
     def expr(self, terms) -> str | None:
-        """``terms``: iterable of (sign, factor, ...); None when every term vanishes."""
+        """``terms``: iterable of (sign, factor, ...); None when every term vanishes.
+        The first surviving positive term leads (a leading minus would cost a
+        negation)."""
+        live = [(sign, fac) for sign, *fac in terms if not any(f in self.zero for f in fac)]
+        live.sort(key=lambda sf: sf[0] < 0)  # stable: positive terms first, each group in its order
         out = ""
-        for sign, *fac in terms:
-            if any(f in self.zero for f in fac):
-                continue
+        for sign, fac in live:
             p = "*".join(fac)
             out += ("-" if sign < 0 else "") + p if not out else (" - " if sign < 0 else " + ") + p
         return out or None
+
+    def ops(self, terms) -> int:
+        """Arithmetic operations of the expression of ``terms``."""
+        live = [fac for sign, *fac in terms if not any(f in self.zero for f in fac)]
+        return sum(len(fac) - 1 for fac in live) + max(len(live) - 1, 0)
 
     def let(self, name: str, terms) -> str:
         e = self.expr(terms)
@@ -306,37 +343,84 @@ class _Code:
 
 
 def _param_names(n: int) -> list[str]:
-    names = ["minv", "g", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "Nxx", "Nyy", "Nzz", "Nxy", "Nxz", "Nyz", "bga", "bgb"]
+    names = ["mass", "g", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "Nxx", "Nyy", "Nzz", "Nxy", "Nxz", "Nyz",
+             "Mxx", "Myy", "Mzz", "Mxy", "Mxz", "Myz", "Ex", "Ey", "Ez", "bga", "hb"]
     for i in range(n):
-        names += [f"ax{i}", f"ay{i}", f"az{i}", f"px{i}", f"py{i}", f"pz{i}", f"L2{i}"]
+        names += [f"ax{i}", f"ay{i}", f"az{i}", f"px{i}", f"py{i}", f"pz{i}", f"L2{i}", f"hbL{i}"]
+        if i > 0:
+            names += [f"Da{a}{i}" for a in _AX] + [f"Dp{a}{i}" for a in _AX]
     return names
 
 
+_NEVER_ZERO = ("mass", "bga", "hb")
+"""Parameters the kernel never drops as zero (a zero would be a degenerate
+scene anyway), besides the per-wire ``L2``/``hbL`` (the Baumgarte terms are
+written only when ``stabilise``)."""
+
+
 def _param_values(P: "RigParams") -> dict:
-    """Parameter name -> value (float for a single scene, else array of the batch shape)."""
+    """Parameter name -> value (float for a single scene, else array of the batch shape).
+
+    ``I..``/``N..`` the inertia and its inverse (body axes), ``M..`` = mass x
+    the inverse inertia (the kernel solves for the multipliers divided by the
+    mass, see :func:`_kernel_source`), ``E.`` Euler's coefficients
+    ``(I_yy - I_zz) / I_xx``, ... (principal body axes), ``bga`` = 2 alpha, ``hb`` = beta^2 / 2
+    and ``hbL<i>`` = beta^2 L_i^2 / 2 (the Baumgarte terms folded into
+    ``bga phidot + hb |d|^2 - hbL``), ``L2<i>`` = L_i^2, ``Da.<i>`` = a_0 -
+    a_i (world) and ``Dp.<i>`` = p_i - p_0 (body), for wire i's vector in
+    body axes from wire 0's.
+    """
     single = P.mass.ndim == 0
 
     def c(x):
         return float(x) if single else np.ascontiguousarray(x)
 
     I, N = P.inertia, P.inertia_inv
-    vals = {"minv": c(1.0 / P.mass), "g": c(P.gravity), "bga": c(2.0 * P.baumgarte[..., 0]), "bgb": c(P.baumgarte[..., 1] ** 2)}
-    for pre, M in (("I", I), ("N", N)):
+    bgb = P.baumgarte[..., 1] ** 2
+    vals = {"mass": c(P.mass), "g": c(P.gravity), "bga": c(2.0 * P.baumgarte[..., 0]), "hb": c(0.5 * bgb)}
+    for pre, M in (("I", I), ("N", N), ("M", np.asarray(P.mass)[..., None, None] * N)):
         for k, (i, j) in zip(("xx", "yy", "zz", "xy", "xz", "yz"), ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))):
             vals[pre + k] = c(0.5 * (M[..., i, j] + M[..., j, i]))
+    d = [I[..., k, k] for k in range(3)]
+    for k in range(3):  # Euler's coefficients (I_yy - I_zz) / I_xx, ... (used when the body axes are principal)
+        vals["E" + _AX[k]] = c((d[(k + 1) % 3] - d[(k + 2) % 3]) / d[k])
     for i in range(P.lengths.shape[-1]):
         for k in range(3):
             vals[f"a{_AX[k]}{i}"] = c(P.anchors[..., i, k])
             vals[f"p{_AX[k]}{i}"] = c(P.attachments[..., i, k])
         vals[f"L2{i}"] = c(P.lengths[..., i] ** 2)
+        vals[f"hbL{i}"] = c(0.5 * bgb * P.lengths[..., i] ** 2)
+        if i > 0:
+            for k in range(3):
+                vals[f"Da{_AX[k]}{i}"] = c(P.anchors[..., 0, k] - P.anchors[..., i, k])
+                vals[f"Dp{_AX[k]}{i}"] = c(P.attachments[..., i, k] - P.attachments[..., 0, k])
     return vals
 
 
-def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tuple[str, list[str]]:
+SIGNATURES = ("args", "odeint")
+"""Call signatures of a compiled kernel: ``"args"`` ``f(rx, ..., wz)`` (13
+floats or arrays) returning a tuple; ``"odeint"`` ``f(y, t)`` for
+:func:`scipy.integrate.odeint` on one scene (``y`` an array (13,), unpacked
+with one ``tolist``) returning an array (13,) (+ extras) that the kernel
+owns and overwrites on its next call: copy it to keep it (odeint copies it
+at once; :func:`scipy.integrate.solve_ivp` keeps references, so it takes
+the ``"args"`` form)."""
+
+
+def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
+                   signature: str = "args") -> tuple[str, list[str]]:
     """Source of a factory ``make(<params>) -> f(<13 state components>)``.
 
     ``f`` returns the 13 derivative components, followed (``extras``) by the
     n multipliers ``lam`` (N/m) and the n constraint values ``phi`` (m^2).
+
+    The multiplier system is solved for ``mu = lam / m`` (m/s^2 per m of
+    wire): ``(m J M^-1 J^T) mu = rb`` has the rows ``d_i . d_j + J_i . (m
+    I^-1) J_j``, the CoM acceleration is ``sum mu_i d_i - g e_z`` and the
+    angular one ``I^-1 tau + sum mu_i (m I^-1) J_i``, which spares the
+    divisions by the mass.  The attachment velocity is taken in body axes
+    (``R^T v + w x p``: a sparse ``p`` costs fewer terms than ``(R w) x (R
+    p)``).
     """
     C = _Code(zero)
     L = C.lines
@@ -349,19 +433,24 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
           "R20 = xz - wy_", "R21 = yz + wx_", "R22 = 1.0 - (xx + yy)"]
     R = [["R00", "R01", "R02"], ["R10", "R11", "R12"], ["R20", "R21", "R22"]]
     w = ["wx", "wy", "wz"]
-    # world angular velocity, gyroscopic torque -w x I w and I^-1 of it (body axes)
+    # CoM velocity in body axes, gyroscopic torque -w x I w and I^-1 of it (body axes)
     for a in range(3):
-        C.let(f"ww{_AX[a]}", [(1, R[a][b], w[b]) for b in range(3)])
+        C.let(f"vb{_AX[a]}", [(1, R[b][a], "v" + _AX[b]) for b in range(3)])
     Iname = {(0, 0): "xx", (1, 1): "yy", (2, 2): "zz", (0, 1): "xy", (1, 0): "xy", (0, 2): "xz", (2, 0): "xz",
              (1, 2): "yz", (2, 1): "yz"}
-    for a in range(3):
-        C.let(f"Iw{_AX[a]}", [(1, "I" + Iname[a, b], w[b]) for b in range(3)])
     L.append("w2 = wx*wx + wy*wy + wz*wz")
-    C.let("taux", [(-1, "wy", "Iwz"), (1, "wz", "Iwy")])
-    C.let("tauy", [(-1, "wz", "Iwx"), (1, "wx", "Iwz")])
-    C.let("tauz", [(-1, "wx", "Iwy"), (1, "wy", "Iwx")])
-    for a in range(3):
-        C.let(f"Nt{_AX[a]}", [(1, "N" + Iname[a, b], "tau" + _AX[b]) for b in range(3)])
+    if {"Ixy", "Ixz", "Iyz"} <= C.zero:  # principal body axes: Euler's equations, I^-1 (-w x I w)_x = Ex wy wz, ...
+        C.let("Ntx", [(1, "Ex", "wy", "wz")])
+        C.let("Nty", [(1, "Ey", "wz", "wx")])
+        C.let("Ntz", [(1, "Ez", "wx", "wy")])
+    else:
+        for a in range(3):
+            C.let(f"Iw{_AX[a]}", [(1, "I" + Iname[a, b], w[b]) for b in range(3)])
+        C.let("taux", [(-1, "wy", "Iwz"), (1, "wz", "Iwy")])
+        C.let("tauy", [(-1, "wz", "Iwx"), (1, "wx", "Iwz")])
+        C.let("tauz", [(-1, "wx", "Iwy"), (1, "wy", "Iwx")])
+        for a in range(3):
+            C.let(f"Nt{_AX[a]}", [(1, "N" + Iname[a, b], "tau" + _AX[b]) for b in range(3)])
     for i in range(n):
         p = [f"px{i}", f"py{i}", f"pz{i}"]
         # attachment offset (world), wire vector anchor -> attachment, and in body axes
@@ -369,22 +458,29 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
             C.let(f"Rp{_AX[a]}{i}", [(1, R[a][b], p[b]) for b in range(3)])
         for a in range(3):
             C.let(f"d{_AX[a]}{i}", [(1, "r" + _AX[a]), (1, f"Rp{_AX[a]}{i}"), (-1, f"a{_AX[a]}{i}")])
+        e_terms = [[(1, R[b][a], f"d{_AX[b]}{i}") for b in range(3)] for a in range(3)]  # R^T d
+        if i > 0:  # e_i = e_0 + R^T (a_0 - a_i) + (p_i - p_0): fewer terms when anchors differ along few axes
+            via0 = [[(1, f"e{_AX[a]}0")] + [(1, R[b][a], f"Da{_AX[b]}{i}") for b in range(3)] + [(1, f"Dp{_AX[a]}{i}")]
+                    for a in range(3)]
+            if sum(map(C.ops, via0)) < sum(map(C.ops, e_terms)):
+                e_terms = via0
         for a in range(3):
-            C.let(f"e{_AX[a]}{i}", [(1, R[b][a], f"d{_AX[b]}{i}") for b in range(3)])
-        # attachment velocity v + w_world x Rp
-        C.let(f"sx{i}", [(1, "vx"), (1, "wwy", f"Rpz{i}"), (-1, "wwz", f"Rpy{i}")])
-        C.let(f"sy{i}", [(1, "vy"), (1, "wwz", f"Rpx{i}"), (-1, "wwx", f"Rpz{i}")])
-        C.let(f"sz{i}", [(1, "vz"), (1, "wwx", f"Rpy{i}"), (-1, "wwy", f"Rpx{i}")])
+            C.let(f"e{_AX[a]}{i}", e_terms[a])
+        # attachment velocity in body axes: R^T v + w x p
+        C.let(f"sx{i}", [(1, "vbx"), (1, "wy", p[2]), (-1, "wz", p[1])])
+        C.let(f"sy{i}", [(1, "vby"), (1, "wz", p[0]), (-1, "wx", p[2])])
+        C.let(f"sz{i}", [(1, "vbz"), (1, "wx", p[1]), (-1, "wy", p[0])])
         C.let(f"dd{i}", [(1, f"d{a}{i}", f"d{a}{i}") for a in _AX])
-        C.lines.append(f"phi{i} = 0.5*(dd{i} - L2{i})")
+        if extras:
+            C.lines.append(f"phi{i} = 0.5*(dd{i} - L2{i})")
         if stabilise:
-            C.let(f"phd{i}", [(1, f"d{a}{i}", f"s{a}{i}") for a in _AX])
-        # rotational Jacobian row p x (R^T d) and I^-1 of it
+            C.let(f"phd{i}", [(1, f"e{a}{i}", f"s{a}{i}") for a in _AX])
+        # rotational Jacobian row p x (R^T d) and (m I^-1) of it
         C.let(f"Jx{i}", [(1, p[1], f"ez{i}"), (-1, p[2], f"ey{i}")])
         C.let(f"Jy{i}", [(1, p[2], f"ex{i}"), (-1, p[0], f"ez{i}")])
         C.let(f"Jz{i}", [(1, p[0], f"ey{i}"), (-1, p[1], f"ex{i}")])
         for a in range(3):
-            C.let(f"NJ{_AX[a]}{i}", [(1, "N" + Iname[a, b], f"J{_AX[b]}{i}") for b in range(3)])
+            C.let(f"MJ{_AX[a]}{i}", [(1, "M" + Iname[a, b], f"J{_AX[b]}{i}") for b in range(3)])
         # centripetal term (R^T d) . (w x (w x p)) = (e.w)(w.p) - |w|^2 (e.p)
         C.let(f"ew{i}", [(1, f"e{a}{i}", "w" + a) for a in _AX])
         C.let(f"wp{i}", [(1, "w" + _AX[a], p[a]) for a in range(3)])
@@ -392,21 +488,21 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
         terms = [(-1, f"s{a}{i}", f"s{a}{i}") for a in _AX]
         terms += [(-1, f"ew{i}", f"wp{i}"), (1, "w2", f"ep{i}")]
         terms += [(1, "g", f"dz{i}")]
-        terms += [(-1, f"NJ{a}{i}", f"tau{a}") for a in _AX]
-        if stabilise:
-            terms += [(-1, "bga", f"phd{i}"), (-1, "bgb", f"phi{i}")]
+        terms += [(-1, f"J{a}{i}", f"Nt{a}") for a in _AX]
+        if stabilise:  # - 2 alpha phidot - beta^2 phi, phi = (|d|^2 - L^2) / 2
+            terms += [(-1, "bga", f"phd{i}"), (-1, "hb", f"dd{i}"), (1, f"hbL{i}")]
         C.let(f"rb{i}", terms)
-    # multiplier matrix J M^-1 J^T (symmetric, upper triangle)
+    # multiplier matrix m J M^-1 J^T (symmetric, upper triangle)
     for i in range(n):
         for j in range(i, n):
-            dd = f"dd{i}" if i == j else "(" + C.expr([(1, f"d{a}{i}", f"d{a}{j}") for a in _AX]) + ")"
-            C.let(f"A{i}{j}", [(1, "minv", dd)] + [(1, f"J{a}{i}", f"NJ{a}{j}") for a in _AX])
+            dd = [(1, f"dd{i}")] if i == j else [(1, f"d{a}{i}", f"d{a}{j}") for a in _AX]
+            C.let(f"A{i}{j}", dd + [(1, f"J{a}{i}", f"MJ{a}{j}") for a in _AX])
     if n > MAX_ELIMINATION_WIRES:
         # four or more wires: the constraints can be dependent (every wire taut on a symmetric rig),
         # J M^-1 J^T is then singular and the minimum-norm multipliers are taken (see _min_norm)
         upper = ", ".join(C.v(f"A{i}{j}") for i in range(n) for j in range(i, n))
         rbs = ", ".join(C.v(f"rb{i}") for i in range(n))
-        C.lines.append(f"{', '.join(f'lam{i}' for i in range(n))}, = _min_norm(({upper},), ({rbs},))")
+        C.lines.append(f"{', '.join(f'mu{i}' for i in range(n))}, = _min_norm(({upper},), ({rbs},))")
     # unpivoted symmetric elimination, then back substitution
     for k in range(n if n <= MAX_ELIMINATION_WIRES else 0):
         C.lines.append(f"iA{k} = 1.0/A{k}{k}")
@@ -417,31 +513,38 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool) -> tu
             C.lines.append(f"rb{i} = {C.v(f'rb{i}')} - f*{C.v(f'rb{k}')}")
             C.zero.discard(f"rb{i}")
     for i in reversed(range(n if n <= MAX_ELIMINATION_WIRES else 0)):
-        rest = "".join(f" - A{i}{j}*lam{j}" for j in range(i + 1, n))
-        C.lines.append(f"lam{i} = ({C.v(f'rb{i}')}{rest})*iA{i}")
+        rest = "".join(f" - A{i}{j}*mu{j}" for j in range(i + 1, n))
+        C.lines.append(f"mu{i} = ({C.v(f'rb{i}')}{rest})*iA{i}")
+    C.let("ax_", [(1, f"mu{i}", f"dx{i}") for i in range(n)])
+    C.let("ay_", [(1, f"mu{i}", f"dy{i}") for i in range(n)])
+    C.let("az_", [(1, f"mu{i}", f"dz{i}") for i in range(n)] + [(-1, "g")])
     for a in range(3):
-        C.let(f"F{_AX[a]}", [(1, f"lam{i}", f"d{_AX[a]}{i}") for i in range(n)])
-    C.let("ax_", [(1, "minv", "Fx")])
-    C.let("ay_", [(1, "minv", "Fy")])
-    C.let("az_", [(1, "minv", "Fz"), (-1, "g")])
-    for a in range(3):
-        C.let(f"al{_AX[a]}", [(1, f"Nt{_AX[a]}")] + [(1, f"lam{i}", f"NJ{_AX[a]}{i}") for i in range(n)])
+        C.let(f"al{_AX[a]}", [(1, f"Nt{_AX[a]}")] + [(1, f"mu{i}", f"MJ{_AX[a]}{i}") for i in range(n)])
     # quaternion rate q * (0, w) / 2 with a pull back to |q| = 1 at rate 1/s
-    L += ["u = 1.0 - s",
-          "dqw = -0.5*(qx*wx + qy*wy + qz*wz) + u*qw",
-          "dqx = 0.5*(qw*wx + qy*wz - qz*wy) + u*qx",
-          "dqy = 0.5*(qw*wy - qx*wz + qz*wx) + u*qy",
-          "dqz = 0.5*(qw*wz + qx*wy - qy*wx) + u*qz"]
+    L += ["u = 1.0 - s", "hx = 0.5*wx", "hy = 0.5*wy", "hz = 0.5*wz",
+          "dqw = u*qw - qx*hx - qy*hy - qz*hz",
+          "dqx = u*qx + qw*hx + qy*hz - qz*hy",
+          "dqy = u*qy + qw*hy - qx*hz + qz*hx",
+          "dqz = u*qz + qw*hz + qx*hy - qy*hx"]
     out = ["vx", "vy", "vz", "dqw", "dqx", "dqy", "dqz", C.v("ax_"), C.v("ay_"), C.v("az_"),
            C.v("alx"), C.v("aly"), C.v("alz")]
     if extras:
-        out += [f"lam{i}" for i in range(n)] + [C.v(f"phi{i}") for i in range(n)]
+        out += [f"mass*mu{i}" for i in range(n)] + [C.v(f"phi{i}") for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
+    if signature == "odeint":
+        # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
+        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call
+        head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
+                f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
+                f"    def f(y, t):\n        {', '.join(_STATE_NAMES)} = y.tolist()\n")
+        tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
+    elif signature == "args":
+        head = f"    def f({', '.join(_STATE_NAMES)}):\n"
+        tail = f"        return ({', '.join(out)},)\n"
+    else:
+        raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
     body = "\n".join("        " + ln for ln in C.lines)
-    src = (f"def make({', '.join(params)}):\n"
-           f"    def f({', '.join(_STATE_NAMES)}):\n{body}\n"
-           f"        return ({', '.join(out)},)\n"
-           f"    return f\n")
+    src = f"def make({', '.join(params)}):\n{head}{body}\n{tail}    return f\n"
     return src, params
 
 
@@ -496,14 +599,14 @@ def _min_norm(upper: tuple, rb: tuple) -> tuple:
 def _zero_set(vals: dict) -> frozenset:
     out = set()
     for k, v in vals.items():
-        if k in ("minv", "bga", "bgb") or k.startswith("L2"):
+        if k in _NEVER_ZERO or k.startswith(("L2", "hbL")):
             continue  # never drop these (a zero would be a degenerate scene anyway)
         if np.all(np.asarray(v) == 0):
             out.add(k)
     return frozenset(out)
 
 
-def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False):
+def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args"):
     """The model's right-hand side compiled for the parameters ``P``.
 
     Returns ``f(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz) -> tuple``
@@ -511,21 +614,26 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     followed when ``extras`` by the n multipliers ``lam`` (N/m; tension
     ``-lam |d|``) and the n constraint values ``phi = (|d|^2 - L^2)/2``
     (m^2).  The arguments are floats for a single scene (fastest) or arrays
-    broadcasting against ``P.batch_shape``.  Cached on ``P``.
+    broadcasting against ``P.batch_shape``; with ``signature="odeint"``
+    (one scene) the function is ``f(y, t)`` on an array ``y`` (13,), the
+    right-hand side :func:`scipy.integrate.odeint` calls, without a wrapper,
+    returning an array it reuses (see :data:`SIGNATURES`).  Cached on ``P``.
     """
+    if signature == "odeint" and P.batch_shape != ():
+        raise ValueError("signature='odeint' is for one scene (parameters of batch shape ())")
     cache = P.__dict__.get("_kernels")
     if cache is None:
         cache = {}
         object.__setattr__(P, "_kernels", cache)
-    key = (bool(stabilise), bool(extras))
+    key = (bool(stabilise), bool(extras), signature)
     if key not in cache:
         vals = _param_values(P)
         n = int(P.lengths.shape[-1])
         zero = _zero_set(vals)
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
-            src, params = _kernel_source(n, zero, stabilise, extras)
-            ns: dict = {"_min_norm": _min_norm}
+            src, params = _kernel_source(n, zero, stabilise, extras, signature)
+            ns: dict = {"_min_norm": _min_norm, "_np": np, "_struct": struct}
             exec(compile(src, f"<bifilar.maximal kernel n={n}>", "exec"), ns)  # noqa: S102 - generated here
             _FACTORY_CACHE[fkey] = (ns["make"], params)
         make, params = _FACTORY_CACHE[fkey]
@@ -533,7 +641,7 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     return cache[key]
 
 
-def kernel_source(P: "RigParams", stabilise: bool = True, extras: bool = False) -> str:
+def kernel_source(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args") -> str:
     """The generated source behind :func:`compiled_kernel` (for inspection)."""
     vals = _param_values(P)
-    return _kernel_source(int(P.lengths.shape[-1]), _zero_set(vals), stabilise, extras)[0]
+    return _kernel_source(int(P.lengths.shape[-1]), _zero_set(vals), stabilise, extras, signature)[0]
