@@ -6,9 +6,8 @@ in two stable poses, both turned by less than 90 degrees about each axis from
 the start orientation (Newton from random starts on ~900 random 3-5 wire rigs
 that hang found 9 such, all trifilars; the two here are two of them, rounded).
 Newton ends in the one whose basin it starts in, so a warm start from a
-neighbour's pose (a sweep, the
-batch's first scene, a guess) used to return the other pose, and a sweep's
-answer depended on its order.  The rest pose is defined as the one reached
+neighbour's pose (a sweep, the batch's first scene, a guess) used to return
+the other pose, and a sweep's answer depended on its order.  The rest pose is defined as the one reached
 from the start pose (body axes along the world axes, below the anchors:
 ``rest_pose(scene)``); the batch and ``rest_pose(scene, guess=...)`` must
 return it from every start.  ``local_only`` (finite differences) keeps the
