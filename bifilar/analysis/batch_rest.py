@@ -3,15 +3,16 @@
 :func:`modes_batch` and :func:`rest_and_modes`).
 
 * :func:`rest_poses`: Newton's method on the KKT equations, all scenes at
-  once, warm-started from a guess (a neighbour's rest pose, by default the
-  first scene's); a scene whose Newton run does not end at a taut, stable
-  equilibrium falls back to :func:`~bifilar.analysis.equilibrium.rest_pose`
-  (global search and its one-line errors); a knife edge's pose is turned
-  to the canonical member of its neutral circle, as ``rest_pose`` does; a
-  pose ``rest_pose`` would not accept (rotation from the start orientation
-  beyond its 90-degree box, a two-wire rig's CoM not straight below its
-  attachment line) falls back too, so the warm start and the batch order
-  change no scene's verdict.
+  once, from the start pose :func:`~bifilar.analysis.equilibrium.rest_pose`
+  uses (never from a neighbour's pose: a rig with two stable equilibria
+  would end at the one nearer it); a scene whose Newton run does not end
+  where ``rest_pose``'s Newton start would be accepted (a taut, stable
+  equilibrium turned by at most its 0.5 rad from the start orientation, a
+  two-wire rig's CoM straight below its attachment line) falls back to
+  ``rest_pose`` (global search and its one-line errors); a knife edge's
+  pose is turned to the canonical member of its neutral circle, as
+  ``rest_pose`` does.  So the batch order, its first scene and a guess
+  change no scene's pose or verdict.
 * :func:`modes_batch`: null space of the constraint Jacobian, reduced
   stiffness and mass, and the generalised eigenproblem by batched Cholesky
   and ``eigh``; labels as :func:`~bifilar.analysis.modes.linear_modes`.
@@ -27,9 +28,10 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BifilarError
-from ..rotations import matrix_to_quat, quat_to_rotvec, rotvec_to_matrix
+from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
-from .equilibrium import LINE_TURN_TOL, START_BOX, RestPose, canonical_attitude, knife_edge_axes, line_turns, rest_pose
+from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, RestPose, canonical_attitude, knife_edge_axes,
+                          line_turns, rest_pose, start_coms)
 from .modes import ModeSet, mode_sets
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
@@ -181,9 +183,10 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
 
     Parameters
     ----------
-    guess : a RestPose used as the start of every scene, or one per scene;
-        default: the rest pose of the first scene (global search), also
-        used for a group of scenes (same wire count) a guess does not fit.
+    guess : ignored (kept for callers that pass a neighbour's pose): every
+        scene starts where :func:`rest_pose` starts, since a rig with two
+        stable equilibria would end at the one nearer a warm start, and a
+        sweep's answer would depend on its order and its first scene.
     errors : ``"raise"``: the first scene that cannot hang raises its
         error (:class:`SlackWireError`, ...); ``"return"``: its entry in
         the list is the exception instead.
@@ -198,37 +201,20 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     if not scenes:
         return []
     if len(_groups(scenes)) > 1:
-        if isinstance(guess, RestPose) or guess is None:
-            return _per_group(lambda sc: rest_poses(sc, guess, errors=errors), scenes)
-        return _per_group(lambda sc, gs: rest_poses(sc, gs, errors=errors), scenes, list(guess))
+        return _per_group(lambda sc: rest_poses(sc, errors=errors), scenes)
     out = [None] * len(scenes)
-    n = scenes[0].n_wires
-    if guess is not None and any(len(q.tensions) != n for q in ([guess] if isinstance(guess, RestPose) else guess)):
-        guess = None  # another rig's pose (one guess for a batch of several wire counts): no start for these
-    if guess is None:
-        try:
-            g0 = rest_pose(scenes[0])
-        except BifilarError as exc:
-            if errors != "return":
-                raise
-            out[0] = exc
-            g0 = next((r for r in _first_rest(scenes[1:]) if r is not None), None)
-            if g0 is None:
-                return [_rest_or_error(s, None, errors) for s in scenes]
-        guesses = [g0] * len(scenes)
-    elif isinstance(guess, RestPose):
-        guesses = [guess] * len(scenes)
-    else:
-        guesses = list(guess)
     a, p, L, m, g, I = _stack(scenes)
-    # each distinct guess's multipliers once (one guess for all: the honest budget's sigma points)
-    lam_of = {id(q): q.tensions / np.linalg.norm(q.wire_vectors, axis=1) for q in {id(q): q for q in guesses}.values()}
-    com = np.array([q.com for q in guesses], float)
-    R = np.array([q.R for q in guesses], float)
-    lam = np.array([lam_of[id(q)] for q in guesses], float)
+    # Newton from rest_pose's start pose (not from a guess: a rig with two stable equilibria would end at
+    # the one nearer the guess, so a sweep's answer would depend on its order; tests/test_multi_equilibria.py)
+    com = start_coms(a, p, L)
+    R = np.broadcast_to(np.eye(3), (len(scenes), 3, 3)).copy()
+    _, _, G0 = _jacobian(a, p, com, R)
+    gradV = np.zeros((len(scenes), 6))
+    gradV[:, 2] = m * g
+    lam = -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)  # least squares, as _newton_kkt
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
     # a knife edge (CoM on the attachment line) rests anywhere on a neutral circle; Newton's end
-    # there depends on the warm start: take the canonical member, as rest_pose does
+    # there depends on rounding: take the canonical member, as rest_pose does
     axis = knife_edge_axes(p)
     edge = np.all(np.isfinite(axis), axis=1)
     if edge.any():
@@ -244,13 +230,14 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
         ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
         ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
     q = matrix_to_quat(R)
-    # the single path's acceptance rules, whatever the warm start: a two-wire rig's CoM straight below its
-    # attachment line, and the rotation from the start orientation (the identity) within the 90-degree box
-    # (a neighbour's turned pose leads Newton to equilibria rest_pose refuses); a scene failing either goes
-    # to rest_pose, which turns it about the line or refuses it
+    # the single path's acceptance rules for its Newton start (rest_pose's stage 2): a two-wire rig's CoM
+    # straight below its attachment line, a turn of at most NEWTON_START_MAX_TURN from the start orientation
+    # (inside the 90-degree box; farther, another stable equilibrium may be the one its global search finds),
+    # and not every wire straight across; a scene failing any goes to rest_pose, which turns it about the
+    # line, searches or refuses it
     ok &= ~(np.abs(line_turns(p, R)[0]) > LINE_TURN_TOL)
-    far = q[:, 0] < np.cos(START_BOX / 2)  # turned by more than START_BOX (q w >= 0): a component may leave the box
-    ok[far] &= np.max(np.abs(quat_to_rotvec(q[far])), axis=1) <= START_BOX
+    ok &= np.abs(q[:, 0]) >= np.cos(NEWTON_START_MAX_TURN / 2)
+    ok &= np.max(np.abs(d[..., 2]) / np.linalg.norm(d, axis=2), axis=1) >= MIN_WIRE_SLOPE
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue
@@ -258,7 +245,7 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
             out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
                                     wire_vectors=d[k].copy(), kkt_residual=float(kkt[k]))
         else:
-            out[k] = _rest_or_error(s, guesses[k], errors)
+            out[k] = _rest_or_error(s, errors)
     return out
 
 
@@ -296,17 +283,9 @@ def _plain_rest(fields: dict) -> RestPose:
     return RestPose(**fields)
 
 
-def _first_rest(scenes):
-    for s in scenes:
-        try:
-            yield rest_pose(s)
-        except BifilarError:
-            yield None
-
-
-def _rest_or_error(scene: Scene, guess, errors: str):
+def _rest_or_error(scene: Scene, errors: str):
     try:
-        return rest_pose(scene, guess=guess)
+        return rest_pose(scene)
     except BifilarError as exc:
         if errors != "return":
             raise

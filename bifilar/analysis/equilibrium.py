@@ -94,13 +94,22 @@ def constraint_hessians(d: np.ndarray, w: np.ndarray) -> np.ndarray:
     return H
 
 
-def _initial_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    a, p, L = scene.anchors, scene.attachments, scene.lengths
-    xy = np.mean(a[:, :2] - p[:, :2], axis=0)
-    horiz = np.linalg.norm(a[:, :2] - (xy + p[:, :2]), axis=1)
+def start_coms(anchors: np.ndarray, attachments: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """CoM (..., 3) of the start pose (world, m): the body, axes along the
+    world axes (interface.md), centred below the anchors (anchors,
+    attachments (..., n, 3), m; lengths (..., n), m) and low enough that
+    every wire is at most its length.  Vectorised over leading axes (the
+    batched rest poses start from the same pose as :func:`rest_pose`)."""
+    a, p, L = anchors, attachments, lengths
+    xy = np.mean(a[..., :2] - p[..., :2], axis=-2)
+    horiz = np.linalg.norm(a[..., :2] - (xy[..., None, :] + p[..., :2]), axis=-1)
     drop = np.sqrt(np.maximum(L**2 - horiz**2, (0.5 * L) ** 2))
-    z = np.min(a[:, 2] - p[:, 2] - drop)  # every wire at most its length
-    return np.array([xy[0], xy[1], z]), np.eye(3)
+    z = np.min(a[..., 2] - p[..., 2] - drop, axis=-1)  # every wire at most its length
+    return np.concatenate([xy, z[..., None]], axis=-1)
+
+
+def _initial_pose(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    return start_coms(scene.anchors, scene.attachments, scene.lengths), np.eye(3)
 
 
 def _left_jacobian(x: np.ndarray) -> np.ndarray:
@@ -308,11 +317,19 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
               global_search: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.
 
-    ``guess``: the rest pose of a nearby scene (a sweep or finite-difference
-    neighbour); Newton starts from it and the global search is skipped when
-    it converges to a taut, stable pose.  ``local_only``: with a guess, raise
-    :class:`ConvergenceError` instead of falling back to the global search
-    (finite differences want the neighbouring equilibrium or nothing).
+    The rest pose is the stable equilibrium reached from the start pose (the
+    body's axes along the world axes, below the anchors): a rig may have
+    more than one (a trifilar with strongly leaning wires, a CoM far off
+    centre), and which one a search ends at depends on where it starts.
+
+    ``guess``: the rest pose of a nearby scene (a finite-difference
+    neighbour), used only with ``local_only``: Newton starts from it and the
+    equilibrium on the guess's branch is returned, or
+    :class:`ConvergenceError` (finite differences want the neighbouring
+    equilibrium or nothing).  Without ``local_only`` the guess is ignored:
+    a neighbour's pose could lead to another stable equilibrium than the
+    start pose does (tests/test_multi_equilibria.py), and the search from
+    the start pose costs little more (~1 ms).
     ``global_search``: skip the Newton start (stage 2) and always run SLSQP
     (tests compare the two).
 
@@ -326,12 +343,11 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
     ConvergenceError
         The solver failed.
     """
-    if guess is not None:
+    if guess is not None and local_only:
         quick = _from_guess(scene, guess)
         if quick is not None:
             return quick
-        if local_only:
-            raise ConvergenceError("no taut, stable rest pose near the guess")
+        raise ConvergenceError("no taut, stable rest pose near the guess")
     com0, R0 = _initial_pose(scene)
     if not global_search:
         quick = _newton_start(scene, com0, R0)

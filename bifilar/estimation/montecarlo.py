@@ -136,8 +136,8 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
     as :func:`build_problem` and :class:`HangingModel` track it (MAC against
     the estimate's base modes, then against the draw's own modes at the
     prior).  The rest poses do not depend on the inertia, so they are found
-    once (:func:`~bifilar.analysis.batch.rest_poses`, warm-started from the
-    estimate's); every iteration then computes the modes of all unconverged
+    once (:func:`~bifilar.analysis.batch.rest_poses`, each from the start
+    pose, as :func:`~bifilar.analysis.equilibrium.rest_pose`); every iteration then computes the modes of all unconverged
     draws in one :func:`~bifilar.analysis.batch.modes_batch` call and makes
     one secant step per draw on ``f = T^2 - T_draw^2`` (close to linear in an
     inertia), the first slope from a forward difference, steps limited and

@@ -168,7 +168,8 @@ class HangingModel:
 
     ``values``: {unknown: value} in the reference body frame (missing ones
     keep the prior).  Rest poses are reused while only the inertia changes
-    (the rest pose does not depend on it) and warm-started otherwise; modes
+    (the rest pose does not depend on it) and found anew otherwise (from the
+    start pose, not the previous one: a rig may have two stable poses); modes
     are tracked by MAC against the modes at the prior.
     """
 
