@@ -234,7 +234,7 @@ def simulate_batch(
         measured ~0.1-1 x rtol (docs/performance.md): rtol 1e-10 for a
         period good to 1e-10.
     rests, modes : precomputed rest poses and mode sets (else computed
-        batched; ``guess`` warm-starts the rest poses).
+        batched, each from its start pose: ``guess`` is not used, see ``batch_rest.rest_poses``).
     on_slack : ``continue`` or ``stop`` (end a scene's run at the first step
         -- lsoda: sample -- with a non-positive tension).
     errors : ``raise`` (the first bad scene raises its error, as the
