@@ -43,11 +43,41 @@ class ConfigErrors(InputError):
 
 class SlackWireError(InputError):
     """The scene cannot hang with every wire taut (a physical impossibility
-    of the input, hence exit status 2).  ``wires`` are 1-based indices."""
+    of the input, hence exit status 2).  ``wires`` are 1-based indices.
 
-    def __init__(self, wires: list[int], message: str):
+    ``advise``: optional callable returning the full message with the
+    advice (how much to shorten each wire, checked by solving the changed
+    rig); it is called on first use of the message (``str``, ``.message``),
+    so callers that catch and drop the error (finite-difference neighbours,
+    sweep points) do not pay for it.  If it fails, ``message`` stands.
+    """
+
+    def __init__(self, wires: list[int], message: str, advise=None):
         self.wires = list(wires)
+        self._advise = advise
         super().__init__("rig.lengths", message)
+
+    @property
+    def message(self) -> str:
+        if self._advise is not None:
+            advise, self._advise = self._advise, None
+            try:
+                self._message = advise()
+            except Exception:  # noqa: BLE001 - the plain message is still right
+                pass
+            self.args = (f"{self.field}: {self._message}",)
+        return self._message
+
+    @message.setter
+    def message(self, value: str) -> None:
+        self._message = value
+
+    def __str__(self) -> str:
+        self.message  # noqa: B018 - computes the advice once
+        return super().__str__()
+
+    def __reduce__(self):  # picklable (sweep workers), with the advice computed
+        return (type(self), (self.wires, self.message))
 
 
 class UnstableRestError(InputError):

@@ -91,3 +91,29 @@ def test_tensions_command_thesis_methods_agree():
     assert max(doc["general"]["max_abs_difference_to_model"]) < 1e-6
     assert doc["inertia_from_tensions"]["Izz"]["value"] == pytest.approx(260.4166666667, rel=1e-6)
     assert "Ixx" in doc["inertia_from_tensions_poorly_excited"]
+
+
+def test_tensions_prints_no_value_for_a_component_the_motion_does_not_excite(tmp_path):
+    """A vertical bifilar's torsion hardly turns the body about x or y: the fit
+    holds Ixx, Iyy at the config's values, so their first-pass numbers (Iyy
+    20.3 for a true 30 in an audit) are not determined and must not be
+    printed; the excited Izz still holds the config's value in its interval."""
+    import yaml
+
+    cfg = tmp_path / "vertical.yaml"
+    cfg.write_text(yaml.safe_dump({
+        "body": {"mass": 50.0, "inertia": {"principal": [20.0, 30.0, 40.0]}},
+        "rig": {"anchors": [[-0.5, 0.0, 2.1], [0.5, 0.0, 2.1]], "attachments": [[-0.5, 0.0, 0.1], [0.5, 0.0, 0.1]],
+                "lengths": [2.0, 2.0]}}))
+    r = run("tensions", cfg, "--periods", "2", "--json")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    est, poor = doc["inertia_from_tensions"], doc["inertia_from_tensions_poorly_excited"]
+    assert {"Ixx", "Iyy"} <= set(poor) and "Izz" not in poor
+    for c in ("Ixx", "Iyy"):
+        assert est[c]["value"] is None and est[c]["std"] is None and est[c]["interval_95"] == [None, None]
+        assert "not determined" in est[c]["reason"] and est[c]["config"] == pytest.approx(10.0 * (2 + "xy".index(c[1])))
+    lo, hi = est["Izz"]["interval_95"]
+    assert lo <= 40.0 <= hi and est["Izz"]["value"] == pytest.approx(40.0, rel=1e-6)
+    table = run("tensions", cfg, "--periods", "2")
+    assert table.exit_code == 0 and table.stdout.count("not determined") == 2, table.stdout

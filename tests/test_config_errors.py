@@ -282,7 +282,7 @@ def test_slack_message_matches_the_pose_on_the_other_wires():
     assert dist == pytest.approx(1.0, abs=1e-9)  # Newton-polished rest pose: ~1e-15; 1e-9 is generous
     gap_mm = (cfg["rig"]["lengths"][2] - dist) * 1000
     errors, _ = expectations(path)
-    assert f"slack at rest by {gap_mm:.3g} mm" in errors[0] and f"to {dist:.6g} m" in errors[0]
+    assert f"slack at rest by {gap_mm:.3g} mm" in errors[0] and f"to {dist:.4f} m" in errors[0]
 
 
 def test_unstable_message_height_matches_config():

@@ -112,9 +112,15 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
         other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=comps)
         std = {c: float(np.hypot(std[c], est.values[c] - other.values[c])) for c in comps}
+    # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
+    # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
+    undetermined = [c for c in comps if not std[c] == std[c]]
     doc["inertia_from_tensions"] = {
-        c: {"value": est.values[c], "std": std[c], "dof": est.dof.get(c), "interval_95": est.interval95(c, std[c]),
-            "config": float(scene.inertia[_idx(c)])} for c in comps}
+        c: {"value": None if c in undetermined else est.values[c], "std": std[c],
+            "dof": None if c in undetermined else est.dof.get(c),
+            "interval_95": est.interval95(c, std[c]), "config": float(scene.inertia[_idx(c)])} for c in comps}
+    for c in undetermined:
+        doc["inertia_from_tensions"][c]["reason"] = NOT_DETERMINED
     # the estimator's rule (relative std above 1 %) applied to the std with the differentiation term
     poor = list(est.poorly_excited) + [c for c in comps if c not in est.poorly_excited
                                        and not std[c] <= 0.01 * abs(est.values[c])]
@@ -148,11 +154,17 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         it.add_column(c, justify="right")
     for c in comps:
         lo, hi = est.interval95(c, std[c])
-        span = f"{lo:.6g} .. {hi:.6g} ({est.dof.get(c, 0):.2g})" if std[c] == std[c] else "n/a (not excited)"
-        it.add_row(c, f"{est.values[c]:.8g}", f"{std[c]:.2g}" if std[c] == std[c] else "n/a", span,
+        span = f"{lo:.6g} .. {hi:.6g} ({est.dof.get(c, 0):.2g})" if c not in undetermined else "n/a"
+        it.add_row(c, "not determined (not excited)" if c in undetermined else f"{est.values[c]:.8g}",
+                   f"{std[c]:.2g}" if c not in undetermined else "n/a", span,
                    f"{scene.inertia[_idx(c)]:.8g}", "POORLY" if c in poor else "yes")
     con.print(it)
 
+
+NOT_DETERMINED = ("not determined: the motion hardly excites this component (its torque is at rounding level "
+                  "or its relative std above 1 % in a first fit), so the fit held it at the config's value; "
+                  "excite a mode that turns the body about this axis")
+"""The reason a component's ``value`` is ``null`` in ``inertia_from_tensions``."""
 
 SIM_RTOL = 1e-11
 """Integrator tolerance of the simulated motion (relative; also the floor of
