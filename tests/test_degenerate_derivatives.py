@@ -171,3 +171,29 @@ def test_trifilar_point_equals_the_finite_difference_path(params, monkeypatch):
     assert new["valid"] and old["valid"]
     new.pop("runtime_s", None), old.pop("runtime_s", None)
     _close(new, old)
+
+
+def test_pair_sum_does_not_depend_on_the_eigenspace_basis():
+    # the pair's derivatives come from the pencil (D, B) on its eigenspace: any basis of it (here a
+    # non-orthogonal mix of the two swings, B not diagonal) gives the same split values, so the pair's sum
+    # (the derivative of the sum of its omega^2, a symmetric function: trace B^-1 D) is the same, while each
+    # member's value follows the direction its own shape matches
+    from dataclasses import replace
+
+    from bifilar.analysis.derivatives import analytic_period_jacobian
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import ModeSet, linear_modes
+
+    scene = raised()
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    names = measured_inputs(scene)
+    base = analytic_period_jacobian(scene, rest, ms, names)
+    s0, s1 = ms.modes[0].shape, ms.modes[1].shape
+    mixed = [replace(ms.modes[0], shape=s0 + 0.3 * s1), replace(ms.modes[1], shape=s1 - 0.6 * s0)]
+    got = analytic_period_jacobian(scene, rest, ModeSet(mixed + ms.modes[2:], ms.mass_matrix, ms.basis), names)
+    scale = np.max(np.abs(base[:2]))
+    np.testing.assert_allclose(got[:2].sum(axis=0), base[:2].sum(axis=0), rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(got[2:], base[2:], rtol=0, atol=1e-12 * np.max(np.abs(base[2:])))
+    # the mixed basis matches other directions than the swings did, so some rows differ
+    assert np.max(np.abs(got[:2] - base[:2])) > 1e-3 * scale

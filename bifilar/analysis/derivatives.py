@@ -58,6 +58,7 @@ with mode tracking for the whole Jacobian.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -302,9 +303,10 @@ def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: l
     return (jac, rel) if push else jac
 
 
-#: MAC values within this of a base mode's best match tie (:func:`_cluster_derivative`):
-#: a finite-difference step of 1e-6 of the input's scale moves a MAC by ~1e-6, and a
-#: direction computed to rounding moves it by ~1e-16 / (relative split of the d_i)
+#: assignments of a cluster's modes to its split directions whose total MAC is within this
+#: of the best tie (:func:`_cluster_derivative`): a finite-difference step of 1e-6 of the
+#: input's scale moves a MAC by ~1e-6, and a direction computed to rounding moves it by
+#: ~1e-16 / (relative split of the d_i)
 MAC_TIE = 1e-6
 
 #: members of a cluster that :func:`bifilar.analysis.modes.mode_set` merged carry one eigenvalue
@@ -353,14 +355,15 @@ def _cluster_derivative(Vc, M, w2, mu, dK, dM, dG) -> np.ndarray:
     converges to exactly this, the eigenvalue branches being analytic in the
     step), so the row is what the finite differences gave, without their
     truncation and rounding error.  Where two ``d_i`` are equal the
-    direction is arbitrary but the value is not.  A base mode whose MAC
-    with two or more directions ties (within :data:`MAC_TIE`: e.g. a swing
-    at 45 degrees to the split directions, each half of it) gets their
-    mean ``d_i``: no branch is closer, a central difference flips branch
-    with the step's sign there and so gave the mean too, and a choice by
-    rounding would make the row depend on the machine."""
-    from scipy.optimize import linear_sum_assignment
-
+    direction is arbitrary but the value is not.  Where two one-to-one
+    assignments tie (total MAC within :data:`MAC_TIE`: e.g. swings at 45
+    degrees to the split directions, each half of each), a base mode that
+    the tied assignments give different directions gets the mean of their
+    ``d_i``: no branch is closer, a central difference flips branch with
+    the step's sign there and so gave the mean too, and a choice by
+    rounding would make the row depend on the machine.  So the members'
+    values always add up to ``sum d_i = trace(B^-1 D_j)``, the derivative
+    of the cluster's sum, whatever the basis."""
     B = Vc.T @ M @ Vc
     B = 0.5 * (B + B.T)
     t = np.einsum("nk,jnl,lm->jkm", mu, dG, Vc)
@@ -372,10 +375,14 @@ def _cluster_derivative(Vc, M, w2, mu, dK, dM, dG) -> np.ndarray:
     E = Li.T @ Z  # (J, c, c): B-orthonormal directions e_i (columns)
     BE = B @ E
     mac = BE**2 / (np.diag(B)[None, :, None] * np.einsum("jki,kl,jli->ji", E, B, E)[:, None, :])
-    out = np.empty((Vc.shape[1], len(d)))
+    # every one-to-one assignment of the base modes to the directions (c! of them, c <= 6) and its total MAC
+    c = Vc.shape[1]
+    perms = np.array(list(itertools.permutations(range(c))))  # (P, c): perms[p, a] = direction of base mode a
+    total = mac[:, np.arange(c), perms].sum(axis=2)  # (J, P)
+    near = total >= np.max(total, axis=1, keepdims=True) - MAC_TIE
+    out = np.empty((c, len(d)))
     for j in range(len(d)):
-        rows, cols = linear_sum_assignment(-mac[j])
-        for a, i in zip(rows, cols):
-            tied = mac[j, a] >= mac[j, a, i] - MAC_TIE
-            out[a, j] = d[j, i] if np.count_nonzero(tied) == 1 else float(np.mean(d[j, tied]))
+        for a in range(c):
+            cols = np.unique(perms[near[j], a])
+            out[a, j] = d[j, cols[0]] if len(cols) == 1 else float(np.mean(d[j, cols]))
     return out
