@@ -49,7 +49,8 @@ eigenvalue along its own directions in the eigenspace, the eigenvalues of
 ``V`` (degenerate perturbation theory, :func:`_cluster_derivative`), and
 each member takes the split value of the direction it matches by MAC (the
 mean of those it matches equally), which is what central differences with
-MAC mode tracking converge to.  A nearly repeated pair that ``linear_modes``
+MAC mode tracking converge to (except at an exact tie, where they picked a
+branch by rounding).  A nearly repeated pair that ``linear_modes``
 kept apart (split between its 1e-10 resolution and 1e-8) has no first-order
 row that holds over a useful step: :func:`analytic_period_jacobian` raises
 :class:`NotDifferentiable` and the caller falls back to finite differences
@@ -359,9 +360,14 @@ def _cluster_derivative(Vc, M, w2, mu, dK, dM, dG) -> np.ndarray:
     assignments tie (total MAC within :data:`MAC_TIE`: e.g. swings at 45
     degrees to the split directions, each half of each), a base mode that
     the tied assignments give different directions gets the mean of their
-    ``d_i``: no branch is closer, a central difference flips branch with
-    the step's sign there and so gave the mean too, and a choice by
-    rounding would make the row depend on the machine.  So the members'
+    ``d_i``: no branch is closer, and a choice by rounding would make the
+    row depend on the machine.  (Central differences gave the mean where
+    the step's own O(h) terms break the tie: they flip branch with its
+    sign; where the tie is exact at every step, as for Ixy of a body with
+    Ixx = Iyy, whose split directions are the diagonals, they took the
+    branch the matching's index order gave, a sign by rounding, where the
+    mirror x <-> y makes the swing's period even in Ixy: derivative 0, the
+    mean.)  So the members'
     values always add up to ``sum d_i = trace(B^-1 D_j)``, the derivative
     of the cluster's sum, whatever the basis."""
     B = Vc.T @ M @ Vc
