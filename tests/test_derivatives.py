@@ -115,14 +115,7 @@ def test_torsion_closed_form():
     assert sens.column("length.1")[k] + sens.column("length.2")[k] == pytest.approx(dT_dl, rel=1e-9)
 
 
-def test_repeated_periods_fall_back_to_finite_differences():
-    """The symmetric KTH trifilar's two swings share a period: no per-mode
-    derivative; the whole Jacobian is the finite-difference one."""
-    scene = load_scene(CONFIGS / "trifilar_kth.yaml")
-    names = ["Izz", "length.1", "anchor.2.x"]
-    an, fd = period_sensitivity(scene, names), period_sensitivity_fd(scene, names)
-    assert an.method.startswith("finite-difference") and "repeated" in an.method
-    np.testing.assert_array_equal(an.jacobian, fd.jacobian)
+# repeated periods (the symmetric trifilar's swings): tests/test_degenerate_derivatives.py
 
 
 @pytest.mark.parametrize("key", ["leaning_bifilar", "solar_boat", "trifilar"])

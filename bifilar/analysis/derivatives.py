@@ -40,17 +40,26 @@ the minimum-norm pose derivative, as the Newton solver's least-squares step
 gives a finite-difference neighbour, except for inputs that push along the
 neutral direction, whose columns are NaN (the body turns by a finite angle
 for any change: the caller differences them one-sidedly, see
-:func:`bifilar.estimation.sensitivity.period_sensitivity`).  Repeated
-eigenvalues (a degenerate cluster as :func:`bifilar.analysis.modes.linear_modes`
-finds them, e.g. the two swings of a symmetric trifilar): the derivative of
-each member depends on the perturbation's direction, so no single Jacobian
-row per mode exists; :func:`analytic_period_jacobian` raises
+:func:`bifilar.estimation.sensitivity.period_sensitivity`).
+
+Repeated eigenvalues (a cluster :func:`bifilar.analysis.modes.linear_modes`
+merged, e.g. the two swings of a symmetric trifilar): each input splits the
+eigenvalue along its own directions in the eigenspace, the eigenvalues of
+``V^T (dK - omega^2 dM) V`` plus the constraint terms over the eigenspace
+``V`` (degenerate perturbation theory, :func:`_cluster_derivative`), and
+each member takes the split value of the direction it matches by MAC (the
+mean of those it matches equally), which is what central differences with
+MAC mode tracking converge to (except at an exact tie, where they picked a
+branch by rounding).  A nearly repeated pair that ``linear_modes``
+kept apart (split between its 1e-10 resolution and 1e-8) has no first-order
+row that holds over a useful step: :func:`analytic_period_jacobian` raises
 :class:`NotDifferentiable` and the caller falls back to finite differences
-with mode tracking for the whole Jacobian (what the old code did).
+with mode tracking for the whole Jacobian.
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -260,8 +269,10 @@ def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: l
 
     A neutral mode (no period) has a NaN row; an input without a derivative
     (singular KKT matrix and the input pushing along its neutral direction)
-    a NaN column: the caller differences those columns.  Raises
-    :class:`NotDifferentiable` for repeated eigenvalues.  ``push``: return
+    a NaN column: the caller differences those columns.  Repeated
+    eigenvalues: each member's row along each input's own split
+    (:func:`_cluster_derivative`); raises :class:`NotDifferentiable` for a
+    nearly repeated pair kept apart (:func:`_repeated`).  ``push``: return
     ``(jacobian, push)``, ``push`` (J,) how hard each input pushes along the
     neutral direction (:func:`_pose_derivative`; dimensionless, 0 to
     rounding where the column is finite).
@@ -272,8 +283,7 @@ def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: l
     w2 = np.array([m.omega2 for m in ms.modes])
     live = np.array([m.period is not None for m in ms.modes])
     scale = float(np.max(np.abs(w2)))
-    if degenerate_clusters(np.sort(w2[live]), scale):
-        raise NotDifferentiable("repeated eigenvalues: each mode's derivative depends on the perturbation")
+    groups = _repeated(w2, live, scale)
     dirs = input_directions(scene, names)
     dx, dlam, bad, rel = _pose_derivative(scene, rest, dirs, push=True)
     _, G, K, M = _kkt_matrix(scene, rest)
@@ -286,7 +296,99 @@ def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: l
     dw2 = (np.einsum("ik,jil,lk->kj", V, dK, V) - w2[:, None] * np.einsum("ik,jil,lk->kj", V, dM, V)
            + 2 * np.einsum("nk,jnl,lk->kj", mu, dG, V))
     T = np.array([m.period if m.period is not None else np.nan for m in ms.modes])
+    for idx in groups:  # a repeated eigenvalue: each member's derivative along each input's own split
+        dw2[idx] = _cluster_derivative(V[:, idx], M, w2[idx[0]], mu[:, idx], dK, dM, dG)
     jac = -(T / (2 * np.where(live, w2, 1.0)))[:, None] * dw2
     jac[~live] = np.nan
     jac[:, bad] = np.nan
     return (jac, rel) if push else jac
+
+
+#: assignments of a cluster's modes to its split directions whose total MAC is within this
+#: of the best tie (:func:`_cluster_derivative`): a finite-difference step of 1e-6 of the
+#: input's scale moves a MAC by ~1e-6, and a direction computed to rounding moves it by
+#: ~1e-16 / (relative split of the d_i)
+MAC_TIE = 1e-6
+
+#: members of a cluster that :func:`bifilar.analysis.modes.mode_set` merged carry one eigenvalue
+#: (the cluster mean, so equal); a pair it kept apart differs by more than its resolution,
+#: ``DEGENERATE_RTOL`` (1e-10) of ``|y|^T |K| |y| >= omega^2``: this separates the two
+_MERGED_RTOL = 1e-12
+
+
+def _repeated(w2: np.ndarray, live: np.ndarray, scale: float) -> list:
+    """Index arrays (into the modes) of the clusters of repeated live
+    eigenvalues ``w2`` (rad^2/s^2) that :func:`~bifilar.analysis.modes.mode_set`
+    merged (one eigenvalue, an aligned basis): their derivatives follow from
+    degenerate perturbation theory (:func:`_cluster_derivative`).  Raises
+    :class:`NotDifferentiable` for a pair within the wider band of
+    :func:`~bifilar.analysis.modes.degenerate_clusters` (1e-8 of ``scale``)
+    that was kept apart: its members' derivatives change over inputs
+    steps of the size of the split, so no first-order row describes them."""
+    idx = np.nonzero(live)[0]
+    order = idx[np.argsort(w2[idx], kind="stable")]
+    out = []
+    for a, b in degenerate_clusters(w2[order], scale):
+        members = order[a:b]
+        vals = w2[members]
+        if float(np.max(vals) - np.min(vals)) > _MERGED_RTOL * float(np.max(np.abs(vals))):
+            raise NotDifferentiable("nearly repeated eigenvalues: each mode's derivative depends on the step")
+        out.append(np.sort(members))
+    return out
+
+
+def _cluster_derivative(Vc, M, w2, mu, dK, dM, dG) -> np.ndarray:
+    """d omega^2 (c, J) of the ``c`` modes of a repeated eigenvalue ``w2``
+    (rad^2/s^2) with shapes ``Vc`` (6, c; any basis of the eigenspace, e.g.
+    :func:`~bifilar.analysis.modes.mode_set`'s world-aligned one) and
+    constraint multipliers ``mu`` (n, c), along each of J inputs (``dK``,
+    ``dM`` (J, 6, 6), ``dG`` (J, n, 6): total derivatives).
+
+    Degenerate perturbation theory: along input j the eigenvalue splits into
+    the eigenvalues ``d_i`` of the pencil ``(D_j, B)`` on the eigenspace,
+    ``D_j[a, b] = v_a^T (dK - w2 dM) v_b + mu_a^T dG v_b + mu_b^T dG v_a``
+    (the symmetric form of the single-mode formula, whose diagonal it is),
+    ``B = Vc^T M Vc``; the eigenvector ``e_i`` gives the direction
+    ``u_i = Vc e_i`` the split modes take.  Each base mode gets the ``d_i``
+    of the direction it matches by MAC (one to one, as
+    :func:`~bifilar.estimation.sensitivity.mac_match` tracks modes across a
+    finite-difference step: a central difference of the tracked period
+    converges to exactly this, the eigenvalue branches being analytic in the
+    step), so the row is what the finite differences gave, without their
+    truncation and rounding error.  Where two ``d_i`` are equal the
+    direction is arbitrary but the value is not.  Where two one-to-one
+    assignments tie (total MAC within :data:`MAC_TIE`: e.g. swings at 45
+    degrees to the split directions, each half of each), a base mode that
+    the tied assignments give different directions gets the mean of their
+    ``d_i``: no branch is closer, and a choice by rounding would make the
+    row depend on the machine.  (Central differences gave the mean where
+    the step's own O(h) terms break the tie: they flip branch with its
+    sign; where the tie is exact at every step, as for Ixy of a body with
+    Ixx = Iyy, whose split directions are the diagonals, they took the
+    branch the matching's index order gave, a sign by rounding, where the
+    mirror x <-> y makes the swing's period even in Ixy: derivative 0, the
+    mean.)  So the members'
+    values always add up to ``sum d_i = trace(B^-1 D_j)``, the derivative
+    of the cluster's sum, whatever the basis."""
+    B = Vc.T @ M @ Vc
+    B = 0.5 * (B + B.T)
+    t = np.einsum("nk,jnl,lm->jkm", mu, dG, Vc)
+    D = np.einsum("ik,jil,lm->jkm", Vc, dK, Vc) - w2 * np.einsum("ik,jil,lm->jkm", Vc, dM, Vc) + t + np.swapaxes(t, 1, 2)
+    D = 0.5 * (D + np.swapaxes(D, 1, 2))
+    Lc = np.linalg.cholesky(B)
+    Li = np.linalg.inv(Lc)
+    d, Z = np.linalg.eigh(Li @ D @ Li.T)  # (J, c), (J, c, c)
+    E = Li.T @ Z  # (J, c, c): B-orthonormal directions e_i (columns)
+    BE = B @ E
+    mac = BE**2 / (np.diag(B)[None, :, None] * np.einsum("jki,kl,jli->ji", E, B, E)[:, None, :])
+    # every one-to-one assignment of the base modes to the directions (c! of them, c <= 6) and its total MAC
+    c = Vc.shape[1]
+    perms = np.array(list(itertools.permutations(range(c))))  # (P, c): perms[p, a] = direction of base mode a
+    total = mac[:, np.arange(c), perms].sum(axis=2)  # (J, P)
+    near = total >= np.max(total, axis=1, keepdims=True) - MAC_TIE
+    out = np.empty((c, len(d)))
+    for j in range(len(d)):
+        for a in range(c):
+            cols = np.unique(perms[near[j], a])
+            out[a, j] = d[j, cols[0]] if len(cols) == 1 else float(np.mean(d[j, cols]))
+    return out

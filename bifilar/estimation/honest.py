@@ -105,7 +105,7 @@ def _seed_sensitivity(cache: dict, scene, sens) -> None:
     every measured input, via :func:`~bifilar.estimation.uncertainty.robust_sensitivity`),
     when it is what that would compute: analytic in every measured input
     (no finite-difference column, no neutral mode), so equal to rounding.
-    Anything else (a knife edge, repeated eigenvalues) is left to the
+    Anything else (a knife edge, a nearly repeated pair) is left to the
     budget's own differences."""
     from .budget import scene_key
     from .sensitivity import Sensitivity, measured_inputs

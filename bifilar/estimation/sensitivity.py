@@ -230,9 +230,10 @@ def period_sensitivity(scene: Scene, names: list[str] | None = None, rel_step: f
     exact to rounding; inputs without a derivative there (a neutral
     direction: the CoM on the attachment line) are differenced as
     :func:`period_sensitivity_fd` does (listed in ``one_sided`` /
-    ``undefined``), and a scene with repeated eigenvalues (a symmetric
-    trifilar's two swings) falls back to :func:`period_sensitivity_fd` for
-    the whole Jacobian.  ``method="fd"``: :func:`period_sensitivity_fd`.
+    ``undefined``); repeated eigenvalues (a symmetric trifilar's two swings)
+    are analytic too (degenerate perturbation theory), and a scene with a
+    nearly repeated pair (split 1e-10 .. 1e-8, kept apart by the modes)
+    falls back to :func:`period_sensitivity_fd` for the whole Jacobian.  ``method="fd"``: :func:`period_sensitivity_fd`.
     ``rest``: the rest pose of ``scene`` if already known; ``modes``: its
     :func:`~bifilar.analysis.modes.linear_modes` about ``rest`` if already
     solved.  The method used is in ``Sensitivity.method``.

@@ -202,13 +202,14 @@ def robust_sensitivity(scene: Scene, rest: RestPose, modes: ModeSet, names: list
     one rest pose and one eigen-solve, exact to rounding); the inputs with
     no analytic derivative there (a neutral direction) are differenced by
     :func:`input_jacobian` (``rel_step``, ``scheme``), and so is every input
-    when the modes have repeated eigenvalues (no unique derivative per mode)."""
+    when the modes have a nearly repeated pair (repeated eigenvalues are
+    analytic: :mod:`bifilar.analysis.derivatives`)."""
     from ..analysis.derivatives import NotDifferentiable, analytic_period_jacobian
 
     names = list(names if names is not None else list(INERTIA_COMPONENTS) + measured_inputs(scene))
     try:
         J = analytic_period_jacobian(scene, rest, modes, names)
-    except NotDifferentiable:  # repeated eigenvalues: finite differences with mode tracking for all
+    except NotDifferentiable:  # a nearly repeated pair: finite differences with mode tracking for all
         J, failed = input_jacobian(scene, names, rest, modes, rel_step, scheme)
     else:
         live = np.array([m.period is not None for m in modes.modes], bool)
