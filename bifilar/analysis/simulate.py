@@ -434,8 +434,8 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     if failed:
         reason = failed[0].split(": ", 1)[-1]  # "LSODA: <why>"
         raise IntegrationError("integrator " + reason.replace(": ", " failed: ", 1))
-    P = mx.params_from_scenes(scene)
-    T = mx.tensions(run.y, P)
+    # the tensions at the samples: computed with the run's health (the same kernel pass) where it kept them
+    T = run.tensions if run.tensions is not None else mx.tensions(run.y, mx.params_from_scenes(scene))
     c = relative_pose(run.y, rest)[:, m.dominant]
     scale = state_scale(amplitude, m.dominant, float(np.max(scene.lengths)), 2 * np.pi / m.period)
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
