@@ -90,6 +90,8 @@ def test_simulate_record_is_what_the_replaced_passes_give(cfg, mode, amp, period
     assert np.all(r.tension_min <= T.min(axis=0) + tol) and np.all(r.tension_max >= T.max(axis=0) - tol)
     m = ms.get(mode)
     np.testing.assert_array_equal(r.coordinate, relative_pose(r.y, rest)[:, m.dominant])
+    for k in range(6):  # every column alone, as the whole pose gives it
+        np.testing.assert_array_equal(relative_pose(r.y, rest, k), relative_pose(r.y, rest)[:, k])
     if cfg is None:
         assert r.slack and min(r.tension_min) <= 0
         assert any(w.startswith("run stopped") for w in r.warnings) == (on_slack == "stop")
@@ -131,3 +133,20 @@ def test_one_scene_lowest_point_fold_is_the_batch_fold():
     nan = bh.LowestPoint([s1], np.zeros((1, 3)))
     nan.add([0, 0], [0.0, np.nan], q[:2])
     assert np.isnan(nan.z[0])  # a NaN state is not hidden by the one-scene minimum
+
+
+def test_chunked_extras_are_the_whole_kernels_bits():
+    """``chunked(..., first=13)``: the extras of a record in chunks (the
+    rows of a constant output filled) are the whole kernel's, bit for bit;
+    the derivatives are not gathered; a short record goes through whole."""
+    scene = SCENES[-1][1]  # four wires: the minimum-norm multipliers too
+    P = mx.params_from_scenes(scene)
+    k = mx.compiled_kernel(P, extras=True, physical=True)
+    Y = np.ascontiguousarray(_random_states(scene, np.random.default_rng(11), 2 * 700 + 5).T)
+    whole = k(*Y)
+    parts = mx.chunked(k, 700, first=13)(*Y)
+    assert len(parts) == len(whole) and all(p is None for p in parts[:13])
+    for a, b in zip(parts[13:], whole[13:]):
+        np.testing.assert_array_equal(a, np.broadcast_to(b, a.shape))
+    short = mx.chunked(k, 700, first=13)(*Y[:, :700])
+    assert all(p is not None for p in short)

@@ -778,8 +778,8 @@ def _one_scene_kernels(P1: mx.RigParams, physical: bool = False):
     integrates a scene alone with, and :func:`_lsoda_joint` each of its runs.
     ``physical``: the health's kernel also gives the unstabilised multipliers
     (the record's tensions, :func:`~bifilar.analysis.batch_health.sample_health`)."""
-    return (mx.compiled_kernel(P1, signature="odeint"),
-            mx.chunked(mx.compiled_kernel(P1, extras=True, physical=physical)))  # on the samples: in cache-sized chunks
+    kx = mx.compiled_kernel(P1, extras=True, physical=physical)
+    return mx.compiled_kernel(P1, signature="odeint"), mx.chunked(kx, first=13)  # the samples' extras, chunked
 
 
 def _sample_grid(pers, spp: int):

@@ -381,8 +381,13 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         dE = np.abs(E - obs.E0)
         obs.dE = np.fmax(obs.dE, np.fmax.reduce(dE if every else np.where(valid, dE, np.nan), axis=0))
         if obs.lowest is not None:
-            kk, bb = np.nonzero(valid)
-            obs.lowest.add(bb, Yb[kk, bb, 2] + com0[bb, 2], Yb[kk, bb, 3:7])
+            if every:  # every sample, in np.nonzero(valid)'s order, without its gathers
+                kb = len(tb)
+                obs.lowest.add(np.tile(np.arange(Bn), kb), (Yb[:, :, 2] + com0[:, 2]).reshape(-1),
+                               Yb[:, :, 3:7].reshape(kb * Bn, 4))
+            else:
+                kk, bb = np.nonzero(valid)
+                obs.lowest.add(bb, Yb[kk, bb, 2] + com0[bb, 2], Yb[kk, bb, 3:7])
     if physical:
         return phys[0] if len(phys) == 1 else np.concatenate(phys, axis=1) if phys else np.zeros((n, 0, Bn))
     return None

@@ -235,20 +235,27 @@ CACHE_CHUNK = 4096
 processor's cache (a 13 000-sample record in one call costs ~2x more)."""
 
 
-def chunked(kernel, size: int = CACHE_CHUNK):
+def chunked(kernel, size: int = CACHE_CHUNK, first: int = 0):
     """``kernel`` (a :func:`compiled_kernel` of one scene's parameters) applied
     to 1-D arrays of states (a record) ``size`` states at a time, its outputs
-    concatenated: the same values, faster for long records.  Other
-    arguments (floats, batches of shape (k, B)) go through unchanged."""
+    gathered into arrays of the record's length: the same values, faster for
+    long records.  Outputs before ``first`` are not gathered (None: e.g.
+    ``first=13`` keeps only the extras, what the tensions and health read).
+    Other arguments (floats, batches of shape (k, B)) and records of at most
+    ``size`` states go through unchanged (every output)."""
 
     def f(*comps):
         if np.ndim(comps[0]) != 1 or len(comps[0]) <= size:
             return kernel(*comps)
         K = len(comps[0])
-        parts = [kernel(*(c[k:k + size] for c in comps)) for k in range(0, K, size)]
-        lens = [min(size, K - k) for k in range(0, K, size)]
-        return tuple(np.concatenate([np.broadcast_to(p[i], (m,)) for p, m in zip(parts, lens)])
-                     for i in range(len(parts[0])))
+        res: list = []
+        for k in range(0, K, size):
+            part = kernel(*(c[k:k + size] for c in comps))
+            if not res:
+                res = [None] * first + [np.empty(K) for _ in range(len(part) - first)]
+            for i in range(first, len(part)):
+                res[i][k:k + size] = part[i]  # (a constant output fills its rows)
+        return tuple(res)
 
     return f
 
@@ -259,7 +266,7 @@ def tensions(y: np.ndarray, P: RigParams) -> np.ndarray:
     y = np.asarray(y, dtype=float)
     n = int(P.lengths.shape[-1])
     k = compiled_kernel(P, False, extras=True)
-    out = (chunked(k) if P.batch_shape == () else k)(*_components(y))  # chunks of one scene's states only
+    out = (chunked(k, first=13) if P.batch_shape == () else k)(*_components(y))  # chunks of one scene's states only
     lead = np.broadcast_shapes(y.shape[:-1], P.batch_shape)
     lam = _stack(out[13:13 + n], lead)
     phi = _stack(out[13 + n:13 + 2 * n], lead)
