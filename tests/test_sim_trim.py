@@ -33,7 +33,8 @@ from test_kernel import SCENES, _random_states  # noqa: E402
 def test_physical_kernel_is_both_kernels_bit_for_bit(name, scene):
     """The stabilised kernel's outputs and the unstabilised kernel's
     multipliers, the same bits, from one kernel (2-4 wires: elimination and
-    the minimum-norm solve), on arrays and on floats."""
+    the minimum-norm solve), on arrays and on floats; and the same extras
+    from the kernel that skips the derivatives."""
     P = mx.params_from_scenes(scene)
     n = scene.n_wires
     Y = _random_states(scene, np.random.default_rng(5), 40)
@@ -48,8 +49,14 @@ def test_physical_kernel_is_both_kernels_bit_for_bit(name, scene):
         np.testing.assert_array_equal(x, y)
     f = both(*Y[3].tolist())
     assert list(f[13 + 2 * n:]) == list(phys(*Y[3].tolist())[13:13 + n])
+    lean = mx.compiled_kernel(P, extras=True, physical=True, derivatives=False)(*Y.T)  # the samples' kernel
+    assert len(lean) == len(a) and all(x is None for x in lean[:13])
+    for x, y in zip(lean[13:], a[13:]):
+        np.testing.assert_array_equal(np.broadcast_to(x, (40,)), np.broadcast_to(y, (40,)))
     with pytest.raises(ValueError):
         mx.compiled_kernel(P, stabilise=False, extras=True, physical=True)
+    with pytest.raises(ValueError):
+        mx.compiled_kernel(P, derivatives=False)
 
 
 def _unloaded_trifilar():

@@ -778,7 +778,7 @@ def _one_scene_kernels(P1: mx.RigParams, physical: bool = False):
     integrates a scene alone with, and :func:`_lsoda_joint` each of its runs.
     ``physical``: the health's kernel also gives the unstabilised multipliers
     (the record's tensions, :func:`~bifilar.analysis.batch_health.sample_health`)."""
-    kx = mx.compiled_kernel(P1, extras=True, physical=physical)
+    kx = mx.compiled_kernel(P1, extras=True, physical=physical, derivatives=False)  # sample_health reads the extras
     return mx.compiled_kernel(P1, signature="odeint"), mx.chunked(kx, first=13)  # the samples' extras, chunked
 
 

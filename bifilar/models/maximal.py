@@ -415,7 +415,8 @@ the ``"args"`` form)."""
 
 
 def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
-                   signature: str = "args", physical: bool = False) -> tuple[str, list[str]]:
+                   signature: str = "args", physical: bool = False,
+                   derivatives: bool = True) -> tuple[str, list[str]]:
     """Source of a factory ``make(<params>) -> f(<13 state components>)``.
 
     ``f`` returns the 13 derivative components, followed (``extras``) by the
@@ -425,7 +426,8 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
     as its ``lam``, the same expressions (its right-hand sides, and the
     elimination's factors, which do not depend on the stabilisation), so
     one pass over a record gives the health's multipliers and the
-    physical tensions.
+    physical tensions.  ``derivatives=False`` (with ``extras``): the 13
+    derivative components are None, not computed (the extras the same).
 
     The multiplier system is solved for ``mu = lam / m`` (m/s^2 per m of
     wire): ``(m J M^-1 J^T) mu = rb`` has the rows ``d_i . d_j + J_i . (m
@@ -539,19 +541,22 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         if physical:
             rest = "".join(f" - A{i}{j}*muu{j}" for j in range(i + 1, n))
             C.lines.append(f"muu{i} = ({C.v(f'rbu{i}')}{rest})*iA{i}")
-    C.let("ax_", [(1, f"mu{i}", f"dx{i}") for i in range(n)])
-    C.let("ay_", [(1, f"mu{i}", f"dy{i}") for i in range(n)])
-    C.let("az_", [(1, f"mu{i}", f"dz{i}") for i in range(n)] + [(-1, "g")])
-    for a in range(3):
-        C.let(f"al{_AX[a]}", [(1, f"Nt{_AX[a]}")] + [(1, f"mu{i}", f"MJ{_AX[a]}{i}") for i in range(n)])
-    # quaternion rate q * (0, w) / 2 with a pull back to |q| = 1 at rate 1/s
-    L += ["u = 1.0 - s", "hx = 0.5*wx", "hy = 0.5*wy", "hz = 0.5*wz",
-          "dqw = u*qw - qx*hx - qy*hy - qz*hz",
-          "dqx = u*qx + qw*hx + qy*hz - qz*hy",
-          "dqy = u*qy + qw*hy - qx*hz + qz*hx",
-          "dqz = u*qz + qw*hz + qx*hy - qy*hx"]
-    out = ["vx", "vy", "vz", "dqw", "dqx", "dqy", "dqz", C.v("ax_"), C.v("ay_"), C.v("az_"),
-           C.v("alx"), C.v("aly"), C.v("alz")]
+    if derivatives:
+        C.let("ax_", [(1, f"mu{i}", f"dx{i}") for i in range(n)])
+        C.let("ay_", [(1, f"mu{i}", f"dy{i}") for i in range(n)])
+        C.let("az_", [(1, f"mu{i}", f"dz{i}") for i in range(n)] + [(-1, "g")])
+        for a in range(3):
+            C.let(f"al{_AX[a]}", [(1, f"Nt{_AX[a]}")] + [(1, f"mu{i}", f"MJ{_AX[a]}{i}") for i in range(n)])
+        # quaternion rate q * (0, w) / 2 with a pull back to |q| = 1 at rate 1/s
+        L += ["u = 1.0 - s", "hx = 0.5*wx", "hy = 0.5*wy", "hz = 0.5*wz",
+              "dqw = u*qw - qx*hx - qy*hy - qz*hz",
+              "dqx = u*qx + qw*hx + qy*hz - qz*hy",
+              "dqy = u*qy + qw*hy - qx*hz + qz*hx",
+              "dqz = u*qz + qw*hz + qx*hy - qy*hx"]
+        out = ["vx", "vy", "vz", "dqw", "dqx", "dqy", "dqz", C.v("ax_"), C.v("ay_"), C.v("az_"),
+               C.v("alx"), C.v("aly"), C.v("alz")]
+    else:  # only the extras are read (a record's tensions and health): the derivatives are not computed
+        out = ["None"] * 13
     if extras:
         out += [f"mass*mu{i}" for i in range(n)] + [C.v(f"phi{i}") for i in range(n)]
         if physical:
@@ -633,7 +638,7 @@ def _zero_set(vals: dict) -> frozenset:
 
 
 def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
-                    physical: bool = False):
+                    physical: bool = False, derivatives: bool = True):
     """The model's right-hand side compiled for the parameters ``P``.
 
     Returns ``f(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz) -> tuple``
@@ -648,24 +653,30 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     (with ``stabilise`` and ``extras``): the n unstabilised multipliers
     (N/m) follow, what ``compiled_kernel(P, False, True)`` gives as its
     ``lam`` (the physical tension ``-lam |d|`` of :func:`tensions`) for a
-    few operations more than the stabilised kernel alone.  Cached on ``P``.
+    few operations more than the stabilised kernel alone.
+    ``derivatives=False`` (with ``extras``, ``signature="args"``): the 13
+    derivative components are returned as None, not computed (~20 % fewer
+    operations; the extras are the same bits).  Cached on ``P``.
     """
     if signature == "odeint" and P.batch_shape != ():
         raise ValueError("signature='odeint' is for one scene (parameters of batch shape ())")
     if physical and not (stabilise and extras):
         raise ValueError("physical=True adds the unstabilised multipliers to a stabilised kernel with extras")
+    if not derivatives and not (extras and signature == "args"):
+        raise ValueError("derivatives=False is for a kernel with extras and the 'args' signature")
     cache = P.__dict__.get("_kernels")
     if cache is None:
         cache = {}
         object.__setattr__(P, "_kernels", cache)
-    key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ())
+    key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ()) + \
+        (() if derivatives else ("no derivatives",))
     if key not in cache:
         vals = _param_values(P)
         n = int(P.lengths.shape[-1])
         zero = _zero_set(vals)
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
-            src, params = _kernel_source(n, zero, stabilise, extras, signature, physical)
+            src, params = _kernel_source(n, zero, stabilise, extras, signature, physical, derivatives)
             ns: dict = {"_min_norm": _min_norm, "_np": np, "_struct": struct}
             exec(compile(src, f"<bifilar.maximal kernel n={n}>", "exec"), ns)  # noqa: S102 - generated here
             _FACTORY_CACHE[fkey] = (ns["make"], params)
