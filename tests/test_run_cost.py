@@ -339,7 +339,7 @@ def _health_window(monkeypatch, name):
 
     cap = []
     real = bt.sample_health
-    monkeypatch.setattr(bt, "sample_health", lambda *a: (cap.append(a), real(*a))[1])
+    monkeypatch.setattr(bt, "sample_health", lambda *a, **k: (cap.append(a), real(*a, **k))[1])
     s = _scene(name, {})
     rest = rest_pose(s)
     ms = linear_modes(s, rest)

@@ -133,7 +133,9 @@ class SceneRun(RunSummary):
         samples are taken (``samples_per_period``, LSODA's own), the samples.
     tension_min, tension_max : (n,) N.  slack : [(wire 1-based, t s)].
     lowest_z_min : lowest world z of the body, m; depth_max : ceiling minus
-        that, m.  t, y : dense samples (only with ``samples_per_period``).
+        that, m.  t, y : dense samples (only with ``samples_per_period``);
+        tensions (k, n) N the physical tensions at them where the run computed
+        them with its health (LSODA, one scene; else None).
     t_final, y_final : time (s) and state (13,) where the run ended.
     error : message when the scene could not be run (``errors="return"``),
         else None.
@@ -142,6 +144,7 @@ class SceneRun(RunSummary):
     nsteps: int
     t: np.ndarray | None = None
     y: np.ndarray | None = None
+    tensions: np.ndarray | None = None
     t_final: float | None = None
     y_final: np.ndarray | None = None
     warnings: list = field(default_factory=list)
@@ -590,20 +593,22 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             warnings.append(f"constraint violation {obs.viol[b]:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
         if period is None:
             warnings.append(no_period_warning(float(amps[b]), status[b] == 1))
-        t_s = y_s = None
+        t_s = y_s = T_s = None
         if obs.samples is not None and keep_samples:
             parts = obs.samples[b]
             if parts:
                 t_s = np.concatenate([p_[0] for p_ in parts])
                 y_s = np.concatenate([p_[1] for p_ in parts])
                 y_s[:, :3] += com0[b]
+                if obs.sample_tensions is not None:
+                    T_s = np.concatenate(obs.sample_tensions[b])
         out.append(SceneRun(
             period=period, period_std=pstd, crossings=tc, linear_period=float(T_ref[b]),
             max_constraint_violation=float(obs.viol[b]), energy_drift=drift,
             tension_min=obs.Tmin[b].copy(), tension_max=obs.Tmax[b].copy(), slack=slack,
             lowest_z_min=float(lz[b]), depth_max=float(scenes[b].ceiling_z - lz[b]),
             mode=mds[b].label, amplitude=float(amps[b]), coordinate_name=COMPONENTS[mds[b].dominant],
-            rtol=float(rt[b]), nfev=int(nfev[b]), nsteps=int(nsteps[b]), runtime=runtime, t=t_s, y=y_s,
+            rtol=float(rt[b]), nfev=int(nfev[b]), nsteps=int(nsteps[b]), runtime=runtime, t=t_s, y=y_s, tensions=T_s,
             t_final=float(obs.t_final[b]), y_final=obs.y_final[b] + np.r_[com0[b], np.zeros(10)],
             warnings=warnings, method=_METHOD_NAME[method],
         ))
@@ -707,7 +712,11 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     rte = rtol / sq
     ate = (at / sq).T.ravel()  # scene-major
     if Bn == 1:  # in physical time t = tau T: the kernel itself is odeint's f(y, t) (no wrapper, no scaling)
-        f, kx = _one_scene_kernels(P.take(0) if P1 is None else P1)
+        # kept samples: their physical tensions from the health's kernel pass (SceneRun.tensions)
+        physical = health and obs.samples is not None
+        f, kx = _one_scene_kernels(P.take(0) if P1 is None else P1, physical)
+        if physical:
+            obs.sample_tensions = [[]]
         tscale = float(T_ref[0])
     else:
         kb = mx.compiled_kernel(P)
@@ -763,12 +772,14 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
 
 
-def _one_scene_kernels(P1: mx.RigParams):
+def _one_scene_kernels(P1: mx.RigParams, physical: bool = False):
     """(odeint's ``f(y, t)``, the health's kernel with extras) of one scene's
     float parameters ``P1`` (the kernels cached on it): what :func:`_lsoda`
-    integrates a scene alone with, and :func:`_lsoda_joint` each of its runs."""
-    return (mx.compiled_kernel(P1, signature="odeint"),
-            mx.chunked(mx.compiled_kernel(P1, extras=True)))  # on the samples: in cache-sized chunks
+    integrates a scene alone with, and :func:`_lsoda_joint` each of its runs.
+    ``physical``: the health's kernel also gives the unstabilised multipliers
+    (the record's tensions, :func:`~bifilar.analysis.batch_health.sample_health`)."""
+    kx = mx.compiled_kernel(P1, extras=True, physical=physical, derivatives=False)  # sample_health reads the extras
+    return mx.compiled_kernel(P1, signature="odeint"), mx.chunked(kx, first=13)  # the samples' extras, chunked
 
 
 def _sample_grid(pers, spp: int):
@@ -801,13 +812,17 @@ def _window(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first, 
     keep = kl >= base - 1  # pairs ending in this window (earlier ones were found before)
     cross_cols.append(col[keep])
     cross_t.append(tx[keep] + tau0)
+    Tp = None
     if health:
-        sample_health(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first)
+        Tp = sample_health(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first,
+                           physical=obs.sample_tensions is not None)
     if obs.samples is not None:
         for b in range(Ys.shape[1]):
             sel = tt <= stop_tau[b] + 1e-12
             if np.any(sel):
                 obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :].copy()))  # com0 added at the end
+                if Tp is not None:
+                    obs.sample_tensions[b].append(Tp[:, sel, b].T)
     return cc[-7:]
 
 

@@ -63,20 +63,32 @@ class LowestPoint:
         """Fold the buffered states into the running minimum."""
         if not self._buf:
             return
-        idx = np.concatenate([p[0] for p in self._buf])
-        z = np.concatenate([p[1] for p in self._buf])
-        q = np.concatenate([p[2] for p in self._buf])
+        buf = self._buf
         self._buf, self._rows = [], 0
+        if len(buf) == 1:  # (no concatenation copies)
+            idx, z, q = buf[0]
+        else:
+            idx = np.concatenate([p[0] for p in buf])
+            z = np.concatenate([p[1] for p in buf])
+            q = np.concatenate([p[2] for p in buf])
         q = q / np.linalg.norm(q, axis=-1, keepdims=True)
         qw, qx, qy, qz = q.T
         # world -z in body axes: minus the third row of R (body -> world)
         down = -np.stack([2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)], -1)
-        h = np.max(np.einsum("rnk,rk->rn", self.att[idx], down), axis=1)  # attachment points
+        one = len(self.scenes) == 1  # one scene: its attachments broadcast, every row in its group (no gathers)
+        att = np.broadcast_to(self.att[0], (len(idx),) + self.att.shape[1:]) if one else self.att[idx]
+        h = np.max(np.einsum("rnk,rk->rn", att, down), axis=1)  # attachment points
         for f, bs in self.groups:
+            if one:
+                h = np.maximum(h, np.asarray(f(down), float))
+                continue
             rows = np.nonzero(np.isin(idx, bs))[0]
             if len(rows):
                 h[rows] = np.maximum(h[rows], np.asarray(f(down[rows]), float))
-        np.minimum.at(self._zmin, idx, z - h)
+        if one:
+            self._zmin[0] = np.minimum(self._zmin[0], np.min(z - h))  # (a NaN stays, as with minimum.at)
+        else:
+            np.minimum.at(self._zmin, idx, z - h)
 
     @property
     def z(self) -> np.ndarray:
@@ -185,6 +197,7 @@ class Health(itg.BatchObserver):
         self.dense_times = dense_times  # list of (B) arrays of sample times, or None
         self.next_k = np.zeros(Bn, int)  # index of each scene's next unused sample
         self.samples: list = [[] for _ in range(Bn)] if dense_times is not None else None
+        self.sample_tensions: list | None = None  # per scene, the kept samples' physical tensions (LSODA, one scene)
         self.t_final = np.zeros(Bn)
         self.y_final = np.zeros((Bn, 13))
 
@@ -305,13 +318,19 @@ def _stacked(cols) -> np.ndarray:
     return np.array(np.broadcast_arrays(*cols))
 
 
-def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first):
+def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first, physical: bool = False):
     """Health figures at the samples of one window of the LSODA engine
     (blocks of ~50k values): Ys (k, B, 13) states relative to the rest CoM
     ``com0`` (B, 3), tt (k,) normalised times, ``kx`` the compiled kernel
-    with extras; the lowest point into ``obs.lowest`` if it is set."""
+    with extras; the lowest point into ``obs.lowest`` if it is set.
+    ``physical``: ``kx`` also gives the unstabilised multipliers
+    (``compiled_kernel(..., physical=True)``) and the physical tensions at
+    the samples, (n, k, B) N, are returned (what
+    :func:`~bifilar.models.maximal.tensions` gives, from the same kernel
+    pass as the health's); else None."""
     K, Bn, _ = Ys.shape
     blk = max(1, int(5e4 // max(Bn, 1)))
+    phys = []
     for s0 in range(0, K, blk):
         Yb = Ys[s0:s0 + blk]  # (kb, B, 13)
         tb = tt[s0:s0 + blk]
@@ -325,6 +344,8 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         L2 = obs.L2[:, None, :]
         dl = np.sqrt(L2 + 2.0 * phi)
         T = -lam * dl  # (n, kb, B)
+        if physical:
+            phys.append(-_stacked(out[13 + 2 * n:13 + 3 * n]).reshape(n, len(tb), Bn) * dl)
         viol = np.abs(2.0 * phi / (dl + np.sqrt(L2)))
         if on_slack == "stop":
             slack_now = np.any(T <= 0, axis=0) & valid  # (kb, B)
@@ -360,5 +381,13 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         dE = np.abs(E - obs.E0)
         obs.dE = np.fmax(obs.dE, np.fmax.reduce(dE if every else np.where(valid, dE, np.nan), axis=0))
         if obs.lowest is not None:
-            kk, bb = np.nonzero(valid)
-            obs.lowest.add(bb, Yb[kk, bb, 2] + com0[bb, 2], Yb[kk, bb, 3:7])
+            if every:  # every sample, in np.nonzero(valid)'s order, without its gathers
+                kb = len(tb)
+                obs.lowest.add(np.tile(np.arange(Bn), kb), (Yb[:, :, 2] + com0[:, 2]).reshape(-1),
+                               Yb[:, :, 3:7].reshape(kb * Bn, 4))
+            else:
+                kk, bb = np.nonzero(valid)
+                obs.lowest.add(bb, Yb[kk, bb, 2] + com0[bb, 2], Yb[kk, bb, 3:7])
+    if physical:
+        return phys[0] if len(phys) == 1 else np.concatenate(phys, axis=1) if phys else np.zeros((n, 0, Bn))
+    return None

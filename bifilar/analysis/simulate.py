@@ -155,11 +155,16 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
     return sp
 
 
-def relative_pose(y: np.ndarray, rest: RestPose) -> np.ndarray:
+def relative_pose(y: np.ndarray, rest: RestPose, component: int | None = None) -> np.ndarray:
     """(k, 6) [dx, dy, dz, rx, ry, rz]: CoM displacement and world rotation
-    vector of R R_rest^T, for states y (k, 13)."""
+    vector of R R_rest^T, for states y (k, 13); ``component`` (0-5): only
+    that column (k,), the same values, without computing the other kind."""
+    if component is not None and component < 3:
+        return y[:, component] - rest.com[component]
     q0inv = rest.q * np.array([1, -1, -1, -1])
     dq = quat_multiply(y[:, 3:7], q0inv)
+    if component is not None:
+        return quat_to_rotvec(dq)[:, component - 3]
     return np.concatenate([y[:, 0:3] - rest.com, quat_to_rotvec(dq)], axis=1)
 
 
@@ -434,9 +439,9 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     if failed:
         reason = failed[0].split(": ", 1)[-1]  # "LSODA: <why>"
         raise IntegrationError("integrator " + reason.replace(": ", " failed: ", 1))
-    P = mx.params_from_scenes(scene)
-    T = mx.tensions(run.y, P)
-    c = relative_pose(run.y, rest)[:, m.dominant]
+    # the tensions at the samples: computed with the run's health (the same kernel pass) where it kept them
+    T = run.tensions if run.tensions is not None else mx.tensions(run.y, mx.params_from_scenes(scene))
+    c = relative_pose(run.y, rest, m.dominant)
     scale = state_scale(amplitude, m.dominant, float(np.max(scene.lengths)), 2 * np.pi / m.period)
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
     return SimulationResult(

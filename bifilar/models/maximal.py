@@ -235,20 +235,27 @@ CACHE_CHUNK = 4096
 processor's cache (a 13 000-sample record in one call costs ~2x more)."""
 
 
-def chunked(kernel, size: int = CACHE_CHUNK):
+def chunked(kernel, size: int = CACHE_CHUNK, first: int = 0):
     """``kernel`` (a :func:`compiled_kernel` of one scene's parameters) applied
     to 1-D arrays of states (a record) ``size`` states at a time, its outputs
-    concatenated: the same values, faster for long records.  Other
-    arguments (floats, batches of shape (k, B)) go through unchanged."""
+    gathered into arrays of the record's length: the same values, faster for
+    long records.  Outputs before ``first`` are not gathered (None: e.g.
+    ``first=13`` keeps only the extras, what the tensions and health read).
+    Other arguments (floats, batches of shape (k, B)) and records of at most
+    ``size`` states go through unchanged (every output)."""
 
     def f(*comps):
         if np.ndim(comps[0]) != 1 or len(comps[0]) <= size:
             return kernel(*comps)
         K = len(comps[0])
-        parts = [kernel(*(c[k:k + size] for c in comps)) for k in range(0, K, size)]
-        lens = [min(size, K - k) for k in range(0, K, size)]
-        return tuple(np.concatenate([np.broadcast_to(p[i], (m,)) for p, m in zip(parts, lens)])
-                     for i in range(len(parts[0])))
+        res: list = []
+        for k in range(0, K, size):
+            part = kernel(*(c[k:k + size] for c in comps))
+            if not res:
+                res = [None] * first + [np.empty(K) for _ in range(len(part) - first)]
+            for i in range(first, len(part)):
+                res[i][k:k + size] = part[i]  # (a constant output fills its rows)
+        return tuple(res)
 
     return f
 
@@ -259,7 +266,7 @@ def tensions(y: np.ndarray, P: RigParams) -> np.ndarray:
     y = np.asarray(y, dtype=float)
     n = int(P.lengths.shape[-1])
     k = compiled_kernel(P, False, extras=True)
-    out = (chunked(k) if P.batch_shape == () else k)(*_components(y))  # chunks of one scene's states only
+    out = (chunked(k, first=13) if P.batch_shape == () else k)(*_components(y))  # chunks of one scene's states only
     lead = np.broadcast_shapes(y.shape[:-1], P.batch_shape)
     lam = _stack(out[13:13 + n], lead)
     phi = _stack(out[13 + n:13 + 2 * n], lead)
@@ -408,11 +415,19 @@ the ``"args"`` form)."""
 
 
 def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
-                   signature: str = "args") -> tuple[str, list[str]]:
+                   signature: str = "args", physical: bool = False,
+                   derivatives: bool = True) -> tuple[str, list[str]]:
     """Source of a factory ``make(<params>) -> f(<13 state components>)``.
 
     ``f`` returns the 13 derivative components, followed (``extras``) by the
-    n multipliers ``lam`` (N/m) and the n constraint values ``phi`` (m^2).
+    n multipliers ``lam`` (N/m) and the n constraint values ``phi`` (m^2),
+    and (``physical``, with ``stabilise`` and ``extras``) by the n
+    unstabilised multipliers: what the kernel without ``stabilise`` gives
+    as its ``lam``, the same expressions (its right-hand sides, and the
+    elimination's factors, which do not depend on the stabilisation), so
+    one pass over a record gives the health's multipliers and the
+    physical tensions.  ``derivatives=False`` (with ``extras``): the 13
+    derivative components are None, not computed (the extras the same).
 
     The multiplier system is solved for ``mu = lam / m`` (m/s^2 per m of
     wire): ``(m J M^-1 J^T) mu = rb`` has the rows ``d_i . d_j + J_i . (m
@@ -489,6 +504,8 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         terms += [(-1, f"ew{i}", f"wp{i}"), (1, "w2", f"ep{i}")]
         terms += [(1, "g", f"dz{i}")]
         terms += [(-1, f"J{a}{i}", f"Nt{a}") for a in _AX]
+        if physical:
+            C.let(f"rbu{i}", terms)
         if stabilise:  # - 2 alpha phidot - beta^2 phi, phi = (|d|^2 - L^2) / 2
             terms += [(-1, "bga", f"phd{i}"), (-1, "hb", f"dd{i}"), (1, f"hbL{i}")]
         C.let(f"rb{i}", terms)
@@ -503,6 +520,9 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         upper = ", ".join(C.v(f"A{i}{j}") for i in range(n) for j in range(i, n))
         rbs = ", ".join(C.v(f"rb{i}") for i in range(n))
         C.lines.append(f"{', '.join(f'mu{i}' for i in range(n))}, = _min_norm(({upper},), ({rbs},))")
+        if physical:
+            rbus = ", ".join(C.v(f"rbu{i}") for i in range(n))
+            C.lines.append(f"{', '.join(f'muu{i}' for i in range(n))}, = _min_norm(({upper},), ({rbus},))")
     # unpivoted symmetric elimination, then back substitution
     for k in range(n if n <= MAX_ELIMINATION_WIRES else 0):
         C.lines.append(f"iA{k} = 1.0/A{k}{k}")
@@ -512,24 +532,35 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
                 C.lines.append(f"A{i}{j} = A{i}{j} - f*A{k}{j}")
             C.lines.append(f"rb{i} = {C.v(f'rb{i}')} - f*{C.v(f'rb{k}')}")
             C.zero.discard(f"rb{i}")
+            if physical:
+                C.lines.append(f"rbu{i} = {C.v(f'rbu{i}')} - f*{C.v(f'rbu{k}')}")
+                C.zero.discard(f"rbu{i}")
     for i in reversed(range(n if n <= MAX_ELIMINATION_WIRES else 0)):
         rest = "".join(f" - A{i}{j}*mu{j}" for j in range(i + 1, n))
         C.lines.append(f"mu{i} = ({C.v(f'rb{i}')}{rest})*iA{i}")
-    C.let("ax_", [(1, f"mu{i}", f"dx{i}") for i in range(n)])
-    C.let("ay_", [(1, f"mu{i}", f"dy{i}") for i in range(n)])
-    C.let("az_", [(1, f"mu{i}", f"dz{i}") for i in range(n)] + [(-1, "g")])
-    for a in range(3):
-        C.let(f"al{_AX[a]}", [(1, f"Nt{_AX[a]}")] + [(1, f"mu{i}", f"MJ{_AX[a]}{i}") for i in range(n)])
-    # quaternion rate q * (0, w) / 2 with a pull back to |q| = 1 at rate 1/s
-    L += ["u = 1.0 - s", "hx = 0.5*wx", "hy = 0.5*wy", "hz = 0.5*wz",
-          "dqw = u*qw - qx*hx - qy*hy - qz*hz",
-          "dqx = u*qx + qw*hx + qy*hz - qz*hy",
-          "dqy = u*qy + qw*hy - qx*hz + qz*hx",
-          "dqz = u*qz + qw*hz + qx*hy - qy*hx"]
-    out = ["vx", "vy", "vz", "dqw", "dqx", "dqy", "dqz", C.v("ax_"), C.v("ay_"), C.v("az_"),
-           C.v("alx"), C.v("aly"), C.v("alz")]
+        if physical:
+            rest = "".join(f" - A{i}{j}*muu{j}" for j in range(i + 1, n))
+            C.lines.append(f"muu{i} = ({C.v(f'rbu{i}')}{rest})*iA{i}")
+    if derivatives:
+        C.let("ax_", [(1, f"mu{i}", f"dx{i}") for i in range(n)])
+        C.let("ay_", [(1, f"mu{i}", f"dy{i}") for i in range(n)])
+        C.let("az_", [(1, f"mu{i}", f"dz{i}") for i in range(n)] + [(-1, "g")])
+        for a in range(3):
+            C.let(f"al{_AX[a]}", [(1, f"Nt{_AX[a]}")] + [(1, f"mu{i}", f"MJ{_AX[a]}{i}") for i in range(n)])
+        # quaternion rate q * (0, w) / 2 with a pull back to |q| = 1 at rate 1/s
+        L += ["u = 1.0 - s", "hx = 0.5*wx", "hy = 0.5*wy", "hz = 0.5*wz",
+              "dqw = u*qw - qx*hx - qy*hy - qz*hz",
+              "dqx = u*qx + qw*hx + qy*hz - qz*hy",
+              "dqy = u*qy + qw*hy - qx*hz + qz*hx",
+              "dqz = u*qz + qw*hz + qx*hy - qy*hx"]
+        out = ["vx", "vy", "vz", "dqw", "dqx", "dqy", "dqz", C.v("ax_"), C.v("ay_"), C.v("az_"),
+               C.v("alx"), C.v("aly"), C.v("alz")]
+    else:  # only the extras are read (a record's tensions and health): the derivatives are not computed
+        out = ["None"] * 13
     if extras:
         out += [f"mass*mu{i}" for i in range(n)] + [C.v(f"phi{i}") for i in range(n)]
+        if physical:
+            out += [f"mass*muu{i}" for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
     if signature == "odeint":
         # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
@@ -606,7 +637,8 @@ def _zero_set(vals: dict) -> frozenset:
     return frozenset(out)
 
 
-def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args"):
+def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
+                    physical: bool = False, derivatives: bool = True):
     """The model's right-hand side compiled for the parameters ``P``.
 
     Returns ``f(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz) -> tuple``
@@ -617,22 +649,34 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     broadcasting against ``P.batch_shape``; with ``signature="odeint"``
     (one scene) the function is ``f(y, t)`` on an array ``y`` (13,), the
     right-hand side :func:`scipy.integrate.odeint` calls, without a wrapper,
-    returning an array it reuses (see :data:`SIGNATURES`).  Cached on ``P``.
+    returning an array it reuses (see :data:`SIGNATURES`).  ``physical``
+    (with ``stabilise`` and ``extras``): the n unstabilised multipliers
+    (N/m) follow, what ``compiled_kernel(P, False, True)`` gives as its
+    ``lam`` (the physical tension ``-lam |d|`` of :func:`tensions`) for a
+    few operations more than the stabilised kernel alone.
+    ``derivatives=False`` (with ``extras``, ``signature="args"``): the 13
+    derivative components are returned as None, not computed (~20 % fewer
+    operations; the extras are the same bits).  Cached on ``P``.
     """
     if signature == "odeint" and P.batch_shape != ():
         raise ValueError("signature='odeint' is for one scene (parameters of batch shape ())")
+    if physical and not (stabilise and extras):
+        raise ValueError("physical=True adds the unstabilised multipliers to a stabilised kernel with extras")
+    if not derivatives and not (extras and signature == "args"):
+        raise ValueError("derivatives=False is for a kernel with extras and the 'args' signature")
     cache = P.__dict__.get("_kernels")
     if cache is None:
         cache = {}
         object.__setattr__(P, "_kernels", cache)
-    key = (bool(stabilise), bool(extras), signature)
+    key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ()) + \
+        (() if derivatives else ("no derivatives",))
     if key not in cache:
         vals = _param_values(P)
         n = int(P.lengths.shape[-1])
         zero = _zero_set(vals)
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
-            src, params = _kernel_source(n, zero, stabilise, extras, signature)
+            src, params = _kernel_source(n, zero, stabilise, extras, signature, physical, derivatives)
             ns: dict = {"_min_norm": _min_norm, "_np": np, "_struct": struct}
             exec(compile(src, f"<bifilar.maximal kernel n={n}>", "exec"), ns)  # noqa: S102 - generated here
             _FACTORY_CACHE[fkey] = (ns["make"], params)
@@ -641,7 +685,8 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     return cache[key]
 
 
-def kernel_source(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args") -> str:
+def kernel_source(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
+                  physical: bool = False) -> str:
     """The generated source behind :func:`compiled_kernel` (for inspection)."""
     vals = _param_values(P)
-    return _kernel_source(int(P.lengths.shape[-1]), _zero_set(vals), stabilise, extras, signature)[0]
+    return _kernel_source(int(P.lengths.shape[-1]), _zero_set(vals), stabilise, extras, signature, physical)[0]
