@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Sweep points per second: the cost of one sweep point (all default
 outputs: sensitivities, uncertainty budget, nonlinear runs, estimator
-biases) on the thesis plate and the Solar Boat, beside one naive rest pose +
+biases) on the thesis plate, the Solar Boat and the KTH trifilar, beside one naive rest pose +
 linear modes solve of the same scene (the yardstick of issue 14); and the
 time of the 2-parameter Solar Boat plan of issue 14,
 ``bifilar plan configs/solar_boat.yaml --param spacing=1:4 --param length=2:5 --json``
@@ -46,7 +46,9 @@ from bifilar.config import read_yaml, scene_from_dict  # noqa: E402
 from bifilar.studies import sweep as sw  # noqa: E402
 
 CASES = {"thesis plate": (ROOT / "configs" / "thesis_plate_rest.yaml", {"spacing": 3.0}),
-         "Solar Boat": (ROOT / "configs" / "solar_boat.yaml", {"spacing": 3.0})}
+         "Solar Boat": (ROOT / "configs" / "solar_boat.yaml", {"spacing": 3.0}),
+         # the shipped KTH table: its two swings are a repeated eigenvalue (analytic derivatives since session 5)
+         "trifilar (KTH)": (ROOT / "configs" / "trifilar_kth.yaml", {})}
 
 
 def timed(fn, repeats: int) -> tuple[float, float]:
