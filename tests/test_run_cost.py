@@ -300,7 +300,7 @@ def test_runs_of_a_group_fold_their_lowest_points_once(name, monkeypatch):
 
 
 @pytest.mark.parametrize("name", ["solar_boat", "trifilar_kth"])
-def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(name):
+def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(name, monkeypatch):
     """The closest-pose Newton step's constraint Hessian
     (``start_pose._mu_hessian``) evaluates the 12 displaced poses of its
     central differences at once: bit for bit the Hessian of one
@@ -328,6 +328,9 @@ def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(
         return H
 
     assert np.array_equal(got, one_at_a_time(1e-6))
+    # in blocks (what bounds a large batch's memory): the same bits
+    monkeypatch.setattr(spm, "HESSIAN_BLOCK", 2)
+    assert np.array_equal(spm._mu_hessian(rig, x, mu, scale), got)
     coarse = one_at_a_time(1e-4)
     assert np.allclose(got, coarse, rtol=0, atol=1e-5 * np.abs(coarse).max())
     assert np.allclose(got, np.swapaxes(got, 1, 2), rtol=0, atol=1e-5 * np.abs(got).max())  # a Hessian
