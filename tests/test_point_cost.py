@@ -446,8 +446,8 @@ def _mode_set_fields(ms):
 def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
     # modes_batch labels its scenes with mode_sets (the elementwise arithmetic on the whole batch); against
     # mode_set scene by scene (the path before): the same mode sets bit for bit, over batches of sigma-point
-    # scenes of the Solar Boat, the drone, the trifilar (degenerate swings: mode_set itself) and the
-    # knife-edge plate (a neutral mode)
+    # scenes of the Solar Boat, the drone, the trifilar (degenerate swings: each cluster aligned scene by
+    # scene, the rest batched) and the knife-edge plate (a neutral mode)
     from bifilar.analysis import batch_rest
     from bifilar.analysis import modes as md
     from bifilar.analysis.batch import modes_batch, rest_poses
@@ -461,7 +461,7 @@ def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
     rng = np.random.default_rng(5)
     cases = [_scene("solar_boat", {"spacing": 3.0}), _scene("drone_parallel", {}), _scene("trifilar_kth", {}),
              _scene("thesis_plate_rest", {})]
-    n_modes = neutral = 0
+    n_modes = neutral = repeated = 0
     alone: list = []
     for base in cases:
         names = measured_inputs(base)
@@ -479,8 +479,13 @@ def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
         assert [_mode_set_fields(a) for a in got] == [_mode_set_fields(b) for b in ref]
         n_modes += sum(len(a.modes) for a in got)
         neutral += sum(m.period is None for a in got for m in a.modes)
+        repeated += sum(len({m.period for m in a.modes if m.period}) < sum(1 for m in a.modes if m.period)
+                        for a in ref)
     assert n_modes > 200 and neutral > 0
-    assert 0 < len(alone) < n_modes / 8  # the trifilar's degenerate swings went through mode_set, few else
+    # the trifilar's degenerate swings (a cluster aligned, its periods equal): batched too, nothing went through
+    # mode_set alone
+    assert repeated >= 5
+    assert not alone
 
 
 def test_rest_poses_from_one_guess_equal_those_from_copies_of_it():
@@ -659,3 +664,50 @@ def test_newton_with_hoisted_scales_equals_the_loop_before():
             got = eq._newton_kkt(s, com.copy(), R.copy(), None if lam is None else lam.copy(), iters=iters)
             ref = _newton_kkt_before(s, com.copy(), R.copy(), None if lam is None else lam.copy(), iters=iters)
             assert all(np.array_equal(a, b) for a, b in zip(got, ref))
+
+
+def test_body_from_parts_cached_equals_built_anew():
+    # a sweep point rebuilds its scene from the config; a body from parts whose list holds the same values is
+    # taken from the cache (build._body_cache): the same mass, inertia, CoM and support as a build from scratch,
+    # and any change of a value (or of its type, or -0.0 for 0.0) builds anew
+    import copy
+
+    from bifilar.config import build
+
+    cfg = read_yaml(CONFIGS / "solar_boat.yaml")
+    dirs = np.random.default_rng(3).normal(size=(7, 3))
+
+    def fields(sc):
+        return (sc.mass, sc.inertia.tobytes(), np.asarray(sc.parts_com).tobytes(), sc.support(dirs).tobytes())
+
+    built: list = []
+    real = build._build_body_from_parts
+    build._body_cache.clear()
+    try:
+        build._build_body_from_parts = lambda *a: built.append(1) or real(*a)
+        first = scene_from_dict(copy.deepcopy(cfg), warn=False)
+        again = scene_from_dict(copy.deepcopy(cfg), warn=False)  # a fresh copy, as apply_params gives
+        assert len(built) == 1 and fields(again) == fields(first)
+        assert again.inertia is not first.inertia  # copies: a caller editing one scene's arrays edits no other
+        build._body_cache.clear()
+        assert fields(scene_from_dict(copy.deepcopy(cfg), warn=False)) == fields(first)
+        assert len(built) == 2
+        for edit in (lambda p: p[1].update(mass=p[1]["mass"] * (1 + 1e-15)),
+                     lambda p: p[0].update(position=[-0.0, 0.0, -0.01]),
+                     lambda p: p[0].update(mass=int(p[0]["mass"]) if p[0]["mass"] == int(p[0]["mass"]) else 52)):
+            c = copy.deepcopy(cfg)
+            edit(c["body"]["parts"])
+            n = len(built)
+            sc = scene_from_dict(c, warn=False)
+            assert len(built) == n + 1  # built anew
+            build._body_cache.clear()
+            assert fields(scene_from_dict(c, warn=False)) == fields(sc)
+        # an invalid parts list is never taken from the cache: its errors every time
+        bad = copy.deepcopy(cfg)
+        bad["body"]["parts"][0]["mass"] = -1.0
+        for _ in range(2):
+            with pytest.raises(Exception, match="parts.0"):
+                scene_from_dict(bad, warn=False)
+    finally:
+        build._build_body_from_parts = real
+        build._body_cache.clear()

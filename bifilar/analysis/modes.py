@@ -262,26 +262,32 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     resolution, clusters, ``N @ Y`` and energy-share sums are the very
     calls :func:`mode_set` makes on it; only elementwise operations and
     maxima, exact in any order, run on the whole batch.  A scene with a
-    degenerate cluster goes through :func:`mode_set` itself.  ``which``:
+    degenerate cluster has its cluster aligned (:func:`_align_degenerate`)
+    and its eigenvalues set to the cluster means scene by scene, as
+    :func:`mode_set` does, and joins the batch from there.  ``which``:
     the scenes to do (indices; the others' entries are None), default all.
     Each ModeSet holds ``N[b]`` and ``M[b]`` (views) as :func:`mode_set`
     given them does."""
     B = len(w2)
     out: list = [None] * B
-    rows, S, tols = [], [], []
+    rows, S, tols, ws = [], [], [], []
     for b in (range(B) if which is None else which):
         wb, Yb = np.array(w2[b], float), np.array(Y[b], float)
         tol = _noise(wb, Yb, K[b])
-        if any(j - a > 1 for a, j in clusters(wb, tol)):
-            out[b] = mode_set(N[b], Y[b], w2[b], mass[b], M[b], K=K[b])
-            continue
+        groups = clusters(wb, tol)
+        if any(j - a > 1 for a, j in groups):  # mode_set's steps before N @ Y, on this scene alone
+            Yb = _align_degenerate(N[b], Yb, wb, tol, groups)
+            for a, j in groups:
+                if j - a > 1:
+                    wb[a:j] = np.mean(wb[a:j])
         rows.append(b)
         S.append(N[b] @ Yb)
         tols.append(tol)
+        ws.append(wb)
     if not rows:
         return out
     S = np.array(S)  # (R, 6, k)
-    w2r = np.array(w2, float)[rows]
+    w2r = np.array(ws)
     tol = np.array(tols)
     absS = np.abs(S)
     i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (R, k)
