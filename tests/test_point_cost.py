@@ -711,3 +711,157 @@ def test_body_from_parts_cached_equals_built_anew():
     finally:
         build._build_body_from_parts = real
         build._body_cache.clear()
+
+
+# mode_set as it was before its overhead was trimmed (main at 7b5ff9a), verbatim but for the names: the
+# reference the trimmed one must equal bit for bit
+def _old_clusters(w2, tol):
+    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2)).tolist()
+    w = np.asarray(w2, float).tolist()
+    out = []
+    k = 0
+    while k < len(w):
+        j = k + 1
+        while j < len(w) and abs(w[j] - w[k]) <= max(t[k], t[j]):
+            j += 1
+        out.append((k, j))
+        k = j
+    return out
+
+
+def _old_align_degenerate(N, Y, w2, tol, groups=None):
+    Y = Y.copy()
+    for k, j in (groups if groups is not None else _old_clusters(w2, tol)):
+        if j - k < 2:
+            continue
+        S = N @ Y[:, k:j]  # (6, c)
+        T = S.copy()
+        rows: list[int] = []
+        for _ in range(j - k):
+            norms = np.linalg.norm(T, axis=1)
+            norms[rows] = -1.0
+            r = int(np.argmax(norms >= (1 - 1e-6) * norms.max()))
+            rows.append(r)
+            v = T[r] / np.linalg.norm(T[r])
+            T = T - np.outer(T @ v, v)
+        Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
+    return Y
+
+
+def _old_assemble(S, share, w2, zero, periods, i, M, N):
+    from bifilar.analysis.modes import _BASE_LABEL, COMPONENTS, Mode, ModeSet
+
+    dom_e = np.argmax(share, axis=0)
+    order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
+    seen: dict[str, int] = {}
+    modes = []
+    for j in order:
+        base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
+        c = seen.get(base, 0) + 1
+        seen[base] = c
+        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
+                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
+    return ModeSet(modes, M, N)
+
+
+def _old_mode_set(N, Y, w2, mass, M, K=None):
+    from bifilar.analysis.modes import NEUTRAL_RTOL, _noise
+
+    w2 = np.array(w2, float)
+    tol = _noise(w2, np.array(Y, float), K)
+    groups = _old_clusters(w2, tol)
+    Y = _old_align_degenerate(N, np.array(Y, float), w2, tol, groups)
+    for a, b in groups:
+        if b - a > 1:  # (the mean of one number is that number)
+            w2[a:b] = np.mean(w2[a:b])
+    S = N @ Y
+    absS = np.abs(S)
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
+    S = S / S[i, np.arange(S.shape[1])]
+    diagM = np.diag(M)[3:]
+    share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
+    share = share / share.sum(axis=0)
+    scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
+    zero = (np.abs(w2) <= np.maximum(tol, NEUTRAL_RTOL * scale)) | (w2 <= 0)
+    periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
+    return _old_assemble(S, share, w2, zero, periods, i, M, N)
+
+
+def _eigenproblems(rng, n):
+    """Random solved eigenproblems (N, Y, w2, mass, M, K) of 6 - k degrees of freedom, with clusters of 2 and 3
+    equal eigenvalues, eigenvalues equal but for a few ulps, neutral and negative ones."""
+    from bifilar.analysis.modes import eigh_generalized
+
+    out = []
+    for q in range(n):
+        k = int(rng.integers(2, 6))
+        N = np.linalg.qr(rng.normal(size=(6, 6)))[0][:, :k]
+        w = np.sort(rng.uniform(0.5, 40.0, k))
+        kind = q % 5
+        if kind == 1:
+            w[1] = w[0]
+        elif kind == 2 and k >= 3:
+            w[1] = w[2] = w[0]
+        elif kind == 3:
+            w[1] = w[0] * (1 + 4e-16)
+        elif kind == 4:
+            w[0] = 1e-17 * w[-1] * (1 if q % 2 else -1)
+        Q = np.linalg.qr(rng.normal(size=(k, k)))[0]
+        d = rng.uniform(1.0, 5.0, k)
+        Mr = np.diag(d)
+        K = np.sqrt(d)[:, None] * (Q @ np.diag(w) @ Q.T) * np.sqrt(d)[None, :]  # K y = w Mr y
+        K = 0.5 * (K + K.T)
+        w2, Y = eigh_generalized(K, Mr)
+        M = np.zeros((6, 6))
+        m = float(rng.uniform(1, 100))
+        M[:3, :3] = m * np.eye(3)
+        A = rng.normal(size=(3, 3))
+        M[3:, 3:] = A @ A.T + np.eye(3)
+        out.append((N, Y, w2, m, M, K))
+    return out
+
+
+def test_trimmed_mode_set_equals_the_one_before():
+    # mode_set, modes_of_inertia and the batched mode_sets lost numpy overhead (a cluster's alignment without
+    # np.linalg.norm's and np.outer's wrappers and without the last pick's unused projection; the labels from
+    # Python numbers; the mass matrix's translational block once): the same mode sets bit for bit as the
+    # functions before, kept above, on random eigenproblems with repeated, nearly repeated and neutral
+    # eigenvalues and on the sigma-point scenes of four rigs
+    from bifilar.analysis import modes as md
+    from bifilar.analysis.batch import modes_batch, rest_poses
+
+    rng = np.random.default_rng(11)
+    probs = _eigenproblems(rng, 200)
+    clustered = 0
+    for N, Y, w2, m, M, K in probs:
+        for k in (K, None):
+            got, ref = md.mode_set(N, Y, w2, m, M, K=k), _old_mode_set(N, Y, w2, m, M, K=k)
+            assert _mode_set_fields(got) == _mode_set_fields(ref)
+        clustered += len(md.clusters(w2, md._noise(w2, Y, K))) < len(w2)
+    assert clustered >= 60
+    # the batched mode_sets of the same problems (those of one size together)
+    for k in range(2, 6):
+        sub = [p for p in probs if p[0].shape[1] == k]
+        got = md.mode_sets(*(np.array([p[i] for p in sub]) for i in range(6)))
+        # (the batch's bases are views of one stacked array: their strides differ, not their numbers)
+        assert [_mode_set_fields(a)[:3] for a in got] == [_mode_set_fields(_old_mode_set(*p))[:3] for p in sub]
+    # real scenes: single (modes_of_inertia) and batched
+    for name, params in [("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("drone_parallel", {}),
+                         ("thesis_plate_rest", {})]:
+        base = _scene(name, params)
+        scenes = [perturb(base, n, float(rng.normal()) * 1e-3) for n in measured_inputs(base)] + [base]
+        rests = rest_poses(scenes, errors="return")
+        pairs = [(s, r) for s, r in zip(scenes, rests) if not isinstance(r, Exception)]
+        for (s, r), b in zip(pairs, modes_batch([s for s, _ in pairs], [r for _, r in pairs])):
+            lam = r.tensions / np.linalg.norm(r.wire_vectors, axis=1)
+            Nn, Kr, _, _ = reduced_stiffness(s, r.com, r.R, lam)
+            Ks = 0.5 * (Kr + Kr.T)
+            M = np.zeros((6, 6))
+            M[:3, :3] = s.mass * np.eye(3)
+            M[3:, 3:] = r.R @ np.asarray(s.inertia, float) @ r.R.T
+            Mr = Nn.T @ M @ Nn
+            w2, Y = md.eigh_generalized(Ks, 0.5 * (Mr + Mr.T))
+            ref = _old_mode_set(Nn, Y, w2, s.mass, M, K=Ks)
+            assert _mode_set_fields(md.linear_modes(s, r))[:2] == _mode_set_fields(ref)[:2]
+            # the batch's own eigenproblem (stacked Cholesky): its arrays, the old mode_set
+            assert [m.label for m in b.modes] == [m.label for m in ref.modes]

@@ -106,6 +106,8 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
     N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
     K = 0.5 * (Kr + Kr.T)
+    M0 = np.zeros((6, 6))  # the translational block, the same for every inertia
+    M0[:3, :3] = scene.mass * np.eye(3)
     solved: dict = {}
 
     def modes(inertia) -> ModeSet:
@@ -118,8 +120,7 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
         return ms
 
     def _solve(inertia) -> ModeSet:
-        M = np.zeros((6, 6))
-        M[:3, :3] = scene.mass * np.eye(3)
+        M = M0.copy()
         M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
         if N.shape[1] == 0:
             return ModeSet([], M, N)
@@ -160,7 +161,8 @@ def clusters(w2: np.ndarray, tol) -> list[tuple[int, int]]:
     from the first member, so the grouping does not depend on last-bit noise
     of the others."""
     # Python floats: the same IEEE doubles as numpy's scalars, a tenth of the cost in this loop
-    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2)).tolist()
+    tol = np.asarray(tol, float)
+    t = (tol if tol.shape == np.shape(w2) else np.broadcast_to(tol, np.shape(w2))).tolist()
     w = np.asarray(w2, float).tolist()
     out = []
     k = 0
@@ -211,12 +213,14 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     to the largest eigenvalue applies to all.
     """
     w2 = np.array(w2, float)
-    tol = _noise(w2, np.array(Y, float), K)
+    Y = np.array(Y, float)
+    tol = _noise(w2, Y, K)
     groups = clusters(w2, tol)
-    Y = _align_degenerate(N, np.array(Y, float), w2, tol, groups)
-    for a, b in groups:
-        if b - a > 1:  # (the mean of one number is that number)
-            w2[a:b] = np.mean(w2[a:b])
+    if len(groups) < len(w2):  # a cluster of two or more
+        Y = _align_degenerate(N, Y, w2, tol, groups)
+        for a, b in groups:
+            if b - a > 1:  # (the mean of one number is that number)
+                w2[a:b] = np.mean(w2[a:b])
     S = N @ Y
     absS = np.abs(S)
     # first component within 1e-9 of the largest: independent of last-bit noise
@@ -240,16 +244,17 @@ def _assemble(S, share, w2, zero, periods, i, M, N) -> ModeSet:
     arrays (shapes S (6, k), energy shares (6, k), omega^2, neutral flags,
     periods, index of each shape's unit component): ordered slowest first,
     neutral last, ties by the dominant world component; labelled."""
-    dom_e = np.argmax(share, axis=0)
-    order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
+    # Python numbers of the small arrays (the same doubles; no numpy scalar per access)
+    dom_e, P, Z, W, I = np.argmax(share, axis=0).tolist(), periods.tolist(), zero.tolist(), w2.tolist(), i.tolist()
+    order = sorted(range(len(W)), key=lambda j: (-(P[j] if not Z[j] else -1.0), dom_e[j]))
     seen: dict[str, int] = {}
     modes = []
     for j in order:
         base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
         c = seen.get(base, 0) + 1
         seen[base] = c
-        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
-                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
+        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if Z[j] else P[j], W[j],
+                          S[:, j].copy(), share[:, j].copy(), I[j]))
     return ModeSet(modes, M, N)
 
 
@@ -317,15 +322,17 @@ def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol, groups=
         if j - k < 2:
             continue
         S = N @ Y[:, k:j]  # (6, c)
-        T = S.copy()
+        T = S
         rows: list[int] = []
-        for _ in range(j - k):
-            norms = np.linalg.norm(T, axis=1)
+        for step in range(j - k):
+            norms = np.sqrt(np.add.reduce(T * T, axis=1))  # np.linalg.norm(T, axis=1): its operations
             norms[rows] = -1.0
             r = int(np.argmax(norms >= (1 - 1e-6) * norms.max()))
             rows.append(r)
-            v = T[r] / np.linalg.norm(T[r])
-            T = T - np.outer(T @ v, v)
+            if step < j - k - 1:  # (the last pick's projection is never read)
+                t = T[r]
+                v = t / np.sqrt(t.dot(t))  # np.linalg.norm(t): its operations
+                T = T - (T @ v)[:, None] * v[None, :]  # np.outer's product
         Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
     return Y
 
