@@ -865,3 +865,59 @@ def test_trimmed_mode_set_equals_the_one_before():
             assert _mode_set_fields(md.linear_modes(s, r))[:2] == _mode_set_fields(ref)[:2]
             # the batch's own eigenproblem (stacked Cholesky): its arrays, the old mode_set
             assert [m.label for m in b.modes] == [m.label for m in ref.modes]
+
+
+def _old_matrix_to_quat(R):
+    # rotations.matrix_to_quat before (main at 7b5ff9a): its loop body, Shepperd's method on numpy scalars, is
+    # kept as rotations._shepperd_numpy (the fallback for matrices that are no rotation); the reference of the
+    # Python-float path
+    from bifilar.rotations import _shepperd_numpy
+
+    R = np.asarray(R, dtype=float)
+    flat = R.reshape(-1, 3, 3)
+    out = np.empty((flat.shape[0], 4))
+    for k, m in enumerate(flat):
+        out[k] = _shepperd_numpy(m)
+    out /= np.linalg.norm(out, axis=-1, keepdims=True)
+    return out.reshape(R.shape[:-2] + (4,))
+
+
+def test_matrix_to_quat_on_python_floats_equals_the_one_before():
+    # the batched rest poses take every scene's quaternion (36-50 sigma-point scenes a point): Shepperd's
+    # method on Python floats against the numpy-scalar loop before, bit for bit, on random rotations, the
+    # four branches (turns by ~pi about each axis), exact ties of the trace and a diagonal entry, a -0.0, and
+    # matrices that are no rotation (NaN, a negative root)
+    from bifilar.rotations import matrix_to_quat, rotvec_to_matrix
+
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(300, 3))
+    v *= rng.uniform(0, np.pi, (300, 1)) / np.linalg.norm(v, axis=1, keepdims=True)
+    Rs = list(rotvec_to_matrix(v))
+    for ax in np.eye(3):
+        Rs += list(rotvec_to_matrix(np.array([ax * (np.pi - e) for e in (0.0, 1e-9, 1e-3, 0.3)])))
+    Rs += [np.eye(3), np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0]),
+           np.array([[0.0, -1.0, 0.0], [1.0, 0.0, -0.0], [-0.0, 0.0, 1.0]])]
+    weird = [np.full((3, 3), np.nan), np.diag([-2.0, -3.0, -4.0]), np.zeros((3, 3)), rng.normal(size=(3, 3))]
+    Rs = np.array(Rs)
+    got, ref = matrix_to_quat(Rs), _old_matrix_to_quat(Rs)
+    assert got.tobytes() == ref.tobytes()
+    assert matrix_to_quat(Rs[:6].reshape(2, 3, 3, 3)).tobytes() == ref[:6].tobytes()
+    with np.errstate(all="ignore"):
+        for m in weird:
+            assert np.array_equal(matrix_to_quat(m), _old_matrix_to_quat(m), equal_nan=True)
+
+
+def test_batched_cross_and_skew_written_in_place_equal_the_stacked_ones():
+    # batch_rest._cross and _skew (every batched Newton step and stiffness) fill one array instead of stacking:
+    # the same numbers as np.cross and the nested stacks, bit for bit, signed zeros included
+    from bifilar.analysis.batch_rest import _cross, _skew
+
+    rng = np.random.default_rng(8)
+    u, v = rng.normal(size=(2, 5, 4, 3))
+    u[0, 0] = [0.0, -0.0, 1.0]
+    assert _cross(u, v).tobytes() == np.cross(u, v).tobytes()
+    assert _cross(u[0], v[0, 0]).tobytes() == np.cross(u[0], v[0, 0]).tobytes()  # broadcast
+    z = np.zeros(u.shape[:-1])
+    x, y, w = u[..., 0], u[..., 1], u[..., 2]
+    stacked = np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+    assert _skew(u).tobytes() == stacked.tobytes()
