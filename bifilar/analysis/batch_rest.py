@@ -275,9 +275,9 @@ class _LazyDepthRest(RestPose):
     (``dataclasses.replace``): every field must be given."""
 
     def __init__(self, scene: Scene | None = None, **fields):  # noqa: D107 - RestPose's fields, or all but the lazy two
-        for name, v in fields.items():
-            object.__setattr__(self, name, v)
-        object.__setattr__(self, "_scene", scene)
+        d = self.__dict__  # (what object.__setattr__ field by field wrote, in one call)
+        d.update(fields)
+        d["_scene"] = scene
 
     def __getattr__(self, name):  # only called for attributes not yet set: the lazy two
         if name not in _LAZY or "_scene" not in self.__dict__:
