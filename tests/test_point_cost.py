@@ -8,7 +8,11 @@
   point's components (``at``) against its own Newton + stiffness, and its
   root against the linear period it must reproduce;
 * :func:`bifilar.estimation.honest.honest_stds` fed the point's analytic
-  sensitivity (``sens``) against the budget's own Jacobian.
+  sensitivity (``sens``) against the budget's own Jacobian;
+* (session 6) the batched ``mode_sets`` with repeated eigenvalues, the
+  trimmed ``mode_set`` / ``modes_of_inertia``, ``matrix_to_quat`` on Python
+  floats, ``batch_rest._cross`` / ``_skew`` and the body-from-parts cache,
+  each against the path before (kept verbatim here where it was replaced).
 """
 
 from __future__ import annotations
