@@ -163,7 +163,11 @@ def clusters(w2: np.ndarray, tol) -> list[tuple[int, int]]:
     # Python floats: the same IEEE doubles as numpy's scalars, a tenth of the cost in this loop
     tol = np.asarray(tol, float)
     t = (tol if tol.shape == np.shape(w2) else np.broadcast_to(tol, np.shape(w2))).tolist()
-    w = np.asarray(w2, float).tolist()
+    return _cluster_ranges(np.asarray(w2, float).tolist(), t)
+
+
+def _cluster_ranges(w: list, t: list) -> list[tuple[int, int]]:
+    """:func:`clusters` of eigenvalues ``w`` and their resolutions ``t`` (Python floats)."""
     out = []
     k = 0
     while k < len(w):
@@ -245,7 +249,14 @@ def _assemble(S, share, w2, zero, periods, i, M, N) -> ModeSet:
     periods, index of each shape's unit component): ordered slowest first,
     neutral last, ties by the dominant world component; labelled."""
     # Python numbers of the small arrays (the same doubles; no numpy scalar per access)
-    dom_e, P, Z, W, I = np.argmax(share, axis=0).tolist(), periods.tolist(), zero.tolist(), w2.tolist(), i.tolist()
+    return _assemble_lists(S, share, np.argmax(share, axis=0).tolist(), periods.tolist(), zero.tolist(), w2.tolist(),
+                           i.tolist(), M, N)
+
+
+def _assemble_lists(S, share, dom_e, P, Z, W, I, M, N) -> ModeSet:
+    """:func:`_assemble` with the dominant components, periods, neutral flags,
+    omega^2 and unit-component indices as Python lists (the batch converts
+    all its scenes' at once)."""
     order = sorted(range(len(W)), key=lambda j: (-(P[j] if not Z[j] else -1.0), dom_e[j]))
     seen: dict[str, int] = {}
     modes = []
@@ -279,8 +290,8 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     for b in (range(B) if which is None else which):
         wb, Yb = np.array(w2[b], float), np.array(Y[b], float)
         tol = _noise(wb, Yb, K[b])
-        groups = clusters(wb, tol)
-        if any(j - a > 1 for a, j in groups):  # mode_set's steps before N @ Y, on this scene alone
+        groups = _cluster_ranges(wb.tolist(), tol.tolist())  # clusters(wb, tol)
+        if len(groups) < len(wb):  # mode_set's steps before N @ Y, on this scene alone
             Yb = _align_degenerate(N[b], Yb, wb, tol, groups)
             for a, j in groups:
                 if j - a > 1:
@@ -304,8 +315,9 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     scale = np.maximum(np.max(np.abs(w2r), axis=1), 1e-300)
     zero = (np.abs(w2r) <= np.maximum(tol, NEUTRAL_RTOL * scale[:, None])) | (w2r <= 0)
     periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2r)))
-    for q, b in enumerate(rows):
-        out[b] = _assemble(S[q], share[q], w2r[q], zero[q], periods[q], i[q], M[b], N[b])
+    dom, P, Z, W, I = np.argmax(share, axis=1).tolist(), periods.tolist(), zero.tolist(), w2r.tolist(), i.tolist()
+    for q, b in enumerate(rows):  # (_assemble of each scene, its lists converted for all at once)
+        out[b] = _assemble_lists(S[q], share[q], dom[q], P[q], Z[q], W[q], I[q], M[b], N[b])
     return out
 
 
