@@ -925,3 +925,39 @@ def test_batched_cross_and_skew_written_in_place_equal_the_stacked_ones():
     x, y, w = u[..., 0], u[..., 1], u[..., 2]
     stacked = np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
     assert _skew(u).tobytes() == stacked.tobytes()
+
+
+def test_scene_with_equals_dataclasses_replace():
+    # perturb, HangingModel.scene and the budget's CoM shift (~60 scenes a point) set a Scene's fields directly
+    # (scene.scene_with) instead of through dataclasses.replace: the same fields, the same objects in them, a
+    # new Scene; a name that is no field raises replace's error
+    from dataclasses import fields, replace
+
+    from bifilar.scene import Scene, scene_with
+
+    base = _scene("solar_boat", {"spacing": 3.0})
+    for changes in ({"mass": 2.5}, {"inertia": np.eye(3)}, {"inertia": np.eye(3), "attachments": base.anchors},
+                    {"lengths": base.lengths * 2, "gravity": 9.0}, {}):
+        got, ref = scene_with(base, **changes), replace(base, **changes)
+        assert type(got) is Scene and got is not base
+        for f in fields(Scene):
+            assert getattr(got, f.name) is getattr(ref, f.name)
+        assert set(vars(got)) == set(vars(ref))  # no attribute besides the fields
+    with pytest.raises(TypeError):
+        scene_with(base, mas=1.0)
+    with pytest.raises(Exception):
+        scene_with(base, mass=1.0).mass = 2.0  # still frozen
+    # perturb through it: the same scene as through replace
+    from bifilar.estimation import sensitivity
+
+    names = ("mass", "gravity", "Izz", "Ixy", "length.2", "anchor.1.y", "attachment.2.z", "com.x")
+    got = [sensitivity.perturb(base, n, 1e-3) for n in names]
+    real = sensitivity.scene_with
+    sensitivity.scene_with = replace
+    try:
+        ref = [sensitivity.perturb(base, n, 1e-3) for n in names]
+    finally:
+        sensitivity.scene_with = real
+    for g, r in zip(got, ref):
+        for f in ("mass", "gravity", "inertia", "anchors", "attachments", "lengths"):
+            assert np.asarray(getattr(g, f)).tobytes() == np.asarray(getattr(r, f)).tobytes()
