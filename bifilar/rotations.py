@@ -6,6 +6,8 @@ body components to world components.  Rotation vectors are in radians.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -46,25 +48,56 @@ def matrix_to_quat(R: np.ndarray) -> np.ndarray:
     R = np.asarray(R, dtype=float)
     flat = R.reshape(-1, 3, 3)
     out = np.empty((flat.shape[0], 4))
-    for k, m in enumerate(flat):  # Shepperd's method; called rarely (set-up only)
-        tr = np.trace(m)
-        i = int(np.argmax([tr, m[0, 0], m[1, 1], m[2, 2]]))
-        if i == 0:
-            s = 2.0 * np.sqrt(1.0 + tr)
-            q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-        elif i == 1:
-            s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-            q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-        elif i == 2:
-            s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-            q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-        else:
-            s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-            q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-        q = np.asarray(q)
-        out[k] = q * np.sign(q[0]) if q[0] != 0 else q
+    for k, rows in enumerate(flat.tolist()):
+        out[k] = _shepperd(rows)
     out /= np.linalg.norm(out, axis=-1, keepdims=True)
     return out.reshape(R.shape[:-2] + (4,))
+
+
+def _shepperd(rows: list):
+    """Shepperd's method for one matrix (nested lists): its quaternion before
+    the final normalisation, w >= 0.  On Python floats, with the IEEE
+    operations the numpy scalars made (``np.trace``'s order, ``np.argmax``'s
+    first largest, sqrt correctly rounded either way) but without a numpy
+    call per entry; a matrix that is no rotation (a NaN, a negative root, a
+    zero divisor) goes through numpy scalars as before, for their NaN and inf."""
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rows
+    tr = m00 + m11 + m22
+    d = (tr, m00, m11, m22)
+    i = max(range(4), key=lambda j: (d[j], -j))
+    r = (1.0 + tr, 1.0 + m00 - m11 - m22, 1.0 + m11 - m00 - m22, 1.0 + m22 - m00 - m11)[i]
+    if not r > 0 or any(v != v for v in d):
+        return _shepperd_numpy(np.array(rows, float))
+    s = 2.0 * math.sqrt(r)
+    if i == 0:
+        q = [0.25 * s, (m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s]
+    elif i == 1:
+        q = [(m21 - m12) / s, 0.25 * s, (m01 + m10) / s, (m02 + m20) / s]
+    elif i == 2:
+        q = [(m02 - m20) / s, (m01 + m10) / s, 0.25 * s, (m12 + m21) / s]
+    else:
+        q = [(m10 - m01) / s, (m02 + m20) / s, (m12 + m21) / s, 0.25 * s]
+    return q if q[0] >= 0 or q[0] != q[0] else [-c for c in q]  # q * np.sign(q[0]) where q[0] < 0
+
+
+def _shepperd_numpy(m: np.ndarray) -> np.ndarray:
+    """:func:`_shepperd` on numpy scalars (the path before, for any matrix)."""
+    tr = np.trace(m)
+    i = int(np.argmax([tr, m[0, 0], m[1, 1], m[2, 2]]))
+    if i == 0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    elif i == 1:
+        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+    elif i == 2:
+        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+    q = np.asarray(q)
+    return q * np.sign(q[0]) if q[0] != 0 else q
 
 
 def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:

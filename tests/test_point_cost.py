@@ -8,7 +8,11 @@
   point's components (``at``) against its own Newton + stiffness, and its
   root against the linear period it must reproduce;
 * :func:`bifilar.estimation.honest.honest_stds` fed the point's analytic
-  sensitivity (``sens``) against the budget's own Jacobian.
+  sensitivity (``sens``) against the budget's own Jacobian;
+* (session 6) the batched ``mode_sets`` with repeated eigenvalues, the
+  trimmed ``mode_set`` / ``modes_of_inertia``, ``matrix_to_quat`` on Python
+  floats, ``batch_rest._cross`` / ``_skew`` and the body-from-parts cache,
+  each against the path before (kept verbatim here where it was replaced).
 """
 
 from __future__ import annotations
@@ -446,8 +450,8 @@ def _mode_set_fields(ms):
 def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
     # modes_batch labels its scenes with mode_sets (the elementwise arithmetic on the whole batch); against
     # mode_set scene by scene (the path before): the same mode sets bit for bit, over batches of sigma-point
-    # scenes of the Solar Boat, the drone, the trifilar (degenerate swings: mode_set itself) and the
-    # knife-edge plate (a neutral mode)
+    # scenes of the Solar Boat, the drone, the trifilar (degenerate swings: each cluster aligned scene by
+    # scene, the rest batched) and the knife-edge plate (a neutral mode)
     from bifilar.analysis import batch_rest
     from bifilar.analysis import modes as md
     from bifilar.analysis.batch import modes_batch, rest_poses
@@ -461,7 +465,7 @@ def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
     rng = np.random.default_rng(5)
     cases = [_scene("solar_boat", {"spacing": 3.0}), _scene("drone_parallel", {}), _scene("trifilar_kth", {}),
              _scene("thesis_plate_rest", {})]
-    n_modes = neutral = 0
+    n_modes = neutral = repeated = 0
     alone: list = []
     for base in cases:
         names = measured_inputs(base)
@@ -479,8 +483,13 @@ def test_batched_mode_sets_equal_mode_set_scene_by_scene(monkeypatch):
         assert [_mode_set_fields(a) for a in got] == [_mode_set_fields(b) for b in ref]
         n_modes += sum(len(a.modes) for a in got)
         neutral += sum(m.period is None for a in got for m in a.modes)
+        repeated += sum(len({m.period for m in a.modes if m.period}) < sum(1 for m in a.modes if m.period)
+                        for a in ref)
     assert n_modes > 200 and neutral > 0
-    assert 0 < len(alone) < n_modes / 8  # the trifilar's degenerate swings went through mode_set, few else
+    # the trifilar's degenerate swings (a cluster aligned, its periods equal): batched too, nothing went through
+    # mode_set alone
+    assert repeated >= 5
+    assert not alone
 
 
 def test_rest_poses_from_one_guess_equal_those_from_copies_of_it():
@@ -659,3 +668,296 @@ def test_newton_with_hoisted_scales_equals_the_loop_before():
             got = eq._newton_kkt(s, com.copy(), R.copy(), None if lam is None else lam.copy(), iters=iters)
             ref = _newton_kkt_before(s, com.copy(), R.copy(), None if lam is None else lam.copy(), iters=iters)
             assert all(np.array_equal(a, b) for a, b in zip(got, ref))
+
+
+def test_body_from_parts_cached_equals_built_anew():
+    # a sweep point rebuilds its scene from the config; a body from parts whose list holds the same values is
+    # taken from the cache (build._body_cache): the same mass, inertia, CoM and support as a build from scratch,
+    # and any change of a value (or of its type, or -0.0 for 0.0) builds anew
+    import copy
+
+    from bifilar.config import build
+
+    cfg = read_yaml(CONFIGS / "solar_boat.yaml")
+    dirs = np.random.default_rng(3).normal(size=(7, 3))
+
+    def fields(sc):
+        return (sc.mass, sc.inertia.tobytes(), np.asarray(sc.parts_com).tobytes(), sc.support(dirs).tobytes())
+
+    built: list = []
+    real = build._build_body_from_parts
+    build._body_cache.clear()
+    try:
+        build._build_body_from_parts = lambda *a: built.append(1) or real(*a)
+        first = scene_from_dict(copy.deepcopy(cfg), warn=False)
+        again = scene_from_dict(copy.deepcopy(cfg), warn=False)  # a fresh copy, as apply_params gives
+        assert len(built) == 1 and fields(again) == fields(first)
+        assert again.inertia is not first.inertia  # copies: a caller editing one scene's arrays edits no other
+        build._body_cache.clear()
+        assert fields(scene_from_dict(copy.deepcopy(cfg), warn=False)) == fields(first)
+        assert len(built) == 2
+        for edit in (lambda p: p[1].update(mass=p[1]["mass"] * (1 + 1e-15)),
+                     lambda p: p[0].update(position=[-0.0, 0.0, -0.01]),
+                     lambda p: p[0].update(mass=int(p[0]["mass"]) if p[0]["mass"] == int(p[0]["mass"]) else 52)):
+            c = copy.deepcopy(cfg)
+            edit(c["body"]["parts"])
+            n = len(built)
+            sc = scene_from_dict(c, warn=False)
+            assert len(built) == n + 1  # built anew
+            build._body_cache.clear()
+            assert fields(scene_from_dict(c, warn=False)) == fields(sc)
+        # an invalid parts list is never taken from the cache: its errors every time
+        bad = copy.deepcopy(cfg)
+        bad["body"]["parts"][0]["mass"] = -1.0
+        for _ in range(2):
+            with pytest.raises(Exception, match="parts.0"):
+                scene_from_dict(bad, warn=False)
+    finally:
+        build._build_body_from_parts = real
+        build._body_cache.clear()
+
+
+# mode_set as it was before its overhead was trimmed (main at 7b5ff9a), verbatim but for the names: the
+# reference the trimmed one must equal bit for bit
+def _old_clusters(w2, tol):
+    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2)).tolist()
+    w = np.asarray(w2, float).tolist()
+    out = []
+    k = 0
+    while k < len(w):
+        j = k + 1
+        while j < len(w) and abs(w[j] - w[k]) <= max(t[k], t[j]):
+            j += 1
+        out.append((k, j))
+        k = j
+    return out
+
+
+def _old_align_degenerate(N, Y, w2, tol, groups=None):
+    Y = Y.copy()
+    for k, j in (groups if groups is not None else _old_clusters(w2, tol)):
+        if j - k < 2:
+            continue
+        S = N @ Y[:, k:j]  # (6, c)
+        T = S.copy()
+        rows: list[int] = []
+        for _ in range(j - k):
+            norms = np.linalg.norm(T, axis=1)
+            norms[rows] = -1.0
+            r = int(np.argmax(norms >= (1 - 1e-6) * norms.max()))
+            rows.append(r)
+            v = T[r] / np.linalg.norm(T[r])
+            T = T - np.outer(T @ v, v)
+        Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
+    return Y
+
+
+def _old_assemble(S, share, w2, zero, periods, i, M, N):
+    from bifilar.analysis.modes import _BASE_LABEL, COMPONENTS, Mode, ModeSet
+
+    dom_e = np.argmax(share, axis=0)
+    order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
+    seen: dict[str, int] = {}
+    modes = []
+    for j in order:
+        base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
+        c = seen.get(base, 0) + 1
+        seen[base] = c
+        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
+                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
+    return ModeSet(modes, M, N)
+
+
+def _old_mode_set(N, Y, w2, mass, M, K=None):
+    from bifilar.analysis.modes import NEUTRAL_RTOL, _noise
+
+    w2 = np.array(w2, float)
+    tol = _noise(w2, np.array(Y, float), K)
+    groups = _old_clusters(w2, tol)
+    Y = _old_align_degenerate(N, np.array(Y, float), w2, tol, groups)
+    for a, b in groups:
+        if b - a > 1:  # (the mean of one number is that number)
+            w2[a:b] = np.mean(w2[a:b])
+    S = N @ Y
+    absS = np.abs(S)
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
+    S = S / S[i, np.arange(S.shape[1])]
+    diagM = np.diag(M)[3:]
+    share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
+    share = share / share.sum(axis=0)
+    scale = max(float(np.max(np.abs(w2))) if len(w2) else 0.0, 1e-300)
+    zero = (np.abs(w2) <= np.maximum(tol, NEUTRAL_RTOL * scale)) | (w2 <= 0)
+    periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2)))
+    return _old_assemble(S, share, w2, zero, periods, i, M, N)
+
+
+def _eigenproblems(rng, n):
+    """Random solved eigenproblems (N, Y, w2, mass, M, K) of 6 - k degrees of freedom, with clusters of 2 and 3
+    equal eigenvalues, eigenvalues equal but for a few ulps, neutral and negative ones."""
+    from bifilar.analysis.modes import eigh_generalized
+
+    out = []
+    for q in range(n):
+        k = int(rng.integers(2, 6))
+        N = np.linalg.qr(rng.normal(size=(6, 6)))[0][:, :k]
+        w = np.sort(rng.uniform(0.5, 40.0, k))
+        kind = q % 5
+        if kind == 1:
+            w[1] = w[0]
+        elif kind == 2 and k >= 3:
+            w[1] = w[2] = w[0]
+        elif kind == 3:
+            w[1] = w[0] * (1 + 4e-16)
+        elif kind == 4:
+            w[0] = 1e-17 * w[-1] * (1 if q % 2 else -1)
+        Q = np.linalg.qr(rng.normal(size=(k, k)))[0]
+        d = rng.uniform(1.0, 5.0, k)
+        Mr = np.diag(d)
+        K = np.sqrt(d)[:, None] * (Q @ np.diag(w) @ Q.T) * np.sqrt(d)[None, :]  # K y = w Mr y
+        K = 0.5 * (K + K.T)
+        w2, Y = eigh_generalized(K, Mr)
+        M = np.zeros((6, 6))
+        m = float(rng.uniform(1, 100))
+        M[:3, :3] = m * np.eye(3)
+        A = rng.normal(size=(3, 3))
+        M[3:, 3:] = A @ A.T + np.eye(3)
+        out.append((N, Y, w2, m, M, K))
+    return out
+
+
+def test_trimmed_mode_set_equals_the_one_before():
+    # mode_set, modes_of_inertia and the batched mode_sets lost numpy overhead (a cluster's alignment without
+    # np.linalg.norm's and np.outer's wrappers and without the last pick's unused projection; the labels from
+    # Python numbers; the mass matrix's translational block once): the same mode sets bit for bit as the
+    # functions before, kept above, on random eigenproblems with repeated, nearly repeated and neutral
+    # eigenvalues and on the sigma-point scenes of four rigs
+    from bifilar.analysis import modes as md
+    from bifilar.analysis.batch import modes_batch, rest_poses
+
+    rng = np.random.default_rng(11)
+    probs = _eigenproblems(rng, 200)
+    clustered = 0
+    for N, Y, w2, m, M, K in probs:
+        for k in (K, None):
+            got, ref = md.mode_set(N, Y, w2, m, M, K=k), _old_mode_set(N, Y, w2, m, M, K=k)
+            assert _mode_set_fields(got) == _mode_set_fields(ref)
+        clustered += len(md.clusters(w2, md._noise(w2, Y, K))) < len(w2)
+    assert clustered >= 60
+    # the batched mode_sets of the same problems (those of one size together)
+    for k in range(2, 6):
+        sub = [p for p in probs if p[0].shape[1] == k]
+        got = md.mode_sets(*(np.array([p[i] for p in sub]) for i in range(6)))
+        # (the batch's bases are views of one stacked array: their strides differ, not their numbers)
+        assert [_mode_set_fields(a)[:3] for a in got] == [_mode_set_fields(_old_mode_set(*p))[:3] for p in sub]
+    # real scenes: single (modes_of_inertia) and batched
+    for name, params in [("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("drone_parallel", {}),
+                         ("thesis_plate_rest", {})]:
+        base = _scene(name, params)
+        scenes = [perturb(base, n, float(rng.normal()) * 1e-3) for n in measured_inputs(base)] + [base]
+        rests = rest_poses(scenes, errors="return")
+        pairs = [(s, r) for s, r in zip(scenes, rests) if not isinstance(r, Exception)]
+        for (s, r), b in zip(pairs, modes_batch([s for s, _ in pairs], [r for _, r in pairs])):
+            lam = r.tensions / np.linalg.norm(r.wire_vectors, axis=1)
+            Nn, Kr, _, _ = reduced_stiffness(s, r.com, r.R, lam)
+            Ks = 0.5 * (Kr + Kr.T)
+            M = np.zeros((6, 6))
+            M[:3, :3] = s.mass * np.eye(3)
+            M[3:, 3:] = r.R @ np.asarray(s.inertia, float) @ r.R.T
+            Mr = Nn.T @ M @ Nn
+            w2, Y = md.eigh_generalized(Ks, 0.5 * (Mr + Mr.T))
+            ref = _old_mode_set(Nn, Y, w2, s.mass, M, K=Ks)
+            assert _mode_set_fields(md.linear_modes(s, r))[:2] == _mode_set_fields(ref)[:2]
+            # the batch's own eigenproblem (stacked Cholesky): its arrays, the old mode_set
+            assert [m.label for m in b.modes] == [m.label for m in ref.modes]
+
+
+def _old_matrix_to_quat(R):
+    # rotations.matrix_to_quat before (main at 7b5ff9a): its loop body, Shepperd's method on numpy scalars, is
+    # kept as rotations._shepperd_numpy (the fallback for matrices that are no rotation); the reference of the
+    # Python-float path
+    from bifilar.rotations import _shepperd_numpy
+
+    R = np.asarray(R, dtype=float)
+    flat = R.reshape(-1, 3, 3)
+    out = np.empty((flat.shape[0], 4))
+    for k, m in enumerate(flat):
+        out[k] = _shepperd_numpy(m)
+    out /= np.linalg.norm(out, axis=-1, keepdims=True)
+    return out.reshape(R.shape[:-2] + (4,))
+
+
+def test_matrix_to_quat_on_python_floats_equals_the_one_before():
+    # the batched rest poses take every scene's quaternion (36-50 sigma-point scenes a point): Shepperd's
+    # method on Python floats against the numpy-scalar loop before, bit for bit, on random rotations, the
+    # four branches (turns by ~pi about each axis), exact ties of the trace and a diagonal entry, a -0.0, and
+    # matrices that are no rotation (NaN, a negative root)
+    from bifilar.rotations import matrix_to_quat, rotvec_to_matrix
+
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(300, 3))
+    v *= rng.uniform(0, np.pi, (300, 1)) / np.linalg.norm(v, axis=1, keepdims=True)
+    Rs = list(rotvec_to_matrix(v))
+    for ax in np.eye(3):
+        Rs += list(rotvec_to_matrix(np.array([ax * (np.pi - e) for e in (0.0, 1e-9, 1e-3, 0.3)])))
+    Rs += [np.eye(3), np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0]),
+           np.array([[0.0, -1.0, 0.0], [1.0, 0.0, -0.0], [-0.0, 0.0, 1.0]])]
+    weird = [np.full((3, 3), np.nan), np.diag([-2.0, -3.0, -4.0]), np.zeros((3, 3)), rng.normal(size=(3, 3))]
+    Rs = np.array(Rs)
+    got, ref = matrix_to_quat(Rs), _old_matrix_to_quat(Rs)
+    assert got.tobytes() == ref.tobytes()
+    assert matrix_to_quat(Rs[:6].reshape(2, 3, 3, 3)).tobytes() == ref[:6].tobytes()
+    with np.errstate(all="ignore"):
+        for m in weird:
+            assert np.array_equal(matrix_to_quat(m), _old_matrix_to_quat(m), equal_nan=True)
+
+
+def test_batched_cross_and_skew_written_in_place_equal_the_stacked_ones():
+    # batch_rest._cross and _skew (every batched Newton step and stiffness) fill one array instead of stacking:
+    # the same numbers as np.cross and the nested stacks, bit for bit, signed zeros included
+    from bifilar.analysis.batch_rest import _cross, _skew
+
+    rng = np.random.default_rng(8)
+    u, v = rng.normal(size=(2, 5, 4, 3))
+    u[0, 0] = [0.0, -0.0, 1.0]
+    assert _cross(u, v).tobytes() == np.cross(u, v).tobytes()
+    assert _cross(u[0], v[0, 0]).tobytes() == np.cross(u[0], v[0, 0]).tobytes()  # broadcast
+    z = np.zeros(u.shape[:-1])
+    x, y, w = u[..., 0], u[..., 1], u[..., 2]
+    stacked = np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+    assert _skew(u).tobytes() == stacked.tobytes()
+
+
+def test_scene_with_equals_dataclasses_replace():
+    # perturb, HangingModel.scene and the budget's CoM shift (~60 scenes a point) set a Scene's fields directly
+    # (scene.scene_with) instead of through dataclasses.replace: the same fields, the same objects in them, a
+    # new Scene; a name that is no field raises replace's error
+    from dataclasses import fields, replace
+
+    from bifilar.scene import Scene, scene_with
+
+    base = _scene("solar_boat", {"spacing": 3.0})
+    for changes in ({"mass": 2.5}, {"inertia": np.eye(3)}, {"inertia": np.eye(3), "attachments": base.anchors},
+                    {"lengths": base.lengths * 2, "gravity": 9.0}, {}):
+        got, ref = scene_with(base, **changes), replace(base, **changes)
+        assert type(got) is Scene and got is not base
+        for f in fields(Scene):
+            assert getattr(got, f.name) is getattr(ref, f.name)
+        assert set(vars(got)) == set(vars(ref))  # no attribute besides the fields
+    with pytest.raises(TypeError):
+        scene_with(base, mas=1.0)
+    with pytest.raises(Exception):
+        scene_with(base, mass=1.0).mass = 2.0  # still frozen
+    # perturb through it: the same scene as through replace
+    from bifilar.estimation import sensitivity
+
+    names = ("mass", "gravity", "Izz", "Ixy", "length.2", "anchor.1.y", "attachment.2.z", "com.x")
+    got = [sensitivity.perturb(base, n, 1e-3) for n in names]
+    real = sensitivity.scene_with
+    sensitivity.scene_with = replace
+    try:
+        ref = [sensitivity.perturb(base, n, 1e-3) for n in names]
+    finally:
+        sensitivity.scene_with = real
+    for g, r in zip(got, ref):
+        for f in ("mass", "gravity", "inertia", "anchors", "attachments", "lengths"):
+            assert np.asarray(getattr(g, f)).tobytes() == np.asarray(getattr(r, f)).tobytes()

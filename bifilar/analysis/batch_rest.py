@@ -70,10 +70,15 @@ def _per_group(fn, scenes, *lists, **kw) -> list:
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Cross product over the last axis (faster than np.cross on small batches)."""
+    """Cross product over the last axis (faster than np.cross on small batches;
+    its components written into one array rather than stacked)."""
     ux, uy, uz = u[..., 0], u[..., 1], u[..., 2]
     vx, vy, vz = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx], axis=-1)
+    out = np.empty(np.broadcast_shapes(u.shape, v.shape), np.result_type(u, v))
+    out[..., 0] = uy * vz - uz * vy
+    out[..., 1] = uz * vx - ux * vz
+    out[..., 2] = ux * vy - uy * vx
+    return out
 
 
 def _jacobian(a, p, com, R):
@@ -90,9 +95,17 @@ def _constraints(a, p, L, com, R, ii):
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros(v.shape[:-1])
+    """Cross-product matrices (..., 3, 3) of ``v`` (..., 3), written entry by
+    entry (the values of nested stacks: +0.0 on the diagonal)."""
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+    out = np.zeros(v.shape + (3,), np.result_type(v, 0.0))
+    out[..., 0, 1] = -w
+    out[..., 0, 2] = y
+    out[..., 1, 0] = w
+    out[..., 1, 2] = -x
+    out[..., 2, 0] = -y
+    out[..., 2, 1] = x
+    return out
 
 
 def _hessian(d, w, lam):
@@ -262,9 +275,9 @@ class _LazyDepthRest(RestPose):
     (``dataclasses.replace``): every field must be given."""
 
     def __init__(self, scene: Scene | None = None, **fields):  # noqa: D107 - RestPose's fields, or all but the lazy two
-        for name, v in fields.items():
-            object.__setattr__(self, name, v)
-        object.__setattr__(self, "_scene", scene)
+        d = self.__dict__  # (what object.__setattr__ field by field wrote, in one call)
+        d.update(fields)
+        d["_scene"] = scene
 
     def __getattr__(self, name):  # only called for attributes not yet set: the lazy two
         if name not in _LAZY or "_scene" not in self.__dict__:

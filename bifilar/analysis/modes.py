@@ -106,6 +106,8 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
     N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
     K = 0.5 * (Kr + Kr.T)
+    M0 = np.zeros((6, 6))  # the translational block, the same for every inertia
+    M0[:3, :3] = scene.mass * np.eye(3)
     solved: dict = {}
 
     def modes(inertia) -> ModeSet:
@@ -118,8 +120,7 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
         return ms
 
     def _solve(inertia) -> ModeSet:
-        M = np.zeros((6, 6))
-        M[:3, :3] = scene.mass * np.eye(3)
+        M = M0.copy()
         M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
         if N.shape[1] == 0:
             return ModeSet([], M, N)
@@ -160,8 +161,13 @@ def clusters(w2: np.ndarray, tol) -> list[tuple[int, int]]:
     from the first member, so the grouping does not depend on last-bit noise
     of the others."""
     # Python floats: the same IEEE doubles as numpy's scalars, a tenth of the cost in this loop
-    t = np.broadcast_to(np.asarray(tol, float), np.shape(w2)).tolist()
-    w = np.asarray(w2, float).tolist()
+    tol = np.asarray(tol, float)
+    t = (tol if tol.shape == np.shape(w2) else np.broadcast_to(tol, np.shape(w2))).tolist()
+    return _cluster_ranges(np.asarray(w2, float).tolist(), t)
+
+
+def _cluster_ranges(w: list, t: list) -> list[tuple[int, int]]:
+    """:func:`clusters` of eigenvalues ``w`` and their resolutions ``t`` (Python floats)."""
     out = []
     k = 0
     while k < len(w):
@@ -211,12 +217,14 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
     to the largest eigenvalue applies to all.
     """
     w2 = np.array(w2, float)
-    tol = _noise(w2, np.array(Y, float), K)
+    Y = np.array(Y, float)
+    tol = _noise(w2, Y, K)
     groups = clusters(w2, tol)
-    Y = _align_degenerate(N, np.array(Y, float), w2, tol, groups)
-    for a, b in groups:
-        if b - a > 1:  # (the mean of one number is that number)
-            w2[a:b] = np.mean(w2[a:b])
+    if len(groups) < len(w2):  # a cluster of two or more
+        Y = _align_degenerate(N, Y, w2, tol, groups)
+        for a, b in groups:
+            if b - a > 1:  # (the mean of one number is that number)
+                w2[a:b] = np.mean(w2[a:b])
     S = N @ Y
     absS = np.abs(S)
     # first component within 1e-9 of the largest: independent of last-bit noise
@@ -240,16 +248,24 @@ def _assemble(S, share, w2, zero, periods, i, M, N) -> ModeSet:
     arrays (shapes S (6, k), energy shares (6, k), omega^2, neutral flags,
     periods, index of each shape's unit component): ordered slowest first,
     neutral last, ties by the dominant world component; labelled."""
-    dom_e = np.argmax(share, axis=0)
-    order = sorted(range(len(w2)), key=lambda j: (-(periods[j] if not zero[j] else -1.0), int(dom_e[j])))
+    # Python numbers of the small arrays (the same doubles; no numpy scalar per access)
+    return _assemble_lists(S, share, np.argmax(share, axis=0).tolist(), periods.tolist(), zero.tolist(), w2.tolist(),
+                           i.tolist(), M, N)
+
+
+def _assemble_lists(S, share, dom_e, P, Z, W, I, M, N) -> ModeSet:
+    """:func:`_assemble` with the dominant components, periods, neutral flags,
+    omega^2 and unit-component indices as Python lists (the batch converts
+    all its scenes' at once)."""
+    order = sorted(range(len(W)), key=lambda j: (-(P[j] if not Z[j] else -1.0), dom_e[j]))
     seen: dict[str, int] = {}
     modes = []
     for j in order:
         base = _BASE_LABEL[COMPONENTS[dom_e[j]]]
         c = seen.get(base, 0) + 1
         seen[base] = c
-        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if zero[j] else float(periods[j]), float(w2[j]),
-                          S[:, j].copy(), share[:, j].copy(), int(i[j])))
+        modes.append(Mode(base if c == 1 else f"{base}-{c}", None if Z[j] else P[j], W[j],
+                          S[:, j].copy(), share[:, j].copy(), I[j]))
     return ModeSet(modes, M, N)
 
 
@@ -262,26 +278,32 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     resolution, clusters, ``N @ Y`` and energy-share sums are the very
     calls :func:`mode_set` makes on it; only elementwise operations and
     maxima, exact in any order, run on the whole batch.  A scene with a
-    degenerate cluster goes through :func:`mode_set` itself.  ``which``:
+    degenerate cluster has its cluster aligned (:func:`_align_degenerate`)
+    and its eigenvalues set to the cluster means scene by scene, as
+    :func:`mode_set` does, and joins the batch from there.  ``which``:
     the scenes to do (indices; the others' entries are None), default all.
     Each ModeSet holds ``N[b]`` and ``M[b]`` (views) as :func:`mode_set`
     given them does."""
     B = len(w2)
     out: list = [None] * B
-    rows, S, tols = [], [], []
+    rows, S, tols, ws = [], [], [], []
     for b in (range(B) if which is None else which):
         wb, Yb = np.array(w2[b], float), np.array(Y[b], float)
         tol = _noise(wb, Yb, K[b])
-        if any(j - a > 1 for a, j in clusters(wb, tol)):
-            out[b] = mode_set(N[b], Y[b], w2[b], mass[b], M[b], K=K[b])
-            continue
+        groups = _cluster_ranges(wb.tolist(), tol.tolist())  # clusters(wb, tol)
+        if len(groups) < len(wb):  # mode_set's steps before N @ Y, on this scene alone
+            Yb = _align_degenerate(N[b], Yb, wb, tol, groups)
+            for a, j in groups:
+                if j - a > 1:
+                    wb[a:j] = np.mean(wb[a:j])
         rows.append(b)
         S.append(N[b] @ Yb)
         tols.append(tol)
+        ws.append(wb)
     if not rows:
         return out
     S = np.array(S)  # (R, 6, k)
-    w2r = np.array(w2, float)[rows]
+    w2r = np.array(ws)
     tol = np.array(tols)
     absS = np.abs(S)
     i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (R, k)
@@ -293,8 +315,9 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     scale = np.maximum(np.max(np.abs(w2r), axis=1), 1e-300)
     zero = (np.abs(w2r) <= np.maximum(tol, NEUTRAL_RTOL * scale[:, None])) | (w2r <= 0)
     periods = np.where(zero, np.nan, 2 * np.pi / np.sqrt(np.where(zero, 1.0, w2r)))
-    for q, b in enumerate(rows):
-        out[b] = _assemble(S[q], share[q], w2r[q], zero[q], periods[q], i[q], M[b], N[b])
+    dom, P, Z, W, I = np.argmax(share, axis=1).tolist(), periods.tolist(), zero.tolist(), w2r.tolist(), i.tolist()
+    for q, b in enumerate(rows):  # (_assemble of each scene, its lists converted for all at once)
+        out[b] = _assemble_lists(S[q], share[q], dom[q], P[q], Z[q], W[q], I[q], M[b], N[b])
     return out
 
 
@@ -311,15 +334,17 @@ def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol, groups=
         if j - k < 2:
             continue
         S = N @ Y[:, k:j]  # (6, c)
-        T = S.copy()
+        T = S
         rows: list[int] = []
-        for _ in range(j - k):
-            norms = np.linalg.norm(T, axis=1)
+        for step in range(j - k):
+            norms = np.sqrt(np.add.reduce(T * T, axis=1))  # np.linalg.norm(T, axis=1): its operations
             norms[rows] = -1.0
             r = int(np.argmax(norms >= (1 - 1e-6) * norms.max()))
             rows.append(r)
-            v = T[r] / np.linalg.norm(T[r])
-            T = T - np.outer(T @ v, v)
+            if step < j - k - 1:  # (the last pick's projection is never read)
+                t = T[r]
+                v = t / np.sqrt(t.dot(t))  # np.linalg.norm(t): its operations
+                T = T - (T @ v)[:, None] * v[None, :]  # np.outer's product
         Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
     return Y
 

@@ -167,7 +167,62 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True, unkn
     return scene
 
 
+#: bodies built from parts, by :func:`_spec_key` of the parts list: a sweep over rig parameters builds
+#: one scene a point from the same parts (~0.5 ms a Solar Boat or drone body); at most this many kept
+_BODY_CACHE_SIZE = 16
+_body_cache: dict = {}
+
+
+def _spec_key(spec: Any):
+    """A hashable key equal for two parts lists exactly when they hold the same
+    plain YAML values (mappings with string keys, in the same order; every
+    float by its ``repr``, which tells -0.0 from 0.0 and round-trips; each
+    value's type too, so 1 and 1.0 differ), or None when ``spec`` holds
+    anything else (a numpy array, whose ``repr`` rounds: not cached)."""
+    t = type(spec)
+    if t is float:
+        return repr(spec)
+    if t is str or t is int or t is bool or spec is None:
+        return (t, spec)
+    if t is dict:
+        out = [dict]
+        for k, v in spec.items():
+            kv = _spec_key(v)
+            if kv is None or type(k) is not str:
+                return None
+            out += (k, kv)
+        return tuple(out)
+    if t is list or t is tuple:
+        out = [t]
+        for v in spec:
+            kv = _spec_key(v)
+            if kv is None:
+                return None
+            out.append(kv)
+        return tuple(out)
+    return None
+
+
 def _body_from_parts(spec: Any, chk: _Checker):
+    """(mass kg, inertia (3, 3) kg m^2 about the parts' CoM, support
+    function, the parts' CoM (3,) m in the parts frame) of a ``body.parts``
+    list, or Nones with the problems entered in ``chk``.  A list built
+    before (the same values, :func:`_spec_key`) returns the body built then
+    (copies of its arrays; the same support function): the same numbers."""
+    key = _spec_key(spec)
+    hit = _body_cache.get(key) if key is not None else None
+    if hit is None:
+        hit = _build_body_from_parts(spec, chk)
+        if key is None or hit[0] is None:
+            return hit
+        if len(_body_cache) >= _BODY_CACHE_SIZE:
+            _body_cache.pop(next(iter(_body_cache)))
+        _body_cache[key] = hit
+    mass, I, support, com = hit
+    return mass, I.copy(), support, com.copy()
+
+
+def _build_body_from_parts(spec: Any, chk: _Checker):
     from .. import parts as P  # local import: parts are optional
 
     if not isinstance(spec, (list, tuple)) or len(spec) == 0:

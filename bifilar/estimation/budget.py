@@ -42,11 +42,12 @@ search; docs/invert.md, "Degenerate scenes", for what is still open).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError
+from ..scene import scene_with
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
 from .sensitivity import input_sigma, mac_match, mac_matches, measured_inputs, perturb
@@ -112,7 +113,7 @@ def _perturbed_scene(pb: Problem, h: int, scene, moves):
         if key.startswith("com."):
             v = np.zeros(3)
             v["xyz".index(key[-1])] = d
-            scene = replace(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
+            scene = scene_with(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
         else:
             scene = perturb(scene, key.split(":", 1)[1] if len(pb.models) > 1 and ":" in key else key, d)
     return scene

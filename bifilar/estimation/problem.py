@@ -18,7 +18,7 @@ import numpy as np
 from ..analysis.equilibrium import rest_pose
 from ..analysis.modes import modes_of_inertia
 from ..errors import BifilarError, InputError
-from ..scene import TRIANGLE_SLACK, Scene, obeys_triangle
+from ..scene import TRIANGLE_SLACK, Scene, obeys_triangle, scene_with
 from .measurements import COM_UNKNOWNS, SOLVABLE, MeasurementSet
 from .sensitivity import INERTIA_COMPONENTS, mac_match
 from .uncertainty import default_uncertainty
@@ -224,8 +224,8 @@ class HangingModel:
         d = np.array([values.get(c, 0.0) for c in COM_UNKNOWNS])
         if np.any(d):
             att = self.scene0.attachments - (self.R @ d)[None, :]
-            return replace(self.scene0, inertia=I, attachments=att)
-        return replace(self.scene0, inertia=I)
+            return scene_with(self.scene0, inertia=I, attachments=att)
+        return scene_with(self.scene0, inertia=I)
 
     def locate(self, scene: Scene):
         """(rest, modes, match) with ``match[k]`` the index of base mode k.

@@ -24,13 +24,13 @@ coincidence) are not confused.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..analysis.equilibrium import RestPose, rest_pose
 from ..analysis.modes import ModeSet, linear_modes
-from ..scene import Scene
+from ..scene import Scene, scene_with
 
 INERTIA_COMPONENTS = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 _IDX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
@@ -55,24 +55,24 @@ def perturb(scene: Scene, name: str, delta: float) -> Scene:
         I[i, j] += delta
         if i != j:
             I[j, i] += delta
-        return replace(scene, inertia=I)
+        return scene_with(scene, inertia=I)
     if name == "mass":
-        return replace(scene, mass=scene.mass + delta)
+        return scene_with(scene, mass=scene.mass + delta)
     if name == "gravity":
-        return replace(scene, gravity=scene.gravity + delta)
+        return scene_with(scene, gravity=scene.gravity + delta)
     parts = name.split(".")
     if parts[0] == "length":
         L = scene.lengths.copy()
         L[int(parts[1]) - 1] += delta
-        return replace(scene, lengths=L)
+        return scene_with(scene, lengths=L)
     if parts[0] in ("anchor", "attachment"):
         arr = (scene.anchors if parts[0] == "anchor" else scene.attachments).copy()
         arr[int(parts[1]) - 1, _AX[parts[2]]] += delta
-        return replace(scene, **{"anchors" if parts[0] == "anchor" else "attachments": arr})
+        return scene_with(scene, **{"anchors" if parts[0] == "anchor" else "attachments": arr})
     if parts[0] == "com":
         arr = scene.attachments.copy()
         arr[:, _AX[parts[1]]] -= delta
-        return replace(scene, attachments=arr)
+        return scene_with(scene, attachments=arr)
     raise KeyError(f"unknown input {name!r}")
 
 
