@@ -338,17 +338,17 @@ def test_start_pose_hessian_in_one_evaluation_equals_one_displacement_at_a_time(
 
 def _health_window(monkeypatch, name):
     """The arguments of one LSODA window's ``sample_health`` call in a point-like run."""
-    import bifilar.analysis.batch as bt
+    import bifilar.analysis.batch_lsoda as bl
 
     cap = []
-    real = bt.sample_health
-    monkeypatch.setattr(bt, "sample_health", lambda *a, **k: (cap.append(a), real(*a, **k))[1])
+    real = bl.sample_health
+    monkeypatch.setattr(bl, "sample_health", lambda *a, **k: (cap.append(a), real(*a, **k))[1])
     s = _scene(name, {})
     rest = rest_pose(s)
     ms = linear_modes(s, rest)
     simulate_batch(s, mode=next(m for m in ms.modes if m.period).label, amplitude=0.05, periods=3.0, rtol=1e-8,
                    rests=[rest], modes=[ms])
-    monkeypatch.setattr(bt, "sample_health", real)
+    monkeypatch.setattr(bl, "sample_health", real)
     return s, cap[-1]
 
 
@@ -390,10 +390,10 @@ def test_sample_health_ignores_masked_samples_and_reads_the_tensions(name, monke
 def test_runs_of_one_scene_take_their_samples_through_crossings_and_health_together(name, monkeypatch):
     """A point's LSODA runs (one scene, one rest pose, one length) are each
     integrated as alone and their samples go through the crossings and the
-    health in one pass (``batch._lsoda_joint``): every figure the run
+    health in one pass (``batch_lsoda._lsoda_joint``): every figure the run
     alone gives, bit for bit; runs of different lengths (or that fail) are
     taken one by one, with the same figures."""
-    import bifilar.analysis.batch as bt
+    import bifilar.analysis.batch_lsoda as bl
     from bifilar.analysis.batch import run_one
 
     s = _scene(name, {"spacing": 3.0} if name != "trifilar_kth" else {})
@@ -401,7 +401,7 @@ def test_runs_of_one_scene_take_their_samples_through_crossings_and_health_toget
     ms = linear_modes(s, rest)
     modes = [m for m in ms.modes if m.period][:3]
     for periods in ([3.0, 3.0, 3.0], [3.0, 2.0, 3.0]):
-        passes = _counting(monkeypatch, bt, "sample_health")
+        passes = _counting(monkeypatch, bl, "sample_health")
         runs = simulate_batch([s] * 3, mode=[m.label for m in modes], amplitude=0.05, periods=periods, rtol=1e-8,
                               rests=[rest] * 3, modes=[ms] * 3)
         assert len(passes) == (1 if periods[0] == periods[1] else 3)
@@ -416,7 +416,7 @@ def test_joint_runs_with_a_slack_wire_equal_the_runs_alone(on_slack, monkeypatch
     trifilar of tests/test_batch.py, wire 1 unloaded by a 0.6 m swing):
     slack times, a run stopped there (``on_slack="stop"``) and the figures
     of each run alone, bit for bit."""
-    import bifilar.analysis.batch as bt
+    import bifilar.analysis.batch_lsoda as bl
     from bifilar.analysis.batch import run_one
 
     ang = np.radians([0, 120, 240])
@@ -426,7 +426,7 @@ def test_joint_runs_with_a_slack_wire_equal_the_runs_alone(on_slack, monkeypatch
                                  "lengths": [2.0] * 3}})
     rest = rest_pose(s)
     ms = linear_modes(s, rest)
-    passes = _counting(monkeypatch, bt, "sample_health")
+    passes = _counting(monkeypatch, bl, "sample_health")
     runs = simulate_batch([s, s], mode=["swing-x", "swing-y"], amplitude=0.6, periods=3.0, rtol=1e-9,
                           rests=[rest] * 2, modes=[ms] * 2, on_slack=on_slack)
     assert len(passes) == 1 and runs[0].slack

@@ -22,10 +22,14 @@ integration tolerance:
   LSODA (``scipy.integrate.odeint``: the step loop in Fortran) on one scene
   -- on Python floats, no array overhead -- or on the whole group stacked
   into one ODE in normalised time with tolerances divided by sqrt(B), so
-  each scene keeps the error bound it would have alone; and the project's
+  each scene keeps the error bound it would have alone
+  (:mod:`bifilar.analysis.batch_lsoda`); and the project's
   DOP853 (:mod:`bifilar.integrators`) with a step size and error test of
   its own for every scene (crossings on its order-7 dense output), fastest
-  for large groups.
+  for large groups (:mod:`bifilar.analysis.batch_dop853`).  This module
+  checks the inputs, groups the scenes by wire count, solves their start
+  poses, picks the engine, and builds each scene's :class:`SceneRun` from
+  the health the engine gathered (:mod:`bifilar.analysis.batch_health`).
 
 How to call it (sweeps, Monte Carlo, amplitude ladders)::
 
@@ -53,11 +57,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .. import integrators as itg
 from ..errors import InputError
 from ..models import maximal as mx
 from ..scene import Scene
-from .batch_health import Health, LowestPoint, SharedLowestPoint, merge_refined, refine_extremes, sample_health
+from .batch_dop853 import _dop853, _health_at_dense_samples
+from .batch_health import Health, LowestPoint, SharedLowestPoint
+from .batch_lsoda import _BatchFailed, _lsoda, _lsoda_joint, _NotJoint
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
@@ -193,12 +198,6 @@ def _coordinate_vector(dom: int, q0: np.ndarray) -> np.ndarray:
     }
     e[3:7] = rows[dom]
     return e
-
-
-def _h0(T_ref: np.ndarray, rtol: np.ndarray) -> np.ndarray:
-    """First step, s: about the step the controller settles on (DOP853 takes
-    ~15-40 steps per period at rtol 1e-8..1e-12), a little smaller."""
-    return T_ref * 0.2 * np.asarray(rtol) ** 0.125
 
 
 def simulate_batch(
@@ -418,9 +417,10 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     as it runs alone (its own ODE, on floats), in input order.  Runs of one
     scene from one rest pose (a sweep point's modes) share its parameters
     and compiled kernels and, on LSODA with one length and no samples
-    kept, have their samples processed together (:func:`_lsoda_joint`);
-    every run's lowest point goes into one fold at the end (one
-    support-function call a body).  The same figures, bit for bit, as each
+    kept, have their samples processed together
+    (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`); every run's
+    lowest point goes into one fold at the end (one support-function call a
+    body).  The same figures, bit for bit, as each
     run alone (tests/test_run_cost.py, tests/test_batch_determinism.py)."""
     Bn = len(scenes)
     out: list = [None] * Bn
@@ -473,7 +473,8 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     ``depth_max`` are then left NaN for the caller to fill in from the
     shared fold).  ``joint``: LSODA runs of one scene and one length, each
     integrated as alone, their samples processed together
-    (:func:`_lsoda_joint`; raises :class:`_NotJoint` where that does not
+    (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`; raises
+    :class:`~bifilar.analysis.batch_lsoda._NotJoint` where that does not
     apply)."""
     Bn = len(scenes)
     if method == "auto":
@@ -543,35 +544,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             dense_times = [np.linspace(0.0, te, max(int(spp * te / tr), 200) + 1) for te, tr in zip(t_end, T_ref)]
         obs = Health(Bn, n, e, P.mass, P.gravity, P.inertia, L2, on_slack, lowest, progress, t_end,
                      dense_times, health=health, refine_steps=not stacked)
-        h0 = _h0(T_ref, rt)
-        if Bn == 1 and not stacked:
-            nfev, nsteps, status, msg = _single(P.take(0), ys0[0], float(t_end[0]), float(rt[0]), at[:, 0],
-                                                float(h0[0]), obs, on_slack)
-            nfev, nsteps, status, msgs = np.array([nfev]), np.array([nsteps]), np.array([status]), {0: msg} if msg else {}
-        else:
-            def make_f(idx):
-                return mx.compiled_kernel(P.take(idx), extras=True)
-
-            run = itg.integrate_batch(make_f, ys0.T, t_end, rt, at, h0, obs)
-            nfev, nsteps, status, msgs = run.nfev, run.nsteps, run.status, run.messages
-            obs.t_final[:] = run.t
-            obs.y_final[:] = run.y.T
+        nfev, nsteps, status, msgs = _dop853(P, ys0, T_ref, t_end, rt, at, obs, on_slack, stacked)
     if method == "dop853" and obs.samples is not None and health:
-        # tensions at the requested samples too (a finer resolution of the extremes)
-        for b in range(Bn):
-            if obs.samples[b]:
-                ts_ = np.concatenate([p_[0] for p_ in obs.samples[b]])
-                ys_ = np.concatenate([p_[1] for p_ in obs.samples[b]])
-                out_ = mx.compiled_kernel(P.take(b), extras=True)(*ys_.T)
-                lam_ = np.array(np.broadcast_arrays(*out_[13:13 + n]))
-                phi_ = np.array(np.broadcast_arrays(*out_[13 + n:13 + 2 * n]))
-                T_ = -lam_ * np.sqrt(L2[:, b:b + 1] + 2 * phi_)  # (n, k)
-                obs.Tmin[b] = np.minimum(obs.Tmin[b], T_.min(axis=1))
-                obs.Tmax[b] = np.maximum(obs.Tmax[b], T_.max(axis=1))
-                merge_refined(obs, np.array([b]), *refine_extremes(ts_[:, None], T_[:, :, None]))
-                # the energy at the samples too (dense output: interpolation error included)
-                E_ = obs._energy(np.full(len(ts_), b), ys_.T)
-                obs.dE[b] = max(obs.dE[b], float(np.max(np.abs(E_ - obs.E0[b]))))
+        _health_at_dense_samples(obs, P, L2, n)
     runtime = (time.perf_counter() - t_start) / Bn
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
@@ -613,277 +588,3 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             warnings=warnings, method=_METHOD_NAME[method],
         ))
     return out
-
-
-def _single(P1: mx.RigParams, y0, t_end, rtol, atol, h0, obs: Health, on_slack: str):
-    """One scene on Python floats; the observer is fed afterwards, in one
-    vectorised pass over the accepted steps."""
-    k = mx.compiled_kernel(P1, extras=True)
-    n = int(P1.lengths.shape[-1])
-    stop = None
-    if on_slack == "stop":
-        L2 = P1.lengths**2
-
-        def stop(t, y, ext):
-            lam = np.asarray(ext[:n])
-            return bool(np.any(-lam * np.sqrt(L2 + 2.0 * np.asarray(ext[n:2 * n])) <= 0))
-
-    run = itg.integrate_single(k, y0, t_end, rtol, atol, h0, stop=stop)
-    idx0 = np.zeros(1, int)
-    Y = run.y.T  # (13, k+1)
-    obs.start(idx0, Y[:, :1], run.ext[:1].T)
-    if len(run.t) > 1:
-        # all steps at once: health over the steps; crossings located step by step
-        ns = len(run.t) - 1
-        idx = np.zeros(ns, int)
-        e = obs.e[:, 0]
-        c = e @ Y
-        up = np.nonzero((c[:-1] < 0) & (c[1:] >= 0))[0]
-        if obs.health:
-            _single_health(obs, run, idx, idx0, Y, n, ns)
-        if obs.lowest is not None:
-            obs.lowest.add_states(idx, Y[:, 1:])
-        steps = set(up.tolist())
-        samp_step = None
-        if obs.samples is not None:
-            ts = obs.dense_times[0]
-            ts = ts[(ts > 0) & (ts <= run.t[-1])]
-            samp_step = np.clip(np.searchsorted(run.t, ts, side="left") - 1, 0, ns - 1)
-            steps |= set(samp_step.tolist())
-        for jstep in sorted(steps):
-            F = run.dense(k, jstep)
-            if jstep in up:
-                Fc = (e @ F.reshape(7, 13).T)[:, None]
-                x = itg.crossing_on_step(Fc, np.array([c[jstep]]), np.array([c[jstep + 1]]))
-                obs.cross[0].append(float(run.t[jstep] + x[0] * (run.t[jstep + 1] - run.t[jstep])))
-            if samp_step is not None:
-                sel = ts[samp_step == jstep]
-                if len(sel):
-                    x = (sel - run.t[jstep]) / (run.t[jstep + 1] - run.t[jstep])
-                    ys = itg.dense_eval(F[:, :, None], run.y[jstep][:, None], x[None, :]).T
-                    obs.samples[0].append((sel, ys))
-        obs.cross[0].sort()
-    obs.t_final[0] = run.t[-1]
-    obs.y_final[0] = run.y[-1]
-    return run.nfev, len(run.t) - 1, run.status, run.message
-
-
-def _single_health(obs: Health, run, idx, idx0, Y, n: int, ns: int) -> None:
-    """Health over all accepted steps of a one-scene run at once."""
-    E = obs._energy(idx, Y[:, 1:])
-    obs.dE[0] = np.max(np.abs(E - obs.E0[0]))
-    T, v = obs._tension_viol(idx, run.ext[1:].T)
-    obs.viol[0] = max(obs.viol[0], float(v.max()))
-    obs.Tmin[0] = np.minimum(obs.Tmin[0], T.min(axis=1))
-    obs.Tmax[0] = np.maximum(obs.Tmax[0], T.max(axis=1))
-    for i in range(n):
-        neg = np.nonzero(T[i] <= 0)[0]
-        if len(neg):
-            obs.slack_t[0, i] = run.t[neg[0] + 1]
-    T_all = obs._tension_viol(np.zeros(ns + 1, int), run.ext.T)[0]  # (n, k+1) including t = 0
-    merge_refined(obs, idx0, *refine_extremes(run.t[:, None], T_all[:, :, None]))
-
-
-def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0,
-           health: bool, on_slack: str, progress, P1: mx.RigParams | None = None):
-    """The whole group as one ODE in normalised time tau = t / T_ref (every
-    scene oscillates at ~1 per unit tau, so one step sequence suits all; a
-    single scene in physical time, which is the same ODE without the scaling),
-    integrated by LSODA (:func:`scipy.integrate.odeint`: the step loop runs in
-    Fortran, only the compiled right-hand side is Python).
-
-    Per-scene accuracy: LSODA's error test bounds the root-mean-square of
-    the weighted local errors of all 13 B components; dividing rtol and
-    atol by sqrt(B) makes every scene's own weighted RMS error obey the
-    bound it would have alone (RMS over 13 <= sqrt(B) x RMS over 13 B).
-    The state is stored scene-major, so the Jacobian is banded (12 + 12) if
-    LSODA ever switches to its stiff method.
-
-    Samples at ``spp`` per period feed the crossings (degree-7 local
-    interpolation, :func:`~bifilar.integrators.sampled_crossings`) and,
-    with ``health``, the constraint violation, energy drift, tensions and
-    lowest point.  Long runs go in windows so memory stays ~50 MB.
-    """
-    from scipy.integrate import odeint
-
-    Bn = len(T_ref)
-    n = int(P.lengths.shape[-1])
-    sq = np.sqrt(Bn)
-    rte = rtol / sq
-    ate = (at / sq).T.ravel()  # scene-major
-    if Bn == 1:  # in physical time t = tau T: the kernel itself is odeint's f(y, t) (no wrapper, no scaling)
-        # kept samples: their physical tensions from the health's kernel pass (SceneRun.tensions)
-        physical = health and obs.samples is not None
-        f, kx = _one_scene_kernels(P.take(0) if P1 is None else P1, physical)
-        if physical:
-            obs.sample_tensions = [[]]
-        tscale = float(T_ref[0])
-    else:
-        kb = mx.compiled_kernel(P)
-        Tcol = T_ref[:, None]
-        tscale = 1.0
-
-        def f(y, tau):
-            out = kb(*y.reshape(Bn, 13).T)
-            return (np.array(out).T * Tcol).ravel()
-        kx = mx.compiled_kernel(P, extras=True)
-    tau_end, K_total, taus = _sample_grid(pers, spp)
-    stop_tau = pers.astype(float).copy()  # per-scene end (earlier if a wire goes slack and on_slack == "stop")
-    chunk = _window_samples(spp, Bn)
-    y = ys0.ravel().copy()
-    tail_c = None  # last 7 samples of the previous window (crossing stencils)
-    nfe = nst = 0
-    status = np.zeros(Bn, int)
-    msgs: dict = {}
-    first = True
-    k0 = 0
-    cross_cols, cross_t = [], []
-    while k0 < K_total:
-        k1_ = min(K_total, k0 + chunk)
-        tt = taus[k0:k1_ + 1]
-        Y, info = odeint(f, y, tt * tscale, rtol=rte, atol=ate, full_output=True, mxstep=100000, ml=12, mu=12)
-        message = info["message"]
-        if message == "Integration successful." and not np.all(np.isfinite(Y)):
-            message = "the solution is not finite (NaN or inf)"
-        if message != "Integration successful.":
-            if Bn > 1:
-                raise _BatchFailed(message)
-            status[0] = -1
-            msgs[0] = f"LSODA: {message}"
-            good = np.nonzero(np.all(np.isfinite(Y), axis=1))[0]
-            Y = Y[: (good[-1] + 1) if len(good) else 1]
-            tt = tt[: len(Y)]
-            stop_tau[0] = min(stop_tau[0], tt[-1])
-        nfe += int(info["nfe"][-1]) if len(info["nfe"]) else 0
-        nst += int(info["nst"][-1]) if len(info["nst"]) else 0
-        y = Y[-1].copy()
-        Ys = Y.reshape(len(tt), Bn, 13)
-        if not first:  # the window's first sample repeats the previous window's last
-            Ys, tt = Ys[1:], tt[1:]
-        tail_c = _window(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first, health, spp, tail_c,
-                         cross_cols, cross_t)
-        if progress is not None:
-            progress(min(float(tt[-1]) / tau_end, 1.0), 1.0)
-        first = False
-        k0 = k1_
-        if status[0] == -1 and Bn == 1:
-            break
-    _close(obs, tt, y.reshape(Bn, 13), stop_tau, T_ref, pers, status, cross_cols, cross_t)
-    return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
-
-
-def _one_scene_kernels(P1: mx.RigParams, physical: bool = False):
-    """(odeint's ``f(y, t)``, the health's kernel with extras) of one scene's
-    float parameters ``P1`` (the kernels cached on it): what :func:`_lsoda`
-    integrates a scene alone with, and :func:`_lsoda_joint` each of its runs.
-    ``physical``: the health's kernel also gives the unstabilised multipliers
-    (the record's tensions, :func:`~bifilar.analysis.batch_health.sample_health`)."""
-    kx = mx.compiled_kernel(P1, extras=True, physical=physical, derivatives=False)  # sample_health reads the extras
-    return mx.compiled_kernel(P1, signature="odeint"), mx.chunked(kx, first=13)  # the samples' extras, chunked
-
-
-def _sample_grid(pers, spp: int):
-    """(tau_end, K, taus (K + 1,)): the LSODA engine's sample times in
-    normalised time, ``spp`` a period, up to the longest run."""
-    tau_end = float(np.max(pers))
-    K_total = int(np.ceil(tau_end * spp - 1e-9))
-    taus = np.arange(K_total + 1) / spp
-    taus[-1] = min(taus[-1], tau_end) if K_total else tau_end
-    return tau_end, K_total, taus
-
-
-def _window_samples(spp: int, Bn: int) -> int:
-    """Samples a window of the LSODA engine holds (~50 MB of states)."""
-    return max(4 * spp, int(4e6 / (13 * Bn)))
-
-
-def _window(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first, health, spp, tail_c, cross_cols,
-            cross_t):
-    """The crossings (appended to ``cross_cols``, ``cross_t``), health and
-    kept samples of one window of the LSODA engine: Ys (k, B, 13) at
-    normalised times tt (k,); returns the tail the next window's crossing
-    stencils need."""
-    # crossings of the timed coordinate
-    c = np.einsum("kbm,mb->kb", Ys, obs.e)
-    cc = c if tail_c is None else np.concatenate([tail_c, c])
-    base = 0 if tail_c is None else len(tail_c)
-    tau0 = tt[0] - base / spp
-    col, tx, kl = itg.sampled_crossings(cc, 1.0 / spp)
-    keep = kl >= base - 1  # pairs ending in this window (earlier ones were found before)
-    cross_cols.append(col[keep])
-    cross_t.append(tx[keep] + tau0)
-    Tp = None
-    if health:
-        Tp = sample_health(Ys, tt, obs, kx, n, com0, T_ref, stop_tau, on_slack, first,
-                           physical=obs.sample_tensions is not None)
-    if obs.samples is not None:
-        for b in range(Ys.shape[1]):
-            sel = tt <= stop_tau[b] + 1e-12
-            if np.any(sel):
-                obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :].copy()))  # com0 added at the end
-                if Tp is not None:
-                    obs.sample_tensions[b].append(Tp[:, sel, b].T)
-    return cc[-7:]
-
-
-def _close(obs: Health, tt, y_last, stop_tau, T_ref, pers, status, cross_cols, cross_t) -> None:
-    """End of the LSODA engine's runs: final times and states, each scene's
-    crossings (s) up to its end, status 1 for a run stopped early."""
-    obs.t_final[:] = np.minimum(tt[-1], stop_tau) * T_ref
-    obs.y_final[:] = y_last
-    cols = np.concatenate(cross_cols) if cross_cols else np.zeros(0, int)
-    tcs = np.concatenate(cross_t) if cross_t else np.zeros(0)
-    for b in range(len(T_ref)):
-        sel = tcs[cols == b]
-        obs.cross[b] = list(np.sort(sel[sel <= stop_tau[b] + 1e-12]) * T_ref[b])
-        if stop_tau[b] < pers[b] - 1e-12 and status[b] == 0:
-            status[b] = 1
-
-
-def _lsoda_joint(P1: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0, health: bool,
-                 on_slack: str):
-    """Runs of one scene (its float parameters ``P1``: one compiled kernel
-    for all), each integrated as :func:`_lsoda` integrates a scene alone
-    (its own ODE in physical time, the same odeint call: the same steps and
-    samples, bit for bit), their samples then taken through the crossings
-    and the health together: one pass of numpy calls for the 2-3 runs of a
-    sweep point instead of one a run, row by row the same expressions
-    (tests/test_run_cost.py, tests/test_batch_determinism.py).  Needs runs
-    of one length in one window of samples that all succeed: else raises
-    :class:`_NotJoint` before anything is recorded (the caller runs them
-    one by one)."""
-    from scipy.integrate import odeint
-
-    Bn = len(T_ref)
-    n = int(P1.lengths.shape[-1])
-    if np.any(pers != pers[0]):
-        raise _NotJoint
-    tau_end, K_total, taus = _sample_grid(pers, spp)
-    if not 0 < K_total <= _window_samples(spp, 1):
-        raise _NotJoint
-    f, kx = _one_scene_kernels(P1)
-    Ys = np.empty((K_total + 1, Bn, 13))
-    nfe, nst = np.zeros(Bn, int), np.zeros(Bn, int)
-    for b in range(Bn):
-        Y, info = odeint(f, ys0[b].copy(), taus * float(T_ref[b]), rtol=rtol, atol=np.ascontiguousarray(at[:, b]),
-                         full_output=True, mxstep=100000, ml=12, mu=12)
-        if info["message"] != "Integration successful." or not np.all(np.isfinite(Y)):
-            raise _NotJoint
-        Ys[:, b] = Y
-        nfe[b] = int(info["nfe"][-1]) if len(info["nfe"]) else 0
-        nst[b] = int(info["nst"][-1]) if len(info["nst"]) else 0
-    stop_tau = pers.astype(float).copy()
-    cross_cols: list = []
-    cross_t: list = []
-    status = np.zeros(Bn, int)
-    _window(Ys, taus, obs, kx, n, com0, T_ref, stop_tau, on_slack, True, health, spp, None, cross_cols, cross_t)
-    _close(obs, taus, Ys[-1], stop_tau, T_ref, pers, status, cross_cols, cross_t)
-    return nfe, nst, status, {}
-
-
-class _BatchFailed(Exception):
-    pass
-
-
-class _NotJoint(Exception):
-    """Runs :func:`_lsoda_joint` cannot take together (run them one by one)."""
