@@ -559,6 +559,24 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
     return cols, sigmas, degenerate, scenes, rests, modes, matches
 
 
+def _unknowns_jacobian(pb: Problem, p_hat, cache: dict | None = None) -> np.ndarray:
+    """(K, P) d T_lin / d p of the measured modes at ``p_hat``: the
+    analytic derivative where ``cache`` holds one for this scene (a sweep
+    point's, :func:`bifilar.estimation.honest._seed_sensitivity`: one
+    hanging in body axes, inertia unknowns, {mode label: dT/dI} per
+    component), else :meth:`~bifilar.estimation.problem.Problem.jacobian`
+    (central differences).  The two differ by the differences' truncation
+    and rounding error (~1e-9 relative; docs/performance.md, session 6)."""
+    if cache is not None and len(pb.models) == 1 and all(n in _IDX for n in pb.unknowns):
+        hm = pb.models[0]
+        skey = scene_key(hm.scene(pb.values(p_hat)))
+        cols = [cache.get(("period jacobian", skey, n)) for n in pb.unknowns]
+        labels = [hm.modes0.modes[pb.mode_index[k]].label for k in range(len(pb.measurements))]
+        if all(c is not None and all(lab in c for lab in labels) for c in cols):
+            return np.array([[c[lab] for c in cols] for lab in labels], float).reshape(len(labels), len(cols))
+    return pb.jacobian(p_hat)
+
+
 def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None):
     """Linear budget at the estimate; returns (LinearBudget, degenerate
     inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
@@ -567,7 +585,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
-    Jp = pb.jacobian(p_hat) * r_hat[:, None]
+    Jp = _unknowns_jacobian(pb, p_hat, cache) * r_hat[:, None]
     sig = np.array([m.std for m in pb.measurements])
     multi = len(pb.models) > 1
     cols, sigmas, degenerate, scenes, rests, modes, matches = input_columns(pb, vals, r_hat, unc, cache)

@@ -108,6 +108,7 @@ def _seed_sensitivity(cache: dict, scene, sens) -> None:
     Anything else (a knife edge, a nearly repeated pair) is left to the
     budget's own differences."""
     from .budget import scene_key
+    from .problem import _IDX
     from .sensitivity import Sensitivity, measured_inputs
 
     names = measured_inputs(scene)
@@ -118,5 +119,14 @@ def _seed_sensitivity(cache: dict, scene, sens) -> None:
     jac = np.asarray(sens.jacobian, float)[:, idx]
     if not np.all(np.isfinite(jac)):
         return
-    cache[("sensitivity", scene_key(scene), tuple(names))] = (
+    skey = scene_key(scene)
+    cache[("sensitivity", skey, tuple(names))] = (
         Sensitivity(list(names), sens.periods, jac, sens.modes, sens.rest, method="analytic"), [])
+    # the unknown's column too (budget._unknowns_jacobian: the linear budget's d T / d I of the
+    # measured mode, by central differences otherwise): each inertia component's analytic
+    # derivative, by mode label, where it is finite for every mode
+    labels = [m.label for m in sens.modes.modes]
+    for j, n in enumerate(sens.names):
+        col = np.asarray(sens.jacobian, float)[:, j]
+        if n in _IDX and np.all(np.isfinite(col)):
+            cache[("period jacobian", skey, n)] = {lab: float(v) for lab, v in zip(labels, col)}
