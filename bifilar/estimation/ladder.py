@@ -120,6 +120,7 @@ class ThesisModel:
         mode = hm.modes0.modes[mode_index]
         self.which = thesis_linearisation_for(self.mapping, hm.rest0, mode)
         self.idx = THESIS_COORDS[self.which]
+        self._sub = np.ix_(self.idx, self.idx)  # (the kept block's index arrays, built once)
         p = self.mapping.params
         th0 = self.mapping.theta0
         z5 = np.zeros(5)
@@ -141,20 +142,20 @@ class ThesisModel:
             raise NotApplicable("the thesis's 2x2 linearisation has no oscillatory eigenvalue here")
         k = min(osc, key=lambda k: abs(2 * math.pi / math.sqrt(-ev[k].real) - lin_T))
         self.v_ref = V[:, k]
+        self._v_ref_norm = np.linalg.norm(self.v_ref)
         self.period0 = 2 * math.pi / math.sqrt(-ev[k].real)
 
     def _eig(self, x: float):
         M = self.M_a + (x - self.x0) * self.dM
         L = np.linalg.solve(M, self.dN)
-        sub = L[np.ix_(self.idx, self.idx)]
+        sub = L[self._sub]
         ev, V = np.linalg.eig(sub)
         return ev, V
 
     def period(self, x: float) -> float:
         """The linearisation's period (s) at component value ``x`` (kg m^2)."""
         ev, V = self._eig(x)
-        cos = [abs(np.vdot(V[:, k], self.v_ref)) / (np.linalg.norm(V[:, k]) * np.linalg.norm(self.v_ref))
-               for k in range(2)]
+        cos = [abs(np.vdot(V[:, k], self.v_ref)) / (np.linalg.norm(V[:, k]) * self._v_ref_norm) for k in range(2)]
         k = int(np.argmax(cos))
         return 2 * math.pi / math.sqrt(-ev[k].real) if ev[k].real < 0 else math.nan
 
