@@ -257,6 +257,44 @@ def test_thesis_models_of_one_hanging_share_the_kane_forcing():
     assert a.period(a.x0) == pytest.approx(h2.modes0.get("pitch").period, rel=0.05)
 
 
+def _thesis_period_before(tm, x):
+    """ThesisModel.period as it was before its index arrays and the reference norm were kept (verbatim)."""
+    import math
+
+    M = tm.M_a + (x - tm.x0) * tm.dM
+    L = np.linalg.solve(M, tm.dN)
+    sub = L[np.ix_(tm.idx, tm.idx)]
+    ev, V = np.linalg.eig(sub)
+    cos = [abs(np.vdot(V[:, k], tm.v_ref)) / (np.linalg.norm(V[:, k]) * np.linalg.norm(tm.v_ref))
+           for k in range(2)]
+    k = int(np.argmax(cos))
+    return 2 * math.pi / math.sqrt(-ev[k].real) if ev[k].real < 0 else math.nan
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("thesis_lin3_roll", {})])
+def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
+    from bifilar.estimation.ladder import ThesisModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene(name, params)
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    sens = period_sensitivity(scene, COMPS)
+    n = 0
+    for comp in COMPS:
+        try:
+            tm = ThesisModel(hm, best_mode_for(sens, comp), comp)
+        except Exception:  # noqa: BLE001 - a rung that does not apply
+            continue
+        for f in (0.5, 0.9, 1.0, 1.1, 2.0):
+            x = f * tm.x0
+            got, ref = tm.period(x), _thesis_period_before(tm, x)
+            assert got == ref or (np.isnan(got) and np.isnan(ref))
+            n += 1
+    assert n >= 5
+
+
 @pytest.mark.parametrize("params", [{"spacing": 3.0}, {"spacing": 6.0, "length": 5.0}])
 def test_knife_edge_point_takes_its_linear_budget_without_the_honest_pass(params, monkeypatch):
     # CoM on the attachment line: a neutral mode, so the honest std has no second-order part and equals

@@ -235,7 +235,13 @@ def _one_step(pb: Problem, ctx: BudgetContext, p_hat, r_hat, hits_of: dict) -> d
         ok = np.all(np.isfinite(T), axis=1) & (np.max(np.abs(T / ctx.T_hat - 1), axis=1) < 1e-2)
     inc = (ctx.T_hat ** 2 - T ** 2) / (2 * ctx.T_hat)
     p0 = np.asarray(p_hat, float)
-    return {pids[q]: p0 + ctx.G @ inc[q] for q in np.nonzero(ok)[0]}
+    G = np.asarray(ctx.G, float)
+    if G.shape[1] == 1:
+        # one period: G @ inc[q] is one product per unknown (exactly rounded whatever computes it),
+        # so all points' steps at once are the same numbers
+        steps = p0 + inc[:, :1] * G[:, 0]
+        return {pids[q]: steps[q] for q in np.nonzero(ok)[0].tolist()}
+    return {pids[q]: p0 + G @ inc[q] for q in np.nonzero(ok)[0]}
 
 
 def _coefs3(vm, v0, vp):
