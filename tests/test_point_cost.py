@@ -485,14 +485,32 @@ def test_hanging_model_locate_returns_the_mode_set_it_solved_at_an_inertia():
     assert list(match) == list(mac_match(hm.modes0, hm.locate(scene)[1]))
 
 
+def _honest_case_stds(measurements: str) -> list:
+    """The honest stds of every :func:`_honest_cases` case (fed the analytic sensitivity), and the
+    values and stds of an inversion of the configs' ``measurements`` file (no ladder)."""
+    from bifilar.estimation import honest
+    from bifilar.estimation.invert import invert
+    from bifilar.estimation.measurements import load_measurements
+
+    out = []
+    for case, (cfg, comps) in _honest_cases().items():
+        scene = scene_from_dict(cfg, case, warn=False)
+        unc = default_uncertainty()
+        sens = period_sensitivity(scene, list(dict.fromkeys(COMPS + comps)) + measured_inputs(scene))
+        req = [(c, best_mode_for(sens, c) + 1) for c in comps
+               if np.nanmax(np.abs(sens.column(c)) * component_scale(scene.inertia, c) / sens.periods) >= 1e-6]
+        out.append(honest.honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens))
+    res = invert(load_measurements(CONFIGS / measurements), ladder=False)
+    out.append((res.values.tolist(), res.std.tolist()))
+    return out
+
+
 def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
     # budget._one_step takes the first Gauss-Newton step of every sigma point (and pair corner) at once;
     # against _resolve point by point (the path before): the same re-solved unknowns, bit for bit, over
     # the honest cases (second order and pair terms: the wheel, the drone) and an inversion of three
     # modes for three components (K = P = 3, the example measurements file)
-    from bifilar.estimation import budget, honest
-    from bifilar.estimation.invert import invert
-    from bifilar.estimation.measurements import load_measurements
+    from bifilar.estimation import budget
 
     seen: list = []
     real_solve, real_one = budget._solve_points, budget._one_step
@@ -509,16 +527,7 @@ def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
 
     def run():
         seen.clear()
-        out = []
-        for case, (cfg, comps) in _honest_cases().items():
-            scene = scene_from_dict(cfg, case, warn=False)
-            unc = default_uncertainty()
-            sens = period_sensitivity(scene, list(dict.fromkeys(COMPS + comps)) + measured_inputs(scene))
-            req = [(c, best_mode_for(sens, c) + 1) for c in comps
-                   if np.nanmax(np.abs(sens.column(c)) * component_scale(scene.inertia, c) / sens.periods) >= 1e-6]
-            out.append(honest.honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens))
-        res = invert(load_measurements(CONFIGS / "measurements_example.yaml"), ladder=False)
-        out.append((res.values.tolist(), res.std.tolist()))
+        out = _honest_case_stds("measurements_example.yaml")
         return out, [{k: None if v is None else v.tolist() for k, v in d.items()} for d in seen]
 
     settled: list = []
@@ -529,6 +538,64 @@ def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
     monkeypatch.setattr(budget, "_one_step", lambda *a, **k: {})
     ref, ref_points = run()
     assert got_points == ref_points
+    assert got == ref
+
+
+def _solve_points_before(pb, ctx, p_hat, r_hat, points: dict) -> dict:
+    """budget._solve_points before its per-key hangings were kept (verbatim, names qualified)."""
+    from bifilar.estimation.budget import (_hanging_periods, _key_hanging, _one_step, _perturbed_scene, _resolve,
+                                           scene_key)
+
+    jobs: dict[int, list] = {h: [] for h in range(len(pb.models))}
+    res: dict = {pid: {} for pid in points}
+    cache = ctx.cache
+    skeys = [scene_key(s) for s in ctx.scenes] if cache is not None else None
+    for pid, moves in points.items():
+        for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
+            if any(m.hanging == h for m in pb.measurements):
+                ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
+                if ck is not None and ck in cache:
+                    res[pid][h] = cache[ck]
+                else:
+                    jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
+    for h, jl in jobs.items():
+        if jl:
+            for (pid, _, ck), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
+                res[pid][h] = o
+                if ck is not None:
+                    cache[ck] = o
+    whole = {pid: hits for pid, hits in res.items() if all(v is not None for v in hits.values())}
+    done = _one_step(pb, ctx, p_hat, r_hat, whole)
+    return {pid: (done[pid] if pid in done else _resolve(pb, ctx, p_hat, r_hat, points[pid], hits))
+            if pid in whole else None for pid, hits in res.items()}
+
+
+def test_solve_points_with_kept_hangings_equals_the_one_before(monkeypatch):
+    # the hangings each input key affects are found once per key, not once per point; against the loop
+    # before: the same re-solved points, bit for bit, over the honest cases (one hanging, sigma points and
+    # pair corners) and an inversion of six hangings (inputs of one hanging, shared CoM, mass, gravity)
+    from bifilar.estimation import budget
+
+    seen: list = []
+
+    def recording(fn):
+        def run(*a, **k):
+            out = fn(*a, **k)
+            seen.append({key: None if v is None else v.tolist() for key, v in out.items()})
+            return out
+        return run
+
+    def run_all():
+        seen.clear()
+        out = _honest_case_stds("measurements_hangings_example.yaml")
+        return out, list(seen)
+
+    real = budget._solve_points
+    monkeypatch.setattr(budget, "_solve_points", recording(real))
+    got, got_points = run_all()
+    monkeypatch.setattr(budget, "_solve_points", recording(_solve_points_before))
+    ref, ref_points = run_all()
+    assert len(got_points) >= 10 and got_points == ref_points
     assert got == ref
 
 

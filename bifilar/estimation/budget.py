@@ -194,14 +194,18 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
     res: dict = {pid: {} for pid in points}
     cache = ctx.cache
     skeys = [scene_key(s) for s in ctx.scenes] if cache is not None else None
+    measured = {m.hanging for m in pb.measurements}
+    hangs: dict = {}  # input key -> the measured hangings it affects (the same for every point)
     for pid, moves in points.items():
-        for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
-            if any(m.hanging == h for m in pb.measurements):
-                ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
-                if ck is not None and ck in cache:
-                    res[pid][h] = cache[ck]
-                else:
-                    jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
+        for key, _ in moves:
+            if key not in hangs:
+                hangs[key] = [h for h in _key_hanging(pb, key) if h in measured]
+        for h in (hangs[moves[0][0]] if len(moves) == 1 else sorted({h for key, _ in moves for h in hangs[key]})):
+            ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
+            if ck is not None and ck in cache:
+                res[pid][h] = cache[ck]
+            else:
+                jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
     for h, jl in jobs.items():
         if jl:
             for (pid, _, ck), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
