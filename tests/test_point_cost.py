@@ -295,6 +295,36 @@ def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
     assert n >= 5
 
 
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("thesis_lin3_roll", {}), ("thesis_cylinder_6_4", {})])
+def test_thesis_mass_matrix_with_another_inertia_equals_a_kane_evaluation(name, params):
+    # each component's mass matrix (the hanging's Kane quantities at rest, only the inertia term redone)
+    # against a whole Kane evaluation with the params whose inertia is changed (the path before)
+    from bifilar.estimation.ladder import ThesisModel, _thesis_cache
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel, basis
+    from bifilar.models import kane
+    from bifilar.models.kane_mapping import replace_params
+
+    scene = _scene(name, params)
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    sens = period_sensitivity(scene, COMPS)
+    n = 0
+    for comp in COMPS + ["Ixy", "Ixz", "Iyz"]:
+        try:
+            tm = ThesisModel(hm, best_mode_for(sens, comp if comp in COMPS else "Izz"), comp)
+        except Exception:  # noqa: BLE001 - a rung that does not apply
+            continue
+        mp = tm.mapping
+        p1 = replace_params(mp.params, inertia=mp.params.inertia + mp.C.T @ (hm.R @ basis(comp) @ hm.R.T) @ mp.C)
+        M_b, _ = kane.mass_matrix_and_forcing(mp.theta0, np.zeros(5), p1)
+        assert np.array_equal(tm.dM, M_b - tm.M_a)
+        assert np.array_equal(kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], p1.inertia), M_b)
+        assert np.any(tm.dM != 0)
+        n += 1
+    assert n >= 3
+
+
 @pytest.mark.parametrize("params", [{"spacing": 3.0}, {"spacing": 6.0, "length": 5.0}])
 def test_knife_edge_point_takes_its_linear_budget_without_the_honest_pass(params, monkeypatch):
     # CoM on the attachment line: a neutral mode, so the honest std has no second-order part and equals
