@@ -170,6 +170,14 @@ def test_honest_unknowns_jacobian_is_the_analytic_column():
                                       [Measurement(md.label, float(md.period), 1e-3, "period", "--period")]),
                        ["Izz"], unc)
     assert np.array_equal(budget._unknowns_jacobian(pb, pb.prior, cache), pb.jacobian(pb.prior))
+    # the same scene hung turned by 90 degrees about z (its reference Ixx is the scene's Iyy): the seeded
+    # columns are the scene's body-axis ones, so they must not serve
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    md = sens.modes.modes[best_mode_for(sens, "Iyy")]
+    pb = build_problem(MeasurementSet([Hanging("ref", scene, turn)],
+                                      [Measurement(md.label, float(md.period), 1e-3, "period", "--period")]),
+                       ["Ixx"], unc, rests=[sens.rest])
+    assert np.array_equal(budget._unknowns_jacobian(pb, pb.prior, cache), pb.jacobian(pb.prior))
 
 
 def test_honest_stds_ignore_a_finite_difference_sensitivity():

@@ -577,7 +577,8 @@ def _unknowns_jacobian(pb: Problem, p_hat, cache: dict | None = None) -> np.ndar
     component), else :meth:`~bifilar.estimation.problem.Problem.jacobian`
     (central differences).  The two differ by the differences' truncation
     and rounding error (~1e-9 relative; docs/performance.md, session 6)."""
-    if cache is not None and len(pb.models) == 1 and all(n in _IDX for n in pb.unknowns):
+    if (cache is not None and len(pb.models) == 1 and all(n in _IDX for n in pb.unknowns)
+            and np.array_equal(pb.models[0].R, np.eye(3))):  # (reference axes = the scene's body axes)
         hm = pb.models[0]
         skey = scene_key(hm.scene(pb.values(p_hat)))
         cols = [cache.get(("period jacobian", skey, n)) for n in pb.unknowns]
