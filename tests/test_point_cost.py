@@ -99,9 +99,27 @@ def test_linear_estimate_other_scene_still_solves_its_rest():
     assert T == pytest.approx(sens.periods[k], rel=1e-12)
 
 
+from bifilar.estimation.problem import Problem  # noqa: E402
+
+_CENTRAL = Problem.jacobian  # the differences, kept before any test patches them
+
+
+def _richardson_jacobian(pb, p, rel_step=5e-4):
+    """Problem.jacobian's central differences at steps 2h and h, Richardson-extrapolated
+    (truncation O(h^4): <= 1.2e-11 relative at 5e-4 on these rigs, 1.9e-10 at 1e-3), with a
+    step large enough for the periods' rounding (~1e-14 over 5e-4: ~2e-11 relative): a
+    converged reference for d T / d I."""
+    return (4 * _CENTRAL(pb, p, rel_step) - _CENTRAL(pb, p, 2 * rel_step)) / 3
+
+
 @pytest.mark.parametrize("case", ["Solar Boat", "pitch rig"])
 def test_honest_stds_with_the_points_sensitivity(case, monkeypatch):
-    from bifilar.estimation import budget
+    # fed the point's analytic sensitivity, the honest pass takes its input columns and the unknown's
+    # column d T / d I (budget._unknowns_jacobian) from it instead of differencing: the input columns
+    # are the same derivative (equal to rounding), the unknown's column moves each std by the central
+    # differences' error (~1e-9 relative) towards a converged reference (Richardson-extrapolated
+    # differences), which the analytic value meets to ~1e-11
+    from bifilar.estimation import budget, problem
     from bifilar.estimation.honest import honest_stds
 
     scene = _scene(*SCENES[case])
@@ -109,15 +127,57 @@ def test_honest_stds_with_the_points_sensitivity(case, monkeypatch):
     sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
     assert sens.method == "analytic"
     req = [(c, best_mode_for(sens, c) + 1) for c in COMPS]
-    ref = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest)  # no fallback: the budget's own std
+    ref = np.array(honest_stds(scene, req, unc, unc["timing"], rest=sens.rest))  # no fallback: the budget's own
+    monkeypatch.setattr(problem.Problem, "jacobian", _richardson_jacobian)
+    conv = np.array(honest_stds(scene, req, unc, unc["timing"], rest=sens.rest))
 
     def no_call(*a, **k):
-        raise AssertionError("the budget recomputed the sensitivity it was given")
+        raise AssertionError("the budget recomputed a derivative it was given")
 
     monkeypatch.setattr(budget, "robust_sensitivity", no_call)
-    got = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens)
-    # analytic both ways (the same derivative, columns picked by name): equal to rounding
-    assert got == pytest.approx(ref, rel=1e-12)
+    monkeypatch.setattr(problem.Problem, "jacobian", no_call)
+    got = np.array(honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens))
+    assert got == pytest.approx(ref, rel=1e-7)  # the differences' error: measured <= 9.3e-9
+    err_new, err_old = np.max(np.abs(got / conv - 1)), np.max(np.abs(ref / conv - 1))
+    assert err_new <= 1e-10 and err_new <= 0.1 * err_old
+
+
+def test_honest_unknowns_jacobian_is_the_analytic_column():
+    # the seeded column of each component is the sensitivity's, by mode label; a cache without it
+    # (another scene, a component not seeded) falls back to the differences
+    from bifilar.estimation import budget
+    from bifilar.estimation.honest import _seed_sensitivity
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.problem import build_problem
+
+    scene = _scene(*SCENES["Solar Boat"])
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    cache: dict = {}
+    _seed_sensitivity(cache, scene, sens)
+    unc = default_uncertainty()
+    for comp in COMPS:
+        k = best_mode_for(sens, comp)
+        md = sens.modes.modes[k]
+        meas = MeasurementSet([Hanging("ref", scene, np.eye(3))],
+                              [Measurement(md.label, float(md.period), 1e-3, "period", "--period", amplitude=0.0)])
+        pb = build_problem(meas, [comp], unc, rests=[sens.rest])
+        J = budget._unknowns_jacobian(pb, pb.prior, cache)
+        assert J.shape == (1, 1) and J[0, 0] == sens.column(comp)[k]
+        fd = budget._unknowns_jacobian(pb, pb.prior, {})
+        assert fd[0, 0] == pytest.approx(J[0, 0], rel=1e-7) and fd[0, 0] != J[0, 0]
+    other = perturb(scene, "length.1", 1e-3)
+    pb = build_problem(MeasurementSet([Hanging("ref", other, np.eye(3))],
+                                      [Measurement(md.label, float(md.period), 1e-3, "period", "--period")]),
+                       ["Izz"], unc)
+    assert np.array_equal(budget._unknowns_jacobian(pb, pb.prior, cache), pb.jacobian(pb.prior))
+    # the same scene hung turned by 90 degrees about z (its reference Ixx is the scene's Iyy): the seeded
+    # columns are the scene's body-axis ones, so they must not serve
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    md = sens.modes.modes[best_mode_for(sens, "Iyy")]
+    pb = build_problem(MeasurementSet([Hanging("ref", scene, turn)],
+                                      [Measurement(md.label, float(md.period), 1e-3, "period", "--period")]),
+                       ["Ixx"], unc, rests=[sens.rest])
+    assert np.array_equal(budget._unknowns_jacobian(pb, pb.prior, cache), pb.jacobian(pb.prior))
 
 
 def test_honest_stds_ignore_a_finite_difference_sensitivity():
@@ -203,6 +263,74 @@ def test_thesis_models_of_one_hanging_share_the_kane_forcing():
     ref = ThesisModel(shared, shared.mode_index("pitch", "m"), "Ixx")
     assert a.period(a.x0) != pytest.approx(ref.period(ref.x0), rel=1e-6)
     assert a.period(a.x0) == pytest.approx(h2.modes0.get("pitch").period, rel=0.05)
+
+
+def _thesis_period_before(tm, x):
+    """ThesisModel.period as it was before its index arrays and the reference norm were kept (verbatim)."""
+    import math
+
+    M = tm.M_a + (x - tm.x0) * tm.dM
+    L = np.linalg.solve(M, tm.dN)
+    sub = L[np.ix_(tm.idx, tm.idx)]
+    ev, V = np.linalg.eig(sub)
+    cos = [abs(np.vdot(V[:, k], tm.v_ref)) / (np.linalg.norm(V[:, k]) * np.linalg.norm(tm.v_ref))
+           for k in range(2)]
+    k = int(np.argmax(cos))
+    return 2 * math.pi / math.sqrt(-ev[k].real) if ev[k].real < 0 else math.nan
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("thesis_lin3_roll", {})])
+def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
+    from bifilar.estimation.ladder import ThesisModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene(name, params)
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    sens = period_sensitivity(scene, COMPS)
+    n = 0
+    for comp in COMPS:
+        try:
+            tm = ThesisModel(hm, best_mode_for(sens, comp), comp)
+        except Exception:  # noqa: BLE001 - a rung that does not apply
+            continue
+        for f in (0.5, 0.9, 1.0, 1.1, 2.0):
+            x = f * tm.x0
+            got, ref = tm.period(x), _thesis_period_before(tm, x)
+            assert got == ref or (np.isnan(got) and np.isnan(ref))
+            n += 1
+    assert n >= 5
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("thesis_lin3_roll", {}), ("thesis_cylinder_6_4", {})])
+def test_thesis_mass_matrix_with_another_inertia_equals_a_kane_evaluation(name, params):
+    # each component's mass matrix (the hanging's Kane quantities at rest, only the inertia term redone)
+    # against a whole Kane evaluation with the params whose inertia is changed (the path before)
+    from bifilar.estimation.ladder import ThesisModel, _thesis_cache
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel, basis
+    from bifilar.models import kane
+    from bifilar.models.kane_mapping import replace_params
+
+    scene = _scene(name, params)
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
+    sens = period_sensitivity(scene, COMPS)
+    n = 0
+    for comp in COMPS + ["Ixy", "Ixz", "Iyz"]:
+        try:
+            tm = ThesisModel(hm, best_mode_for(sens, comp if comp in COMPS else "Izz"), comp)
+        except Exception:  # noqa: BLE001 - a rung that does not apply
+            continue
+        mp = tm.mapping
+        p1 = replace_params(mp.params, inertia=mp.params.inertia + mp.C.T @ (hm.R @ basis(comp) @ hm.R.T) @ mp.C)
+        M_b, _ = kane.mass_matrix_and_forcing(mp.theta0, np.zeros(5), p1)
+        assert np.array_equal(tm.dM, M_b - tm.M_a)
+        assert np.array_equal(kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], p1.inertia), M_b)
+        assert np.any(tm.dM != 0)
+        n += 1
+    assert n >= 3
 
 
 @pytest.mark.parametrize("params", [{"spacing": 3.0}, {"spacing": 6.0, "length": 5.0}])
@@ -395,14 +523,32 @@ def test_hanging_model_locate_returns_the_mode_set_it_solved_at_an_inertia():
     assert list(match) == list(mac_match(hm.modes0, hm.locate(scene)[1]))
 
 
+def _honest_case_stds(measurements: str) -> list:
+    """The honest stds of every :func:`_honest_cases` case (fed the analytic sensitivity), and the
+    values and stds of an inversion of the configs' ``measurements`` file (no ladder)."""
+    from bifilar.estimation import honest
+    from bifilar.estimation.invert import invert
+    from bifilar.estimation.measurements import load_measurements
+
+    out = []
+    for case, (cfg, comps) in _honest_cases().items():
+        scene = scene_from_dict(cfg, case, warn=False)
+        unc = default_uncertainty()
+        sens = period_sensitivity(scene, list(dict.fromkeys(COMPS + comps)) + measured_inputs(scene))
+        req = [(c, best_mode_for(sens, c) + 1) for c in comps
+               if np.nanmax(np.abs(sens.column(c)) * component_scale(scene.inertia, c) / sens.periods) >= 1e-6]
+        out.append(honest.honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens))
+    res = invert(load_measurements(CONFIGS / measurements), ladder=False)
+    out.append((res.values.tolist(), res.std.tolist()))
+    return out
+
+
 def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
     # budget._one_step takes the first Gauss-Newton step of every sigma point (and pair corner) at once;
     # against _resolve point by point (the path before): the same re-solved unknowns, bit for bit, over
     # the honest cases (second order and pair terms: the wheel, the drone) and an inversion of three
     # modes for three components (K = P = 3, the example measurements file)
-    from bifilar.estimation import budget, honest
-    from bifilar.estimation.invert import invert
-    from bifilar.estimation.measurements import load_measurements
+    from bifilar.estimation import budget
 
     seen: list = []
     real_solve, real_one = budget._solve_points, budget._one_step
@@ -419,16 +565,7 @@ def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
 
     def run():
         seen.clear()
-        out = []
-        for case, (cfg, comps) in _honest_cases().items():
-            scene = scene_from_dict(cfg, case, warn=False)
-            unc = default_uncertainty()
-            sens = period_sensitivity(scene, list(dict.fromkeys(COMPS + comps)) + measured_inputs(scene))
-            req = [(c, best_mode_for(sens, c) + 1) for c in comps
-                   if np.nanmax(np.abs(sens.column(c)) * component_scale(scene.inertia, c) / sens.periods) >= 1e-6]
-            out.append(honest.honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens))
-        res = invert(load_measurements(CONFIGS / "measurements_example.yaml"), ladder=False)
-        out.append((res.values.tolist(), res.std.tolist()))
+        out = _honest_case_stds("measurements_example.yaml")
         return out, [{k: None if v is None else v.tolist() for k, v in d.items()} for d in seen]
 
     settled: list = []
@@ -439,6 +576,64 @@ def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
     monkeypatch.setattr(budget, "_one_step", lambda *a, **k: {})
     ref, ref_points = run()
     assert got_points == ref_points
+    assert got == ref
+
+
+def _solve_points_before(pb, ctx, p_hat, r_hat, points: dict) -> dict:
+    """budget._solve_points before its per-key hangings were kept (verbatim, names qualified)."""
+    from bifilar.estimation.budget import (_hanging_periods, _key_hanging, _one_step, _perturbed_scene, _resolve,
+                                           scene_key)
+
+    jobs: dict[int, list] = {h: [] for h in range(len(pb.models))}
+    res: dict = {pid: {} for pid in points}
+    cache = ctx.cache
+    skeys = [scene_key(s) for s in ctx.scenes] if cache is not None else None
+    for pid, moves in points.items():
+        for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
+            if any(m.hanging == h for m in pb.measurements):
+                ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
+                if ck is not None and ck in cache:
+                    res[pid][h] = cache[ck]
+                else:
+                    jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
+    for h, jl in jobs.items():
+        if jl:
+            for (pid, _, ck), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
+                res[pid][h] = o
+                if ck is not None:
+                    cache[ck] = o
+    whole = {pid: hits for pid, hits in res.items() if all(v is not None for v in hits.values())}
+    done = _one_step(pb, ctx, p_hat, r_hat, whole)
+    return {pid: (done[pid] if pid in done else _resolve(pb, ctx, p_hat, r_hat, points[pid], hits))
+            if pid in whole else None for pid, hits in res.items()}
+
+
+def test_solve_points_with_kept_hangings_equals_the_one_before(monkeypatch):
+    # the hangings each input key affects are found once per key, not once per point; against the loop
+    # before: the same re-solved points, bit for bit, over the honest cases (one hanging, sigma points and
+    # pair corners) and an inversion of six hangings (inputs of one hanging, shared CoM, mass, gravity)
+    from bifilar.estimation import budget
+
+    seen: list = []
+
+    def recording(fn):
+        def run(*a, **k):
+            out = fn(*a, **k)
+            seen.append({key: None if v is None else v.tolist() for key, v in out.items()})
+            return out
+        return run
+
+    def run_all():
+        seen.clear()
+        out = _honest_case_stds("measurements_hangings_example.yaml")
+        return out, list(seen)
+
+    real = budget._solve_points
+    monkeypatch.setattr(budget, "_solve_points", recording(real))
+    got, got_points = run_all()
+    monkeypatch.setattr(budget, "_solve_points", recording(_solve_points_before))
+    ref, ref_points = run_all()
+    assert len(got_points) >= 10 and got_points == ref_points
     assert got == ref
 
 

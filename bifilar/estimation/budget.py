@@ -194,14 +194,18 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
     res: dict = {pid: {} for pid in points}
     cache = ctx.cache
     skeys = [scene_key(s) for s in ctx.scenes] if cache is not None else None
+    measured = {m.hanging for m in pb.measurements}
+    hangs: dict = {}  # input key -> the measured hangings it affects (the same for every point)
     for pid, moves in points.items():
-        for h in sorted({h for key, _ in moves for h in _key_hanging(pb, key)}):
-            if any(m.hanging == h for m in pb.measurements):
-                ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
-                if ck is not None and ck in cache:
-                    res[pid][h] = cache[ck]
-                else:
-                    jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
+        for key, _ in moves:
+            if key not in hangs:
+                hangs[key] = [h for h in _key_hanging(pb, key) if h in measured]
+        for h in (hangs[moves[0][0]] if len(moves) == 1 else sorted({h for key, _ in moves for h in hangs[key]})):
+            ck = ("sigma point", skeys[h], tuple(moves)) if cache is not None else None
+            if ck is not None and ck in cache:
+                res[pid][h] = cache[ck]
+            else:
+                jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
     for h, jl in jobs.items():
         if jl:
             for (pid, _, ck), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
@@ -235,7 +239,13 @@ def _one_step(pb: Problem, ctx: BudgetContext, p_hat, r_hat, hits_of: dict) -> d
         ok = np.all(np.isfinite(T), axis=1) & (np.max(np.abs(T / ctx.T_hat - 1), axis=1) < 1e-2)
     inc = (ctx.T_hat ** 2 - T ** 2) / (2 * ctx.T_hat)
     p0 = np.asarray(p_hat, float)
-    return {pids[q]: p0 + ctx.G @ inc[q] for q in np.nonzero(ok)[0]}
+    G = np.asarray(ctx.G, float)
+    if G.shape[1] == 1:
+        # one period: G @ inc[q] is one product per unknown (exactly rounded whatever computes it),
+        # so all points' steps at once are the same numbers
+        steps = p0 + inc[:, :1] * G[:, 0]
+        return {pids[q]: steps[q] for q in np.nonzero(ok)[0].tolist()}
+    return {pids[q]: p0 + G @ inc[q] for q in np.nonzero(ok)[0]}
 
 
 def _coefs3(vm, v0, vp):
@@ -559,6 +569,25 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
     return cols, sigmas, degenerate, scenes, rests, modes, matches
 
 
+def _unknowns_jacobian(pb: Problem, p_hat, cache: dict | None = None) -> np.ndarray:
+    """(K, P) d T_lin / d p of the measured modes at ``p_hat``: the
+    analytic derivative where ``cache`` holds one for this scene (a sweep
+    point's, :func:`bifilar.estimation.honest._seed_sensitivity`: one
+    hanging in body axes, inertia unknowns, {mode label: dT/dI} per
+    component), else :meth:`~bifilar.estimation.problem.Problem.jacobian`
+    (central differences).  The two differ by the differences' truncation
+    and rounding error (~1e-9 relative; docs/performance.md, session 6)."""
+    if (cache is not None and len(pb.models) == 1 and all(n in _IDX for n in pb.unknowns)
+            and np.array_equal(pb.models[0].R, np.eye(3))):  # (reference axes = the scene's body axes)
+        hm = pb.models[0]
+        skey = scene_key(hm.scene(pb.values(p_hat)))
+        cols = [cache.get(("period jacobian", skey, n)) for n in pb.unknowns]
+        labels = [hm.modes0.modes[pb.mode_index[k]].label for k in range(len(pb.measurements))]
+        if all(c is not None and all(lab in c for lab in labels) for c in cols):
+            return np.array([[c[lab] for c in cols] for lab in labels], float).reshape(len(labels), len(cols))
+    return pb.jacobian(p_hat)
+
+
 def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None):
     """Linear budget at the estimate; returns (LinearBudget, degenerate
     inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
@@ -567,7 +596,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
-    Jp = pb.jacobian(p_hat) * r_hat[:, None]
+    Jp = _unknowns_jacobian(pb, p_hat, cache) * r_hat[:, None]
     sig = np.array([m.std for m in pb.measurements])
     multi = len(pb.models) > 1
     cols, sigmas, degenerate, scenes, rests, modes, matches = input_columns(pb, vals, r_hat, unc, cache)

@@ -16,7 +16,12 @@ components: the sensitivities and the sigma points' (and pairs') rest poses
 and modes are the same scenes for every component, only their mapping to
 each component's estimate differs (:attr:`BudgetContext.cache`).  The
 measured mode is the one carrying the label of the requested mode at the
-truth (as in the inversion).  An inversion that would not give a std (a
+truth (as in the inversion).  Given the scene's analytic sensitivity
+(``sens``, a sweep point's), the linear budget takes from it both the input
+columns and the unknown's d T / d I, which the inversion differences
+centrally: the std then differs from ``component_std``'s by those
+differences' error (~1e-9 relative, measured and tested against
+Richardson-extrapolated differences in ``tests/test_point_cost.py``).  An inversion that would not give a std (a
 degenerate input: no derivative) gives the ``fallback``, as ``component_std``
 does.  Units SI (kg m^2).
 """
@@ -41,8 +46,9 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     the nonlinear runs of an unstated amplitude (``amplitude=None``).
     ``sens``: the scene's :class:`~bifilar.estimation.sensitivity.Sensitivity`
     about ``rest`` if known (a sweep point's); where it is analytic in every
-    measured input it serves the linear budget (the same Jacobian the budget
-    would compute, :func:`_seed_sensitivity`), and its modes serve as the
+    measured input it serves the linear budget (the input Jacobian the budget
+    would compute, and the unknown's d T / d I in place of its central
+    differences, :func:`_seed_sensitivity`), and its modes serve as the
     scene's when it is about ``rest``.  ``at``: :func:`~bifilar.analysis.modes.modes_of_inertia`
     of ``scene`` about ``rest`` if built (the hanging model's stiffness)."""
     from ..analysis.equilibrium import rest_pose
@@ -104,10 +110,14 @@ def _seed_sensitivity(cache: dict, scene, sens) -> None:
     linear budget of ``scene`` looks up (:func:`bifilar.estimation.budget._budget`:
     every measured input, via :func:`~bifilar.estimation.uncertainty.robust_sensitivity`),
     when it is what that would compute: analytic in every measured input
-    (no finite-difference column, no neutral mode), so equal to rounding.
+    (no finite-difference column, no neutral mode), so equal to rounding;
+    and each inertia component's column (by mode label) as the unknown's
+    d T / d I (:func:`bifilar.estimation.budget._unknowns_jacobian`, central
+    differences otherwise: the analytic value is the one they approximate).
     Anything else (a knife edge, a nearly repeated pair) is left to the
     budget's own differences."""
     from .budget import scene_key
+    from .problem import _IDX
     from .sensitivity import Sensitivity, measured_inputs
 
     names = measured_inputs(scene)
@@ -118,5 +128,14 @@ def _seed_sensitivity(cache: dict, scene, sens) -> None:
     jac = np.asarray(sens.jacobian, float)[:, idx]
     if not np.all(np.isfinite(jac)):
         return
-    cache[("sensitivity", scene_key(scene), tuple(names))] = (
+    skey = scene_key(scene)
+    cache[("sensitivity", skey, tuple(names))] = (
         Sensitivity(list(names), sens.periods, jac, sens.modes, sens.rest, method="analytic"), [])
+    # the unknown's column too (budget._unknowns_jacobian: the linear budget's d T / d I of the
+    # measured mode, by central differences otherwise): each inertia component's analytic
+    # derivative, by mode label, where it is finite for every mode
+    labels = [m.label for m in sens.modes.modes]
+    for j, n in enumerate(sens.names):
+        col = np.asarray(sens.jacobian, float)[:, j]
+        if n in _IDX and np.all(np.isfinite(col)):
+            cache[("period jacobian", skey, n)] = {lab: float(v) for lab, v in zip(labels, col)}

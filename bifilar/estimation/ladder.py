@@ -94,7 +94,8 @@ def _thesis_forcing(hm: HangingModel):
     c = _thesis_cache(hm)
     if "forcing" not in c:
         p, th0, z5 = c["mapping"].params, c["mapping"].theta0, np.zeros(5)
-        M_a, N0 = kane.mass_matrix_and_forcing(th0, z5, p)
+        c["state"] = kane.state_quantities(th0, z5, p)  # (its parts serve each component's mass matrix)
+        M_a, N0 = c["state"]["M5"], c["state"]["N5"]
         dN = np.zeros((5, 5))
         hstep = 1e-30
         for j in range(5):
@@ -120,9 +121,8 @@ class ThesisModel:
         mode = hm.modes0.modes[mode_index]
         self.which = thesis_linearisation_for(self.mapping, hm.rest0, mode)
         self.idx = THESIS_COORDS[self.which]
+        self._sub = np.ix_(self.idx, self.idx)  # (the kept block's index arrays, built once)
         p = self.mapping.params
-        th0 = self.mapping.theta0
-        z5 = np.zeros(5)
         M_a, N0, dN = _thesis_forcing(hm)
         scale = p.mass * p.g * max(p.l, p.l_prime, p.b)
         if np.max(np.abs(N0[:4])) > 1e-7 * scale:
@@ -131,8 +131,8 @@ class ThesisModel:
         self.x0 = float(hm.I_ref0[_IDX[component]])
         # M5 is linear in the inertia: M5(x) = M_a + (x - x0) dM
         E_h = hm.R @ basis(component) @ hm.R.T
-        p1 = replace_params(p, inertia=p.inertia + self.mapping.C.T @ E_h @ self.mapping.C)
-        M_b, _ = kane.mass_matrix_and_forcing(th0, z5, p1)
+        p1 = replace_params(p, inertia=p.inertia + self.mapping.C.T @ E_h @ self.mapping.C)  # (validated)
+        M_b = kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], p1.inertia)  # = mass_matrix_and_forcing's
         self.M_a, self.dM = M_a, M_b - M_a
         lin_T = mode.period
         ev, V = self._eig(self.x0)
@@ -141,20 +141,20 @@ class ThesisModel:
             raise NotApplicable("the thesis's 2x2 linearisation has no oscillatory eigenvalue here")
         k = min(osc, key=lambda k: abs(2 * math.pi / math.sqrt(-ev[k].real) - lin_T))
         self.v_ref = V[:, k]
+        self._v_ref_norm = np.linalg.norm(self.v_ref)
         self.period0 = 2 * math.pi / math.sqrt(-ev[k].real)
 
     def _eig(self, x: float):
         M = self.M_a + (x - self.x0) * self.dM
         L = np.linalg.solve(M, self.dN)
-        sub = L[np.ix_(self.idx, self.idx)]
+        sub = L[self._sub]
         ev, V = np.linalg.eig(sub)
         return ev, V
 
     def period(self, x: float) -> float:
         """The linearisation's period (s) at component value ``x`` (kg m^2)."""
         ev, V = self._eig(x)
-        cos = [abs(np.vdot(V[:, k], self.v_ref)) / (np.linalg.norm(V[:, k]) * np.linalg.norm(self.v_ref))
-               for k in range(2)]
+        cos = [abs(np.vdot(V[:, k], self.v_ref)) / (np.linalg.norm(V[:, k]) * self._v_ref_norm) for k in range(2)]
         k = int(np.argmax(cos))
         return 2 * math.pi / math.sqrt(-ev[k].real) if ev[k].real < 0 else math.nan
 

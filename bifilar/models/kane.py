@@ -343,14 +343,37 @@ def _core(theta, thetadot, p, *, check=True):
     m = p.mass
     M5 = np.empty((5, 5), dtype=np.result_type(s, td))
     N5 = np.empty(5, dtype=M5.dtype)
-    M5[:4] = m * (Vn.T @ V) + Gn.T @ (Iw @ G)
+    MV = m * (Vn.T @ V)  # the translational part (the inertia enters through Gn^T Iw G only)
+    M5[:4] = MV + Gn.T @ (Iw @ G)
     N5[:4] = -m * (Vn.T @ Vdtd) - Gn.T @ (Iw @ Gdtd + _cross(omega, Iw @ omega)) - m * p.g * Vn[2]
     M5[4] = beta
     N5[4] = -betadot_td
     return dict(
         R=R, rN=rN, BC=BC, CD=CD, E=E, V=V, G=G, beta=beta, gamma=gamma,
-        omega=omega, v=v, Vdtd=Vdtd, Gdtd=Gdtd, M5=M5, N5=N5, Iw=Iw,
+        omega=omega, v=v, Vdtd=Vdtd, Gdtd=Gdtd, M5=M5, N5=N5, Iw=Iw, Gn=Gn, MV=MV,
     )
+
+
+def state_quantities(theta, thetadot, p: KaneParams) -> dict:
+    """Every quantity of section 5.1 at one state (theta rad, thetadot
+    rad/s, (5,) each), as :func:`mass_matrix_and_forcing` computes them:
+    ``M5``, ``N5`` and their parts, for :func:`mass_matrix_with_inertia`."""
+    return _core(theta, thetadot, p)
+
+
+def mass_matrix_with_inertia(k: dict, inertia) -> np.ndarray:
+    """M5 (5, 5) of the state whose quantities are ``k``
+    (:func:`state_quantities` with params ``p``) for params that differ
+    from ``p`` only in the inertia (3, 3, kg m^2, ntilde axes, about the
+    CoM): the inertia enters M5 only through ``Gn^T (R I R^T) G``, so the
+    rest is reused; the same expressions as :func:`_core`, so the same
+    numbers as :func:`mass_matrix_and_forcing` with those params."""
+    R, G = k["R"], k["G"]
+    Iw = R @ inertia @ R.T
+    M5 = np.empty_like(k["M5"])
+    M5[:4] = k["MV"] + k["Gn"].T @ (Iw @ G)
+    M5[4] = k["beta"]
+    return M5
 
 
 def _state(y):
