@@ -284,7 +284,10 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
     C = np.diag(sig ** 2 + amp_var) + input_period_covariance(pb, p, r)
     if extra_var is not None:
         C += np.diag(np.asarray(extra_var, float))
-    L = np.linalg.cholesky(C)
+    try:
+        L = np.linalg.cholesky(C)
+    except np.linalg.LinAlgError:  # sensitivities that overflow: no finite covariance to check against
+        return False, math.inf, math.inf, test
     Jp = pb.jacobian(p) * r[:, None]
     with np.errstate(over="ignore", invalid="ignore"):  # a 1e300 s period: an infinite misfit, refused
         rw = solve_triangular(L, res, lower=True)
