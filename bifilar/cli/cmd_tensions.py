@@ -36,7 +36,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..analysis.simulate import simulate
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
     from ..config import load_scene
-    from ..estimation.from_tensions import inertia_from_tensions
+    from ..estimation.from_tensions import inertia_from_tensions, record_std
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
@@ -101,7 +101,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                             "max_abs_difference_to_model": np.max(np.abs(F_sym[:, None] - T_model), axis=0),
                             "note": "valid only for mirror-symmetric motion (thesis 7.2)"}
     est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps)
-    std = dict(est.std)
+    std, std_inputs, interval, dof = dict(est.std), None, None, est.dof
     if motion is None:
         # a simulated motion is exact only to the integrator's tolerance, which the
         # residuals (at rounding level) cannot show: the cylinder of 6.4 gave Ixx
@@ -110,17 +110,23 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     else:
         # the rates of a record are differentiated, not known: the spread between two differentiations
         # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
+        # and the config's geometry is measured too (torque arms, wire directions): systematic over the record
         other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=comps)
-        std = {c: float(np.hypot(std[c], est.values[c] - other.values[c])) for c in comps}
+        std, std_inputs, interval, dof = record_std(scene, est, other, y[:, 0:3], R, omega, T_model, alpha)
+        dof = {c: (v if math.isfinite(v) else None) for c, v in dof.items()}
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
     # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
     undetermined = [c for c in comps if not std[c] == std[c]]
     doc["inertia_from_tensions"] = {
         c: {"value": None if c in undetermined else est.values[c], "std": std[c],
-            "dof": None if c in undetermined else est.dof.get(c),
-            "interval_95": est.interval95(c, std[c]), "config": float(scene.inertia[_idx(c)])} for c in comps}
+            "dof": None if c in undetermined else dof.get(c),
+            "interval_95": interval[c] if interval else est.interval95(c, std[c]),
+            "config": float(scene.inertia[_idx(c)])} for c in comps}
     for c in undetermined:
         doc["inertia_from_tensions"][c]["reason"] = NOT_DETERMINED
+    if std_inputs is not None:  # the config geometry's share of std (record_std)
+        for c in comps:
+            doc["inertia_from_tensions"][c]["std_geometry"] = std_inputs.get(c) if c not in undetermined else None
     # the estimator's rule (relative std above 1 %) applied to the std with the differentiation term
     poor = list(est.poorly_excited) + [c for c in comps if c not in est.poorly_excited
                                        and not std[c] <= 0.01 * abs(est.values[c])]
@@ -153,8 +159,11 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     for c in ("component", "estimate (kg m^2)", "std", "95 % (t, dof)", "config value", "excited?"):
         it.add_column(c, justify="right")
     for c in comps:
-        lo, hi = est.interval95(c, std[c])
-        span = f"{lo:.6g} .. {hi:.6g} ({est.dof.get(c, 0):.2g})" if c not in undetermined else "n/a"
+        lo, hi = interval[c] if interval else est.interval95(c, std[c])
+        nu = dof.get(c)
+        span = f"{lo:.6g} .. {hi:.6g} ({nu:.2g})" if c not in undetermined else "n/a"
+        if c not in undetermined and nu is None:
+            span = f"{lo:.6g} .. {hi:.6g} (normal)"
         it.add_row(c, "not determined (not excited)" if c in undetermined else f"{est.values[c]:.8g}",
                    f"{std[c]:.2g}" if c not in undetermined else "n/a", span,
                    f"{scene.inertia[_idx(c)]:.8g}", "POORLY" if c in poor else "yes")

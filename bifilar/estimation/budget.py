@@ -179,7 +179,7 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
             try:
                 r = rest_pose(scene, guess=rest) if com_unknown else rest
                 ms = linear_modes(scene, r)
-            except BifilarError:
+            except (BifilarError, np.linalg.LinAlgError):  # a step past definiteness (a body near its limit)
                 return None
             c2 = mac_match(ms0, ms)
             fill(h, ms, c2[col])

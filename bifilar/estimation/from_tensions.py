@@ -153,20 +153,7 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     if alpha is None:
         alpha = np.gradient(omega, t, axis=0, edge_order=2)
     comps = tuple(components)
-    fixed = [c for c in COMPONENTS if c not in comps]
-    A = euler_design(omega, alpha, comps)
-    b = wire_torque_body(scene, com, R, tensions)
-    if fixed:
-        Af = euler_design(omega, alpha, fixed)
-        idx = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
-        xf = np.array([scene.inertia[idx[c]] for c in fixed])
-        b = b - Af @ xf
-    A2 = A.reshape(-1, len(comps))
-    b2 = b.reshape(-1)
-    scale = np.linalg.norm(A2, axis=0)
-    scale[scale == 0] = 1.0
-    x, *_ = np.linalg.lstsq(A2 / scale, b2, rcond=None)
-    x = x / scale
+    x, A2, b2, scale = _least_squares(scene, com, R, omega, tensions, alpha, comps)
     r = A2 @ x - b2
     s2 = float(r @ r) / max(len(b2) - len(comps), 1)
     As = A2 / scale
@@ -191,6 +178,100 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
             or stds[c] > threshold * max(abs(values[c]), 1e-300)]
     return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)), lags,
                           dict(zip(comps, map(float, dof))))
+
+
+def _least_squares(scene: Scene, com, R, omega, tensions, alpha, comps: tuple):
+    """(estimate (m,) kg m^2, design (3k, m), torques (3k,) N m, column
+    scales) of Euler's equations over every sample, the components not in
+    ``comps`` at the scene's values."""
+    fixed = [c for c in COMPONENTS if c not in comps]
+    A = euler_design(omega, alpha, comps)
+    b = wire_torque_body(scene, com, R, tensions)
+    if fixed:
+        Af = euler_design(omega, alpha, fixed)
+        idx = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
+        xf = np.array([scene.inertia[idx[c]] for c in fixed])
+        b = b - Af @ xf
+    A2 = A.reshape(-1, len(comps))
+    b2 = b.reshape(-1)
+    scale = np.linalg.norm(A2, axis=0)
+    scale[scale == 0] = 1.0
+    x, *_ = np.linalg.lstsq(A2 / scale, b2, rcond=None)
+    return x / scale, A2, b2, scale
+
+
+def geometry_std(scene: Scene, est: TensionInertia, com, R, omega, tensions, alpha,
+                 unc: dict | None = None) -> dict:
+    """Standard uncertainty (kg m^2) of each determined component of ``est``
+    from the config's geometry: the torque arms and wire directions come
+    from the anchors and attachment points and the CoM (relative to the
+    attachments) as written down, each off by its standard uncertainty
+    (:func:`~bifilar.estimation.uncertainty.default_uncertainty`:
+    ``position`` 1 mm per coordinate, ``com`` 2 mm; ``unc`` overrides).
+    Each input moved by its std, the estimate re-solved (the same
+    components, those fixed in ``est`` held); the
+    contributions are added in quadrature (linear, independent inputs).
+
+    The residuals cannot show this error: a recorded motion fits a rig 1 mm
+    off nearly as well, the torque arms scaled.  Without it the std of a
+    record's ``Izz`` was up to 7 times too small (z-scores' sd 2.2-6.8 with
+    load-cell noise 0.5-0.05 % of the tension; docs/invert.md, "Audit,
+    session 6").  SI units; body frame for the attachments, world for the
+    anchors, as the config."""
+    from .sensitivity import input_sigma, measured_inputs, perturb
+    from .uncertainty import default_uncertainty
+
+    unc = default_uncertainty(unc or {})
+    # the components solved in est's final fit (all of them when none is excited: then none was fixed)
+    comps = tuple(c for c in est.components if math.isfinite(est.std[c]))
+    if not comps:
+        return {}
+    x0 = _least_squares(scene, com, R, omega, tensions, alpha, comps)[0]
+    var = np.zeros(len(comps))
+    for name in measured_inputs(scene):
+        if not (name.startswith(("anchor.", "attachment.", "com."))):
+            continue
+        sx = input_sigma(scene, name, unc)
+        if not sx > 0:
+            continue
+        x = _least_squares(perturb(scene, name, sx), com, R, omega, tensions, alpha, comps)[0]
+        var += (x - x0) ** 2
+    return dict(zip(comps, map(float, np.sqrt(var))))
+
+
+def record_std(scene: Scene, est: TensionInertia, other: TensionInertia, com, R, omega, tensions, alpha,
+               unc: dict | None = None) -> tuple[dict, dict, dict, dict]:
+    """The uncertainty (kg m^2) of each component of ``est`` from a recorded
+    motion: the residuals' std (``est.std``, Student's t with ``est.dof``),
+    the difference from ``other`` (the same fit with the rates
+    differentiated another way) and the config's geometry
+    (:func:`geometry_std`), the last two systematic over the record, which
+    the residuals cannot show (normal, known std).
+
+    Returns (std: the three in quadrature; the geometry's part; the 95 %
+    interval ``value +- sqrt((t s_res)^2 + (1.96 s_diff)^2 + (1.96
+    s_geo)^2)``, each term expanded by its own factor as ``invert``'s
+    interval (docs/invert.md, "The 95 % interval"); the equivalent degrees
+    of freedom of that interval, ``t_{0.975, dof} = half-width / std``,
+    inf for the normal 1.96).  NaN / None for a component the fit held
+    fixed.  A Student factor of the residuals' few dof applied to the whole
+    std made a record's interval 40 times its std where the geometry's
+    known std dominates."""
+    from scipy import stats
+
+    from .uncertainty import Z95, equivalent_dof
+
+    g = geometry_std(scene, est, com, R, omega, tensions, alpha, unc)
+    std, interval, dof = {}, {}, {}
+    for c in est.components:
+        s_res, s_diff, s_geo = est.std[c], est.values[c] - other.values[c], g.get(c, 0.0)
+        std[c] = float(math.hypot(math.hypot(s_res, s_diff), s_geo))
+        nu = est.dof.get(c, math.inf)
+        t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) and nu > 0 else Z95
+        half = math.sqrt((t * s_res) ** 2 + (Z95 * s_diff) ** 2 + (Z95 * s_geo) ** 2)
+        interval[c] = [est.values[c] - half, est.values[c] + half]
+        dof[c] = equivalent_dof(half / std[c]) if std[c] > 0 else math.nan
+    return std, g, interval, dof
 
 
 def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:

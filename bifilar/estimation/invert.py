@@ -311,8 +311,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                         "flat body): the least-squares fit among physical tensors; the fit check below still holds")
     elif roots[0].edge:
         warnings.append(f"no physical tensor reproduces the period exactly: the estimate lies on the edge of the "
-                        f"physical set (triangle inequality I1 + I2 = I3, a thin flat body), within {EDGE_Z:g} sigma "
-                        "of the measurement")
+                        f"physical set (triangle inequality I1 + I2 = I3, a thin flat body), within {EDGE_Z:g} timing "
+                        "sigma of the measurement or within its uncertainty with the inputs' counted (fit)")
     # -- the ladder -------------------------------------------------------
     rungs: dict[str, dict] = {}
     if not has_amp:
@@ -402,7 +402,13 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                     row[extra] = rg[extra]
         ladder_rows.append(row)
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge)
-    if fit.get("chi2_with_inputs") is not None:
+    if fit.get("chi2_with_inputs") is not None and fit["dof"] == 0:
+        notes.append(f"the measured period(s) lie beyond what a physical tensor gives, by up to "
+                     f"{fit['max_abs_normalised_residual']:.3g} timing sigma, but within their uncertainty with the "
+                     f"input uncertainties counted (distance {fit['distance_from_fit']:.3g}, {fit['test']}): the "
+                     "measured inputs (lengths, positions, mass, CoM) are probably off within their stated std; the "
+                     "answer is the physical limit and the budget carries the inputs")
+    elif fit.get("chi2_with_inputs") is not None:
         notes.append(f"the periods disagree beyond their timing uncertainty alone (chi2 {fit['chi2']:.3g} for "
                      f"{fit['dof']} degrees of freedom) but agree within the input uncertainties (chi2 "
                      f"{fit['chi2_with_inputs']:.3g} with them and the assumed release amplitudes): the measured "
@@ -585,14 +591,15 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
     check).  Raises ConvergenceError when it does not; a forced lower rung
     (small-angle, thesis) is a different model, so its fit is reported,
     not enforced.  ``edge``: an answer on the edge of the physical set,
-    accepted within ``EDGE_Z`` sigma."""
+    accepted within ``EDGE_Z`` sigma, or within the periods' uncertainty
+    with the inputs' counted (no tensor inside reproduces them exactly)."""
     T, z = _residuals(pb, p, r)
     K, P = len(z), len(pb.unknowns)
     ok, chi2, test = fit_statistics(z, P)
     if edge and K <= P:
         ok, test = bool(np.all(np.abs(z) <= EDGE_Z)), f"|residual| <= {EDGE_Z:g} sigma (on the edge of the physical set)"
     chi2_in = chi2_at = None
-    if not ok and K > P and np.all(np.isfinite(z)):
+    if not ok and (K > P or edge) and np.all(np.isfinite(z)):
         # the inputs' errors shift the periods together: the check counts them (roots.input_fit_check)
         ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, r, method, pb.unc))
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
