@@ -266,7 +266,25 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
         fit = _from_crossings(cr, t, y, notes + [f"nonlinear fit failed ({exc}); period from crossings"])
     fit.oscillation = osc
     _require_fit(fit)
+    _alias_note(fit, t)
     return fit
+
+
+#: a fit whose frequency is above 1/ALIAS_MARGIN of the sample rate gets a note
+ALIAS_MARGIN = 2.5
+
+
+def _alias_note(fit: PeriodFit, t):
+    """Note that an oscillation near the Nyquist frequency may be an alias:
+    sampled at ``fs``, a frequency ``f`` and ``fs - f`` give the same samples
+    (``invert --signal`` compares them with the config's modes,
+    :mod:`.signal_alias`)."""
+    fs = 1.0 / float(np.median(np.diff(t)))
+    f = fit.frequency
+    if np.isfinite(f) and f > 0 and fs < ALIAS_MARGIN * f:
+        fit.notes.append(f"the sample rate {fs:.4g} Hz is only {fs / f:.2f} x the fitted frequency {f:.4g} Hz: an "
+                         f"oscillation at {fs - f:.4g} Hz (period {1 / (fs - f):.4g} s), above the Nyquist "
+                         f"frequency {fs / 2:.4g} Hz, gives the same samples; a record alone cannot tell them apart")
 
 
 def _block_average(t, y, notes):
