@@ -111,7 +111,8 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     tb.add_row("period (s)", f"{fit.period:.9g} +- {fit.std:.2g}")
     u = fit.uncertainty
     if u:
-        tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}, "
+        quant = f", quantisation +{u['quantisation']:.2g}" if u.get("quantisation") else ""
+        tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}{quant}, "
                                       f"non-stationarity {u['nonstationarity']:.2g}")
         tb.add_row("  dominant term", u["dominant"].replace("_", " "))
     tb.add_row("frequency (Hz)", fmt(fit.frequency, 9))

@@ -195,3 +195,29 @@ def serial_factor(r, f0: float, dt: float, max_order: int = AR_MAX_ORDER) -> tup
     z = np.exp(-2j * math.pi * f0 * dt * np.arange(1, p + 1))
     S = s2 / abs(1.0 - a @ z) ** 2
     return float(math.sqrt(max(S / g[0], 1.0))), int(p)
+
+
+#: a record is quantised when its samples take at most this fraction of
+#: distinct values and all lie on one lattice ``origin + k q``
+LATTICE_MAX_LEVELS = 0.25
+#: tolerance of the lattice test, in steps
+LATTICE_TOL = 1e-3
+
+
+def lattice_step(y) -> tuple[float, float] | None:
+    """``(q, origin)`` ([y]) when every sample lies on the lattice
+    ``origin + k q`` (integer k) with fewer distinct levels than
+    ``LATTICE_MAX_LEVELS`` of the samples: a camera's pixel step, an ADC's
+    least significant bit, or the last printed digit.  None otherwise."""
+    y = np.asarray(y, float)
+    u = np.unique(y)
+    if u.size < 3 or u.size > LATTICE_MAX_LEVELS * y.size:
+        return None
+    d = np.diff(u)
+    q = float(d.min())
+    if not q > 0:
+        return None
+    k = (u - u[0]) / q
+    if float(np.max(np.abs(k - np.round(k)))) > LATTICE_TOL:
+        return None
+    return q, float(u[0])

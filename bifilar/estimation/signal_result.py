@@ -35,7 +35,8 @@ class PeriodFit:
         amplitude at ``t0``.
     std : float
         s, 1-sigma uncertainty of ``period``:
-        ``hypot(std_raw * std_inflation, std_nonstationary)`` (module
+        ``hypot(max(std_raw * std_inflation, std_quantisation),
+        std_nonstationary)`` (module
         docstring); ``uncertainty`` lists the terms and the dominant one.
     frequency : float
         Hz, ``1 / period``.
@@ -77,8 +78,14 @@ class PeriodFit:
     std_nonstationary : float
         s, between-window std of the period when the windows disagree
         beyond their noise (0 otherwise); ``windows`` lists them.
+    std_quantisation : float
+        s, spread of the period over re-quantised copies of the fit when the
+        record lies on a lattice of steps with too little noise to dither
+        them (0 otherwise; ``signal._quantisation``); it replaces the noise
+        term (with its serial factor) when larger.
     uncertainty : dict
         ``noise``, ``serial_correlation`` (the extra std it adds, s),
+        ``quantisation`` (the extra std of an undithered quantised record, s),
         ``nonstationarity`` (s), ``total`` (= ``std``), ``dominant``
         (the name of the largest term) and the rules' parameters.
     windows : list of dict
@@ -149,6 +156,7 @@ class PeriodFit:
     crossing: CrossingPeriod | None = field(default=None, repr=False)
     half_periods: tuple | None = None
     std_nonstationary: float = 0.0
+    std_quantisation: float = 0.0
     uncertainty: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
     residual_check: dict = field(default_factory=dict)
@@ -193,7 +201,7 @@ class PeriodFit:
         """JSON-friendly scalars (no arrays)."""
         keys = ("model", "period", "std", "frequency", "period_undamped", "damping_ratio", "damping",
                 "amplitude", "amplitude_rms", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
-                "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "uncertainty",
+                "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "std_quantisation", "uncertainty",
                 "lag1_autocorr", "noise_std", "aic", "bic", "converged", "modes", "selection",
                 "chosen_by", "choice_reason", "windows", "residual_check", "oscillation", "notes")
         d = {k: getattr(self, k) for k in keys}
