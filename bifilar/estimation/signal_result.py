@@ -225,6 +225,34 @@ def _grad_std(cov, idx, grad):
     return math.sqrt(v) if np.isfinite(v) and v >= 0 else float("nan")
 
 
+def _hc_std(raw: _Raw, covf, s2: float, r, dof: int) -> dict:
+    """Heteroscedasticity-consistent std (White's sandwich, scaled by
+    ``n/(n-p)``) of each frequency parameter ``omega`` (rad/s), by index
+    into ``raw.p``.  The least-squares ``s^2 (J^T J)^-1`` assumes every
+    sample equally noisy; a camera's timestamp jitter or repeated frames
+    err by ``y'(t) dt``, most at the zero crossings where the frequency is
+    measured, and the plain std then understates the error (session 6
+    audit: sd of z ~1.2).  The period's noise std is the larger of the two,
+    for white residuals (Ljung-Box); residuals that are not white get the
+    serial-correlation factor instead (smooth, deterministic residuals such
+    as a sensor's harmonics would make the sandwich overstate the std)."""
+    out: dict = {}
+    if not np.all(np.isfinite(covf)) or not s2 > 0:
+        return out
+    fi = np.nonzero(raw.free)[0]
+    A = covf / s2  # (J^T J)^-1
+    n = r.size
+    for iw in range(4, raw.p.size, 4):
+        hit = np.nonzero(fi == iw)[0]
+        if hit.size == 0:
+            continue
+        g = raw.J @ A[:, hit[0]]
+        v = float(np.sum((g * r) ** 2)) * n / dof
+        if np.isfinite(v) and v >= 0:
+            out[iw] = math.sqrt(v)
+    return out
+
+
 def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     n = t.size
     npar = int(raw.free.sum())
@@ -249,6 +277,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     roundoff = math.sqrt(raw.cost / n) <= 1e-9 * max(float(np.std(y)), np.finfo(float).tiny)
     lb_q, lb_p = ljung_box(r)
     white = roundoff or lb_p >= LB_ALPHA or not np.all(np.isfinite(inv2))
+    # independent but unequal errors: the sandwich std; correlated ones get the serial factor instead
+    hc = _hc_std(raw, covf, s2, r, dof) if white and not roundoff else {}
     dt = float(np.median(np.diff(t)))
 
     def factor(i_param: int) -> float:
@@ -276,7 +306,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         fac = facs[iw]
         a, b, w, sg = (float(p[i]) for i in (ia, ib, iw, isg))
         T = 2 * math.pi / w
-        sdT_raw = 2 * math.pi / w ** 2 * _std(cov, iw)
+        sdT_raw = 2 * math.pi / w ** 2 * max(_std(cov, iw), hc.get(iw, 0.0))
         wn = math.hypot(w, sg)
         zeta = sg / wn
         zstd = _grad_std(cov, [iw, isg], [-sg * w / wn ** 3, w ** 2 / wn ** 3])
@@ -304,7 +334,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         a, b, w, kap, sg = (float(v) for v in p[2:7])
         A0 = math.hypot(a, b)
         T = 2 * math.pi / w
-        sdT_raw = 2 * math.pi / w ** 2 * _std(cov, 4)
+        sdT_raw = 2 * math.pi / w ** 2 * max(_std(cov, 4), hc.get(4, 0.0))
         k = kap / A0 if A0 > 0 else float("nan")
         kstd = _grad_std(cov, [2, 3, 5], [-kap * a / A0 ** 3, -kap * b / A0 ** 3, 1 / A0]) if A0 > 0 else float("nan")
         zeta = (sg + kap) / w
