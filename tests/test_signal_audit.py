@@ -187,3 +187,19 @@ def test_timestamp_jitter_std_covers_its_error():
     cover = float(np.mean(np.abs(z) < 1.96))
     assert cover >= 0.95 - 3 * math.sqrt(0.95 * 0.05 / z.size), (cover, z.std())
     assert z.std() < 1.13, z.std()
+
+
+def test_a_faster_modes_alias_near_a_resolved_mode_is_no_refusal(tmp_path):
+    """drone_parallel: torsion 1.88 s (0.53 Hz) predicted, pitch 0.985 s.
+    A torsion recorded at 2.3 s (0.435 Hz) at 1.4 Hz (3.2 samples per
+    cycle, resolved) lies nearer the pitch's alias 1.4 - 1.015 = 0.385 Hz
+    (relative to the pitch) than to any mode: a coincidence, not a refusal
+    by alias."""
+    cfg = CONFIGS / "drone_parallel.yaml"
+    s = load_scene(cfg, warn=False)
+    pitch = linear_modes(s, rest_pose(s)).get("pitch").period
+    fa, k = fold(1 / pitch, 1.4)
+    assert k == 1 and abs(1 / 2.3 - fa) * pitch < 0.08  # the premise: the alias is close
+    p = _record(tmp_path / "drone.csv", 2.3, 1.4)
+    r = run("invert", cfg, "--signal", f"torsion={p}", "--json")
+    assert "alias of mode" not in r.stderr, r.stderr

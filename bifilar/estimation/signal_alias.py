@@ -9,12 +9,15 @@ predicted mode and with each mode's alias at the record's sample rate.
 
 Rules (SI: Hz, s):
 
-* refused (:class:`InputError`, exit 2) when an alias of a predicted mode
-  matches the fitted frequency better than any mode itself (distances
-  relative to the mode's predicted frequency): the match is only by alias;
-* warned when the sample rate is below ``ALIAS_MARGIN`` times the measured
-  mode's frequency (the larger of its prediction at the prior and the
-  fitted one): a mode a little faster than predicted would alias.
+* nothing is said when the sample rate is at least ``ALIAS_MARGIN`` times
+  the measured mode's frequency (the larger of its prediction at the prior
+  and the fitted one): that mode is resolved, and a faster mode's alias
+  landing near it is a coincidence, not evidence;
+* below that, refused (:class:`InputError`, exit 2) when an alias of a
+  predicted mode matches the fitted frequency better than any mode itself
+  (distances relative to the mode's predicted frequency, the scale of its
+  prediction error): the match is only by alias;
+* else warned: a mode a little faster than predicted would alias.
 """
 
 from __future__ import annotations
@@ -67,6 +70,11 @@ def check_signal_aliases(pb) -> list[str]:
         modes = _predicted(model)
         if not modes:
             continue
+        md = model.modes0.modes[pb.mode_index[k]]
+        f_pred = 1.0 / md.period if md.period and math.isfinite(md.period) and md.period > 0 else 0.0
+        f_hi = max(f_pred, f_fit)
+        if fs >= ALIAS_MARGIN * f_hi:
+            continue  # the measured mode is well resolved; a faster mode's alias nearby is a coincidence
         direct = min(modes, key=lambda lf: abs(f_fit - lf[1]) / lf[1])
         d_direct = abs(f_fit - direct[1]) / direct[1]
         aliases = []
@@ -85,14 +93,10 @@ def check_signal_aliases(pb) -> list[str]:
                     f"itself (nearest: '{direct[0]}' at {direct[1]:.4g} Hz): sampled below twice its frequency, "
                     f"an oscillation shows as a slower alias; record at {ALIAS_MARGIN:g} x {f:.4g} = "
                     f"{ALIAS_MARGIN * f:.3g} Hz or faster")
-        md = model.modes0.modes[pb.mode_index[k]]
-        f_pred = 1.0 / md.period if md.period and math.isfinite(md.period) and md.period > 0 else 0.0
-        f_hi = max(f_pred, f_fit)
-        if fs < ALIAS_MARGIN * f_hi:
-            warnings.append(
-                f"{m.field}: the sample rate {fs:.4g} Hz of the recording of '{m.label}' is only "
-                f"{fs / f_hi:.2f} x the mode's frequency ({f_pred:.4g} Hz predicted, {f_fit:.4g} Hz fitted): "
-                f"an oscillation between {fs / 2:.4g} and {fs:.4g} Hz would show as its alias below "
-                f"{fs / 2:.4g} Hz, which the record cannot tell apart; record at {ALIAS_MARGIN:g} x the "
-                f"frequency ({ALIAS_MARGIN * f_hi:.3g} Hz) or faster")
+        warnings.append(
+            f"{m.field}: the sample rate {fs:.4g} Hz of the recording of '{m.label}' is only "
+            f"{fs / f_hi:.2f} x the mode's frequency ({f_pred:.4g} Hz predicted, {f_fit:.4g} Hz fitted): "
+            f"an oscillation between {fs / 2:.4g} and {fs:.4g} Hz would show as its alias below "
+            f"{fs / 2:.4g} Hz, which the record cannot tell apart; record at {ALIAS_MARGIN:g} x the "
+            f"frequency ({ALIAS_MARGIN * f_hi:.3g} Hz) or faster")
     return warnings
