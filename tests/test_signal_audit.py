@@ -203,3 +203,22 @@ def test_a_faster_modes_alias_near_a_resolved_mode_is_no_refusal(tmp_path):
     p = _record(tmp_path / "drone.csv", 2.3, 1.4)
     r = run("invert", cfg, "--signal", f"torsion={p}", "--json")
     assert "alias of mode" not in r.stderr, r.stderr
+
+
+# ---------------------------------------------------------------------------
+# a slow swell larger than the oscillation
+# ---------------------------------------------------------------------------
+
+def test_a_slow_swell_larger_than_the_oscillation_is_not_its_period():
+    """A baseline swelling through half a cycle of 60-77 s with 2-3 times
+    the amplitude of a 1.3 s oscillation: the record holds 23 clear cycles,
+    but the swell was the strongest periodogram bin (refused: "fewer than 2
+    cycles") or the larger mode of the two-mode fit (its 77 s "period"
+    refused).  Now the period is the oscillation's, within its std."""
+    t = np.arange(0.0, 30.0, 0.02)
+    rng = np.random.default_rng(0)
+    for amp, Tw in ((2.0, 77.0), (3.0, 60.0), (2.0, 60.0)):
+        y = (amp * np.cos(2 * np.pi * t / Tw + 0.5) + np.exp(-0.048 * t) * np.cos(2 * np.pi * t / 1.3 + 1)
+             + 0.02 * rng.standard_normal(t.size))
+        fit = fit_period(t, y, model="auto")
+        assert abs(fit.period - 1.3) < 4 * fit.std, (amp, Tw, fit.period, fit.std)

@@ -102,10 +102,23 @@ def require_oscillation(t, y) -> dict:
     scale = float(np.max(np.abs(y))) if np.size(y) else 0.0
     if I.size < 4 or not 2.0 * float(np.sum(I)) / n > (1e-9 * scale) ** 2:
         raise SignalError("signal", "the record is constant (or a straight line): no oscillation")
+    thr = peak_threshold(I.size)
     k = int(np.argmax(I))
+    slow = f * T_rec < MIN_CYCLES - 0.5
+    if slow[k] and not np.all(slow):
+        # a slow swell (a baseline wandering through part of a cycle) may
+        # outweigh the oscillation: take the strongest peak (a local maximum,
+        # not the swell's falling leakage) with enough cycles when it is
+        # significant
+        i = np.arange(1, I.size - 1)
+        peaks = i[~slow[i] & (I[i] > I[i - 1]) & (I[i] >= I[i + 1])]
+        if peaks.size:
+            k2 = int(peaks[np.argmax(I[peaks])])
+            S2 = _local_level(I, k2)
+            if S2 > 0 and I[k2] / S2 >= thr:
+                k = k2
     S = _local_level(I, k)
     ratio = float(I[k] / S) if S > 0 else float("inf")
-    thr = peak_threshold(I.size)
     cycles = float(f[k] * T_rec)
     if ratio < thr:
         raise SignalError("signal", f"no significant spectral peak: the strongest component "

@@ -13,7 +13,7 @@ import numpy as np
 
 from .signal_checks import LB_ALPHA, ljung_box, serial_factor
 from .signal_crossings import CrossingPeriod
-from .signal_models import _NAMES, _Raw, _envelope, _lag1, _model, _noise_sigma
+from .signal_models import _NAMES, _Raw, _envelope, _lag1, _mode_rank, _model, _noise_sigma
 
 # ---------------------------------------------------------------------------
 # result
@@ -324,7 +324,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         T_und = m["period_undamped"]
     elif multi:
         modes = [mode(i, i + 1, i + 2, i + 3) for i in range(2, p.size, 4)]
-        modes.sort(key=lambda d: -d["amplitude"])
+        T_rec = float(t[-1] - t[0])
+        modes.sort(key=lambda d: _mode_rank(d["omega"], d["amplitude"], T_rec))
         m = modes[0]
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"], "zeta": m["damping_ratio"],
                    "zeta_std": m["damping_ratio_std"], "second_sigma": modes[1]["sigma"],
