@@ -51,7 +51,7 @@ Uncertainty (the headline ``std``)
   refitted (:func:`_quantisation`); the spread of those periods replaces
   the noise term when larger.
 
-``uncertainty`` lists the three terms and which one dominates.
+``uncertainty`` lists the terms and which one dominates.
 
 Refusals (``SignalError`` on ``signal`` or ``time``, exit 2 in the CLI):
 a time column that is not strictly increasing or has gaps
@@ -77,6 +77,7 @@ from .signal_checks import (
     require_oscillation,
     residual_peaks,
 )
+from .signal_alias import ALIAS_MARGIN  # a fit above 1/ALIAS_MARGIN of the sample rate gets a note
 from .signal_crossings import CrossingPeriod, period_from_crossings
 from .signal_io import (
     MAX_GAP_FRACTION,
@@ -276,8 +277,6 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     return fit
 
 
-#: a fit whose frequency is above 1/ALIAS_MARGIN of the sample rate gets a note
-ALIAS_MARGIN = 2.5
 
 
 def _alias_note(fit: PeriodFit, t):
@@ -501,12 +500,14 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     beyond the lags the whiteness test looks at) and part of it lies in the
     band the fit absorbs, so neither the least-squares std nor the
     serial-correlation factor sees it (a period off by up to 3.5 of its std).
-    The fitted curve is therefore re-quantised ``QUANT_DRAWS`` times with the
-    lattice shifted by a random fraction of a step, a random phase and the
-    noise left before quantisation, ``sigma0^2 = RSS/n - q^2/12``, and
-    refitted with the chosen model; the spread of those periods,
-    ``std_quantisation``, is the std when it exceeds the noise term.  The
-    draws are seeded by the record, so a result is reproducible."""
+    The fitted curve, shifted by a random phase, plus the noise left before
+    quantisation (``sigma0^2 = RSS/n - q^2/12``), is therefore rounded onto
+    the record's own lattice ``QUANT_DRAWS`` times and refitted with the
+    chosen model; the rms spread of those periods about the fitted one,
+    ``std_quantisation``, is the std when it exceeds the noise term (a
+    lattice shifted at random instead under-covers a signal centred on a
+    level, as an encoder zeroed at rest is).  The draws are seeded by the
+    record, so a result is reproducible."""
     lat = lattice_step(y)
     if lat is None or fit.model not in _KIND or fit.residuals is None:
         return
