@@ -231,15 +231,18 @@ def write_markdown(g, rows, rel, out: Path, runtime: float):
     a("* **Residual checks**: Ljung–Box whiteness test (20 lags, p < 0.01 = not white) and the "
       "significant peaks left in the residual periodogram (same test as below), labelled as harmonics "
       "kf₀ of the oscillation or as unmodelled oscillations.")
-    a("* **Headline std** = √((f·σ_noise)² + τ²). σ_noise from the least-squares covariance "
-      "`s²(JᵀJ)⁻¹`. f ≥ 1 (*serial correlation*) applies when the residuals are not white: "
+    a("* **Headline std** = √(max(f·σ_noise, σ_q)² + τ²). σ_noise from the least-squares covariance "
+      "`s²(JᵀJ)⁻¹` (for white residuals the larger of it and the sandwich, heteroscedasticity-consistent "
+      "std: a camera's timestamp jitter errs most at the zero crossings). f ≥ 1 (*serial correlation*) applies when the residuals are not white: "
       "f = √(S_AR(f₀)/γ(0)), the residual spectral density at the oscillation frequency (AR model of "
       "order ≤ 20 by AIC, Yule–Walker) relative to white noise. τ (*non-stationarity*): the same model "
       "is fitted to each half of the record (≥ 2 cycles each; a multi-mode fit keeps its other modes' "
       "frequencies and dampings); when the halves disagree beyond their stds, Q = (T₁−T₂)²/(s₁²+s₂²) > 6.63 "
       "(χ²₁, 99 %), τ = √((Q−1)/w) (DerSimonian–Laird; ≈ √(((T₁−T₂)² − s₁² − s₂²)/2)) is added in "
-      "quadrature. `uncertainty.dominant` names the largest of noise, serial correlation and "
-      "non-stationarity.")
+      "quadrature. σ_q (*quantisation*): a record on a lattice of steps q (pixels, ADC bits) whose noise "
+      "before quantisation is below q/2 is re-quantised and refitted 40 times (random phase); the "
+      "periods' rms spread. `uncertainty.dominant` names the largest of noise, serial correlation, "
+      "quantisation and non-stationarity.")
     a("* **Refusals** (exit 2): time not strictly increasing; a single gap longer than 2 % of the "
       "record (and 3 median steps) or samples covering less than 75 % of the span (the span less "
       "its gaps, steps longer than 10 mean steps), or a uniform grid at the median step over 4x the "

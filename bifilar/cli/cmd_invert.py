@@ -15,7 +15,9 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @click.option("--timed", multiple=True, metavar="LABEL=CYCLES:T1,T2,...",
               help="Timed trials: CYCLES cycles took T1, T2, ... s (e.g. torsion=10:26.81,26.79,26.84); repeatable.")
 @click.option("--signal", "signals", multiple=True, metavar="LABEL=PATH",
-              help="A recording of the mode's oscillation (CSV or .mat, see `bifilar period`); repeatable.")
+              help="A recording of the mode's oscillation (CSV or .mat, see `bifilar period`); repeatable. "
+                   "Refused when its frequency matches a predicted mode only by alias (sampled below twice "
+                   "the mode's frequency); warned below 2.5 samples per cycle.")
 @click.option("--column", default=None, help="Signal column / MAT variable (default: first non-time numeric one).")
 @click.option("--sample-rate", default=None, help="Signal sample rate, Hz (when the file has no time column).")
 @click.option("--signal-model", default="auto", show_default=True,

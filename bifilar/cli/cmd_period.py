@@ -40,7 +40,10 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     recorded oscillation SIGNAL (CSV with a t/time column in s, or .mat), or
     reduce stopwatch trials (--timed).  Exit 2 for a record that is not an
     oscillation (no significant spectral peak, fewer than two cycles, a fit
-    explaining almost nothing, a broken time column)."""
+    explaining almost nothing, a broken time column).  Sampled below twice its
+    frequency an oscillation shows as a slower alias that no record alone can
+    tell apart (a note flags fits above fs/2.5; `invert --signal` checks the
+    config's modes)."""
     from ..errors import InputError
 
     if timed is not None:
@@ -108,7 +111,8 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     tb.add_row("period (s)", f"{fit.period:.9g} +- {fit.std:.2g}")
     u = fit.uncertainty
     if u:
-        tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}, "
+        quant = f", quantisation +{u['quantisation']:.2g}" if u.get("quantisation") else ""
+        tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}{quant}, "
                                       f"non-stationarity {u['nonstationarity']:.2g}")
         tb.add_row("  dominant term", u["dominant"].replace("_", " "))
     tb.add_row("frequency (Hz)", fmt(fit.frequency, 9))

@@ -84,6 +84,7 @@ from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical
 from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
 from .roots import EDGE_Z, Root, find_roots, fit_statistics, input_fit_check, labelled_periods
 from .roots import separating_measurement
+from .signal_alias import check_signal_aliases
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
@@ -261,6 +262,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
     notes += start_notes
     pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
+    warnings += check_signal_aliases(pb)  # a recording sampled too slowly for its mode (refused if only an alias fits)
     if solve_for or ms.solve_for:  # chosen by the user, not picked per period: each must be measured
         refuse_unmeasured(pb)
     pb.unc = unc_all

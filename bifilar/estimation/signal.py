@@ -29,7 +29,7 @@ Public API
 
 Uncertainty (the headline ``std``)
 ----------------------------------
-``std = sqrt((f_serial * std_noise)^2 + std_nonstationary^2)``:
+``std = sqrt(max(f_serial * std_noise, std_quantisation)^2 + std_nonstationary^2)``:
 
 * ``std_noise``: least squares, ``s^2 (J^T J)^-1`` with ``s^2 = RSS/(n-p)``
   (exact for white residuals);
@@ -45,9 +45,13 @@ Uncertainty (the headline ``std``)
   quantile, 6.63) the between-half std ``tau = sqrt((Q - 1) / w)`` (the
   DerSimonian-Laird estimate; for equal stds ``sqrt(((T1 - T2)^2 - s1^2 -
   s2^2) / 2)``) is added in quadrature: the period changes along the
-  record by that much, so "the" period of the record is not known better.
+  record by that much, so "the" period of the record is not known better;
+* ``std_quantisation``: a record on a lattice of steps (a camera's pixel,
+  an ADC's bit) with too little noise to dither them is re-quantised and
+  refitted (:func:`_quantisation`); the spread of those periods replaces
+  the noise term when larger.
 
-``uncertainty`` lists the three terms and which one dominates.
+``uncertainty`` lists the terms and which one dominates.
 
 Refusals (``SignalError`` on ``signal`` or ``time``, exit 2 in the CLI):
 a time column that is not strictly increasing or has gaps
@@ -69,9 +73,11 @@ from scipy import stats
 from .signal_checks import (
     MIN_CYCLES,
     R2_MIN,
+    lattice_step,
     require_oscillation,
     residual_peaks,
 )
+from .signal_alias import ALIAS_MARGIN  # a fit above 1/ALIAS_MARGIN of the sample rate gets a note
 from .signal_crossings import CrossingPeriod, period_from_crossings
 from .signal_io import (
     MAX_GAP_FRACTION,
@@ -92,6 +98,7 @@ from .signal_models import (
     _fit_viscous,
     _leading_rest,
     _linear_amplitudes,
+    _model,
     _solve,
 )
 from .signal_result import PeriodFit, _build
@@ -266,7 +273,23 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
         fit = _from_crossings(cr, t, y, notes + [f"nonlinear fit failed ({exc}); period from crossings"])
     fit.oscillation = osc
     _require_fit(fit)
+    _alias_note(fit, t)
     return fit
+
+
+
+
+def _alias_note(fit: PeriodFit, t):
+    """Note that an oscillation near the Nyquist frequency may be an alias:
+    sampled at ``fs``, a frequency ``f`` and ``fs - f`` give the same samples
+    (``invert --signal`` compares them with the config's modes,
+    :mod:`.signal_alias`)."""
+    fs = 1.0 / float(np.median(np.diff(t)))
+    f = fit.frequency
+    if np.isfinite(f) and f > 0 and fs < ALIAS_MARGIN * f:
+        fit.notes.append(f"the sample rate {fs:.4g} Hz is only {fs / f:.2f} x the fitted frequency {f:.4g} Hz: an "
+                         f"oscillation at {fs - f:.4g} Hz (period {1 / (fs - f):.4g} s), above the Nyquist "
+                         f"frequency {fs / 2:.4g} Hz, gives the same samples; a record alone cannot tell them apart")
 
 
 def _block_average(t, y, notes):
@@ -455,8 +478,77 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
     _residual_peaks(fit)
     if split_check:
         _stationarity(fit, t, y)
+    _quantisation(fit, t, y, criterion)
     _compose_std(fit)
     return fit
+
+
+#: a quantised record is simulated when its noise before quantisation is
+#: below this many steps (above it the noise dithers the steps away)
+DITHER_STEPS = 0.5
+#: simulated records of the quantisation check
+QUANT_DRAWS = 40
+
+
+def _quantisation(fit: PeriodFit, t, y, criterion):
+    """Std of the period a record quantised in steps ``q`` (a camera's pixel,
+    an ADC's bit; :func:`.signal_checks.lattice_step`) can have when its
+    noise is too weak to dither the steps (below ``DITHER_STEPS q``).
+
+    Undithered, the quantisation error is a deterministic function of the
+    signal: it repeats from cycle to cycle (correlated at lags of a period,
+    beyond the lags the whiteness test looks at) and part of it lies in the
+    band the fit absorbs, so neither the least-squares std nor the
+    serial-correlation factor sees it (a period off by up to 3.5 of its std).
+    The fitted curve, shifted by a random phase, plus the noise left before
+    quantisation (``sigma0^2 = RSS/n - q^2/12``), is therefore rounded onto
+    the record's own lattice ``QUANT_DRAWS`` times and refitted with the
+    chosen model; the rms spread of those periods about the fitted one,
+    ``std_quantisation``, is the std when it exceeds the noise term (a
+    lattice shifted at random instead under-covers a signal centred on a
+    level, as an encoder zeroed at rest is).  The draws are seeded by the
+    record, so a result is reproducible."""
+    lat = lattice_step(y)
+    if lat is None or fit.model not in _KIND or fit.residuals is None:
+        return
+    q = lat[0]
+    ms = float(np.mean(fit.residuals ** 2))
+    sigma0 = math.sqrt(max(ms - q * q / 12.0, 0.0))
+    fit.uncertainty["quantisation_step"] = q
+    if sigma0 >= DITHER_STEPS * q:
+        return
+    kind = fit._kind
+    p = fit.params.copy()
+    drift = fit.selection.get("drift", True)
+    rng = np.random.default_rng([t.size, int(np.sum(np.round((y - lat[1]) / q)) % (1 << 31))])
+    periods = []
+    for _ in range(QUANT_DRAWS):
+        pb = p.copy()
+        dphi = rng.uniform(0.0, 2 * math.pi)
+        for i in range(2, pb.size if kind != "quadratic" else 4, 4):
+            a, b = pb[i], pb[i + 1]
+            pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
+        yb = _model(kind, pb, t, fit.t0, fit.t_ref) + sigma0 * rng.standard_normal(t.size)
+        yb = q * np.round((yb - lat[1]) / q) + lat[1]
+        try:
+            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
+        except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
+                ZeroDivisionError):
+            continue
+        if fb.converged and np.isfinite(fb.period):
+            periods.append(fb.period)
+    if len(periods) < QUANT_DRAWS // 2:
+        fit.notes.append(f"quantisation check failed: only {len(periods)} of {QUANT_DRAWS} simulated records fitted")
+        return
+    dev = np.asarray(periods) - fit.period
+    sq = float(np.sqrt(np.mean(dev ** 2)))  # about the fitted period: the copies' shift counts too
+    fit.std_quantisation = sq
+    fit.uncertainty["quantisation_test"] = {"step": q, "noise_before_quantisation": sigma0,
+                                            "draws": len(periods), "std": sq,
+                                            "mean_shift": float(np.mean(periods)) - fit.period}
+    fit.notes.append(f"the record is quantised in steps of {q:.3g} with little noise ({sigma0:.2g}, below "
+                     f"{DITHER_STEPS:g} step): the period of {len(periods)} re-quantised copies of the fit "
+                     f"spreads by {sq:.2g} s")
 
 
 def _residual_peaks(fit: PeriodFit):
@@ -566,9 +658,10 @@ def _compose_std(fit: PeriodFit):
     noise = float(fit.std_raw)
     serial = noise * float(fit.std_inflation)
     ns = float(fit.std_nonstationary)
-    total = math.hypot(serial, ns)
+    quant = max(float(fit.std_quantisation), serial)  # the simulated spread includes the noise
+    total = math.hypot(quant, ns)
     terms = {"noise": noise, "serial_correlation": math.sqrt(max(serial ** 2 - noise ** 2, 0.0)),
-             "nonstationarity": ns}
+             "quantisation": math.sqrt(max(quant ** 2 - serial ** 2, 0.0)), "nonstationarity": ns}
     dom = max(terms, key=terms.get)
     fit.uncertainty = dict(terms, total=total, dominant=dom, serial_factor=float(fit.std_inflation),
                            **fit.uncertainty)

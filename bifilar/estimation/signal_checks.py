@@ -102,10 +102,23 @@ def require_oscillation(t, y) -> dict:
     scale = float(np.max(np.abs(y))) if np.size(y) else 0.0
     if I.size < 4 or not 2.0 * float(np.sum(I)) / n > (1e-9 * scale) ** 2:
         raise SignalError("signal", "the record is constant (or a straight line): no oscillation")
+    thr = peak_threshold(I.size)
     k = int(np.argmax(I))
+    slow = f * T_rec < MIN_CYCLES - 0.5
+    if slow[k] and not np.all(slow):
+        # a slow swell (a baseline wandering through part of a cycle) may
+        # outweigh the oscillation: take the strongest peak (a local maximum,
+        # not the swell's falling leakage) with enough cycles when it is
+        # significant
+        i = np.arange(1, I.size - 1)
+        peaks = i[~slow[i] & (I[i] > I[i - 1]) & (I[i] >= I[i + 1])]
+        if peaks.size:
+            k2 = int(peaks[np.argmax(I[peaks])])
+            S2 = _local_level(I, k2)
+            if S2 > 0 and I[k2] / S2 >= thr:
+                k = k2
     S = _local_level(I, k)
     ratio = float(I[k] / S) if S > 0 else float("inf")
-    thr = peak_threshold(I.size)
     cycles = float(f[k] * T_rec)
     if ratio < thr:
         raise SignalError("signal", f"no significant spectral peak: the strongest component "
@@ -195,3 +208,29 @@ def serial_factor(r, f0: float, dt: float, max_order: int = AR_MAX_ORDER) -> tup
     z = np.exp(-2j * math.pi * f0 * dt * np.arange(1, p + 1))
     S = s2 / abs(1.0 - a @ z) ** 2
     return float(math.sqrt(max(S / g[0], 1.0))), int(p)
+
+
+#: a record is quantised when its samples take at most this fraction of
+#: distinct values and all lie on one lattice ``origin + k q``
+LATTICE_MAX_LEVELS = 0.25
+#: tolerance of the lattice test, in steps
+LATTICE_TOL = 1e-3
+
+
+def lattice_step(y) -> tuple[float, float] | None:
+    """``(q, origin)`` ([y]) when every sample lies on the lattice
+    ``origin + k q`` (integer k) with fewer distinct levels than
+    ``LATTICE_MAX_LEVELS`` of the samples: a camera's pixel step, an ADC's
+    least significant bit, or the last printed digit.  None otherwise."""
+    y = np.asarray(y, float)
+    u = np.unique(y)
+    if u.size < 3 or u.size > LATTICE_MAX_LEVELS * y.size:
+        return None
+    d = np.diff(u)
+    q = float(d.min())
+    if not q > 0:
+        return None
+    k = (u - u[0]) / q
+    if float(np.max(np.abs(k - np.round(k)))) > LATTICE_TOL:
+        return None
+    return q, float(u[0])

@@ -354,11 +354,24 @@ def _fit_two_mode(t, y, t0, tm, visc: _Raw, drift):
     return _canonical(raw, t)
 
 
+def _mode_rank(omega: float, amplitude: float, T_rec: float) -> tuple:
+    """Sort key of a fitted mode (``omega`` rad/s, ``amplitude`` [y] at
+    ``t0``, record ``T_rec`` s): modes with at least ``MIN_CYCLES`` cycles in
+    the record first, then by amplitude.  A slow swell fitted as a "mode"
+    (a baseline wandering through part of a cycle) can outweigh the
+    oscillation but cannot be its period."""
+    from .signal_checks import MIN_CYCLES  # signal_checks imports this module
+
+    return (abs(omega) * T_rec / (2 * math.pi) < MIN_CYCLES, -amplitude)
+
+
 def _canonical(raw: _Raw, t) -> _Raw:
-    """Modes of a multi-mode fit in canonical order: by amplitude at ``t0``,
-    the dominant (the reported period) first."""
+    """Modes of a multi-mode fit in canonical order (:func:`_mode_rank`):
+    by amplitude at ``t0`` among the modes with two or more cycles in the
+    record, the dominant (the reported period) first."""
     starts = list(range(2, raw.p.size, 4))
-    order = sorted(starts, key=lambda i: -math.hypot(raw.p[i], raw.p[i + 1]))
+    order = sorted(starts, key=lambda i: _mode_rank(raw.p[i + 2], math.hypot(raw.p[i], raw.p[i + 1]),
+                                                   float(t[-1] - t[0])))
     if order != starts:
         perm = np.r_[0, 1, [i + k for i in order for k in range(4)]]
         raw.p = raw.p[perm]

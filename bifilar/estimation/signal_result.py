@@ -13,7 +13,7 @@ import numpy as np
 
 from .signal_checks import LB_ALPHA, ljung_box, serial_factor
 from .signal_crossings import CrossingPeriod
-from .signal_models import _NAMES, _Raw, _envelope, _lag1, _model, _noise_sigma
+from .signal_models import _NAMES, _Raw, _envelope, _lag1, _mode_rank, _model, _noise_sigma
 
 # ---------------------------------------------------------------------------
 # result
@@ -35,7 +35,8 @@ class PeriodFit:
         amplitude at ``t0``.
     std : float
         s, 1-sigma uncertainty of ``period``:
-        ``hypot(std_raw * std_inflation, std_nonstationary)`` (module
+        ``hypot(max(std_raw * std_inflation, std_quantisation),
+        std_nonstationary)`` (module
         docstring); ``uncertainty`` lists the terms and the dominant one.
     frequency : float
         Hz, ``1 / period``.
@@ -77,8 +78,14 @@ class PeriodFit:
     std_nonstationary : float
         s, between-window std of the period when the windows disagree
         beyond their noise (0 otherwise); ``windows`` lists them.
+    std_quantisation : float
+        s, spread of the period over re-quantised copies of the fit when the
+        record lies on a lattice of steps with too little noise to dither
+        them (0 otherwise; ``signal._quantisation``); it replaces the noise
+        term (with its serial factor) when larger.
     uncertainty : dict
         ``noise``, ``serial_correlation`` (the extra std it adds, s),
+        ``quantisation`` (the extra std of an undithered quantised record, s),
         ``nonstationarity`` (s), ``total`` (= ``std``), ``dominant``
         (the name of the largest term) and the rules' parameters.
     windows : list of dict
@@ -149,6 +156,7 @@ class PeriodFit:
     crossing: CrossingPeriod | None = field(default=None, repr=False)
     half_periods: tuple | None = None
     std_nonstationary: float = 0.0
+    std_quantisation: float = 0.0
     uncertainty: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
     residual_check: dict = field(default_factory=dict)
@@ -193,7 +201,7 @@ class PeriodFit:
         """JSON-friendly scalars (no arrays)."""
         keys = ("model", "period", "std", "frequency", "period_undamped", "damping_ratio", "damping",
                 "amplitude", "amplitude_rms", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
-                "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "uncertainty",
+                "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "std_quantisation", "uncertainty",
                 "lag1_autocorr", "noise_std", "aic", "bic", "converged", "modes", "selection",
                 "chosen_by", "choice_reason", "windows", "residual_check", "oscillation", "notes")
         d = {k: getattr(self, k) for k in keys}
@@ -215,6 +223,34 @@ def _grad_std(cov, idx, grad):
     sub = cov[np.ix_(idx, idx)]
     v = float(g @ sub @ g)
     return math.sqrt(v) if np.isfinite(v) and v >= 0 else float("nan")
+
+
+def _hc_std(raw: _Raw, covf, s2: float, r, dof: int) -> dict:
+    """Heteroscedasticity-consistent std (White's sandwich, scaled by
+    ``n/(n-p)``) of each frequency parameter ``omega`` (rad/s), by index
+    into ``raw.p``.  The least-squares ``s^2 (J^T J)^-1`` assumes every
+    sample equally noisy; a camera's timestamp jitter or repeated frames
+    err by ``y'(t) dt``, most at the zero crossings where the frequency is
+    measured, and the plain std then understates the error (session 6
+    audit: sd of z ~1.2).  The period's noise std is the larger of the two,
+    for white residuals (Ljung-Box); residuals that are not white get the
+    serial-correlation factor instead (smooth, deterministic residuals such
+    as a sensor's harmonics would make the sandwich overstate the std)."""
+    out: dict = {}
+    if not np.all(np.isfinite(covf)) or not s2 > 0:
+        return out
+    fi = np.nonzero(raw.free)[0]
+    A = covf / s2  # (J^T J)^-1
+    n = r.size
+    for iw in range(4, raw.p.size, 4):
+        hit = np.nonzero(fi == iw)[0]
+        if hit.size == 0:
+            continue
+        g = raw.J @ A[:, hit[0]]
+        v = float(np.sum((g * r) ** 2)) * n / dof
+        if np.isfinite(v) and v >= 0:
+            out[iw] = math.sqrt(v)
+    return out
 
 
 def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
@@ -241,6 +277,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     roundoff = math.sqrt(raw.cost / n) <= 1e-9 * max(float(np.std(y)), np.finfo(float).tiny)
     lb_q, lb_p = ljung_box(r)
     white = roundoff or lb_p >= LB_ALPHA or not np.all(np.isfinite(inv2))
+    # independent but unequal errors: the sandwich std; correlated ones get the serial factor instead
+    hc = _hc_std(raw, covf, s2, r, dof) if white and not roundoff else {}
     dt = float(np.median(np.diff(t)))
 
     def factor(i_param: int) -> float:
@@ -268,7 +306,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         fac = facs[iw]
         a, b, w, sg = (float(p[i]) for i in (ia, ib, iw, isg))
         T = 2 * math.pi / w
-        sdT_raw = 2 * math.pi / w ** 2 * _std(cov, iw)
+        sdT_raw = 2 * math.pi / w ** 2 * max(_std(cov, iw), hc.get(iw, 0.0))
         wn = math.hypot(w, sg)
         zeta = sg / wn
         zstd = _grad_std(cov, [iw, isg], [-sg * w / wn ** 3, w ** 2 / wn ** 3])
@@ -286,7 +324,8 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         T_und = m["period_undamped"]
     elif multi:
         modes = [mode(i, i + 1, i + 2, i + 3) for i in range(2, p.size, 4)]
-        modes.sort(key=lambda d: -d["amplitude"])
+        T_rec = float(t[-1] - t[0])
+        modes.sort(key=lambda d: _mode_rank(d["omega"], d["amplitude"], T_rec))
         m = modes[0]
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"], "zeta": m["damping_ratio"],
                    "zeta_std": m["damping_ratio_std"], "second_sigma": modes[1]["sigma"],
@@ -296,7 +335,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         a, b, w, kap, sg = (float(v) for v in p[2:7])
         A0 = math.hypot(a, b)
         T = 2 * math.pi / w
-        sdT_raw = 2 * math.pi / w ** 2 * _std(cov, 4)
+        sdT_raw = 2 * math.pi / w ** 2 * max(_std(cov, 4), hc.get(4, 0.0))
         k = kap / A0 if A0 > 0 else float("nan")
         kstd = _grad_std(cov, [2, 3, 5], [-kap * a / A0 ** 3, -kap * b / A0 ** 3, 1 / A0]) if A0 > 0 else float("nan")
         zeta = (sg + kap) / w
