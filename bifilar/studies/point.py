@@ -86,8 +86,12 @@ def point_sensitivity(scene, names: list[str], rest=None, at=None):
     lands on a pose turned by ~1 rad).  A derivative must follow the local
     branch, so each side's rest pose must stay within :data:`TURN_MAX` of the
     base pose; otherwise that side is dropped (one-sided difference, first
-    order: relative error ~1e-6), and an input with no side left is left out
-    of the uncertainty budget (its column set to 0) with a note.  The inputs
+    order: relative error ~1e-6), and an input with no side left has no
+    derivative (its column NaN, listed in ``undefined``, with a note): the
+    point's sigmas are then null, as ``invert`` gives no std there (within
+    that input's uncertainty the hanging changes qualitatively; a sigma
+    leaving it out was confidently wrong, docs/design.md "Closed-loop check
+    of the planner").  The inputs
     with an analytic derivative at the neutral scene (the branch's
     derivative, :mod:`bifilar.analysis.derivatives`) take it instead: only
     those pushing along the neutral direction are differenced, except at an
@@ -116,6 +120,7 @@ def point_sensitivity(scene, names: list[str], rest=None, at=None):
     notes = []
     todo = list(range(len(names)))
     no_branch: set = set()
+    undefined: list[str] = []
     if neutral:
         # the analytic derivative where it exists (the branch's derivative, exact: what a
         # one-sided difference approximates to O(h)); the branch-following differences
@@ -147,9 +152,13 @@ def point_sensitivity(scene, names: list[str], rest=None, at=None):
             jac[:, j] = (T1 - T0) / (sgn * h)
             notes.append(f"{name}: one-sided derivative (no nearby stable rest for a {'-+'[sgn < 0]}{h:.1e} change)")
         else:
-            notes.append(f"{name}: left out of the budget (no nearby stable rest for a {h:.1e} change either way: "
-                         "the point is at the edge of stability)")
-    return Sensitivity(list(names), T0, jac, ms, rest), notes
+            # no derivative: within the input's uncertainty the hanging changes qualitatively, so no std
+            # can be given (NaN: the budget's sigma is null, as invert's std is, not a sigma without it)
+            jac[:, j] = np.nan
+            undefined.append(name)
+            notes.append(f"{name}: no derivative (no nearby stable rest for a {h:.1e} change either way: "
+                         "the point is at the edge of stability): the uncertainty cannot be given")
+    return Sensitivity(list(names), T0, jac, ms, rest, undefined=tuple(undefined)), notes
 
 
 def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slope: float,
@@ -546,6 +555,11 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             shares=grouped_shares(b), separation=sep,
             axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
         )
+        if not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
+            from ..estimation.invert import std_unavailable_text
+
+            bad = [n for j, n in enumerate(sens.names) if n not in _IDX and not np.isfinite(sens.jacobian[k, j])]
+            entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE")
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at)

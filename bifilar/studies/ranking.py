@@ -26,7 +26,8 @@ from .settings import Constraints
 def objective(point: dict, target: str | None, among=None) -> float:
     """Relative standard uncertainty the ranking minimises: of ``target``, or
     the worst of the components ``among`` (default: all of the point's);
-    inf when one of them is not identifiable or the point is invalid."""
+    inf when one of them is not identifiable or has no sigma
+    (``sigma_unavailable``), or the point is invalid."""
     if not point.get("valid"):
         return math.inf
     comps = point["components"]
@@ -121,6 +122,13 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
         return "--param", "no valid configuration in the range: " + why_invalid(points)
     finite = [p for p in valid if math.isfinite(objective(p, target, among))]
     if not finite:
+        # identifiable, but no std anywhere (a knife edge, dependent wires): say why, as invert does
+        sel = [target] if target else list(among if among is not None else _components(points))
+        why = [(c, p["components"][c]["sigma_unavailable"]) for p in valid for c in sel
+               if p["components"].get(c, {}).get("sigma_unavailable")]
+        if why:
+            return "--param", (f"no point of the range has an uncertainty for {why[0][0]} "
+                               f"({len(valid)} valid point(s)): {why[0][1]}")
         what = target or "no component"
         verb = "is not" if target else "is"
         return "--target", f"{what} {verb} identifiable from any mode anywhere in the range"
