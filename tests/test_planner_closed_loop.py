@@ -89,6 +89,32 @@ def test_dependent_wires_without_a_sigma_are_not_called_unidentifiable():
     assert "Izz" in rec["reason"] and "length.1" in rec["reason"] and "identifiable" not in rec["reason"]
 
 
+def _fake(obj, x):
+    return {"params": {"length_offset": x}, "valid": True, "error": None,
+            "components": {"Izz": {"identifiable": True, "rel_sigma": obj, "mode": "torsion"}},
+            "separation": 0.5, "tension": {"rest": [1.0], "peak": 2.0, "min": [0.5], "max": [2.0], "slack": False,
+                                            "slack_wires": []}, "depth": {"rest": 1.0, "max": 1.0}}
+
+
+@pytest.mark.parametrize("ulps", [0, 1, -1])
+def test_ties_go_to_the_parameters_not_to_the_grid_order_or_the_last_bits(ulps):
+    # mirror images (length_offset -0.1 and 0.1 of a symmetric rig) have one objective up to rounding
+    # (6e-14 relative measured on the shallow box of docs/design.md); the recommendation and the ranks
+    # must not follow the order of the grid nor the last bits
+    a = 0.0123
+    b = a
+    for _ in range(abs(ulps)):
+        b = math.nextafter(b, math.inf if ulps > 0 else -math.inf)
+    for order in ((-0.1, 0.1), (0.1, -0.1)):
+        pts = [_fake(a if x < 0 else b, x) for x in order]
+        rec = sw.assess(pts, sw.Constraints(), None)
+        assert rec["params"] == {"length_offset": -0.1}, (order, ulps)
+        assert {p["params"]["length_offset"]: p["rank"] for p in pts} == {-0.1: 1, 0.1: 2}
+    # a real difference still ranks
+    pts = [_fake(a * (1 + 1e-6), -0.1), _fake(a, 0.1)]
+    assert sw.assess(pts, sw.Constraints(), None)["params"] == {"length_offset": 0.1}
+
+
 def test_recommended_point_sigma_is_the_spread_of_the_experiment():
     # the Solar Boat's recommended point of `sweep --param spacing=1:4:7 --param length=2:5:4`: the
     # experimenter's inputs drawn from their stds (every length, anchor and attachment coordinate,

@@ -37,6 +37,29 @@ def objective(point: dict, target: str | None, among=None) -> float:
     return float(max(vals)) if vals else math.inf
 
 
+#: objectives within this relative difference rank as equal: mirror-image points (``length_offset =
+#: -0.1`` and ``0.1`` of a symmetric rig) have the same figures up to rounding (6e-14 relative measured),
+#: far below anything the figures resolve, so which of them is recommended must not be left to the last bits
+TIE_REL = 1e-9
+
+
+def rank_order(points: list[dict], idx, key) -> list[int]:
+    """The indices ``idx`` of ``points`` by increasing ``key(point)``
+    (finite), ties broken by the parameters, not by the grid order or
+    rounding: the points whose key is within :data:`TIE_REL` of the
+    smallest remaining one form a group, ordered by their parameter values
+    (as given, in the sweep's parameter order); then the next group."""
+    order = sorted(idx, key=lambda i: key(points[i]))
+    out: list[int] = []
+    while order:
+        head = key(points[order[0]])
+        group = [i for i in order if key(points[i]) <= head + TIE_REL * abs(head)]
+        group.sort(key=lambda i: tuple(float(v) for v in points[i].get("params", {}).values()))
+        out += group
+        order = [i for i in order if i not in group]
+    return out
+
+
 def measurable_components(points: list[dict]) -> list[str]:
     """Components identifiable at one valid point at least (config order)."""
     out = []
@@ -189,8 +212,8 @@ def assess(points: list[dict], constraints: Constraints, target: str | None) -> 
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
-    ranked = sorted((i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None),
-                    key=lambda i: points[i]["objective"])
+    ranked = rank_order(points, [i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None],
+                        lambda p: p["objective"])
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
