@@ -187,3 +187,20 @@ def test_flat_body_estimates_beyond_the_physical_limit_are_predicted():
     # a body well inside its physical set: nothing to say (the boat's recommended point)
     _, _, p = _point(SOLAR, {"spacing": 2.5, "length": 2.0}, tensions=False)
     assert all(c["p_unphysical"] < 1e-6 and "physical_limit" not in c for c in p["components"].values())
+
+
+def test_sweep_table_says_why_a_knife_edge_point_is_not_ranked():
+    # the plate hung at its CoM (height 0: a knife edge) and 0.3 m above it: the second is recommended,
+    # the first's row says why it has no rank; the flat plate's components all sit on a triangle limit
+    # with the others as given, which the recommended point's warnings say
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    r = CliRunner().invoke(main, ["sweep", str(PLATE), "--param", "height=0,0.3", "--no-tensions"])
+    assert r.exit_code == 0, r.stderr
+    text = " ".join(r.stdout.split())
+    assert "0: no uncertainty for Ixx, Izz: an input has no derivative here" in text
+    assert "recommended: point 1: height = 0.3" in text
+    assert "Izz: the config's value 260.417 kg m^2 lies" in " ".join(r.stderr.split())
+    assert " ".join(r.stderr.split()).count("a flat body sits on it") == 3

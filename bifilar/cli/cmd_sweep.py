@@ -379,6 +379,10 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         row.append(str(p["rank"]) if p["rank"] is not None else "[yellow]x[/yellow]" if p["violations"] else "-")
         if p["violations"]:
             notes.append(f"{i}: " + esc("; ".join(p["violations"])))
+        unavailable = [c for c in comps if p["components"][c].get("sigma_unavailable")]
+        if unavailable:  # not ranked: say why (the inputs are in the JSON's sigma_unavailable)
+            notes.append(f"{i}: no uncertainty for {', '.join(unavailable)}: an input has no derivative here "
+                         "(the CoM on the attachment line, or dependent wires); see --json")
         t.add_row(*row)
     con.print(t)
     for line in notes[:20]:

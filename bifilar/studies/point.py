@@ -396,6 +396,7 @@ def physical_limits(inertia, comp: str, budget) -> dict:
     that promised a symmetric spread (docs/design.md)."""
     from ..estimation.problem import admissible_interval
     from ..estimation.roots import EDGE_Z
+    from ..scene import TRIANGLE_SLACK
 
     lo, hi = admissible_interval(inertia, comp)
     out: dict = {"physical_interval": [lo, hi], "p_unphysical": None, "p_refused": None}
@@ -414,7 +415,8 @@ def physical_limits(inertia, comp: str, budget) -> dict:
         out["physical_limit"] = (
             f"the config's value {I:.6g} kg m^2 lies {abs(I - near) / sd:.2g} sigma from its physical limit "
             f"{near:.6g} kg m^2 (positive definite, triangle inequality, the other components as given"
-            + ("; a flat body sits on it" if abs(I - near) <= 2e-4 * abs(near) else "")
+            + ("; a flat body sits on it" if abs(I - near) <= 2 * TRIANGLE_SLACK * float(np.max(np.linalg.eigvalsh(inertia)))
+               else "")
             + f"), so about {100 * out['p_unphysical']:.2g} % of experiments time a period no "
             f"physical {comp} reproduces: invert gives the limit there or, for about "
             f"{100 * out['p_refused']:.2g} %, refuses; the sigma describes the spread only away from the limit")
