@@ -43,7 +43,8 @@ def test_plan_stops_at_the_tension_limit_where_the_formula_puts_it():
     # gives that spacing in closed form: s* = b - 2 l sin(theta*), cos(theta*) = m g / (2 T_max).
     cfg = trapezoid().config
     T_max = 700.0
-    st = sw.resolve_settings(cfg, amplitude=1e-3, periods=2.0)  # 1e-3 rad: peak within 4e-4 of rest
+    # 1e-3 rad: peak within 4e-4 of rest; attachment x and com x (no derivative: the CoM on the attachment line) exact
+    st = sw.resolve_settings(cfg, amplitude=1e-3, periods=2.0, sigma={"position": 0.0, "com": 0.0})
     res = plan(cfg, "t", [("spacing", 1.0, 9.0)], st, sw.Constraints(max_tension=T_max), "Ixx")
     cos_t = 100 * G / (2 * T_max)
     s_star = 10 - 2 * 5 * math.sqrt(1 - cos_t**2)
@@ -58,7 +59,7 @@ def test_plan_stops_at_the_tension_limit_where_the_formula_puts_it():
 
 def test_plan_uses_only_available_wire_lengths():
     cfg = trapezoid(b=5.0, bp=5.0).config
-    st = sw.resolve_settings(cfg, tensions=False)
+    st = sw.resolve_settings(cfg, tensions=False, sigma={"position": 0.0, "com": 0.0})  # the knife edge's inputs exact
     res = plan(cfg, "t", [("length", 2.0, 6.0)], st, sw.Constraints(lengths_available=(2.5, 3.5, 7.0)), "Izz")
     assert res.best["params"]["length"] in (2.5, 3.5)
     with pytest.raises(InputError) as e:

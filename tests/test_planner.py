@@ -30,6 +30,10 @@ def run(args):
     return r.exit_code, r.stdout, r.stderr
 
 
+#: attachment x and com x have no derivative on the thesis plate (CoM on the attachment line): stated exact
+KNIFE_EXACT = ["--sigma", "position=0", "--sigma", "com=0"]
+
+
 def parallel_plate():
     """The thesis plate on parallel wires 5 m apart."""
     cfg = read_yaml(PLATE)
@@ -40,7 +44,8 @@ def parallel_plate():
 def test_plate_sweep_recommends_the_measurable_components_and_names_iyy_remedy():
     # the thesis plate with its CoM on the attachment line: the pitch about that line is neutral, so no
     # period depends on Iyy anywhere in the range; Ixx and Izz must still get a recommendation
-    code, out, err = run(["sweep", str(PLATE), "--param", "spacing=1,2.5", "--no-tensions", "--json"])
+    # (attachment x and com x, which have no derivative at this knife edge, stated exact: else no sigma)
+    code, out, err = run(["sweep", str(PLATE), "--param", "spacing=1,2.5", "--no-tensions", "--json"] + KNIFE_EXACT)
     assert code == 0, err
     doc = json.loads(out)
     rec = doc["recommendation"]
@@ -63,22 +68,23 @@ def test_plate_sweep_recommends_the_measurable_components_and_names_iyy_remedy()
     c2["rig"]["attachments"] = best["rig"]["attachments"]
     c2["rig"]["anchors"] = best["rig"]["anchors"]
     c2["body"] = {"mass": 100.0, "inertia": {"principal": [208.3333333333, 260.4166666667, 52.0833333333]}}
-    p = sw.evaluate_point(c2, "t", {}, sw.resolve_settings(c2, tensions=False))
+    p = sw.evaluate_point(c2, "t", {}, sw.resolve_settings(c2, tensions=False, sigma={"position": 0.0, "com": 0.0}))
     assert turned[0]["rel_sigma"] == pytest.approx(p["components"]["Izz"]["rel_sigma"], rel=1e-6)
 
 
 def test_swept_timing_uncertainty_changes_the_predicted_sigma_as_sigma_flag_does():
     cfg = parallel_plate()
     values = (0.0, 0.003, 0.03)
+    knife = {"position": 0.0, "com": 0.0}  # no derivative at this knife edge: stated exact, else no sigma
     pts = sw.run_sweep(cfg, "t", sw.build_grid([ParamSpec("uncertainty.timing", values)]),
-                       sw.resolve_settings(cfg, components=["Izz"], tensions=False))
+                       sw.resolve_settings(cfg, components=["Izz"], tensions=False, sigma=knife))
     rel = [p["components"]["Izz"]["rel_sigma"] for p in pts]
     # the timing term adds in quadrature: rel^2 = rel_0^2 + (t (dI/dT) / I)^2 with (dI/I)/(dT/T) = rel_sens
     e = pts[0]["components"]["Izz"]
     for t, r in zip(values, rel):
         assert r == pytest.approx(math.hypot(rel[0], t * e["rel_sensitivity_period"] / e["period"]), rel=1e-9)
         flag = sw.evaluate_point(cfg, "t", {}, sw.resolve_settings(cfg, components=["Izz"], tensions=False,
-                                                                    sigma={"timing": t}))
+                                                                    sigma={**knife, "timing": t}))
         assert r == pytest.approx(flag["components"]["Izz"]["rel_sigma"], rel=1e-12)
     assert rel[2] > 5 * rel[1]
 
@@ -110,7 +116,8 @@ def test_plan_zip_keeps_wires_parallel_and_writes_a_config_and_a_measurements_fi
     src.write_text(yaml.safe_dump(cfg))
     out_cfg, meas = tmp_path / "planned.yaml", tmp_path / "measurements.yaml"
     code, out, err = run(["plan", str(src), "--zip", "--param", "spacing=2:5", "--param", "ceiling_spacing=2:5",
-                          "--no-tensions", "--write-config", str(out_cfg), "--write-measurements", str(meas), "--json"])
+                          "--no-tensions", "--write-config", str(out_cfg), "--write-measurements", str(meas), "--json"]
+                         + KNIFE_EXACT)
     assert code == 0, err
     doc = json.loads(out)
     opt = doc["optimum"]
@@ -138,12 +145,12 @@ def test_plan_zip_keeps_wires_parallel_and_writes_a_config_and_a_measurements_fi
     for c, a in mh["accuracy"].items():
         # the planned periods are those of the prior: invert must give the prior back
         assert inv[c]["value"] == pytest.approx(a["value"], rel=1e-6), c
-        # this plate's CoM lies on its attachment line (a knife edge: a 1 mm sideways error tips it),
-        # so invert gives no std rather than a wrong one (issue 10), naming the inputs; the plan's
-        # linear sigma is its known limit there.  The sigma round trip on a rig that is not a knife
-        # edge: test_multi_hanging_plan_uncertainty_matches_a_monte_carlo_of_the_planned_experiment.
-        assert inv[c]["std"] is None, c
-    assert "cannot be given" in idoc["std_unavailable"] and "attachment" in idoc["std_unavailable"]
+        # this plate's CoM lies on its attachment line (a knife edge: a 1 mm sideways error tips it);
+        # the plan states attachment x and com x exact (KNIFE_EXACT) and writes that into the file, so
+        # invert's std exists and is the plan's (the sigma round trip on a rig that is not a knife edge:
+        # test_multi_hanging_plan_uncertainty_matches_a_monte_carlo_of_the_planned_experiment)
+        assert inv[c]["std"] == pytest.approx(a["sigma"], rel=1e-6), c
+    assert idoc["std_unavailable"] is None
 
 
 def test_separation_guard_is_the_smallest_gap_of_any_timed_mode():
@@ -242,7 +249,7 @@ def monte_carlo_of_plan(hp, n, rng, offset):
             for mm in hp.measurements if mm["hanging"] == h.name] for h in hp.hangings]
     blocks = []
     for h, ks in zip(hp.hangings, idx):
-        J, Sx, Js = _rows(h, comps, hp.unc)
+        J, Sx, Js, _ = _rows(h, comps, hp.unc)
         blocks.append((J[ks], Sx[np.ix_(ks, ks)], Js[ks]))
     C, rank, _ = joint_covariance(blocks, hp.unc["timing"])
     J = np.vstack([b[0] for b in blocks])

@@ -55,7 +55,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     with progress_bar("planning", enabled=True) as upd:
         res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
     doc = res.to_json()
-    doc["warnings"] = point_warnings(cfg, config, res.best["params"], "the planned point")
+    doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point")
     doc["settings"] = settings.describe()
     doc["how_to_time"] = timing_advice(res.best, reaction, sensor)
     ident = doc["identifiability"]

@@ -111,13 +111,17 @@ def point_config(base_cfg: dict, source: str, point: dict) -> dict:
     return cfg
 
 
-def point_warnings(cfg: dict, source: str, params: dict, what: str) -> list[str]:
+def point_warnings(cfg: dict, source: str, point: dict, what: str) -> list[str]:
     """The config plausibility warnings of a recommended or planned point
-    (:func:`bifilar.studies.sweep.point_warnings`), each logged to stderr now
-    (``warning: WHAT: ...``) and returned for the JSON document."""
+    (:func:`bifilar.studies.sweep.point_warnings`) and its components'
+    ``physical_limit`` (an estimate often outside what a real body can
+    have), each logged to stderr now (``warning: WHAT: ...``) and returned
+    for the JSON document."""
     from ..studies.sweep import point_warnings as check
 
-    out = [f"{what}: {w}" for w in check(cfg, source, params)]
+    out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
+    out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
+            if e.get("physical_limit")]
     for w in out:
         click.echo(f"warning: {w}", err=True)
     return out
@@ -298,7 +302,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     remedies_for(rec, points, cfg, config, settings)
     warnings = []
     if rec.get("best") is not None:
-        warnings = point_warnings(cfg, config, rec["params"], "the recommended point")
+        warnings = point_warnings(cfg, config, points[rec["best"]], "the recommended point")
         rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
         multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                       hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
@@ -375,6 +379,10 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         row.append(str(p["rank"]) if p["rank"] is not None else "[yellow]x[/yellow]" if p["violations"] else "-")
         if p["violations"]:
             notes.append(f"{i}: " + esc("; ".join(p["violations"])))
+        unavailable = [c for c in comps if p["components"][c].get("sigma_unavailable")]
+        if unavailable:  # not ranked: say why (the inputs are in the JSON's sigma_unavailable)
+            notes.append(f"{i}: no uncertainty for {', '.join(unavailable)}: an input has no derivative here "
+                         "(the CoM on the attachment line, or dependent wires); see --json")
         t.add_row(*row)
     con.print(t)
     for line in notes[:20]:

@@ -208,6 +208,18 @@ class InversionResult:
         return doc
 
 
+def std_unavailable_text(inputs, option: str) -> str:
+    """Why no std can be given (``invert``'s ``std_unavailable``, a sweep
+    point's ``sigma_unavailable``): ``inputs`` have no derivative; ``option``
+    is the flag that states their uncertainty."""
+    return ("the uncertainty cannot be given: these inputs have no derivative here (the scene is degenerate: a "
+            "neutral mode, e.g. the CoM on the line through two attachment points; or four or five dependent "
+            "wires, where a change of one wire leaves a wire slack or removes a mode), so within their stated "
+            "uncertainty the hanging changes qualitatively (it cannot hang, tilts far, or loses a mode): "
+            + ", ".join(inputs) + ". Hang the body with its CoM clearly below the attachment line, state "
+            f"those inputs' uncertainty ({option}) if it is smaller")
+
+
 def _assumed(unc: dict) -> dict:
     from .uncertainty import UNCERTAINTY_KEYS
 
@@ -433,14 +445,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         # uncertainty the scene changes qualitatively, and a budget without
         # them is far too small (50x on the thesis plate with its CoM on the
         # attachment line).  No std is better than a wrong one.
-        res.std_unavailable = (
-            "the uncertainty cannot be given: these inputs have no derivative here (the scene is degenerate: a "
-            "neutral mode, e.g. the CoM on the line through two attachment points; or four or five dependent "
-            "wires, where a change of one wire leaves a wire slack or removes a mode), so within their stated "
-            "uncertainty the hanging changes qualitatively (it cannot hang, tilts far, or loses a mode): "
-            + ", ".join(degenerate) + ". Hang the body with its CoM clearly below the attachment line, state "
-            "those inputs' uncertainty (--uncertainty KEY=VALUE) if it is smaller, or run --monte-carlo N to "
-            "see the spread")
+        res.std_unavailable = std_unavailable_text(degenerate, "--uncertainty KEY=VALUE") + (
+            ", or run --monte-carlo N to see the spread")
         warnings.append(res.std_unavailable)
     res.interval = interval_95(p_hat, res.budget, bctx)
     if res.std_unavailable:

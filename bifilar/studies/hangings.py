@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BifilarError, InputError
+from ..estimation.invert import std_unavailable_text
 from ..estimation.sensitivity import input_sigma
 from .point import IDENTIFIABLE_MIN, component_scale, point_uncertainty
 from .remedy import HANGINGS, hanging_config, hanging_sensitivity, reference_column, rotation
@@ -82,6 +83,8 @@ class HangingPlan:
     scales: dict
     unc: dict
     missing: list = field(default_factory=list)
+    #: inputs with no derivative for a timed period and a nonzero sigma: no sigma can be given (NaN covariance)
+    undefined: list = field(default_factory=list)
 
     def accuracy(self) -> dict:
         sd = np.sqrt(np.clip(np.diag(self.covariance), 0, None)) if len(self.covariance) else []
@@ -96,7 +99,9 @@ class HangingPlan:
         return {"components": self.components, "accuracy": self.accuracy(), "correlation": self.correlation(),
                 "hangings": [{"name": h.name, "rotation_deg": list(h.rotvec_deg), "notes": h.notes}
                              for h in self.hangings],
-                "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing}
+                "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing,
+                "sigma_unavailable": (std_unavailable_text(self.undefined, "--sigma KEY=VALUE")
+                                      if self.undefined else None)}
 
 
 def _separations(T: np.ndarray) -> np.ndarray:
@@ -141,11 +146,26 @@ def _rows(h: Hanging, comps: list[str], unc: dict):
     names = h.sens.names
     xs = [j for j, n in enumerate(names) if n not in _IDX and n not in SHARED_INPUTS]
     sx = np.array([input_sigma(h.scene, names[j], unc) for j in xs])
-    Jx = h.sens.jacobian[:, xs] * sx
+    Jx = _stated(h.sens.jacobian[:, xs], sx)
     col = {n: (h.sens.column(n) if n in names else np.zeros(len(J))) for n in SHARED_INPUTS}
-    Jcom = np.column_stack([col["com.x"], col["com.y"], col["com.z"]]) @ h.R
-    Js = np.column_stack([col["mass"] * input_sigma(h.scene, "mass", unc), Jcom * input_sigma(h.scene, "com.x", unc)])
-    return J, Jx @ Jx.T, Js
+    s_com = input_sigma(h.scene, "com.x", unc)
+    Jcom = _stated(np.column_stack([col["com.x"], col["com.y"], col["com.z"]]), np.full(3, s_com)) @ h.R
+    Js = np.column_stack([_stated(col["mass"][:, None], np.array([input_sigma(h.scene, "mass", unc)])), Jcom])
+    # per mode: the inputs without a derivative (a knife edge) and a nonzero sigma: no std can be given
+    # from that period (as invert gives none)
+    stated = [(names[j], h.sens.jacobian[:, j]) for j, s in zip(xs, sx) if s > 0]
+    stated += [(n, col[n]) for n in SHARED_INPUTS if n in names and input_sigma(h.scene, n, unc) > 0]
+    undefined = [[n for n, c in stated if not np.isfinite(c[k])] for k in range(len(J))]
+    return J, Jx @ Jx.T, Js, undefined
+
+
+def _stated(jac: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """dT/dx times sigma_x (s), column by column; an input stated exact
+    (sigma 0) contributes nothing, even without a derivative (NaN column),
+    and a NaN column with a nonzero sigma counts 0 here (the hanging
+    selection needs numbers; :func:`_rows` lists it and the plan's sigmas
+    are then null)."""
+    return np.where(sigma > 0, np.nan_to_num(jac, nan=0.0), 0.0) * sigma
 
 
 def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True):
@@ -212,7 +232,7 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
         blocks = []
         for hi in sorted({a for a, _ in sel}):
             ks = [k for a, k in sel if a == hi]
-            J, Sx, Js = data[hi]
+            J, Sx, Js, _ = data[hi]
             scale = np.array([scales[c] for c in components])
             blocks.append((J[ks] * scale, Sx[np.ix_(ks, ks)], Js[ks]))  # in units of each component's scale
         C, rank, unresolved = joint_covariance(blocks, timing, as_invert)
@@ -252,7 +272,11 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                       DEFAULT_REACTION if reaction is None else reaction, sensor)}
             for a in used_idx for (b, k) in sorted(chosen) if b == a]
     missing = [c for c, u in zip(components, unresolved) if u]
-    return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing)
+    undefined = sorted({n for a, k in chosen for n in data[a][3][k]})
+    if undefined:  # the selection left them out; the prediction cannot (invert gives no std either)
+        C = np.full_like(C, np.nan)
+    return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing,
+                       undefined)
 
 
 def measurements_document(plan: HangingPlan, reaction: float | None = None) -> dict:
@@ -297,7 +321,10 @@ def describe_json(doc: dict) -> list[str]:
     for c, a in doc["accuracy"].items():
         ok = a["sigma"] is not None and math.isfinite(a["sigma"])
         lines.append(f"{c} = {a['value']:.6g} +- {a['sigma']:.3g} kg m^2 ({100 * a['rel_sigma']:.3g} %)" if ok
+                     else f"{c}: uncertainty not given (below)" if doc.get("sigma_unavailable")
                      else f"{c}: not identified by the hangings tried")
+    if doc.get("sigma_unavailable"):
+        lines.append(doc["sigma_unavailable"])
     return lines
 
 

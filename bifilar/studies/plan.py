@@ -54,7 +54,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import identifiability, measurable_components, point_separation
+from .ranking import identifiability, measurable_components, point_separation, rank_order
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -272,8 +272,8 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     if not feasible:
         flag, msg = binding_constraint(evaluated, constraints, target, among)
         raise InputError(flag, msg)
-    best = min((p for p in feasible if not p.get("screen")), key=lambda p: objective(p, target, among))
-    best = dict(best)
+    full = [p for p in feasible if not p.get("screen")]
+    best = dict(full[rank_order(full, range(len(full)), lambda p: objective(p, target, among))[0]])
     best["objective"] = objective(best, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
                       among, zip_)

@@ -86,8 +86,12 @@ def point_sensitivity(scene, names: list[str], rest=None, at=None):
     lands on a pose turned by ~1 rad).  A derivative must follow the local
     branch, so each side's rest pose must stay within :data:`TURN_MAX` of the
     base pose; otherwise that side is dropped (one-sided difference, first
-    order: relative error ~1e-6), and an input with no side left is left out
-    of the uncertainty budget (its column set to 0) with a note.  The inputs
+    order: relative error ~1e-6), and an input with no side left has no
+    derivative (its column NaN, listed in ``undefined``, with a note): the
+    point's sigmas are then null, as ``invert`` gives no std there (within
+    that input's uncertainty the hanging changes qualitatively; a sigma
+    leaving it out was confidently wrong, docs/design.md "Closed-loop check
+    of the planner").  The inputs
     with an analytic derivative at the neutral scene (the branch's
     derivative, :mod:`bifilar.analysis.derivatives`) take it instead: only
     those pushing along the neutral direction are differenced, except at an
@@ -116,6 +120,7 @@ def point_sensitivity(scene, names: list[str], rest=None, at=None):
     notes = []
     todo = list(range(len(names)))
     no_branch: set = set()
+    undefined: list[str] = []
     if neutral:
         # the analytic derivative where it exists (the branch's derivative, exact: what a
         # one-sided difference approximates to O(h)); the branch-following differences
@@ -147,9 +152,13 @@ def point_sensitivity(scene, names: list[str], rest=None, at=None):
             jac[:, j] = (T1 - T0) / (sgn * h)
             notes.append(f"{name}: one-sided derivative (no nearby stable rest for a {'-+'[sgn < 0]}{h:.1e} change)")
         else:
-            notes.append(f"{name}: left out of the budget (no nearby stable rest for a {h:.1e} change either way: "
-                         "the point is at the edge of stability)")
-    return Sensitivity(list(names), T0, jac, ms, rest), notes
+            # no derivative: within the input's uncertainty the hanging changes qualitatively, so no std
+            # can be given (NaN: the budget's sigma is null, as invert's std is, not a sigma without it)
+            jac[:, j] = np.nan
+            undefined.append(name)
+            notes.append(f"{name}: no derivative (no nearby stable rest for a {h:.1e} change either way: "
+                         "the point is at the edge of stability): the uncertainty cannot be given")
+    return Sensitivity(list(names), T0, jac, ms, rest, undefined=tuple(undefined)), notes
 
 
 def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slope: float,
@@ -365,6 +374,55 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True, at=
     return out
 
 
+#: a component whose estimate falls outside its physical interval in at least this fraction of experiments
+#: gets a ``physical_limit`` warning (see :func:`physical_limits`)
+UNPHYSICAL_WARN = 0.01
+
+
+def physical_limits(inertia, comp: str, budget) -> dict:
+    """Where the estimate of ``comp`` may fall outside what a real body can
+    have: ``physical_interval`` [lo, hi] (kg m^2; positive definite and the
+    triangle inequality with the other components as given,
+    :func:`bifilar.estimation.problem.admissible_interval`), and for a
+    normal estimate about the config's value with the predicted sigma
+    ``p_unphysical``, the fraction of experiments whose period no physical
+    value reproduces (``invert`` then gives the limit, when the period
+    misfit there is within :data:`~bifilar.estimation.roots.EDGE_Z` timing
+    sigmas, else refuses: ``p_refused``), and ``physical_limit``, a warning
+    when ``p_unphysical`` >= :data:`UNPHYSICAL_WARN`.  A flat body (the
+    trifilar table, the thesis plate: Izz = Ixx + Iyy) sits on the limit,
+    so about half of its Izz estimates do: the closed-loop check found 13 %
+    of the trifilar's refused and most of the rest clamped, under a sigma
+    that promised a symmetric spread (docs/design.md)."""
+    from ..estimation.problem import admissible_interval
+    from ..estimation.roots import EDGE_Z
+    from ..scene import TRIANGLE_SLACK
+
+    lo, hi = admissible_interval(inertia, comp)
+    out: dict = {"physical_interval": [lo, hi], "p_unphysical": None, "p_refused": None}
+    sd = float(budget.value_sigma)
+    if not (math.isfinite(sd) and sd > 0):
+        return out
+    I = float(inertia[_IDX[comp]])
+    edge = EDGE_Z * float(budget.contributions.get("timing", 0.0))  # the misfit invert accepts, kg m^2
+
+    def beyond(d):  # P(estimate more than d beyond either limit)
+        return 0.5 * (math.erfc((I - lo + d) / (sd * math.sqrt(2))) + math.erfc((hi - I + d) / (sd * math.sqrt(2))))
+
+    out["p_unphysical"], out["p_refused"] = beyond(0.0), beyond(edge)
+    if out["p_unphysical"] >= UNPHYSICAL_WARN:
+        near = lo if I - lo < hi - I else hi
+        out["physical_limit"] = (
+            f"the config's value {I:.6g} kg m^2 lies {abs(I - near) / sd:.2g} sigma from its physical limit "
+            f"{near:.6g} kg m^2 (positive definite, triangle inequality, the other components as given"
+            + ("; a flat body sits on it" if abs(I - near) <= 2 * TRIANGLE_SLACK * float(np.max(np.linalg.eigvalsh(inertia)))
+               else "")
+            + f"), so about {100 * out['p_unphysical']:.2g} % of experiments time a period no "
+            f"physical {comp} reproduces: invert gives the limit there or, for about "
+            f"{100 * out['p_refused']:.2g} %, refuses; the sigma describes the spread only away from the limit")
+    return out
+
+
 def component_scale(inertia, comp: str) -> float:
     """The scale a component's uncertainty is relative to (kg m^2): ``|I_ii|``
     for a moment; ``sqrt(I_ii I_jj)`` for a product ``I_ij`` (which may be
@@ -546,6 +604,12 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             shares=grouped_shares(b), separation=sep,
             axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
         )
+        entry.update(physical_limits(scene.inertia, comp, b))
+        if not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
+            from ..estimation.invert import std_unavailable_text
+
+            bad = [n for j, n in enumerate(sens.names) if n not in _IDX and not np.isfinite(sens.jacobian[k, j])]
+            entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE")
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at)

@@ -26,7 +26,8 @@ from .settings import Constraints
 def objective(point: dict, target: str | None, among=None) -> float:
     """Relative standard uncertainty the ranking minimises: of ``target``, or
     the worst of the components ``among`` (default: all of the point's);
-    inf when one of them is not identifiable or the point is invalid."""
+    inf when one of them is not identifiable or has no sigma
+    (``sigma_unavailable``), or the point is invalid."""
     if not point.get("valid"):
         return math.inf
     comps = point["components"]
@@ -34,6 +35,29 @@ def objective(point: dict, target: str | None, among=None) -> float:
     vals = [comps[k]["rel_sigma"] for k in sel if k in comps]
     vals = [math.inf if v is None else v for v in vals]
     return float(max(vals)) if vals else math.inf
+
+
+#: objectives within this relative difference rank as equal: mirror-image points (``length_offset =
+#: -0.1`` and ``0.1`` of a symmetric rig) have the same figures up to rounding (6e-14 relative measured),
+#: far below anything the figures resolve, so which of them is recommended must not be left to the last bits
+TIE_REL = 1e-9
+
+
+def rank_order(points: list[dict], idx, key) -> list[int]:
+    """The indices ``idx`` of ``points`` by increasing ``key(point)``
+    (finite), ties broken by the parameters, not by the grid order or
+    rounding: the points whose key is within :data:`TIE_REL` of the
+    smallest remaining one form a group, ordered by their parameter values
+    (as given, in the sweep's parameter order); then the next group."""
+    order = sorted(idx, key=lambda i: key(points[i]))
+    out: list[int] = []
+    while order:
+        head = key(points[order[0]])
+        group = [i for i in order if key(points[i]) <= head + TIE_REL * abs(head)]
+        group.sort(key=lambda i: tuple(float(v) for v in points[i].get("params", {}).values()))
+        out += group
+        order = [i for i in order if i not in group]
+    return out
 
 
 def measurable_components(points: list[dict]) -> list[str]:
@@ -121,6 +145,13 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
         return "--param", "no valid configuration in the range: " + why_invalid(points)
     finite = [p for p in valid if math.isfinite(objective(p, target, among))]
     if not finite:
+        # identifiable, but no std anywhere (a knife edge, dependent wires): say why, as invert does
+        sel = [target] if target else list(among if among is not None else _components(points))
+        why = [(c, p["components"][c]["sigma_unavailable"]) for p in valid for c in sel
+               if p["components"].get(c, {}).get("sigma_unavailable")]
+        if why:
+            return "--param", (f"no point of the range has an uncertainty for {why[0][0]} "
+                               f"({len(valid)} valid point(s)): {why[0][1]}")
         what = target or "no component"
         verb = "is not" if target else "is"
         return "--target", f"{what} {verb} identifiable from any mode anywhere in the range"
@@ -181,8 +212,8 @@ def assess(points: list[dict], constraints: Constraints, target: str | None) -> 
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
-    ranked = sorted((i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None),
-                    key=lambda i: points[i]["objective"])
+    ranked = rank_order(points, [i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None],
+                        lambda p: p["objective"])
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
