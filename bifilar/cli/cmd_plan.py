@@ -8,7 +8,7 @@ import click
 from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, multi_hanging, point_warnings,
                         render_identifiability, render_multi_hanging, render_rig, render_timing, resolve_all,
                         timing_advice, write_point_config)
-from .common import check_output_path, check_workers, console, emit_json, esc, handle_errors, progress_bar
+from .common import check_output_path, check_workers, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 
 @click.command("plan")
@@ -94,7 +94,7 @@ def _render(cfg, res, settings, doc) -> None:
         if not e["identifiable"]:
             t.add_row(c, f"{e['value']:.6g}", "-", "not identifiable", "-", "-")
         else:
-            t.add_row(c, f"{e['value']:.6g}", f"{e['sigma']:.3g}", _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
+            t.add_row(c, f"{e['value']:.6g}", fmt(e["sigma"], 3), _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
                       f"{e['period']:.6g}")
     con.print(t)
     con.print("identifiability:")

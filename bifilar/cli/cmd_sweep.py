@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..output import write_yaml
-from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc,
+from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc, fmt,
                      handle_errors, progress_bar)
 
 UNC_HELP = "Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity [relative]."
@@ -417,7 +417,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
             bias = e["bias"]
             thesis = _pct(bias.get("thesis")) if bias.get("thesis") is not None else (
                 "pending" if "pending" in e["bias_notes"].get("thesis", "") else "-")
-            acc.add_row(c, f"{e['value']:.5g}", f"{e['sigma']:.3g}", _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
+            acc.add_row(c, f"{e['value']:.5g}", fmt(e["sigma"], 3), _pct(e["rel_sigma"]), _ABBR.get(e["mode"], e["mode"]),
                         f"{e['period']:.5g}", _pct(bias.get("small_angle")), thesis, _pct(bias.get("linear")))
         con.print(acc)
         render_rig(con, b["rig"])
