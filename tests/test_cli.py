@@ -395,7 +395,17 @@ def test_signal_during_a_run_exits_cleanly(tmp_path, sig, code, word):
                 seen += os.read(master, 4096)
         assert b"simulating" in seen, seen
         proc.send_signal(sig)
-        proc.wait(timeout=30)
+        # keep draining the terminal while waiting: a child blocked on a full
+        # pty (its progress bar still drawing on a loaded machine) cannot exit
+        deadline = time.time() + 60
+        while proc.poll() is None and time.time() < deadline:
+            r, _, _ = select.select([master], [], [], 0.2)
+            if r:
+                try:
+                    seen += os.read(master, 4096)
+                except OSError:
+                    break
+        proc.wait(timeout=5)
         while True:
             r, _, _ = select.select([master], [], [], 0.2)
             if not r:
