@@ -101,7 +101,7 @@ def test_plausible_period_does_not_warn_about_units():
 
 
 def test_plausibility_rule_bounds():
-    from bifilar.estimation.measurements import PLAUSIBLE_PERIOD, implausible_period
+    from bifilar.estimation.period_specs import PLAUSIBLE_PERIOD, implausible_period
 
     lo, hi = PLAUSIBLE_PERIOD
     assert implausible_period(lo, "torsion", "--period") is None

@@ -31,7 +31,7 @@ import math
 import numpy as np
 import pytest
 
-from bifilar.estimation.measurements import period_from_trials
+from bifilar.estimation.period_specs import period_from_trials
 
 T0 = 1.9054        # s, true period
 CYCLES = 10

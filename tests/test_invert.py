@@ -20,6 +20,7 @@ from bifilar.analysis.simulate import simulate
 from bifilar.config import load_scene, scene_from_dict
 from bifilar.errors import ConfigErrors, InputError
 from bifilar.estimation import measurements as mm
+from bifilar.estimation import period_specs as ps
 from bifilar.estimation.invert import (
     HangingModel,
     NotApplicable,
@@ -457,27 +458,27 @@ def test_physical_interval_is_positive_definite_boundary():
 
 
 def test_period_and_timed_specs():
-    assert mm.parse_period_spec("torsion=2.681+-0.001") == ("torsion", 2.681, 0.001)
-    assert mm.parse_period_spec("3=2.5 ± 0.01") == ("3", 2.5, 0.01)
-    assert mm.parse_period_spec("pitch=1.5") == ("pitch", 1.5, None)
-    assert mm.parse_timed_spec("torsion=10 cycles in 26.81 s, 26.79 s, 26.84 s") == (
+    assert ps.parse_period_spec("torsion=2.681+-0.001") == ("torsion", 2.681, 0.001)
+    assert ps.parse_period_spec("3=2.5 ± 0.01") == ("3", 2.5, 0.01)
+    assert ps.parse_period_spec("pitch=1.5") == ("pitch", 1.5, None)
+    assert ps.parse_timed_spec("torsion=10 cycles in 26.81 s, 26.79 s, 26.84 s") == (
         "torsion", 10.0, [26.81, 26.79, 26.84])
-    assert mm.parse_timed_spec("torsion=10:26.81,26.79") == ("torsion", 10.0, [26.81, 26.79])
+    assert ps.parse_timed_spec("torsion=10:26.81,26.79") == ("torsion", 10.0, [26.81, 26.79])
     for bad in ("torsion", "torsion=", "=2", "torsion=abc", "torsion=-1", "torsion=2+-x", "torsion=2+-0"):
         with pytest.raises(InputError) as ei:
-            mm.parse_period_spec(bad)
+            ps.parse_period_spec(bad)
         assert ei.value.field == "--period"
 
 
 def test_period_from_trials():
     # scatter (0.025 s) above the reaction-time floor: the scatter is used
-    T, s, det = mm.period_from_trials(10, [26.81, 26.79, 26.84], unc={"trial_time": 0.01})
+    T, s, det = ps.period_from_trials(10, [26.81, 26.79, 26.84], unc={"trial_time": 0.01})
     assert T == pytest.approx(26.81333333333 / 10, rel=1e-12)
     sd = np.std([26.81, 26.79, 26.84], ddof=1)
     assert s == pytest.approx(sd / math.sqrt(3) / 10, rel=1e-12)
-    T1, s1, _ = mm.period_from_trials(20, [40.0])
+    T1, s1, _ = ps.period_from_trials(20, [40.0])
     assert s1 == pytest.approx(0.1 / 20)  # one hand-timed trial: 0.1 s on the total
-    _, s2, _ = mm.period_from_trials(10, [26.8, 26.9], time_std=0.05)
+    _, s2, _ = ps.period_from_trials(10, [26.8, 26.9], time_std=0.05)
     assert s2 == pytest.approx(0.05 / math.sqrt(2) / 10)
 
 

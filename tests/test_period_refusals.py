@@ -13,7 +13,7 @@ from click.testing import CliRunner
 from scipy import stats
 
 from bifilar.cli import main
-from bifilar.estimation import measurements as mm
+from bifilar.estimation import period_specs as ps
 from bifilar.estimation.signal import SignalError, check_time, fit_period
 
 T_GRID = np.arange(0, 20, 0.01)  # 2000 samples, 100 Hz
@@ -144,9 +144,9 @@ def test_cli_json_reports_choice_and_uncertainty_terms(tmp_path):
 # ---------------------------------------------------------------------------
 
 def test_identical_trials_never_more_uncertain_than_near_identical():
-    _, s_same, d_same = mm.period_from_trials(10, [15.20, 15.20])
-    _, s_near, d_near = mm.period_from_trials(10, [15.20, 15.21])
-    _, s_three, _ = mm.period_from_trials(10, [15.20, 15.20, 15.21])
+    _, s_same, d_same = ps.period_from_trials(10, [15.20, 15.20])
+    _, s_near, d_near = ps.period_from_trials(10, [15.20, 15.21])
+    _, s_three, _ = ps.period_from_trials(10, [15.20, 15.20, 15.21])
     assert s_same <= s_near
     # both below the 0.1 s reaction floor: the floor sets the trial std
     assert d_same["trial_std"] == d_near["trial_std"] == 0.1
@@ -156,7 +156,7 @@ def test_identical_trials_never_more_uncertain_than_near_identical():
 
 def test_student_t_interval_for_few_scattered_trials():
     times = [15.0, 15.4, 15.8]  # scatter 0.4 s > 0.1 s floor
-    T, s, det = mm.period_from_trials(10, times)
+    T, s, det = ps.period_from_trials(10, times)
     assert det["dof"] == 2
     k = stats.t.ppf(0.975, 2)  # 4.30, not 1.96
     assert det["coverage_factor"] == pytest.approx(k)

@@ -60,6 +60,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
 
     from ..errors import InputError
     from ..estimation import measurements as mm
+    from ..estimation import period_specs as ps
 
     if method is not None and method not in mm.METHOD_NAMES:
         raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
@@ -71,20 +72,20 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
         raise InputError("--journal", "only with --monte-carlo N")
     cyc = _float(cycles, "--cycles", positive=True)
     sr = _float(sample_rate, "--sample-rate", positive=True)
-    if sr is not None and sr > mm.MAX_SAMPLE_RATE:
-        raise InputError("--sample-rate", f"must be in (0, {mm.MAX_SAMPLE_RATE:g}] Hz, got {sr:g}")
+    if sr is not None and sr > ps.MAX_SAMPLE_RATE:
+        raise InputError("--sample-rate", f"must be in (0, {ps.MAX_SAMPLE_RATE:g}] Hz, got {sr:g}")
     scale = _float(signal_scale, "--signal-scale", positive=True)
     if signal_quantity not in ("angle", "rate", "other"):
         raise InputError("--signal-quantity", f"must be angle, rate or other, got {signal_quantity!r}")
-    unc = mm.parse_uncertainty_overrides(uncertainty)
-    amps = mm.parse_amplitudes(amplitudes)
+    unc = ps.parse_uncertainty_overrides(uncertainty)
+    amps = ps.parse_amplitudes(amplitudes)
     bad = [s for s in solve_for if s not in mm.SOLVABLE]
     if bad:
         raise InputError("--solve-for", f"unknown component {bad[0]!r}; choose from {', '.join(mm.SOLVABLE)}")
     # parse the simple specs before any work
-    p_specs = [mm.parse_period_spec(s) for s in periods]
-    t_specs = [mm.parse_timed_spec(s) for s in timed]
-    s_specs = [mm.split_label(s, "--signal", "torsion=recording.csv") for s in signals]
+    p_specs = [ps.parse_period_spec(s) for s in periods]
+    t_specs = [ps.parse_timed_spec(s) for s in timed]
+    s_specs = [ps.split_label(s, "--signal", "torsion=recording.csv") for s in signals]
     # every output is distinct from the others and from every input, checked before any work
     inputs = [config, measurements, *(path for _, path in s_specs)]
     if journal is not None:
@@ -108,7 +109,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
                                               "period", "--period", cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
                                               std_given=s is not None))
     for label, n, times in t_specs:
-        T, s, det = mm.period_from_trials(n, times, None, ms.uncertainty)
+        T, s, det = ps.period_from_trials(n, times, None, ms.uncertainty)
         ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
                                               details=det))
     for label, path in s_specs:

@@ -1,6 +1,6 @@
 """`bifilar period`: the period of a recorded oscillation or of stopwatch
 trials (a thin CLI on :mod:`bifilar.estimation.signal` and
-:func:`bifilar.estimation.measurements.period_from_trials`)."""
+:func:`bifilar.estimation.period_specs.period_from_trials`)."""
 
 from __future__ import annotations
 
@@ -65,7 +65,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
             vals[name] = float(v)
         except ValueError:
             raise InputError(name, f"must be a number, got {v!r}") from None
-    from ..estimation.measurements import MAX_SAMPLE_RATE, check_signal_scale
+    from ..estimation.period_specs import MAX_SAMPLE_RATE, check_signal_scale
 
     sr = vals["--sample-rate"]
     if sr is not None and not 0 < sr <= MAX_SAMPLE_RATE:
@@ -77,7 +77,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     check_signal_scale(t, y, "SIGNAL")
     fit = fit_period(t, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"],
                      trim="auto" if trim else None)
-    from ..estimation.measurements import implausible_period
+    from ..estimation.period_specs import implausible_period
 
     slip = implausible_period(fit.period, None, "SIGNAL")
     if slip:  # e.g. a time column in ms read as s, or a wrong --sample-rate
@@ -157,17 +157,17 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
 
 
 def _timed(spec, target, uncertainty, as_json):
-    from ..estimation import measurements as mm
+    from ..estimation import period_specs as ps
 
-    label, n, times = mm.parse_timed_spec(spec)
-    unc = mm.parse_uncertainty_overrides(uncertainty)
-    T, s, det = mm.period_from_trials(n, times, None, unc)
-    warnings = [w for w in (mm.implausible_period(T, label, "--timed", cycles=n),) if w]
+    label, n, times = ps.parse_timed_spec(spec)
+    unc = ps.parse_uncertainty_overrides(uncertainty)
+    T, s, det = ps.period_from_trials(n, times, None, unc)
+    warnings = [w for w in (ps.implausible_period(T, label, "--timed", cycles=n),) if w]
     plan = None
     if target is not None:
-        goal = mm.parse_target(target, T)
+        goal = ps.parse_target(target, T)
         plan = {"target_std": goal, "trial_std": det["trial_std"],
-                "options": mm.trials_for_target(T, det["trial_std"], goal)}
+                "options": ps.trials_for_target(T, det["trial_std"], goal)}
     if as_json:
         doc = {"period": T, "std": s, "damping_ratio": None, "label": label, "timed": det}
         if plan is not None:

@@ -71,7 +71,8 @@ from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
 from .budget import DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95, second_order
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
 from .ladder import small_angle_geometry, small_angle_vertical_inertia, thesis_linearisation_for  # noqa: F401
-from .measurements import METHODS, MeasurementSet, implausible_period
+from .measurements import METHODS, MeasurementSet
+from .period_specs import implausible_period
 from .montecarlo import (  # noqa: F401
     batched_applies,
     draw_monte_carlo,
