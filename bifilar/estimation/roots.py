@@ -571,13 +571,66 @@ def scalar_roots(pb: Problem, target: float | None = None) -> list[Root]:
     if x is not None:
         return [Root(np.array([x]), edge=True)]
     raise InputError(m.field, scan.range_message(target) + _triangle_hint(scan, target)
-                     + slip_hint(target, scan.attainable()))
+                     + _input_hint(scan, target) + slip_hint(target, scan.attainable()))
+
+
+#: a refusal says the measured inputs may be the cause when the period is
+#: within this many times the inputs' combined 1-sigma shift (linearised)
+#: of the nearest end of the attainable range (:func:`_input_hint`)
+INPUT_HINT_Z = 3.0
+
+
+def _input_size(key: str, s: float) -> str:
+    """A measured input's standard uncertainty ``s`` (SI) in the unit a
+    user writes it in: mm for lengths and positions, g for the mass."""
+    if key == "mass":
+        return f"{s * 1e3:.3g} g"
+    if key == "gravity":
+        return f"{s:.3g} m/s^2"
+    return f"{s * 1e3:.3g} mm"
+
+
+def _input_hint(scan: ScalarScan, target: float) -> str:
+    """When the measured inputs, off by their stated uncertainties, move the
+    attainable range's nearest end (s) by more than its distance to the
+    unreachable ``target`` (s) -- within :data:`INPUT_HINT_Z` times the
+    combined linear shift ``sqrt(sum (dT/dx_i s_i)^2)`` of the labelled
+    mode's period at the grid point whose period is nearest ``target`` --
+    say so and name the dominant input; else ``""``.  Linear only (the
+    budget's input Jacobian): the range of a body whose CoM lies a few mm
+    below the attachments can move further than this says."""
+    T = np.array([scan.T[q, k] if k >= 0 else math.nan for q, k in enumerate(scan.lab)])
+    if not np.any(np.isfinite(T)):
+        return ""
+    q = int(np.nanargmin(np.abs(T - target)))
+    T_end, d = float(T[q]), abs(target - float(T[q]))
+    try:
+        keys, J, s = _input_columns(scan.pb, np.array([scan.xs[q]]))
+    except (BifilarError, np.linalg.LinAlgError):
+        return ""
+    dT = np.abs(J[0]) * s
+    tot = float(np.sqrt(np.sum(dT ** 2)))
+    if not (tot > 0 and d <= INPUT_HINT_Z * tot):
+        return ""
+    j = int(np.argmax(dT))
+    return (f"; the measured inputs may be the cause: their stated uncertainties move the period near "
+            f"{T_end:.6g} s by {100 * tot / T_end:.2g} % (1 sigma, linearised), and {target:.6g} s is "
+            f"{100 * d / T_end:.2g} % away; the largest: {keys[j]}, whose {_input_size(keys[j], s[j])} moves it "
+            f"by {100 * dT[j] / T_end:.2g} %: check the inputs")
 
 
 #: the largest number of cycles a period may be the total time of (a
 #: stopwatch trial times 5-50 cycles), and the largest N of a 1/N alias
 SLIP_MAX_CYCLES = 100
 SLIP_MAX_ALIAS = 10
+#: a slip is named only for a period at least this factor beyond the
+#: reachable range (above its top, below its bottom).  Every slip named
+#: changes a period by a factor of 2 or more (N >= 2 cycles or 1/N, 1000
+#: for ms), but a range reaching down near zero (a thin disc's Izz -> 0)
+#: holds ``target / 2`` for any period just past its top: there a period a
+#: few % too long is far likelier the inputs (a CoM a few mm off moves the
+#: range by 5-20 %, :func:`_input_hint`) or the mode than a slip
+SLIP_MIN_FACTOR = 1.5
 
 
 def _ns(ns: list[int]) -> str:
@@ -595,19 +648,26 @@ def slip_hint(target: float, ranges: list[tuple[float, float]]) -> str:
     cycles entered as a period (``target / N``, ``2 <= N <=``
     :data:`SLIP_MAX_CYCLES`) or a shorter alias (``N target``, ``2 <= N <=``
     :data:`SLIP_MAX_ALIAS`: a half period between zero crossings, a
-    harmonic).  Only slips that land inside a range are named; ``""`` when
-    none does (the message then stands as it is)."""
+    harmonic).  Only slips that land inside a range are named, and only
+    for a period clearly outside the ranges: a too long period (ms, cycles)
+    at least :data:`SLIP_MIN_FACTOR` times their top, a too short one (an
+    alias) at most their bottom over it; ``""`` otherwise (the message then
+    stands as it is)."""
     def inside(x: float) -> bool:
         return any(a * (1 - 1e-9) <= x <= b * (1 + 1e-9) for a, b in ranges)
 
+    if not ranges:
+        return ""
     hints = []
-    if inside(target / 1000):
+    too_long = target >= SLIP_MIN_FACTOR * max(b for _, b in ranges)
+    too_short = target <= min(a for a, _ in ranges) / SLIP_MIN_FACTOR
+    if too_long and inside(target / 1000):
         hints.append(f"it is reachable as {target / 1000:.6g} s: was it entered in ms?")
-    longer = [n for n in range(2, SLIP_MAX_CYCLES + 1) if inside(target / n)]
-    if longer and not hints:
+    longer = [n for n in range(2, SLIP_MAX_CYCLES + 1) if too_long and inside(target / n)]
+    if longer:  # both when the range spans three decades (a thin disc's Izz -> 0): neither excludes the other
         hints.append(f"it is {_ns(longer)} times a reachable period ({_span(target / longer[-1], target / longer[0])}"
                      "): is it the total time of that many cycles?")
-    shorter = [n for n in range(2, SLIP_MAX_ALIAS + 1) if inside(target * n)]
+    shorter = [n for n in range(2, SLIP_MAX_ALIAS + 1) if too_short and inside(target * n)]
     if shorter:
         half = " (N = 2: a half period, timed between successive zero crossings)" if shorter[0] == 2 else ""
         hints.append(f"it is 1/N of a reachable period for N = {_ns(shorter)} ({_span(target * shorter[0], target * shorter[-1])}"
