@@ -91,7 +91,7 @@ def test_no_refusal_and_coverage_over_input_errors():
 
 def test_agrees_with_timing_only_chi2_without_input_errors():
     """With every input uncertainty zero the fit statistic is the timing chi-square sum z^2."""
-    from bifilar.estimation.roots import input_fit_check
+    from bifilar.estimation.fit_check import input_fit_check
 
     zero = {**UNC, "length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0}
     T_t, T_s = _closed_form(L)
@@ -108,7 +108,7 @@ def test_a_tensor_away_from_the_fit_is_not_accepted_because_another_fits():
     """The data fit within the inputs' uncertainty, but an Izz 10 std away from the estimate does not
     reproduce them: the check is made at the tensor, not only of the data (the generalised residual alone
     minimises over the unknowns and would accept any tensor)."""
-    from bifilar.estimation.roots import input_fit_check, labelled_periods
+    from bifilar.estimation.fit_check import input_fit_check, labelled_periods
 
     periods = _closed_form(L + 1e-3)
     res = invert(_ms(_plate(), periods, UNC["timing"]), solve_for=["Izz"], unc=UNC, ladder=False)

@@ -19,7 +19,7 @@ from bifilar.config import scene_from_dict
 from bifilar.errors import BifilarError, InputError
 from bifilar.estimation.invert import invert
 from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
-from bifilar.estimation.roots import EDGE_Z, FIT_Z
+from bifilar.estimation.fit_check import EDGE_Z, FIT_Z
 from bifilar.rotations import rotvec_to_matrix
 
 from conftest import PLATE_I, trapezoid

@@ -1,5 +1,5 @@
 """Tests written to kill surviving mutants of invert's root search and fit
-check (``bifilar/estimation/roots.py``; see docs/mutation.md).  Expected
+check (``bifilar/estimation/roots.py``, whose fit check is now ``fit_check.py``; see docs/mutation.md).  Expected
 values come from independent truths: the generalised least-squares
 residual and the estimate's Mahalanobis distance written out with explicit
 inverses, the forward model (periods of a tensor chosen here) and the
@@ -15,7 +15,7 @@ import pytest
 
 from bifilar.analysis.equilibrium import rest_pose
 from bifilar.analysis.modes import linear_modes
-from bifilar.estimation import roots
+from bifilar.estimation import fit_check, roots
 from bifilar.estimation.invert import invert
 from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
 from bifilar.estimation.problem import admissible_interval
@@ -42,11 +42,11 @@ def test_input_fit_check_is_the_generalised_least_squares_residual_and_distance(
     pb = res.problem
     sig = np.array([m.std for m in pb.measurements])
     Cx = np.array([[4.0, 3.0], [3.0, 9.0]]) * sig[:, None] * sig[None, :]
-    monkeypatch.setattr(roots, "input_period_covariance", lambda pb_, p_, r_=None: Cx.copy())
+    monkeypatch.setattr(fit_check, "input_period_covariance", lambda pb_, p_, r_=None: Cx.copy())
     amp, extra, r = np.array([0.5, 0.0]) * sig**2, np.array([0.0, 0.25]) * sig**2, np.array([1.02, 0.97])
     for p in (res.values, res.values + 3 * res.std, res.values - 20 * res.std):
-        z = (roots.labelled_periods(pb, p) - np.array([T_t, T_s])) / sig
-        ok, chi2_fit, dist, _ = roots.input_fit_check(pb, p, z, r=r, extra_var=extra, amp_var=amp)
+        z = (fit_check.labelled_periods(pb, p) - np.array([T_t, T_s])) / sig
+        ok, chi2_fit, dist, _ = fit_check.input_fit_check(pb, p, z, r=r, extra_var=extra, amp_var=amp)
         C = np.diag(sig**2 + amp + extra) + Cx
         J = pb.jacobian(p) * r[:, None]
         e = z * sig

@@ -83,7 +83,8 @@ from .montecarlo import (  # noqa: F401
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
-from .roots import EDGE_Z, Root, find_roots, fit_statistics, input_fit_check, labelled_periods
+from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
+from .roots import Root, find_roots
 from .roots import separating_measurement
 from .signal_alias import check_signal_aliases
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
@@ -554,7 +555,7 @@ def _scaled_start(ms: MeasurementSet, I_start: np.ndarray, nulls: list) -> tuple
     exist at the start."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import modes_of_inertia
-    from .roots import label_index
+    from .fit_check import label_index
 
     null_at = np.zeros((3, 3), bool)
     for n in nulls:
@@ -609,7 +610,7 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
         ok, test = bool(np.all(np.abs(z) <= EDGE_Z)), f"|residual| <= {EDGE_Z:g} sigma (on the edge of the physical set)"
     chi2_in = chi2_at = None
     if not ok and (K > P or edge) and np.all(np.isfinite(z)):
-        # the inputs' errors shift the periods together: the check counts them (roots.input_fit_check)
+        # the inputs' errors shift the periods together: the check counts them (fit_check.input_fit_check)
         ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, r, method, pb.unc))
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
            "chi2_with_inputs": chi2_in, "distance_from_fit": chi2_at,

@@ -387,7 +387,7 @@ def physical_limits(inertia, comp: str, budget) -> dict:
     normal estimate about the config's value with the predicted sigma
     ``p_unphysical``, the fraction of experiments whose period no physical
     value reproduces (``invert`` then gives the limit, when the period
-    misfit there is within :data:`~bifilar.estimation.roots.EDGE_Z` timing
+    misfit there is within :data:`~bifilar.estimation.fit_check.EDGE_Z` timing
     sigmas, else refuses: ``p_refused``), and ``physical_limit``, a warning
     when ``p_unphysical`` >= :data:`UNPHYSICAL_WARN`.  A flat body (the
     trifilar table, the thesis plate: Izz = Ixx + Iyy) sits on the limit,
@@ -395,7 +395,7 @@ def physical_limits(inertia, comp: str, budget) -> dict:
     of the trifilar's refused and most of the rest clamped, under a sigma
     that promised a symmetric spread (docs/design.md)."""
     from ..estimation.problem import admissible_interval
-    from ..estimation.roots import EDGE_Z
+    from ..estimation.fit_check import EDGE_Z
     from ..scene import TRIANGLE_SLACK
 
     lo, hi = admissible_interval(inertia, comp)

@@ -1,0 +1,273 @@
+"""Does an answer reproduce its measurements?  The periods an answer
+predicts for the measured mode labels, and the check that they match the
+measured periods within their uncertainty (timing, and where the timing-only
+test fails, the measured inputs' and the assumed amplitudes' uncertainty).
+
+Units: periods in s, inertia components in kg m^2 (reference body axes),
+CoM shifts in m (see :mod:`bifilar.estimation.problem`).
+
+With ``z_k = (T_model - T_meas) / sigma_k``, an answer fits when ``max |z_k|
+<= FIT_Z`` if there are as many periods as unknowns (the equations are solved
+exactly; ``FIT_Z`` = 0.1), and when the chi-square ``sum z_k^2`` is below its
+``1 - CHI2_P`` quantile with ``K - P`` degrees of freedom if there are more
+periods ``K`` than unknowns ``P`` (``CHI2_P`` = 0.001).  Used by
+:mod:`bifilar.estimation.roots` (which solutions count) and
+:mod:`bifilar.estimation.invert` (the printed answer's ``fit``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import BifilarError
+from .problem import Problem
+
+#: largest normalised residual |T_model - T_meas| / sigma of an exactly determined fit
+FIT_Z = 0.1
+#: an overdetermined fit is refused when P(chi2 >= observed) < CHI2_P
+CHI2_P = 1e-3
+#: a solution on the edge of the admissible set is accepted within this many sigma
+EDGE_Z = 2.0
+
+
+def label_index(ms, label: str) -> int | None:
+    """Index into ``ms.modes`` of the mode carrying ``label`` (or 1-based index), else None."""
+    try:
+        m = ms.get(label)
+    except KeyError:
+        return None
+    return ms.modes.index(m)
+
+
+def fit_statistics(z: np.ndarray, P: int) -> tuple[bool, float, str]:
+    """(passes, chi2, threshold description) of normalised residuals ``z``
+    for ``P`` unknowns (module docstring)."""
+    z = np.asarray(z, float)
+    K = len(z)
+    chi2 = float(z @ z) if np.all(np.isfinite(z)) else math.inf
+    if K <= P:
+        return bool(np.all(np.abs(z) <= FIT_Z)), chi2, f"|residual| <= {FIT_Z:g} sigma"
+    lim = chi2_limit(K, P)
+    return chi2 <= lim, chi2, f"chi2 <= {lim:.4g} ({K - P} degrees of freedom, p = {CHI2_P:g})"
+
+
+def chi2_limit(K: int, P: int) -> float:
+    """The ``1 - CHI2_P`` quantile of chi-square with ``K - P`` degrees of freedom."""
+    from scipy.stats import chi2 as chi2_dist
+
+    return float(chi2_dist.ppf(1 - CHI2_P, K - P))
+
+
+def _input_columns(pb: Problem, p, r=None) -> tuple[list, np.ndarray, np.ndarray]:
+    """(input keys, (K, n) period sensitivities to them (s per SI unit,
+    times the amplitude factors ``r``, NaN set to 0: no derivative), (n,)
+    their standard uncertainties) of the modes carrying the measured labels
+    at the unknowns ``p`` (:func:`~bifilar.estimation.budget.input_columns`)."""
+    from .budget import input_columns
+    from .uncertainty import default_uncertainty
+
+    K = len(pb.measurements)
+    r = np.ones(K) if r is None else np.asarray(r, float)
+
+    def rows(h, ms, match, k):
+        return label_index(ms, pb.measurements[k].label)
+
+    unc = pb.unc if pb.unc else default_uncertainty()
+    cols, sigmas = input_columns(pb, pb.values(p), r, unc, rows=rows)[:2]
+    keys = list(cols)
+    J = np.column_stack([np.where(np.isfinite(cols[n]), cols[n], 0.0) for n in keys]) if keys else np.zeros((K, 0))
+    return keys, J, np.array([sigmas[n] for n in keys])
+
+
+def input_period_covariance(pb: Problem, p, r=None) -> np.ndarray:
+    """(K, K) covariance (s^2) of the measured periods caused by the measured
+    inputs (wire lengths, anchor and attachment coordinates, mass, gravity,
+    CoM) at their standard uncertainties ``pb.unc``, linearised at the
+    unknowns ``p``: ``J_x diag(s^2) J_x^T``, ``J_x`` the periods' input
+    sensitivities (times the amplitude factors ``r``) of the modes carrying
+    the measured labels at ``p``.  Inputs without a derivative (a knife
+    edge) are left out."""
+    _, J, s = _input_columns(pb, p, r)
+    Js = J * s
+    return Js @ Js.T
+
+
+def inputs_explain(pb: Problem, p, res: np.ndarray, other_var: np.ndarray, lim: float) -> bool:
+    """Whether measured inputs off within their stated uncertainty explain
+    the residuals ``res`` (K,) s (measured minus model, at the unknowns
+    ``p`` held fixed) with the full model, not only its linearisation.
+
+    The likeliest input error given the residuals (the conditional mean,
+    ``dx = S^2 J^T C^-1 res``, ``C = J S^2 J^T + diag(other_var)``: timing
+    and release amplitudes in ``other_var``, s^2) is applied to the
+    hanging's scene, its rest pose and modes found again, and the misfit
+    ``|dx / s|^2 + sum (res - dT)^2 / other_var`` with the periods' true
+    change ``dT`` must be at most ``lim``.  Linearly it is ``res^T C^-1
+    res``; where the periods are not linear over the inputs' uncertainty
+    (four dependent wires, where 1 mm of a length moves a period by
+    seconds in the linearisation, or leaves a wire slack) the linear test
+    would accept any period: this one does not."""
+    from ..analysis.equilibrium import rest_pose
+    from ..analysis.modes import linear_modes
+    from .sensitivity import perturb
+
+    res = np.asarray(res, float)
+    keys, J, s = _input_columns(pb, p)
+    keep = s > 0  # an exact input cannot be off
+    keys, J, s = [n for n, k in zip(keys, keep) if k], J[:, keep], s[keep]
+    if not keys:
+        return False
+    C = (J * s ** 2) @ J.T + np.diag(other_var)
+    dx = s ** 2 * (J.T @ np.linalg.solve(C, res))
+    vals = pb.values(p)
+    dT = np.zeros(len(res))
+    for h, hm in enumerate(pb.models):
+        ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
+        if not ks:
+            continue
+        pre = f"{hm.hanging.name}:" if len(pb.models) > 1 else ""
+        scene, d_com = hm.scene(vals), np.zeros(3)
+        for key, d in zip(keys, dx):
+            if key.startswith("com."):
+                d_com["xyz".index(key[-1])] += d
+            elif key in ("mass", "gravity"):
+                scene = perturb(scene, key, d)
+            elif key.startswith(pre) and ":" not in key[len(pre):]:
+                scene = perturb(scene, key[len(pre):], d)
+        for ax, d in zip("xyz", hm.R @ d_com):  # a CoM shift in the reference frame, seen in this hanging's
+            scene = perturb(scene, f"com.{ax}", d)
+        try:
+            ms = linear_modes(scene, rest_pose(scene, guess=hm.rest0))
+        except (BifilarError, np.linalg.LinAlgError):
+            return False
+        base = labelled_periods(pb, p)
+        for k in ks:
+            i = label_index(ms, pb.measurements[k].label)
+            if i is None or not ms.modes[i].period:
+                return False
+            dT[k] = ms.modes[i].period - base[k]
+    misfit = float(np.sum((dx / s) ** 2) + np.sum((res - dT) ** 2 / other_var))
+    return misfit <= lim
+
+
+def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarray:
+    """(K,) second moment (s^2) of the lengthening of each period timed at an
+    unstated release amplitude (``amplitude is None``; 0 for the others), as
+    the budget assumes it (:func:`~bifilar.estimation.budget.amplitude_systematic`:
+    amplitudes uniform in 0 .. A_max, ``T = T_lin (1 + (r_max - 1) u)``,
+    ``u = (A / A_max)^2``, ``E[u^2] = 1/5``): ``(T_lin (r_max - 1))^2 / 5``.
+    Different modes are released independently.  One short simulation per
+    such measurement at ``p``."""
+    from .budget import default_amplitude_range
+    from .solve import amplitude_factor
+
+    vals = pb.values(p)
+    out = np.zeros(len(pb.measurements))
+    for k, m in enumerate(pb.measurements):
+        if m.amplitude is not None:
+            continue
+        hm = pb.models[m.hanging]
+        _, ms, match = hm.locate(hm.scene(vals))
+        mode = ms.modes[match[pb.mode_index[k]]]
+        if not mode.period:
+            continue
+        A = default_amplitude_range(hm.scene(vals), mode)
+        try:
+            r_max, _ = amplitude_factor(hm, vals, pb.mode_index[k], A, 3, rtol)
+        except BifilarError:
+            continue
+        out[k] = (mode.period * (r_max - 1)) ** 2 / 5
+    return out
+
+
+def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> tuple[bool, float, float, str]:
+    """The fit check with the measured inputs' uncertainty counted: (passes,
+    chi2 of the fit, distance of ``p`` from the fit, description).
+
+    The periods' covariance is ``C = diag(sigma_T^2) + C_x`` (timing plus
+    :func:`input_period_covariance`, the spread of periods timed at an
+    unstated amplitude, :func:`unstated_amplitude_variance`, and
+    ``extra_var`` (K,) s^2 on the diagonal; ``amp_var``: the former when
+    computed already, it hardly depends on ``p``).  With ``C = L L^T``, ``res = z
+    sigma_T`` the residuals at ``p`` and ``J_p`` the periods' Jacobian in the
+    unknowns:
+
+    * the data must fit the model: ``min_dp |L^-1 (res + J_p dp)|^2`` (the
+      generalised least-squares residual; with ``C_x = 0`` it equals ``sum
+      z^2`` at the weighted least-squares solution) at most its 99.9 %
+      quantile with ``K - P`` degrees of freedom;
+    * ``p`` must be the fit, not only near a tensor that fits: the step
+      ``d = G res`` from ``p`` to the weighted least-squares solution (``G``
+      the budget's gain matrix, timing weights) in the metric of that
+      estimate's covariance ``G C G^T``, ``d^T (G C G^T)^-1 d``, at most
+      its 99.9 % quantile with ``P`` degrees of freedom (0 at the solution;
+      the truth passes 99.9 % of the time), so that a point on the edge of
+      the physical set away from the fit is not accepted.
+
+    An input error shifts every period it touches together (a wire 1 mm
+    long lengthens each swing period of that hanging), which timing alone
+    calls a misfit."""
+    from scipy.linalg import solve_triangular
+    from scipy.stats import chi2 as chi2_dist
+
+    from .uncertainty import gain_matrix
+
+    K, P = len(pb.measurements), len(pb.unknowns)
+    r = np.ones(K) if r is None else np.asarray(r, float)
+    sig = np.array([m.std for m in pb.measurements])
+    res = np.asarray(z, float) * sig
+    if K > P:
+        lim_fit, lim_p = chi2_limit(K, P), float(chi2_dist.ppf(1 - CHI2_P, P))
+        test = (f"with the input uncertainties: fit chi2 <= {lim_fit:.4g} ({K - P} degrees of freedom) and the "
+                f"estimate's distance from the fit <= {lim_p:.4g} ({P} degrees of freedom), p = {CHI2_P:g}")
+    else:
+        # as many periods as unknowns, missed only by an answer on the edge of the physical set (no tensor
+        # inside fits): every set of periods fits; the edge is accepted as with timing alone, within EDGE_Z
+        # sigma (for P unknowns the same probability, 95.4 %)
+        lim_fit = math.inf
+        lim_p = float(chi2_dist.ppf(chi2_dist.cdf(EDGE_Z ** 2, 1), P))
+        test = (f"with the input uncertainties: the edge's distance from the exact fit <= {lim_p:.4g} ({P} degrees "
+                f"of freedom, {EDGE_Z:g} sigma)")
+    if not np.all(np.isfinite(res)):
+        return False, math.inf, math.inf, test
+    amp_var = unstated_amplitude_variance(pb, p) if amp_var is None else amp_var
+    C = np.diag(sig ** 2 + amp_var) + input_period_covariance(pb, p, r)
+    if extra_var is not None:
+        C += np.diag(np.asarray(extra_var, float))
+    try:
+        L = np.linalg.cholesky(C)
+    except np.linalg.LinAlgError:  # sensitivities that overflow: no finite covariance to check against
+        return False, math.inf, math.inf, test
+    Jp = pb.jacobian(p) * r[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):  # a 1e300 s period: an infinite misfit, refused
+        rw = solve_triangular(L, res, lower=True)
+        Jw = solve_triangular(L, Jp, lower=True)
+        e = rw - Jw @ np.linalg.lstsq(Jw, rw, rcond=None)[0]
+        G = gain_matrix(Jp, sig)
+        d = G @ res
+        dist = float(d @ np.linalg.solve(G @ C @ G.T, d))
+        chi2_fit = float(e @ e)
+    ok = bool(chi2_fit <= lim_fit and dist <= lim_p)  # False for NaN
+    if ok and K <= P:
+        # no other tensor is fitted: the inputs alone must bridge the residual, checked with the full model
+        other = sig ** 2 + amp_var + (0.0 if extra_var is None else np.asarray(extra_var, float))
+        ok = inputs_explain(pb, p, -res, other, lim_p)
+    return ok, chi2_fit, dist, test
+
+
+def labelled_periods(pb: Problem, p) -> np.ndarray:
+    """(K,) linear periods (s) of the modes carrying the measured labels at ``p`` (NaN: no such mode)."""
+    vals = pb.values(p)
+    out = np.full(len(pb.measurements), np.nan)
+    cache = {}
+    for k, m in enumerate(pb.measurements):
+        h = m.hanging
+        if h not in cache:
+            hm = pb.models[h]
+            cache[h] = hm.locate(hm.scene(vals))[1]
+        i = label_index(cache[h], m.label)
+        if i is not None and cache[h].modes[i].period:
+            out[k] = cache[h].modes[i].period
+    return out
