@@ -83,7 +83,8 @@ class Scene:
         return np.maximum(np.asarray(self.support(d), dtype=float), h_att)
 
     def with_changes(self, **kw: Any) -> "Scene":
-        return replace(self, **kw)
+        """This scene with some fields changed (:func:`scene_with`)."""
+        return scene_with(self, **kw)
 
 
 
