@@ -1,7 +1,8 @@
 """Every file the package writes: atomic replacement, CSV tables, JSON-lines
 journals, and the checks of output paths made before any work.
 
-This module sits below the CLI (it imports only :mod:`bifilar.errors`), so
+This module sits below the CLI (it imports only :mod:`bifilar.errors` and
+:mod:`bifilar.interrupts`), so
 the library (reports, sweeps, the Monte Carlo journal) and the commands
 share one implementation of the promises in docs/errors.md:
 
@@ -27,27 +28,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from .errors import InputError
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM turned into an exception so that ``finally`` blocks (temporary
-    files of :func:`atomic_write`, journals) run; the CLI exits with status 143.
-
-    A subclass of :class:`KeyboardInterrupt` so that code stopping early on
-    Ctrl-C stops on SIGTERM too; code that re-raises an interruption under its
-    own type must keep it recognisable (see :func:`is_terminated`)."""
-
-
-def is_terminated(exc: BaseException) -> bool:
-    """True if ``exc`` is, or was raised from / carries, a SIGTERM
-    (:class:`Terminated`) rather than a Ctrl-C."""
-    seen = 0
-    while exc is not None and seen < 20:
-        if isinstance(exc, Terminated) or getattr(exc, "terminated", False):
-            return True
-        exc = exc.__cause__ or exc.__context__
-        seen += 1
-    return False
+from .interrupts import Terminated, is_terminated, raise_if_stop_requested  # noqa: F401 (re-exported)
 
 
 # ---------------------------------------------------------------------------
@@ -170,6 +151,7 @@ def atomic_write(path: Path, write: Callable[[str], None]) -> None:
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.chmod(tmp, _target_mode(path))
+        raise_if_stop_requested()  # a Ctrl-C a finaliser swallowed must not let the file land
         os.replace(tmp, path)
     except BaseException:
         try:

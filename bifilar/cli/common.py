@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 import click
 
+from ..interrupts import raise_if_stop_requested, stop_handlers
 from ..output import (PLOT_SUFFIXES, Terminated, atomic_write, check_journal_path,  # noqa: F401 (re-exported)
                       check_output_path, is_terminated, write_csv, write_table_csv)
 
@@ -67,10 +68,6 @@ def _one_line(s: str) -> str:
     return " ".join(str(s).replace("\r", "\n").split("\n"))
 
 
-def _raise_terminated(signum, frame):  # pragma: no cover - exercised through a subprocess
-    raise Terminated()
-
-
 def handle_errors(fn: Callable) -> Callable:
     """Decorator for commands: package errors -> one-line messages and exit codes.
 
@@ -88,24 +85,17 @@ def handle_errors(fn: Callable) -> Callable:
 
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        import signal
-        import threading
-
         from ..errors import BifilarError, ConfigErrors, InputError
 
         ctx = click.get_current_context()
         debug = bool((ctx.obj or {}).get("debug"))
-        old_term = None
-        if threading.current_thread() is threading.main_thread():
-            try:
-                old_term = signal.signal(signal.SIGTERM, _raise_terminated)
-            except (ValueError, OSError):  # pragma: no cover - exotic embedding
-                old_term = None
         try:
-            with warnings.catch_warnings(), _native_stdout_to_stderr():
+            with stop_handlers(), warnings.catch_warnings(), _native_stdout_to_stderr():
                 if not debug:
                     warnings.showwarning = _show_warning_one_line
-                return fn(*args, **kwargs)
+                result = fn(*args, **kwargs)
+                raise_if_stop_requested()  # a Ctrl-C a finaliser swallowed after the last progress step
+                return result
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
             raise
         except ConfigErrors as exc:
@@ -145,9 +135,6 @@ def handle_errors(fn: Callable) -> Callable:
             click.echo(f"error: internal error ({type(exc).__name__}: {_one_line(str(exc))}); "
                        "rerun with --debug for a traceback", err=True)
             ctx.exit(1)
-        finally:
-            if old_term is not None:
-                signal.signal(signal.SIGTERM, old_term)
 
     return wrapper
 
@@ -336,7 +323,7 @@ def progress_bar(description: str, enabled: bool = True):
     @contextlib.contextmanager
     def cm():
         if not enabled or not _stderr_is_terminal():
-            yield lambda done, total: None
+            yield lambda done, total: raise_if_stop_requested()
             return
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -345,6 +332,7 @@ def progress_bar(description: str, enabled: bool = True):
             task = prog.add_task(description, total=1.0)
 
             def update(done: float, total: float) -> None:
+                raise_if_stop_requested()  # a Ctrl-C swallowed by a finaliser stops the run here
                 prog.update(task, completed=min(done / total, 1.0) if total else 1.0)
 
             yield update
