@@ -121,3 +121,26 @@ def test_a_swallowed_stop_ends_the_run_at_its_next_progress_step(tmp_path, monke
     assert r.exit_code == 130, r.output
     assert len(calls) == 2  # the second update raised: no step after it
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupt_raised_in_exec_of_a_string_still_exits_130(tmp_path):
+    """A KeyboardInterrupt leaving ``exec`` of a string (as when Ctrl-C lands
+    while a dataclass is built during a lazy import) sets CPython's
+    'unhandled KeyboardInterrupt' flag even though the command catches it;
+    the process then died by SIGINT (status -2) instead of exiting 130."""
+    import subprocess
+    import sys
+
+    code = ("import bifilar.analysis.simulate as s\n"
+            "def boom(*a, **k):\n"
+            "    exec('raise KeyboardInterrupt')\n"
+            "s.simulate = boom\n"
+            "from bifilar.cli import main\n"
+            f"main(['simulate', {str(PLATE)!r}, '--periods', '2'])\n")
+    # run as `python -m` (as `python -m bifilar` is): a SystemExit there returns to Py_RunMain, which
+    # consults the flag (`python -c` exits inside PyErr_Print and never looks)
+    (tmp_path / "runner").mkdir()
+    (tmp_path / "runner" / "__main__.py").write_text(code)
+    r = subprocess.run([sys.executable, "-m", "runner"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 130, (r.returncode, r.stderr[-500:])
+    assert "interrupted" in r.stderr and "Traceback" not in r.stderr
