@@ -205,6 +205,7 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     if B is not None:
         geo = np.sqrt(np.sum(((bread @ (As.T @ B)) / scale[:, None]) ** 2, axis=1))
         extra, weight = _geometry_shrinkage(As, B, r)
+        extra, weight = extra[:, weight > 1e-9], weight[weight > 1e-9]  # the others change nothing
         r = r - extra @ (weight * (extra.T @ r))
     As3, r3 = As.reshape(len(t), 3, -1), r.reshape(len(t), 3)
     g = _scores(As3, r3)  # (k, m)
@@ -510,17 +511,18 @@ def _leverage_correction(As3: np.ndarray, r3: np.ndarray, bread: np.ndarray, W: 
     """
     k, _, m = As3.shape
     P = np.einsum("mn,kin->kmi", bread, As3)  # (k, m, 3)
-    Z = _design_basis(As3.reshape(k * 3, m))
-    L = np.ones(Z.shape[1])
+    Qa = _design_basis(As3.reshape(k * 3, m))
+    Z, L = Qa, np.ones(Qa.shape[1])
     if extra is not None and extra.shape[1]:
-        Z = np.hstack([Z, extra])
         L = np.concatenate([L, np.ones(extra.shape[1]) if weight is None else weight])
+        Z = np.hstack([Qa, extra])
     Z3 = Z.reshape(k, 3, -1)
     z = Z3.shape[2]
-    Pt = np.swapaxes(P, 1, 2)  # (k, 3, m)
-    SX = _banded_times(np.concatenate([Z3, Pt], axis=2), r3, W)  # S [Z, P^T]
-    SZ, SP = SX[:, :, :z], SX[:, :, z:]
-    omega = Pt.reshape(3 * k, m).T @ SP.reshape(3 * k, m)
+    SZ = _banded_times(Z3, r3, W)
+    # P^T = Qa (Qa^T P^T): the influence rows lie in the design's span (bread is its pseudo-inverse)
+    Pt = np.swapaxes(P, 1, 2).reshape(3 * k, m)
+    SP = SZ[:, :, :Qa.shape[1]].reshape(3 * k, -1) @ (Qa.T @ Pt)
+    omega = Pt.T @ SP
     omega = (omega + omega.T) / 2
     ZSZ = Z.T @ SZ.reshape(3 * k, z)
     expected = np.diag(omega).copy()
@@ -539,13 +541,13 @@ def _banded_times(X: np.ndarray, r3: np.ndarray, W: int) -> np.ndarray:
     ``C(k - l)`` for ``0 <= k - l <= W``, ``C(l - k)^T`` for ``0 < l - k
     <= W``, zero beyond; ``C(d) = sum_l r_{l+d} r_l^T / k`` (``r3`` (k, 3))."""
     k, _, q = X.shape
-    X2 = np.ascontiguousarray(np.swapaxes(X, 1, 2)).reshape(k * q, 3)  # rows (sample, column): X_k^T
-    out = X2 @ (r3.T @ r3 / k)  # rows of (S X)_k^T = sum_l X_l^T S_kl^T
+    Xt = np.ascontiguousarray(np.swapaxes(X, 0, 1)).reshape(3, k * q)  # columns (sample, column of X)
+    out = (r3.T @ r3 / k) @ Xt
     for d in range(1, min(W, k - 1) + 1):
         C = r3[d:].T @ r3[:-d] / k
-        out[d * q:] += X2[:-d * q] @ C.T  # l = k - d: S_kl = C(d)
-        out[:-d * q] += X2[d * q:] @ C  # l = k + d: S_kl = C(d)^T
-    return np.swapaxes(out.reshape(k, q, 3), 1, 2)
+        out[:, d * q:] += C @ Xt[:, :-d * q]  # l = k - d: S_kl = C(d)
+        out[:, :-d * q] += C.T @ Xt[:, d * q:]  # l = k + d: S_kl = C(d)^T
+    return np.swapaxes(out.reshape(3, k, q), 0, 1)
 
 
 def _window_sum(x: np.ndarray, W: int) -> np.ndarray:
