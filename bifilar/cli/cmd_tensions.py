@@ -114,8 +114,10 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         # the rates of a record are differentiated, not known: the spread between two differentiations
         # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
         # and the config's geometry is measured too (torque arms, wire directions): systematic over the record
-        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=comps,
-                                      geometry=geometry)
+        # the same fit (est's components, the others held) with the other rates; its std is not used
+        kept = tuple(c for c in comps if c not in est.poorly_excited) or comps
+        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=kept,
+                                      fix_poorly_excited=False)
         std, std_inputs, interval, dof = record_std(est, other)
         dof = {c: (v if math.isfinite(v) else None) for c, v in dof.items()}
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass

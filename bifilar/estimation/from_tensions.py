@@ -397,7 +397,7 @@ def record_std(est: TensionInertia, other: TensionInertia) -> tuple[dict, dict, 
     """The uncertainty (kg m^2) of each component of ``est`` from a recorded
     motion: the residuals' std (``est.std``, Student's t with ``est.dof``),
     the difference from ``other`` (the same fit with the rates
-    differentiated another way) and the config's geometry
+    differentiated another way; NaN for a component it lacks) and the config's geometry
     (``est.std_geometry``: ``est`` must be fitted with ``geometry=``, which
     also keeps the geometry's residuals out of ``est.std``), the last two
     systematic over the record, which the residuals cannot show (normal,
@@ -422,7 +422,7 @@ def record_std(est: TensionInertia, other: TensionInertia) -> tuple[dict, dict, 
     g = est.std_geometry
     std, interval, dof = {}, {}, {}
     for c in est.components:
-        s_res, s_diff, s_geo = est.std[c], est.values[c] - other.values[c], g.get(c, 0.0)
+        s_res, s_diff, s_geo = est.std[c], est.values[c] - other.values.get(c, math.nan), g.get(c, 0.0)
         std[c] = float(math.hypot(math.hypot(s_res, s_diff), s_geo))
         nu = est.dof.get(c, math.inf)
         t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) and nu > 0 else Z95
