@@ -53,8 +53,8 @@ class TensionInertia:
     the interval covering 95 %), used by :meth:`interval95`.
     std_geometry : dict component -> kg m^2, the config geometry's part of
     the uncertainty (:func:`geometry_jacobian`), kept apart from ``std``
-    (the residuals', with the geometry's directions projected out of the
-    residuals, see :func:`_solve`); None when the fit was told the geometry
+    (the residuals', with the geometry's share of the residuals removed,
+    see :func:`_solve`); None when the fit was told the geometry
     is exact (``geometry=None``: a simulated motion).
     """
 
@@ -131,9 +131,8 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     it is measured (a dict of overrides of
     :func:`~bifilar.estimation.uncertainty.default_uncertainty`, ``{}`` for
     the defaults: ``position`` m, ``com`` m): its part of each component's
-    uncertainty is returned as ``std_geometry``, and its directions are
-    projected out of the residuals before their std is taken (see
-    :func:`_solve`); the relative-std rule for ``poorly_excited`` then
+    uncertainty is returned as ``std_geometry``, and its share of the
+    residuals is removed before their std is taken (see :func:`_solve`); the relative-std rule for ``poorly_excited`` then
     applies to both in quadrature.  None (default): the geometry is exact.
     """
     if alpha is None:
@@ -186,12 +185,12 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     delta + e)``: a config off by its std leaves torque residuals of its
     own, systematic over the record, that the residuals' (sandwich) std
     counted as noise -- the geometry's error counted a second time,
-    through the residuals' ``(I - H) B delta``: 2-100 times the noise's std,
-    z sd 0.5-0.75, 99 % coverage (docs/invert.md, "Audit, session 7").  So
-    the residuals are projected onto the complement of ``(I - H) B``'s
-    columns (``r' = (I - H_aug) e``, ``H_aug`` the hat matrix of ``[A,
-    B]``) before the sandwich, and :func:`_leverage_correction` is told of
-    the directions removed.
+    through the residuals' ``(I - H) B delta``: 5-700 times the noise's std,
+    z sd 0.5-0.75, 99-100 % coverage (docs/invert.md, "Audit, session 7:
+    tensions").  So the geometry's share of the residuals along each
+    direction of ``(I - H) B`` is removed before the sandwich
+    (:func:`_geometry_shrinkage`), and :func:`_leverage_correction` is told
+    of the directions and their weights (the noise removed with them).
     """
     comps = tuple(components)
     x, A2, b2, scale = _least_squares(scene, com, R, omega, tensions, alpha, comps)
