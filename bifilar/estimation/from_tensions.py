@@ -132,8 +132,9 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     :func:`~bifilar.estimation.uncertainty.default_uncertainty`, ``{}`` for
     the defaults: ``position`` m, ``com`` m): its part of each component's
     uncertainty is returned as ``std_geometry``, and its share of the
-    residuals is removed before their std is taken (see :func:`_solve`); the relative-std rule for ``poorly_excited`` then
-    applies to both in quadrature.  None (default): the geometry is exact.
+    residuals is removed before their std is taken (see :func:`_solve`);
+    the relative-std rule for ``poorly_excited`` then applies to both in
+    quadrature.  None (default): the geometry is exact.
     """
     if alpha is None:
         alpha = np.gradient(omega, t, axis=0, edge_order=2)
