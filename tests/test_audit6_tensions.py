@@ -7,7 +7,8 @@ residuals cannot show it: with load-cell noise 0.05 % of the tension the
 residual std alone put 1 % of a 1000 kg body's Izz estimates 19 std from
 the truth (300 draws; docs/invert.md, "Audit, session 6").
 :func:`~bifilar.estimation.from_tensions.record_std` adds the geometry's
-part (each input moved by its std, the fit re-solved), as the CLI prints.
+part (the fit's linearised response to each input moved by its std), as
+the CLI prints; its calibration: tests/test_tensions_calibration.py.
 
 The motion is the truth's (exact rates, as tests/test_coverage_tensions.py),
 the tensions get white noise; the config is the truth's with every
@@ -54,8 +55,8 @@ def test_recorded_motion_std_includes_the_config_geometry():
         cfg = replace(truth, anchors=truth.anchors + rng.normal(0, POSITION, (2, 3)),
                       attachments=truth.attachments + rng.normal(0, POSITION, (2, 3)) - rng.normal(0, COM, 3))
         Tn = T + rng.standard_normal(T.shape) * 5e-4 * T.mean(axis=0)
-        est = inertia_from_tensions(cfg, run.t, com, R, omega, Tn, alpha=alpha)
-        std, geo, interval, _ = record_std(cfg, est, est, com, R, omega, Tn, alpha)
+        est = inertia_from_tensions(cfg, run.t, com, R, omega, Tn, alpha=alpha, geometry={})
+        std, geo, interval, _ = record_std(est, est)
         err = est.values["Izz"] - 700.0
         z_res.append(err / est.std["Izz"])
         z_all.append(err / std["Izz"])
@@ -66,7 +67,6 @@ def test_recorded_motion_std_includes_the_config_geometry():
     # the residual std alone is confidently wrong in the tail (the bug; seed 11: max |z| ~ 12)
     assert z_res.max() > 5, z_res.max()
     # with the geometry no estimate is beyond 4 std (normal: P(any of 60 > 4) = 0.4 %), and the interval covers
-    # at least 95 % of 60 (>= 55: binomial P(< 55) = 8 % for a true 95 %, ~0 for the residual std's ~90 %;
-    # it covers more: the residuals take part of the geometry's error too, so the std is conservative)
+    # at least 95 % of 60 (>= 55: binomial P(< 55) = 8 % for a true 95 %, ~0 for the residual std's ~90 %)
     assert z_all.max() < 4, z_all.max()
     assert covered >= 55, covered

@@ -100,7 +100,10 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         doc["symmetric"] = {"min": float(F_sym.min()), "max": float(F_sym.max()),
                             "max_abs_difference_to_model": np.max(np.abs(F_sym[:, None] - T_model), axis=0),
                             "note": "valid only for mirror-symmetric motion (thesis 7.2)"}
-    est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps)
+    # a record's rig is measured: its geometry's std is its own term, kept out of the residuals' (record_std)
+    geometry = None if motion is None else {}
+    est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps,
+                                geometry=geometry)
     std, std_inputs, interval, dof = dict(est.std), None, None, est.dof
     if motion is None:
         # a simulated motion is exact only to the integrator's tolerance, which the
@@ -111,8 +114,11 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         # the rates of a record are differentiated, not known: the spread between two differentiations
         # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
         # and the config's geometry is measured too (torque arms, wire directions): systematic over the record
-        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=comps)
-        std, std_inputs, interval, dof = record_std(scene, est, other, y[:, 0:3], R, omega, T_model, alpha)
+        # the same fit (est's components, the others held) with the other rates; its std is not used
+        kept = tuple(c for c in comps if c not in est.poorly_excited) or comps
+        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=kept,
+                                      fix_poorly_excited=False)
+        std, std_inputs, interval, dof = record_std(est, other)
         dof = {c: (v if math.isfinite(v) else None) for c, v in dof.items()}
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
     # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
@@ -171,7 +177,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
 
 
 NOT_DETERMINED = ("not determined: the motion hardly excites this component (its torque is at rounding level "
-                  "or its relative std above 1 % in a first fit), so the fit held it at the config's value; "
+                  "or its relative std, with the config geometry's for a record, above 1 % in a first fit), so the fit "
+                  "held it at the config's value; "
                   "excite a mode that turns the body about this axis")
 """The reason a component's ``value`` is ``null`` in ``inertia_from_tensions``."""
 

@@ -51,6 +51,11 @@ class TensionInertia:
     tests/test_mutation_gaps.py; with the leverage-corrected variance,
     whose factor grows with the chosen window, 1.05-1.2 on 241 samples,
     the interval covering 95 %), used by :meth:`interval95`.
+    std_geometry : dict component -> kg m^2, the config geometry's part of
+    the uncertainty (:func:`geometry_jacobian`), kept apart from ``std``
+    (the residuals', with the geometry's share of the residuals removed,
+    see :func:`_solve`); None when the fit was told the geometry
+    is exact (``geometry=None``: a simulated motion).
     """
 
     components: tuple
@@ -63,6 +68,7 @@ class TensionInertia:
     n_samples: int
     lag_window: int = 0
     dof: dict = field(default_factory=dict)
+    std_geometry: dict | None = None
 
     def interval95(self, c: str, std: float | None = None) -> list:
         """[lo, hi] kg m^2: ``value +- t std``, Student's t with the std's
@@ -109,7 +115,7 @@ def wire_torque_body(scene: Scene, com: np.ndarray, R: np.ndarray, tensions: np.
 def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.ndarray, omega: np.ndarray,
                           tensions: np.ndarray, alpha: np.ndarray | None = None,
                           components=("Ixx", "Iyy", "Izz"), threshold: float = 0.01,
-                          fix_poorly_excited: bool = True) -> TensionInertia:
+                          fix_poorly_excited: bool = True, geometry: dict | None = None) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     With ``fix_poorly_excited`` (default) the components the motion does not
@@ -120,38 +126,73 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     not determine them, and the first pass's residual std does not bound
     their error (the Solar Boat's torsion gave Iyy 236 +- 3 kg m^2 for
     317, its residuals at rounding level).
+
+    ``geometry``: the standard uncertainties of the config's geometry when
+    it is measured (a dict of overrides of
+    :func:`~bifilar.estimation.uncertainty.default_uncertainty`, ``{}`` for
+    the defaults: ``position`` m, ``com`` m): its part of each component's
+    uncertainty is returned as ``std_geometry``, and its share of the
+    residuals is removed before their std is taken (see :func:`_solve`);
+    the relative-std rule for ``poorly_excited`` then applies to both in
+    quadrature.  None (default): the geometry is exact.
     """
-    first = _solve(scene, t, com, R, omega, tensions, alpha, tuple(components), threshold)
+    if alpha is None:
+        alpha = np.gradient(omega, t, axis=0, edge_order=2)
+    B = None  # the torques' change per std of each geometric input, (3k, p) N m, at the motion-fitted tensions
+    if geometry is not None:
+        B = geometry_jacobian(scene, com, R, _motion_fit(com, R, omega, alpha, tensions), geometry)[1]
+        B = B.reshape(3 * len(t), -1)
+    first = _solve(scene, t, com, R, omega, tensions, alpha, tuple(components), threshold, B)
     if not fix_poorly_excited or not first.poorly_excited or len(first.poorly_excited) == len(first.components):
         return first
     components = tuple(components)
     keep = tuple(c for c in components if c not in first.poorly_excited)
-    second = _solve(scene, t, com, R, omega, tensions, alpha, keep, threshold)
+    second = _solve(scene, t, com, R, omega, tensions, alpha, keep, threshold, B)
     values = {**first.values, **second.values}
-    std = {**{c: math.nan for c in first.poorly_excited}, **second.std}
+    nan = {c: math.nan for c in first.poorly_excited}
+    std = {**nan, **second.std}
     idx = [components.index(c) for c in keep]
     corr = np.full((len(components), len(components)), np.nan)
     corr[np.ix_(idx, idx)] = second.correlation
     return TensionInertia(tuple(components), values, std, corr, list(first.poorly_excited),
                           second.residual_rms, second.condition, second.n_samples, second.lag_window,
-                          {**first.dof, **second.dof})
+                          {**first.dof, **second.dof},
+                          None if second.std_geometry is None else {**nan, **second.std_geometry})
 
 
-def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold) -> TensionInertia:
+def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold,
+           B: np.ndarray | None = None) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     Parameters
     ----------
     t : (k,) s.  com : (k, 3) m, world.  R : (k, 3, 3) body -> world.
     omega : (k, 3) body-axes angular velocity, rad/s.  tensions : (k, n) N.
-    alpha : (k, 3) body-axes angular acceleration, rad/s^2; if None it is
-        differentiated from ``omega`` (second-order finite differences).
+    alpha : (k, 3) body-axes angular acceleration, rad/s^2.
     components : the unknowns (principal moments by default; all six for the
         full tensor).  Components not solved for are taken from ``scene``.
     threshold : relative std above which a component is flagged poorly excited.
+    B : (3k, p) N m, the torques' change per standard uncertainty of each
+        geometric input (:func:`geometry_jacobian`, at the tensions of
+        :func:`_motion_fit`), None when the geometry is exact.
+
+    The config's geometry enters the torques ``b`` only (the design ``A``
+    is the motion's), linearly over its uncertainty: ``b = A theta + B
+    delta + e`` with ``B`` the torques' derivative per standard uncertainty
+    of each input (:func:`geometry_jacobian`), ``delta`` the inputs' errors
+    in stds (independent, unit variance) and ``e`` the load-cell noise.  The
+    estimate moves by ``G delta``, ``G = (A^T A)^-1 A^T B``: that is the
+    geometry's std, ``sqrt(sum_j G_ij^2)``.  The residuals are ``(I - H)(B
+    delta + e)``: a config off by its std leaves torque residuals of its
+    own, systematic over the record, that the residuals' (sandwich) std
+    counted as noise -- the geometry's error counted a second time,
+    through the residuals' ``(I - H) B delta``: 5-700 times the noise's std,
+    z sd 0.5-0.75, 99-100 % coverage (docs/invert.md, "Audit, session 7:
+    tensions").  So the geometry's share of the residuals along each
+    direction of ``(I - H) B`` is removed before the sandwich
+    (:func:`_geometry_shrinkage`), and :func:`_leverage_correction` is told
+    of the directions and their weights (the noise removed with them).
     """
-    if alpha is None:
-        alpha = np.gradient(omega, t, axis=0, edge_order=2)
     comps = tuple(components)
     x, A2, b2, scale = _least_squares(scene, com, R, omega, tensions, alpha, comps)
     r = A2 @ x - b2
@@ -160,10 +201,16 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     AtA = As.T @ As
     cond = float(np.linalg.cond(AtA)) ** 0.5
     bread = np.linalg.pinv(AtA)
+    geo, extra, weight = None, None, None
+    if B is not None:
+        geo = np.sqrt(np.sum(((bread @ (As.T @ B)) / scale[:, None]) ** 2, axis=1))
+        extra, weight = _geometry_shrinkage(As, B, r)
+        extra, weight = extra[:, weight > 1e-9], weight[weight > 1e-9]  # the others change nothing
+        r = r - extra @ (weight * (extra.T @ r))
     As3, r3 = As.reshape(len(t), 3, -1), r.reshape(len(t), 3)
-    g = np.einsum("kim,ki->km", As3, r3)  # scores, (k, m)
+    g = _scores(As3, r3)  # (k, m)
     meat, lags = _score_covariance(g, len(comps))
-    f = np.sqrt(_leverage_correction(As3, r3, bread, lags))
+    f = np.sqrt(_leverage_correction(As3, r3, bread, lags, extra, weight))
     cov = f[:, None] * (bread @ meat @ bread) * f[None, :] / np.outer(scale, scale)
     h2 = (g @ bread) ** 2  # each sample's share of each component's error, squared
     dof = 3 * h2.sum(axis=0) ** 2 / ((2 * lags + 3) * np.maximum((h2 ** 2).sum(axis=0), 1e-300))
@@ -171,13 +218,104 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     corr = cov / np.maximum(np.outer(std, std), 1e-300)
     values = dict(zip(comps, map(float, x)))
     stds = dict(zip(comps, map(float, std)))
+    total = std if geo is None else np.hypot(std, geo)
     # a column at the rounding level of the torques (no motion about that
     # axis) fits rounding noise with a tiny residual: flag it by its size
     excited = _excited(scene, com, R, tensions, A2, len(t))
-    poor = [c for j, c in enumerate(comps) if not excited[j] or not np.isfinite(stds[c]) or stds[c] <= 0
-            or stds[c] > threshold * max(abs(values[c]), 1e-300)]
+    poor = [c for j, c in enumerate(comps) if not excited[j] or not np.isfinite(total[j]) or stds[c] <= 0
+            or total[j] > threshold * max(abs(values[c]), 1e-300)]
     return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)), lags,
-                          dict(zip(comps, map(float, dof))))
+                          dict(zip(comps, map(float, dof))), None if geo is None else dict(zip(comps, map(float, geo))))
+
+
+def _motion_fit(com, R, omega, alpha, tensions: np.ndarray) -> np.ndarray:
+    """(k, n) N: the measured tensions least-squares fitted, wire by wire,
+    on the motion's own signals (a constant, the CoM (3), the rotation
+    matrix (9), omega (3), alpha (3), the products omega_a omega_b (6)): the
+    true tensions are such a function of the motion to first order in a
+    small one (the centripetal terms second order); the noise keeps only
+    its part in those 25 directions.  :func:`_solve` differentiates the
+    torques w.r.t. the geometry at these tensions: at the measured ones
+    the derivative carried the load-cell noise itself, and projecting its
+    directions out of the residuals removed noise (the 1000 kg bifilar's
+    residual std 2.6x too small with the shrinkage of
+    :func:`_geometry_shrinkage`, 10x without); with the fitted ones z sd
+    1.03, as without projection.  A model error of the fit moves the
+    derivative by that error's share of the tension (a systematic term of
+    second order in the motion times the geometry's error)."""
+    k = len(com)
+    w = omega
+    X = np.column_stack([np.ones(k), com, R.reshape(k, 9), w, alpha, w[:, [0, 0, 0, 1, 1, 2]] * w[:, [0, 1, 2, 1, 2, 2]]])
+    scale = np.linalg.norm(X, axis=0)
+    scale[scale == 0] = 1.0
+    c, *_ = np.linalg.lstsq(X / scale, tensions, rcond=None)
+    return (X / scale) @ c
+
+
+GEOMETRY_RANK_RTOL = 1e-6
+"""Directions of the geometry's residuals ``(I - H) B`` (:func:`_solve`)
+with a singular value below this fraction of the largest stay in the
+residuals: the part of the geometry's error they carry is at most 1e-6 of
+the largest one's, below the load-cell noise unless that is below ~1e-8
+of the tension (their shrinkage weight would be ~0 anyway); and they are
+found from the Gram matrix ``C^T C`` (50 times cheaper than an SVD of the
+(3k, p) ``C``), whose eigenvalues are exact to ~1e-16 of the largest,
+1e-4 of the smallest one kept."""
+
+
+def _geometry_shrinkage(As: np.ndarray, B: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(Q (3k, q), lam (q,)): the directions of the residuals ``(I - H) B``
+    that the geometry's errors leave and how much of ``r`` along each is
+    theirs (``As`` (3k, m) the scaled design, ``B`` (3k, p) the torques per
+    std of each input, :func:`geometry_jacobian`; ``r`` (3k,) the
+    residuals, N m); :func:`_solve` removes ``Q (lam * Q^T r)``.
+
+    ``(I - H) B = Q diag(s) V^T`` (SVD, the columns of ``Q`` orthogonal to
+    the design's; ``s`` above :data:`GEOMETRY_RANK_RTOL`): the geometry's
+    error ``delta`` (unit normal per input) leaves ``s_i (V^T delta)_i``
+    along ``q_i``, variance ``s_i^2``; the noise leaves variance ``n_i =
+    q_i^T S q_i`` (``S`` the residuals' serially correlated covariance
+    with every ``q_i`` removed, :func:`_banded_times`).  The part of ``r``
+    along ``q_i`` that is the geometry's, in expectation given ``r`` (normal
+    prior and noise), is ``lam_i = s_i^2 / (s_i^2 + n_i)`` of it.  Not a
+    plain projection (``lam = 1``): ``B`` is computed from the measured,
+    noisy tensions, and a combination of inputs whose true torques cancel
+    (the two anchors' x of a symmetric bifilar, ``T_1 - T_2``) is then
+    the tension noise itself; projected out, it took the noise with it
+    (the exact 1000 kg bifilar's residual std 10x too small).  Such a
+    direction has ``s_i`` at the noise's level, ``lam_i ~ 1e-3``; a real
+    one (1 mm is 1e2-1e4 load-cell sigmas of torque over a record) ~ 1."""
+    if B.shape[1] == 0:
+        return np.zeros((len(B), 0)), np.zeros(0)
+    Qa = _design_basis(As)
+    C = B - Qa @ (Qa.T @ B)
+    C -= Qa @ (Qa.T @ C)  # twice: the columns of B along As are large, C the small difference
+    w, V = np.linalg.eigh(C.T @ C)
+    keep = w > GEOMETRY_RANK_RTOL ** 2 * max(float(w.max()), 0.0)
+    if not keep.any():
+        return np.zeros((len(B), 0)), np.zeros(0)
+    s2 = w[keep]
+    Q = C @ (V[:, keep] / np.sqrt(s2))
+    Q = Q @ np.linalg.inv(np.linalg.cholesky(Q.T @ Q)).T  # orthonormal to rounding (Cholesky QR, second pass)
+    k, m = len(r) // 3, As.shape[1]
+    rh3 = (r - Q @ (Q.T @ r)).reshape(k, 3)
+    W = _score_covariance(_scores(As.reshape(k, 3, m), rh3), m)[1]
+    Q3 = Q.reshape(k, 3, -1)
+    noise = np.sum(Q3 * _banded_times(Q3, rh3, W), axis=(0, 1))
+    return Q, s2 / np.maximum(s2 + np.maximum(noise, 0), 1e-300)
+
+
+def _scores(As3: np.ndarray, r3: np.ndarray) -> np.ndarray:
+    """(k, m) least-squares scores ``As_k^T r_k`` (``As3`` (k, 3, m), ``r3`` (k, 3))."""
+    return np.sum(As3 * r3[:, :, None], axis=1)
+
+
+def _design_basis(As: np.ndarray) -> np.ndarray:
+    """(3k, rank) orthonormal basis of the scaled design's columns, the
+    rank as ``pinv(As^T As)`` counts it (singular values of ``As`` above
+    ``sqrt(1e-15)`` of the largest)."""
+    U, sv, _ = np.linalg.svd(As, full_matrices=False)
+    return U[:, sv > math.sqrt(1e-15) * max(float(sv.max()), 1e-300)] if sv.size else U
 
 
 def _least_squares(scene: Scene, com, R, omega, tensions, alpha, comps: tuple):
@@ -200,53 +338,70 @@ def _least_squares(scene: Scene, com, R, omega, tensions, alpha, comps: tuple):
     return x / scale, A2, b2, scale
 
 
-def geometry_std(scene: Scene, est: TensionInertia, com, R, omega, tensions, alpha,
-                 unc: dict | None = None) -> dict:
-    """Standard uncertainty (kg m^2) of each determined component of ``est``
-    from the config's geometry: the torque arms and wire directions come
-    from the anchors and attachment points and the CoM (relative to the
-    attachments) as written down, each off by its standard uncertainty
-    (:func:`~bifilar.estimation.uncertainty.default_uncertainty`:
-    ``position`` 1 mm per coordinate, ``com`` 2 mm; ``unc`` overrides).
-    Each input moved by its std, the estimate re-solved (the same
-    components, those fixed in ``est`` held); the
-    contributions are added in quadrature (linear, independent inputs).
+GEOMETRY_INPUTS = ("anchor.", "attachment.", "com.")
+"""The measured inputs (:func:`~bifilar.estimation.sensitivity.measured_inputs`)
+the wire torques depend on: the torque arms and the wire directions."""
 
-    The residuals cannot show this error: a recorded motion fits a rig 1 mm
-    off nearly as well, the torque arms scaled.  Without it the std of a
-    record's ``Izz`` was up to 7 times too small (z-scores' sd 2.2-6.8 with
-    load-cell noise 0.5-0.05 % of the tension; docs/invert.md, "Audit,
-    session 6").  SI units; body frame for the attachments, world for the
-    anchors, as the config."""
-    from .sensitivity import input_sigma, measured_inputs, perturb
+
+def geometry_jacobian(scene: Scene, com: np.ndarray, R: np.ndarray, tensions: np.ndarray,
+                      unc: dict | None = None) -> tuple[list, np.ndarray]:
+    """(names, J (k, 3, p)): the change of :func:`wire_torque_body` (N m,
+    body axes) per standard uncertainty of each geometric input of the
+    config (:data:`GEOMETRY_INPUTS`, in the order of
+    :func:`~bifilar.estimation.sensitivity.measured_inputs`; the std from
+    :func:`~bifilar.estimation.uncertainty.default_uncertainty` with ``unc``'s
+    overrides, ``position`` 1 mm per coordinate, ``com`` 2 mm; inputs with a
+    zero std are left out), analytic: with ``v = anchor - com - R a`` (world),
+    ``u = v / |v|``, ``N = (I - u u^T) / |v|`` and the body force ``f = T
+    R^T u``, the torque ``a x f`` moves by ``a x (T R^T N e)`` for an anchor
+    moved along world axis ``e``, by ``e x f - a x (T R^T N R e)`` for an
+    attachment moved along body axis ``e``, and a CoM moved by ``d`` moves
+    every attachment by ``-d`` (:func:`~bifilar.estimation.sensitivity.perturb`).
+    com (k, 3) m world; R (k, 3, 3) body -> world; tensions (k, n) N."""
+    from .sensitivity import input_sigma, measured_inputs
     from .uncertainty import default_uncertainty
 
     unc = default_uncertainty(unc or {})
-    # the components solved in est's final fit (all of them when none is excited: then none was fixed)
-    comps = tuple(c for c in est.components if math.isfinite(est.std[c]))
-    if not comps:
-        return {}
-    x0 = _least_squares(scene, com, R, omega, tensions, alpha, comps)[0]
-    var = np.zeros(len(comps))
-    for name in measured_inputs(scene):
-        if not (name.startswith(("anchor.", "attachment.", "com."))):
-            continue
-        sx = input_sigma(scene, name, unc)
-        if not sx > 0:
-            continue
-        x = _least_squares(perturb(scene, name, sx), com, R, omega, tensions, alpha, comps)[0]
-        var += (x - x0) ** 2
-    return dict(zip(comps, map(float, np.sqrt(var))))
+    names = [nm for nm in measured_inputs(scene) if nm.startswith(GEOMETRY_INPUTS) and input_sigma(scene, nm, unc) > 0]
+    k = len(com)
+    if not names:
+        return [], np.zeros((k, 3, 0))
+    a = scene.attachments
+    v = scene.anchors[None] - com[:, None, :] - np.einsum("kij,nj->kni", R, a)  # (k, n, 3) world
+    length = np.linalg.norm(v, axis=-1)[..., None, None]
+    u = v / length[..., 0]
+    N = (np.eye(3) - u[..., :, None] * u[..., None, :]) / length  # du/dv, (k, n, 3, 3)
+    f = np.einsum("kji,knj->kni", R, tensions[..., None] * u)  # body force (k, n, 3)
+    TRN = tensions[..., None, None] * (np.swapaxes(R, 1, 2)[:, None] @ N)  # df/dv (k, n, 3, 3)
+    anchor = _skew(a) @ TRN  # world axes
+    attachment = -_skew(f) - anchor @ R[:, None]  # body axes
+    per = {"anchor": anchor, "attachment": attachment}
+    cols = []
+    for nm in names:
+        part = nm.split(".")
+        e = "xyz".index(part[-1])
+        col = -attachment[:, :, :, e].sum(axis=1) if part[0] == "com" else per[part[0]][:, int(part[1]) - 1, :, e]
+        cols.append(col * input_sigma(scene, nm, unc))
+    return names, np.stack(cols, axis=-1)
 
 
-def record_std(scene: Scene, est: TensionInertia, other: TensionInertia, com, R, omega, tensions, alpha,
-               unc: dict | None = None) -> tuple[dict, dict, dict, dict]:
+def _skew(x: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) matrices ``[x]_x`` with ``[x]_x y = x cross y``."""
+    z = np.zeros(x.shape[:-1])
+    return np.stack([np.stack([z, -x[..., 2], x[..., 1]], -1),
+                     np.stack([x[..., 2], z, -x[..., 0]], -1),
+                     np.stack([-x[..., 1], x[..., 0], z], -1)], -2)
+
+
+def record_std(est: TensionInertia, other: TensionInertia) -> tuple[dict, dict, dict, dict]:
     """The uncertainty (kg m^2) of each component of ``est`` from a recorded
     motion: the residuals' std (``est.std``, Student's t with ``est.dof``),
     the difference from ``other`` (the same fit with the rates
-    differentiated another way) and the config's geometry
-    (:func:`geometry_std`), the last two systematic over the record, which
-    the residuals cannot show (normal, known std).
+    differentiated another way; NaN for a component it lacks) and the config's geometry
+    (``est.std_geometry``: ``est`` must be fitted with ``geometry=``, which
+    also keeps the geometry's residuals out of ``est.std``), the last two
+    systematic over the record, which the residuals cannot show (normal,
+    known std).
 
     Returns (std: the three in quadrature; the geometry's part; the 95 %
     interval ``value +- sqrt((t s_res)^2 + (1.96 s_diff)^2 + (1.96
@@ -261,17 +416,20 @@ def record_std(scene: Scene, est: TensionInertia, other: TensionInertia, com, R,
 
     from .uncertainty import Z95, equivalent_dof
 
-    g = geometry_std(scene, est, com, R, omega, tensions, alpha, unc)
+    if est.std_geometry is None:
+        raise ValueError("record_std: est was fitted with the geometry exact (geometry=None); fit it with "
+                         "geometry={} (or the stated uncertainties) so that its residual std leaves the geometry out")
+    g = est.std_geometry
     std, interval, dof = {}, {}, {}
     for c in est.components:
-        s_res, s_diff, s_geo = est.std[c], est.values[c] - other.values[c], g.get(c, 0.0)
+        s_res, s_diff, s_geo = est.std[c], est.values[c] - other.values.get(c, math.nan), g.get(c, 0.0)
         std[c] = float(math.hypot(math.hypot(s_res, s_diff), s_geo))
         nu = est.dof.get(c, math.inf)
         t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) and nu > 0 else Z95
         half = math.sqrt((t * s_res) ** 2 + (Z95 * s_diff) ** 2 + (Z95 * s_geo) ** 2)
         interval[c] = [est.values[c] - half, est.values[c] + half]
         dof[c] = equivalent_dof(half / std[c]) if std[c] > 0 else math.nan
-    return std, g, interval, dof
+    return std, dict(g), interval, dof
 
 
 def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
@@ -310,7 +468,8 @@ def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
     return meat, W
 
 
-def _leverage_correction(As3: np.ndarray, r3: np.ndarray, bread: np.ndarray, W: int) -> np.ndarray:
+def _leverage_correction(As3: np.ndarray, r3: np.ndarray, bread: np.ndarray, W: int,
+                         extra: np.ndarray | None = None, weight: np.ndarray | None = None) -> np.ndarray:
     """(m,) factors by which the lag-window variance of each component is
     too small because it is built from residuals, not errors: the factor
     is ``Omega_jj / E[V_jj]`` under a working model of the errors, so
@@ -323,45 +482,72 @@ def _leverage_correction(As3: np.ndarray, r3: np.ndarray, bread: np.ndarray, W: 
     3x3 covariance between samples ``d`` apart is the residuals' own,
     ``C(d) = sum_k r_{k+d} r_k^T / k``, for ``|d| <= W`` and zero beyond
     (the window ``V`` itself assumes; the three torque rows of a sample
-    share its tension noise and differ in size; the scale cancels).  Then
-    ``r = (I - H) e`` with ``H_kl = As_k P_l``; with ``D_k = P_k As_k``,
-    ``Y_l = sum_d P_{l+d} C(d)``, ``Z_l = Y_l P_l^T`` and the model's
-    covariance of the estimate ``Omega = sum_l Z_l``:
+    share its tension noise and differ in size; the scale cancels): ``S``
+    (3k, 3k).  The residuals are ``r = M e``, ``M = I - Z L Z^T``, ``Z``
+    (3k, z) an orthonormal basis of the design's columns and of ``extra``
+    ((3k, q), orthonormal and orthogonal to the design: directions also
+    removed from the residuals, ``weight`` (q,) of each, default 1; the
+    geometry's in :func:`_solve`), ``L`` diagonal, 1 on the design's
+    directions and ``weight`` on ``extra``'s.  With ``D_j`` the (k, 3k) map
+    of the residuals to component j's ``h`` (row k: ``P_k[j]`` on sample
+    k's three rows) and ``K`` the window's band of ones, ``E[V_jj] = tr(K
+    D_j M S M D_j^T)``, with ``Y = D_j Z L``:
 
-        E[V] = Omega - sum_{|k - l| <= W} (D_k Z_l + (D_k Z_l)^T - D_k Omega D_l^T).
+        E[V_jj] = Omega_jj - 2 tr(K Y (D_j S Z)^T) + tr(K Y (Z^T S Z) Y^T),
 
-    The expansion behind HC2's ``r_k^2 / (1 - h_kk)`` (unbiased for
-    homoskedastic errors), carried over the window's cross products: the
-    scores sum to zero (the normal equations), so each lag's sum is low
-    by about the variance of the estimate -- with white errors
-    ``(2 W + 1) Omega / k`` in all (``W = 0``, one row a sample, equal
-    leverages: ``k / (k - m)``).  The serial correlation is in the model
-    because it changes the size of that loss: scores modulated by the
-    motion's oscillation lose less over a long window than white ones,
-    and the white model's factor overstated an AR(1) 0.8 std by 10 % on
-    200 samples.  Coverage it buys on 100-2000-sample records: docs/design.md.
-    A factor of 1 where the model has no positive variance to correct
-    (residuals all zero: an exact fit).
+    ``Omega = sum_k P_k (S P^T)_k``.  The expansion behind HC2's ``r_k^2 /
+    (1 - h_kk)`` (unbiased for homoskedastic errors), carried over the
+    window's cross products: the scores sum to zero (the normal
+    equations), so each lag's sum is low by about the variance of the
+    estimate -- with white errors ``(2 W + 1) Omega / k`` in all (``W =
+    0``, one row a sample, equal leverages: ``k / (k - m)``).  The serial
+    correlation is in the model because it changes the size of that loss:
+    scores modulated by the motion's oscillation lose less over a long
+    window than white ones, and the white model's factor overstated an
+    AR(1) 0.8 std by 10 % on 200 samples.  Coverage it buys on
+    100-2000-sample records: docs/design.md.  A factor of 1 where the
+    model has no positive variance to correct (residuals all zero: an
+    exact fit).
     """
     k, _, m = As3.shape
     P = np.einsum("mn,kin->kmi", bread, As3)  # (k, m, 3)
-    P2 = P.reshape(k * m, 3)  # rows (sample, component): one matrix product a lag
-    Y2 = P2 @ (r3.T @ r3 / k)
-    for d in range(1, W + 1):
-        C = r3[d:].T @ r3[:-d] / k  # C(d): r_{l+d} r_l^T
-        Y2[:-d * m] += P2[d * m:] @ C
-        Y2[d * m:] += P2[:-d * m] @ C.T
-    Y = Y2.reshape(k, m, 3)
-    omega = np.einsum("kmi,kni->mn", Y, P)
+    Qa = _design_basis(As3.reshape(k * 3, m))
+    Z, L = Qa, np.ones(Qa.shape[1])
+    if extra is not None and extra.shape[1]:
+        L = np.concatenate([L, np.ones(extra.shape[1]) if weight is None else weight])
+        Z = np.hstack([Qa, extra])
+    Z3 = Z.reshape(k, 3, -1)
+    z = Z3.shape[2]
+    SZ = _banded_times(Z3, r3, W)
+    # P^T = Qa (Qa^T P^T): the influence rows lie in the design's span (bread is its pseudo-inverse)
+    Pt = np.swapaxes(P, 1, 2).reshape(3 * k, m)
+    SP = SZ[:, :, :Qa.shape[1]].reshape(3 * k, -1) @ (Qa.T @ Pt)
+    omega = Pt.T @ SP
     omega = (omega + omega.T) / 2
+    ZSZ = Z.T @ SZ.reshape(3 * k, z)
     expected = np.diag(omega).copy()
     for j in range(m):
-        Dj = np.einsum("ki,kin->kn", P[:, j, :], As3)  # row j of D_k, (k, m)
-        Zj = np.einsum("kia,ka->ki", Y, P[:, j, :])  # column j of Z_k, (k, m)
-        expected[j] -= 2 * np.sum(Dj * _window_sum(Zj, W))
-        expected[j] += np.sum((Dj @ omega) * _window_sum(Dj, W))
+        Pj = P[:, j, :, None]
+        Y = np.sum(Pj * Z3, axis=1) * L  # (k, z)
+        DSZ = np.sum(Pj * SZ, axis=1)
+        expected[j] += np.sum((Y @ ZSZ - 2 * DSZ) * _window_sum(Y, W))
     ok = (np.diag(omega) > 0) & (expected > 0)
     return np.where(ok, np.diag(omega) / np.where(ok, expected, 1.0), 1.0)
+
+
+def _banded_times(X: np.ndarray, r3: np.ndarray, W: int) -> np.ndarray:
+    """(k, 3, q) ``S X`` for ``X`` (k, 3, q), ``S`` the working model's
+    error covariance of :func:`_leverage_correction`: block ``(k, l)`` is
+    ``C(k - l)`` for ``0 <= k - l <= W``, ``C(l - k)^T`` for ``0 < l - k
+    <= W``, zero beyond; ``C(d) = sum_l r_{l+d} r_l^T / k`` (``r3`` (k, 3))."""
+    k, _, q = X.shape
+    Xt = np.ascontiguousarray(np.swapaxes(X, 0, 1)).reshape(3, k * q)  # columns (sample, column of X)
+    out = (r3.T @ r3 / k) @ Xt
+    for d in range(1, min(W, k - 1) + 1):
+        C = r3[d:].T @ r3[:-d] / k
+        out[:, d * q:] += C @ Xt[:, :-d * q]  # l = k - d: S_kl = C(d)
+        out[:, :-d * q] += C.T @ Xt[:, d * q:]  # l = k + d: S_kl = C(d)^T
+    return np.swapaxes(out.reshape(3, k, q), 0, 1)
 
 
 def _window_sum(x: np.ndarray, W: int) -> np.ndarray:
