@@ -32,7 +32,7 @@ from ..rotations import matrix_to_quat, rotvec_to_matrix
 from ..scene import Scene, lowest_point_z
 from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, RestPose, canonical_attitude, knife_edge_axes,
                           line_turns, rest_pose, start_coms)
-from .modes import ModeSet, mode_sets
+from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
 
@@ -308,16 +308,21 @@ def _rest_or_error(scene: Scene, errors: str):
 # --------------------------------------------------------------------------
 # linear modes
 # --------------------------------------------------------------------------
-def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[ModeSet]:
+def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose], lazy: bool = False) -> list[ModeSet]:
     """:func:`~bifilar.analysis.modes.linear_modes` of many scenes at once
     (same number of wires).  Periods agree with the single-scene function to
     ~1e-12 relative, shapes to ~1e-10 (both solve the same symmetric
-    generalised eigenproblem; here by Cholesky and ``numpy.linalg.eigh``)."""
+    generalised eigenproblem; here by Cholesky and ``numpy.linalg.eigh``).
+    ``lazy``: a scene whose eigenvalues are all distinct and positive
+    (:func:`~bifilar.analysis.modes.plain_order`) gets a
+    :class:`~bifilar.analysis.modes.LazyModeSet`, its periods and shapes
+    computed for the batch at once and its :class:`Mode` objects only when
+    read (the same mode set, bit for bit); the others as without."""
     scenes = list(scenes)
     if not scenes:
         return []
     if len(_groups(scenes)) > 1:
-        return _per_group(modes_batch, scenes, list(rests))
+        return _per_group(lambda sc, rs: modes_batch(sc, rs, lazy), scenes, list(rests))
     a, p, L, m, g, I = _stack(scenes)
     com = np.array([r.com for r in rests])
     R = np.array([r.R for r in rests])
@@ -337,12 +342,30 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[Mode
     Li = np.linalg.inv(Lc)
     w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
     Y = np.swapaxes(Li, 1, 2) @ Z
+    plain = plain_order(w2, Y, Kr) & full if lazy else np.zeros(len(scenes), bool)
     # mode_set of each full-rank scene, its arithmetic batched where exact (mode_sets: the same mode sets)
-    out = mode_sets(N, Y, w2, m, M, Kr, which=np.nonzero(full)[0])
+    out = mode_sets(N, Y, w2, m, M, Kr, which=np.nonzero(full & ~plain)[0])
+    if plain.any():
+        out = _lazy_mode_sets(out, np.nonzero(plain)[0], N, Y, w2, m, M, Kr)
     for b in np.nonzero(~full)[0]:
         from .modes import linear_modes
 
         out[b] = linear_modes(scenes[b], rests[b])
+    return out
+
+
+def _lazy_mode_sets(out: list, bs, N, Y, w2, m, M, Kr) -> list:
+    """``out`` with a :class:`LazyModeSet` for each scene ``bs`` (indices) of
+    a solved batch (arrays of :func:`modes_batch`): periods (the expression
+    of :func:`~bifilar.analysis.modes.mode_sets` on the same eigenvalues)
+    and unit shapes (the same scaling) of all of them at once; each one's
+    :class:`Mode` objects from :func:`mode_sets` of that scene alone."""
+    S, _ = unit_shapes(N[bs] @ Y[bs])  # (the stacked product: each scene's N @ Y, the same bits)
+    periods = 2 * np.pi / np.sqrt(w2[bs])
+    for q, b in enumerate(bs.tolist()):
+        sl = slice(b, b + 1)
+        out[b] = LazyModeSet(lambda sl=sl: mode_sets(N[sl], Y[sl], w2[sl], m[sl], M[sl], Kr[sl])[0],
+                             periods[q], S[q].T, M[b], N[b])
     return out
 
 

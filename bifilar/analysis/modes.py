@@ -88,6 +88,66 @@ class ModeSet:
         return [m.label for m in self.modes]
 
 
+class LazyModeSet(ModeSet):
+    """A :class:`ModeSet` of one scene of a batch (:func:`~bifilar.analysis.batch_rest.modes_batch`
+    with ``lazy=True``) whose eigenvalues are all distinct and positive
+    (no degenerate cluster, no neutral mode, with a margin, :func:`plain_order`),
+    so its modes are in the eigensolver's order (slowest first): ``periods``
+    (k,) s and ``shapes`` (k, 6) (each scaled as :func:`mode_set` scales it,
+    the same numbers) are there at once, and the :class:`Mode` objects
+    (labels, energy shares) are built on first read of ``modes`` by
+    ``build()`` (:func:`mode_sets` of that scene alone: the mode set the
+    batch would have made, bit for bit).  The honest budget's sigma points
+    read only the periods and shapes (MAC) of most of theirs.  Pickled as
+    the plain :class:`ModeSet`."""
+
+    def __init__(self, build, periods: np.ndarray, shapes: np.ndarray, mass_matrix: np.ndarray,
+                 basis: np.ndarray):  # noqa: D107
+        self.__dict__.update(periods=periods, shapes=shapes, mass_matrix=mass_matrix, basis=basis, _build=build)
+
+    def __getattr__(self, name):  # only called for attributes not yet set: ``modes``
+        if name != "modes" or "_build" not in self.__dict__:
+            raise AttributeError(name)
+        ms = self.__dict__["_build"]()
+        object.__setattr__(self, "modes", ms.modes)
+        return ms.modes
+
+    def __reduce__(self):
+        return (ModeSet, (self.modes, self.mass_matrix, self.basis))
+
+
+def plain_order(w2: np.ndarray, Y: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """(B,) bool: which of a batch of solved eigenproblems (``w2`` (B, k)
+    ascending, rad^2/s^2; ``Y`` (B, k, k); reduced stiffness ``K`` (B, k, k))
+    :func:`mode_set` would leave in the eigensolver's order, untouched:
+    every eigenvalue positive and apart from its neighbours by more than
+    twice the resolution :func:`_noise` gives it (and than twice the neutral
+    threshold), so no cluster is formed and none is neutral whatever the
+    last bits of that resolution (here computed for the whole batch at once,
+    which may round differently from :func:`mode_set`'s own).  Its periods
+    2 pi / sqrt(w2) then fall strictly, which is :func:`_assemble`'s order."""
+    w2 = np.asarray(w2, float)
+    if w2.shape[1] == 0:
+        return np.zeros(len(w2), bool)
+    aY = np.abs(Y)
+    tol = DEGENERATE_RTOL * np.maximum(np.einsum("bik,bij,bjk->bk", aY, np.abs(K), aY), 1e-300)
+    scale = np.maximum(np.max(np.abs(w2), axis=1), 1e-300)
+    floor = np.maximum(tol, NEUTRAL_RTOL * scale[:, None])
+    ok = np.all(w2 > 2 * floor, axis=1)
+    if w2.shape[1] > 1:
+        ok &= np.all(np.diff(w2, axis=1) > 2 * np.maximum(tol[:, 1:], tol[:, :-1]), axis=1)
+    return ok
+
+
+def unit_shapes(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(shapes, index of each one's unit component (B, k)): shapes ``S``
+    (B, 6, k) scaled as :func:`mode_set` scales them, each column by its
+    first component within 1e-9 of the largest magnitude."""
+    absS = np.abs(S)
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (B, k)
+    return S / np.take_along_axis(S, i[:, None, :], axis=1), i
+
+
 def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     """All 6 - n linear modes about ``rest``, slowest first."""
     return modes_of_inertia(scene, rest)(scene.inertia)
@@ -305,9 +365,7 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     S = np.array(S)  # (R, 6, k)
     w2r = np.array(ws)
     tol = np.array(tols)
-    absS = np.abs(S)
-    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (R, k)
-    S = S / np.take_along_axis(S, i[:, None, :], axis=1)
+    S, i = unit_shapes(S)  # (R, 6, k), (R, k)
     diagM = np.diagonal(np.asarray(M)[rows], axis1=1, axis2=2)[:, 3:]
     share = np.concatenate([np.asarray(mass, float)[rows, None, None] * S[:, :3] ** 2,
                             diagM[:, :, None] * S[:, 3:] ** 2], axis=1)
