@@ -1266,3 +1266,40 @@ def test_hanging_periods_with_lazy_mode_sets_equal_the_ones_before():
             if a is not None:
                 assert a[0].tobytes() == b[0].tobytes() and list(a[4]) == list(b[4])
                 assert _mode_set_fields(a[3])[:3] == _mode_set_fields(b[3])[:3]
+
+
+def _old_zero_set(vals: dict) -> frozenset:
+    """maximal._zero_set before session 7, verbatim."""
+    from bifilar.models.maximal import _NEVER_ZERO
+
+    out = set()
+    for k, v in vals.items():
+        if k in _NEVER_ZERO or k.startswith(("L2", "hbL")):
+            continue  # never drop these (a zero would be a degenerate scene anyway)
+        if np.all(np.asarray(v) == 0):
+            out.add(k)
+    return frozenset(out)
+
+
+def test_kernel_parameters_once_per_rig_and_zero_set_on_floats():
+    # compiled_kernel computes a rig's parameter values and zero set once for all its kernels (was once per
+    # kernel), and _zero_set tests a single scene's floats without numpy: the same zero sets (signed zeros,
+    # NaN, batch arrays) and the same kernels' outputs as kernels of a fresh RigParams each
+    from bifilar.models import maximal as mx
+
+    vals = {"mass": 0.0, "Ixy": 0.0, "Ixz": -0.0, "Iyz": 1e-300, "Ex": float("nan"), "px0": 2.0, "L20": 0.0,
+            "ax0": np.zeros(3), "ay0": np.array([0.0, 1.0]), "az0": np.array([-0.0, 0.0])}
+    assert mx._zero_set(vals) == _old_zero_set(vals) == frozenset({"Ixy", "Ixz", "ax0", "az0"})
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("thesis_plate_rest", {})):
+        scene = _scene(name, params)
+        P = mx.params_from_scenes([scene]).take(0)
+        assert mx._zero_set(mx._param_values(P)) == _old_zero_set(mx._param_values(P))
+        y = np.array([0.01, -0.02, 0.03, 0.999, 0.02, -0.01, 0.03, 0.1, -0.2, 0.05, 0.3, -0.1, 0.2])
+        y[3:7] /= np.linalg.norm(y[3:7])
+        for kw in ({}, {"extras": True}, {"signature": "odeint"}):
+            fresh = mx.compiled_kernel(mx.params_from_scenes([scene]).take(0), **kw)
+            got = mx.compiled_kernel(P, **kw)
+            a = got(y, 0.0) if kw.get("signature") else got(*y)
+            b = fresh(y, 0.0) if kw.get("signature") else fresh(*y)
+            assert np.array_equal(np.asarray(a, float), np.asarray(b, float))
+        assert "values" in P.__dict__["_kernels"]
