@@ -1303,3 +1303,47 @@ def test_kernel_parameters_once_per_rig_and_zero_set_on_floats():
             b = fresh(y, 0.0) if kw.get("signature") else fresh(*y)
             assert np.array_equal(np.asarray(a, float), np.asarray(b, float))
         assert "values" in P.__dict__["_kernels"]
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("trifilar_kth", {}), ("thesis_plate_rest", {}), ("drone_parallel", {})])
+def test_modes_of_inertia_lazy_equals_eager(name, params):
+    # modes_of_inertia(...)(inertia, lazy=True): a LazyModeSet where mode_set keeps the eigensolver's order (no
+    # cluster, no neutral mode: the trifilar's swings and the knife-edge plate stay eager); against the eager
+    # mode set (the path before): the same periods and shapes before its modes are built, the same mode set
+    # after; and matched_periods (what linear_estimate reads) the same bits
+    from bifilar.analysis.modes import LazyModeSet
+
+    scene = _scene(name, params)
+    rest = rest_pose(scene)
+    base = linear_modes(scene, rest)
+    n_lazy = 0
+    for comp, f in (("Ixx", 1.0), ("Izz", 1.0 + 3e-4), ("Iyy", 1.0 - 2e-3), ("Ixy", 0.01)):
+        inertia = perturb(scene, comp, (f - 1.0 if comp != "Ixy" else f) * scene.inertia[0, 0]).inertia
+        eager = modes_of_inertia(scene, rest)(inertia)
+        lazy = modes_of_inertia(scene, rest)(inertia, lazy=True)
+        assert np.array_equal(matched_periods(base, lazy), matched_periods(base, eager), equal_nan=True)
+        if isinstance(lazy, LazyModeSet):
+            n_lazy += 1
+            assert "modes" not in lazy.__dict__
+            assert np.array_equal(lazy.periods, [m.period for m in eager.modes])
+            assert np.array_equal(lazy.shapes, [m.shape for m in eager.modes])
+        assert _mode_set_fields(lazy)[:3] == _mode_set_fields(eager)[:3]
+    assert (n_lazy == 4) == (name not in ("trifilar_kth", "thesis_plate_rest"))
+
+
+@pytest.mark.parametrize("comp", COMPS)
+def test_linear_estimate_with_lazy_mode_sets_equals_the_eager_one(comp):
+    # linear_estimate's secant steps read periods and shapes only (lazy mode sets); against the same steps
+    # with eager mode sets (an `at` that ignores lazy: the path before): the same estimate, bit for bit
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    k = best_mode_for(sens, comp)
+    at = modes_of_inertia(scene, sens.rest)
+    eager = modes_of_inertia(scene, sens.rest)
+    for rel in (3e-4, -1e-3, 2e-2):
+        T_target = sens.periods[k] * (1 + rel)
+        got = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, sens.column(comp)[k], at=at)
+        ref = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, sens.column(comp)[k],
+                              at=lambda inertia, lazy=False: eager(inertia))
+        assert got is not None and got == ref

@@ -89,15 +89,16 @@ class ModeSet:
 
 
 class LazyModeSet(ModeSet):
-    """A :class:`ModeSet` of one scene of a batch (:func:`~bifilar.analysis.batch_rest.modes_batch`
-    with ``lazy=True``) whose eigenvalues are all distinct and positive
+    """A :class:`ModeSet` (of one scene of a batch, :func:`~bifilar.analysis.batch_rest.modes_batch`
+    with ``lazy=True``, or of :func:`modes_of_inertia` asked with ``lazy=True``)
+    whose eigenvalues are all distinct and positive
     (no degenerate cluster, no neutral mode, with a margin, :func:`plain_order`),
     so its modes are in the eigensolver's order (slowest first): ``periods``
     (k,) s and ``shapes`` (k, 6) (each scaled as :func:`mode_set` scales it,
     the same numbers) are there at once, and the :class:`Mode` objects
     (labels, energy shares) are built on first read of ``modes`` by
-    ``build()`` (:func:`mode_sets` of that scene alone: the mode set the
-    batch would have made, bit for bit).  The honest budget's sigma points
+    ``build()`` (:func:`mode_sets` of that scene alone, or :func:`mode_set`:
+    the mode set the eager path makes, bit for bit).  The honest budget's sigma points
     read only the periods and shapes (MAC) of most of theirs.  Pickled as
     the plain :class:`ModeSet`."""
 
@@ -139,6 +140,26 @@ def plain_order(w2: np.ndarray, Y: np.ndarray, K: np.ndarray) -> np.ndarray:
     return ok
 
 
+def _plain_one(w2: np.ndarray, Y: np.ndarray, K: np.ndarray) -> bool:
+    """:func:`plain_order` of one solved eigenproblem, exactly as :func:`mode_set`
+    decides (its own resolution :func:`_noise` and clusters, on Python floats:
+    the same doubles), so without a margin: no cluster and no neutral mode."""
+    w = w2.tolist()
+    t = _noise(w2, Y, K).tolist()
+    if len(_cluster_ranges(w, t)) < len(w):
+        return False
+    floor = NEUTRAL_RTOL * max(max(abs(x) for x in w) if w else 0.0, 1e-300)
+    return all(x > 0 and abs(x) > max(tj, floor) for x, tj in zip(w, t))
+
+
+def _unit_shape_one(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`unit_shapes` of one scene's shapes ``S`` (6, k): (scaled shapes, unit components (k,))."""
+    absS = np.abs(S)
+    # first component within 1e-9 of the largest: independent of last-bit noise
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
+    return S / S[i, np.arange(S.shape[1])], i
+
+
 def unit_shapes(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(shapes, index of each one's unit component (B, k)): shapes ``S``
     (B, 6, k) scaled as :func:`mode_set` scales them, each column by its
@@ -162,7 +183,11 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     the same result to the last bit).  For a search over one inertia
     component at a fixed geometry.  An inertia asked for again (the same
     bytes) returns the mode set solved for it the first time (the same
-    object: read only; a sweep point's consumers share one function)."""
+    object: read only; a sweep point's consumers share one function).
+    ``lazy=True``: a :class:`LazyModeSet` where :func:`plain_order` allows
+    (periods and shapes at once, the :class:`Mode` objects by
+    :func:`mode_set` when read: the same mode set), for callers that read
+    only periods and shapes (:func:`~bifilar.estimation.sensitivity.matched_periods`)."""
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
     N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
     K = 0.5 * (Kr + Kr.T)
@@ -170,22 +195,25 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     M0[:3, :3] = scene.mass * np.eye(3)
     solved: dict = {}
 
-    def modes(inertia) -> ModeSet:
+    def modes(inertia, lazy: bool = False) -> ModeSet:
         key = np.asarray(inertia, float).tobytes()
         ms = solved.get(key)
         if ms is None:
-            ms = _solve(inertia)
+            ms = _solve(inertia, lazy)
             if len(solved) < 8:
                 solved[key] = ms
         return ms
 
-    def _solve(inertia) -> ModeSet:
+    def _solve(inertia, lazy: bool) -> ModeSet:
         M = M0.copy()
         M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
         if N.shape[1] == 0:
             return ModeSet([], M, N)
         Mr = N.T @ M @ N
         w2, Y = eigh_generalized(K, 0.5 * (Mr + Mr.T))
+        if lazy and _plain_one(w2, Y, K):
+            S, _ = _unit_shape_one(N @ Y)
+            return LazyModeSet(lambda: mode_set(N, Y, w2, scene.mass, M, K=K), 2 * np.pi / np.sqrt(w2), S.T, M, N)
         return mode_set(N, Y, w2, scene.mass, M, K=K)
 
     return modes
@@ -285,11 +313,7 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
         for a, b in groups:
             if b - a > 1:  # (the mean of one number is that number)
                 w2[a:b] = np.mean(w2[a:b])
-    S = N @ Y
-    absS = np.abs(S)
-    # first component within 1e-9 of the largest: independent of last-bit noise
-    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
-    S = S / S[i, np.arange(S.shape[1])]
+    S, i = _unit_shape_one(N @ Y)
     diagM = np.diag(M)[3:]
     share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
     share = share / share.sum(axis=0)

@@ -133,7 +133,7 @@ def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarr
 
     M = base.mass_matrix
     A = np.array([m.shape for m in base.modes])
-    B = np.array([m.shape for m in other.modes])
+    B = np.array(_shapes(other))
     num = (A @ M @ B.T) ** 2
     den = np.outer(np.einsum("ij,jk,ik->i", A, M, A), np.einsum("ij,jk,ik->i", B, M, B))
     mac = num / np.maximum(den, 1e-300)
@@ -194,8 +194,9 @@ def matched_periods(base: ModeSet, other: ModeSet) -> np.ndarray:
     wires independent and, with inextensible wires, removes a mode, so that
     mode's period has no derivative with respect to that input."""
     out = np.full(len(base.modes), np.nan)
+    P = getattr(other, "periods", None)  # a LazyModeSet's, without building its modes (all finite)
     for r, i in zip(*_mac_assignment(base, other)):
-        out[r] = other.modes[i].period if other.modes[i].period else np.nan
+        out[r] = P[i] if P is not None else (other.modes[i].period if other.modes[i].period else np.nan)
     return out
 
 
