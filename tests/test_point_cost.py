@@ -1347,3 +1347,30 @@ def test_linear_estimate_with_lazy_mode_sets_equals_the_eager_one(comp):
         ref = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, sens.column(comp)[k],
                               at=lambda inertia, lazy=False: eager(inertia))
         assert got is not None and got == ref
+
+
+def test_admissible_interval_remembered_equals_computed(monkeypatch):
+    # admissible_interval remembers its answers (a sweep over geometry asks the same tensors at every point);
+    # against the computation (the path before, _admissible_interval): the same ends, the component's own value
+    # ignored as before, and the memory bounded
+    from bifilar.estimation import problem as pr
+
+    rng = np.random.default_rng(3)
+    monkeypatch.setattr(pr, "_admissible_seen", {})
+    calls = []
+    real = pr._admissible_interval
+    monkeypatch.setattr(pr, "_admissible_interval", lambda I0, name: calls.append(name) or real(I0, name))
+    for _ in range(40):
+        A = rng.normal(size=(3, 3))
+        I = A @ A.T + 0.3 * np.eye(3)
+        for name in ("Ixx", "Izz", "Ixy", "Iyz"):
+            i, j = pr._IDX[name]
+            I0 = I.copy()
+            I0[i, j] = I0[j, i] = 0.0
+            first = pr.admissible_interval(I, name)
+            assert first == real(I0, name)
+            I2 = I.copy()
+            I2[i, j] = I2[j, i] = I[i, j] + 1.0  # its own value is ignored
+            n = len(calls)
+            assert pr.admissible_interval(I2, name) == first and len(calls) == n
+    assert len(calls) == 160 and len(pr._admissible_seen) <= pr._ADMISSIBLE_KEEP
