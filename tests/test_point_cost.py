@@ -1374,3 +1374,32 @@ def test_admissible_interval_remembered_equals_computed(monkeypatch):
             n = len(calls)
             assert pr.admissible_interval(I2, name) == first and len(calls) == n
     assert len(calls) == 160 and len(pr._admissible_seen) <= pr._ADMISSIBLE_KEEP
+
+
+def test_rest_poses_quaternion_when_read_and_the_turn_check_from_the_trace():
+    # batch rest poses compute q when it is read (matrix_to_quat of R alone: the same bits as in the batch),
+    # and the Newton start's turn check decides from the trace away from its threshold (matrix_to_quat near
+    # it); against matrix_to_quat of the whole batch (the path before): the same quaternions and verdicts,
+    # on random rotations, rotations within 1e-12 of the threshold either way, and a NaN
+    from bifilar.analysis.batch import rest_poses
+    from bifilar.analysis.batch_rest import _within_turn
+    from bifilar.analysis.equilibrium import NEWTON_START_MAX_TURN
+    from bifilar.rotations import matrix_to_quat, rotvec_to_matrix
+
+    rng = np.random.default_rng(8)
+    c = np.cos(NEWTON_START_MAX_TURN / 2)
+    axes = rng.normal(size=(400, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    ang = np.concatenate([rng.uniform(0, np.pi, 200), NEWTON_START_MAX_TURN + rng.uniform(-1e-12, 1e-12, 200)])
+    R = rotvec_to_matrix(axes * ang[:, None])
+    R[7, 1, 2] = np.nan
+    with np.errstate(invalid="ignore"):
+        want = np.abs(matrix_to_quat(R)[:, 0]) >= c
+    assert np.array_equal(_within_turn(R, c), want) and want[200:].any() and not want[200:].all()
+    base = _scene("solar_boat", {"spacing": 3.0})
+    scenes = [perturb(base, n, 1e-3) for n in measured_inputs(base)]
+    got = rest_poses(scenes, rest_pose(base))
+    assert all("q" not in r.__dict__ for r in got)
+    Q = matrix_to_quat(np.array([r.R for r in got]))
+    for r, q in zip(got, Q):
+        assert np.array_equal(r.q, q)

@@ -242,36 +242,54 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
         Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
         ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
         ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
-    q = matrix_to_quat(R)
     # the single path's acceptance rules for its Newton start (rest_pose's stage 2): a two-wire rig's CoM
     # straight below its attachment line, a turn of at most NEWTON_START_MAX_TURN from the start orientation
     # (inside the 90-degree box; farther, another stable equilibrium may be the one its global search finds),
     # and not every wire straight across; a scene failing any goes to rest_pose, which turns it about the
     # line, searches or refuses it
     ok &= ~(np.abs(line_turns(p, R)[0]) > LINE_TURN_TOL)
-    ok &= np.abs(q[:, 0]) >= np.cos(NEWTON_START_MAX_TURN / 2)
+    ok &= _within_turn(R, np.cos(NEWTON_START_MAX_TURN / 2))
     ok &= np.max(np.abs(d[..., 2]) / np.linalg.norm(d, axis=2), axis=1) >= MIN_WIRE_SLOPE
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue
         if ok[k]:
-            out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
+            out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), tensions=T[k].copy(),
                                     wire_vectors=d[k].copy(), kkt_residual=float(kkt[k]))
         else:
             out[k] = _rest_or_error(s, errors)
     return out
 
 
-_LAZY = ("lowest_z", "depth")
+def _within_turn(R: np.ndarray, c: float) -> np.ndarray:
+    """(B,) |q_w| >= ``c`` of the quaternions :func:`~bifilar.rotations.matrix_to_quat`
+    gives rotation matrices ``R`` (B, 3, 3): decided from the trace
+    (|q_w| = sqrt(1 + tr) / 2 for a rotation, to ~1e-15) where it is more
+    than 1e-9 from ``c``, else (and for a matrix with a NaN) by
+    ``matrix_to_quat`` itself, so the same verdicts without its per-matrix
+    Python work for every scene."""
+    with np.errstate(invalid="ignore"):
+        w = 0.5 * np.sqrt(np.maximum(1.0 + (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2]), 0.0))
+    inside, outside = w >= c + 1e-9, w < c - 1e-9
+    out = inside.copy()
+    unsure = ~(inside | outside)
+    if unsure.any():
+        out[unsure] = np.abs(matrix_to_quat(R[unsure])[:, 0]) >= c
+    return out
+
+
+_LAZY = ("lowest_z", "depth", "q")
 
 
 class _LazyDepthRest(RestPose):
-    """A :class:`RestPose` whose ``lowest_z`` and ``depth`` are computed on
-    first read (then kept), with the same expression as before: the body's
-    lowest point (:func:`~bifilar.scene.lowest_point_z`, one support-function
-    call a scene) was ~45 % of a batch's cost, and most batched rest poses
-    (the sigma points of the honest budget) never read it.  Pickled and
-    copied as the plain :class:`RestPose` with those values.  ``scene`` None
+    """A :class:`RestPose` whose ``lowest_z``, ``depth`` and ``q`` are
+    computed on first read (then kept), with the same expressions as
+    before: the body's lowest point (:func:`~bifilar.scene.lowest_point_z`,
+    one support-function call a scene) was ~45 % of a batch's cost, the
+    quaternion (:func:`~bifilar.rotations.matrix_to_quat` of ``R``: the same
+    bits alone as in a batch) ~10 %, and most batched rest poses (the sigma
+    points of the honest budget) read neither.  Pickled and copied as the
+    plain :class:`RestPose` with those values.  ``scene`` None
     (``dataclasses.replace``): every field must be given."""
 
     def __init__(self, scene: Scene | None = None, **fields):  # noqa: D107 - RestPose's fields, or all but the lazy two
@@ -279,9 +297,12 @@ class _LazyDepthRest(RestPose):
         d.update(fields)
         d["_scene"] = scene
 
-    def __getattr__(self, name):  # only called for attributes not yet set: the lazy two
+    def __getattr__(self, name):  # only called for attributes not yet set: the lazy ones
         if name not in _LAZY or "_scene" not in self.__dict__:
             raise AttributeError(name)
+        if name == "q":
+            object.__setattr__(self, "q", matrix_to_quat(self.R))
+            return self.q
         s = self.__dict__["_scene"]
         lz = float(lowest_point_z(s, self.com, self.R))
         object.__setattr__(self, "lowest_z", lz)
