@@ -1403,3 +1403,32 @@ def test_rest_poses_quaternion_when_read_and_the_turn_check_from_the_trace():
     Q = matrix_to_quat(np.array([r.R for r in got]))
     for r, q in zip(got, Q):
         assert np.array_equal(r.q, q)
+
+
+def _old_derivatives_skew(v):
+    """derivatives._skew before session 7, verbatim."""
+    z = np.zeros(v.shape[:-1], dtype=v.dtype)
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}),
+                                         ("thesis_plate_rest", {"spacing": 2.0}), ("drone_parallel", {})])
+def test_analytic_jacobian_with_in_place_cross_and_skew_equals_np_cross_and_stacks(name, params, monkeypatch):
+    # the analytic period derivatives (complex steps through _parts, _stepped, _pose_derivative) take
+    # batch_rest's _cross and _skew (written in place); against np.cross and the stacked skew (the path
+    # before): the same Jacobian bit for bit
+    from bifilar.analysis import derivatives as dv
+
+    scene = _scene(name, params)
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    names = COMPS + measured_inputs(scene)
+    got = dv.analytic_period_jacobian(scene, rest, ms, names)
+    monkeypatch.setattr(dv, "_skew", _old_derivatives_skew)
+    monkeypatch.setattr(dv, "_cross", np.cross)
+    ref = dv.analytic_period_jacobian(scene, rest, ms, names)
+    assert np.asarray(got, float).tobytes() == np.asarray(ref, float).tobytes()
+    v = np.random.default_rng(4).normal(size=(5, 2, 3)) * (1 + 1j)
+    assert np.array_equal(dv._skew(v), _old_derivatives_skew(v)) and dv._skew(v).dtype == complex
+    assert np.array_equal(dv._cross(v, v[::-1]), np.cross(v, v[::-1]))
