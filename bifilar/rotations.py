@@ -13,16 +13,21 @@ import numpy as np
 
 def skew(v: np.ndarray) -> np.ndarray:
     """Cross-product matrix: ``skew(a) @ b == cross(a, b)``; ``v`` shape (..., 3)."""
-    v = np.asarray(v, dtype=float)
-    z = np.zeros(v.shape[:-1])
-    return np.stack(
-        [
-            np.stack([z, -v[..., 2], v[..., 1]], axis=-1),
-            np.stack([v[..., 2], z, -v[..., 0]], axis=-1),
-            np.stack([-v[..., 1], v[..., 0], z], axis=-1),
-        ],
-        axis=-2,
-    )
+    return skew_of(np.asarray(v, dtype=float))
+
+
+def skew_of(v: np.ndarray) -> np.ndarray:
+    """:func:`skew` of ``v`` (..., 3) in its own dtype (complex-safe), written
+    entry by entry (the values of nested stacks: +0.0 on the diagonal)."""
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    out = np.zeros(v.shape + (3,), np.result_type(v, 0.0))
+    out[..., 0, 1] = -w
+    out[..., 0, 2] = y
+    out[..., 1, 0] = w
+    out[..., 1, 2] = -x
+    out[..., 2, 0] = -y
+    out[..., 2, 1] = x
+    return out
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
@@ -118,11 +123,14 @@ def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 def rotvec_to_quat(v: np.ndarray) -> np.ndarray:
     """Unit quaternion of rotation vector(s) ``v`` (..., 3), radians."""
     v = np.asarray(v, dtype=float)
-    ang = np.linalg.norm(v, axis=-1, keepdims=True)
+    ang = np.sqrt(np.add.reduce(v * v, axis=-1, keepdims=True))  # np.linalg.norm(v, axis=-1, ...)'s operations
     half = 0.5 * ang
-    # sin(half)/ang with a series for tiny angles
+    # sin(half)/ang with a series for tiny angles (the series' branch only where one is tiny: the same values)
     small = ang < 1e-8
-    k = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
+    if small.any():
+        k = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
+    else:
+        k = np.sin(half) / ang
     return np.concatenate([np.cos(half), k * v], axis=-1)
 
 

@@ -28,7 +28,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BifilarError
-from ..rotations import matrix_to_quat, rotvec_to_matrix
+from ..rotations import matrix_to_quat, rotvec_to_matrix, skew_of
 from ..scene import Scene, lowest_point_z
 from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, RestPose, canonical_attitude, knife_edge_axes,
                           line_turns, rest_pose, start_coms)
@@ -94,18 +94,7 @@ def _constraints(a, p, L, com, R, ii):
     return d, w, G, 0.5 * (np.einsum("bni,bni->bn", d, d) - L[ii] ** 2)
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrices (..., 3, 3) of ``v`` (..., 3), written entry by
-    entry (the values of nested stacks: +0.0 on the diagonal)."""
-    x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    out = np.zeros(v.shape + (3,), np.result_type(v, 0.0))
-    out[..., 0, 1] = -w
-    out[..., 0, 2] = y
-    out[..., 1, 0] = w
-    out[..., 1, 2] = -x
-    out[..., 2, 0] = -y
-    out[..., 2, 1] = x
-    return out
+_skew = skew_of  # cross-product matrices (..., 3, 3) in v's dtype, written entry by entry
 
 
 def _hessian(d, w, lam):
