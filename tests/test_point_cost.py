@@ -1466,3 +1466,22 @@ def test_rotvec_to_quat_and_skew_with_fewer_calls_equal_the_ones_before():
             assert np.array_equal(skew(w), _old_skew(w), equal_nan=True)
             assert np.array_equal(np.signbit(skew(w)), np.signbit(_old_skew(w)))
     assert rotvec_to_matrix(np.zeros(3)).tolist() == np.eye(3).tolist()
+
+
+def test_thesis_model_validates_only_a_products_unit_step():
+    # ThesisModel builds a moment's unit-step inertia without KaneParams' checks (adding C^T r r^T C keeps it
+    # positive semi-definite: they cannot fail) and a product's through them, as before: a body whose moments
+    # are small against the unit step of Ixy is refused (InputError), its Ixx is not
+    from bifilar.errors import InputError
+    from bifilar.estimation.ladder import ThesisModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene("thesis_lin2_pitch", {})
+    small = replace(scene, inertia=scene.inertia * (0.3 / float(np.max(scene.inertia))))
+    hm = HangingModel(Hanging("h", small, np.eye(3)), small.inertia)
+    sens = period_sensitivity(small, COMPS)
+    k = best_mode_for(sens, "Iyy")
+    ThesisModel(hm, k, "Iyy")
+    with pytest.raises(InputError, match="positive semi-definite"):
+        ThesisModel(hm, k, "Ixz")

@@ -131,8 +131,13 @@ class ThesisModel:
         self.x0 = float(hm.I_ref0[_IDX[component]])
         # M5 is linear in the inertia: M5(x) = M_a + (x - x0) dM
         E_h = hm.R @ basis(component) @ hm.R.T
-        p1 = replace_params(p, inertia=p.inertia + self.mapping.C.T @ E_h @ self.mapping.C)  # (validated)
-        M_b = kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], p1.inertia)  # = mass_matrix_and_forcing's
+        I_b = p.inertia + self.mapping.C.T @ E_h @ self.mapping.C
+        i, j = _IDX[component]
+        if i != j:  # a product's unit step may leave the positive semi-definite cone: KaneParams refuses it
+            I_b = replace_params(p, inertia=I_b).inertia  # (validated)
+        # (a moment's adds C^T r r^T C, positive semi-definite: the checks KaneParams makes cannot fail, and it
+        # keeps the same values)
+        M_b = kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], I_b)  # = mass_matrix_and_forcing's
         self.M_a, self.dM = M_a, M_b - M_a
         lin_T = mode.period
         ev, V = self._eig(self.x0)
