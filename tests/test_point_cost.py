@@ -280,8 +280,10 @@ def _thesis_period_before(tm, x):
 
 
 @pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
-                                         ("thesis_lin3_roll", {})])
+                                         ("thesis_lin3_roll", {}), ("thesis_cylinder_6_4", {})])
 def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
+    # (session 7: at the prior x0, where the root search starts, period returns the period __init__ solved:
+    # the shortcut is taken, and f = 1.0 below checks it against the computation)
     from bifilar.estimation.ladder import ThesisModel
     from bifilar.estimation.measurements import Hanging
     from bifilar.estimation.problem import HangingModel
@@ -295,6 +297,7 @@ def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
             tm = ThesisModel(hm, best_mode_for(sens, comp), comp)
         except Exception:  # noqa: BLE001 - a rung that does not apply
             continue
+        assert tm._at_x0 is not None
         for f in (0.5, 0.9, 1.0, 1.1, 2.0):
             x = f * tm.x0
             got, ref = tm.period(x), _thesis_period_before(tm, x)
@@ -1485,3 +1488,4 @@ def test_thesis_model_validates_only_a_products_unit_step():
     ThesisModel(hm, k, "Iyy")
     with pytest.raises(InputError, match="positive semi-definite"):
         ThesisModel(hm, k, "Ixz")
+
