@@ -33,6 +33,10 @@ def skew_of(v: np.ndarray) -> np.ndarray:
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrix (..., 3, 3) of quaternion(s) ``q`` (..., 4); q need not be unit."""
     q = np.asarray(q, dtype=float)
+    if q.size <= 4 * _FEW:
+        m = _quat_to_matrix_few(q)
+        if m is not None:
+            return m
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     out = np.empty(q.shape[:-1] + (3, 3))  # filled entry by entry: the numpy calls of nested stacks cost more
@@ -46,6 +50,28 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     out[..., 2, 1] = 2 * (y * z + w * x)
     out[..., 2, 2] = 1 - 2 * (x * x + y * y)
     return out
+
+
+#: up to this many quaternions :func:`quat_to_matrix` works on Python floats (a start-pose solve's 2-3)
+_FEW = 8
+
+
+def _quat_to_matrix_few(q: np.ndarray):
+    """:func:`quat_to_matrix` of a few quaternions on Python floats: the same
+    IEEE operations in the same order as the numpy path (the norm's sum of
+    squares left to right, as ``add.reduce`` sums four terms; then the
+    entries' expressions), without a numpy call per entry; None (the numpy
+    path) where a norm is zero or not finite, for numpy's NaN and inf."""
+    rows = []
+    for w, x, y, z in q.reshape(-1, 4).tolist():
+        n = math.sqrt(w * w + x * x + y * y + z * z)
+        if not 0.0 < n < math.inf:
+            return None
+        w, x, y, z = w / n, x / n, y / n, z / n
+        rows.append([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return np.array(rows, float).reshape(q.shape[:-1] + (3, 3))
 
 
 def matrix_to_quat(R: np.ndarray) -> np.ndarray:

@@ -1489,3 +1489,32 @@ def test_thesis_model_validates_only_a_products_unit_step():
     with pytest.raises(InputError, match="positive semi-definite"):
         ThesisModel(hm, k, "Ixz")
 
+
+
+def test_quat_to_matrix_of_a_few_on_python_floats_equals_the_numpy_path(monkeypatch):
+    # quat_to_matrix of up to 8 quaternions (a start-pose solve's, ~11 calls a point) on Python floats; against
+    # the numpy path (all it was before; _FEW = 0 takes it for every size): the same bits over random, tiny,
+    # huge and nearly identity quaternions in every shape it takes, and numpy's own NaN / inf for a zero or
+    # non-finite one
+    from bifilar import rotations
+    from bifilar.rotations import quat_to_matrix
+
+    def _numpy_quat_to_matrix(q):
+        with monkeypatch.context() as m:
+            m.setattr(rotations, "_FEW", 0)
+            return quat_to_matrix(q)
+
+    rng = np.random.default_rng(21)
+    n = 0
+    for shape in ((4,), (1, 4), (3, 4), (8, 4), (2, 3, 4), (9, 4)):
+        for scale in (1e-150, 1e-3, 1.0, 1e3, 1e150):
+            for _ in range(60):
+                q = rng.normal(size=shape) * scale
+                if rng.uniform() < 0.3:
+                    q[..., 1:] *= 1e-9
+                assert np.array_equal(quat_to_matrix(q), _numpy_quat_to_matrix(q))
+                n += 1
+    with np.errstate(all="ignore"):
+        for bad in (np.zeros(4), np.array([[1.0, 0, 0, 0], [np.nan, 0, 0, 1]]), np.array([np.inf, 1.0, 0, 0])):
+            assert np.array_equal(quat_to_matrix(bad), _numpy_quat_to_matrix(bad), equal_nan=True)
+    assert n == 1800
