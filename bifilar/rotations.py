@@ -13,21 +13,30 @@ import numpy as np
 
 def skew(v: np.ndarray) -> np.ndarray:
     """Cross-product matrix: ``skew(a) @ b == cross(a, b)``; ``v`` shape (..., 3)."""
-    v = np.asarray(v, dtype=float)
-    z = np.zeros(v.shape[:-1])
-    return np.stack(
-        [
-            np.stack([z, -v[..., 2], v[..., 1]], axis=-1),
-            np.stack([v[..., 2], z, -v[..., 0]], axis=-1),
-            np.stack([-v[..., 1], v[..., 0], z], axis=-1),
-        ],
-        axis=-2,
-    )
+    return skew_of(np.asarray(v, dtype=float))
+
+
+def skew_of(v: np.ndarray) -> np.ndarray:
+    """:func:`skew` of ``v`` (..., 3) in its own dtype (complex-safe), written
+    entry by entry (the values of nested stacks: +0.0 on the diagonal)."""
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    out = np.zeros(v.shape + (3,), np.result_type(v, 0.0))
+    out[..., 0, 1] = -w
+    out[..., 0, 2] = y
+    out[..., 1, 0] = w
+    out[..., 1, 2] = -x
+    out[..., 2, 0] = -y
+    out[..., 2, 1] = x
+    return out
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrix (..., 3, 3) of quaternion(s) ``q`` (..., 4); q need not be unit."""
     q = np.asarray(q, dtype=float)
+    if q.size <= 4 * _FEW:
+        m = _quat_to_matrix_few(q)
+        if m is not None:
+            return m
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     out = np.empty(q.shape[:-1] + (3, 3))  # filled entry by entry: the numpy calls of nested stacks cost more
@@ -41,6 +50,28 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     out[..., 2, 1] = 2 * (y * z + w * x)
     out[..., 2, 2] = 1 - 2 * (x * x + y * y)
     return out
+
+
+#: up to this many quaternions :func:`quat_to_matrix` works on Python floats (a start-pose solve's 2-3)
+_FEW = 8
+
+
+def _quat_to_matrix_few(q: np.ndarray):
+    """:func:`quat_to_matrix` of a few quaternions on Python floats: the same
+    IEEE operations in the same order as the numpy path (the norm's sum of
+    squares left to right, as ``add.reduce`` sums four terms; then the
+    entries' expressions), without a numpy call per entry; None (the numpy
+    path) where a norm is zero or not finite, for numpy's NaN and inf."""
+    rows = []
+    for w, x, y, z in q.reshape(-1, 4).tolist():
+        n = math.sqrt(w * w + x * x + y * y + z * z)
+        if not 0.0 < n < math.inf:
+            return None
+        w, x, y, z = w / n, x / n, y / n, z / n
+        rows.append([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return np.array(rows, float).reshape(q.shape[:-1] + (3, 3))
 
 
 def matrix_to_quat(R: np.ndarray) -> np.ndarray:
@@ -118,11 +149,14 @@ def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 def rotvec_to_quat(v: np.ndarray) -> np.ndarray:
     """Unit quaternion of rotation vector(s) ``v`` (..., 3), radians."""
     v = np.asarray(v, dtype=float)
-    ang = np.linalg.norm(v, axis=-1, keepdims=True)
+    ang = np.sqrt(np.add.reduce(v * v, axis=-1, keepdims=True))  # np.linalg.norm(v, axis=-1, ...)'s operations
     half = 0.5 * ang
-    # sin(half)/ang with a series for tiny angles
+    # sin(half)/ang with a series for tiny angles (the series' branch only where one is tiny: the same values)
     small = ang < 1e-8
-    k = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
+    if small.any():
+        k = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
+    else:
+        k = np.sin(half) / ang
     return np.concatenate([np.cos(half), k * v], axis=-1)
 
 

@@ -280,8 +280,10 @@ def _thesis_period_before(tm, x):
 
 
 @pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
-                                         ("thesis_lin3_roll", {})])
+                                         ("thesis_lin3_roll", {}), ("thesis_cylinder_6_4", {})])
 def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
+    # (session 7: at the prior x0, where the root search starts, period returns the period __init__ solved:
+    # the shortcut is taken, and f = 1.0 below checks it against the computation)
     from bifilar.estimation.ladder import ThesisModel
     from bifilar.estimation.measurements import Hanging
     from bifilar.estimation.problem import HangingModel
@@ -295,6 +297,7 @@ def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
             tm = ThesisModel(hm, best_mode_for(sens, comp), comp)
         except Exception:  # noqa: BLE001 - a rung that does not apply
             continue
+        assert tm._at_x0 is not None
         for f in (0.5, 0.9, 1.0, 1.1, 2.0):
             x = f * tm.x0
             got, ref = tm.period(x), _thesis_period_before(tm, x)
@@ -1157,3 +1160,361 @@ def test_scene_with_equals_dataclasses_replace():
     for g, r in zip(got, ref):
         for f in ("mass", "gravity", "inertia", "anchors", "attachments", "lengths"):
             assert np.asarray(getattr(g, f)).tobytes() == np.asarray(getattr(r, f)).tobytes()
+
+
+# --------------------------------------------------------------------------
+# session 7 (issue 14, the Solar Boat point towards 15 ms)
+# --------------------------------------------------------------------------
+def _sigma_batches():
+    """Batches of sigma-point-like scenes (each measured input moved by +-3e-3 x a normal draw) with their
+    rest poses and base mode sets: the Solar Boat, the drone, the trifilar (repeated swings), the knife-edge
+    plate (a neutral mode), the thesis cylinder."""
+    from bifilar.analysis.batch import rest_poses
+
+    rng = np.random.default_rng(11)
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("solar_boat", {"spacing": 1.5, "length": 3.5}),
+                         ("drone_parallel", {}), ("trifilar_kth", {}), ("thesis_plate_rest", {}),
+                         ("thesis_cylinder_6_4", {})):
+        base = _scene(name, params)
+        rest = rest_pose(base)
+        scenes = [perturb(base, nm, sgn * float(rng.normal()) * 3e-3) for nm in measured_inputs(base) for sgn in (1, -1)]
+        rests = rest_poses(scenes, rest, errors="return")
+        keep = [q for q, r in enumerate(rests) if not isinstance(r, Exception)]
+        yield name, base, rest, [scenes[q] for q in keep], [rests[q] for q in keep]
+
+
+def test_lazy_mode_sets_equal_the_eager_ones():
+    # modes_batch(lazy=True) gives a scene with distinct, positive eigenvalues a LazyModeSet (periods and unit
+    # shapes for the batch at once, the Mode objects when read); against modes_batch without it (the path
+    # before): the same periods and shapes before the modes are built, the same mode sets bit for bit once
+    # built, pickled as the plain ModeSet; scenes with a cluster (the trifilar's swings) or a neutral mode (the
+    # knife-edge plate) stay eager
+    import pickle
+
+    from bifilar.analysis.batch import modes_batch
+    from bifilar.analysis.modes import LazyModeSet, ModeSet
+
+    lazy_n = eager_n = 0
+    for name, _, _, scenes, rests in _sigma_batches():
+        ref = modes_batch(scenes, rests)
+        got = modes_batch(scenes, rests, lazy=True)
+        for a, b in zip(got, ref):
+            if isinstance(a, LazyModeSet):
+                lazy_n += 1
+                assert "modes" not in a.__dict__
+                assert np.array_equal(a.periods, [m.period for m in b.modes])
+                assert np.array_equal(a.shapes, [m.shape for m in b.modes])
+                assert np.array_equal(a.mass_matrix, b.mass_matrix) and np.array_equal(a.basis, b.basis)
+                plain = pickle.loads(pickle.dumps(a))
+                assert type(plain) is ModeSet and _mode_set_fields(plain)[0] == _mode_set_fields(b)[0]
+            else:
+                eager_n += 1
+                assert name in ("trifilar_kth", "thesis_plate_rest") or len({m.period for m in b.modes}) < len(b.modes)
+                assert len({m.period for m in b.modes}) < len(b.modes) or any(m.period is None for m in b.modes)
+            assert _mode_set_fields(a)[:3] == _mode_set_fields(b)[:3]
+    assert lazy_n > 80 and eager_n > 20
+
+
+def test_plain_order_refuses_clusters_and_neutral_modes_whatever_their_last_bits():
+    # plain_order admits a scene only when mode_set would neither merge nor call neutral any of its eigenvalues,
+    # with a margin of 2 over the resolution: built by hand, a gap of 3 resolutions passes, of 1.5 does not
+    # (mode_set would not merge it, but the margin is for the batch's rounding), of 0.5 does not (a cluster)
+    from bifilar.analysis.modes import DEGENERATE_RTOL, _noise, clusters, plain_order
+
+    K = np.diag([1.0, 2.0, 5.0])
+    Y = np.eye(3)
+    for gap, want in ((3.0, True), (1.5, False), (0.5, False)):
+        w2 = np.array([1.0, 2.0, 2.0 + gap * DEGENERATE_RTOL * 2.0 * (1 + 1e-12)])
+        Kg = np.diag(w2)
+        assert bool(plain_order(w2[None], Y[None], Kg[None])[0]) is want
+        if want:
+            assert len(clusters(w2, _noise(w2, Y, Kg))) == 3
+        if gap < 1:
+            assert len(clusters(w2, _noise(w2, Y, Kg))) == 2
+    assert not plain_order(np.array([[0.0, 1.0, 2.0]]), Y[None], K[None])[0]  # neutral
+    assert not plain_order(np.array([[-1.0, 1.0, 2.0]]), Y[None], K[None])[0]  # unstable
+
+
+def _hanging_periods_before(scenes, rest, base_modes) -> list:
+    """budget._hanging_periods before session 7 (eager mode sets), verbatim."""
+    from bifilar.analysis.batch import modes_batch, rest_poses
+    from bifilar.errors import BifilarError  # noqa: F401 - as the module had it
+    from bifilar.estimation.montecarlo import _modes_or_none
+    from bifilar.estimation.sensitivity import mac_matches
+
+    rests = rest_poses(scenes, rest, errors="return")
+    good = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
+    out: list = [None] * len(scenes)
+    if not good:
+        return out
+    mss = _modes_or_none(modes_batch, [scenes[q] for q in good], [rests[q] for q in good])
+    kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and len(ms.modes) == len(base_modes.modes)]
+    for (q, ms), col in zip(kept, mac_matches(base_modes, [ms for _, ms in kept])):
+        T = np.array([ms.modes[c].period or np.nan for c in col])
+        out[q] = (T, scenes[q], rests[q], ms, col)
+    return out
+
+
+def test_hanging_periods_with_lazy_mode_sets_equal_the_ones_before():
+    # the sigma points' periods and MAC columns from the lazy mode sets against the eager path: bit for bit
+    from bifilar.estimation.budget import _hanging_periods
+
+    for _, base, rest, scenes, _ in _sigma_batches():
+        ms0 = linear_modes(base, rest)
+        got = _hanging_periods(scenes, rest, ms0)
+        ref = _hanging_periods_before(scenes, rest, ms0)
+        assert len(got) == len(ref)
+        for a, b in zip(got, ref):
+            assert (a is None) == (b is None)
+            if a is not None:
+                assert a[0].tobytes() == b[0].tobytes() and list(a[4]) == list(b[4])
+                assert _mode_set_fields(a[3])[:3] == _mode_set_fields(b[3])[:3]
+
+
+def _old_zero_set(vals: dict) -> frozenset:
+    """maximal._zero_set before session 7, verbatim."""
+    from bifilar.models.maximal import _NEVER_ZERO
+
+    out = set()
+    for k, v in vals.items():
+        if k in _NEVER_ZERO or k.startswith(("L2", "hbL")):
+            continue  # never drop these (a zero would be a degenerate scene anyway)
+        if np.all(np.asarray(v) == 0):
+            out.add(k)
+    return frozenset(out)
+
+
+def test_kernel_parameters_once_per_rig_and_zero_set_on_floats():
+    # compiled_kernel computes a rig's parameter values and zero set once for all its kernels (was once per
+    # kernel), and _zero_set tests a single scene's floats without numpy: the same zero sets (signed zeros,
+    # NaN, batch arrays) and the same kernels' outputs as kernels of a fresh RigParams each
+    from bifilar.models import maximal as mx
+
+    vals = {"mass": 0.0, "Ixy": 0.0, "Ixz": -0.0, "Iyz": 1e-300, "Ex": float("nan"), "px0": 2.0, "L20": 0.0,
+            "ax0": np.zeros(3), "ay0": np.array([0.0, 1.0]), "az0": np.array([-0.0, 0.0])}
+    assert mx._zero_set(vals) == _old_zero_set(vals) == frozenset({"Ixy", "Ixz", "ax0", "az0"})
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("thesis_plate_rest", {})):
+        scene = _scene(name, params)
+        P = mx.params_from_scenes([scene]).take(0)
+        assert mx._zero_set(mx._param_values(P)) == _old_zero_set(mx._param_values(P))
+        y = np.array([0.01, -0.02, 0.03, 0.999, 0.02, -0.01, 0.03, 0.1, -0.2, 0.05, 0.3, -0.1, 0.2])
+        y[3:7] /= np.linalg.norm(y[3:7])
+        for kw in ({}, {"extras": True}, {"signature": "odeint"}):
+            fresh = mx.compiled_kernel(mx.params_from_scenes([scene]).take(0), **kw)
+            got = mx.compiled_kernel(P, **kw)
+            a = got(y, 0.0) if kw.get("signature") else got(*y)
+            b = fresh(y, 0.0) if kw.get("signature") else fresh(*y)
+            assert np.array_equal(np.asarray(a, float), np.asarray(b, float))
+        assert "values" in P.__dict__["_kernels"]
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("trifilar_kth", {}), ("thesis_plate_rest", {}), ("drone_parallel", {})])
+def test_modes_of_inertia_lazy_equals_eager(name, params):
+    # modes_of_inertia(...)(inertia, lazy=True): a LazyModeSet where mode_set keeps the eigensolver's order (no
+    # cluster, no neutral mode: the trifilar's swings and the knife-edge plate stay eager); against the eager
+    # mode set (the path before): the same periods and shapes before its modes are built, the same mode set
+    # after; and matched_periods (what linear_estimate reads) the same bits
+    from bifilar.analysis.modes import LazyModeSet
+
+    scene = _scene(name, params)
+    rest = rest_pose(scene)
+    base = linear_modes(scene, rest)
+    n_lazy = 0
+    for comp, f in (("Ixx", 1.0), ("Izz", 1.0 + 3e-4), ("Iyy", 1.0 - 2e-3), ("Ixy", 0.01)):
+        inertia = perturb(scene, comp, (f - 1.0 if comp != "Ixy" else f) * scene.inertia[0, 0]).inertia
+        eager = modes_of_inertia(scene, rest)(inertia)
+        lazy = modes_of_inertia(scene, rest)(inertia, lazy=True)
+        assert np.array_equal(matched_periods(base, lazy), matched_periods(base, eager), equal_nan=True)
+        if isinstance(lazy, LazyModeSet):
+            n_lazy += 1
+            assert "modes" not in lazy.__dict__
+            assert np.array_equal(lazy.periods, [m.period for m in eager.modes])
+            assert np.array_equal(lazy.shapes, [m.shape for m in eager.modes])
+        assert _mode_set_fields(lazy)[:3] == _mode_set_fields(eager)[:3]
+    assert (n_lazy == 4) == (name not in ("trifilar_kth", "thesis_plate_rest"))
+
+
+@pytest.mark.parametrize("comp", COMPS)
+def test_linear_estimate_with_lazy_mode_sets_equals_the_eager_one(comp):
+    # linear_estimate's secant steps read periods and shapes only (lazy mode sets); against the same steps
+    # with eager mode sets (an `at` that ignores lazy: the path before): the same estimate, bit for bit
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    k = best_mode_for(sens, comp)
+    at = modes_of_inertia(scene, sens.rest)
+    eager = modes_of_inertia(scene, sens.rest)
+    for rel in (3e-4, -1e-3, 2e-2):
+        T_target = sens.periods[k] * (1 + rel)
+        got = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, sens.column(comp)[k], at=at)
+        ref = linear_estimate(scene, comp, k, T_target, sens.modes, sens.rest, sens.column(comp)[k],
+                              at=lambda inertia, lazy=False: eager(inertia))
+        assert got is not None and got == ref
+
+
+def test_admissible_interval_remembered_equals_computed(monkeypatch):
+    # admissible_interval remembers its answers (a sweep over geometry asks the same tensors at every point);
+    # against the computation (the path before, _admissible_interval): the same ends, the component's own value
+    # ignored as before, and the memory bounded
+    from bifilar.estimation import problem as pr
+
+    rng = np.random.default_rng(3)
+    monkeypatch.setattr(pr, "_admissible_seen", {})
+    calls = []
+    real = pr._admissible_interval
+    monkeypatch.setattr(pr, "_admissible_interval", lambda I0, name: calls.append(name) or real(I0, name))
+    for _ in range(40):
+        A = rng.normal(size=(3, 3))
+        I = A @ A.T + 0.3 * np.eye(3)
+        for name in ("Ixx", "Izz", "Ixy", "Iyz"):
+            i, j = pr._IDX[name]
+            I0 = I.copy()
+            I0[i, j] = I0[j, i] = 0.0
+            first = pr.admissible_interval(I, name)
+            assert first == real(I0, name)
+            I2 = I.copy()
+            I2[i, j] = I2[j, i] = I[i, j] + 1.0  # its own value is ignored
+            n = len(calls)
+            assert pr.admissible_interval(I2, name) == first and len(calls) == n
+    assert len(calls) == 160 and len(pr._admissible_seen) <= pr._ADMISSIBLE_KEEP
+
+
+def test_rest_poses_quaternion_when_read_and_the_turn_check_from_the_trace():
+    # batch rest poses compute q when it is read (matrix_to_quat of R alone: the same bits as in the batch),
+    # and the Newton start's turn check decides from the trace away from its threshold (matrix_to_quat near
+    # it); against matrix_to_quat of the whole batch (the path before): the same quaternions and verdicts,
+    # on random rotations, rotations within 1e-12 of the threshold either way, and a NaN
+    from bifilar.analysis.batch import rest_poses
+    from bifilar.analysis.batch_rest import _within_turn
+    from bifilar.analysis.equilibrium import NEWTON_START_MAX_TURN
+    from bifilar.rotations import matrix_to_quat, rotvec_to_matrix
+
+    rng = np.random.default_rng(8)
+    c = np.cos(NEWTON_START_MAX_TURN / 2)
+    axes = rng.normal(size=(400, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    ang = np.concatenate([rng.uniform(0, np.pi, 200), NEWTON_START_MAX_TURN + rng.uniform(-1e-12, 1e-12, 200)])
+    R = rotvec_to_matrix(axes * ang[:, None])
+    R[7, 1, 2] = np.nan
+    with np.errstate(invalid="ignore"):
+        want = np.abs(matrix_to_quat(R)[:, 0]) >= c
+    assert np.array_equal(_within_turn(R, c), want) and want[200:].any() and not want[200:].all()
+    base = _scene("solar_boat", {"spacing": 3.0})
+    scenes = [perturb(base, n, 1e-3) for n in measured_inputs(base)]
+    got = rest_poses(scenes, rest_pose(base))
+    assert all("q" not in r.__dict__ for r in got)
+    Q = matrix_to_quat(np.array([r.R for r in got]))
+    for r, q in zip(got, Q):
+        assert np.array_equal(r.q, q)
+
+
+def _old_derivatives_skew(v):
+    """derivatives._skew before session 7, verbatim."""
+    z = np.zeros(v.shape[:-1], dtype=v.dtype)
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}),
+                                         ("thesis_plate_rest", {"spacing": 2.0}), ("drone_parallel", {})])
+def test_analytic_jacobian_with_in_place_cross_and_skew_equals_np_cross_and_stacks(name, params, monkeypatch):
+    # the analytic period derivatives (complex steps through _parts, _stepped, _pose_derivative) take
+    # batch_rest's _cross and _skew (written in place); against np.cross and the stacked skew (the path
+    # before): the same Jacobian bit for bit
+    from bifilar.analysis import derivatives as dv
+
+    scene = _scene(name, params)
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    names = COMPS + measured_inputs(scene)
+    got = dv.analytic_period_jacobian(scene, rest, ms, names)
+    monkeypatch.setattr(dv, "_skew", _old_derivatives_skew)
+    monkeypatch.setattr(dv, "_cross", np.cross)
+    ref = dv.analytic_period_jacobian(scene, rest, ms, names)
+    assert np.asarray(got, float).tobytes() == np.asarray(ref, float).tobytes()
+    v = np.random.default_rng(4).normal(size=(5, 2, 3)) * (1 + 1j)
+    assert np.array_equal(dv._skew(v), _old_derivatives_skew(v)) and dv._skew(v).dtype == complex
+    assert np.array_equal(dv._cross(v, v[::-1]), np.cross(v, v[::-1]))
+
+
+def _old_skew(v):
+    """rotations.skew before session 7, verbatim."""
+    v = np.asarray(v, dtype=float)
+    z = np.zeros(v.shape[:-1])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], axis=-1), np.stack([v[..., 2], z, -v[..., 0]], axis=-1),
+                     np.stack([-v[..., 1], v[..., 0], z], axis=-1)], axis=-2)
+
+
+def _old_rotvec_to_quat(v):
+    """rotations.rotvec_to_quat before session 7, verbatim."""
+    v = np.asarray(v, dtype=float)
+    ang = np.linalg.norm(v, axis=-1, keepdims=True)
+    half = 0.5 * ang
+    small = ang < 1e-8
+    k = np.where(small, 0.5 - ang**2 / 48.0, np.sin(half) / np.where(small, 1.0, ang))
+    return np.concatenate([np.cos(half), k * v], axis=-1)
+
+
+def test_rotvec_to_quat_and_skew_with_fewer_calls_equal_the_ones_before():
+    # rotvec_to_quat (the start poses' and Newton steps' rotations: ~15 calls a point) sums squares as
+    # np.linalg.norm does and takes the series' branch only where an angle is tiny; skew writes its entries in
+    # place; against the verbatim functions before: the same bits, tiny, zero, -0.0 and NaN vectors included
+    from bifilar.rotations import rotvec_to_matrix, rotvec_to_quat, skew
+
+    rng = np.random.default_rng(12)
+    for shape in ((3,), (7, 3), (4, 2, 3)):
+        v = rng.normal(size=shape) * rng.choice([1e-12, 1e-9, 1e-3, 1.0, 3.0], size=shape[:-1] + (1,))
+        for w in (v, np.zeros(shape), -np.zeros(shape), np.where(rng.uniform(size=shape) < 0.2, np.nan, v)):
+            assert np.array_equal(rotvec_to_quat(w), _old_rotvec_to_quat(w), equal_nan=True)
+            assert np.array_equal(skew(w), _old_skew(w), equal_nan=True)
+            assert np.array_equal(np.signbit(skew(w)), np.signbit(_old_skew(w)))
+    assert rotvec_to_matrix(np.zeros(3)).tolist() == np.eye(3).tolist()
+
+
+def test_thesis_model_validates_only_a_products_unit_step():
+    # ThesisModel builds a moment's unit-step inertia without KaneParams' checks (adding C^T r r^T C keeps it
+    # positive semi-definite: they cannot fail) and a product's through them, as before: a body whose moments
+    # are small against the unit step of Ixy is refused (InputError), its Ixx is not
+    from bifilar.errors import InputError
+    from bifilar.estimation.ladder import ThesisModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.estimation.problem import HangingModel
+
+    scene = _scene("thesis_lin2_pitch", {})
+    small = replace(scene, inertia=scene.inertia * (0.3 / float(np.max(scene.inertia))))
+    hm = HangingModel(Hanging("h", small, np.eye(3)), small.inertia)
+    sens = period_sensitivity(small, COMPS)
+    k = best_mode_for(sens, "Iyy")
+    ThesisModel(hm, k, "Iyy")
+    with pytest.raises(InputError, match="positive semi-definite"):
+        ThesisModel(hm, k, "Ixz")
+
+
+
+def test_quat_to_matrix_of_a_few_on_python_floats_equals_the_numpy_path(monkeypatch):
+    # quat_to_matrix of up to 8 quaternions (a start-pose solve's, ~11 calls a point) on Python floats; against
+    # the numpy path (all it was before; _FEW = 0 takes it for every size): the same bits over random, tiny,
+    # huge and nearly identity quaternions in every shape it takes, and numpy's own NaN / inf for a zero or
+    # non-finite one
+    from bifilar import rotations
+    from bifilar.rotations import quat_to_matrix
+
+    def _numpy_quat_to_matrix(q):
+        with monkeypatch.context() as m:
+            m.setattr(rotations, "_FEW", 0)
+            return quat_to_matrix(q)
+
+    rng = np.random.default_rng(21)
+    n = 0
+    for shape in ((4,), (1, 4), (3, 4), (8, 4), (2, 3, 4), (9, 4)):
+        for scale in (1e-150, 1e-3, 1.0, 1e3, 1e150):
+            for _ in range(60):
+                q = rng.normal(size=shape) * scale
+                if rng.uniform() < 0.3:
+                    q[..., 1:] *= 1e-9
+                assert np.array_equal(quat_to_matrix(q), _numpy_quat_to_matrix(q))
+                n += 1
+    with np.errstate(all="ignore"):
+        for bad in (np.zeros(4), np.array([[1.0, 0, 0, 0], [np.nan, 0, 0, 1]]), np.array([np.inf, 1.0, 0, 0])):
+            assert np.array_equal(quat_to_matrix(bad), _numpy_quat_to_matrix(bad), equal_nan=True)
+    assert n == 1800

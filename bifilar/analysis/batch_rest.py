@@ -28,11 +28,11 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BifilarError
-from ..rotations import matrix_to_quat, rotvec_to_matrix
+from ..rotations import matrix_to_quat, rotvec_to_matrix, skew_of
 from ..scene import Scene, lowest_point_z
 from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, RestPose, canonical_attitude, knife_edge_axes,
                           line_turns, rest_pose, start_coms)
-from .modes import ModeSet, mode_sets
+from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes"]
 
@@ -94,18 +94,7 @@ def _constraints(a, p, L, com, R, ii):
     return d, w, G, 0.5 * (np.einsum("bni,bni->bn", d, d) - L[ii] ** 2)
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrices (..., 3, 3) of ``v`` (..., 3), written entry by
-    entry (the values of nested stacks: +0.0 on the diagonal)."""
-    x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    out = np.zeros(v.shape + (3,), np.result_type(v, 0.0))
-    out[..., 0, 1] = -w
-    out[..., 0, 2] = y
-    out[..., 1, 0] = w
-    out[..., 1, 2] = -x
-    out[..., 2, 0] = -y
-    out[..., 2, 1] = x
-    return out
+_skew = skew_of  # cross-product matrices (..., 3, 3) in v's dtype, written entry by entry
 
 
 def _hessian(d, w, lam):
@@ -242,36 +231,54 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
         Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
         ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
         ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
-    q = matrix_to_quat(R)
     # the single path's acceptance rules for its Newton start (rest_pose's stage 2): a two-wire rig's CoM
     # straight below its attachment line, a turn of at most NEWTON_START_MAX_TURN from the start orientation
     # (inside the 90-degree box; farther, another stable equilibrium may be the one its global search finds),
     # and not every wire straight across; a scene failing any goes to rest_pose, which turns it about the
     # line, searches or refuses it
     ok &= ~(np.abs(line_turns(p, R)[0]) > LINE_TURN_TOL)
-    ok &= np.abs(q[:, 0]) >= np.cos(NEWTON_START_MAX_TURN / 2)
+    ok &= _within_turn(R, np.cos(NEWTON_START_MAX_TURN / 2))
     ok &= np.max(np.abs(d[..., 2]) / np.linalg.norm(d, axis=2), axis=1) >= MIN_WIRE_SLOPE
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue
         if ok[k]:
-            out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), q=q[k].copy(), tensions=T[k].copy(),
+            out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), tensions=T[k].copy(),
                                     wire_vectors=d[k].copy(), kkt_residual=float(kkt[k]))
         else:
             out[k] = _rest_or_error(s, errors)
     return out
 
 
-_LAZY = ("lowest_z", "depth")
+def _within_turn(R: np.ndarray, c: float) -> np.ndarray:
+    """(B,) |q_w| >= ``c`` of the quaternions :func:`~bifilar.rotations.matrix_to_quat`
+    gives rotation matrices ``R`` (B, 3, 3): decided from the trace
+    (|q_w| = sqrt(1 + tr) / 2 for a rotation, to ~1e-15) where it is more
+    than 1e-9 from ``c``, else (and for a matrix with a NaN) by
+    ``matrix_to_quat`` itself, so the same verdicts without its per-matrix
+    Python work for every scene."""
+    with np.errstate(invalid="ignore"):
+        w = 0.5 * np.sqrt(np.maximum(1.0 + (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2]), 0.0))
+    inside, outside = w >= c + 1e-9, w < c - 1e-9
+    out = inside.copy()
+    unsure = ~(inside | outside)
+    if unsure.any():
+        out[unsure] = np.abs(matrix_to_quat(R[unsure])[:, 0]) >= c
+    return out
+
+
+_LAZY = ("lowest_z", "depth", "q")
 
 
 class _LazyDepthRest(RestPose):
-    """A :class:`RestPose` whose ``lowest_z`` and ``depth`` are computed on
-    first read (then kept), with the same expression as before: the body's
-    lowest point (:func:`~bifilar.scene.lowest_point_z`, one support-function
-    call a scene) was ~45 % of a batch's cost, and most batched rest poses
-    (the sigma points of the honest budget) never read it.  Pickled and
-    copied as the plain :class:`RestPose` with those values.  ``scene`` None
+    """A :class:`RestPose` whose ``lowest_z``, ``depth`` and ``q`` are
+    computed on first read (then kept), with the same expressions as
+    before: the body's lowest point (:func:`~bifilar.scene.lowest_point_z`,
+    one support-function call a scene) was ~45 % of a batch's cost, the
+    quaternion (:func:`~bifilar.rotations.matrix_to_quat` of ``R``: the same
+    bits alone as in a batch) ~10 %, and most batched rest poses (the sigma
+    points of the honest budget) read neither.  Pickled and copied as the
+    plain :class:`RestPose` with those values.  ``scene`` None
     (``dataclasses.replace``): every field must be given."""
 
     def __init__(self, scene: Scene | None = None, **fields):  # noqa: D107 - RestPose's fields, or all but the lazy two
@@ -279,9 +286,12 @@ class _LazyDepthRest(RestPose):
         d.update(fields)
         d["_scene"] = scene
 
-    def __getattr__(self, name):  # only called for attributes not yet set: the lazy two
+    def __getattr__(self, name):  # only called for attributes not yet set: the lazy ones
         if name not in _LAZY or "_scene" not in self.__dict__:
             raise AttributeError(name)
+        if name == "q":
+            object.__setattr__(self, "q", matrix_to_quat(self.R))
+            return self.q
         s = self.__dict__["_scene"]
         lz = float(lowest_point_z(s, self.com, self.R))
         object.__setattr__(self, "lowest_z", lz)
@@ -308,16 +318,21 @@ def _rest_or_error(scene: Scene, errors: str):
 # --------------------------------------------------------------------------
 # linear modes
 # --------------------------------------------------------------------------
-def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[ModeSet]:
+def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose], lazy: bool = False) -> list[ModeSet]:
     """:func:`~bifilar.analysis.modes.linear_modes` of many scenes at once
     (same number of wires).  Periods agree with the single-scene function to
     ~1e-12 relative, shapes to ~1e-10 (both solve the same symmetric
-    generalised eigenproblem; here by Cholesky and ``numpy.linalg.eigh``)."""
+    generalised eigenproblem; here by Cholesky and ``numpy.linalg.eigh``).
+    ``lazy``: a scene whose eigenvalues are all distinct and positive
+    (:func:`~bifilar.analysis.modes.plain_order`) gets a
+    :class:`~bifilar.analysis.modes.LazyModeSet`, its periods and shapes
+    computed for the batch at once and its :class:`Mode` objects only when
+    read (the same mode set, bit for bit); the others as without."""
     scenes = list(scenes)
     if not scenes:
         return []
     if len(_groups(scenes)) > 1:
-        return _per_group(modes_batch, scenes, list(rests))
+        return _per_group(lambda sc, rs: modes_batch(sc, rs, lazy), scenes, list(rests))
     a, p, L, m, g, I = _stack(scenes)
     com = np.array([r.com for r in rests])
     R = np.array([r.R for r in rests])
@@ -337,12 +352,30 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose]) -> list[Mode
     Li = np.linalg.inv(Lc)
     w2, Z = np.linalg.eigh(Li @ Kr @ np.swapaxes(Li, 1, 2))
     Y = np.swapaxes(Li, 1, 2) @ Z
+    plain = plain_order(w2, Y, Kr) & full if lazy else np.zeros(len(scenes), bool)
     # mode_set of each full-rank scene, its arithmetic batched where exact (mode_sets: the same mode sets)
-    out = mode_sets(N, Y, w2, m, M, Kr, which=np.nonzero(full)[0])
+    out = mode_sets(N, Y, w2, m, M, Kr, which=np.nonzero(full & ~plain)[0])
+    if plain.any():
+        out = _lazy_mode_sets(out, np.nonzero(plain)[0], N, Y, w2, m, M, Kr)
     for b in np.nonzero(~full)[0]:
         from .modes import linear_modes
 
         out[b] = linear_modes(scenes[b], rests[b])
+    return out
+
+
+def _lazy_mode_sets(out: list, bs, N, Y, w2, m, M, Kr) -> list:
+    """``out`` with a :class:`LazyModeSet` for each scene ``bs`` (indices) of
+    a solved batch (arrays of :func:`modes_batch`): periods (the expression
+    of :func:`~bifilar.analysis.modes.mode_sets` on the same eigenvalues)
+    and unit shapes (the same scaling) of all of them at once; each one's
+    :class:`Mode` objects from :func:`mode_sets` of that scene alone."""
+    S, _ = unit_shapes(N[bs] @ Y[bs])  # (the stacked product: each scene's N @ Y, the same bits)
+    periods = 2 * np.pi / np.sqrt(w2[bs])
+    for q, b in enumerate(bs.tolist()):
+        sl = slice(b, b + 1)
+        out[b] = LazyModeSet(lambda sl=sl: mode_sets(N[sl], Y[sl], w2[sl], m[sl], M[sl], Kr[sl])[0],
+                             periods[q], S[q].T, M[b], N[b])
     return out
 
 

@@ -65,6 +65,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Scene
+from .batch_rest import _cross, _skew  # complex-safe: np.cross's and the stacked skew's values, written in place
 from .equilibrium import RestPose
 from .modes import ModeSet, degenerate_clusters
 
@@ -127,13 +128,6 @@ def input_directions(scene: Scene, names: list[str]) -> dict:
     return out
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    """Cross-product matrices (..., 3, 3) of (..., 3), complex-safe."""
-    z = np.zeros(v.shape[:-1], dtype=v.dtype)
-    x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2)
-
-
 def _parts(a, p, L, m, g, I, c, R, lam):
     """KKT residual, constraint Jacobian, Lagrangian Hessian and mass matrix,
     batched over a leading axis and complex-safe (no conjugation).
@@ -143,7 +137,7 @@ def _parts(a, p, L, m, g, I, c, R, lam):
     """
     w = np.einsum("bij,bnj->bni", R, p)
     d = c[:, None, :] + w - a
-    G = np.concatenate([d, np.cross(w, d)], axis=-1)
+    G = np.concatenate([d, _cross(w, d)], axis=-1)
     phi = 0.5 * (np.einsum("bni,bni->bn", d, d) - L**2)
     gradV = np.zeros(c.shape[:1] + (6,), dtype=G.dtype)
     gradV[:, 2] = m * g
@@ -257,7 +251,7 @@ def rest_derivative(scene: Scene, rest: RestPose, names: list[str]) -> RestDeriv
     lam = rest.tensions / nd
     # d_i = c + R p_i - a_i: dd_i = dc + [dtheta]x R p_i + R dp_i - da_i
     w = scene.attachments @ rest.R.T
-    dd = (dx[:, None, :3] + np.cross(dx[:, None, 3:], w[None]) + dirs["attachments"] @ rest.R.T
+    dd = (dx[:, None, :3] + _cross(dx[:, None, 3:], w[None]) + dirs["attachments"] @ rest.R.T
           - dirs["anchors"])
     dT = dlam * nd + lam * np.einsum("jni,ni->jn", dd, d) / nd
     return RestDerivative(list(names), dx[:, :3], dx[:, 3:], dT, dlam)

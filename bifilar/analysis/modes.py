@@ -88,6 +88,87 @@ class ModeSet:
         return [m.label for m in self.modes]
 
 
+class LazyModeSet(ModeSet):
+    """A :class:`ModeSet` (of one scene of a batch, :func:`~bifilar.analysis.batch_rest.modes_batch`
+    with ``lazy=True``, or of :func:`modes_of_inertia` asked with ``lazy=True``)
+    whose eigenvalues are all distinct and positive
+    (no degenerate cluster, no neutral mode, with a margin, :func:`plain_order`),
+    so its modes are in the eigensolver's order (slowest first): ``periods``
+    (k,) s and ``shapes`` (k, 6) (each scaled as :func:`mode_set` scales it,
+    the same numbers) are there at once, and the :class:`Mode` objects
+    (labels, energy shares) are built on first read of ``modes`` by
+    ``build()`` (:func:`mode_sets` of that scene alone, or :func:`mode_set`:
+    the mode set the eager path makes, bit for bit).  The honest budget's sigma points
+    read only the periods and shapes (MAC) of most of theirs.  Pickled as
+    the plain :class:`ModeSet`."""
+
+    def __init__(self, build, periods: np.ndarray, shapes: np.ndarray, mass_matrix: np.ndarray,
+                 basis: np.ndarray):  # noqa: D107
+        self.__dict__.update(periods=periods, shapes=shapes, mass_matrix=mass_matrix, basis=basis, _build=build)
+
+    def __getattr__(self, name):  # only called for attributes not yet set: ``modes``
+        if name != "modes" or "_build" not in self.__dict__:
+            raise AttributeError(name)
+        ms = self.__dict__["_build"]()
+        object.__setattr__(self, "modes", ms.modes)
+        return ms.modes
+
+    def __reduce__(self):
+        return (ModeSet, (self.modes, self.mass_matrix, self.basis))
+
+
+def plain_order(w2: np.ndarray, Y: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """(B,) bool: which of a batch of solved eigenproblems (``w2`` (B, k)
+    ascending, rad^2/s^2; ``Y`` (B, k, k); reduced stiffness ``K`` (B, k, k))
+    :func:`mode_set` would leave in the eigensolver's order, untouched:
+    every eigenvalue positive and apart from its neighbours by more than
+    twice the resolution :func:`_noise` gives it (and than twice the neutral
+    threshold), so no cluster is formed and none is neutral whatever the
+    last bits of that resolution (here computed for the whole batch at once,
+    which may round differently from :func:`mode_set`'s own).  Its periods
+    2 pi / sqrt(w2) then fall strictly, which is :func:`_assemble`'s order."""
+    w2 = np.asarray(w2, float)
+    if w2.shape[1] == 0:
+        return np.zeros(len(w2), bool)
+    aY = np.abs(Y)
+    tol = DEGENERATE_RTOL * np.maximum(np.einsum("bik,bij,bjk->bk", aY, np.abs(K), aY), 1e-300)
+    scale = np.maximum(np.max(np.abs(w2), axis=1), 1e-300)
+    floor = np.maximum(tol, NEUTRAL_RTOL * scale[:, None])
+    ok = np.all(w2 > 2 * floor, axis=1)
+    if w2.shape[1] > 1:
+        ok &= np.all(np.diff(w2, axis=1) > 2 * np.maximum(tol[:, 1:], tol[:, :-1]), axis=1)
+    return ok
+
+
+def _plain_one(w2: np.ndarray, Y: np.ndarray, K: np.ndarray) -> bool:
+    """:func:`plain_order` of one solved eigenproblem, exactly as :func:`mode_set`
+    decides (its own resolution :func:`_noise` and clusters, on Python floats:
+    the same doubles), so without a margin: no cluster and no neutral mode."""
+    w = w2.tolist()
+    t = _noise(w2, Y, K).tolist()
+    if len(_cluster_ranges(w, t)) < len(w):
+        return False
+    floor = NEUTRAL_RTOL * max(max(abs(x) for x in w) if w else 0.0, 1e-300)
+    return all(x > 0 and abs(x) > max(tj, floor) for x, tj in zip(w, t))
+
+
+def _unit_shape_one(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`unit_shapes` of one scene's shapes ``S`` (6, k): (scaled shapes, unit components (k,))."""
+    absS = np.abs(S)
+    # first component within 1e-9 of the largest: independent of last-bit noise
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
+    return S / S[i, np.arange(S.shape[1])], i
+
+
+def unit_shapes(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(shapes, index of each one's unit component (B, k)): shapes ``S``
+    (B, 6, k) scaled as :func:`mode_set` scales them, each column by its
+    first component within 1e-9 of the largest magnitude."""
+    absS = np.abs(S)
+    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (B, k)
+    return S / np.take_along_axis(S, i[:, None, :], axis=1), i
+
+
 def linear_modes(scene: Scene, rest: RestPose) -> ModeSet:
     """All 6 - n linear modes about ``rest``, slowest first."""
     return modes_of_inertia(scene, rest)(scene.inertia)
@@ -102,7 +183,11 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     the same result to the last bit).  For a search over one inertia
     component at a fixed geometry.  An inertia asked for again (the same
     bytes) returns the mode set solved for it the first time (the same
-    object: read only; a sweep point's consumers share one function)."""
+    object: read only; a sweep point's consumers share one function).
+    ``lazy=True``: a :class:`LazyModeSet` where :func:`plain_order` allows
+    (periods and shapes at once, the :class:`Mode` objects by
+    :func:`mode_set` when read: the same mode set), for callers that read
+    only periods and shapes (:func:`~bifilar.estimation.sensitivity.matched_periods`)."""
     lam = rest.tensions / np.linalg.norm(rest.wire_vectors, axis=1)
     N, Kr, _, _ = reduced_stiffness(scene, rest.com, rest.R, lam)
     K = 0.5 * (Kr + Kr.T)
@@ -110,22 +195,25 @@ def modes_of_inertia(scene: Scene, rest: RestPose):
     M0[:3, :3] = scene.mass * np.eye(3)
     solved: dict = {}
 
-    def modes(inertia) -> ModeSet:
+    def modes(inertia, lazy: bool = False) -> ModeSet:
         key = np.asarray(inertia, float).tobytes()
         ms = solved.get(key)
         if ms is None:
-            ms = _solve(inertia)
+            ms = _solve(inertia, lazy)
             if len(solved) < 8:
                 solved[key] = ms
         return ms
 
-    def _solve(inertia) -> ModeSet:
+    def _solve(inertia, lazy: bool) -> ModeSet:
         M = M0.copy()
         M[3:, 3:] = rest.R @ np.asarray(inertia, float) @ rest.R.T
         if N.shape[1] == 0:
             return ModeSet([], M, N)
         Mr = N.T @ M @ N
         w2, Y = eigh_generalized(K, 0.5 * (Mr + Mr.T))
+        if lazy and _plain_one(w2, Y, K):
+            S, _ = _unit_shape_one(N @ Y)
+            return LazyModeSet(lambda: mode_set(N, Y, w2, scene.mass, M, K=K), 2 * np.pi / np.sqrt(w2), S.T, M, N)
         return mode_set(N, Y, w2, scene.mass, M, K=K)
 
     return modes
@@ -225,11 +313,7 @@ def mode_set(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: float, M: np.nd
         for a, b in groups:
             if b - a > 1:  # (the mean of one number is that number)
                 w2[a:b] = np.mean(w2[a:b])
-    S = N @ Y
-    absS = np.abs(S)
-    # first component within 1e-9 of the largest: independent of last-bit noise
-    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=0), axis=0)
-    S = S / S[i, np.arange(S.shape[1])]
+    S, i = _unit_shape_one(N @ Y)
     diagM = np.diag(M)[3:]
     share = np.concatenate([mass * S[:3] ** 2, diagM[:, None] * S[3:] ** 2], axis=0)
     share = share / share.sum(axis=0)
@@ -305,9 +389,7 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     S = np.array(S)  # (R, 6, k)
     w2r = np.array(ws)
     tol = np.array(tols)
-    absS = np.abs(S)
-    i = np.argmax(absS >= (1 - 1e-9) * absS.max(axis=1, keepdims=True), axis=1)  # (R, k)
-    S = S / np.take_along_axis(S, i[:, None, :], axis=1)
+    S, i = unit_shapes(S)  # (R, 6, k), (R, k)
     diagM = np.diagonal(np.asarray(M)[rows], axis1=1, axis2=2)[:, 3:]
     share = np.concatenate([np.asarray(mass, float)[rows, None, None] * S[:, :3] ** 2,
                             diagM[:, :, None] * S[:, 3:] ** 2], axis=1)

@@ -50,7 +50,7 @@ from ..errors import BifilarError, ConvergenceError
 from ..scene import scene_with
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
-from .sensitivity import input_sigma, mac_match, mac_matches, measured_inputs, perturb
+from .sensitivity import input_sigma, mac_match, mac_matches, measured_inputs, n_modes, perturb
 from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
 
 #: sigma points at +- sqrt(3) standard uncertainties (3-point Gauss-Hermite)
@@ -132,10 +132,13 @@ def _hanging_periods(scenes, rest, base_modes) -> list:
     out: list = [None] * len(scenes)
     if not good:
         return out
-    mss = _modes_or_none(modes_batch, [scenes[q] for q in good], [rests[q] for q in good])
-    kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and len(ms.modes) == len(base_modes.modes)]
+    # lazy: most sigma points need only their periods and shapes (the Mode objects when _resolve reads them)
+    mss = _modes_or_none(lambda s, r: modes_batch(s, r, lazy=True), [scenes[q] for q in good],
+                         [rests[q] for q in good])
+    kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and n_modes(ms) == len(base_modes.modes)]
     for (q, ms), col in zip(kept, mac_matches(base_modes, [ms for _, ms in kept])):
-        T = np.array([ms.modes[c].period or np.nan for c in col])
+        P = getattr(ms, "periods", None)  # a LazyModeSet's (all finite: no neutral mode)
+        T = P[col] if P is not None else np.array([ms.modes[c].period or np.nan for c in col])
         out[q] = (T, scenes[q], rests[q], ms, col)
     return out
 

@@ -131,8 +131,13 @@ class ThesisModel:
         self.x0 = float(hm.I_ref0[_IDX[component]])
         # M5 is linear in the inertia: M5(x) = M_a + (x - x0) dM
         E_h = hm.R @ basis(component) @ hm.R.T
-        p1 = replace_params(p, inertia=p.inertia + self.mapping.C.T @ E_h @ self.mapping.C)  # (validated)
-        M_b = kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], p1.inertia)  # = mass_matrix_and_forcing's
+        I_b = p.inertia + self.mapping.C.T @ E_h @ self.mapping.C
+        i, j = _IDX[component]
+        if i != j:  # a product's unit step may leave the positive semi-definite cone: KaneParams refuses it
+            I_b = replace_params(p, inertia=I_b).inertia  # (validated)
+        # (a moment's adds C^T r r^T C, positive semi-definite: the checks KaneParams makes cannot fail, and it
+        # keeps the same values)
+        M_b = kane.mass_matrix_with_inertia(_thesis_cache(hm)["state"], I_b)  # = mass_matrix_and_forcing's
         self.M_a, self.dM = M_a, M_b - M_a
         lin_T = mode.period
         ev, V = self._eig(self.x0)
@@ -143,6 +148,8 @@ class ThesisModel:
         self.v_ref = V[:, k]
         self._v_ref_norm = np.linalg.norm(self.v_ref)
         self.period0 = 2 * math.pi / math.sqrt(-ev[k].real)
+        # period(x0): the same eigenproblem, so period0 where period()'s pick (made here as it makes it) is k
+        self._at_x0 = self.period0 if self._pick(V) == k else None
 
     def _eig(self, x: float):
         M = self.M_a + (x - self.x0) * self.dM
@@ -151,11 +158,17 @@ class ThesisModel:
         ev, V = np.linalg.eig(sub)
         return ev, V
 
+    def _pick(self, V) -> int:
+        """The eigenvector of ``V`` (columns) closest in direction to the reference one."""
+        cos = [abs(np.vdot(V[:, k], self.v_ref)) / (np.linalg.norm(V[:, k]) * self._v_ref_norm) for k in range(2)]
+        return int(np.argmax(cos))
+
     def period(self, x: float) -> float:
         """The linearisation's period (s) at component value ``x`` (kg m^2)."""
+        if x == self.x0 and self._at_x0 is not None:  # (the root search starts here)
+            return self._at_x0
         ev, V = self._eig(x)
-        cos = [abs(np.vdot(V[:, k], self.v_ref)) / (np.linalg.norm(V[:, k]) * self._v_ref_norm) for k in range(2)]
-        k = int(np.argmax(cos))
+        k = self._pick(V)
         return 2 * math.pi / math.sqrt(-ev[k].real) if ev[k].real < 0 else math.nan
 
 

@@ -87,10 +87,30 @@ def admissible_interval(I: np.ndarray, name: str) -> tuple[float, float]:
     hi)``; ``lo > hi`` when no value is physical.  The positive-definite ends
     are open (a singular tensor), the triangle ends closed; for a diagonal
     component the interval is bounded by the triangle inequality, for a
-    product by definiteness or the triangle inequality."""
+    product by definiteness or the triangle inequality.  Remembered for
+    the last :data:`_ADMISSIBLE_KEEP` tensors asked (a pure function of the
+    other components: a sweep over the rig's geometry asks the same ones at
+    every point, each ~0.15 ms of eigenvalue solves)."""
     i, j = _IDX[name]
     I0 = np.array(I, float)
     I0[i, j] = I0[j, i] = 0.0
+    key = (I0.tobytes(), name)
+    got = _admissible_seen.get(key)
+    if got is None:
+        got = _admissible_interval(I0, name)
+        if len(_admissible_seen) >= _ADMISSIBLE_KEEP:
+            _admissible_seen.clear()
+        _admissible_seen[key] = got
+    return got
+
+
+#: how many (tensor, component) answers :func:`admissible_interval` keeps
+_ADMISSIBLE_KEEP = 64
+_admissible_seen: dict = {}
+
+
+def _admissible_interval(I0: np.ndarray, name: str) -> tuple[float, float]:
+    """:func:`admissible_interval` of ``I0`` (component ``name`` set to 0), computed."""
     E = basis(name)
     lo1, hi1 = _psd_interval(I0, E)
     c = 1.0 / (2.0 - TRIANGLE_SLACK)

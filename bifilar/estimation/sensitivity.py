@@ -133,7 +133,7 @@ def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarr
 
     M = base.mass_matrix
     A = np.array([m.shape for m in base.modes])
-    B = np.array([m.shape for m in other.modes])
+    B = np.array(_shapes(other))
     num = (A @ M @ B.T) ** 2
     den = np.outer(np.einsum("ij,jk,ik->i", A, M, A), np.einsum("ij,jk,ik->i", B, M, B))
     mac = num / np.maximum(den, 1e-300)
@@ -143,6 +143,18 @@ def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarr
 def mac_match(base: ModeSet, other: ModeSet) -> np.ndarray:
     """Index into ``other.modes`` of the mode matching each base mode (MAC)."""
     return _mac_assignment(base, other)[1]
+
+
+def n_modes(ms: ModeSet) -> int:
+    """Number of modes of ``ms`` (a :class:`~bifilar.analysis.modes.LazyModeSet`'s without building them)."""
+    P = getattr(ms, "periods", None)
+    return len(P) if P is not None else len(ms.modes)
+
+
+def _shapes(ms: ModeSet):
+    """The shapes of ``ms``'s modes, (k, 6) (a LazyModeSet's without building its modes: the same numbers)."""
+    S = getattr(ms, "shapes", None)
+    return S if S is not None else [m.shape for m in ms.modes]
 
 
 def mac_matches(base: ModeSet, others: list) -> list:
@@ -156,12 +168,12 @@ def mac_matches(base: ModeSet, others: list) -> list:
     from scipy.optimize import linear_sum_assignment
 
     k = len(base.modes)
-    same = [q for q, o in enumerate(others) if len(o.modes) == k]
+    same = [q for q, o in enumerate(others) if n_modes(o) == k]
     out = [None] * len(others)
     if same and k:
         M = base.mass_matrix
         A = np.array([m.shape for m in base.modes])
-        B = np.array([[m.shape for m in others[q].modes] for q in same])  # (S, k, 6)
+        B = np.array([_shapes(others[q]) for q in same])  # (S, k, 6)
         num = ((A @ M) @ np.swapaxes(B, 1, 2)) ** 2
         den = np.einsum("ij,jk,ik->i", A, M, A)[None, :, None] * np.einsum("sij,jk,sik->si", B, M, B)[:, None, :]
         mac = num / np.maximum(den, 1e-300)
@@ -182,8 +194,9 @@ def matched_periods(base: ModeSet, other: ModeSet) -> np.ndarray:
     wires independent and, with inextensible wires, removes a mode, so that
     mode's period has no derivative with respect to that input."""
     out = np.full(len(base.modes), np.nan)
+    P = getattr(other, "periods", None)  # a LazyModeSet's, without building its modes (all finite)
     for r, i in zip(*_mac_assignment(base, other)):
-        out[r] = other.modes[i].period if other.modes[i].period else np.nan
+        out[r] = P[i] if P is not None else (other.modes[i].period if other.modes[i].period else np.nan)
     return out
 
 

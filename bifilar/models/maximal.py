@@ -632,7 +632,7 @@ def _zero_set(vals: dict) -> frozenset:
     for k, v in vals.items():
         if k in _NEVER_ZERO or k.startswith(("L2", "hbL")):
             continue  # never drop these (a zero would be a degenerate scene anyway)
-        if np.all(np.asarray(v) == 0):
+        if (v == 0) if type(v) is float else np.all(np.asarray(v) == 0):  # (a single scene's floats: no numpy call)
             out.add(k)
     return frozenset(out)
 
@@ -671,9 +671,11 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ()) + \
         (() if derivatives else ("no derivatives",))
     if key not in cache:
-        vals = _param_values(P)
+        if "values" not in cache:  # the parameters' values and zero set, once for every kernel of P
+            vals = _param_values(P)
+            cache["values"] = (vals, _zero_set(vals))
+        vals, zero = cache["values"]
         n = int(P.lengths.shape[-1])
-        zero = _zero_set(vals)
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
             src, params = _kernel_source(n, zero, stabilise, extras, signature, physical, derivatives)

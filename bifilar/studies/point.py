@@ -184,8 +184,9 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
         if at is None:
             at = modes_of_inertia(scene, rest_pose(scene, guess=rest, local_only=True))
 
-        def period(x):  # the linear period of mode k with comp changed by x (kg m^2)
-            return float(matched_periods(modes, at(perturb(scene, comp, x).inertia if x else scene.inertia))[k])
+        def period(x):  # the linear period of mode k with comp changed by x (kg m^2); only periods and shapes read
+            inertia = perturb(scene, comp, x).inertia if x else scene.inertia
+            return float(matched_periods(modes, at(inertia, lazy=True))[k])
 
         if T0 is None:
             T0 = period(0.0)
