@@ -54,7 +54,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import identifiability, measurable_components, point_separation, rank_order
+from .ranking import identifiability, measurable_components, point_separation, rank_order, rel_sigma
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -127,12 +127,12 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None) -> float:
     identifiable -> 1e6 (the optimum itself is always a feasible point)."""
     if not p.get("valid"):
         return 1e6
-    ob = objective(p, target, among)
+    ob = objective(p, target, among, small_amplitude=True)
     if not math.isfinite(ob):
         return 1e6
     if target is None:  # the worst component, smoothed (a 16-norm) so that the simplex slides along the ridge
         sel = among if among is not None else list(p["components"])
-        rel = np.array([p["components"][k]["rel_sigma"] for k in sel], float)
+        rel = np.array([rel_sigma(p["components"][k], small_amplitude=True) for k in sel], float)
         ob = float(np.sum(rel**16) ** (1 / 16))
     v = dict(violations(p, c, target))
     if not v:
@@ -258,11 +258,13 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     # matters in this range: a shallow CoM) the whole search again in full
     cache, among = search(screen=True)
     feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
-                       and math.isfinite(objective(p, target, among))), key=lambda p: objective(p, target, among))
+                       and math.isfinite(objective(p, target, among))),
+                      key=lambda p: objective(p, target, among, small_amplitude=True))
     for p in feasible[:CONFIRM]:
         full = evaluate_point(base_cfg, source, p["params"], settings)
         cache[key_of(p["params"])] = full
-        if not (full.get("valid") and objective(full, target, among) == objective(p, target, among)
+        if not (full.get("valid") and objective(full, target, among, small_amplitude=True)
+                == objective(p, target, among, small_amplitude=True)
                 and not violations(full, constraints, target)):
             cache, among = search(screen=False)
             break

@@ -87,7 +87,8 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        resolve_uncertainty)
 from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 3  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge
+JOURNAL_VERSION = 4  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
+# 4: the sigma budgets the stated amplitude (amplitude_budget)
 
 
 # --------------------------------------------------------------------------
