@@ -7,6 +7,7 @@ experiments."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -108,3 +109,52 @@ def test_spread_of_experiments_released_at_an_uncertain_amplitude():
     assert abs(sd / e["sigma"] - 1) < band, sd / e["sigma"]
     assert abs(np.mean(est) - e["value"]) < 3.5 * e["sigma"] / math.sqrt(n)
     assert e["amplitude_budget"]["sigma_small_amplitude"] < 0.5 * e["sigma"]
+
+
+def _cli(*args) -> dict:
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    r = CliRunner().invoke(main, [str(a) for a in args])
+    assert r.exit_code == 0, r.stderr
+    return json.loads(r.stdout)
+
+
+def test_recommendation_says_what_an_unstated_amplitude_costs_and_how_to_invert(tmp_path):
+    # the boat at its recommended point (one point swept): the advice's invert options, run on the point's
+    # config, print the sweep's sigma (the period written to 6 digits: 1e-4); without --amplitude invert
+    # budgets a 0-10 degree release and prints ~5.5x that for Izz (docs/design.md: 5.7x the small-amplitude
+    # sigma).  The old sweep said nothing about the amplitude
+    point = tmp_path / "point.yaml"
+    doc = _cli("sweep", SOLAR, "--param", "spacing=2.5", "--param", "length=2", "--component", "Izz",
+               "--write-config", point, "--json")
+    adv = doc["recommendation"]["amplitude_advice"]
+    e = doc["points"][0]["components"]["Izz"]
+    assert adv["budgeted"] and adv["amplitude"] == 0.05 and "--amplitude 0.05" in adv["text"]
+    row = adv["components"]["Izz"]
+    assert row["sigma"] == e["sigma"] and row["mode"] == "torsion"
+    inv = _cli("invert", point, *row["invert_options"].split(), "--json")
+    assert inv["inertia"]["Izz"]["std"] == pytest.approx(e["sigma"], rel=1e-4)
+    assert inv["inertia"]["Izz"]["value"] == pytest.approx(e["value"], rel=1e-5)
+    unstated = row["invert_options"].replace(" --amplitude 0.05", "").replace(f"{row['period']:.6g}", f"{e['period']:.9g}")
+    inv = _cli("invert", point, *unstated.split(), "--json")
+    assert row["std_unstated"] == pytest.approx(inv["inertia"]["Izz"]["std"], rel=1e-6)
+    assert 5 < row["ratio_unstated"] < 6.5 and f"{row['ratio_unstated']:.2g} times the sigma" in adv["text"]
+
+
+def test_multi_hanging_plan_states_the_amplitude_and_its_sigma_is_invert_s(tmp_path):
+    # `plan --hangings --write-measurements` on the KTH trifilar at amplitude 0.3: the measurements file
+    # gives each period at the planned amplitude with that amplitude (it gave amplitude 0 and the linear
+    # periods), and invert --measurements of it prints the plan's joint sigma (measured: 1e-3 at 0.3, the
+    # periods written to 9 digits; band 1 %), which counts the amplitude's 10 % (1.5-1.6x the sigmas planned at 0.05)
+    out = tmp_path / "measurements.yaml"
+    plan = _cli("plan", CONFIGS / "trifilar_kth.yaml", "--param", "spacing=0.8:1.6", "--min-separation", 0,
+                "--hangings", "--amplitude", 0.3, "--write-measurements", out, "--json")
+    mh = plan["multi_hanging"]
+    written = read_yaml(out)
+    assert all(m["amplitude"] == 0.3 for h in written["hangings"] for m in h["measurements"])
+    assert all(m["period_at_amplitude"] > m["period"] for m in mh["measurements"])
+    inv = _cli("invert", "--measurements", out, "--json")
+    for comp, a in mh["accuracy"].items():
+        assert inv["inertia"][comp]["std"] == pytest.approx(a["sigma"], rel=0.01), comp
