@@ -442,7 +442,8 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict) -> None:
                  shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))
         e.pop("physical_limit", None)
         e.update(physical_limits(pre.scene.inertia, comp, Budget(comp, b.mode, sd, {"timing": c_t}, shares,
-                                                                 b.dI_dT, b.rel_sensitivity)))
+                                                                 b.dI_dT, b.rel_sensitivity),
+                                 interval=e["physical_interval"]))
 
 
 #: a component whose estimate falls outside its physical interval in at least this fraction of experiments
@@ -450,7 +451,7 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict) -> None:
 UNPHYSICAL_WARN = 0.01
 
 
-def physical_limits(inertia, comp: str, budget) -> dict:
+def physical_limits(inertia, comp: str, budget, interval=None) -> dict:
     """Where the estimate of ``comp`` may fall outside what a real body can
     have: ``physical_interval`` [lo, hi] (kg m^2; positive definite and the
     triangle inequality with the other components as given,
@@ -464,12 +465,14 @@ def physical_limits(inertia, comp: str, budget) -> dict:
     trifilar table, the thesis plate: Izz = Ixx + Iyy) sits on the limit,
     so about half of its Izz estimates do: the closed-loop check found 13 %
     of the trifilar's refused and most of the rest clamped, under a sigma
-    that promised a symmetric spread (docs/design.md)."""
+    that promised a symmetric spread (docs/design.md).  ``interval``: the
+    ``physical_interval`` if already computed (the same for every budget of
+    the component)."""
     from ..estimation.problem import admissible_interval
     from ..estimation.fit_check import EDGE_Z
     from ..scene import TRIANGLE_SLACK
 
-    lo, hi = admissible_interval(inertia, comp)
+    lo, hi = admissible_interval(inertia, comp) if interval is None else interval
     out: dict = {"physical_interval": [lo, hi], "p_unphysical": None, "p_refused": None}
     sd = float(budget.value_sigma)
     if not (math.isfinite(sd) and sd > 0):
