@@ -298,20 +298,20 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings) -> dict | 
     (:func:`bifilar.studies.point.stated_amplitude_budget`); None without
     the nonlinear runs (``--no-tensions``: the plan is then for a small
     amplitude, ``amplitude: 0``) or when a run gives no period."""
-    from ..analysis.simulate import simulate
+    from ..analysis.batch import simulate_batch
     from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
 
     if not settings.tensions:
         return None
+    try:  # the chosen measurements' runs in one call of the batched engine (as a sweep point's)
+        runs = simulate_batch([hs[a].scene for a, _ in chosen], mode=[k + 1 for _, k in chosen],
+                              amplitude=settings.amplitude, periods=settings.periods, rtol=settings.rtol,
+                              rests=[hs[a].sens.rest for a, _ in chosen], modes=[hs[a].sens.modes for a, _ in chosen])
+    except BifilarError:
+        return None
     out = {}
-    for a, k in chosen:
-        h = hs[a]
-        T_lin = float(h.sens.periods[k])
-        try:
-            run = simulate(h.scene, k + 1, settings.amplitude, settings.periods, rest=h.sens.rest,
-                           modes=h.sens.modes, rtol=settings.rtol)
-        except BifilarError:
-            return None
+    for (a, k), run in zip(chosen, runs):
+        T_lin = float(hs[a].sens.periods[k])
         if not run.period:
             return None
         r = run.period / T_lin
