@@ -6,13 +6,18 @@ For each component: the point's scene is built, the period of its mode is
 timed with the sweep's timing std, every measured input of the
 experimenter's config is drawn from its declared std, and the period is
 inverted as a user would (``invert --period MODE=T+-TIMING --amplitude 0
---solve-for C``, the library path).  Prints one JSON line per component:
-the sweep's sigma, the realised sd and their ratio, the mean error in
-standard errors, invert's median std over the sweep's, the refused draws,
-and the point's predicted ``p_unphysical`` / ``p_refused``.
+--solve-for C``, the library path).  With ``--amplitude A`` the sweep runs
+at that amplitude (its sigma then budgets the stated amplitude's 10 %), each
+experiment's release amplitude is drawn about ``A`` with that 10 %, the
+period is the one the true body shows at it (nonlinear, 10 cycles, rtol
+1e-10) and the user states ``--amplitude A``.  Prints one JSON line per
+component: the sweep's sigma (and its small-amplitude one), the realised sd
+and their ratio, the mean error in standard errors, invert's median std over
+the sweep's, the refused draws, and the point's predicted ``p_unphysical`` /
+``p_refused``.
 
     python scripts/closed_loop_plan.py configs/solar_boat.yaml '{"spacing": 2.5, "length": 2.0}' \
-        --components Ixx,Iyy,Izz --draws 200 --seed 1
+        --components Ixx,Iyy,Izz --draws 200 --seed 1 [--amplitude 0.05]
 """
 
 from __future__ import annotations
@@ -49,9 +54,13 @@ def measured_scene(truth, rng, unc):
     return s
 
 
-def check(path: str, params: dict, comp: str, draws: int, seed: int) -> dict:
+def check(path: str, params: dict, comp: str, draws: int, seed: int, amplitude: float = 0.0) -> dict:
+    from bifilar.analysis.batch import simulate_batch
+    from bifilar.estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+
     cfg = read_yaml(path)
-    st = sw.resolve_settings(cfg, tensions=False, components=[comp])
+    st = sw.resolve_settings(cfg, tensions=amplitude > 0, components=[comp],
+                             **({"amplitude": amplitude} if amplitude > 0 else {}))
     p = sw.evaluate_point(cfg, path, params, st)
     if not p["valid"]:
         return {"params": params, "comp": comp, "error": p["error"]}
@@ -63,13 +72,19 @@ def check(path: str, params: dict, comp: str, draws: int, seed: int) -> dict:
     rng = np.random.default_rng(seed)
     est, std, refused = [], [], 0
     t0 = time.process_time()
-    for _ in range(draws):
+    if amplitude > 0:  # the period the true body shows at each experiment's release amplitude
+        amps = amplitude * (1 + DEFAULT_AMPLITUDE_REL * rng.standard_normal(draws))
+        periods = [r.period for r in simulate_batch([scene] * draws, mode=e["mode"], amplitude=list(amps),
+                                                      periods=10, rtol=1e-10)]
+    else:
+        periods = [e["period"]] * draws
+    for T in periods:
         ms = MeasurementSet([Hanging("reference", measured_scene(scene, rng, unc), np.eye(3))],
-                            [Measurement(e["mode"], e["period"] + rng.normal(0, unc["timing"]), unc["timing"],
-                                         "period", "--period", amplitude=0.0)])
+                            [Measurement(e["mode"], T + rng.normal(0, unc["timing"]), unc["timing"],
+                                         "period", "--period", amplitude=amplitude)])
         ms.uncertainty = dict(unc)
         try:
-            r = invert(ms, method="linear", solve_for=[comp], ladder=False)
+            r = invert(ms, method="nonlinear" if amplitude > 0 else "linear", solve_for=[comp], ladder=False)
         except BifilarError:
             refused += 1
             continue
@@ -78,6 +93,7 @@ def check(path: str, params: dict, comp: str, draws: int, seed: int) -> dict:
     est = np.array(est)
     sd = float(np.std(est, ddof=1)) if len(est) > 1 else float("nan")
     return {"params": params, "comp": comp, "mode": e["mode"], "value": e["value"], "sigma": e["sigma"],
+            "amplitude": amplitude, "sigma_small_amplitude": (e.get("amplitude_budget") or {}).get("sigma_small_amplitude"),
             "realised_sd": sd, "ratio": sd / e["sigma"],
             "mean_error_se": float((est.mean() - e["value"]) / (sd / np.sqrt(len(est)))) if len(est) > 1 else None,
             "invert_std_over_sigma": float(np.nanmedian(std) / e["sigma"]) if std else None,
@@ -92,9 +108,11 @@ def main() -> None:
     ap.add_argument("--components", default="Ixx,Iyy,Izz")
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--amplitude", type=float, default=0.0,
+                    help="release amplitude stated to invert (drawn with its 10 %%); 0: small (default)")
     a = ap.parse_args()
     for comp in a.components.split(","):
-        print(json.dumps(check(a.config, json.loads(a.params), comp, a.draws, a.seed)), flush=True)
+        print(json.dumps(check(a.config, json.loads(a.params), comp, a.draws, a.seed, a.amplitude)), flush=True)
 
 
 if __name__ == "__main__":

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, multi_hanging, point_warnings,
-                        render_identifiability, render_multi_hanging, render_rig, render_timing, resolve_all,
-                        timing_advice, write_point_config)
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, amplitude_advice, common_options, multi_hanging, point_warnings,
+                        render_amplitude, render_identifiability, render_multi_hanging, render_rig, render_timing,
+                        resolve_all, timing_advice, write_point_config)
 from .common import check_output_path, check_workers, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 
@@ -58,6 +58,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point")
     doc["settings"] = settings.describe()
     doc["how_to_time"] = timing_advice(res.best, reaction, sensor)
+    doc["amplitude_advice"] = amplitude_advice(cfg, config, res.best, settings)
     ident = doc["identifiability"]
     need = [c for c, e in ident.items() if not e["identifiable"]]
     if need:
@@ -87,7 +88,9 @@ def _render(cfg, res, settings, doc) -> None:
     con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:
         con.print("  limited by: " + esc("; ".join(res.active)))
-    t = Table(title="expected accuracy of each inertia component")
+    t = Table(title="expected accuracy of each inertia component",
+              caption="sigma: " + (f"the amplitude stated to invert (--amplitude {settings.amplitude:g}, +-10 %)"
+                                   if settings.tensions else "for a small amplitude (--amplitude 0)"))
     for h in ("comp", "value", "sigma", "rel %", "mode", "T s"):
         t.add_column(h, justify="right")
     for c, e in res.accuracy().items():
@@ -101,6 +104,7 @@ def _render(cfg, res, settings, doc) -> None:
     render_identifiability(con, doc["identifiability"])
     render_rig(con, b["rig"])
     render_timing(con, doc["how_to_time"])
+    render_amplitude(con, doc.get("amplitude_advice"))
     render_multi_hanging(con, doc)
     tn = b["tension"]
     if tn.get("peak") is not None:

@@ -188,6 +188,24 @@ def timing_advice(point: dict, reaction: float, sensor) -> list[dict]:
     return how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
 
 
+def amplitude_advice(cfg: dict, source: str, point: dict, settings) -> dict:
+    """What the point's sigmas assume about the release amplitude and what
+    an unstated one costs (:func:`bifilar.studies.amplitude.amplitude_advice`)."""
+    from ..studies.amplitude import amplitude_advice as advise
+
+    return advise(cfg, source, point, settings)
+
+
+def render_amplitude(con, adv: dict | None) -> None:
+    """The amplitude advice: one sentence, and the invert options per component."""
+    if not adv:
+        return
+    con.print(f"amplitude: {esc(adv['text'])}; after the experiment, per component (POINT: the point's config, "
+              "--write-config; the period: the measured one):")
+    for c, r in adv["components"].items():
+        con.print(f"  - {c}: bifilar invert POINT {esc(r['invert_options'])}")
+
+
 def render_timing(con, rows: list[dict]) -> None:
     from ..studies.timing import describe
 
@@ -304,6 +322,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     if rec.get("best") is not None:
         warnings = point_warnings(cfg, config, points[rec["best"]], "the recommended point")
         rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
+        rec["amplitude_advice"] = amplitude_advice(cfg, config, points[rec["best"]], settings)
         multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                       hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
     elif wm_p or hangings:
@@ -406,7 +425,9 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         for line in rec["why"]:
             con.print(f"  - {esc(line)}")
         acc = Table(title="expected accuracy at the recommended point",
-                    caption=f"bias: estimator vs the full model at amplitude {b['amplitude']:g}")
+                    caption=f"bias: estimator vs the full model at amplitude {b['amplitude']:g}; sigma: "
+                    + (f"the amplitude stated to invert (--amplitude {b['amplitude']:g}, +-10 %)"
+                       if settings.tensions else "for a small amplitude (--amplitude 0)"))
         for h in ("comp", "value", "sigma", "rel %", "mode", "T s", "sm-angle %", "thesis %", "linear %"):
             acc.add_column(h, justify="right")
         for c in comps:
@@ -422,6 +443,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         con.print(acc)
         render_rig(con, b["rig"])
         render_timing(con, rec.get("how_to_time") or [])
+        render_amplitude(con, rec.get("amplitude_advice"))
         render_multi_hanging(con, rec)
         if rec.get("config_written"):
             con.print(f"config of the recommended point written to {rec['config_written']}")

@@ -228,13 +228,19 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                 cands.append((hi, k))
     chosen: list[tuple[int, int]] = []
 
-    def evaluate(sel, as_invert=False):
+    def evaluate(sel, as_invert=False, amp=None):
         blocks = []
         for hi in sorted({a for a, _ in sel}):
             ks = [k for a, k in sel if a == hi]
             J, Sx, Js, _ = data[hi]
             scale = np.array([scales[c] for c in components])
-            blocks.append((J[ks] * scale, Sx[np.ix_(ks, ks)], Js[ks]))  # in units of each component's scale
+            # the stated amplitude (amp {(hanging, mode): (r, s^2)}): invert's nonlinear rung fits T_lin r, so
+            # each period's row, its inputs' rows and the body's scale by r, and the amplitude's own
+            # uncertainty adds its variance to the period's (stated_amplitude_budget, per period)
+            r = np.array([amp[(hi, k)][0] for k in ks]) if amp else np.ones(len(ks))
+            va = np.array([amp[(hi, k)][1] for k in ks]) if amp else np.zeros(len(ks))
+            blocks.append((J[ks] * scale * r[:, None], Sx[np.ix_(ks, ks)] * np.outer(r, r) + np.diag(va),
+                           Js[ks] * r[:, None]))  # in units of each component's scale
         C, rank, unresolved = joint_covariance(blocks, timing, as_invert)
         worst = float(np.sqrt(np.max(np.diag(C)))) if rank == len(components) else math.inf
         return rank, worst, C, unresolved
@@ -261,15 +267,19 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
             break
         chosen.append(m)
         rank, worst = r, w
-    # chosen for the best fit; reported for the fit invert makes of them
-    rank, worst, C, unresolved = evaluate(chosen, as_invert=True) if chosen else (0, math.inf, np.full((len(components),) * 2, np.inf),
-                                                                     np.ones(len(components), bool))
+    # chosen for the best fit (small amplitude); reported for the fit invert makes of them, the
+    # planned amplitude stated for each period
+    amp = _amplitude_terms(hs, chosen, settings) if chosen else None
+    rank, worst, C, unresolved = evaluate(chosen, as_invert=True, amp=amp) if chosen else (
+        0, math.inf, np.full((len(components),) * 2, np.inf), np.ones(len(components), bool))
     sc = np.array([scales[c] for c in components])
     C = C * np.outer(sc, sc)
     used_idx = sorted({a for a, _ in chosen})
     meas = [{"hanging": hs[a].name, "mode": hs[a].sens.modes.modes[k].label, "period_sigma": timing,
              **advice(float(hs[a].sens.periods[k]), float(hs[a].separation[k]), timing,
-                      DEFAULT_REACTION if reaction is None else reaction, sensor)}
+                      DEFAULT_REACTION if reaction is None else reaction, sensor),
+             "amplitude": settings.amplitude if amp else 0.0,
+             "period_at_amplitude": float(hs[a].sens.periods[k]) * (amp[(a, k)][0] if amp else 1.0)}
             for a in used_idx for (b, k) in sorted(chosen) if b == a]
     missing = [c for c, u in zip(components, unresolved) if u]
     undefined = sorted({n for a, k in chosen for n in data[a][3][k]})
@@ -279,23 +289,55 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                        undefined)
 
 
+def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings) -> dict | None:
+    """{(hanging index, mode index): (r, s^2)} of the chosen measurements at
+    the planned amplitude: the amplitude factor ``r = T(A) / T_lin`` by the
+    nonlinear model (``settings.periods`` periods at ``settings.rtol``, as a
+    sweep point's run) and the variance its stated uncertainty (invert's
+    default 10 %) adds to the period, ``(2 T_lin (r - 1) rel)^2``
+    (:func:`bifilar.studies.point.stated_amplitude_budget`); None without
+    the nonlinear runs (``--no-tensions``: the plan is then for a small
+    amplitude, ``amplitude: 0``) or when a run gives no period."""
+    from ..analysis.batch import simulate_batch
+    from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+
+    if not settings.tensions:
+        return None
+    try:  # the chosen measurements' runs in one call of the batched engine (as a sweep point's)
+        runs = simulate_batch([hs[a].scene for a, _ in chosen], mode=[k + 1 for _, k in chosen],
+                              amplitude=settings.amplitude, periods=settings.periods, rtol=settings.rtol,
+                              rests=[hs[a].sens.rest for a, _ in chosen], modes=[hs[a].sens.modes for a, _ in chosen])
+    except BifilarError:
+        return None
+    out = {}
+    for (a, k), run in zip(chosen, runs):
+        T_lin = float(hs[a].sens.periods[k])
+        if not run.period:
+            return None
+        r = run.period / T_lin
+        out[(a, k)] = (r, (2.0 * T_lin * (r - 1.0) * DEFAULT_AMPLITUDE_REL) ** 2)
+    return out
+
+
 def measurements_document(plan: HangingPlan, reaction: float | None = None) -> dict:
     """The plan as a ``bifilar invert --measurements`` file (docs/invert.md):
     one hanging per entry with its inline config and rotation, one
     measurement per timed mode.  The periods are the *planned* ones (the
-    config's inertia) with the timing sigma and ``amplitude: 0`` (small):
-    replace them with the measured values (or ``cycles``/``times``) and the
-    release amplitude after the experiment; without an amplitude, invert
-    budgets an assumed 0-10 degree release range, which the plan leaves out."""
+    config's inertia, at the planned amplitude) with the timing sigma and
+    the planned ``amplitude`` (0 when the plan ran no nonlinear model,
+    ``--no-tensions``), as the plan's sigmas assume: replace the periods
+    with the measured values (or ``cycles``/``times``) and the amplitude
+    with the one released after the experiment; without an amplitude,
+    invert budgets an assumed 0-10 degree release range, which the plan
+    leaves out."""
     from ..jsonable import to_jsonable
 
     hangs = []
     for h in plan.hangings:
-        # amplitude 0: the planned periods are small-amplitude (linear) ones and
-        # the plan's sigma assumes the amplitude is stated; put the release
-        # amplitude there with the measured period (invert then corrects for it)
-        ms = [{"mode": m["mode"], "period": f"{m['period']:.9g} +- {m['period_sigma']:.3g}", "amplitude": 0.0}
-              for m in plan.measurements if m["hanging"] == h.name]
+        # the plan's sigma assumes the amplitude is stated (its 10 % budgeted); the periods are the
+        # ones the body shows at it (invert then corrects for it)
+        ms = [{"mode": m["mode"], "period": f"{m['period_at_amplitude']:.9g} +- {m['period_sigma']:.3g}",
+               "amplitude": m["amplitude"]} for m in plan.measurements if m["hanging"] == h.name]
         entry = {"name": h.name, "config": to_jsonable(h.config),
                  "rotation": "identity" if not any(h.rotvec_deg) else {"rotvec_deg": list(h.rotvec_deg)},
                  "measurements": ms}

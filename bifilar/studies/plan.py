@@ -24,13 +24,20 @@ Screens and confirmation (issue 14).  Both steps evaluate *screens*
 component's linear sigma, no estimator biases; the grid's nonlinear runs in
 one batch; the local search's without nonlinear runs when there is no
 tension or depth limit and every grid point's wires keep half their rest
-tension, :func:`_far_from_limits`).  The best :data:`CONFIRM` feasible
+tension, :func:`_far_from_limits`, and the stated amplitude's own
+uncertainty changes no grid point's objective by 2 % or more,
+:func:`_amplitude_negligible`; the search then ranks every point by its
+small-amplitude sigma, ``invert --amplitude 0``'s, since a screen without a
+run has no amplitude factor).  The best :data:`CONFIRM` feasible
 screens are then evaluated in full (the honest second-order sigma, the
 nonlinear runs, the biases); when a full figure equals its screen's (the
-linear budget holds, as it does wherever the CoM is not shallow) the
+small-amplitude sigmas compared: the linear budget holds, as it does
+wherever the CoM is not shallow; the amplitude's term depends on the run,
+batched or not, in the last bits) the
 search path was the full one's, and the answer is the same.  Otherwise
 (second order matters, or the confirmed point goes slack) the whole search
-is run again on full points, as before.
+is run again on full points, as before.  The answer is ranked by the full
+sigma, the stated amplitude's uncertainty included.
 
 The objective is the relative standard uncertainty of ``target`` (or the
 worst of the *measurable* components: those identifiable at some point of
@@ -54,7 +61,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import identifiability, measurable_components, point_separation, rank_order
+from .ranking import identifiability, measurable_components, point_separation, rank_order, rel_sigma
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -120,19 +127,20 @@ def _is_length(name: str) -> bool:
     return name == "length" or (name.startswith("rig.lengths.") and name.count(".") == 2)
 
 
-def _penalty(p: dict, c: Constraints, target: str | None, among=None) -> float:
+def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_amplitude: bool = False) -> float:
     """Exterior penalty, continuous at the edge of the feasible set:
     feasible -> the relative uncertainty; infeasible -> that times
     (1 + 100 x the relative excess over each limit); invalid or not
-    identifiable -> 1e6 (the optimum itself is always a feasible point)."""
+    identifiable -> 1e6 (the optimum itself is always a feasible point).
+    ``small_amplitude``: of the small-amplitude sigmas (:func:`~bifilar.studies.ranking.rel_sigma`)."""
     if not p.get("valid"):
         return 1e6
-    ob = objective(p, target, among)
+    ob = objective(p, target, among, small_amplitude)
     if not math.isfinite(ob):
         return 1e6
     if target is None:  # the worst component, smoothed (a 16-norm) so that the simplex slides along the ridge
         sel = among if among is not None else list(p["components"])
-        rel = np.array([p["components"][k]["rel_sigma"] for k in sel], float)
+        rel = np.array([rel_sigma(p["components"][k], small_amplitude) for k in sel], float)
         ob = float(np.sum(rel**16) ** (1 / 16))
     v = dict(violations(p, c, target))
     if not v:
@@ -221,7 +229,8 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     def search(screen: bool) -> tuple[dict, list]:
         """Grid, then the local search (module docstring), every point
         evaluated as a screen (:func:`evaluate_point` ``screen=True``) or
-        in full; returns ({params key: point}, the measurable components)."""
+        in full; returns ({params key: point}, the measurable components,
+        whether the search ranked the small-amplitude sigmas)."""
         cache: dict[tuple, dict] = {}
         done[0] = 0
         pts = run_sweep(base_cfg, source, grid, settings, workers=workers, screen=screen,
@@ -235,8 +244,12 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
                              + _remedy_text(base_cfg, source, pts, settings, target))
 
         local = settings
-        if screen and settings.tensions and _far_from_limits(pts, constraints):
+        if (screen and settings.tensions and _far_from_limits(pts, constraints)
+                and _amplitude_negligible(pts, target, among)):
             local = replace(settings, tensions=False)  # the confirmation runs the best point's motion
+        # without runs no screen has the stated amplitude's term: the whole search then ranks the
+        # small-amplitude figures (within AMPLITUDE_ENOUGH of the full ones on the grid)
+        small = not local.tensions
 
         def evaluate(params: dict) -> dict:
             key = key_of(params)
@@ -247,24 +260,26 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
             return cache[key]
 
         def score(p):
-            return _penalty(p, constraints, target, among)
+            return _penalty(p, constraints, target, among, small)
 
         if d:
             _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluate, score)
-        return cache, among
+        return cache, among, small
 
     # the search on screens (linear sigmas, no biases), then the best feasible
     # screen confirmed in full; where the full figure differs (second order
     # matters in this range: a shallow CoM) the whole search again in full
-    cache, among = search(screen=True)
+    cache, among, small = search(screen=True)
     feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
-                       and math.isfinite(objective(p, target, among))), key=lambda p: objective(p, target, among))
+                       and math.isfinite(objective(p, target, among))),
+                      key=lambda p: objective(p, target, among, small))
     for p in feasible[:CONFIRM]:
         full = evaluate_point(base_cfg, source, p["params"], settings)
         cache[key_of(p["params"])] = full
-        if not (full.get("valid") and objective(full, target, among) == objective(p, target, among)
+        if not (full.get("valid") and objective(full, target, among, small_amplitude=True)
+                == objective(p, target, among, small_amplitude=True)
                 and not violations(full, constraints, target)):
-            cache, among = search(screen=False)
+            cache, among, _ = search(screen=False)
             break
     evaluated = list(cache.values())
     feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target)
@@ -277,6 +292,28 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     best["objective"] = objective(best, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
                       among, zip_)
+
+
+#: the local search may run without nonlinear runs (and so rank the small-amplitude sigmas) only when on
+#: every valid grid point the stated amplitude's term changes the objective by less than this (relative)
+AMPLITUDE_ENOUGH = 0.02
+
+
+def _amplitude_negligible(points: list[dict], target: str | None, among) -> bool:
+    """Whether the stated amplitude's own uncertainty (``amplitude_budget``)
+    changes the objective of every valid grid point by less than
+    :data:`AMPLITUDE_ENOUGH`: then the local search may leave the nonlinear
+    runs out (its screens rank the small-amplitude figures; the optimum is
+    confirmed in full).  At a large amplitude it may not: the amplitude's
+    term moves the optimum (the Solar Boat at 0.3: spacing 1 instead of
+    2.5)."""
+    for p in points:
+        if not p.get("valid"):
+            continue
+        full, small = objective(p, target, among), objective(p, target, among, small_amplitude=True)
+        if math.isfinite(full) and math.isfinite(small) and full > (1 + AMPLITUDE_ENOUGH) * small:
+            return False
+    return True
 
 
 def _far_from_limits(points: list[dict], c: Constraints) -> bool:

@@ -375,12 +375,84 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True, at=
     return out
 
 
+def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float):
+    """The budget ``invert --period MODE=T --amplitude A`` prints (one
+    period, one unknown, the nonlinear rung) from the small-amplitude one
+    (``--amplitude 0``) of the same component and mode: ``budget`` (a
+    :class:`~bifilar.estimation.sensitivity.Budget`, its ``value_sigma``
+    the honest std, kg m^2), ``T_lin`` the mode's linear period (s), ``r =
+    T(A) / T_lin`` the amplitude factor at the stated amplitude ``A`` and
+    ``rel`` the amplitude's relative standard uncertainty (invert's default
+    :data:`~bifilar.estimation.uncertainty.DEFAULT_AMPLITUDE_REL` for an
+    ``--amplitude`` without ``+-``).
+
+    The nonlinear rung fits ``T_lin(I) r = T`` (:mod:`bifilar.estimation.budget`,
+    ``_budget``): the period's derivative and every input's are those of the
+    small-amplitude budget times ``r``, so an input's contribution
+    ``(dT/dx r) / (dT/dI r) s_x`` is unchanged, the timing's ``s_T /
+    (dT/dI r)`` is divided by ``r``, and the stated amplitude's own
+    uncertainty ``s_A = rel A`` adds ``dT/dA s_A / (dT/dI r)`` with ``dT/dA
+    = 2 T_lin (r - 1) / A`` (the amplitude's effect taken as quadratic), so
+    ``|2 (r - 1) rel T_lin / (r dT/dI)|``, independent of ``A``.  The
+    second-order terms (re-solved sigma points) are those of the
+    small-amplitude budget (the factor ``r`` cancels in them), so the same
+    change applies to the honest std.  Returns (std, timing contribution,
+    amplitude contribution, variance shares by kind), kg m^2."""
+    c_t = float(budget.contributions["timing"])
+    c_a = abs(2.0 * (r - 1.0) * rel * T_lin * float(budget.dI_dT) / r)
+    sd = float(budget.value_sigma)
+    var = sd * sd - c_t * c_t * (1.0 - 1.0 / (r * r)) + c_a * c_a
+    lin = {k: float(c) for k, c in budget.contributions.items()}
+    lin["timing"] = c_t / r
+    lin["amplitude"] = c_a
+    tot = sum(c * c for c in lin.values())
+    shares = {k: (c * c / tot if tot > 0 else 0.0) for k, c in lin.items()}
+    return math.sqrt(max(var, 0.0)), c_t / r, c_a, shares
+
+
+def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict) -> None:
+    """Each component's sigma for the amplitude stated to ``invert`` (the
+    point's nonlinear run gives the amplitude factor;
+    :func:`stated_amplitude_budget`), the small-amplitude figure kept in
+    ``amplitude_budget``; without a run (``--no-tensions``, a planner's
+    screen without runs) the sigma stays the small-amplitude one and
+    ``amplitude_budget.budgeted`` is false."""
+    from ..estimation.sensitivity import Budget, grouped_shares
+    from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+
+    for comp, k in pre.chosen.items():
+        e = res["components"][comp]
+        b = pre.budgets[comp]
+        sd0 = float(b.value_sigma)
+        run = sims.get(k)
+        T_lin = float(pre.periods[k])
+        r = run.period / T_lin if run is not None and run.period else None
+        info = {"amplitude": pre.amplitude, "relative_std": DEFAULT_AMPLITUDE_REL, "budgeted": False,
+                "period_factor": r, "contribution": None,
+                "sigma_small_amplitude": sd0 if math.isfinite(sd0) else None,
+                "rel_sigma_small_amplitude": e["rel_sigma"] if math.isfinite(sd0) else None}
+        e["amplitude_budget"] = info
+        if r is None or not math.isfinite(sd0):
+            info["note"] = ("no nonlinear run at this point: the sigma is for a small amplitude stated as such "
+                            "(invert --amplitude 0)" if r is None else "no sigma")
+            continue
+        sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL)
+        info.update(budgeted=True, contribution=c_a)
+        scale = component_scale(pre.scene.inertia, comp)
+        e.update(sigma=sd, rel_sigma=sd / scale if scale else math.inf,
+                 shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))
+        e.pop("physical_limit", None)
+        e.update(physical_limits(pre.scene.inertia, comp, Budget(comp, b.mode, sd, {"timing": c_t}, shares,
+                                                                 b.dI_dT, b.rel_sensitivity),
+                                 interval=e["physical_interval"]))
+
+
 #: a component whose estimate falls outside its physical interval in at least this fraction of experiments
 #: gets a ``physical_limit`` warning (see :func:`physical_limits`)
 UNPHYSICAL_WARN = 0.01
 
 
-def physical_limits(inertia, comp: str, budget) -> dict:
+def physical_limits(inertia, comp: str, budget, interval=None) -> dict:
     """Where the estimate of ``comp`` may fall outside what a real body can
     have: ``physical_interval`` [lo, hi] (kg m^2; positive definite and the
     triangle inequality with the other components as given,
@@ -394,12 +466,14 @@ def physical_limits(inertia, comp: str, budget) -> dict:
     trifilar table, the thesis plate: Izz = Ixx + Iyy) sits on the limit,
     so about half of its Izz estimates do: the closed-loop check found 13 %
     of the trifilar's refused and most of the rest clamped, under a sigma
-    that promised a symmetric spread (docs/design.md)."""
+    that promised a symmetric spread (docs/design.md).  ``interval``: the
+    ``physical_interval`` if already computed (the same for every budget of
+    the component)."""
     from ..estimation.problem import admissible_interval
     from ..estimation.fit_check import EDGE_Z
     from ..scene import TRIANGLE_SLACK
 
-    lo, hi = admissible_interval(inertia, comp)
+    lo, hi = admissible_interval(inertia, comp) if interval is None else interval
     out: dict = {"physical_interval": [lo, hi], "p_unphysical": None, "p_refused": None}
     sd = float(budget.value_sigma)
     if not (math.isfinite(sd) and sd > 0):
@@ -613,7 +687,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE")
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
-    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at)
+    pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at, budgets=budgets)
     if st.tensions:
         pre.runs = sorted(set(chosen.values()))
         from ..analysis.simulate import checked_start_poses
@@ -651,6 +725,7 @@ class _Prepared:
     runs: list  # mode indices to run nonlinearly (empty: none)
     starts: Any = None  # their start poses (StartPoses, in the order of runs), checked
     at: Any = None  # modes_of_inertia of scene about rest (_stiffness), or None
+    budgets: dict = None  # {component: its Budget at a small amplitude (predicted_budgets)}
 
 
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
@@ -681,6 +756,7 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
         res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
+    _stated_amplitude(res, pre, sims)
     if screen:
         return res
     # biases at the prescribed amplitude

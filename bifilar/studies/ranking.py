@@ -23,16 +23,30 @@ from .settings import Constraints
 
 
 
-def objective(point: dict, target: str | None, among=None) -> float:
+def rel_sigma(entry: dict, small_amplitude: bool = False):
+    """A component entry's relative sigma (None: none can be given);
+    ``small_amplitude``: the figure for a small amplitude (``invert
+    --amplitude 0``) instead of the stated one's, i.e. without the stated
+    amplitude's own uncertainty (``amplitude_budget``)."""
+    rs = entry.get("rel_sigma")
+    ab = entry.get("amplitude_budget")
+    if small_amplitude and ab and ab.get("budgeted"):
+        return ab["rel_sigma_small_amplitude"]
+    return rs
+
+
+def objective(point: dict, target: str | None, among=None, small_amplitude: bool = False) -> float:
     """Relative standard uncertainty the ranking minimises: of ``target``, or
     the worst of the components ``among`` (default: all of the point's);
     inf when one of them is not identifiable or has no sigma
-    (``sigma_unavailable``), or the point is invalid."""
+    (``sigma_unavailable``), or the point is invalid.  ``small_amplitude``:
+    of the sigmas for a small amplitude (:func:`rel_sigma`; a planner's
+    search, whose screens may have no nonlinear run)."""
     if not point.get("valid"):
         return math.inf
     comps = point["components"]
     sel = [target] if target else (list(among) if among is not None else list(comps))
-    vals = [comps[k]["rel_sigma"] for k in sel if k in comps]
+    vals = [rel_sigma(comps[k], small_amplitude) for k in sel if k in comps]
     vals = [math.inf if v is None else v for v in vals]
     return float(max(vals)) if vals else math.inf
 

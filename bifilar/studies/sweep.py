@@ -17,7 +17,10 @@ the body axes of the point's scene):
   x), the predicted standard uncertainty ``sigma`` (kg m^2) and
   ``rel_sigma`` for the stated measurement errors
   (:func:`~bifilar.studies.point.predicted_budget`, for the point's
-  uncertainties: the settings', or a swept ``uncertainty.KEY``), the
+  uncertainties: the settings', or a swept ``uncertainty.KEY``; the
+  period timed at the point's amplitude and that amplitude stated to
+  ``invert`` with its default 10 %, :func:`~bifilar.studies.point.stated_amplitude_budget`,
+  the small-amplitude figure in ``amplitude_budget``), the
   variance shares by kind, the modes its period depends on
   (``from_modes``: ``|d ln T / d ln I|`` per mode), the separation of its
   mode (relative distance to the nearest other period), and the relative bias of simple estimators against the full
@@ -87,7 +90,8 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        resolve_uncertainty)
 from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 3  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge
+JOURNAL_VERSION = 4  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
+# 4: the sigma budgets the stated amplitude (amplitude_budget)
 
 
 # --------------------------------------------------------------------------
