@@ -46,10 +46,11 @@ Uncertainty (the headline ``std``)
   DerSimonian-Laird estimate; for equal stds ``sqrt(((T1 - T2)^2 - s1^2 -
   s2^2) / 2)``) is added in quadrature: the period changes along the
   record by that much, so "the" period of the record is not known better;
-* ``std_quantisation``: a record on a lattice of steps (a camera's pixel,
-  an ADC's bit) with too little noise to dither them is re-quantised and
-  refitted (:func:`_quantisation`); the spread of those periods replaces
-  the noise term when larger.
+* ``std_quantisation``: a quantised record (few distinct values: a
+  camera's pixel, an ADC's bit, or pixels converted to an angle, whose
+  levels are unevenly spaced) with too little noise to dither the steps is
+  re-quantised onto its own levels and refitted (:func:`_quantisation`);
+  the spread of those periods replaces the noise term when larger.
 
 ``uncertainty`` lists the terms and which one dominates.
 
@@ -73,7 +74,7 @@ from scipy import stats
 from .signal_checks import (
     MIN_CYCLES,
     R2_MIN,
-    lattice_step,
+    quantisation_levels,
     require_oscillation,
     residual_peaks,
 )
@@ -491,9 +492,10 @@ QUANT_DRAWS = 40
 
 
 def _quantisation(fit: PeriodFit, t, y, criterion):
-    """Std of the period a record quantised in steps ``q`` (a camera's pixel,
-    an ADC's bit; :func:`.signal_checks.lattice_step`) can have when its
-    noise is too weak to dither the steps (below ``DITHER_STEPS q``).
+    """Std of the period a quantised record (a camera's pixel, an ADC's
+    bit, or pixels converted to an angle; :func:`.signal_checks.quantisation_levels`)
+    can have when its noise is too weak to dither the steps (below
+    ``DITHER_STEPS`` of the local step).
 
     Undithered, the quantisation error is a deterministic function of the
     signal: it repeats from cycle to cycle (correlated at lags of a period,
@@ -501,26 +503,30 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     band the fit absorbs, so neither the least-squares std nor the
     serial-correlation factor sees it (a period off by up to 3.5 of its std).
     The fitted curve, shifted by a random phase, plus the noise left before
-    quantisation (``sigma0^2 = RSS/n - q^2/12``), is therefore rounded onto
-    the record's own lattice ``QUANT_DRAWS`` times and refitted with the
-    chosen model; the rms spread of those periods about the fitted one,
-    ``std_quantisation``, is the std when it exceeds the noise term (a
-    lattice shifted at random instead under-covers a signal centred on a
-    level, as an encoder zeroed at rest is).  The draws are seeded by the
-    record, so a result is reproducible."""
-    lat = lattice_step(y)
-    if lat is None or fit.model not in _KIND or fit.residuals is None:
+    quantisation (in steps, ``sigma0^2 = mean(r^2 / w^2) - 1/12`` with ``w``
+    the width of each sample's level: ``RSS/n - q^2/12`` over ``q^2`` on a
+    uniform lattice), is therefore put onto the record's own levels (the
+    nearest level; on a uniform lattice, rounding) ``QUANT_DRAWS`` times and
+    refitted with the chosen model; the rms spread of those periods about
+    the fitted one, ``std_quantisation``, is the std when it exceeds the
+    noise term (a lattice shifted at random instead under-covers a signal
+    centred on a level, as an encoder zeroed at rest is).  The draws are
+    seeded by the record, so a result is reproducible."""
+    lev = quantisation_levels(y)
+    if lev is None or fit.model not in _KIND or fit.residuals is None:
         return
-    q = lat[0]
-    ms = float(np.mean(fit.residuals ** 2))
-    sigma0 = math.sqrt(max(ms - q * q / 12.0, 0.0))
+    q = lev.typical_step
+    w = lev.step(y)
+    s_steps = math.sqrt(max(float(np.mean((fit.residuals / w) ** 2)) - 1.0 / 12.0, 0.0))
+    sigma0 = s_steps * q
     fit.uncertainty["quantisation_step"] = q
-    if sigma0 >= DITHER_STEPS * q:
+    if s_steps >= DITHER_STEPS:
         return
     kind = fit._kind
     p = fit.params.copy()
     drift = fit.selection.get("drift", True)
-    rng = np.random.default_rng([t.size, int(np.sum(np.round((y - lat[1]) / q)) % (1 << 31))])
+    k_rec = np.round(lev.index(y))
+    rng = np.random.default_rng([t.size, int(np.sum(k_rec) % (1 << 31))])
     periods = []
     for _ in range(QUANT_DRAWS):
         pb = p.copy()
@@ -528,8 +534,8 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
         for i in range(2, pb.size if kind != "quadratic" else 4, 4):
             a, b = pb[i], pb[i + 1]
             pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
-        yb = _model(kind, pb, t, fit.t0, fit.t_ref) + sigma0 * rng.standard_normal(t.size)
-        yb = q * np.round((yb - lat[1]) / q) + lat[1]
+        kb = lev.index(_model(kind, pb, t, fit.t0, fit.t_ref)) + s_steps * rng.standard_normal(t.size)
+        yb = lev.level(np.round(kb))
         try:
             fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
         except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
@@ -543,10 +549,15 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     dev = np.asarray(periods) - fit.period
     sq = float(np.sqrt(np.mean(dev ** 2)))  # about the fitted period: the copies' shift counts too
     fit.std_quantisation = sq
-    fit.uncertainty["quantisation_test"] = {"step": q, "noise_before_quantisation": sigma0,
+    uniform = lev.uniform is not None
+    fit.uncertainty["quantisation_test"] = {"step": q, "uniform": uniform, "levels": int(lev.values.size),
+                                            "noise_before_quantisation": sigma0, "noise_steps": s_steps,
                                             "draws": len(periods), "std": sq,
                                             "mean_shift": float(np.mean(periods)) - fit.period}
-    fit.notes.append(f"the record is quantised in steps of {q:.3g} with little noise ({sigma0:.2g}, below "
+    where = (f"in steps of {q:.3g}" if uniform else
+             f"on {lev.values.size} unevenly spaced levels (median step {q:.3g}; a map of a lattice, e.g. "
+             f"pixels converted to an angle)")
+    fit.notes.append(f"the record is quantised {where} with little noise ({s_steps:.2g} step, below "
                      f"{DITHER_STEPS:g} step): the period of {len(periods)} re-quantised copies of the fit "
                      f"spreads by {sq:.2g} s")
 
