@@ -94,3 +94,28 @@ def test_a_noisy_or_sub_pixel_record_is_not_treated_as_quantised():
         assert quantisation_levels(rec) is None
         fit = fit_period(t, rec, model="viscous", crossing_check=False)
         assert fit.std_quantisation == 0.0 and "quantisation_test" not in fit.uncertainty
+
+
+def test_quantised_120fps_std_is_not_twice_the_error():
+    """10 steps of amplitude at 120 fps, no noise: the signal dwells on each
+    level for several frames, the quantisation error is a saw-tooth whose
+    power lies far above the oscillation's frequency, and the least-squares
+    std (which reads it as white noise) was ~2.4 x the period's error (sd(z)
+    0.44 over 150 draws).  The re-quantised copies reproduce the record's
+    noise term, so their spread is the std.  The error's sd comes from 150
+    cheap fits (the period does not depend on the check; 6 % standard
+    error), the std from 8 full fits (40 copies each, ~11 % each): their
+    ratio must lie within 0.75-1.33 (before: 2.4)."""
+    from bifilar.estimation.signal import _fit_window
+
+    kw = dict(fs=120.0, steps=10, seed=5)
+    err = [_fit_window(t, y, "viscous", True, None, (), "BIC")[0].period - T_TRUE
+           for t, y in _quantised_draws(150, **kw)]
+    sd_err = float(np.sqrt(np.mean(np.square(err))))
+    stds = []
+    for t, y in _quantised_draws(8, fs=120.0, steps=10, seed=6):
+        fit = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+        assert fit.uncertainty["quantisation_test"]["replaces_noise"]
+        stds.append(fit.std)
+    ratio = float(np.median(stds)) / sd_err
+    assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)

@@ -527,7 +527,7 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     drift = fit.selection.get("drift", True)
     k_rec = np.round(lev.index(y))
     rng = np.random.default_rng([t.size, int(np.sum(k_rec) % (1 << 31))])
-    periods = []
+    periods, noise_terms = [], []
     for _ in range(QUANT_DRAWS):
         pb = p.copy()
         dphi = rng.uniform(0.0, 2 * math.pi)
@@ -543,6 +543,7 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
             continue
         if fb.converged and np.isfinite(fb.period):
             periods.append(fb.period)
+            noise_terms.append(fb.std)  # the copy's own noise term (with its serial factor)
     if len(periods) < QUANT_DRAWS // 2:
         fit.notes.append(f"quantisation check failed: only {len(periods)} of {QUANT_DRAWS} simulated records fitted")
         return
@@ -550,9 +551,16 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     sq = float(np.sqrt(np.mean(dev ** 2)))  # about the fitted period: the copies' shift counts too
     fit.std_quantisation = sq
     uniform = lev.uniform is not None
+    # the record's noise term within those of its copies: its residuals are
+    # what quantisation and sigma0 make, and the spread of the copies (which
+    # holds both) is the std; a larger one means errors the copies lack
+    noise = fit.std_raw * fit.std_inflation
+    replaces = bool(noise <= max(noise_terms))
     fit.uncertainty["quantisation_test"] = {"step": q, "uniform": uniform, "levels": int(lev.values.size),
                                             "noise_before_quantisation": sigma0, "noise_steps": s_steps,
                                             "draws": len(periods), "std": sq,
+                                            "noise_term": noise, "copies_noise_term_max": max(noise_terms),
+                                            "replaces_noise": replaces,
                                             "mean_shift": float(np.mean(periods)) - fit.period}
     where = (f"in steps of {q:.3g}" if uniform else
              f"on {lev.values.size} unevenly spaced levels (median step {q:.3g}; a map of a lattice, e.g. "
@@ -665,20 +673,39 @@ def _stationarity(fit: PeriodFit, t, y):
 
 
 def _compose_std(fit: PeriodFit):
-    """Headline std from the three terms; which one dominates."""
+    """Headline std from the three terms; which one dominates.  When the
+    quantisation check found the record's noise term among its copies'
+    (``quantisation_test.replaces_noise``), the copies' spread, which holds
+    the noise as well, stands for noise, serial correlation and
+    quantisation together: the least-squares and serial-correlation stds
+    read the quantisation error as noise spread over all frequencies, and
+    overstate it when the signal dwells on each level for several samples
+    (x2.4 for 10 steps at 120 fps)."""
     noise = float(fit.std_raw)
     serial = noise * float(fit.std_inflation)
     ns = float(fit.std_nonstationary)
-    quant = max(float(fit.std_quantisation), serial)  # the simulated spread includes the noise
+    replaced = bool((fit.uncertainty.get("quantisation_test") or {}).get("replaces_noise"))
+    if replaced:
+        quant = float(fit.std_quantisation)
+    else:
+        quant = max(float(fit.std_quantisation), serial)  # the simulated spread includes the noise
     total = math.hypot(quant, ns)
     terms = {"noise": noise, "serial_correlation": math.sqrt(max(serial ** 2 - noise ** 2, 0.0)),
-             "quantisation": math.sqrt(max(quant ** 2 - serial ** 2, 0.0)), "nonstationarity": ns}
-    dom = max(terms, key=terms.get)
+             "quantisation": quant if replaced else math.sqrt(max(quant ** 2 - serial ** 2, 0.0)),
+             "nonstationarity": ns}
+    if replaced:
+        fit.uncertainty["noise_replaced_by_quantisation"] = True
+    dom = max(("quantisation", "nonstationarity") if replaced else terms, key=terms.get)
     fit.uncertainty = dict(terms, total=total, dominant=dom, serial_factor=float(fit.std_inflation),
                            **fit.uncertainty)
     fit.std = total
     if fit.modes:
         fit.modes[0]["std_total"] = total
-    if dom != "noise":
+    if replaced and serial > quant:
+        fit.notes.append(f"std {total:.2g} s from the re-quantised copies, whose spread holds the noise too; "
+                         f"the noise term {serial:.2g} s, which reads the quantisation error as white noise, is "
+                         f"no larger than the copies' own (up to {fit.uncertainty['quantisation_test']['copies_noise_term_max']:.2g} s) "
+                         "and overstates it")
+    elif dom != "noise":
         fit.notes.append(f"std {total:.2g} s is dominated by {dom.replace('_', ' ')} "
                          f"(noise alone {noise:.2g} s)")
