@@ -554,7 +554,7 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     # the record's noise term within those of its copies: its residuals are
     # what quantisation and sigma0 make, and the spread of the copies (which
     # holds both) is the std; a larger one means errors the copies lack
-    noise = fit.std_raw * fit.std_inflation
+    noise = float(fit.std)  # still the noise term (with its serial factor), like the copies' fb.std
     replaces = bool(noise <= max(noise_terms))
     fit.uncertainty["quantisation_test"] = {"step": q, "uniform": uniform, "levels": int(lev.values.size),
                                             "noise_before_quantisation": sigma0, "noise_steps": s_steps,
