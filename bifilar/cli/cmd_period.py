@@ -112,6 +112,8 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     u = fit.uncertainty
     if u:
         quant = f", quantisation +{u['quantisation']:.2g}" if u.get("quantisation") else ""
+        if u.get("noise_replaced_by_quantisation"):
+            quant = f"; in their place quantisation {u['quantisation']:.2g} (re-quantised copies)"
         tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}{quant}, "
                                       f"non-stationarity {u['nonstationarity']:.2g}")
         tb.add_row("  dominant term", u["dominant"].replace("_", " "))

@@ -46,10 +46,11 @@ Uncertainty (the headline ``std``)
   DerSimonian-Laird estimate; for equal stds ``sqrt(((T1 - T2)^2 - s1^2 -
   s2^2) / 2)``) is added in quadrature: the period changes along the
   record by that much, so "the" period of the record is not known better;
-* ``std_quantisation``: a record on a lattice of steps (a camera's pixel,
-  an ADC's bit) with too little noise to dither them is re-quantised and
-  refitted (:func:`_quantisation`); the spread of those periods replaces
-  the noise term when larger.
+* ``std_quantisation``: a quantised record (few distinct values: a
+  camera's pixel, an ADC's bit, or pixels converted to an angle, whose
+  levels are unevenly spaced) with too little noise to dither the steps is
+  re-quantised onto its own levels and refitted (:func:`_quantisation`);
+  the spread of those periods replaces the noise term when larger.
 
 ``uncertainty`` lists the terms and which one dominates.
 
@@ -73,7 +74,7 @@ from scipy import stats
 from .signal_checks import (
     MIN_CYCLES,
     R2_MIN,
-    lattice_step,
+    quantisation_levels,
     require_oscillation,
     residual_peaks,
 )
@@ -491,9 +492,10 @@ QUANT_DRAWS = 40
 
 
 def _quantisation(fit: PeriodFit, t, y, criterion):
-    """Std of the period a record quantised in steps ``q`` (a camera's pixel,
-    an ADC's bit; :func:`.signal_checks.lattice_step`) can have when its
-    noise is too weak to dither the steps (below ``DITHER_STEPS q``).
+    """Std of the period a quantised record (a camera's pixel, an ADC's
+    bit, or pixels converted to an angle; :func:`.signal_checks.quantisation_levels`)
+    can have when its noise is too weak to dither the steps (below
+    ``DITHER_STEPS`` of the local step).
 
     Undithered, the quantisation error is a deterministic function of the
     signal: it repeats from cycle to cycle (correlated at lags of a period,
@@ -501,35 +503,39 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     band the fit absorbs, so neither the least-squares std nor the
     serial-correlation factor sees it (a period off by up to 3.5 of its std).
     The fitted curve, shifted by a random phase, plus the noise left before
-    quantisation (``sigma0^2 = RSS/n - q^2/12``), is therefore rounded onto
-    the record's own lattice ``QUANT_DRAWS`` times and refitted with the
-    chosen model; the rms spread of those periods about the fitted one,
-    ``std_quantisation``, is the std when it exceeds the noise term (a
-    lattice shifted at random instead under-covers a signal centred on a
-    level, as an encoder zeroed at rest is).  The draws are seeded by the
-    record, so a result is reproducible."""
-    lat = lattice_step(y)
-    if lat is None or fit.model not in _KIND or fit.residuals is None:
+    quantisation (in steps, ``sigma0^2 = mean(r^2 / w^2) - 1/12`` with ``w``
+    the width of each sample's level: ``RSS/n - q^2/12`` over ``q^2`` on a
+    uniform lattice), is therefore put onto the record's own levels (the
+    nearest level; on a uniform lattice, rounding) ``QUANT_DRAWS`` times and
+    refitted with the chosen model; the rms spread of those periods about
+    the fitted one, ``std_quantisation``, is the std when it exceeds the
+    noise term (a lattice shifted at random instead under-covers a signal
+    centred on a level, as an encoder zeroed at rest is).  The draws are
+    seeded by the record, so a result is reproducible."""
+    lev = quantisation_levels(y)
+    if lev is None or fit.model not in _KIND or fit.residuals is None:
         return
-    q = lat[0]
-    ms = float(np.mean(fit.residuals ** 2))
-    sigma0 = math.sqrt(max(ms - q * q / 12.0, 0.0))
+    q = lev.typical_step
+    w = lev.step(y)
+    s_steps = math.sqrt(max(float(np.mean((fit.residuals / w) ** 2)) - 1.0 / 12.0, 0.0))
+    sigma0 = s_steps * q
     fit.uncertainty["quantisation_step"] = q
-    if sigma0 >= DITHER_STEPS * q:
+    if s_steps >= DITHER_STEPS:
         return
     kind = fit._kind
     p = fit.params.copy()
     drift = fit.selection.get("drift", True)
-    rng = np.random.default_rng([t.size, int(np.sum(np.round((y - lat[1]) / q)) % (1 << 31))])
-    periods = []
+    k_rec = np.round(lev.index(y))
+    rng = np.random.default_rng([t.size, int(np.sum(k_rec) % (1 << 31))])
+    periods, noise_terms = [], []
     for _ in range(QUANT_DRAWS):
         pb = p.copy()
         dphi = rng.uniform(0.0, 2 * math.pi)
         for i in range(2, pb.size if kind != "quadratic" else 4, 4):
             a, b = pb[i], pb[i + 1]
             pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
-        yb = _model(kind, pb, t, fit.t0, fit.t_ref) + sigma0 * rng.standard_normal(t.size)
-        yb = q * np.round((yb - lat[1]) / q) + lat[1]
+        kb = lev.index(_model(kind, pb, t, fit.t0, fit.t_ref)) + s_steps * rng.standard_normal(t.size)
+        yb = lev.level(np.round(kb))
         try:
             fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
         except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
@@ -537,16 +543,29 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
             continue
         if fb.converged and np.isfinite(fb.period):
             periods.append(fb.period)
+            noise_terms.append(fb.std)  # the copy's own noise term (with its serial factor)
     if len(periods) < QUANT_DRAWS // 2:
         fit.notes.append(f"quantisation check failed: only {len(periods)} of {QUANT_DRAWS} simulated records fitted")
         return
     dev = np.asarray(periods) - fit.period
     sq = float(np.sqrt(np.mean(dev ** 2)))  # about the fitted period: the copies' shift counts too
     fit.std_quantisation = sq
-    fit.uncertainty["quantisation_test"] = {"step": q, "noise_before_quantisation": sigma0,
+    uniform = lev.uniform is not None
+    # the record's noise term within those of its copies: its residuals are
+    # what quantisation and sigma0 make, and the spread of the copies (which
+    # holds both) is the std; a larger one means errors the copies lack
+    noise = float(fit.std)  # still the noise term (with its serial factor), like the copies' fb.std
+    replaces = bool(noise <= max(noise_terms))
+    fit.uncertainty["quantisation_test"] = {"step": q, "uniform": uniform, "levels": int(lev.values.size),
+                                            "noise_before_quantisation": sigma0, "noise_steps": s_steps,
                                             "draws": len(periods), "std": sq,
+                                            "noise_term": noise, "copies_noise_term_max": max(noise_terms),
+                                            "replaces_noise": replaces,
                                             "mean_shift": float(np.mean(periods)) - fit.period}
-    fit.notes.append(f"the record is quantised in steps of {q:.3g} with little noise ({sigma0:.2g}, below "
+    where = (f"in steps of {q:.3g}" if uniform else
+             f"on {lev.values.size} unevenly spaced levels (median step {q:.3g}; a map of a lattice, e.g. "
+             f"pixels converted to an angle)")
+    fit.notes.append(f"the record is quantised {where} with little noise ({s_steps:.2g} step, below "
                      f"{DITHER_STEPS:g} step): the period of {len(periods)} re-quantised copies of the fit "
                      f"spreads by {sq:.2g} s")
 
@@ -654,20 +673,39 @@ def _stationarity(fit: PeriodFit, t, y):
 
 
 def _compose_std(fit: PeriodFit):
-    """Headline std from the three terms; which one dominates."""
+    """Headline std from the three terms; which one dominates.  When the
+    quantisation check found the record's noise term among its copies'
+    (``quantisation_test.replaces_noise``), the copies' spread, which holds
+    the noise as well, stands for noise, serial correlation and
+    quantisation together: the least-squares and serial-correlation stds
+    read the quantisation error as noise spread over all frequencies, and
+    overstate it when the signal dwells on each level for several samples
+    (x2.4 for 10 steps at 120 fps)."""
     noise = float(fit.std_raw)
     serial = noise * float(fit.std_inflation)
     ns = float(fit.std_nonstationary)
-    quant = max(float(fit.std_quantisation), serial)  # the simulated spread includes the noise
+    replaced = bool((fit.uncertainty.get("quantisation_test") or {}).get("replaces_noise"))
+    if replaced:
+        quant = float(fit.std_quantisation)
+    else:
+        quant = max(float(fit.std_quantisation), serial)  # the simulated spread includes the noise
     total = math.hypot(quant, ns)
     terms = {"noise": noise, "serial_correlation": math.sqrt(max(serial ** 2 - noise ** 2, 0.0)),
-             "quantisation": math.sqrt(max(quant ** 2 - serial ** 2, 0.0)), "nonstationarity": ns}
-    dom = max(terms, key=terms.get)
+             "quantisation": quant if replaced else math.sqrt(max(quant ** 2 - serial ** 2, 0.0)),
+             "nonstationarity": ns}
+    if replaced:
+        fit.uncertainty["noise_replaced_by_quantisation"] = True
+    dom = max(("quantisation", "nonstationarity") if replaced else terms, key=terms.get)
     fit.uncertainty = dict(terms, total=total, dominant=dom, serial_factor=float(fit.std_inflation),
                            **fit.uncertainty)
     fit.std = total
     if fit.modes:
         fit.modes[0]["std_total"] = total
-    if dom != "noise":
+    if replaced and serial > quant:
+        fit.notes.append(f"std {total:.2g} s from the re-quantised copies, whose spread holds the noise too; "
+                         f"the noise term {serial:.2g} s, which reads the quantisation error as white noise, is "
+                         f"no larger than the copies' own (up to {fit.uncertainty['quantisation_test']['copies_noise_term_max']:.2g} s) "
+                         "and overstates it")
+    elif dom != "noise":
         fit.notes.append(f"std {total:.2g} s is dominated by {dom.replace('_', ' ')} "
                          f"(noise alone {noise:.2g} s)")

@@ -34,6 +34,7 @@ follow that notch and reports the level around it.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
@@ -234,3 +235,104 @@ def lattice_step(y) -> tuple[float, float] | None:
     if float(np.max(np.abs(k - np.round(k)))) > LATTICE_TOL:
         return None
     return q, float(u[0])
+
+
+#: a gap between neighbouring levels within this fraction of a step of a
+#: whole multiple m >= 2 of the local step holds m - 1 levels the record
+#: never visited
+LEVEL_GAP_TOL = 0.1
+#: gaps on each side whose median is the local step of a gap
+LEVEL_WINDOW = 5
+
+
+@dataclass(frozen=True)
+class Levels:
+    """The quantisation levels of a record ([y]), increasing: a uniform
+    lattice ``origin + k q`` (``uniform = (q, origin)``) or the record's own
+    distinct values with the levels it skipped filled in (a monotone map of
+    a lattice: pixels converted to an angle by ``atan``, ``asin`` or a
+    calibration polynomial, an encoder printed in rounded radians).  Level
+    ``k`` is ``values[k]``; beyond the ends the end steps continue."""
+
+    values: np.ndarray
+    uniform: tuple[float, float] | None = None
+
+    def index(self, y) -> np.ndarray:
+        """Continuous level index of ``y`` ([y]): integer at a level,
+        linear in between (so rounding it picks the nearest level)."""
+        y = np.asarray(y, float)
+        if self.uniform is not None:
+            q, o = self.uniform
+            return (y - o) / q
+        v = self.values
+        k = np.interp(y, v, np.arange(v.size, dtype=float))
+        lo, hi = y < v[0], y > v[-1]
+        k[lo] = (y[lo] - v[0]) / (v[1] - v[0])
+        k[hi] = v.size - 1 + (y[hi] - v[-1]) / (v[-1] - v[-2])
+        return k
+
+    def level(self, k) -> np.ndarray:
+        """Value ([y]) of the integer level index ``k``."""
+        k = np.asarray(k, float)
+        if self.uniform is not None:
+            q, o = self.uniform
+            return q * k + o
+        v = self.values
+        m = v.size - 1
+        y = np.interp(k, np.arange(v.size, dtype=float), v)
+        lo, hi = k < 0, k > m
+        y[lo] = v[0] + k[lo] * (v[1] - v[0])
+        y[hi] = v[-1] + (k[hi] - m) * (v[-1] - v[-2])
+        return y
+
+    def step(self, y) -> np.ndarray:
+        """Width ([y]) of the quantisation bin around each value of ``y``:
+        half the distance between the neighbouring levels."""
+        y = np.asarray(y, float)
+        if self.uniform is not None:
+            return np.full(y.shape, self.uniform[0])
+        v = self.values
+        w = np.r_[v[1] - v[0], 0.5 * (v[2:] - v[:-2]), v[-1] - v[-2]]
+        return w[np.clip(np.round(self.index(y)).astype(int), 0, v.size - 1)]
+
+    @property
+    def typical_step(self) -> float:
+        """Median width of the bins ([y])."""
+        if self.uniform is not None:
+            return self.uniform[0]
+        return float(np.median(self.step(self.values)))
+
+
+def quantisation_levels(y) -> Levels | None:
+    """The levels of a quantised record: ``Levels`` when the samples take
+    at most ``LATTICE_MAX_LEVELS`` as many distinct values as there are
+    samples, whatever their spacing (a noisy or sub-pixel record takes as
+    many values as samples); None otherwise.  A uniform lattice
+    (:func:`lattice_step`) is kept exact; otherwise a gap between
+    neighbouring distinct values that is ``m >= 2`` times (within
+    ``LEVEL_GAP_TOL``) the median of its ``LEVEL_WINDOW`` neighbouring gaps
+    on each side (the local step; robust to a few other skipped levels, and
+    centred where the steps change smoothly) holds ``m - 1`` levels the
+    record skipped, filled in evenly."""
+    y = np.asarray(y, float)
+    lat = lattice_step(y)
+    if lat is not None:
+        return Levels(np.unique(y), uniform=lat)
+    u = np.unique(y)
+    if u.size < 3 or u.size > LATTICE_MAX_LEVELS * y.size:
+        return None
+    d = np.diff(u)
+    pad = np.r_[np.full(LEVEL_WINDOW, np.nan), d, np.full(LEVEL_WINDOW, np.nan)]
+    win = np.lib.stride_tricks.sliding_window_view(pad, 2 * LEVEL_WINDOW + 1)
+    win = np.delete(win, LEVEL_WINDOW, axis=1)  # the gap itself
+    with np.errstate(all="ignore"):
+        s = np.nanmedian(win, axis=1) if win.shape[1] else np.full(d.size, np.nan)
+        r = d / s
+    m = np.round(r)
+    fill = (m >= 2) & (np.abs(r - m) <= LEVEL_GAP_TOL)
+    parts = [u[:1]]
+    for i in range(d.size):
+        if fill[i]:
+            parts.append(u[i] + d[i] * np.arange(1, int(m[i])) / m[i])
+        parts.append(u[i + 1:i + 2])
+    return Levels(np.concatenate(parts))

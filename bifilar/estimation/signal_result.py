@@ -80,9 +80,10 @@ class PeriodFit:
         beyond their noise (0 otherwise); ``windows`` lists them.
     std_quantisation : float
         s, spread of the period over re-quantised copies of the fit when the
-        record lies on a lattice of steps with too little noise to dither
-        them (0 otherwise; ``signal._quantisation``); it replaces the noise
-        term (with its serial factor) when larger.
+        record is quantised (on a lattice of steps, or on unevenly spaced
+        levels such as pixels converted to an angle) with too little noise
+        to dither them (0 otherwise; ``signal._quantisation``); it replaces
+        the noise term (with its serial factor) when larger.
     uncertainty : dict
         ``noise``, ``serial_correlation`` (the extra std it adds, s),
         ``quantisation`` (the extra std of an undithered quantised record, s),

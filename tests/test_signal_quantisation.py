@@ -1,0 +1,121 @@
+"""Signal audit, session 7: quantised recordings whose levels are not a
+uniform lattice (docs/invert.md, "Signal audit, session 7").
+
+A camera measures whole pixels; converted to an angle (``atan((px - c) /
+d)``, ``asin``, a calibration polynomial) or printed in rounded radians
+(an encoder), the samples lie on unevenly spaced levels that
+``signal_checks.lattice_step`` does not recognise, and the period's std
+was the plain least-squares one (sd(z) ~1.4, coverage ~0.79).  The truth
+is known: the generator of ``test_signal_audit`` (whole steps about a level,
+no noise) mapped through each conversion.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bifilar.estimation.signal import fit_period
+from bifilar.estimation.signal_checks import lattice_step, quantisation_levels
+
+from test_signal_audit import _quantised_draws
+
+T_TRUE = 1.2345  # s, the period of _quantised_draws
+
+
+def _z_scores(mapping, n, **kw):
+    z = []
+    for t, k in _quantised_draws(n, **kw):
+        fit = fit_period(t, mapping(k), model="viscous", crossing_check=False)
+        assert fit.std_quantisation > 0, "a quantised record was not recognised"
+        z.append((fit.period - T_TRUE) / fit.std)
+    return np.array(z)
+
+
+def _assert_covers(z):
+    """95 % coverage within the 3-sigma binomial band of the draw count, and
+    sd(z) below 1.3 (its own standard error is ~1/sqrt(2n), 0.11 for 40
+    draws: a calibrated std passes with a margin of 2.7 of it)."""
+    cover = float(np.mean(np.abs(z) < 1.96))
+    assert cover >= 0.95 - 3 * math.sqrt(0.95 * 0.05 / z.size), (cover, z.std())
+    assert z.std() < 1.3, (cover, z.std())
+
+
+def test_pixels_converted_to_an_angle_std_covers_its_error():
+    """20 pixels of amplitude at 500 px from the pivot, angle = atan(px / d):
+    the levels are 0.2 % farther apart at the centre than at the ends, no
+    lattice.  The 40 draws here: sd(z) 1.48, coverage 0.775 before (below
+    the band's 0.847); 0.85, 1.00 after."""
+    _assert_covers(_z_scores(lambda k: np.arctan(k / 500.0), 40))
+
+
+def test_encoder_in_rounded_radians_std_covers_its_error():
+    """A 4096-count encoder written in radians with 5 decimals: a lattice
+    blurred by the printing by up to 0.3 % of a step, beyond the lattice
+    test's tolerance.  The 40 draws here: sd(z) 1.43, coverage 0.75 before;
+    0.83, 1.00 after."""
+    _assert_covers(_z_scores(lambda k: np.round(k * 2 * np.pi / 4096, 5), 40, seed=12))
+
+
+def test_levels_of_a_map_of_a_lattice_fill_the_skipped_ones():
+    """The levels of asin(k / d) for k = -30..30 (steps 15 % wider at the
+    ends than at the centre) with seven of them never visited, one, two or
+    three in a row, where a fast passage skips them: the skipped ones are filled in (evenly: within 2 % of a step
+    of the true values here), and rounding the level index puts a value back
+    on its own level, and a value between levels on the nearer one."""
+    d = 60.0
+    k = np.arange(-30, 31)
+    true = np.arcsin(k / d)
+    seen = np.delete(true, [12, 13, 14, 20, 31, 40, 41])
+    y = np.repeat(seen, 5)
+    assert lattice_step(y) is None
+    lev = quantisation_levels(y)
+    assert lev is not None and lev.uniform is None
+    assert lev.values.size == true.size
+    step = np.diff(true)
+    assert np.max(np.abs(lev.values - true)) < 0.02 * step.min()
+    own = np.arange(true.size)
+    assert np.array_equal(np.round(lev.index(true)), own)  # each value on its own level
+    assert np.allclose(lev.level(own), lev.values, rtol=0, atol=1e-9 * step.min())
+    mid = true[:-1] + 0.3 * step  # nearer the lower level
+    assert np.array_equal(np.round(lev.index(mid)), own[:-1])
+
+
+def test_a_noisy_or_sub_pixel_record_is_not_treated_as_quantised():
+    """A noisy angle (float noise: every sample its own value) and a
+    sub-pixel tracker's positions (as the KTH recordings) take as many
+    values as samples: no quantisation levels, no ``std_quantisation``."""
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 20.0, 1 / 60)
+    y = np.arctan(20 * np.cos(2 * np.pi / T_TRUE * t + 0.4) / 500) + 1e-4 * rng.standard_normal(t.size)
+    px = 320 + 80 * np.cos(2 * np.pi / T_TRUE * t) + 0.05 * rng.standard_normal(t.size)
+    for rec in (y, np.round(px, 6)):
+        assert quantisation_levels(rec) is None
+        fit = fit_period(t, rec, model="viscous", crossing_check=False)
+        assert fit.std_quantisation == 0.0 and "quantisation_test" not in fit.uncertainty
+
+
+def test_quantised_120fps_std_is_not_twice_the_error():
+    """10 steps of amplitude at 120 fps, no noise: the signal dwells on each
+    level for several frames, the quantisation error is a saw-tooth whose
+    power lies far above the oscillation's frequency, and the least-squares
+    std (which reads it as white noise) was ~2.4 x the period's error (sd(z)
+    0.44 over 150 draws).  The re-quantised copies reproduce the record's
+    noise term, so their spread is the std.  The error's sd comes from 150
+    cheap fits (the period does not depend on the check; 6 % standard
+    error), the std from 8 full fits (40 copies each, ~11 % each): their
+    ratio must lie within 0.75-1.33 (before: 2.4)."""
+    from bifilar.estimation.signal import _fit_window
+
+    kw = dict(fs=120.0, steps=10, seed=5)
+    err = [_fit_window(t, y, "viscous", True, None, (), "BIC")[0].period - T_TRUE
+           for t, y in _quantised_draws(150, **kw)]
+    sd_err = float(np.sqrt(np.mean(np.square(err))))
+    stds = []
+    for t, y in _quantised_draws(8, fs=120.0, steps=10, seed=6):
+        fit = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+        assert fit.uncertainty["quantisation_test"]["replaces_noise"]
+        stds.append(fit.std)
+    ratio = float(np.median(stds)) / sd_err
+    assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
