@@ -66,7 +66,7 @@ from .batch_lsoda import _BatchFailed, _lsoda, _lsoda_joint, _NotJoint
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
-from .simulate import RunSummary, measured_period, no_period_warning, state_scale
+from .simulate import RunSummary, measured_period, no_period_warning, state_scale, timed_crossings
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -551,7 +551,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
     for b in range(Bn):
-        tc = np.array(obs.cross[b])
+        tc = timed_crossings(np.array(obs.cross[b]), float(amps[b]))
         period, pstd = measured_period(tc)
         E0 = obs.E0[b]
         drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else 0.0

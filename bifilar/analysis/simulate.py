@@ -183,6 +183,41 @@ def crossings(t: np.ndarray, c: np.ndarray, fine) -> np.ndarray:
     return np.asarray(out)
 
 
+MIN_TIMED_ANGLE = 1e-6
+"""Smallest release amplitude, as a wire angle (rad: the amplitude of a
+rotation-dominated mode, a translation's metres over the longest wire), from
+which a run times a period: the integrator's tolerances stop shrinking with
+the amplitude there (:func:`state_scale`) and the state's rounding follows, so
+below it the crossings time the tolerance and the rounding, not the motion
+(at 1e-9 rad the thesis cylinder's torsion came out 1e-7 off its period, at
+1e-12 rad 3e-4, at 1e-300 rad 44 %, all with exit status 0)."""
+
+
+def check_timeable(scene: Scene, m: Mode, amplitude: float) -> None:
+    """Refuse (:class:`InputError` on ``--amplitude``) a nonzero release
+    amplitude too small to time (below :data:`MIN_TIMED_ANGLE` as a wire
+    angle), naming the linear period that such a motion has.  Amplitude 0
+    passes: its run has nothing to time and says so (:func:`no_period_warning`)."""
+    if amplitude == 0 or not np.isfinite(amplitude):
+        return
+    rot = m.dominant >= 3
+    angle = abs(amplitude) if rot else abs(amplitude) / float(np.max(scene.lengths))
+    if angle < MIN_TIMED_ANGLE:
+        unit, least = ("rad", MIN_TIMED_ANGLE) if rot else ("m", MIN_TIMED_ANGLE * float(np.max(scene.lengths)))
+        raise InputError("--amplitude", f"{amplitude:g} {unit} of the {m.label} mode is too small to time: below "
+                                        f"{least:.3g} {unit} the simulated crossings follow the integrator's "
+                                        "tolerance and the rounding of the state, not the motion; at such an "
+                                        f"amplitude the period is the linear one, {m.period:.10g} s (bifilar "
+                                        f"modes); use |amplitude| >= {least:.3g} {unit}")
+
+
+def timed_crossings(tc: np.ndarray, amplitude: float | None) -> np.ndarray:
+    """The crossing times ``tc`` (s) a run times, none at amplitude 0: a body
+    released at rest stays there, and the sign changes of its coordinate are
+    rounding (they gave a 'period' 44 % off the linear one with exit status 0)."""
+    return np.zeros(0) if amplitude is not None and amplitude == 0 else np.asarray(tc)
+
+
 def measured_period(tc: np.ndarray) -> tuple[float | None, float | None]:
     """Mean period and single-cycle std (s) from successive upward crossing times
     (s); the std is None from a single cycle (no spread to measure, not zero)."""
@@ -273,6 +308,7 @@ def simulate(
     if y0 is None:
         if m.period is None:
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
+        check_timeable(scene, m, amplitude)
         if method == "auto":
             return _simulate_engine(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period, on_slack,
                                     progress)
@@ -483,7 +519,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     def fine(tt: float) -> float:
         return float(relative_pose(state_at(tt), rest)[0, dom])
 
-    tc = crossings(ts, c, fine)
+    tc = timed_crossings(crossings(ts, c, fine), amplitude if m is not None else None)
     period, pstd = measured_period(tc)
     slack = []
     for i in range(scene.n_wires):

@@ -1,0 +1,81 @@
+"""Audit, session 7: `simulate` on cases nobody here wrote (docs/design.md,
+"Audit, session 7: modes, simulate and the command line").
+
+Expected values are analytic (the parallel-wire bifilar's torsion period,
+thesis eq. 5.2.17) or physical facts (a body released at rest has nothing to
+time), never the output of the code under test."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bifilar.analysis.equilibrium import rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.analysis.simulate import simulate
+from bifilar.errors import InputError
+
+from bifilar.config import load_scene
+from conftest import CONFIGS, trapezoid
+
+MIN_TIMED_ANGLE = 1e-6  # rad: bifilar.analysis.simulate.MIN_TIMED_ANGLE, the documented limit
+# parallel vertical wires: anchors and attachments both 1 m apart, 2 m wires, a 10 kg body
+D, L, M, IZZ = 1.0, 2.0, 10.0, 0.8
+T_TORSION = 2 * math.pi * math.sqrt(4 * IZZ * L / (M * 9.81 * D**2))  # thesis (5.2.17), exact for small angles
+
+
+@pytest.fixture(scope="module")
+def parallel():
+    sc = trapezoid(b=D, bp=D, l1=L, inertia=[0.5, 0.4, IZZ], mass=M, h=0.1)
+    rest = rest_pose(sc)
+    return sc, rest, linear_modes(sc, rest)
+
+
+@pytest.mark.parametrize("config", ["thesis_cylinder_6_4.yaml", "thesis_plate_rest.yaml"])
+@pytest.mark.parametrize("method", ["auto", "DOP853"])
+def test_amplitude_zero_has_no_period(config, method):
+    """Released at rest the body stays at rest: the sign changes of its
+    coordinate are rounding.  They were timed as a period (the thesis
+    cylinder's torsion: 3.59 s against 6.43 s, 7 'cycles', exit 0)."""
+    sc = load_scene(CONFIGS / config, warn=False)
+    r = simulate(sc, "torsion", 0.0, 10, method=method)
+    assert r.period is None and r.period_std is None
+    assert len(r.crossings) == 0
+    assert any(w.startswith("amplitude 0:") for w in r.warnings)
+    assert r.to_json()["cycles"] == 0
+
+
+@pytest.mark.parametrize("amplitude", [1e-9, -1e-12, 1e-300])
+def test_amplitude_too_small_to_time_is_refused(parallel, amplitude):
+    """Below 1e-6 rad the integrator's tolerances stop shrinking with the
+    amplitude: the 'period' followed the tolerance and the rounding (1e-7 off
+    at 1e-9 rad, 1e-4 at 1e-12, tens of % at 1e-300), printed with exit 0."""
+    sc, rest, ms = parallel
+    with pytest.raises(InputError) as ei:
+        simulate(sc, "torsion", amplitude, 10, rest=rest, modes=ms)
+    assert ei.value.field == "--amplitude"
+    assert "too small to time" in ei.value.message
+    assert f"{T_TORSION:.6f}"[:7] in ei.value.message  # names the linear period instead
+
+
+def test_translation_amplitude_limit_is_an_angle(parallel):
+    """A swing's amplitude is in metres: the limit is the wire angle 1e-6 rad
+    times the wire length."""
+    sc, rest, ms = parallel
+    with pytest.raises(InputError):
+        simulate(sc, "swing-x", 0.5 * MIN_TIMED_ANGLE * L, 10, rest=rest, modes=ms)
+    # along the attachment line the parallel wires swing the body without turning it: a simple pendulum
+    r = simulate(sc, "swing-y", 2 * MIN_TIMED_ANGLE * L, 4, rest=rest, modes=ms)
+    assert abs(r.period / (2 * math.pi * math.sqrt(L / 9.81)) - 1) < 1e-9
+
+
+@pytest.mark.parametrize("method", ["auto", "DOP853"])
+def test_period_at_the_smallest_amplitude(parallel, method):
+    """At the limit the period is still the small-angle one to the printed
+    digits (the nonlinear shift is ~A^2 = 1e-12)."""
+    sc, rest, ms = parallel
+    r = simulate(sc, "torsion", MIN_TIMED_ANGLE, 10, rest=rest, modes=ms, method=method)
+    assert abs(r.period / T_TORSION - 1) < 1e-9
+    assert np.isfinite(r.energy_drift)
