@@ -79,3 +79,31 @@ def test_period_at_the_smallest_amplitude(parallel, method):
     r = simulate(sc, "torsion", MIN_TIMED_ANGLE, 10, rest=rest, modes=ms, method=method)
     assert abs(r.period / T_TORSION - 1) < 1e-9
     assert np.isfinite(r.energy_drift)
+
+
+def test_rtol_below_what_the_integrators_keep_is_refused(parallel):
+    """LSODA (the default method) refuses rtol below 100 x the double
+    precision (exit 1 after NaN warnings at --rtol 1e-14, which the option
+    accepted), and solve_ivp silently loosens it to that while the report
+    stated the tighter one."""
+    sc, rest, ms = parallel
+    eps100 = 100 * np.finfo(float).eps
+    for method in ("auto", "DOP853", "LSODA"):
+        with pytest.raises(InputError) as ei:
+            simulate(sc, "torsion", 0.05, 2, rest=rest, modes=ms, method=method, rtol=0.45 * eps100)
+        assert ei.value.field == "--rtol"
+    r = simulate(sc, "torsion", 0.05, 2, rest=rest, modes=ms, method="auto", rtol=1.01 * eps100)
+    assert r.period is not None and r.rtol == pytest.approx(1.01 * eps100)
+
+
+def test_cli_rtol_1e14_exits_2_naming_it(tmp_path):
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    res = CliRunner().invoke(main, ["simulate", str(CONFIGS / "thesis_plate_rest.yaml"), "--rtol", "1e-14",
+                                    "--periods", "2", "--json"])
+    assert res.exit_code == 2, res.output
+    err = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(err) == 1 and err[0].startswith("error: --rtol: ") and "Traceback" not in res.stderr
+    assert res.stdout == ""

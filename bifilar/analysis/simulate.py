@@ -183,6 +183,21 @@ def crossings(t: np.ndarray, c: np.ndarray, fine) -> np.ndarray:
     return np.asarray(out)
 
 
+MIN_RTOL = 100 * float(np.finfo(float).eps)
+"""Smallest relative tolerance a run takes (2.2e-14): ODEPACK's LSODA (the
+``auto`` method) refuses anything tighter ("Illegal input detected", exit 1
+after NaN warnings), and :func:`scipy.integrate.solve_ivp` silently raises it
+to this value while the report would state the tighter one."""
+
+
+def check_rtol(rtol: float) -> None:
+    """Refuse (:class:`InputError` on ``--rtol``) a relative tolerance below
+    :data:`MIN_RTOL`, which no integrator here keeps."""
+    if not rtol >= MIN_RTOL:
+        raise InputError("--rtol", f"must be at least {MIN_RTOL:.3g} (100 x the double precision: the integrators "
+                                   f"refuse a tighter tolerance or loosen it to that), got {rtol:g}")
+
+
 MIN_TIMED_ANGLE = 1e-6
 """Smallest release amplitude, as a wire angle (rad: the amplitude of a
 rotation-dominated mode, a translation's metres over the longest wire), from
@@ -295,6 +310,7 @@ def simulate(
     """
     if on_slack not in ("continue", "stop"):
         raise InputError("--on-slack", "must be 'continue' or 'stop'")
+    check_rtol(rtol)
     rest = rest or rest_pose(scene)
     modes = modes or linear_modes(scene, rest)
     warnings: list[str] = []
