@@ -107,3 +107,28 @@ def test_cli_rtol_1e14_exits_2_naming_it(tmp_path):
     err = [ln for ln in res.stderr.splitlines() if ln.strip()]
     assert len(err) == 1 and err[0].startswith("error: --rtol: ") and "Traceback" not in res.stderr
     assert res.stdout == ""
+
+
+@pytest.fixture(scope="module")
+def leaning_plate():
+    sc = trapezoid()  # the thesis plate: wires leaning in 30 degrees (the kane chart is regular there)
+    rest = rest_pose(sc)
+    return sc, rest, linear_modes(sc, rest)
+
+
+def test_kane_model_takes_the_same_amplitude_and_mode_checks(leaning_plate):
+    """`--model kane` bypassed the checks: 1e-14 rad was timed 4e-4 off the
+    linear period (exit 0), and the neutral pitch 'ran' with the advice to
+    integrate longer."""
+    from bifilar.analysis.kane_run import simulate_kane
+
+    sc, rest, ms = leaning_plate
+    with pytest.raises(InputError) as ei:
+        simulate_kane(sc, rest, ms, mode="torsion", amplitude=1e-12, periods=2)
+    assert ei.value.field == "--amplitude"
+    with pytest.raises(InputError) as ei:
+        simulate_kane(sc, rest, ms, mode="pitch", amplitude=0.05, periods=2)
+    assert ei.value.field == "--mode"
+    with pytest.raises(InputError) as ei:
+        simulate_kane(sc, rest, ms, mode="torsion", amplitude=0.05, periods=2, rtol=1e-14)
+    assert ei.value.field == "--rtol"
