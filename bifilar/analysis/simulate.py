@@ -401,10 +401,13 @@ def simulate(
     if denom > 0:
         drift = max(drift, float(np.max(np.abs(mx.energy(Y, P) - E[0])) / denom))
     T = mx.tensions(Y, P)
+    stopped_slack = None
     if sol.status == 1:
         warnings.append(f"run stopped at t = {t_stop:.4g} s because a wire went slack")
+        # the event stops where the tension reaches zero, which the samples there show as +0 or a hair above
+        stopped_slack = (int(np.argmin(mx.tensions(sol.y[:, -1], Pshift))) + 1, float(t_stop))
     return summarise_run(scene, rest, m, amplitude, ts, Y, T, state_at, viol, drift, "maximal", method, rtol,
-                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings)
+                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack)
 
 
 STIFF_RATIO = 1e3
@@ -521,12 +524,16 @@ def no_period_warning(amplitude: float | None, stopped: bool) -> str:
 
 def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,
                   T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
-                  atol: float, nfev: int, runtime: float, warnings: list) -> SimulationResult:
+                  atol: float, nfev: int, runtime: float, warnings: list,
+                  stopped_slack: tuple[int, float] | None = None) -> SimulationResult:
     """Measured period, slack wires, clearance and health of a run, whatever the model.
 
     ts (k,) s and Y (k, 13) world-frame maximal states at dense samples; T (k, n)
     tensions, N; ``state_at(t) -> (1, 13)`` the continuous solution (for
     refining crossings); viol (m) and drift as measured by the caller.
+    ``stopped_slack``: (wire, 1-based, and t, s) where an event stopped the run
+    at a wire's zero tension (``on_slack="stop"``), reported as slack even
+    when the samples there show the tension as a rounding above zero.
     """
     rel = relative_pose(Y, rest)
     dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
@@ -544,6 +551,10 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
             slack.append((i + 1, float(ts[neg[0]])))
             warnings.append(f"WIRE {i + 1} GOES SLACK at t = {ts[neg[0]]:.4g} s (tension {T[:, i].min():.3g} N): "
                             "the motion after that is not physical; reduce the amplitude")
+        elif stopped_slack is not None and stopped_slack[0] == i + 1:
+            slack.append(stopped_slack)
+            warnings.append(f"WIRE {i + 1} GOES SLACK at t = {stopped_slack[1]:.4g} s (its tension reaches 0 N "
+                            "there): the motion after that is not physical; reduce the amplitude")
     lz = lowest_point_z(scene, Y[:, 0:3], mx.quat_to_matrix(Y[:, 3:7]))
     Lmax = float(np.max(scene.lengths))
     if viol > 1e-6 * Lmax:
