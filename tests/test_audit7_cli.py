@@ -61,3 +61,16 @@ def test_noise_free_recording_inverts(tmp_path):
     doc = json.loads(res.stdout)
     assert doc["inertia"]["Izz"]["value"] > 0
     assert "std_floor" in json.dumps(doc["measurements"])
+
+
+@pytest.mark.parametrize("option", ["--t-start", "--t-stop", "--sample-rate"])
+def test_period_window_nan_is_named_as_such(tmp_path, option):
+    """`--t-start nan` was refused as 'only 0 samples between nan s and inf s'."""
+    import numpy as np
+
+    t = np.linspace(0.0, 20.0, 2001)
+    f = tmp_path / "s.csv"
+    np.savetxt(f, np.c_[t, np.sin(2 * np.pi * t / 1.9)], delimiter=",", header="t,x", comments="")
+    res = run("period", f, option, "nan", "--json")
+    one_error_line(res, option)
+    assert "must be a number, got nan" in res.stderr
