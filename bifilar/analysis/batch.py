@@ -551,7 +551,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
     for b in range(Bn):
-        tc = timed_crossings(np.array(obs.cross[b]), float(amps[b]))
+        tc = timed_crossings(np.array(obs.cross[b]), float(amps[b]), mds[b].dominant, float(Lmax[b]))
         period, pstd = measured_period(tc)
         E0 = obs.E0[b]
         drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else 0.0
@@ -567,7 +567,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         if obs.viol[b] > 1e-6 * Lmax[b]:
             warnings.append(f"constraint violation {obs.viol[b]:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
         if period is None:
-            warnings.append(no_period_warning(float(amps[b]), status[b] == 1))
+            warnings.append(no_period_warning(float(amps[b]), status[b] == 1, mds[b].dominant, float(Lmax[b])))
         t_s = y_s = T_s = None
         if obs.samples is not None and keep_samples:
             parts = obs.samples[b]

@@ -30,7 +30,7 @@ from ..rotations import matrix_to_quat, quat_to_matrix
 from ..scene import Scene
 from .equilibrium import RestPose
 from .modes import ModeSet
-from .simulate import check_rtol, check_timeable, initial_state, summarise_run
+from .simulate import check_rtol, initial_state, summarise_run
 
 
 @dataclass(frozen=True)
@@ -161,7 +161,6 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
         m = modes.pick(mode)
         if m.period is None:
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
-        check_timeable(scene, m, amplitude)  # as the default model: too small an amplitude times the rounding
         y0 = from_world(km, initial_state(scene, rest, m, amplitude))
         y0 = kn.complete_initial_state(y0[:4], y0[5:9], km.p, theta5_guess=y0[4])
     T_ref = (m.period if m is not None and m.period else None) or min(x.period for x in modes.modes if x.period)

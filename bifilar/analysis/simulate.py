@@ -205,32 +205,44 @@ which a run times a period: the integrator's tolerances stop shrinking with
 the amplitude there (:func:`state_scale`) and the state's rounding follows, so
 below it the crossings time the tolerance and the rounding, not the motion
 (at 1e-9 rad the thesis cylinder's torsion came out 1e-7 off its period, at
-1e-12 rad 3e-4, at 1e-300 rad 44 %, all with exit status 0)."""
+1e-12 rad 3e-4, at 1e-300 rad 44 %, all with exit status 0).  The run itself
+(its record, tensions, health) is still given."""
+
+
+def _small_amplitude(amplitude, dominant: int, Lmax: float) -> tuple[str, float] | None:
+    """(unit, least amplitude) when ``amplitude`` (None: an explicit start,
+    not judged) is nonzero but below :data:`MIN_TIMED_ANGLE` as a wire angle
+    (``dominant`` the timed coordinate's index in dx dy dz rx ry rz, ``Lmax``
+    the longest wire, m), else None."""
+    if amplitude is None or amplitude == 0 or not np.isfinite(amplitude):
+        return None
+    unit, least = ("rad", MIN_TIMED_ANGLE) if dominant >= 3 else ("m", MIN_TIMED_ANGLE * Lmax)
+    return (unit, least) if abs(amplitude) < least else None
 
 
 def check_timeable(scene: Scene, m: Mode, amplitude: float) -> None:
     """Refuse (:class:`InputError` on ``--amplitude``) a nonzero release
-    amplitude too small to time (below :data:`MIN_TIMED_ANGLE` as a wire
-    angle), naming the linear period that such a motion has.  Amplitude 0
-    passes: its run has nothing to time and says so (:func:`no_period_warning`)."""
-    if amplitude == 0 or not np.isfinite(amplitude):
-        return
-    rot = m.dominant >= 3
-    angle = abs(amplitude) if rot else abs(amplitude) / float(np.max(scene.lengths))
-    if angle < MIN_TIMED_ANGLE:
-        unit, least = ("rad", MIN_TIMED_ANGLE) if rot else ("m", MIN_TIMED_ANGLE * float(np.max(scene.lengths)))
-        raise InputError("--amplitude", f"{amplitude:g} {unit} of the {m.label} mode is too small to time: below "
-                                        f"{least:.3g} {unit} the simulated crossings follow the integrator's "
-                                        "tolerance and the rounding of the state, not the motion; at such an "
-                                        f"amplitude the period is the linear one, {m.period:.10g} s (bifilar "
-                                        f"modes); use |amplitude| >= {least:.3g} {unit}")
+    amplitude too small to time, for a caller that needs the period (the
+    amplitude factor of ``invert --amplitude``)."""
+    small = _small_amplitude(amplitude, m.dominant, float(np.max(scene.lengths)))
+    if small is not None:
+        raise InputError("--amplitude", f"{amplitude:g} {small[0]} of the {m.label} mode is too small to time: "
+                                        f"{_SMALL_WHY.format(least=small[1], unit=small[0])}; at such an amplitude "
+                                        f"the period is the linear one, {m.period:.10g} s")
 
 
-def timed_crossings(tc: np.ndarray, amplitude: float | None) -> np.ndarray:
-    """The crossing times ``tc`` (s) a run times, none at amplitude 0: a body
+_SMALL_WHY = ("below {least:.3g} {unit} the simulated crossings follow the integrator's tolerance and the rounding "
+              "of the state, not the motion")
+
+
+def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
+    """The crossing times ``tc`` (s) a run times: none at amplitude 0 (a body
     released at rest stays there, and the sign changes of its coordinate are
-    rounding (they gave a 'period' 44 % off the linear one with exit status 0)."""
-    return np.zeros(0) if amplitude is not None and amplitude == 0 else np.asarray(tc)
+    rounding: they gave a 'period' 44 % off the linear one with exit status
+    0), none at an amplitude too small to time (:data:`MIN_TIMED_ANGLE`)."""
+    if amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None):
+        return np.zeros(0)
+    return np.asarray(tc)
 
 
 def measured_period(tc: np.ndarray) -> tuple[float | None, float | None]:
@@ -324,7 +336,6 @@ def simulate(
     if y0 is None:
         if m.period is None:
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
-        check_timeable(scene, m, amplitude)
         if method == "auto":
             return _simulate_engine(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period, on_slack,
                                     progress)
@@ -510,13 +521,20 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     )
 
 
-def no_period_warning(amplitude: float | None, stopped: bool) -> str:
+def no_period_warning(amplitude: float | None, stopped: bool, dominant: int = 3, Lmax: float = 1.0) -> str:
     """Why a run measured no period (fewer than two upward crossings):
     ``amplitude`` of the mode (None for an explicit start state), ``stopped``
-    whether the run ended early (a wire went slack with ``on_slack="stop"``)."""
+    whether the run ended early (a wire went slack with ``on_slack="stop"``);
+    ``dominant``, ``Lmax`` as :func:`timed_crossings`."""
     if amplitude is not None and amplitude == 0:
         return ("amplitude 0: the body starts at rest and stays there; there is no oscillation to time "
                 "(give a nonzero --amplitude)")
+    small = _small_amplitude(amplitude, dominant, Lmax)
+    if small is not None:
+        why = _SMALL_WHY.format(least=small[1], unit=small[0])
+        return (f"amplitude {amplitude:g} {small[0]} is too small to time: {why}; no period is given (at such an "
+                "amplitude it is the linear one; give |amplitude| >= "
+                f"{small[1]:.3g} {small[0]} to time it)")
     if stopped:
         return "fewer than two crossings of the rest value before the run stopped: no period measured"
     return "fewer than two crossings of the rest value: no period measured; integrate longer"
@@ -542,7 +560,8 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     def fine(tt: float) -> float:
         return float(relative_pose(state_at(tt), rest)[0, dom])
 
-    tc = timed_crossings(crossings(ts, c, fine), amplitude if m is not None else None)
+    Lmax = float(np.max(scene.lengths))
+    tc = timed_crossings(crossings(ts, c, fine), amplitude if m is not None else None, dom, Lmax)
     period, pstd = measured_period(tc)
     slack = []
     for i in range(scene.n_wires):
@@ -556,12 +575,11 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
             warnings.append(f"WIRE {i + 1} GOES SLACK at t = {stopped_slack[1]:.4g} s (its tension reaches 0 N "
                             "there): the motion after that is not physical; reduce the amplitude")
     lz = lowest_point_z(scene, Y[:, 0:3], mx.quat_to_matrix(Y[:, 3:7]))
-    Lmax = float(np.max(scene.lengths))
     if viol > 1e-6 * Lmax:
         warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
     if period is None:
         stopped = any(w.startswith("run stopped at t = ") for w in warnings)
-        warnings.append(no_period_warning(amplitude if m is not None else None, stopped))
+        warnings.append(no_period_warning(amplitude if m is not None else None, stopped, dom, Lmax))
     return SimulationResult(
         t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
         period=period, period_std=pstd, crossings=tc, linear_period=m.period if m is not None else None,
