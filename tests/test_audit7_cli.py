@@ -75,10 +75,3 @@ def test_period_window_nan_is_named_as_such(tmp_path, option):
     one_error_line(res, option)
     assert "must be a number, got nan" in res.stderr
 
-
-def test_invert_needs_a_timeable_amplitude():
-    """`invert --amplitude` simulates for the period's amplitude factor: an
-    amplitude too small to time is invalid input there, naming the option."""
-    res = run("invert", PLATE, "--period", "torsion=1.9", "--amplitude", "1e-9", "--json")
-    one_error_line(res, "--amplitude")
-    assert "too small to time" in res.stderr

@@ -220,19 +220,22 @@ def _small_amplitude(amplitude, dominant: int, Lmax: float) -> tuple[str, float]
     return (unit, least) if abs(amplitude) < least else None
 
 
-def check_timeable(scene: Scene, m: Mode, amplitude: float) -> None:
-    """Refuse (:class:`InputError` on ``--amplitude``) a nonzero release
-    amplitude too small to time, for a caller that needs the period (the
-    amplitude factor of ``invert --amplitude``)."""
-    small = _small_amplitude(amplitude, m.dominant, float(np.max(scene.lengths)))
-    if small is not None:
-        raise InputError("--amplitude", f"{amplitude:g} {small[0]} of the {m.label} mode is too small to time: "
-                                        f"{_SMALL_WHY.format(least=small[1], unit=small[0])}; at such an amplitude "
-                                        f"the period is the linear one, {m.period:.10g} s")
-
-
 _SMALL_WHY = ("below {least:.3g} {unit} the simulated crossings follow the integrator's tolerance and the rounding "
               "of the state, not the motion")
+
+
+def small_amplitude_period(amplitude, dominant: int, Lmax: float, linear_period) -> tuple[float, str] | None:
+    """(period, warning) of a run released at an amplitude too small to time
+    (:data:`MIN_TIMED_ANGLE`): the linear period (s), which such a motion has
+    to ~A^2 (below 1e-12 of it), and why it is given instead of the crossings';
+    None otherwise (and for a mode without a period)."""
+    small = _small_amplitude(amplitude, dominant, Lmax)
+    if small is None or not linear_period:
+        return None
+    why = _SMALL_WHY.format(least=small[1], unit=small[0])
+    return float(linear_period), (f"amplitude {amplitude:g} {small[0]} is too small to time: {why}; the period "
+                                  "given is the linear one, which such a motion has to within ~amplitude^2 "
+                                  f"(give |amplitude| >= {small[1]:.3g} {small[0]} to time it)")
 
 
 def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
@@ -521,20 +524,13 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     )
 
 
-def no_period_warning(amplitude: float | None, stopped: bool, dominant: int = 3, Lmax: float = 1.0) -> str:
+def no_period_warning(amplitude: float | None, stopped: bool) -> str:
     """Why a run measured no period (fewer than two upward crossings):
     ``amplitude`` of the mode (None for an explicit start state), ``stopped``
-    whether the run ended early (a wire went slack with ``on_slack="stop"``);
-    ``dominant``, ``Lmax`` as :func:`timed_crossings`."""
+    whether the run ended early (a wire went slack with ``on_slack="stop"``)."""
     if amplitude is not None and amplitude == 0:
         return ("amplitude 0: the body starts at rest and stays there; there is no oscillation to time "
                 "(give a nonzero --amplitude)")
-    small = _small_amplitude(amplitude, dominant, Lmax)
-    if small is not None:
-        why = _SMALL_WHY.format(least=small[1], unit=small[0])
-        return (f"amplitude {amplitude:g} {small[0]} is too small to time: {why}; no period is given (at such an "
-                "amplitude it is the linear one; give |amplitude| >= "
-                f"{small[1]:.3g} {small[0]} to time it)")
     if stopped:
         return "fewer than two crossings of the rest value before the run stopped: no period measured"
     return "fewer than two crossings of the rest value: no period measured; integrate longer"
@@ -563,6 +559,10 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     Lmax = float(np.max(scene.lengths))
     tc = timed_crossings(crossings(ts, c, fine), amplitude if m is not None else None, dom, Lmax)
     period, pstd = measured_period(tc)
+    small = small_amplitude_period(amplitude, dom, Lmax, m.period) if m is not None else None
+    if small is not None:
+        period = small[0]
+        warnings.append(small[1])
     slack = []
     for i in range(scene.n_wires):
         neg = np.where(T[:, i] <= 0)[0]
@@ -579,7 +579,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
         warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
     if period is None:
         stopped = any(w.startswith("run stopped at t = ") for w in warnings)
-        warnings.append(no_period_warning(amplitude if m is not None else None, stopped, dom, Lmax))
+        warnings.append(no_period_warning(amplitude if m is not None else None, stopped))
     return SimulationResult(
         t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
         period=period, period_std=pstd, crossings=tc, linear_period=m.period if m is not None else None,
