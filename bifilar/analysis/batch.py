@@ -66,7 +66,8 @@ from .batch_lsoda import _BatchFailed, _lsoda, _lsoda_joint, _NotJoint
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
-from .simulate import RunSummary, measured_period, no_period_warning, state_scale
+from .simulate import (RunSummary, measured_period, no_period_warning, small_amplitude_period, state_scale,
+                       timed_crossings)
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -551,12 +552,15 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
     out = []
     for b in range(Bn):
-        tc = np.array(obs.cross[b])
+        tc = timed_crossings(np.array(obs.cross[b]), float(amps[b]), mds[b].dominant, float(Lmax[b]))
         period, pstd = measured_period(tc)
+        small = small_amplitude_period(float(amps[b]), mds[b].dominant, float(Lmax[b]), float(T_ref[b]))
         E0 = obs.E0[b]
         drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else 0.0
         slack = [(i + 1, float(obs.slack_t[b, i])) for i in range(n) if np.isfinite(obs.slack_t[b, i])]
-        warnings = []
+        warnings = [] if small is None else [small[1]]
+        if small is not None:
+            period = small[0]
         for w_, ts_ in slack:
             warnings.append(f"WIRE {w_} GOES SLACK at t = {ts_:.4g} s (tension {obs.Tmin[b, w_ - 1]:.3g} N): "
                             "the motion after that is not physical; reduce the amplitude")

@@ -30,7 +30,7 @@ from ..rotations import matrix_to_quat, quat_to_matrix
 from ..scene import Scene
 from .equilibrium import RestPose
 from .modes import ModeSet
-from .simulate import initial_state, summarise_run
+from .simulate import check_rtol, initial_state, summarise_run
 
 
 @dataclass(frozen=True)
@@ -138,6 +138,7 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     :class:`~bifilar.models.kane.KaneSingularityError` (exit 1) at vertical wires.
     """
     km = kane_map(scene)
+    check_rtol(rtol)
     rest_theta = from_world(km, mx.pack(rest.com, rest.q))
     if abs(np.sin(rest_theta[1])) < 1e-6:
         raise InputError("--model", "the thesis's kane coordinates are singular for this rig: wire 1 hangs "
@@ -158,6 +159,8 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
             m = modes.get(mode)
     else:
         m = modes.pick(mode)
+        if m.period is None:
+            raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
         y0 = from_world(km, initial_state(scene, rest, m, amplitude))
         y0 = kn.complete_initial_state(y0[:4], y0[5:9], km.p, theta5_guess=y0[4])
     T_ref = (m.period if m is not None and m.period else None) or min(x.period for x in modes.modes if x.period)

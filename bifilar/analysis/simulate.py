@@ -183,6 +183,71 @@ def crossings(t: np.ndarray, c: np.ndarray, fine) -> np.ndarray:
     return np.asarray(out)
 
 
+MIN_RTOL = 100 * float(np.finfo(float).eps)
+"""Smallest relative tolerance a run takes (2.2e-14): ODEPACK's LSODA (the
+``auto`` method) refuses anything tighter ("Illegal input detected", exit 1
+after NaN warnings), and :func:`scipy.integrate.solve_ivp` silently raises it
+to this value while the report would state the tighter one."""
+
+
+def check_rtol(rtol: float) -> None:
+    """Refuse (:class:`InputError` on ``--rtol``) a relative tolerance below
+    :data:`MIN_RTOL`, which no integrator here keeps."""
+    if not rtol >= MIN_RTOL:
+        raise InputError("--rtol", f"must be at least {MIN_RTOL:.3g} (100 x the double precision: the integrators "
+                                   f"refuse a tighter tolerance or loosen it to that), got {rtol:g}")
+
+
+MIN_TIMED_ANGLE = 1e-6
+"""Smallest release amplitude, as a wire angle (rad: the amplitude of a
+rotation-dominated mode, a translation's metres over the longest wire), from
+which a run times a period: the integrator's tolerances stop shrinking with
+the amplitude there (:func:`state_scale`) and the state's rounding follows, so
+below it the crossings time the tolerance and the rounding, not the motion
+(at 1e-9 rad the thesis cylinder's torsion came out 1e-7 off its period, at
+1e-12 rad 3e-4, at 1e-300 rad 44 %, all with exit status 0).  The run itself
+(its record, tensions, health) is still given."""
+
+
+def _small_amplitude(amplitude, dominant: int, Lmax: float) -> tuple[str, float] | None:
+    """(unit, least amplitude) when ``amplitude`` (None: an explicit start,
+    not judged) is nonzero but below :data:`MIN_TIMED_ANGLE` as a wire angle
+    (``dominant`` the timed coordinate's index in dx dy dz rx ry rz, ``Lmax``
+    the longest wire, m), else None."""
+    if amplitude is None or amplitude == 0 or not np.isfinite(amplitude):
+        return None
+    unit, least = ("rad", MIN_TIMED_ANGLE) if dominant >= 3 else ("m", MIN_TIMED_ANGLE * Lmax)
+    return (unit, least) if abs(amplitude) < least else None
+
+
+_SMALL_WHY = ("below {least:.3g} {unit} the simulated crossings follow the integrator's tolerance and the rounding "
+              "of the state, not the motion")
+
+
+def small_amplitude_period(amplitude, dominant: int, Lmax: float, linear_period) -> tuple[float, str] | None:
+    """(period, warning) of a run released at an amplitude too small to time
+    (:data:`MIN_TIMED_ANGLE`): the linear period (s), which such a motion has
+    to ~A^2 (below 1e-12 of it), and why it is given instead of the crossings';
+    None otherwise (and for a mode without a period)."""
+    small = _small_amplitude(amplitude, dominant, Lmax)
+    if small is None or not linear_period:
+        return None
+    why = _SMALL_WHY.format(least=small[1], unit=small[0])
+    return float(linear_period), (f"amplitude {amplitude:g} {small[0]} is too small to time: {why}; the period "
+                                  "given is the linear one, which such a motion has to within ~amplitude^2 "
+                                  f"(give |amplitude| >= {small[1]:.3g} {small[0]} to time it)")
+
+
+def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
+    """The crossing times ``tc`` (s) a run times: none at amplitude 0 (a body
+    released at rest stays there, and the sign changes of its coordinate are
+    rounding: they gave a 'period' 44 % off the linear one with exit status
+    0), none at an amplitude too small to time (:data:`MIN_TIMED_ANGLE`)."""
+    if amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None):
+        return np.zeros(0)
+    return np.asarray(tc)
+
+
 def measured_period(tc: np.ndarray) -> tuple[float | None, float | None]:
     """Mean period and single-cycle std (s) from successive upward crossing times
     (s); the std is None from a single cycle (no spread to measure, not zero)."""
@@ -260,6 +325,7 @@ def simulate(
     """
     if on_slack not in ("continue", "stop"):
         raise InputError("--on-slack", "must be 'continue' or 'stop'")
+    check_rtol(rtol)
     rest = rest or rest_pose(scene)
     modes = modes or linear_modes(scene, rest)
     warnings: list[str] = []
@@ -349,10 +415,13 @@ def simulate(
     if denom > 0:
         drift = max(drift, float(np.max(np.abs(mx.energy(Y, P) - E[0])) / denom))
     T = mx.tensions(Y, P)
+    stopped_slack = None
     if sol.status == 1:
         warnings.append(f"run stopped at t = {t_stop:.4g} s because a wire went slack")
+        # the event stops where the tension reaches zero, which the samples there show as +0 or a hair above
+        stopped_slack = (int(np.argmin(mx.tensions(sol.y[:, -1], Pshift))) + 1, float(t_stop))
     return summarise_run(scene, rest, m, amplitude, ts, Y, T, state_at, viol, drift, "maximal", method, rtol,
-                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings)
+                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack)
 
 
 STIFF_RATIO = 1e3
@@ -469,12 +538,16 @@ def no_period_warning(amplitude: float | None, stopped: bool) -> str:
 
 def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,
                   T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
-                  atol: float, nfev: int, runtime: float, warnings: list) -> SimulationResult:
+                  atol: float, nfev: int, runtime: float, warnings: list,
+                  stopped_slack: tuple[int, float] | None = None) -> SimulationResult:
     """Measured period, slack wires, clearance and health of a run, whatever the model.
 
     ts (k,) s and Y (k, 13) world-frame maximal states at dense samples; T (k, n)
     tensions, N; ``state_at(t) -> (1, 13)`` the continuous solution (for
     refining crossings); viol (m) and drift as measured by the caller.
+    ``stopped_slack``: (wire, 1-based, and t, s) where an event stopped the run
+    at a wire's zero tension (``on_slack="stop"``), reported as slack even
+    when the samples there show the tension as a rounding above zero.
     """
     rel = relative_pose(Y, rest)
     dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
@@ -483,8 +556,13 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     def fine(tt: float) -> float:
         return float(relative_pose(state_at(tt), rest)[0, dom])
 
-    tc = crossings(ts, c, fine)
+    Lmax = float(np.max(scene.lengths))
+    tc = timed_crossings(crossings(ts, c, fine), amplitude if m is not None else None, dom, Lmax)
     period, pstd = measured_period(tc)
+    small = small_amplitude_period(amplitude, dom, Lmax, m.period) if m is not None else None
+    if small is not None:
+        period = small[0]
+        warnings.append(small[1])
     slack = []
     for i in range(scene.n_wires):
         neg = np.where(T[:, i] <= 0)[0]
@@ -492,8 +570,11 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
             slack.append((i + 1, float(ts[neg[0]])))
             warnings.append(f"WIRE {i + 1} GOES SLACK at t = {ts[neg[0]]:.4g} s (tension {T[:, i].min():.3g} N): "
                             "the motion after that is not physical; reduce the amplitude")
+        elif stopped_slack is not None and stopped_slack[0] == i + 1:
+            slack.append(stopped_slack)
+            warnings.append(f"WIRE {i + 1} GOES SLACK at t = {stopped_slack[1]:.4g} s (its tension reaches 0 N "
+                            "there): the motion after that is not physical; reduce the amplitude")
     lz = lowest_point_z(scene, Y[:, 0:3], mx.quat_to_matrix(Y[:, 3:7]))
-    Lmax = float(np.max(scene.lengths))
     if viol > 1e-6 * Lmax:
         warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
     if period is None:

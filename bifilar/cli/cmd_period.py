@@ -4,6 +4,8 @@ trials (a thin CLI on :mod:`bifilar.estimation.signal` and
 
 from __future__ import annotations
 
+import math
+
 import click
 
 from .common import check_output_path, console, emit_json, esc, fmt, handle_errors
@@ -65,6 +67,8 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
             vals[name] = float(v)
         except ValueError:
             raise InputError(name, f"must be a number, got {v!r}") from None
+        if math.isnan(vals[name]):  # was read as a window of 'only 0 samples between nan s and inf s'
+            raise InputError(name, f"must be a number, got {v}")
     from ..estimation.period_specs import MAX_SAMPLE_RATE, check_signal_scale
 
     sr = vals["--sample-rate"]

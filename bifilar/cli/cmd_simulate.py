@@ -35,7 +35,9 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     chk.finite("--amplitude", amplitude)
     if chk.positive("--periods", periods):
         chk.in_range("--periods", periods, 0, MAX_SIM_PERIODS, lo_open=True)
-    chk.in_range("--rtol", rtol, 1e-14, 1e-2, hi_open=True)  # below ~100 eps the integrator crawls
+    from ..analysis.simulate import MIN_RTOL
+
+    chk.in_range("--rtol", rtol, MIN_RTOL, 1e-2, hi_open=True)  # below 100 eps the integrators refuse or loosen it
     if method not in ("auto", "DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"):
         chk.error("--method", f"unknown method {method!r}; use auto, DOP853, RK45, RK23, Radau, BDF or LSODA")
     if theta is not None and model != "kane":

@@ -68,8 +68,8 @@ import numpy as np
 
 from ..errors import ConfigErrors, InputError
 from .sensitivity import INERTIA_COMPONENTS
-from .period_specs import (check_period_sigma, parse_times, parse_uncertainty_overrides, parse_value_sigma,
-                           period_from_signal, period_from_trials)
+from .period_specs import (MIN_RELATIVE_SIGMA, check_period_sigma, parse_times, parse_uncertainty_overrides,
+                           parse_value_sigma, period_from_signal, period_from_trials)
 from .uncertainty import default_uncertainty
 
 #: the rungs of the ladder of estimators, simplest first (see invert.py)
@@ -179,7 +179,12 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
                                     "window": [fit.t0, fit.t1], "notes": list(fit.notes)},
            "amplitude_source": ("given" if amplitude is not None else
                                 ("fit (energy-weighted envelope)" if r["amplitude"] is not None else None))}
-    return Measurement(label, r["period"], r["std"], "signal", fld, hanging=hanging, amplitude=amp,
+    std = r["std"]
+    if std < MIN_RELATIVE_SIGMA * r["period"]:  # a noise-free record: below what the model's period resolves
+        std = MIN_RELATIVE_SIGMA * r["period"]
+        det["std_floor"] = (f"the fitted std {r['std']:.3g} s is below {MIN_RELATIVE_SIGMA:g} of the period, "
+                            f"which the model does not resolve; {std:.3g} s is used")
+    return Measurement(label, r["period"], std, "signal", fld, hanging=hanging, amplitude=amp,
                        amplitude_std=amplitude_std, cycles=min(r["cycles"], MAX_SIM_CYCLES),
                        observed_period=r["observed_period"], damping_ratio=r["damping_ratio"], std_given=True,
                        details=det, fit=fit, signal=(r["t"], r["y"]))

@@ -78,6 +78,18 @@ def check_period_sigma(T: float, s: float | None, fld: str) -> None:
     if s is not None and s >= T:
         raise InputError(fld, f"the uncertainty {s:g} s is not smaller than the period {T:g} s: such a "
                          "measurement says nothing about the period; give the period's standard uncertainty")
+    if s is not None and s < MIN_RELATIVE_SIGMA * T:
+        raise InputError(fld, f"the uncertainty {s:g} s is below {MIN_RELATIVE_SIGMA:g} of the period {T:g} s: "
+                         "no timing is that precise, and the model computes a period only to about 1e-14 of it, "
+                         "so no answer could be checked against it; give the period's standard uncertainty")
+
+
+MIN_RELATIVE_SIGMA = 1e-12
+"""Smallest stated period uncertainty, relative to the period: below it the
+fit check (an answer within 0.1 sigma of the period) asks for more than the
+model's period resolves (~1e-14 relative: ``invert --period torsion=1.9+-1e-15``
+ended in exit 1, 'the linear estimate does not reproduce the measurements');
+1e-12 of a 1 s period is a picosecond."""
 
 
 PLAUSIBLE_PERIOD = (0.05, 100.0)
