@@ -123,8 +123,10 @@ def test_no_point_with_the_available_lengths_binds_and_lists_them():
     flag, msg = binding_constraint(pts, c, None)
     assert flag == "--lengths-available"
     assert msg == "no configuration uses only the available wire lengths 1, 1.5", msg
-    pts.append(dict(_point(x=3), lengths=[1.5, 1.0 + 5e-7]))  # within the documented 1e-6 m
-    assert sw.assess(pts, c, None)["best"] == 2
+    pts.append(dict(_point(x=3), lengths=[1.5, 1.0 + 1.5e-6]))  # beyond the documented 1e-6 m
+    assert sw.assess(pts, c, None)["best"] is None
+    pts.append(dict(_point(x=4), lengths=[1.5, 1.0 + 5e-7]))  # within it
+    assert sw.assess(pts, c, None)["best"] == 3
 
 
 def test_pareto_front_is_the_points_no_other_dominates():
@@ -149,3 +151,12 @@ def test_the_objective_names_only_the_measurable_components():
     rec = sw.assess([_point(comps=comps, x=1)], sw.Constraints(), None)
     assert rec["target"] == "worst relative of Izz" and rec["not_measurable"] == ["Ixx"], rec["target"]
     assert rec["best"] == 0 and rec["objective"] == 0.01
+
+
+def test_every_point_slack_binds_the_amplitude():
+    pts = [_point(x=1), _point(x=2)]
+    for p in pts:
+        p["tension"].update(slack=True, slack_wires=[1])
+    flag, msg = binding_constraint(pts, sw.Constraints(), None)
+    assert (flag, msg) == ("--amplitude", "every configuration lets a wire go slack during the excitation; "
+                                          "reduce --amplitude")
