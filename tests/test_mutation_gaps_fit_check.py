@@ -92,3 +92,22 @@ def test_inputs_explain_accepts_an_input_error_within_its_cost_and_refuses_one_b
         r = np.array(_closed_form(L + d)) - base
         assert not fit_check.inputs_explain(pb, p, r, var, below), d
         assert fit_check.inputs_explain(pb, p, r, var, above), d
+
+
+def test_an_exactly_determined_answer_is_accepted_within_two_sigma(monkeypatch):
+    """One period, one unknown (the torsion's Izz), the inputs' covariance
+    set to 0: the step to the exact fit in the metric of its covariance is
+    ``z^2`` (``d = res / J``, covariance ``sigma^2 / J^2``), and an edge
+    answer is accepted within EDGE_Z = 2 sigma (docs/invert.md): ``z`` =
+    1.9 passes (the inputs, 1 mm, explain 0.19 ms easily), 2.1 does not."""
+    T_t, _ = _closed_form(L)
+    ms = MeasurementSet([Hanging("ref", _plate(), np.eye(3))],
+                        [Measurement("torsion", T_t, UNC["timing"], "period", "--period", amplitude=0.0)])
+    res = invert(ms, solve_for=["Izz"], unc=UNC, ladder=False, method="linear")
+    monkeypatch.setattr(fit_check, "input_period_covariance", lambda pb_, p_, r_=None: np.zeros((1, 1)))
+    for z, passes in ((1.9, True), (-1.9, True), (2.1, False), (-2.1, False)):
+        ok, chi2_fit, dist, how = fit_check.input_fit_check(res.problem, res.values, np.array([z]),
+                                                            amp_var=np.zeros(1))
+        assert dist == pytest.approx(z * z, rel=1e-9) and chi2_fit == pytest.approx(0.0, abs=1e-12)
+        assert ok is passes, z
+        assert "<= 4 (1 degrees of freedom, 2 sigma)" in how, how
