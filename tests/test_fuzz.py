@@ -449,7 +449,12 @@ def test_fuzz_cli_arguments(workdir, argv):
     exit 2 naming the option (ours or click's message), never a traceback."""
     reset(workdir)
     argv = [a.replace("OUT", str(workdir)) for a in argv]
-    res = CliRunner().invoke(main, argv)
+    cwd = os.getcwd()
+    os.chdir(workdir)  # a junk word taken as a file name (`--out --unknown`) is written here, not in the checkout
+    try:
+        res = CliRunner().invoke(main, argv)
+    finally:
+        os.chdir(cwd)
     assert_clean_outcome(res, as_json="--json" in argv and res.exit_code == 0 and "--json=3" not in argv)
     if len(argv) > 1 and Path(argv[1]).name in INPUTS:  # the input config is never written over
         assert Path(argv[1]).read_text() == INPUTS[Path(argv[1]).name]
