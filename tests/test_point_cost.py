@@ -279,11 +279,9 @@ def _thesis_period_before(tm, x):
     return 2 * math.pi / math.sqrt(-ev[k].real) if ev[k].real < 0 else math.nan
 
 
-@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
-                                         ("thesis_lin3_roll", {}), ("thesis_cylinder_6_4", {})])
-def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
-    # (session 7: at the prior x0, where the root search starts, period returns the period __init__ solved:
-    # the shortcut is taken, and f = 1.0 below checks it against the computation)
+def _thesis_models(name, params, comps):
+    """(component, ThesisModel, HangingModel) of each of ``comps`` whose thesis rung applies to the
+    config ``name`` changed by ``params`` (a product is timed on the torsion, Izz's mode)."""
     from bifilar.estimation.ladder import ThesisModel
     from bifilar.estimation.measurements import Hanging
     from bifilar.estimation.problem import HangingModel
@@ -291,12 +289,21 @@ def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
     scene = _scene(name, params)
     hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
     sens = period_sensitivity(scene, COMPS)
-    n = 0
-    for comp in COMPS:
+    for comp in comps:
         try:
-            tm = ThesisModel(hm, best_mode_for(sens, comp), comp)
+            tm = ThesisModel(hm, best_mode_for(sens, comp if comp in COMPS else "Izz"), comp)
         except Exception:  # noqa: BLE001 - a rung that does not apply
             continue
+        yield comp, tm, hm
+
+
+@pytest.mark.parametrize("name,params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {}),
+                                         ("thesis_lin3_roll", {}), ("thesis_cylinder_6_4", {})])
+def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
+    # (session 7: at the prior x0, where the root search starts, period returns the period __init__ solved:
+    # the shortcut is taken, and f = 1.0 below checks it against the computation)
+    n = 0
+    for _, tm, _ in _thesis_models(name, params, COMPS):
         assert tm._at_x0 is not None
         for f in (0.5, 0.9, 1.0, 1.1, 2.0):
             x = f * tm.x0
@@ -311,21 +318,13 @@ def test_thesis_period_with_kept_indices_equals_the_one_before(name, params):
 def test_thesis_mass_matrix_with_another_inertia_equals_a_kane_evaluation(name, params):
     # each component's mass matrix (the hanging's Kane quantities at rest, only the inertia term redone)
     # against a whole Kane evaluation with the params whose inertia is changed (the path before)
-    from bifilar.estimation.ladder import ThesisModel, _thesis_cache
-    from bifilar.estimation.measurements import Hanging
-    from bifilar.estimation.problem import HangingModel, basis
+    from bifilar.estimation.ladder import _thesis_cache
+    from bifilar.estimation.problem import basis
     from bifilar.models import kane
     from bifilar.models.kane_mapping import replace_params
 
-    scene = _scene(name, params)
-    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia)
-    sens = period_sensitivity(scene, COMPS)
     n = 0
-    for comp in COMPS + ["Ixy", "Ixz", "Iyz"]:
-        try:
-            tm = ThesisModel(hm, best_mode_for(sens, comp if comp in COMPS else "Izz"), comp)
-        except Exception:  # noqa: BLE001 - a rung that does not apply
-            continue
+    for comp, tm, hm in _thesis_models(name, params, COMPS + ["Ixy", "Ixz", "Iyz"]):
         mp = tm.mapping
         p1 = replace_params(mp.params, inertia=mp.params.inertia + mp.C.T @ (hm.R @ basis(comp) @ hm.R.T) @ mp.C)
         M_b, _ = kane.mass_matrix_and_forcing(mp.theta0, np.zeros(5), p1)
