@@ -45,6 +45,8 @@ def test_amplitude_zero_has_no_period(config, method):
     assert len(r.crossings) == 0
     assert any(w.startswith("amplitude 0:") for w in r.warnings)
     assert r.to_json()["cycles"] == 0
+    # the drift is relative to the oscillation's energy, which is zero: undefined, not a reassuring 0
+    assert np.isnan(r.energy_drift) and r.to_json()["energy_drift"] is None
 
 
 @pytest.mark.parametrize("method", ["auto", "DOP853"])

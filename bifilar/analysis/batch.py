@@ -136,7 +136,8 @@ class SceneRun(RunSummary):
     linear_period : the mode's linear period, s.
     max_constraint_violation : max | |d_i| - L_i |, m.
     energy_drift : max |E - E0| / |E0 - E_rest| over the steps and, where
-        samples are taken (``samples_per_period``, LSODA's own), the samples.
+        samples are taken (``samples_per_period``, LSODA's own), the samples;
+        nan when the release has no oscillation energy (amplitude 0).
     tension_min, tension_max : (n,) N.  slack : [(wire 1-based, t s)].
     lowest_z_min : lowest world z of the body, m; depth_max : ceiling minus
         that, m.  t, y : dense samples (only with ``samples_per_period``);
@@ -556,7 +557,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         period, pstd = measured_period(tc)
         small = small_amplitude_period(float(amps[b]), mds[b].dominant, float(Lmax[b]), float(T_ref[b]))
         E0 = obs.E0[b]
-        drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else 0.0
+        drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else float("nan")  # no oscillation energy: undefined
         slack = [(i + 1, float(obs.slack_t[b, i])) for i in range(n) if np.isfinite(obs.slack_t[b, i])]
         warnings = [] if small is None else [small[1]]
         if small is not None:

@@ -39,7 +39,8 @@ class RunSummary:
     linear_period : the mode's linear period, s.
     max_constraint_violation : max | |d_i| - L_i | at the solver steps, m.
     energy_drift : max |E - E0| / |E0 - E_rest| over the solver's steps and
-        the reported samples (dense output: its interpolation error included).
+        the reported samples (dense output: its interpolation error included);
+        nan when the release has no oscillation energy (amplitude 0).
     tension_min, tension_max : (n,) N.  slack : list of (wire 1-based, t).
     lowest_z_min : lowest world z reached by the body, m; depth_max the
         corresponding depth below the ceiling, m.
@@ -398,7 +399,8 @@ def simulate(
     E = mx.energy(Ys, P)
     E_rest = scene.mass * scene.gravity * rest.com[2]
     denom = abs(E[0] - E_rest)
-    drift = float(np.max(np.abs(E - E[0])) / denom) if denom > 0 else 0.0
+    # relative to the oscillation's energy: undefined (nan, JSON null) for a body released at rest
+    drift = float(np.max(np.abs(E - E[0])) / denom) if denom > 0 else float("nan")
     # dense samples for crossings, tensions, clearance
     k = max(int(samples_per_period * t_stop / T_ref), 200)
     ts = np.linspace(0.0, t_stop, k + 1)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import click
 
 from .common import check_output_path, console, emit_json, esc, fmt, handle_errors, progress_bar
@@ -105,7 +107,8 @@ def _render(scene, res) -> None:
         t.add_row("period shift vs linear", f"{(res.period / res.linear_period - 1):+.3e}")
     t.add_row("cycles timed", str(max(len(res.crossings) - 1, 0)) + f" (coordinate {res.coordinate_name})")
     t.add_row("max constraint violation (m)", f"{res.max_constraint_violation:.2e}")
-    t.add_row("energy drift (rel. to oscillation)", f"{res.energy_drift:.2e}")
+    t.add_row("energy drift (rel. to oscillation)",
+              f"{res.energy_drift:.2e}" if math.isfinite(res.energy_drift) else "- (no oscillation energy)")
     for i in range(scene.n_wires):
         t.add_row(f"tension wire {i + 1} min / max (N)", f"{res.tension_min[i]:.6g} / {res.tension_max[i]:.6g}")
     t.add_row("lowest point z (m)", f"{res.lowest_z_min:.6g}")
