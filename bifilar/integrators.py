@@ -538,3 +538,27 @@ def _ext(out, m: int, k: int) -> np.ndarray:
     if len(out) == m:
         return np.empty((0, k))
     return np.array(np.broadcast_arrays(*out[m:], np.empty(k))[:-1]).reshape(len(out) - m, k)
+
+
+def with_progress(f, t_end: float, progress, step: float = 0.005, time_first: bool = True):
+    """``f`` (``f(t, y)``, or ``f(y, t)`` as odeint calls it with
+    ``time_first=False``) that also calls ``progress(t, t_end)`` each time the
+    integrator's time ``t`` advances by ``step * t_end`` (a long run's progress
+    bar moves; ``progress`` may raise to stop the run).  It only forwards the
+    call: the numbers do not depend on whether progress is asked for."""
+    nxt = [0.0]
+    dt = step * t_end
+
+    def g_ty(t, y):
+        if t >= nxt[0]:
+            nxt[0] = t + dt
+            progress(t, t_end)
+        return f(t, y)
+
+    def g_yt(y, t):
+        if t >= nxt[0]:
+            nxt[0] = t + dt
+            progress(t, t_end)
+        return f(y, t)
+
+    return g_ty if time_first else g_yt

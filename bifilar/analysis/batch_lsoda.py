@@ -73,7 +73,9 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
         kx = mx.compiled_kernel(P, extras=True)
     tau_end, K_total, taus = _sample_grid(pers, spp)
     if progress is not None:
-        f = _ticking(f, progress, tau_end * tscale)
+        # a one-scene window holds ~4800 periods: without ticks from the right-hand side a `simulate`
+        # progress bar sat at 0 % for a whole typical run
+        f = itg.with_progress(f, tau_end * tscale, progress, step=0.01, time_first=False)
     stop_tau = pers.astype(float).copy()  # per-scene end (earlier if a wire goes slack and on_slack == "stop")
     chunk = _window_samples(spp, Bn)
     y = ys0.ravel().copy()
@@ -116,25 +118,6 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
             break
     _close(obs, tt, y.reshape(Bn, 13), stop_tau, T_ref, pers, status, cross_cols, cross_t)
     return np.full(Bn, nfe), np.full(Bn, nst), status, msgs
-
-
-def _ticking(f, progress, t_end: float):
-    """``f(y, t)`` that also calls ``progress(t / t_end, 1.0)`` each 1 % of
-    ``t_end`` (the integrator's time, s or normalised): a window of one
-    scene holds thousands of periods, so the per-window updates alone left
-    a `simulate` progress bar at 0 % for the whole of a typical run.  The
-    same arithmetic (it only forwards the call): the numbers do not depend
-    on whether a bar is drawn."""
-    step = 0.01 * t_end
-    nxt = [step]
-
-    def g(y, t):
-        if t >= nxt[0]:
-            nxt[0] = t + step
-            progress(min(t / t_end, 1.0), 1.0)
-        return f(y, t)
-
-    return g
 
 
 def _one_scene_kernels(P1: mx.RigParams, physical: bool = False):

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from .. import integrators as itg
 from ..errors import IntegrationError, InputError
 from ..models import maximal as mx
 from ..rotations import quat_multiply, quat_to_rotvec
@@ -370,7 +371,7 @@ def simulate(
         warnings.append(stiff)
         f = _with_budget(f, t_end, max_evaluations)
     if progress is not None:
-        f = _with_progress(f, t_end, progress)
+        f = itg.with_progress(f, t_end, progress)
     events = None
     if on_slack == "stop":
         def slack_event(t, y):
@@ -592,14 +593,3 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
         rtol=float(rtol), atol=float(atol), nfev=int(nfev), runtime=runtime, warnings=warnings,
     )
 
-
-def _with_progress(f, t_end: float, progress):
-    last = [-1.0]
-
-    def g(t, y):
-        if t - last[0] >= 0.005 * t_end:
-            last[0] = t
-            progress(t, t_end)
-        return f(t, y)
-
-    return g
