@@ -67,7 +67,7 @@ from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
 from .simulate import (RunSummary, measured_period, no_period_warning, small_amplitude_period, state_scale,
-                       timed_crossings)
+                       timed_crossings, untimed)
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -137,7 +137,7 @@ class SceneRun(RunSummary):
     max_constraint_violation : max | |d_i| - L_i |, m.
     energy_drift : max |E - E0| / |E0 - E_rest| over the steps and, where
         samples are taken (``samples_per_period``, LSODA's own), the samples;
-        nan when the release has no oscillation energy (amplitude 0).
+        nan when the release has no oscillation energy to speak of (``simulate.untimed``).
     tension_min, tension_max : (n,) N.  slack : [(wire 1-based, t s)].
     lowest_z_min : lowest world z of the body, m; depth_max : ceiling minus
         that, m.  t, y : dense samples (only with ``samples_per_period``);
@@ -557,7 +557,8 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         period, pstd = measured_period(tc)
         small = small_amplitude_period(float(amps[b]), mds[b].dominant, float(Lmax[b]), float(T_ref[b]))
         E0 = obs.E0[b]
-        drift = float(obs.dE[b] / abs(E0)) if E0 != 0 else float("nan")  # no oscillation energy: undefined
+        drift = (float(obs.dE[b] / abs(E0)) if E0 != 0 and not untimed(float(amps[b]), mds[b].dominant, float(Lmax[b]))
+                 else float("nan"))  # relative to no oscillation energy (or one at rounding): undefined
         slack = [(i + 1, float(obs.slack_t[b, i])) for i in range(n) if np.isfinite(obs.slack_t[b, i])]
         warnings = [] if small is None else [small[1]]
         if small is not None:

@@ -41,7 +41,7 @@ class RunSummary:
     max_constraint_violation : max | |d_i| - L_i | at the solver steps, m.
     energy_drift : max |E - E0| / |E0 - E_rest| over the solver's steps and
         the reported samples (dense output: its interpolation error included);
-        nan when the release has no oscillation energy (amplitude 0).
+        nan when the release has no oscillation energy to speak of (:func:`untimed`).
     tension_min, tension_max : (n,) N.  slack : list of (wire 1-based, t).
     lowest_z_min : lowest world z reached by the body, m; depth_max the
         corresponding depth below the ceiling, m.
@@ -240,12 +240,22 @@ def small_amplitude_period(amplitude, dominant: int, Lmax: float, linear_period)
                                   f"(give |amplitude| >= {small[1]:.3g} {small[0]} to time it)")
 
 
+def untimed(amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> bool:
+    """True when a run released at ``amplitude`` (None: an explicit start,
+    not judged) cannot be timed: amplitude 0 or below :data:`MIN_TIMED_ANGLE`
+    as a wire angle.  Its oscillation energy (~A^2, at most 1e-12 of the
+    rig's) is then zero or at the rounding of the energy bookkeeping, so the
+    drift relative to it is undefined too (nan: 0.0 or 0.32 for the same
+    run, depending on the BLAS kernel's last bits)."""
+    return amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None)
+
+
 def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
     """The crossing times ``tc`` (s) a run times: none at amplitude 0 (a body
     released at rest stays there, and the sign changes of its coordinate are
     rounding: they gave a 'period' 44 % off the linear one with exit status
     0), none at an amplitude too small to time (:data:`MIN_TIMED_ANGLE`)."""
-    if amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None):
+    if untimed(amplitude, dominant, Lmax):
         return np.zeros(0)
     return np.asarray(tc)
 
@@ -566,6 +576,8 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     if small is not None:
         period = small[0]
         warnings.append(small[1])
+    if m is not None and untimed(amplitude, dom, Lmax):
+        drift = float("nan")
     slack = []
     for i in range(scene.n_wires):
         neg = np.where(T[:, i] <= 0)[0]
