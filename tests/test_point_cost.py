@@ -1613,3 +1613,67 @@ def _old_line_frame(p, R):
     nz = np.linalg.norm(zp, axis=-1, keepdims=True)
     down = -zp / np.where(nz > 0, nz, 1.0)
     return n, down, None, v, nz[..., 0]
+
+
+def _old_left_jacobian(theta):
+    """start_pose.left_jacobian before session 8, verbatim."""
+    from bifilar.rotations import skew
+
+    theta = np.asarray(theta, float)
+    a2 = np.einsum("...i,...i->...", theta, theta)
+    a = np.sqrt(a2)
+    small = a < 1e-4
+    safe = np.where(small, 1.0, a)
+    b = np.where(small, 0.5 - a2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    c = np.where(small, 1.0 / 6.0 - a2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    K = skew(theta)
+    return np.eye(3) + b[..., None, None] * K + c[..., None, None] * (K @ K)
+
+
+def _old_rig_take(self, ii):
+    """start_pose._Rig.take before session 8, verbatim."""
+    from bifilar.analysis.start_pose import _Rig
+
+    out = object.__new__(_Rig)
+    for k, v in self.__dict__.items():
+        out.__dict__[k] = v[ii]
+    return out
+
+
+def test_start_poses_without_masks_or_copies_equal_the_ones_before():
+    # (session 8) left_jacobian skips the series' masks where no angle is tiny, and _Rig.take of every scene in
+    # order is the rig itself (no copies); against the verbatim functions before: the same left Jacobians (tiny,
+    # small, large and mixed angles, a NaN) and the same start poses bit for bit (chart pose, CoM, attitude,
+    # quaternion, residual, gap) of a sweep point's runs and a mixed batch (amplitudes 1e-7..0.3, the series
+    # branch included, an unreachable start going through the continuation and least squares)
+    from bifilar.analysis import start_pose as spm
+
+    rng = np.random.default_rng(4)
+    th = rng.normal(size=(40, 3)) * np.logspace(-9, 0.5, 40)[:, None]
+    th[7] = np.nan
+    for t in (th, th[20:], th[:3], th[5]):
+        with np.errstate(invalid="ignore"):
+            assert spm.left_jacobian(t).tobytes() == _old_left_jacobian(t).tobytes()
+    cases = []
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("drone_parallel", {}),
+                         ("thesis_plate_rest", {})):
+        s = _scene(name, params)
+        rest = rest_pose(s)
+        modes = [m for m in linear_modes(s, rest).modes if m.period]
+        for amp in (1e-7, 0.05, 0.3):
+            cases.append(([s] * len(modes), [rest] * len(modes), modes, amp))
+        cases.append(([s] * len(modes), [rest] * len(modes), modes, np.geomspace(1e-6, 2.0, len(modes))))
+    for scenes, rests, modes, amp in cases:
+        got = spm.start_poses(scenes, rests, modes, amp)
+        with pytest.MonkeyPatch.context() as m:
+            m.setattr(spm, "left_jacobian", _old_left_jacobian)
+            m.setattr(spm._Rig, "take", _old_rig_take)
+            ref = spm.start_poses(scenes, rests, modes, amp)
+        for f in spm.StartPoses.__dataclass_fields__:
+            assert getattr(got, f).tobytes() == getattr(ref, f).tobytes(), f
+    assert any(not np.all(spm.start_poses(*c).feasible) for c in cases)  # (the fallbacks were exercised)
+    rig = spm._Rig(cases[0][0], cases[0][1])
+    assert rig.take(np.arange(len(cases[0][0]))) is rig  # the shortcut is taken ...
+    for ii in (np.arange(len(cases[0][0]))[::-1], np.array([0, 0, 1]), np.arange(2)):  # ... only for all, in order
+        sub = rig.take(ii)
+        assert sub is not rig and all(np.array_equal(v[ii], sub.__dict__[k]) for k, v in rig.__dict__.items())
