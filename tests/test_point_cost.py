@@ -12,7 +12,11 @@
 * (session 6) the batched ``mode_sets`` with repeated eigenvalues, the
   trimmed ``mode_set`` / ``modes_of_inertia``, ``matrix_to_quat`` on Python
   floats, ``batch_rest._cross`` / ``_skew`` and the body-from-parts cache,
-  each against the path before (kept verbatim here where it was replaced).
+  each against the path before (kept verbatim here where it was replaced);
+* (session 8) ``modes_batch`` taking the ``rest_poses`` batch's arrays
+  (``BatchGeometry``), ``line_turns`` with the caller's knife-edge axes and
+  ``rotations.cross``, and the start poses' ``left_jacobian`` without masks
+  and ``_Rig.take`` without copies.
 """
 
 from __future__ import annotations
