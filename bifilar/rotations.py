@@ -30,6 +30,20 @@ def skew_of(v: np.ndarray) -> np.ndarray:
     return out
 
 
+def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Cross product ``u x v`` over the last axis (..., 3): ``np.cross``'s
+    products and differences in its order (the same values, complex-safe),
+    written into one array without its axis handling (several times faster
+    on small batches)."""
+    ux, uy, uz = u[..., 0], u[..., 1], u[..., 2]
+    vx, vy, vz = v[..., 0], v[..., 1], v[..., 2]
+    out = np.empty(np.broadcast_shapes(u.shape, v.shape), np.result_type(u, v))
+    out[..., 0] = uy * vz - uz * vy
+    out[..., 1] = uz * vx - ux * vz
+    out[..., 2] = ux * vy - uy * vx
+    return out
+
+
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrix (..., 3, 3) of quaternion(s) ``q`` (..., 4); q need not be unit."""
     q = np.asarray(q, dtype=float)

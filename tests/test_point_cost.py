@@ -12,7 +12,11 @@
 * (session 6) the batched ``mode_sets`` with repeated eigenvalues, the
   trimmed ``mode_set`` / ``modes_of_inertia``, ``matrix_to_quat`` on Python
   floats, ``batch_rest._cross`` / ``_skew`` and the body-from-parts cache,
-  each against the path before (kept verbatim here where it was replaced).
+  each against the path before (kept verbatim here where it was replaced);
+* (session 8) ``modes_batch`` taking the ``rest_poses`` batch's arrays
+  (``BatchGeometry``), ``line_turns`` with the caller's knife-edge axes and
+  ``rotations.cross``, and the start poses' ``left_jacobian`` without masks
+  and ``_Rig.take`` without copies.
 """
 
 from __future__ import annotations
@@ -1517,3 +1521,163 @@ def test_quat_to_matrix_of_a_few_on_python_floats_equals_the_numpy_path(monkeypa
         for bad in (np.zeros(4), np.array([[1.0, 0, 0, 0], [np.nan, 0, 0, 1]]), np.array([np.inf, 1.0, 0, 0])):
             assert np.array_equal(quat_to_matrix(bad), _numpy_quat_to_matrix(bad), equal_nan=True)
     assert n == 1800
+
+
+def test_modes_batch_with_the_rest_poses_geometry_equals_computing_it_again():
+    # (session 8) modes_batch takes the stacked arrays, wire vectors, |d|, constraint Jacobian and null space of
+    # the rest_poses call that gave its rests (BatchGeometry) instead of computing them again from the same
+    # scenes and poses; against modes_batch without it (the path before): the same mode sets bit for bit, lazy
+    # and eager, over sigma-point-like batches of six rigs (knife edge, repeated swings, a neutral mode), and
+    # the geometry refused (computed again) for a subset, another order, other rest objects and a batch with a
+    # rest_pose fallback (a rig turned 0.8 rad: the batch's Newton end is not taken)
+    from bifilar.analysis.batch import modes_batch, rest_poses
+    from bifilar.estimation.budget import _hanging_periods
+
+    rng = np.random.default_rng(21)
+    used = 0
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("solar_boat", {"spacing": 1.5, "length": 3.5}),
+                         ("drone_parallel", {}), ("trifilar_kth", {}), ("thesis_plate_rest", {}),
+                         ("thesis_cylinder_6_4", {})):
+        base = _scene(name, params)
+        scenes = [perturb(base, nm, sgn * float(rng.normal()) * 3e-3) for nm in measured_inputs(base) for sgn in (1, -1)]
+        geo: list = []
+        rests = rest_poses(scenes, errors="return", geometry=geo)
+        ref_rests = rest_poses(scenes, errors="return")
+        for a, b in zip(rests, ref_rests):  # (rest_poses itself unchanged by handing its arrays over)
+            assert type(a) is type(b)
+            if not isinstance(a, Exception):
+                assert a.com.tobytes() == b.com.tobytes() and a.R.tobytes() == b.R.tobytes()
+                assert a.tensions.tobytes() == b.tensions.tobytes()
+        good = [q for q, r in enumerate(rests) if not isinstance(r, Exception)]
+        sc, rs = [scenes[q] for q in good], [rests[q] for q in good]
+        assert geo[0].matches(sc, rs) is (len(good) == len(scenes))
+        used += geo[0].matches(sc, rs)
+        for lazy in (False, True):
+            got = modes_batch(sc, rs, lazy, geometry=geo[0])
+            ref = modes_batch(sc, rs, lazy)
+            assert [_mode_set_fields(a)[:3] for a in got] == [_mode_set_fields(b)[:3] for b in ref]
+        assert not geo[0].matches(sc[1:], rs[1:]) and not geo[0].matches(sc[::-1], rs[::-1])
+        assert not geo[0].matches(sc, [replace(r) for r in rs])
+        ms0 = linear_modes(base, rest_pose(base))
+        got = _hanging_periods(scenes, rest_pose(base), ms0)
+        ref = _hanging_periods_before(scenes, rest_pose(base), ms0)
+        for a, b in zip(got, ref):
+            assert (a is None) == (b is None)
+            if a is not None:
+                assert a[0].tobytes() == b[0].tobytes() and list(a[4]) == list(b[4])
+    assert used >= 5
+    turned = _scene("solar_boat", {"spacing": 3.0, "rotate_z": 0.8})
+    pair = [turned, _scene("solar_boat", {"spacing": 3.0})]
+    geo = []
+    rs = rest_poses(pair, geometry=geo)
+    assert not geo[0].matches(pair, rs)  # the turned rig's pose is rest_pose's, not the batch Newton's end
+    assert [_mode_set_fields(a)[:3] for a in modes_batch(pair, rs, geometry=geo[0])] == \
+        [_mode_set_fields(b)[:3] for b in modes_batch(pair, rs)]
+
+
+def test_line_turns_with_the_callers_knife_edge_axes_and_in_place_cross():
+    # (session 8) rest_poses hands line_turns the knife-edge axes it computed (was computed twice) and the line
+    # frame's side vector is rotations.cross (np.cross's operations): the same psi and n, NaN cases included,
+    # as line_turns with np.cross and its own knife_edge_axes (the path before), on random two-wire rigs,
+    # knife edges and a vertical attachment line
+    from bifilar.analysis import equilibrium as eq
+    from bifilar.rotations import cross, rotvec_to_matrix
+
+    rng = np.random.default_rng(3)
+    p = rng.normal(size=(60, 2, 3))
+    p[5] = [[1.0, 0.0, 0.0], [-2.0, 0.0, 0.0]]  # knife edge: the CoM on the line
+    p[6] = [[0.1, 0.0, 0.5], [0.1, 0.0, -0.5]]  # the line vertical at R = identity
+    R = rotvec_to_matrix(rng.normal(size=(60, 3)))
+    R[6] = np.eye(3)
+    axes = eq.knife_edge_axes(p)
+    psi, n = eq.line_turns(p, R, edge_axes=axes)
+
+    def frame_with_np_cross(pp, RR):
+        nn, down, _, v, nz = _old_line_frame(pp, RR)
+        return nn, down, np.cross(nn, down), v, nz
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(eq, "_line_frame", frame_with_np_cross)
+        psi0, n0 = eq.line_turns(p, R)
+    assert psi.tobytes() == psi0.tobytes() and n.tobytes() == n0.tobytes()
+    assert np.isnan(psi[5]) and np.isnan(psi[6]) and np.isfinite(psi[:5]).all()
+    u, v = rng.normal(size=(2, 7, 3)) + 1j * rng.normal(size=(2, 7, 3))
+    assert cross(u, v).tobytes() == np.cross(u, v).tobytes()  # complex (the analytic derivatives' steps)
+
+
+def _old_line_frame(p, R):
+    """equilibrium._line_frame before session 8 without its cross product (verbatim otherwise)."""
+    p = np.asarray(p, float)
+    u = p[..., 1, :] - p[..., 0, :]
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+    foot = p[..., 0, :] - np.einsum("...i,...i->...", p[..., 0, :], u)[..., None] * u
+    n = np.einsum("...ij,...j->...i", R, u)
+    v = -np.einsum("...ij,...j->...i", R, foot)
+    zp = np.array([0.0, 0.0, 1.0]) - n[..., 2:3] * n
+    nz = np.linalg.norm(zp, axis=-1, keepdims=True)
+    down = -zp / np.where(nz > 0, nz, 1.0)
+    return n, down, None, v, nz[..., 0]
+
+
+def _old_left_jacobian(theta):
+    """start_pose.left_jacobian before session 8, verbatim."""
+    from bifilar.rotations import skew
+
+    theta = np.asarray(theta, float)
+    a2 = np.einsum("...i,...i->...", theta, theta)
+    a = np.sqrt(a2)
+    small = a < 1e-4
+    safe = np.where(small, 1.0, a)
+    b = np.where(small, 0.5 - a2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    c = np.where(small, 1.0 / 6.0 - a2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    K = skew(theta)
+    return np.eye(3) + b[..., None, None] * K + c[..., None, None] * (K @ K)
+
+
+def _old_rig_take(self, ii):
+    """start_pose._Rig.take before session 8, verbatim."""
+    from bifilar.analysis.start_pose import _Rig
+
+    out = object.__new__(_Rig)
+    for k, v in self.__dict__.items():
+        out.__dict__[k] = v[ii]
+    return out
+
+
+def test_start_poses_without_masks_or_copies_equal_the_ones_before():
+    # (session 8) left_jacobian skips the series' masks where no angle is tiny, and _Rig.take of every scene in
+    # order is the rig itself (no copies); against the verbatim functions before: the same left Jacobians (tiny,
+    # small, large and mixed angles, a NaN) and the same start poses bit for bit (chart pose, CoM, attitude,
+    # quaternion, residual, gap) of a sweep point's runs and a mixed batch (amplitudes 1e-7..0.3, the series
+    # branch included, an unreachable start going through the continuation and least squares)
+    from bifilar.analysis import start_pose as spm
+
+    rng = np.random.default_rng(4)
+    th = rng.normal(size=(40, 3)) * np.logspace(-9, 0.5, 40)[:, None]
+    th[7] = np.nan
+    for t in (th, th[20:], th[:3], th[5]):
+        with np.errstate(invalid="ignore"):
+            assert spm.left_jacobian(t).tobytes() == _old_left_jacobian(t).tobytes()
+    cases = []
+    for name, params in (("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {}), ("drone_parallel", {}),
+                         ("thesis_plate_rest", {})):
+        s = _scene(name, params)
+        rest = rest_pose(s)
+        modes = [m for m in linear_modes(s, rest).modes if m.period]
+        for amp in (1e-7, 0.05, 0.3):
+            cases.append(([s] * len(modes), [rest] * len(modes), modes, amp))
+        cases.append(([s] * len(modes), [rest] * len(modes), modes, np.geomspace(1e-6, 2.0, len(modes))))
+    for scenes, rests, modes, amp in cases:
+        got = spm.start_poses(scenes, rests, modes, amp)
+        with pytest.MonkeyPatch.context() as m:
+            m.setattr(spm, "left_jacobian", _old_left_jacobian)
+            m.setattr(spm._Rig, "take", _old_rig_take)
+            ref = spm.start_poses(scenes, rests, modes, amp)
+        for f in spm.StartPoses.__dataclass_fields__:
+            assert getattr(got, f).tobytes() == getattr(ref, f).tobytes(), f
+    assert any(not np.all(spm.start_poses(*c).feasible) for c in cases)  # (the fallbacks were exercised)
+    rig = spm._Rig(cases[0][0], cases[0][1])
+    assert rig.take(np.arange(len(cases[0][0]))) is rig  # the shortcut is taken ...
+    for ii in (np.arange(len(cases[0][0]))[::-1], np.array([0, 0, 1]), np.arange(2)):  # ... only for all, in order
+        sub = rig.take(ii)
+        assert sub is not rig and all(np.array_equal(v[ii], sub.__dict__[k]) for k, v in rig.__dict__.items())

@@ -310,17 +310,20 @@ def simulate_batch(
     for ii in _groups(scenes):
         nw = scenes[ii[0]].n_wires
         sub = [scenes[k] for k in ii]
+        geo: list = []
         if rests is None:
-            rs = rest_poses(sub, guess, errors=errors)
+            rs = rest_poses(sub, guess, errors=errors, geometry=geo)
         else:
             rs = [rests[k] for k in ii]
         ms: list = [None] * len(ii)
         good = [j for j, r in enumerate(rs) if isinstance(r, RestPose)]
         if modes is None:
-            for j, x in zip(good, modes_batch([sub[j] for j in good], [rs[j] for j in good])):
+            for j, x in zip(good, modes_batch([sub[j] for j in good], [rs[j] for j in good],
+                                              geometry=geo[0] if geo else None)):
                 ms[j] = x
         else:
             ms = [modes[k] for k in ii]
+        geo.clear()  # (a 10 000-scene batch's arrays: not kept through the runs)
         runnable = []
         for j, k in enumerate(ii):
             if not isinstance(rs[j], RestPose):

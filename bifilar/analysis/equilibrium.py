@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestError
-from ..rotations import matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
+from ..rotations import cross, matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
 from ..scene import Scene, lowest_point_z
 
 
@@ -472,10 +472,10 @@ def _line_frame(attachments: np.ndarray, R: np.ndarray):
     zp = np.array([0.0, 0.0, 1.0]) - n[..., 2:3] * n  # vertical, across the line
     nz = np.linalg.norm(zp, axis=-1, keepdims=True)
     down = -zp / np.where(nz > 0, nz, 1.0)
-    return n, down, np.cross(n, down), v, nz[..., 0]
+    return n, down, cross(n, down), v, nz[..., 0]
 
 
-def line_turns(attachments: np.ndarray, R: np.ndarray):
+def line_turns(attachments: np.ndarray, R: np.ndarray, edge_axes: np.ndarray | None = None):
     """Two-wire rig (attachments (..., 2, 3), body frame, m) in attitude
     ``R`` (..., 3, 3, body -> world): the turn psi (rad, in (-pi, pi],
     right-handed about n) that brings the CoM straight below the attachment
@@ -487,7 +487,8 @@ def line_turns(attachments: np.ndarray, R: np.ndarray):
     m g times the CoM's depth below it, whatever the wires).  psi is NaN for
     3+ wires, a knife edge (CoM on the line, :func:`knife_edge_axes`: no
     turn is preferred) and a line within :data:`_VERTICAL_LINE` of vertical.
-    Vectorised over leading axes."""
+    Vectorised over leading axes.  ``edge_axes``: :func:`knife_edge_axes`
+    of ``attachments`` if the caller has it (else computed here)."""
     p = np.asarray(attachments, float)
     R = np.asarray(R, float)
     shape = np.broadcast_shapes(p.shape[:-2], R.shape[:-2])
@@ -495,7 +496,8 @@ def line_turns(attachments: np.ndarray, R: np.ndarray):
         return np.full(shape, np.nan), np.full(shape + (3,), np.nan)
     n, down, side, v, nz = _line_frame(p, R)
     psi = np.arctan2(-np.einsum("...i,...i->...", v, side), np.einsum("...i,...i->...", v, down))
-    bad = ~np.all(np.isnan(knife_edge_axes(p)), axis=-1) | (nz < _VERTICAL_LINE)
+    edge = knife_edge_axes(p) if edge_axes is None else edge_axes
+    bad = ~np.all(np.isnan(edge), axis=-1) | (nz < _VERTICAL_LINE)
     return np.where(bad, np.nan, psi), n
 
 

@@ -115,9 +115,13 @@ def left_jacobian(theta: np.ndarray) -> np.ndarray:
     a2 = np.einsum("...i,...i->...", theta, theta)
     a = np.sqrt(a2)
     small = a < 1e-4
-    safe = np.where(small, 1.0, a)
-    b = np.where(small, 0.5 - a2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
-    c = np.where(small, 1.0 / 6.0 - a2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    if small.any():
+        safe = np.where(small, 1.0, a)
+        b = np.where(small, 0.5 - a2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+        c = np.where(small, 1.0 / 6.0 - a2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    else:  # (no series: the same values without the masks, as a start pose's turns of ~0.1 rad take it)
+        b = (1.0 - np.cos(a)) / a**2
+        c = (a - np.sin(a)) / a**3
     K = skew(theta)
     return np.eye(3) + b[..., None, None] * K + c[..., None, None] * (K @ K)
 
@@ -138,6 +142,9 @@ class _Rig:
         self.q0 = np.array([r.q for r in rests], float)
 
     def take(self, ii) -> "_Rig":
+        if len(ii) == len(self.L) and isinstance(ii, np.ndarray) and ii.dtype.kind == "i" \
+                and bool(np.all(ii == np.arange(len(ii)))):
+            return self  # every scene, in order: the same arrays (the solvers' loops while all are active)
         out = object.__new__(_Rig)
         for k, v in self.__dict__.items():
             out.__dict__[k] = v[ii]

@@ -127,14 +127,15 @@ def _hanging_periods(scenes, rest, base_modes) -> list:
     from ..analysis.batch import modes_batch, rest_poses
     from .montecarlo import _modes_or_none
 
-    rests = rest_poses(scenes, rest, errors="return")
+    geo: list = []  # the batch's final-pose arrays, handed to modes_batch (the same numbers, computed once)
+    rests = rest_poses(scenes, rest, errors="return", geometry=geo)
     good = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
     out: list = [None] * len(scenes)
     if not good:
         return out
     # lazy: most sigma points need only their periods and shapes (the Mode objects when _resolve reads them)
-    mss = _modes_or_none(lambda s, r: modes_batch(s, r, lazy=True), [scenes[q] for q in good],
-                         [rests[q] for q in good])
+    mss = _modes_or_none(lambda s, r: modes_batch(s, r, lazy=True, geometry=geo[0] if geo else None),
+                         [scenes[q] for q in good], [rests[q] for q in good])
     kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and n_modes(ms) == len(base_modes.modes)]
     for (q, ms), col in zip(kept, mac_matches(base_modes, [ms for _, ms in kept])):
         P = getattr(ms, "periods", None)  # a LazyModeSet's (all finite: no neutral mode)
