@@ -86,10 +86,25 @@ class SimulationResult(RunSummary):
     method: str
     atol: float
     warnings: list = field(default_factory=list)
+    energy_drift_resolution: float = float("nan")
+    """Smallest relative energy drift the run can tell from rounding (:func:`drift_resolution`;
+    nan where the drift is undefined)."""
+
+    @property
+    def energy_drift_below_resolution(self) -> bool | None:
+        """True when :attr:`energy_drift` is no larger than the rounding floor of the energy
+        bookkeeping (a number that is not drift); None where either is undefined."""
+        if not (np.isfinite(self.energy_drift) and np.isfinite(self.energy_drift_resolution)):
+            return None
+        return bool(self.energy_drift <= self.energy_drift_resolution)
 
     def to_json(self) -> dict:
-        return run_json(self, {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
-                               "runtime_s": float(self.runtime)})
+        doc = run_json(self, {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
+                              "runtime_s": float(self.runtime)})
+        res = self.energy_drift_resolution
+        doc["energy_drift_resolution"] = float(res) if np.isfinite(res) else None
+        doc["energy_drift_below_resolution"] = self.energy_drift_below_resolution
+        return doc
 
 
 def run_json(r, integrator: dict) -> dict:
@@ -248,6 +263,35 @@ def untimed(amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> bo
     drift relative to it is undefined too (nan: 0.0 or 0.32 for the same
     run, depending on the BLAS kernel's last bits)."""
     return amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None)
+
+
+DRIFT_FLOOR_ULPS = 20.0
+"""Rounding floor of a run's absolute energy error, in units of eps m g D
+(D: the farthest anchor from the rest CoM, the lever the wire constraints
+round their positions on).  Measured (docs/design.md, "Simulate's health
+at the edges"): at amplitudes 2e-6 and 1e-5 rad, where the tolerances' part
+(~rtol, relative) is negligible, |E - E0| was 0.2-10 eps m g D over every
+mode of the shipped configs, LSODA and DOP853, 3-300 periods (it grows
+slowly with the run's length: x2 from 10 to 100 periods); 20 covers these
+with a margin of 2."""
+
+
+def drift_resolution(scene: Scene, rest: RestPose, y_start: np.ndarray) -> float:
+    """Smallest relative energy drift a run released at ``y_start`` (13,),
+    world frame, can tell from the rounding of its own energy bookkeeping:
+    :data:`DRIFT_FLOOR_ULPS` eps m g D over the oscillation energy E0 - E_rest
+    (J; kinetic plus m g (z - z_rest), taken as a difference so that it is not
+    rounded itself).  The oscillation energy grows as A^2, the floor does not,
+    so at tiny amplitudes the measured drift is this floor (1/A^2: 7e-6 at
+    1e-5 rad on the thesis plate) and says nothing about the integration.
+    nan when there is no oscillation energy."""
+    y = np.asarray(y_start, float).copy()
+    y[0:3] -= rest.com
+    e_osc = abs(float(mx.energy(y, mx.params_from_scenes(scene))))
+    if not e_osc > 0:
+        return float("nan")
+    lever = float(np.max(np.linalg.norm(scene.anchors - rest.com, axis=1)))
+    return DRIFT_FLOOR_ULPS * np.finfo(float).eps * scene.mass * scene.gravity * lever / e_osc
 
 
 def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
@@ -534,6 +578,7 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         slack=run.slack, lowest_z_min=run.lowest_z_min, depth_max=run.depth_max, mode=m.label,
         amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
         nfev=int(run.nfev), runtime=runtime, warnings=list(run.warnings),
+        energy_drift_resolution=drift_resolution(scene, rest, run.y[0]) if np.isfinite(run.energy_drift) else np.nan,
     )
 
 
@@ -603,5 +648,6 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
         lowest_z_min=float(lz.min()), depth_max=float(scene.ceiling_z - lz.min()),
         mode=m.label if m is not None else None, amplitude=float(amplitude), model=model, method=method,
         rtol=float(rtol), atol=float(atol), nfev=int(nfev), runtime=runtime, warnings=warnings,
+        energy_drift_resolution=drift_resolution(scene, rest, Y[0]) if np.isfinite(drift) else np.nan,
     )
 

@@ -107,8 +107,7 @@ def _render(scene, res) -> None:
         t.add_row("period shift vs linear", f"{(res.period / res.linear_period - 1):+.3e}")
     t.add_row("cycles timed", str(max(len(res.crossings) - 1, 0)) + f" (coordinate {res.coordinate_name})")
     t.add_row("max constraint violation (m)", f"{res.max_constraint_violation:.2e}")
-    t.add_row("energy drift (rel. to oscillation)",
-              f"{res.energy_drift:.2e}" if math.isfinite(res.energy_drift) else "- (no oscillation energy)")
+    t.add_row("energy drift (rel. to oscillation)", _drift_text(res))
     for i in range(scene.n_wires):
         t.add_row(f"tension wire {i + 1} min / max (N)", f"{res.tension_min[i]:.6g} / {res.tension_max[i]:.6g}")
     t.add_row("lowest point z (m)", f"{res.lowest_z_min:.6g}")
@@ -117,3 +116,12 @@ def _render(scene, res) -> None:
     con.print(t)
     for w in res.warnings:
         con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")
+
+
+def _drift_text(res) -> str:
+    """The energy drift's table cell: the number, or why there is none to give."""
+    if not math.isfinite(res.energy_drift):
+        return "- (no oscillation energy)"
+    if res.energy_drift_below_resolution:
+        return f"below resolution {res.energy_drift_resolution:.1e}"
+    return f"{res.energy_drift:.2e}"
