@@ -86,3 +86,53 @@ def test_the_table_and_json_say_below_resolution():
     doc = json.loads(r.stdout)
     assert doc["energy_drift"] is None and doc["energy_drift_resolution"] is None
     assert doc["energy_drift_below_resolution"] is None
+
+
+# --------------------------------------------------------------------------- the period's numerical error
+
+
+@pytest.fixture(scope="module")
+def converged(parallel):
+    """The torsion period at 0.05 rad, integrated at rtol 1e-12 by both engines (they agree to ~1e-12)."""
+    sc, rest, ms = parallel
+    runs = [simulate(sc, "torsion", 0.05, 10, rest=rest, modes=ms, method=m, rtol=1e-12) for m in ("auto", "DOP853")]
+    assert runs[0].period == pytest.approx(runs[1].period, rel=1e-11)
+    return runs[1].period
+
+
+@pytest.mark.parametrize("method", ["auto", "DOP853", "RK45"])
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8, 1e-10])
+def test_period_error_bounds_the_true_error(parallel, converged, method, rtol):
+    """A loose --rtol 1e-5 gave a period 1.4e-5 off, printed with 10 digits
+    and no warning; every run now states a bound on its period's numerical
+    error, which must cover the distance to a converged run."""
+    sc, rest, ms = parallel
+    r = simulate(sc, "torsion", 0.05, 10, rest=rest, modes=ms, method=method, rtol=rtol)
+    assert abs(r.period - converged) <= r.period_error
+    assert r.period_error <= 20 * rtol * r.period  # a bound of the tolerance's order, not a blanket one
+    assert r.to_json()["period_error"] == r.period_error
+
+
+def test_period_error_at_a_tiny_amplitude_is_the_linear_periods(parallel):
+    """Below 1e-6 rad the period given is the linear one, which the motion has to ~A^2."""
+    sc, rest, ms = parallel
+    r = simulate(sc, "torsion", 1e-7, 3, rest=rest, modes=ms)
+    assert r.period == pytest.approx(T_TORSION, rel=1e-9)  # thesis (5.2.17), exact for small angles
+    assert abs(r.period - T_TORSION) <= max(r.period_error, 1e-9 * T_TORSION)
+    assert r.period_error <= 1e-12 * r.period
+
+
+def test_a_loose_rtol_warns_and_prints_the_digits_it_has():
+    loose = CliRunner().invoke(main, ["simulate", str(PLATE), "--rtol", "1e-5"])
+    assert loose.exit_code == 0, loose.stderr
+    row = next(ln for ln in loose.stdout.splitlines() if "measured period" in ln)
+    value = row.split("│")[2].split("+-")[0].strip()
+    assert len(value.replace(".", "")) <= 5  # 1.9088: the error is ~1e-4 s, not 1e-9
+    assert "integration error may reach" in " ".join(loose.stdout.split())
+    default = CliRunner().invoke(main, ["simulate", str(PLATE), "--json"])
+    doc = json.loads(default.stdout)
+    assert 0 < doc["period_error"] < 1e-8 * doc["period"]
+    assert not any("integration error" in w for w in doc["warnings"])
+    loose_json = json.loads(CliRunner().invoke(main, ["simulate", str(PLATE), "--rtol", "1e-5", "--json"]).stdout)
+    assert loose_json["period_error"] > 1e-5 * loose_json["period"]
+    assert any("integration error may reach" in w for w in loose_json["warnings"])

@@ -101,7 +101,7 @@ def _render(scene, res) -> None:
     t = Table(title=f"{esc(scene.name)}: {res.model} model, mode {res.mode}, amplitude {res.amplitude:g}")
     t.add_column("quantity")
     t.add_column("value", justify="right")
-    t.add_row("measured period (s)", fmt(res.period, 10))
+    t.add_row("measured period (s)", _period_text(res.period, res.period_error))
     t.add_row("linear period (s)", fmt(res.linear_period, 10))
     if res.period and res.linear_period:
         t.add_row("period shift vs linear", f"{(res.period / res.linear_period - 1):+.3e}")
@@ -125,3 +125,14 @@ def _drift_text(res) -> str:
     if res.energy_drift_below_resolution:
         return f"below resolution {res.energy_drift_resolution:.1e}"
     return f"{res.energy_drift:.2e}"
+
+
+def _period_text(period, error) -> str:
+    """The measured period to the digits its numerical error leaves (the last
+    one at the error's leading decade, at most 12), with that error."""
+    if period is None:
+        return fmt(None)
+    if not (error is not None and math.isfinite(error) and error > 0):
+        return fmt(period, 10)
+    digits = min(max(math.floor(math.log10(abs(period))) - math.floor(math.log10(error)) + 1, 1), 12)
+    return f"{period:.{digits}g} +- {error:.1g} (numerical)"
