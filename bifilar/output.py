@@ -12,6 +12,9 @@ share one implementation of the promises in docs/errors.md:
 * an output name must be a regular file or not exist: a device node, FIFO or
   socket (``/dev/null``, a named pipe) is refused (exit 2) rather than
   replaced by a regular file or written through;
+* a read-only file (no write permission bit, or not writable by this user)
+  is never replaced or appended to, not even with ``--force``: the mode is
+  the user's own mark that the file is to be kept (docs/errors.md);
 * a journal (a JSON-lines file the work appends to as it goes, so an
   interrupted run can resume) is never written through a symbolic link, is
   repaired when its last line was torn by the interruption, and is refused
@@ -81,14 +84,28 @@ def _check_regular(p: Path, option: str) -> None:
         raise InputError(option, f"{p} is {kind}; outputs are written only to regular files")
 
 
+def _check_writable(p: Path, option: str) -> None:
+    """Refuse an existing file that is read-only: no write permission bit at
+    all (``chmod a-w``; looked at directly because root's ``os.access``
+    says yes to anything) or not writable by this user."""
+    try:
+        st = os.stat(p)
+    except OSError:
+        return  # absent: nothing to protect
+    if stat.S_ISREG(st.st_mode) and (not st.st_mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH)
+                                     or not os.access(p, os.W_OK)):
+        raise InputError(option, f"{p} is read-only; it is never replaced, even with --force: make it writable "
+                                 "(chmod u+w) or choose another name")
+
+
 def check_output_path(path: str | None, force: bool, protected: list[str | None], option: str) -> Path | None:
     """Validate an output path before any work is done (exit 2 on problems).
 
     ``protected``: paths this command reads or writes through other options
     (by convention the input config first); the output may be none of them,
     whether or not they exist yet (symlinks and hard links included).  An
-    existing file is only replaced with ``force``; a directory, device node,
-    FIFO or socket never (even with ``force``).  For ``option == "--plot"``
+    existing file is only replaced with ``force``; a read-only file, a
+    directory, device node, FIFO or socket never (even with ``force``).  For ``option == "--plot"``
     the name must end in an image format (:data:`PLOT_SUFFIXES`)."""
     if path is None:
         return None
@@ -100,6 +117,7 @@ def check_output_path(path: str | None, force: bool, protected: list[str | None]
     if option == "--plot" and p.suffix.lower() not in PLOT_SUFFIXES:
         raise InputError(option, f"cannot tell the image format of {p.name!r}: end the name in .png, .pdf or .svg "
                                  f"(or {', '.join(s for s in sorted(PLOT_SUFFIXES) if s not in ('.png', '.pdf', '.svg'))})")
+    _check_writable(p, option)
     if p.exists() and not force:
         raise InputError(option, f"{p} exists; choose another name or pass --force to replace it")
     _check_directory(p, option)
@@ -122,6 +140,7 @@ def check_journal_path(path: str | os.PathLike, protected: list, option: str, *,
                                  "remove it or choose another name")
     _check_distinct(p, protected, option)
     _check_regular(p, option)
+    _check_writable(p, option)  # resumed (appended to) or started over (truncated): written either way
     _check_directory(p, option)
     if resume and p.exists() and not os.access(p, os.R_OK | os.W_OK):
         raise InputError(option, f"the journal {p} is not readable and writable")
@@ -139,10 +158,13 @@ def atomic_write(path: Path, write: Callable[[str], None]) -> None:
     is flushed to disk before the rename, and is removed if ``write`` fails
     or the run is interrupted: ``path`` is either untouched or complete.
     The new file gets the mode of the file it replaces, else the umask's.
-    A ``path`` that exists and is not a regular file (a device, FIFO) is
-    refused with :class:`~bifilar.errors.InputError`."""
+    A ``path`` that exists and is not a regular file (a device, FIFO) or is
+    read-only is refused with :class:`~bifilar.errors.InputError` (the CLI
+    checked both before any work; this holds for the library's callers and
+    for a file made read-only during the run)."""
     path = Path(path)
     _check_regular(path, str(path))
+    _check_writable(path, str(path))
     directory = str(path.parent) if str(path.parent) else "."
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=directory)
     os.close(fd)

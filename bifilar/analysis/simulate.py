@@ -14,6 +14,7 @@ slack), and the lowest point of the body.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -86,10 +87,28 @@ class SimulationResult(RunSummary):
     method: str
     atol: float
     warnings: list = field(default_factory=list)
+    energy_drift_resolution: float = float("nan")
+    """Smallest relative energy drift the run can tell from rounding (:func:`drift_resolution`;
+    nan where the drift is undefined)."""
+    period_error: float = float("nan")
+    """Bound on the numerical error of :attr:`period`, s (:func:`period_accuracy`; nan without a period)."""
+
+    @property
+    def energy_drift_below_resolution(self) -> bool | None:
+        """True when :attr:`energy_drift` is no larger than the rounding floor of the energy
+        bookkeeping (a number that is not drift); None where either is undefined."""
+        if not (np.isfinite(self.energy_drift) and np.isfinite(self.energy_drift_resolution)):
+            return None
+        return bool(self.energy_drift <= self.energy_drift_resolution)
 
     def to_json(self) -> dict:
-        return run_json(self, {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
-                               "runtime_s": float(self.runtime)})
+        doc = run_json(self, {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
+                              "runtime_s": float(self.runtime)})
+        res = self.energy_drift_resolution
+        doc["energy_drift_resolution"] = float(res) if np.isfinite(res) else None
+        doc["energy_drift_below_resolution"] = self.energy_drift_below_resolution
+        doc["period_error"] = float(self.period_error) if np.isfinite(self.period_error) else None
+        return doc
 
 
 def run_json(r, integrator: dict) -> dict:
@@ -248,6 +267,92 @@ def untimed(amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> bo
     drift relative to it is undefined too (nan: 0.0 or 0.32 for the same
     run, depending on the BLAS kernel's last bits)."""
     return amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None)
+
+
+DRIFT_FLOOR_ULPS = 20.0
+"""Rounding floor of a run's absolute energy error, in units of eps m g D
+(D: the farthest anchor from the rest CoM, the lever the wire constraints
+round their positions on).  Measured (docs/design.md, "Simulate's health
+at the edges"): at amplitudes 2e-6 and 1e-5 rad, where the tolerances' part
+(~rtol, relative) is negligible, |E - E0| was 0.2-10 eps m g D over every
+mode of the shipped configs, LSODA and DOP853, 3-300 periods (it grows
+slowly with the run's length: x2 from 10 to 100 periods); 20 covers these
+with a margin of 2."""
+
+
+def drift_resolution(scene: Scene, rest: RestPose, y_start: np.ndarray) -> float:
+    """Smallest relative energy drift a run released at ``y_start`` (13,),
+    world frame, can tell from the rounding of its own energy bookkeeping:
+    :data:`DRIFT_FLOOR_ULPS` eps m g D over the oscillation energy E0 - E_rest
+    (J; kinetic plus m g (z - z_rest), taken as a difference so that it is not
+    rounded itself).  The oscillation energy grows as A^2, the floor does not,
+    so at tiny amplitudes the measured drift is this floor (1/A^2: 7e-6 at
+    1e-5 rad on the thesis plate) and says nothing about the integration.
+    nan when there is no oscillation energy."""
+    y = np.asarray(y_start, float).copy()
+    y[0:3] -= rest.com
+    e_osc = abs(float(mx.energy(y, mx.params_from_scenes(scene))))
+    if not e_osc > 0:
+        return float("nan")
+    lever = float(np.max(np.linalg.norm(scene.anchors - rest.com, axis=1)))
+    return DRIFT_FLOOR_ULPS * np.finfo(float).eps * scene.mass * scene.gravity * lever / e_osc
+
+
+PERIOD_ERROR_PER_RTOL = {"auto": 15.0, "LSODA": 8.0, "DOP853": 4.0, "RK45": 5.0, "RK23": 7.0, "Radau": 0.05,
+                         "BDF": 10.0}
+"""Bound on a run's relative period error per unit of ``rtol``, by method
+(``auto``: the batched engine's LSODA, ``scipy.integrate.odeint``; the others
+:func:`scipy.integrate.solve_ivp`'s).  Measured (docs/design.md, "Simulate's
+health at the edges"): the period of every mode of the shipped configs at
+0.001-0.3 rad (translations: times the longest wire), 3-100 periods, rtol
+1e-4..1e-10 (RK23 and BDF: the plate, to 1e-8), against the same run at rtol
+1e-12 with DOP853; the largest error over rtol was 6.6 (auto), 3.6 (LSODA),
+1.7 (DOP853), 2.2 (RK45), 3.5 (RK23), 0.016 (Radau), 4.6 (BDF).  Each bound
+is about twice that (three times for Radau).
+The error is the integration's phase error, so it is relative and does not
+grow with the number of periods."""
+PERIOD_ERROR_PER_RTOL_KANE = {"DOP853": 8.0, "RK45": 30.0, "LSODA": 40.0}
+"""The same for the thesis's kane model (``--model kane``), whose equations
+the tolerances meet differently: every mode of the plate and the pitch rig
+at 0.001 and 0.05 rad, rtol 1e-4, 1e-6, 1e-8, 1e-10, against the kane run at
+1e-12; largest error over rtol 3.4 (DOP853, its default; 0.8 from 1e-6 on),
+14 (RK45), 20 (LSODA).  Other methods get the largest bound."""
+PERIOD_ERROR_FLOOR = 1e-12
+"""Smallest relative period error claimed: the 1e-12 reference runs agree
+with each other (LSODA against DOP853) to 1e-12, so nothing finer was checked."""
+PERIOD_ERROR_WARN = 1e-8
+"""Relative period error above which a run warns: a tenth of the best timing
+the planner considers (a sensor record of 50 cycles at 1 kHz with 0.1 %
+noise: ~1e-7 of the period, :mod:`bifilar.studies.timing`); a stopwatch's
+is 1e-3."""
+
+
+def period_accuracy(period: float | None, method: str, rtol: float, amplitude: float | None = None,
+                    dominant: int = 3, Lmax: float = 1.0, model: str = "maximal") -> tuple[float, str | None]:
+    """(error, warning) of a run's measured ``period`` (s): a bound on its
+    numerical error, s (nan without a period), and a warning when the bound
+    exceeds :data:`PERIOD_ERROR_WARN` of the period (else None).
+
+    The bound is :data:`PERIOD_ERROR_PER_RTOL` [``method``] x ``rtol`` of the
+    period (``model="kane"``: :data:`PERIOD_ERROR_PER_RTOL_KANE`), at least :data:`PERIOD_ERROR_FLOOR`; for a release too small to
+    time (``amplitude``, ``dominant``, ``Lmax`` as :func:`small_amplitude_period`),
+    whose period is the linear one, the wire angle squared.  A method without
+    a measured bound (a name not in the table) gets the largest one."""
+    if period is None:
+        return float("nan"), None
+    small = _small_amplitude(amplitude, dominant, Lmax)
+    if small is not None:
+        angle = abs(amplitude) / (1.0 if dominant >= 3 else Lmax)
+        return max(angle**2, PERIOD_ERROR_FLOOR) * period, None
+    table = PERIOD_ERROR_PER_RTOL_KANE if model == "kane" else PERIOD_ERROR_PER_RTOL
+    c = table.get(method, max(table.values()))
+    err = max(c * rtol, PERIOD_ERROR_FLOOR) * period
+    if err <= PERIOD_ERROR_WARN * period:
+        return err, None
+    need = max(10.0 ** math.floor(math.log10(PERIOD_ERROR_WARN / c)), MIN_RTOL)
+    return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative: {c:g} x rtol "
+                 f"{rtol:g} for {method}), above the {PERIOD_ERROR_WARN:g} a sensor's timing resolves; --rtol "
+                 f"{need:g} brings it below")
 
 
 def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
@@ -526,6 +631,8 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     c = relative_pose(run.y, rest, m.dominant)
     scale = state_scale(amplitude, m.dominant, float(np.max(scene.lengths)), 2 * np.pi / m.period)
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
+    perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, float(np.max(scene.lengths)))
+    warnings = list(run.warnings) + ([w] if w else [])
     return SimulationResult(
         t=run.t, y=run.y, coordinate=c, coordinate_name=run.coordinate_name, tensions=T,
         period=run.period, period_std=run.period_std, crossings=run.crossings, linear_period=m.period,
@@ -533,7 +640,9 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         tension_min=np.minimum(run.tension_min, T.min(axis=0)), tension_max=np.maximum(run.tension_max, T.max(axis=0)),
         slack=run.slack, lowest_z_min=run.lowest_z_min, depth_max=run.depth_max, mode=m.label,
         amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
-        nfev=int(run.nfev), runtime=runtime, warnings=list(run.warnings),
+        nfev=int(run.nfev), runtime=runtime, warnings=warnings,
+        energy_drift_resolution=drift_resolution(scene, rest, run.y[0]) if np.isfinite(run.energy_drift) else np.nan,
+        period_error=perr,
     )
 
 
@@ -595,6 +704,9 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     if period is None:
         stopped = any(w.startswith("run stopped at t = ") for w in warnings)
         warnings.append(no_period_warning(amplitude if m is not None else None, stopped))
+    perr, w = period_accuracy(period, method, rtol, amplitude if m is not None else None, dom, Lmax, model)
+    if w:
+        warnings.append(w)
     return SimulationResult(
         t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
         period=period, period_std=pstd, crossings=tc, linear_period=m.period if m is not None else None,
@@ -603,5 +715,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
         lowest_z_min=float(lz.min()), depth_max=float(scene.ceiling_z - lz.min()),
         mode=m.label if m is not None else None, amplitude=float(amplitude), model=model, method=method,
         rtol=float(rtol), atol=float(atol), nfev=int(nfev), runtime=runtime, warnings=warnings,
+        energy_drift_resolution=drift_resolution(scene, rest, Y[0]) if np.isfinite(drift) else np.nan,
+        period_error=perr,
     )
 

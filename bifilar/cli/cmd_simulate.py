@@ -101,14 +101,13 @@ def _render(scene, res) -> None:
     t = Table(title=f"{esc(scene.name)}: {res.model} model, mode {res.mode}, amplitude {res.amplitude:g}")
     t.add_column("quantity")
     t.add_column("value", justify="right")
-    t.add_row("measured period (s)", fmt(res.period, 10))
+    t.add_row("measured period (s)", _period_text(res.period, res.period_error))
     t.add_row("linear period (s)", fmt(res.linear_period, 10))
     if res.period and res.linear_period:
         t.add_row("period shift vs linear", f"{(res.period / res.linear_period - 1):+.3e}")
     t.add_row("cycles timed", str(max(len(res.crossings) - 1, 0)) + f" (coordinate {res.coordinate_name})")
     t.add_row("max constraint violation (m)", f"{res.max_constraint_violation:.2e}")
-    t.add_row("energy drift (rel. to oscillation)",
-              f"{res.energy_drift:.2e}" if math.isfinite(res.energy_drift) else "- (no oscillation energy)")
+    t.add_row("energy drift (rel. to oscillation)", _drift_text(res))
     for i in range(scene.n_wires):
         t.add_row(f"tension wire {i + 1} min / max (N)", f"{res.tension_min[i]:.6g} / {res.tension_max[i]:.6g}")
     t.add_row("lowest point z (m)", f"{res.lowest_z_min:.6g}")
@@ -117,3 +116,23 @@ def _render(scene, res) -> None:
     con.print(t)
     for w in res.warnings:
         con.print(f"[bold red]WARNING:[/bold red] {esc(w)}")
+
+
+def _drift_text(res) -> str:
+    """The energy drift's table cell: the number, or why there is none to give."""
+    if not math.isfinite(res.energy_drift):
+        return "- (no oscillation energy)"
+    if res.energy_drift_below_resolution:
+        return f"below resolution {res.energy_drift_resolution:.1e}"
+    return f"{res.energy_drift:.2e}"
+
+
+def _period_text(period, error) -> str:
+    """The measured period to the digits its numerical error leaves (the last
+    one at the error's leading decade, at most 12), with that error."""
+    if period is None:
+        return fmt(None)
+    if not (error is not None and math.isfinite(error) and error > 0):
+        return fmt(period, 10)
+    digits = min(max(math.floor(math.log10(abs(period))) - math.floor(math.log10(error)) + 1, 1), 12)
+    return f"{period:.{digits}g} +- {error:.1g} (numerical)"

@@ -1,0 +1,138 @@
+"""simulate's health figures at the edges (docs/design.md, "Simulate's health
+at the edges"): the energy drift's resolution at tiny amplitudes, the
+period's integration error.
+
+Expected values come from analytic results (the parallel-wire bifilar's
+torsion period, thesis eq. 5.2.17, and its oscillation energy) or from
+independent runs (a converged integration at rtol 1e-12), never from the
+output of the code under test."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from bifilar.analysis.equilibrium import rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.analysis.simulate import simulate
+from bifilar.cli import main
+from conftest import CONFIGS, trapezoid
+
+EPS = np.finfo(float).eps
+D, L, M, IZZ = 1.0, 2.0, 10.0, 0.8  # parallel vertical wires 1 m apart, 2 m long, a 10 kg body
+T_TORSION = 2 * math.pi * math.sqrt(4 * IZZ * L / (M * 9.81 * D**2))  # thesis (5.2.17), small angles
+PLATE = CONFIGS / "thesis_plate_rest.yaml"
+
+
+@pytest.fixture(scope="module")
+def parallel():
+    sc = trapezoid(b=D, bp=D, l1=L, inertia=[0.5, 0.4, IZZ], mass=M, h=0.1)
+    rest = rest_pose(sc)
+    return sc, rest, linear_modes(sc, rest)
+
+
+def floor(sc, rest, amplitude):
+    """20 eps m g (farthest anchor from the rest CoM) over the torsion's
+    oscillation energy 1/2 Izz omega^2 A^2, omega from the analytic period."""
+    lever = max(np.linalg.norm(a - rest.com) for a in sc.anchors)
+    e_osc = 0.5 * IZZ * (2 * math.pi / T_TORSION) ** 2 * amplitude**2
+    return 20 * EPS * M * 9.81 * lever / e_osc
+
+
+# --------------------------------------------------------------------------- energy drift resolution
+
+
+@pytest.mark.parametrize("method", ["auto", "DOP853"])
+def test_drift_at_a_tiny_amplitude_is_below_its_resolution(parallel, method):
+    """At 1e-5 rad the oscillation energy is ~1e-10 of the rig's, and the
+    drift printed (7e-6 on the thesis plate, growing as 1/A^2) was the
+    energy's rounding, not the integration's: now reported as below the
+    resolution, which is the rounding floor over the oscillation energy."""
+    sc, rest, ms = parallel
+    r = simulate(sc, "torsion", 1e-5, 10, rest=rest, modes=ms, method=method)
+    assert r.energy_drift_resolution == pytest.approx(floor(sc, rest, 1e-5), rel=1e-3)
+    assert r.energy_drift_below_resolution is True
+    # the same run converged (rtol 1e-12): its drift is the floor as well, no integration error left
+    conv = simulate(sc, "torsion", 1e-5, 10, rest=rest, modes=ms, method=method, rtol=1e-12)
+    assert conv.energy_drift <= r.energy_drift_resolution
+
+
+def test_a_real_drift_is_still_reported(parallel):
+    """A loose tolerance drifts the energy for real: the number is printed,
+    not hidden under the resolution, and it is the integration's (a
+    converged run drifts 10x less)."""
+    sc, rest, ms = parallel
+    loose = simulate(sc, "torsion", 1e-4, 10, rest=rest, modes=ms, method="auto", rtol=1e-6)
+    conv = simulate(sc, "torsion", 1e-4, 10, rest=rest, modes=ms, method="auto", rtol=1e-12)
+    assert loose.energy_drift > 10 * max(conv.energy_drift, loose.energy_drift_resolution)
+    assert loose.energy_drift_below_resolution is False
+    doc = loose.to_json()
+    assert doc["energy_drift"] == loose.energy_drift and doc["energy_drift_below_resolution"] is False
+
+
+def test_the_table_and_json_say_below_resolution():
+    r = CliRunner().invoke(main, ["simulate", str(PLATE), "--amplitude", "1e-5", "--json"])
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["energy_drift_below_resolution"] is True
+    assert 0 < doc["energy_drift"] <= doc["energy_drift_resolution"]
+    r = CliRunner().invoke(main, ["simulate", str(PLATE), "--amplitude", "1e-5"])
+    assert r.exit_code == 0 and "below resolution" in r.stdout
+    r = CliRunner().invoke(main, ["simulate", str(PLATE), "--amplitude", "0", "--json"])  # undefined: null
+    doc = json.loads(r.stdout)
+    assert doc["energy_drift"] is None and doc["energy_drift_resolution"] is None
+    assert doc["energy_drift_below_resolution"] is None
+
+
+# --------------------------------------------------------------------------- the period's numerical error
+
+
+@pytest.fixture(scope="module")
+def converged(parallel):
+    """The torsion period at 0.05 rad, integrated at rtol 1e-12 by both engines (they agree to ~1e-12)."""
+    sc, rest, ms = parallel
+    runs = [simulate(sc, "torsion", 0.05, 10, rest=rest, modes=ms, method=m, rtol=1e-12) for m in ("auto", "DOP853")]
+    assert runs[0].period == pytest.approx(runs[1].period, rel=1e-11)
+    return runs[1].period
+
+
+@pytest.mark.parametrize("method", ["auto", "DOP853", "RK45"])
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8, 1e-10])
+def test_period_error_bounds_the_true_error(parallel, converged, method, rtol):
+    """A loose --rtol 1e-5 gave a period 1.4e-5 off, printed with 10 digits
+    and no warning; every run now states a bound on its period's numerical
+    error, which must cover the distance to a converged run."""
+    sc, rest, ms = parallel
+    r = simulate(sc, "torsion", 0.05, 10, rest=rest, modes=ms, method=method, rtol=rtol)
+    assert abs(r.period - converged) <= r.period_error
+    assert r.period_error <= 20 * rtol * r.period  # a bound of the tolerance's order, not a blanket one
+    assert r.to_json()["period_error"] == r.period_error
+
+
+def test_period_error_at_a_tiny_amplitude_is_the_linear_periods(parallel):
+    """Below 1e-6 rad the period given is the linear one, which the motion has to ~A^2."""
+    sc, rest, ms = parallel
+    r = simulate(sc, "torsion", 1e-7, 3, rest=rest, modes=ms)
+    assert r.period == pytest.approx(T_TORSION, rel=1e-9)  # thesis (5.2.17), exact for small angles
+    assert abs(r.period - T_TORSION) <= max(r.period_error, 1e-9 * T_TORSION)
+    assert r.period_error <= 1e-12 * r.period
+
+
+def test_a_loose_rtol_warns_and_prints_the_digits_it_has():
+    loose = CliRunner().invoke(main, ["simulate", str(PLATE), "--rtol", "1e-5"])
+    assert loose.exit_code == 0, loose.stderr
+    row = next(ln for ln in loose.stdout.splitlines() if "measured period" in ln)
+    value = row.split("│")[2].split("+-")[0].strip()
+    assert len(value.replace(".", "")) <= 5  # 1.9088: the error is ~1e-4 s, not 1e-9
+    assert "integration error may reach" in " ".join(loose.stdout.split())
+    default = CliRunner().invoke(main, ["simulate", str(PLATE), "--json"])
+    doc = json.loads(default.stdout)
+    assert 0 < doc["period_error"] < 1e-8 * doc["period"]
+    assert not any("integration error" in w for w in doc["warnings"])
+    loose_json = json.loads(CliRunner().invoke(main, ["simulate", str(PLATE), "--rtol", "1e-5", "--json"]).stdout)
+    assert loose_json["period_error"] > 1e-5 * loose_json["period"]
+    assert any("integration error may reach" in w for w in loose_json["warnings"])
