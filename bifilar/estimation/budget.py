@@ -631,11 +631,13 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
     derivative in the unknowns is ``J_full = r dT_lin/dp + T_lin dr/dp``
     (``laws[k].dr_dp``), and a change of the measured period (timing) or of
     the release amplitude moves the estimate by the gain of ``J_full``, not
-    of ``r dT_lin/dp``.  The inputs keep their terms: the amplitude factor
-    is taken to depend on an input as on the unknowns, in proportion to
-    their effects on the linear period (exact where it depends on the body
-    through the same combination, e.g. ``I / (m d^2)`` of a bifilar's
-    torsion), and then ``J_full`` cancels in their ratio as ``r`` does."""
+    of ``r dT_lin/dp``.  The inputs keep their terms ``r dT_lin/dx`` over
+    ``r dT_lin/dp``: right where the factor depends on an input as on the
+    unknowns, in proportion to their effects on the linear period (the
+    mass: re-solved, ratio 1.000), not in general (``dr/dx`` would need a
+    run per input: the Solar Boat at spacing 1, length 2, torsion at 0.3
+    rad, the wire lengths' and the anchors' and attachments' x terms are
+    1.11-1.21 too small; docs/design.md, "The stated amplitude")."""
     from .uncertainty import gain_matrix
 
     P = Jp.shape[1]
