@@ -83,6 +83,8 @@ class BudgetContext:
     surrogate: dict = field(default_factory=dict)   # key -> (a, b) of the quadratic
     cross: dict = field(default_factory=dict)       # (key_i, key_j) -> (k11, k21, k12, k22)
     amplitude: dict = field(default_factory=dict)   # label -> D (P,): truth - p at A_max
+    #: label -> its AmplitudeLaw over 0 .. A_max: the truth is p + D w(A), w = (r(A) - 1) / (r(A_max) - 1)
+    amplitude_law: dict = field(default_factory=dict)
     #: results shared by budgets of the same scenes (several unknowns at one truth):
     #: input sensitivities and sigma points' periods, keyed by the scene's arrays
     cache: dict | None = None
@@ -355,14 +357,23 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
     if not ctx.surrogate and not ctx.amplitude:
         return lin, failed
     for lab, D in ctx.amplitude.items():
-        contrib[f"amplitude[{lab}]"] = D * math.sqrt(4 / 45)
-        offset = offset + D / 3
+        mean_w, std_w = _release_moments(ctx, lab)
+        contrib[f"amplitude[{lab}]"] = D * std_w
+        offset = offset + D * mean_w
     if np.any(offset):
         contrib["offset"] = offset
     cov = np.zeros_like(lin.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)
     return LinearBudget(list(lin.names), cov, contrib, dict(lin.sigmas), dict(lin.dof)), failed
+
+
+def _release_moments(ctx: BudgetContext, lab: str) -> tuple[float, float]:
+    """(mean, std) of the unstated release's weight ``w`` of ``lab``: its
+    amplitude law's, or a quadratic law's (1/3, 2/sqrt(45)) for a context
+    built without one."""
+    law = ctx.amplitude_law.get(lab)
+    return law.release_moments() if law is not None else (1.0 / 3.0, math.sqrt(4.0 / 45.0))
 
 
 def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_samples=None) -> np.ndarray:
@@ -376,7 +387,8 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
     periods (a period with ``nu`` finite degrees of freedom: ``c T_nu``, a
     Student variate, whose 97.5 % quantile is ``c t_{0.975, nu}``), taken with a random
     sign ``s = +-1`` (the model and its mirror image, equally likely), plus
-    ``D u`` with ``u = (A/A_max)^2``, ``A`` uniform, for an unstated
+    ``D w`` with ``w = (r(A) - 1) / (r(A_max) - 1)`` of the mode's amplitude
+    law (``u = (A/A_max)^2`` for a quadratic one), ``A`` uniform, for an unstated
     amplitude.  Why the mirror: the model is built around the *measured*
     inputs (the truth spread about them), but where the truth sits at the
     extremum of the response (the symmetric wheel) the error the
@@ -423,9 +435,10 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
             zi, zj = zs[ki], zs[kj]
             err += zi * zj * (k11 + k21 * zi + k12 * zj + k22 * zi * zj)
         amp = np.zeros_like(err)
-        for D in ctx.amplitude.values():
+        for lab, D in ctx.amplitude.items():
             u = rng.uniform(0.0, 1.0, N)[:, None] ** 2
-            amp += D[None, :] * u
+            law = ctx.amplitude_law.get(lab)
+            amp += D[None, :] * (law.release_weight(u) if law is not None else u)
         if ctx.surrogate:
             err *= rng.choice([-1.0, 1.0], N)[:, None]
         q = np.quantile(err + amp, [0.025, 0.975], axis=0)
@@ -477,15 +490,17 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
     """The systematic term of periods timed at an unstated amplitude
     (measurements whose ``amplitude is None``): release amplitudes assumed
     uniform in 0 .. A_max (:func:`default_amplitude_range`), the amplitude
-    factor ``r(A) = 1 + (r_max - 1) (A / A_max)^2`` with ``r_max`` simulated
-    by the nonlinear model at A_max, so the truth is ``p + D u`` with
-    ``u = (A/A_max)^2`` (mean 1/3, std 2/sqrt(45)) and
-    ``D = -G T (r_max - 1) / r_max``.  The estimate is kept (it is the
+    factor ``r(A) = 1 + a A^2 + b A^4`` of the mode's amplitude law
+    (:func:`~bifilar.estimation.solve.amplitude_law_at`: the nonlinear model
+    at A_max and A_max / 2, 3 periods each), so the truth is ``p + D w``
+    with ``w = (r(A) - 1) / (r_max - 1)`` (``(A/A_max)^2`` for a quadratic
+    law: mean 1/3, std 2/sqrt(45); :meth:`~bifilar.estimation.solve.AmplitudeLaw.release_moments`)
+    and ``D = -G T (r_max - 1) / r_max``.  The estimate is kept (it is the
     small-amplitude one the user asked for); :func:`second_order` puts
-    the term's mean ``D/3`` into ``offset`` and its spread ``2 D / sqrt(45)``
-    into ``amplitude[label]``.  Fills ``ctx.amplitude`` {label: D}; returns {label:
-    (A_max, r_max)}."""
-    from .solve import amplitude_factor
+    the term's mean ``D E[w]`` into ``offset`` and its spread ``D sd(w)``
+    into ``amplitude[label]``.  Fills ``ctx.amplitude`` {label: D} and
+    ``ctx.amplitude_law``; returns {label: (A_max, r_max)}."""
+    from .solve import RELEASE_LAW_RATIO, amplitude_law_at
 
     out = {}
     multi = len(pb.models) > 1
@@ -497,14 +512,16 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
         mode = ctx.modes[m.hanging].modes[ctx.match[m.hanging][pb.mode_index[k]]]
         A = default_amplitude_range(scene, mode)
         try:
-            r_max, _ = amplitude_factor(hm, pb.values(p_hat), pb.mode_index[k], A, 3, rtol)
+            law = amplitude_law_at(hm, pb.values(p_hat), pb.mode_index[k], A, 3, rtol, lam=RELEASE_LAW_RATIO)
         except BifilarError:
             continue
+        r_max = float(law.factor(A))
         lab = f"{hm.hanging.name}:{m.label}" if multi else m.label
         e = np.zeros(len(pb.measurements))
         e[k] = ctx.T_hat[k] * (r_max - 1) / r_max
         D = -(ctx.G @ e)
         ctx.amplitude[lab] = D
+        ctx.amplitude_law[lab] = law
         out[lab] = (A, float(r_max))
     return out
 
@@ -592,11 +609,60 @@ def _unknowns_jacobian(pb: Problem, p_hat, cache: dict | None = None) -> np.ndar
     return pb.jacobian(p_hat)
 
 
-def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None):
+def stated_amplitude_period_std(pb: Problem, T_lin, laws, unc: dict) -> np.ndarray:
+    """(K,) standard uncertainty (s) of each model period from its stated
+    amplitude's own uncertainty (nonlinear method; 0 without an amplitude):
+    ``dT/dA s_A`` with ``dT/dA = T_lin dr/dA`` from the mode's amplitude
+    law (``laws[k]``, :class:`~bifilar.estimation.solve.AmplitudeLaw`: the
+    slope measured by a second run at half the amplitude, not the quadratic
+    rule ``2 T_lin (r - 1) / A``) and ``s_A`` the stated std or
+    ``unc["amplitude"]`` relative (invert's default 10 %)."""
+    out = np.zeros(len(pb.measurements))
+    for k, m in enumerate(pb.measurements):
+        if m.amplitude:
+            sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * abs(m.amplitude)
+            out[k] = abs(T_lin[k] * laws[k].slope()) * sA
+    return out
+
+
+def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_names, pb: Problem,
+                      multi: bool) -> LinearBudget:
+    """The nonlinear rung's budget with the amplitude factor's dependence on
+    the unknowns: the model period is ``T_lin(p) r(A; p)``, so the periods'
+    derivative in the unknowns is ``J_full = r dT_lin/dp + T_lin dr/dp``
+    (``laws[k].dr_dp``), and a change of the measured period (timing) or of
+    the release amplitude moves the estimate by the gain of ``J_full``, not
+    of ``r dT_lin/dp``.  The inputs keep their terms ``r dT_lin/dx`` over
+    ``r dT_lin/dp``: right where the factor depends on an input as on the
+    unknowns, in proportion to their effects on the linear period (the
+    mass: re-solved, ratio 1.000), not in general (``dr/dx`` would need a
+    run per input: the Solar Boat at spacing 1, length 2, torsion at 0.3
+    rad, the wire lengths' and the anchors' and attachments' x terms are
+    1.11-1.21 too small; docs/design.md, "The stated amplitude")."""
+    from .uncertainty import gain_matrix
+
+    P = Jp.shape[1]
+    dr = np.array([law.dr_dp if law is not None and law.dr_dp is not None else np.zeros(P) for law in laws])
+    Gf = gain_matrix(Jp + np.asarray(T_lin, float)[:, None] * dr, sig)
+    contrib = dict(budget.contributions)
+    for k, m in enumerate(pb.measurements):
+        contrib[timing_names[k]] = Gf[:, k] * sig[k]
+        if m.amplitude:
+            lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
+            contrib[f"amplitude[{lab}]"] = -Gf[:, k] * s_amp[k]
+    cov = np.zeros_like(budget.covariance)
+    for c in contrib.values():
+        cov += np.outer(c, c)
+    return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof))
+
+
+def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None, laws=None):
     """Linear budget at the estimate; returns (LinearBudget, degenerate
     inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
     ``cache``: a dict shared by budgets of other unknowns at the same
-    scenes (:attr:`BudgetContext.cache`), or None."""
+    scenes (:attr:`BudgetContext.cache`), or None.  ``laws``: the amplitude
+    law of each measurement with a stated amplitude (nonlinear method;
+    :func:`stated_amplitude_period_std`)."""
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
@@ -609,12 +675,11 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     in_sig = np.array([sigmas[n] for n in in_names])
     G = gain_matrix(Jp, sig)
     extra = {}
+    s_amp = stated_amplitude_period_std(pb, T_lin, laws, unc) if method == "nonlinear" else np.zeros(K)
     for k, m in enumerate(pb.measurements):
         lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
         if method == "nonlinear" and m.amplitude:
-            sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * m.amplitude
-            dT_dA = T_lin[k] * 2 * (r_hat[k] - 1) / m.amplitude
-            extra[f"amplitude[{lab}]"] = -G[:, k] * dT_dA * sA
+            extra[f"amplitude[{lab}]"] = -G[:, k] * s_amp[k]
     if method != best and best in rungs and "p" in rungs[best]:
         extra["model bias"] = np.abs(np.asarray(p_hat) - rungs[best]["p"])
     tn = []
@@ -623,6 +688,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
         tn.append(f"timing[{lab}]")
     budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn,
                        timing_dof=[m.dof for m in pb.measurements])
+    if method == "nonlinear" and laws is not None and any(law is not None for law in laws):
+        budget = _with_factor_gain(budget, Jp, T_lin, laws, sig, s_amp, tn, pb, multi)
     # every input, degenerate ones too, with its standard uncertainty
     all_sig = dict(sigmas)
     for d in degenerate:

@@ -156,12 +156,13 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarr
     """(K,) second moment (s^2) of the lengthening of each period timed at an
     unstated release amplitude (``amplitude is None``; 0 for the others), as
     the budget assumes it (:func:`~bifilar.estimation.budget.amplitude_systematic`:
-    amplitudes uniform in 0 .. A_max, ``T = T_lin (1 + (r_max - 1) u)``,
-    ``u = (A / A_max)^2``, ``E[u^2] = 1/5``): ``(T_lin (r_max - 1))^2 / 5``.
-    Different modes are released independently.  One short simulation per
-    such measurement at ``p``."""
+    amplitudes uniform in 0 .. A_max, ``T = T_lin (1 + (r_max - 1) w)``,
+    ``w`` the mode's amplitude law's release weight, ``E[w^2] = 1/5`` for a
+    quadratic law): ``(T_lin (r_max - 1))^2 E[w^2]``.
+    Different modes are released independently.  Two short simulations per
+    such measurement at ``p`` (the law's, at A_max and A_max / 2)."""
     from .budget import default_amplitude_range
-    from .solve import amplitude_factor
+    from .solve import RELEASE_LAW_RATIO, amplitude_law_at
 
     vals = pb.values(p)
     out = np.zeros(len(pb.measurements))
@@ -175,10 +176,11 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarr
             continue
         A = default_amplitude_range(hm.scene(vals), mode)
         try:
-            r_max, _ = amplitude_factor(hm, vals, pb.mode_index[k], A, 3, rtol)
+            law = amplitude_law_at(hm, vals, pb.mode_index[k], A, 3, rtol, lam=RELEASE_LAW_RATIO)
         except BifilarError:
             continue
-        out[k] = (mode.period * (r_max - 1)) ** 2 / 5
+        mean_w, std_w = law.release_moments()
+        out[k] = (mode.period * (float(law.factor(A)) - 1)) ** 2 * (mean_w ** 2 + std_w ** 2)
     return out
 
 

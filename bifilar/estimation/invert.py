@@ -68,7 +68,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
-from .budget import DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95, second_order
+from .budget import (DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95,
+                     second_order, stated_amplitude_period_std)
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
 from .ladder import small_angle_geometry, small_angle_vertical_inertia, thesis_linearisation_for  # noqa: F401
 from .measurements import METHODS, MeasurementSet
@@ -131,6 +132,9 @@ class InversionResult:
     ambiguous: bool = False
     separation: dict | None = None
     sims: list = field(default_factory=list, repr=False)
+    #: per measurement its amplitude law (nonlinear method with a stated amplitude,
+    #: :class:`~bifilar.estimation.solve.AmplitudeLaw`) or None
+    amplitude_laws: list = field(default_factory=list, repr=False)
 
     @property
     def std(self) -> np.ndarray:
@@ -180,6 +184,13 @@ class InversionResult:
             res.append({"mode": m.label, "hanging": self.hangings[m.hanging].name, "measured": m.period,
                         "model": float(Tm), "normalised_residual": float((Tm - m.period) / m.std),
                         "amplitude_factor": float(self.factors[k])})
+            law = self.amplitude_laws[k] if k < len(self.amplitude_laws) else None
+            if law is not None:  # the slope the budget's amplitude term uses (measured, not the quadratic rule)
+                res[-1]["amplitude_slope"] = {"dT_dA": float(self.linear_periods[k] * law.slope()),
+                                              "quadratic_rule": float(2 * Tm - 2 * self.linear_periods[k])
+                                              / m.amplitude,
+                                              "quartic_share": (law.quartic_share if math.isfinite(law.quartic_share)
+                                                                else None)}
         doc = {
             "inertia": inertia,
             "method": self.method,
@@ -379,8 +390,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                 warnings.append("the nonlinear estimate lies on the edge of the physical set (triangle inequality "
                                 "I1 + I2 = I3, a thin flat body)")
     # -- the budget -------------------------------------------------------
+    laws = est_nl.laws if method == "nonlinear" else None
     budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(pb, p_hat, r_hat, method, rungs, best,
-                                                                            unc_all, rtol)
+                                                                            unc_all, rtol, laws=laws)
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
         worst = ", ".join(f"{n} {100 * D[i] / p_hat[i]:+.2g} % ({D[i] / budget.std[i]:+.2g} std)"
@@ -417,7 +429,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                 if extra in rg:
                     row[extra] = rg[extra]
         ladder_rows.append(row)
-    fit = _fit_check(pb, p_hat, r_hat, method, edge=edge)
+    fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
     if fit.get("chi2_with_inputs") is not None and fit["dof"] == 0:
         notes.append(f"the measured period(s) lie beyond what a physical tensor gives, by up to "
                      f"{fit['max_abs_normalised_residual']:.3g} timing sigma, but within their uncertainty with the "
@@ -441,7 +453,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     res = InversionResult(list(pb.unknowns), np.asarray(p_hat, float), budget, method, best, ladder_rows,
                           list(pb.measurements), list(ms.hangings), T_lin_hat, np.asarray(r_hat, float),
                           _assumed(unc_all), degenerate, warnings, notes, problem=pb,
-                          sims=(est_nl.sims if est_nl is not None else []))
+                          sims=(est_nl.sims if est_nl is not None else []), amplitude_laws=list(laws or []))
     if degenerate:
         # inputs with no derivative (a knife edge): within their stated
         # uncertainty the scene changes qualitatively, and a budget without
@@ -596,7 +608,7 @@ def _residuals(pb: Problem, p, r) -> tuple[np.ndarray, np.ndarray]:
     return T, (T - np.array([m.period for m in pb.measurements])) / np.array([m.std for m in pb.measurements])
 
 
-def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
+def _fit_check(pb: Problem, p, r, method: str, edge: bool = False, laws=None) -> dict:
     """The estimate must reproduce every measurement (roots.py: the fit
     check).  Raises ConvergenceError when it does not; a forced lower rung
     (small-angle, thesis) is a different model, so its fit is reported,
@@ -611,7 +623,7 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
     chi2_in = chi2_at = None
     if not ok and (K > P or edge) and np.all(np.isfinite(z)):
         # the inputs' errors shift the periods together: the check counts them (fit_check.input_fit_check)
-        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, r, method, pb.unc))
+        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, laws, method, pb.unc))
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
            "chi2_with_inputs": chi2_in, "distance_from_fit": chi2_at,
            "max_abs_normalised_residual": float(np.max(np.abs(z)))}
@@ -622,31 +634,27 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False) -> dict:
     return out
 
 
-def _amplitude_variance(pb: Problem, p, r, method: str, unc: dict) -> np.ndarray | None:
+def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndarray | None:
     """(K,) variance (s^2) of each model period from its stated amplitude's
-    uncertainty under the nonlinear method (as the budget's amplitude term:
-    ``dT/dA = 2 T_lin (r - 1) / A``), or None for the other methods."""
+    uncertainty under the nonlinear method (as the budget's amplitude term,
+    :func:`~bifilar.estimation.budget.stated_amplitude_period_std`: the
+    slope of the mode's amplitude law ``laws[k]``), or None for the other methods."""
     if method != "nonlinear":
         return None
-    T_lin = pb.linear_periods(p)
-    out = np.zeros(len(pb.measurements))
-    for k, m in enumerate(pb.measurements):
-        if m.amplitude:
-            sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * m.amplitude
-            out[k] = (T_lin[k] * 2 * (r[k] - 1) / m.amplitude * sA) ** 2
-    return out
+    return stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) ** 2
 
 
 def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float,
-                cache: dict | None = None):
+                cache: dict | None = None, laws=None):
     """The budget every answer (the chosen root and any further one) gets:
     the linear budget (:func:`~bifilar.estimation.budget._budget`), the
     systematic term of an unstated amplitude, and second-order propagation
     where the linear one is wrong (:func:`~bifilar.estimation.budget.second_order`).
     Returns (budget, linear std, degenerate inputs, T_lin at ``p`` (s),
     budget context, {mode: (assumed max amplitude, its period factor)}).
-    ``cache``: shared by budgets at the same scenes (``BudgetContext.cache``)."""
-    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache)
+    ``cache``: shared by budgets at the same scenes (``BudgetContext.cache``).
+    ``laws``: the amplitude laws of the nonlinear method (``Estimate.laws``)."""
+    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws)
     std_lin = budget.std
     amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
     if any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):
@@ -686,7 +694,8 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
         est = solve_nonlinear(pb, p, rtol=rtol)
         p, r = est.p, est.r
     m = method if method in ("linear", "nonlinear") else "linear"
-    budget = full_budget(pb, p, r, m, {m: {"p": p, "r": r}}, m, unc, rtol)[0]
+    budget = full_budget(pb, p, r, m, {m: {"p": p, "r": r}}, m, unc, rtol,
+                         laws=est.laws if method == "nonlinear" else None)[0]
     T, z = _residuals(pb, p, r)
     ok, chi2, test = fit_statistics(z, len(pb.unknowns))
     return _root_entry(pb, p, r, budget, root.edge, {"chi2": chi2})

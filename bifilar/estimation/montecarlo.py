@@ -27,8 +27,9 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     the measured values; normal, except a period from ``n`` timed trials:
     ``T + std T_{n-1}``, Student's t with the trials' dof, whose spread is
     what the trials support and whose 2.5-97.5 % quantiles are the
-    Student interval; for ``n <= 3`` it has no finite variance); the amplitude factor is scaled as ``r(A) = 1 + (r -
-    1)(A/A0)^2`` (nonlinear method) and each drawn period is divided by it,
+    Student interval; for ``n <= 3`` it has no finite variance); the amplitude factor at the drawn amplitude is
+    the mode's amplitude law ``r(A) = 1 + a A^2 + b A^4`` (nonlinear method;
+    ``res.amplitude_laws``, :class:`~bifilar.estimation.solve.AmplitudeLaw`) and each drawn period is divided by it,
     so every draw is a linear-model problem.  Every input is perturbed,
     degenerate ones (no derivative) too: their finite-size effect is what the
     linear budget cannot see.  A draw that cannot even be built
@@ -66,9 +67,9 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                 T = m.period + m.std * (rng.standard_t(nu) if math.isfinite(nu) else rng.normal())
                 r = res.factors[k]
                 if m.amplitude and res.method == "nonlinear":
-                    sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * m.amplitude
+                    sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * abs(m.amplitude)
                     A = m.amplitude + rng.normal(0.0, sA)
-                    r = 1 + (r - 1) * (A / m.amplitude) ** 2
+                    r = float(res.amplitude_laws[k].factor(A))
                 meas.append(replace(m, period=T / r))
             draws.append(MeasurementSet(hangs, meas))
         except BifilarError:

@@ -172,7 +172,11 @@ def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True)
     """(C, rank, unresolved) of the joint fit over hangings; S = timing^2 I
     + the input covariance of each hanging's chosen modes (block diagonal)
     + the body's shared inputs' ``Js Js^T`` across hangings; ``blocks``: per
-    hanging (J rows, input covariance, shared-input rows ``Js``).
+    hanging (J rows, input covariance, shared-input rows ``Js``, and with
+    a stated amplitude the rows of the model's full derivative ``r dT_lin/dI
+    + T_lin dr/dI`` and the amplitude's variance per period (s^2): the
+    timing and the amplitude then go through the full rows' gain, the
+    inputs through ``J``'s, as invert's ``budget._with_factor_gain``).
     ``as_invert``: the fit ``bifilar invert`` makes (least squares weighted
     by the timing variance, equal for every period), C = (J^T J)^-1 J^T S J
     (J^T J)^-1; else the best one, weighted by S^-1, C = (J^T S^-1 J)^-1
@@ -181,14 +185,19 @@ def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True)
     space."""
     n = blocks[0][0].shape[1] if blocks else 0
     F = np.zeros((n, n))
+    full = bool(blocks) and all(len(b) > 3 for b in blocks)
     if blocks:
         Jall = np.vstack([b[0] for b in blocks])
         Js = np.vstack([b[2] for b in blocks])
-        S = timing**2 * np.eye(len(Jall)) + Js @ Js.T
+        S = Js @ Js.T
         k = 0
-        for J, Sx, _ in blocks:
-            S[k:k + len(J), k:k + len(J)] += Sx
-            k += len(J)
+        for b in blocks:
+            S[k:k + len(b[0]), k:k + len(b[0])] += b[1]
+            k += len(b[0])
+        # the periods' own variance: timing, and a stated amplitude's (with the model's gain, below)
+        St = timing**2 * np.eye(len(Jall)) + (np.diag(np.concatenate([b[4] for b in blocks])) if full else 0.0)
+        if not (as_invert and full):
+            S, St = S + St, np.zeros_like(S)
         F = Jall.T @ Jall if as_invert else Jall.T @ np.linalg.solve(S, Jall)
     w, V = np.linalg.eigh(F)
     ok = w > max(float(w.max()) if w.size else 0.0, 0.0) * 1e-12
@@ -197,7 +206,14 @@ def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True)
         null = V[:, ~ok]
         return np.full((n, n), np.inf), rank, np.max(np.abs(null), axis=1) > 1e-6
     Finv = V @ np.diag(1 / w) @ V.T
-    return (Finv @ Jall.T @ S @ Jall @ Finv if as_invert else Finv), rank, np.zeros(n, bool)
+    if not as_invert:
+        return Finv, rank, np.zeros(n, bool)
+    C = Finv @ Jall.T @ S @ Jall @ Finv
+    if full:  # the timing and amplitude terms through the model's full derivative (budget._with_factor_gain)
+        Jf = np.vstack([b[3] for b in blocks])
+        Gf = np.linalg.solve(Jf.T @ Jf, Jf.T)
+        C = C + Gf @ St @ Gf.T
+    return C, rank, np.zeros(n, bool)
 
 
 def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSettings, components: list[str],
@@ -239,8 +255,12 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
             # uncertainty adds its variance to the period's (stated_amplitude_budget, per period)
             r = np.array([amp[(hi, k)][0] for k in ks]) if amp else np.ones(len(ks))
             va = np.array([amp[(hi, k)][1] for k in ks]) if amp else np.zeros(len(ks))
-            blocks.append((J[ks] * scale * r[:, None], Sx[np.ix_(ks, ks)] * np.outer(r, r) + np.diag(va),
-                           Js[ks] * r[:, None]))  # in units of each component's scale
+            block = (J[ks] * scale * r[:, None], Sx[np.ix_(ks, ks)] * np.outer(r, r), Js[ks] * r[:, None])
+            if amp:  # the amplitude factor's dependence on the components: the gain of the timing and amplitude terms
+                T_lin = np.array([hs[hi].sens.periods[k] for k in ks], float)
+                dr = np.array([amp[(hi, k)][2] for k in ks])
+                block += ((J[ks] * r[:, None] + T_lin[:, None] * dr) * scale, va)
+            blocks.append(block)  # in units of each component's scale
         C, rank, unresolved = joint_covariance(blocks, timing, as_invert)
         worst = float(np.sqrt(np.max(np.diag(C)))) if rank == len(components) else math.inf
         return rank, worst, C, unresolved
@@ -269,7 +289,7 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
         rank, worst = r, w
     # chosen for the best fit (small amplitude); reported for the fit invert makes of them, the
     # planned amplitude stated for each period
-    amp = _amplitude_terms(hs, chosen, settings) if chosen else None
+    amp = _amplitude_terms(hs, chosen, settings, components) if chosen else None
     rank, worst, C, unresolved = evaluate(chosen, as_invert=True, amp=amp) if chosen else (
         0, math.inf, np.full((len(components),) * 2, np.inf), np.ones(len(components), bool))
     sc = np.array([scales[c] for c in components])
@@ -289,33 +309,61 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                        undefined)
 
 
-def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings) -> dict | None:
-    """{(hanging index, mode index): (r, s^2)} of the chosen measurements at
-    the planned amplitude: the amplitude factor ``r = T(A) / T_lin`` by the
-    nonlinear model (``settings.periods`` periods at ``settings.rtol``, as a
-    sweep point's run) and the variance its stated uncertainty (invert's
-    default 10 %) adds to the period, ``(2 T_lin (r - 1) rel)^2``
-    (:func:`bifilar.studies.point.stated_amplitude_budget`); None without
-    the nonlinear runs (``--no-tensions``: the plan is then for a small
-    amplitude, ``amplitude: 0``) or when a run gives no period."""
+def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components: list) -> dict | None:
+    """{(hanging index, mode index): (r, s^2, dr/dI)} of the chosen measurements at
+    the planned amplitude ``A``: the amplitude factor ``r = T(A) / T_lin`` by
+    the nonlinear model (``settings.periods`` periods at ``settings.rtol``,
+    as a sweep point's run) and the variance its stated uncertainty
+    (invert's default 10 %) adds to the period, ``(T_lin A dr/dA rel)^2``
+    with the slope of the mode's amplitude law (a second run at
+    :data:`~bifilar.estimation.solve.STATED_LAW_RATIO` of ``A``, as invert's;
+    :func:`bifilar.studies.point.stated_amplitude_budget`), and the
+    factor's derivative in each of ``components`` (reference body axes, 1 /
+    kg m^2; a run with the component stepped by
+    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment, as
+    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`); None
+    without the nonlinear runs (``--no-tensions``: the plan is then for a
+    small amplitude, ``amplitude: 0``) or when a run gives no period."""
+    from dataclasses import replace
+
     from ..analysis.batch import simulate_batch
+    from ..analysis.modes import linear_modes
+    from ..estimation.solve import FACTOR_STEP, STATED_LAW_RATIO, amplitude_law
     from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
 
     if not settings.tensions:
         return None
-    try:  # the chosen measurements' runs in one call of the batched engine (as a sweep point's)
-        runs = simulate_batch([hs[a].scene for a, _ in chosen], mode=[k + 1 for _, k in chosen],
-                              amplitude=settings.amplitude, periods=settings.periods, rtol=settings.rtol,
-                              rests=[hs[a].sens.rest for a, _ in chosen], modes=[hs[a].sens.modes for a, _ in chosen])
+    A = settings.amplitude
+    n = len(chosen)
+    h = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(hs[0].scene.inertia)))
+    stepped = []  # per chosen measurement and component: (scene, modes) with the component stepped by h
+    for a, _ in chosen:
+        for c in components:
+            E = np.zeros((3, 3))
+            i, j = _IDX[c]
+            E[i, j] = E[j, i] = h
+            sc = replace(hs[a].scene, inertia=hs[a].scene.inertia + hs[a].R @ E @ hs[a].R.T)
+            stepped.append((sc, linear_modes(sc, hs[a].sens.rest)))
+    try:  # the chosen measurements' runs, their laws' and their steps' in one call of the batched engine
+        runs = simulate_batch([hs[a].scene for a, _ in chosen] * 2 + [sc for sc, _ in stepped],
+                              mode=[k + 1 for _, k in chosen] * 2 + [k + 1 for _, k in chosen for _ in components],
+                              amplitude=[A] * n + [STATED_LAW_RATIO * A] * n + [A] * len(stepped),
+                              periods=settings.periods, rtol=settings.rtol,
+                              rests=[hs[a].sens.rest for a, _ in chosen] * 2 + [hs[a].sens.rest for a, _ in chosen
+                                                                                for _ in components],
+                              modes=[hs[a].sens.modes for a, _ in chosen] * 2 + [ms for _, ms in stepped])
     except BifilarError:
         return None
     out = {}
-    for (a, k), run in zip(chosen, runs):
+    for q, ((a, k), run, low) in enumerate(zip(chosen, runs, runs[n:2 * n])):
         T_lin = float(hs[a].sens.periods[k])
-        if not run.period:
+        steps = runs[2 * n + q * len(components):2 * n + (q + 1) * len(components)]
+        if not run.period or not low.period or not all(s.period for s in steps):
             return None
         r = run.period / T_lin
-        out[(a, k)] = (r, (2.0 * T_lin * (r - 1.0) * DEFAULT_AMPLITUDE_REL) ** 2)
+        law = amplitude_law(A, r, STATED_LAW_RATIO, low.period / T_lin)
+        dr = np.array([(s.period / s.linear_period - r) / h for s in steps])
+        out[(a, k)] = (r, (T_lin * A * law.slope() * DEFAULT_AMPLITUDE_REL) ** 2, dr)
     return out
 
 

@@ -375,44 +375,107 @@ def predicted_budgets(sens, scene, requests, unc: dict, honest: bool = True, at=
     return out
 
 
-def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float):
+def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: float | None = None,
+                            dr_dI: float = 0.0):
     """The budget ``invert --period MODE=T --amplitude A`` prints (one
     period, one unknown, the nonlinear rung) from the small-amplitude one
     (``--amplitude 0``) of the same component and mode: ``budget`` (a
     :class:`~bifilar.estimation.sensitivity.Budget`, its ``value_sigma``
     the honest std, kg m^2), ``T_lin`` the mode's linear period (s), ``r =
-    T(A) / T_lin`` the amplitude factor at the stated amplitude ``A`` and
+    T(A) / T_lin`` the amplitude factor at the stated amplitude ``A``,
     ``rel`` the amplitude's relative standard uncertainty (invert's default
     :data:`~bifilar.estimation.uncertainty.DEFAULT_AMPLITUDE_REL` for an
-    ``--amplitude`` without ``+-``).
+    ``--amplitude`` without ``+-``), ``slope`` = ``A dr/dA`` from the
+    mode's amplitude law (:class:`~bifilar.estimation.solve.AmplitudeLaw`;
+    None: the quadratic rule's ``2 (r - 1)``, only for a caller without the
+    law's run) and ``dr_dI`` the factor's derivative in the component
+    (1 / kg m^2; invert's forward difference, see
+    :func:`~bifilar.estimation.solve.stated_amplitude_law`).
 
-    The nonlinear rung fits ``T_lin(I) r = T`` (:mod:`bifilar.estimation.budget`,
-    ``_budget``): the period's derivative and every input's are those of the
-    small-amplitude budget times ``r``, so an input's contribution
-    ``(dT/dx r) / (dT/dI r) s_x`` is unchanged, the timing's ``s_T /
-    (dT/dI r)`` is divided by ``r``, and the stated amplitude's own
-    uncertainty ``s_A = rel A`` adds ``dT/dA s_A / (dT/dI r)`` with ``dT/dA
-    = 2 T_lin (r - 1) / A`` (the amplitude's effect taken as quadratic), so
-    ``|2 (r - 1) rel T_lin / (r dT/dI)|``, independent of ``A``.  The
-    second-order terms (re-solved sigma points) are those of the
-    small-amplitude budget (the factor ``r`` cancels in them), so the same
-    change applies to the honest std.  Returns (std, timing contribution,
-    amplitude contribution, variance shares by kind), kg m^2."""
+    The nonlinear rung fits ``T_lin(I) r(A; I) = T``
+    (:mod:`bifilar.estimation.budget`, ``_budget``): the period's derivative
+    in ``I`` is ``g dT_lin/dI`` with ``g = r + T_lin dr_dI dI/dT``, so the
+    timing's contribution ``s_T / (g dT/dI)`` is the small-amplitude one
+    divided by ``g``, the stated amplitude's own uncertainty ``s_A = rel A``
+    adds ``T_lin (dr/dA) s_A / (g dT/dI)`` = ``|slope rel T_lin dI/dT /
+    g|``, and an input's contribution is unchanged (the factor taken to
+    depend on the inputs as on the unknown: ``budget._with_factor_gain``).
+    The second-order terms (re-solved sigma points) are those of the
+    small-amplitude budget (the factor cancels in them), so the same change
+    applies to the honest std.  Returns (std, timing contribution, amplitude
+    contribution, variance shares by kind), kg m^2."""
     c_t = float(budget.contributions["timing"])
-    c_a = abs(2.0 * (r - 1.0) * rel * T_lin * float(budget.dI_dT) / r)
+    g = r + T_lin * dr_dI * float(budget.dI_dT)
+    slope = 2.0 * (r - 1.0) if slope is None else slope
+    c_a = abs(slope * rel * T_lin * float(budget.dI_dT) / g)
     sd = float(budget.value_sigma)
-    var = sd * sd - c_t * c_t * (1.0 - 1.0 / (r * r)) + c_a * c_a
+    var = sd * sd - c_t * c_t * (1.0 - 1.0 / (g * g)) + c_a * c_a
     lin = {k: float(c) for k, c in budget.contributions.items()}
-    lin["timing"] = c_t / r
+    lin["timing"] = c_t / g
     lin["amplitude"] = c_a
     tot = sum(c * c for c in lin.values())
     shares = {k: (c * c / tot if tot > 0 else 0.0) for k, c in lin.items()}
-    return math.sqrt(max(var, 0.0)), c_t / r, c_a, shares
+    return math.sqrt(max(var, 0.0)), c_t / g, c_a, shares
 
 
-def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict) -> None:
+def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
+    """{component: (A dr/dA, dr/dI)} of every component whose mode has a
+    run at the point's amplitude: the law's second run at
+    :data:`~bifilar.estimation.solve.STATED_LAW_RATIO` of the amplitude
+    per mode, and one run per component with it stepped by
+    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment (as
+    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`), all in
+    one call of the batched engine, as the point's own runs (periods, rtol);
+    a component whose runs fail is left out (its sigma then says so)."""
+    from dataclasses import replace
+
+    from ..analysis.modes import linear_modes
+    from ..estimation.solve import FACTOR_STEP, STATED_LAW_RATIO, amplitude_law
+
+    comps = [(c, k) for c, k in pre.chosen.items() if sims.get(k) is not None and sims[k].period]
+    if not comps:
+        return {}
+    modes = sorted({k for _, k in comps})
+    h = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(pre.scene.inertia)))
+    stepped = []
+    for c, _ in comps:
+        I = np.array(pre.scene.inertia, float)
+        i, j = _IDX[c]
+        I[i, j] += h
+        if i != j:
+            I[j, i] += h
+        sc = replace(pre.scene, inertia=I)
+        stepped.append((sc, linear_modes(sc, pre.rest)))
+    scenes = [pre.scene] * len(modes) + [sc for sc, _ in stepped]
+    try:
+        runs = _runs_at(scenes, [pre.labels[k] for k in modes] + [pre.labels[k] for _, k in comps],
+                        [STATED_LAW_RATIO * pre.amplitude] * len(modes) + [pre.amplitude] * len(comps), st,
+                        [pre.rest] * len(scenes), [pre.ms] * len(modes) + [ms for _, ms in stepped])
+    except BifilarError:
+        return {}
+    out = {}
+    for n, (c, k) in enumerate(comps):
+        half, step = runs[modes.index(k)], runs[len(modes) + n]
+        if half.error or step.error or not half.period or not step.period:
+            continue
+        r = sims[k].period / float(pre.periods[k])
+        law = amplitude_law(pre.amplitude, r, STATED_LAW_RATIO, half.period / float(pre.periods[k]))
+        out[c] = (pre.amplitude * law.slope(), (step.period / step.linear_period - r) / h)
+    return out
+
+
+def _runs_at(scenes, labels, amplitudes, st: SweepSettings, rests, modes) -> list:
+    """Nonlinear runs of ``scenes`` (one call of the batched engine, errors returned per run)."""
+    from ..analysis.batch import simulate_batch
+
+    return simulate_batch(scenes, mode=labels, amplitude=amplitudes, periods=st.periods, rtol=st.rtol, rests=rests,
+                          modes=modes, errors="return")
+
+
+def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings) -> None:
     """Each component's sigma for the amplitude stated to ``invert`` (the
-    point's nonlinear run gives the amplitude factor;
+    point's nonlinear run gives the amplitude factor, :func:`_amplitude_laws`
+    its slope and its derivative in the component;
     :func:`stated_amplitude_budget`), the small-amplitude figure kept in
     ``amplitude_budget``; without a run (``--no-tensions``, a planner's
     screen without runs) the sigma stays the small-amplitude one and
@@ -420,6 +483,7 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict) -> None:
     from ..estimation.sensitivity import Budget, grouped_shares
     from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
 
+    laws = _amplitude_laws(pre, sims, st)
     for comp, k in pre.chosen.items():
         e = res["components"][comp]
         b = pre.budgets[comp]
@@ -432,12 +496,16 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict) -> None:
                 "sigma_small_amplitude": sd0 if math.isfinite(sd0) else None,
                 "rel_sigma_small_amplitude": e["rel_sigma"] if math.isfinite(sd0) else None}
         e["amplitude_budget"] = info
-        if r is None or not math.isfinite(sd0):
+        if r is None or not math.isfinite(sd0) or comp not in laws:
             info["note"] = ("no nonlinear run at this point: the sigma is for a small amplitude stated as such "
-                            "(invert --amplitude 0)" if r is None else "no sigma")
+                            "(invert --amplitude 0)" if r is None else "no sigma" if not math.isfinite(sd0) else
+                            "the amplitude law's runs failed: the sigma is for a small amplitude stated as such "
+                            "(invert --amplitude 0)")
             continue
-        sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL)
-        info.update(budgeted=True, contribution=c_a)
+        slope, dr_dI = laws[comp]
+        sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI)
+        info.update(budgeted=True, contribution=c_a, slope=slope, quadratic_slope=2.0 * (r - 1.0),
+                    factor_gain=r + T_lin * dr_dI * float(b.dI_dT))
         scale = component_scale(pre.scene.inertia, comp)
         e.update(sigma=sd, rel_sigma=sd / scale if scale else math.inf,
                  shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))
@@ -756,7 +824,7 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
         res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
-    _stated_amplitude(res, pre, sims)
+    _stated_amplitude(res, pre, sims, st)
     if screen:
         return res
     # biases at the prescribed amplitude
