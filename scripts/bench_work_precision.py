@@ -67,11 +67,17 @@ from bifilar.models import maximal as mx  # noqa: E402
 # --------------------------------------------------------------------------
 # the naive baseline
 # --------------------------------------------------------------------------
-def naive_rhs_factory(scene, anchor_shift=None):
+def naive_rhs_factory(scene, anchor_shift=None, damping=0.0):
     """``f(t, y)`` of the maximal-coordinate model written the obvious way:
     3-vectors as numpy arrays, a Python loop over the wires, ``np.cross``,
     matrix products, ``np.linalg.solve`` -- the same equations (and
-    Baumgarte rates) as :func:`bifilar.models.maximal.rhs`."""
+    Baumgarte rates) as :func:`bifilar.models.maximal.rhs`.
+
+    ``damping`` (1/s): a viscous force ``-c m v`` on the CoM and torque
+    ``-c I w`` on the body (mass-proportional damping, which the library's
+    conservative model does not have): a mode of angular frequency omega
+    then decays with the damping ratio ``c / (2 omega)``, Q = omega / c
+    (tests/test_end_to_end_audit.py, a pendulum's free decay)."""
     m = scene.mass
     g = scene.gravity
     I = np.array(scene.inertia)
@@ -93,7 +99,7 @@ def naive_rhs_factory(scene, anchor_shift=None):
         r, q, v, w = y[0:3], y[3:7], y[7:10], y[10:13]
         R = quat_to_R(q)
         ww = R @ w
-        tau = -np.cross(w, I @ w)
+        tau = -np.cross(w, I @ w) - damping * (I @ w)
         Iinv_tau = Iinv @ tau
         ds, Jws, IJws, b = [], [], [], []
         for i in range(n):
@@ -107,7 +113,8 @@ def naive_rhs_factory(scene, anchor_shift=None):
             Jw = np.cross(p, d_b)
             IJw = Iinv @ Jw
             cen = d_b @ np.cross(w, np.cross(w, p))
-            b.append(-(sdot @ sdot) - cen + g * d[2] - Jw @ Iinv_tau - 2 * alpha * phidot - beta**2 * phi)
+            b.append(-(sdot @ sdot) - cen + g * d[2] + damping * (d @ v) - Jw @ Iinv_tau - 2 * alpha * phidot
+                     - beta**2 * phi)
             ds.append(d)
             Jws.append(Jw)
             IJws.append(IJw)
@@ -116,7 +123,7 @@ def naive_rhs_factory(scene, anchor_shift=None):
             for j in range(n):
                 A[i, j] = ds[i] @ ds[j] / m + Jws[i] @ IJws[j]
         lam = np.linalg.solve(A, np.array(b))
-        vdot = np.array([0.0, 0.0, -g])
+        vdot = np.array([0.0, 0.0, -g]) - damping * v
         wdot = Iinv_tau.copy()
         for i in range(n):
             vdot = vdot + lam[i] * ds[i] / m

@@ -564,9 +564,15 @@ def test_signal_measurement_removes_damping_and_reads_amplitude(tmp_path):
     assert abs(m.period - 2 * math.pi / wn) < 5 * m.std + 1e-12
     assert abs(m.observed_period - T_d) < 5 * m.std + 1e-12
     assert m.period < m.observed_period
-    # energy-weighted RMS of the envelope A exp(-zeta wn t) over the record
+    # the amplitude the fitted period refers to: the envelope A exp(-zeta wn t)
+    # weighted as the least-squares slope of the phase weighs it (weights
+    # A^2 times the lever arm; tests/test_end_to_end_audit.py checks the rule
+    # against a chirp's own law)
     env = A * np.exp(-zeta * wn * t)
-    a_eff = math.sqrt(np.sum(env**4) / np.sum(env**2))
+    w = env**2
+    tc = t - np.sum(w * t) / np.sum(w)
+    K = np.cumsum((w * tc)[::-1])[::-1]
+    a_eff = math.sqrt(np.sum(K * w) / np.sum(K))
     assert m.amplitude == pytest.approx(a_eff, rel=2e-3)  # fitted amplitude and decay to ~0.1 %
 
 

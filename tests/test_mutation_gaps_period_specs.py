@@ -53,9 +53,17 @@ def record(tmp_path_factory):
 
 
 def _true_effective_amplitude(t_used):
-    """The energy-weighted RMS of the true envelope over the samples used."""
-    env = A0 * np.exp(-ZETA * WN * np.asarray(t_used))
-    return math.sqrt(np.sum(env ** 4) / np.sum(env ** 2))
+    """The amplitude the fitted period refers to, from the true envelope
+    over the samples used: squared amplitudes weighted as the phase's
+    least-squares slope weighs them (weights A^2 times the lever arm from
+    their weighted mean time; tests/test_end_to_end_audit.py checks the
+    rule against a chirp's own law)."""
+    t = np.asarray(t_used)
+    env = A0 * np.exp(-ZETA * WN * t)
+    w = env ** 2
+    tc = t - np.sum(w * t) / np.sum(w)
+    K = np.cumsum((w * tc)[::-1])[::-1]
+    return math.sqrt(np.sum(K * w) / np.sum(K))
 
 
 def test_a_damped_recordings_period_is_the_natural_one_and_its_observed_the_damped_one(record):
@@ -74,9 +82,9 @@ def test_a_damped_recordings_period_is_the_natural_one_and_its_observed_the_damp
     assert r["cycles"] == pytest.approx((f.t1 - f.t0) * WD / (2 * math.pi), rel=1e-4)  # ~20 cycles in 30 s
 
 
-def test_the_amplitude_is_the_energy_weighted_envelope_in_the_modes_unit(record):
-    """``angle``: the energy-weighted RMS of the envelope, ``sqrt(sum A^4 /
-    sum A^2)`` over the fit window, times ``scale``; ``rate``: an angular
+def test_the_amplitude_is_the_one_the_period_refers_to_in_the_modes_unit(record):
+    """``angle``: the envelope as the fitted period weighs it over the fit
+    window (:func:`signal_result.period_amplitude`), times ``scale``; ``rate``: an angular
     rate's envelope divided by the angular frequency (the angle's
     amplitude).  The envelope here is the true one, A0 exp(-zeta wn t)."""
     r = ps.period_from_signal(record, quantity="angle")

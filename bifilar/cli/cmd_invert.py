@@ -211,7 +211,7 @@ def _apply_amplitudes(ms, amps: dict) -> None:
     for m in ms.measurements:
         spec = amps.get(m.label, amps.get(None))
         if spec is not None and (m.amplitude is None or m.label in amps):
-            m.amplitude, m.amplitude_std = spec
+            m.state_amplitude(*spec)
 
 
 def _render(ms, res) -> None:

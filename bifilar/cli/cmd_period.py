@@ -141,7 +141,8 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     if len(fit.modes) > 2:
         m3 = fit.modes[2]
         tb.add_row("third mode (s)", f"{m3['period']:.6g} (amplitude {m3['amplitude']:.3g})")
-    tb.add_row("amplitude (signal units)", f"{fmt(fit.amplitude, 5)} at t0, {fmt(fit.amplitude_rms, 5)} RMS over the fit")
+    tb.add_row("amplitude (signal units)", f"{fmt(fit.amplitude, 5)} at t0, {fmt(fit.amplitude_rms, 5)} RMS over the fit, "
+                                           f"{fmt(fit.amplitude_period, 5)} the period's")
     tb.add_row("r^2", fmt(fit.r_squared, 7))
     rc = fit.residual_check
     if rc:

@@ -126,6 +126,25 @@ class Measurement:
         nu = self.details.get("dof") if self.source == "timed" else None
         return float(nu) if nu is not None else math.inf
 
+    def state_amplitude(self, amplitude: float | None, amplitude_std: float | None = None) -> None:
+        """Set the amplitude a user states (rad or m, the mode's dominant
+        coordinate; None: unknown) and its std.  For a recording it is the
+        amplitude at the start of the fit window: the release, when the
+        record holds it (a leading rest is left out).  A decaying record's
+        fitted period refers to a smaller amplitude, ``details["decay"]``
+        times that one (:func:`~bifilar.estimation.signal_result.period_amplitude`),
+        which is what the model is run at; the std scales with it."""
+        d = self.details.get("decay") if self.source == "signal" else None
+        if amplitude is None or d is None:
+            self.amplitude, self.amplitude_std = amplitude, amplitude_std
+            if self.source == "signal" and amplitude is not None:
+                self.details["amplitude_source"] = "given"
+            return
+        self.amplitude = amplitude * d
+        self.amplitude_std = None if amplitude_std is None else amplitude_std * d
+        self.details["amplitude_source"] = (f"given at the record's start ({amplitude:.6g}), times its decay "
+                                            f"{d:.4g}: the amplitude the fitted period refers to")
+
     def to_json(self) -> dict:
         d = {"mode": self.label, "hanging": self.hanging, "source": self.source, "period": self.period,
              "std": self.std, "std_given": self.std_given, "amplitude": self.amplitude,
@@ -170,24 +189,25 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
     """A :class:`Measurement` from a recording (see :func:`period_from_signal`)."""
     r = period_from_signal(path, fld=fld, **kw)
     fit = r["fit"]
-    amp = amplitude if amplitude is not None else r["amplitude"]
     meta = {k: v for k, v in r["meta"].items() if k in ("path", "column", "n_samples", "sample_rate", "duration",
                                                          "time_source", "warnings")}
     meta["path"] = str(meta.get("path", path))
     det = {"signal": meta, "fit": {"model": fit.model, "period": fit.period, "std": fit.std,
                                     "damping_ratio": fit.damping_ratio, "r_squared": fit.r_squared,
                                     "window": [fit.t0, fit.t1], "notes": list(fit.notes)},
-           "amplitude_source": ("given" if amplitude is not None else
-                                ("fit (energy-weighted envelope)" if r["amplitude"] is not None else None))}
+           "amplitude_source": "fit (the amplitude the fitted period refers to)" if r["amplitude"] is not None else None,
+           "decay": r["decay"]}
     std = r["std"]
     if std < MIN_RELATIVE_SIGMA * r["period"]:  # a noise-free record: below what the model's period resolves
         std = MIN_RELATIVE_SIGMA * r["period"]
         det["std_floor"] = (f"the fitted std {r['std']:.3g} s is below {MIN_RELATIVE_SIGMA:g} of the period, "
                             f"which the model does not resolve; {std:.3g} s is used")
-    return Measurement(label, r["period"], std, "signal", fld, hanging=hanging, amplitude=amp,
-                       amplitude_std=amplitude_std, cycles=min(r["cycles"], MAX_SIM_CYCLES),
-                       observed_period=r["observed_period"], damping_ratio=r["damping_ratio"], std_given=True,
-                       details=det, fit=fit, signal=(r["t"], r["y"]))
+    m = Measurement(label, r["period"], std, "signal", fld, hanging=hanging, amplitude=r["amplitude"],
+                    cycles=min(r["cycles"], MAX_SIM_CYCLES), observed_period=r["observed_period"],
+                    damping_ratio=r["damping_ratio"], std_given=True, details=det, fit=fit, signal=(r["t"], r["y"]))
+    if amplitude is not None:
+        m.state_amplitude(amplitude, amplitude_std)
+    return m
 
 
 # ---------------------------------------------------------------------------

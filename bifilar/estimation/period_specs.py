@@ -346,12 +346,14 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
     ``sqrt(1 - zeta^2)``), ``std`` (s, including the damping ratio's
     uncertainty), ``observed_period``, ``damping_ratio``, ``amplitude``
     (rad or m, None unless ``quantity`` is ``angle`` or ``rate``),
-    ``cycles``, ``fit``, ``t``, ``y``, ``meta``.
+    ``decay`` (the amplitude the period refers to over the envelope at the
+    fit window's start, unit-free, <= 1 for a decaying record; None for a
+    crossings-only fit), ``cycles``, ``fit``, ``t``, ``y``, ``meta``.
 
-    The amplitude of a decaying recording is the energy-weighted RMS of the
-    fitted envelope over the fit window, ``sqrt(sum A^4 / sum A^2)`` (the
-    frequency of a least-squares fit is weighted by the squared amplitude),
-    times ``scale``; for ``rate`` it is further divided by omega.
+    The amplitude of a decaying recording is the one its fitted period
+    refers to, :attr:`~bifilar.estimation.signal_result.PeriodFit.amplitude_period`
+    (the envelope weighted as a least-squares slope weighs it), times
+    ``scale``; for ``rate`` it is further divided by omega.
     """
     from .signal import SignalError, fit_period, read_signal
 
@@ -373,14 +375,16 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
     c = math.sqrt(1.0 - zeta * zeta)
     Tn = Td * c
     std = math.hypot(c * float(fit.std), Td * zeta / c * zstd)
-    amp = None
-    if quantity != "other" and fit.model != "crossings":
-        env = np.abs(fit.envelope(fit.t_used))
-        a_eff = float(np.sqrt(np.sum(env**4) / np.sum(env**2))) if np.sum(env**2) > 0 else 0.0
-        a_eff *= 1.0 if scale is None else float(scale)
-        if quantity == "rate":
-            a_eff /= 2 * math.pi / Td
-        amp = a_eff
+    amp = decay = None
+    if fit.model != "crossings":
+        a_start = float(np.abs(fit.envelope(np.array([fit.t0])))[0])
+        decay = fit.amplitude_period / a_start if a_start > 0 and np.isfinite(fit.amplitude_period) else None
+        if quantity != "other":
+            a_eff = fit.amplitude_period if np.isfinite(fit.amplitude_period) else 0.0
+            a_eff *= 1.0 if scale is None else float(scale)
+            if quantity == "rate":
+                a_eff /= 2 * math.pi / Td
+            amp = a_eff
     cycles = max((fit.t1 - fit.t0) / Td, 1.0)
     return {"period": Tn, "std": std, "observed_period": Td, "damping_ratio": zeta, "amplitude": amp,
-            "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta}
+            "decay": decay, "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta}

@@ -56,10 +56,17 @@ class PeriodFit:
         ``A cos(omega (t - t0) + phase)``.
     amplitude_rms : float
         [y], RMS over the fit window of the (dominant) oscillation's
-        envelope: the amplitude the period refers to.  A finite-amplitude
-        pendulum's period depends on it, and one record rarely spans enough
-        amplitude to measure that dependence; compare periods of
-        recordings at their ``amplitude_rms`` (docs/real_data.md).
+        envelope.  A finite-amplitude pendulum's period depends on its
+        amplitude, and one record rarely spans enough amplitude to measure
+        that dependence; compare periods of recordings at their amplitude
+        (docs/real_data.md).
+    amplitude_period : float
+        [y], the amplitude the fitted period refers to: the period a
+        pendulum shows at this constant amplitude is the one fitted to the
+        decaying record, for a period that changes as ``A^2``
+        (:func:`period_amplitude`).  Equals the envelope without decay;
+        for a strong decay it lies between ``amplitude_rms`` and the
+        energy-weighted RMS.
     offset, drift : float
         [y] at ``t_ref`` and [y]/s: ``c0 + c1 (t - t_ref)``.
     residual_rms, r_squared : float
@@ -149,6 +156,7 @@ class PeriodFit:
     lag1_autocorr: float = 0.0
     noise_std: float = float("nan")
     amplitude_rms: float = float("nan")
+    amplitude_period: float = float("nan")
     period_undamped: float | None = None
     aic: float = float("nan")
     bic: float = float("nan")
@@ -201,7 +209,7 @@ class PeriodFit:
     def to_dict(self) -> dict:
         """JSON-friendly scalars (no arrays)."""
         keys = ("model", "period", "std", "frequency", "period_undamped", "damping_ratio", "damping",
-                "amplitude", "amplitude_rms", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
+                "amplitude", "amplitude_rms", "amplitude_period", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
                 "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "std_quantisation", "uncertainty",
                 "lag1_autocorr", "noise_std", "aic", "bic", "converged", "modes", "selection",
                 "chosen_by", "choice_reason", "windows", "residual_check", "oscillation", "notes")
@@ -354,6 +362,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         if raw.free[6] and sg * T_rec < 1e-6:
             notes.append("viscous term of the quadratic model at its bound sigma = 0")
     free_n = [nm for nm, f in zip(names, raw.free) if f]
+    env = np.abs(_envelope(raw.kind, p, t, raw.t0))
     if not raw.converged:
         notes.append(f"least squares did not converge: {raw.message}")
     return PeriodFit(
@@ -363,7 +372,39 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         r_squared=float(r2), n_samples=int(n), covariance=cov, params=p.copy(), param_names=names,
         t0=float(t[0]), t1=float(t[-1]), t_ref=float(raw.tm), std_raw=m["std_raw"], std_inflation=infl,
         lag1_autocorr=rho, noise_std=_noise_sigma(r),
-        amplitude_rms=float(np.sqrt(np.mean(_envelope(raw.kind, p, t, raw.t0) ** 2))),
+        amplitude_rms=float(np.sqrt(np.mean(env ** 2))), amplitude_period=period_amplitude(t, env),
         period_undamped=T_und, aic=aic, bic=bic,
         converged=raw.converged, modes=modes, t_used=t.copy(), residuals=r.copy(), notes=notes,
         selection={"free_parameters": free_n}, residual_check=check, _kind=raw.kind)
+
+
+def period_amplitude(t: np.ndarray, env: np.ndarray) -> float:
+    """The constant amplitude ([y]) at which a pendulum shows the period a
+    least-squares fit finds in a record whose envelope ``env`` (at the
+    sample times ``t``, s) decays, when the period changes with the
+    amplitude as ``A^2`` (a pendulum's first nonlinear term).
+
+    The fitted frequency is the slope of the phase over time, weighted by
+    the squared amplitude (the information of each sample): with weights
+    ``w = env^2`` and their mean time ``t_w``, the slope averages the
+    instantaneous frequency with the kernel ``K(t_i) = dt_i sum_{j >= i}
+    w_j (t_j - t_w)`` (non-negative, zero at both ends of the window), so
+    the amplitude it refers to is ``sqrt(sum K env^2 / sum K)``.  Not the
+    energy-weighted RMS ``sqrt(sum env^4 / sum env^2)``, which ignores the
+    lever arm ``t - t_w`` of a slope: 47 % too high in ``A^2`` for a
+    record decaying to a fifth (docs/invert.md, "Inputs").  Without decay
+    every weighting gives the envelope."""
+    t = np.asarray(t, dtype=float)
+    env = np.asarray(env, dtype=float)
+    if t.size < 3 or not np.all(np.isfinite(env)):
+        return float(np.sqrt(np.mean(env ** 2))) if env.size else float("nan")
+    w = env ** 2
+    sw = float(np.sum(w))
+    if not sw > 0:
+        return 0.0
+    tw = float(np.sum(w * t) / sw)
+    dt = np.diff(t, prepend=t[0] - float(np.median(np.diff(t))))
+    K = dt * np.cumsum((w * (t - tw))[::-1])[::-1]
+    K = np.maximum(K, 0.0)  # non-negative in exact arithmetic; rounding at the ends
+    sk = float(np.sum(K))
+    return float(np.sqrt(np.sum(K * w) / sk)) if sk > 0 else float(np.sqrt(sw / env.size))
