@@ -1752,3 +1752,33 @@ def test_point_with_its_laws_runs_in_its_call_equals_the_separate_calls(name, pa
     monkeypatch.setattr(pt, "_evaluate", before)
     ref = sw.evaluate_point(cfg, name, params, st)
     assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)
+
+
+@pytest.mark.parametrize("name, params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {})])
+def test_law_runs_stepped_modes_from_the_points_stiffness_equal_their_linear_modes(name, params):
+    """(session 8) The amplitude laws' stepped scenes take their modes from
+    the point's stiffness (``modes_of_inertia``): every label, period and
+    shape those of each stepped scene's own ``linear_modes``, bit for bit;
+    the stepped inertia is the one invert steps (``FACTOR_STEP`` of the
+    largest moment, on the component and its transpose)."""
+    from bifilar.estimation.solve import FACTOR_STEP
+    from bifilar.studies.point import _IDX, _law_runs
+
+    scene = _scene(name, params)
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    idx = [k for k, m in enumerate(ms.modes) if m.period][:3]
+    chosen = dict(zip(COMPS + ["Ixy"], idx + idx[:1]))
+    labels = [m.label for m in ms.modes]
+    got = _law_runs(scene, rest, ms, labels, chosen, 0.05, modes_of_inertia(scene, rest))
+    ref = _law_runs(scene, rest, ms, labels, chosen, 0.05)
+    h = FACTOR_STEP * np.max(np.linalg.eigvalsh(scene.inertia))
+    n = len(got.modes)
+    for (c, _), sc, a, b in zip(got.comps, got.scenes[n:], got.mode_sets[n:], ref.mode_sets[n:]):
+        i, j = _IDX[c]
+        dI = np.zeros((3, 3))
+        dI[i, j] = dI[j, i] = h
+        assert np.allclose(sc.inertia - scene.inertia, dI, rtol=0, atol=1e-9 * h)
+        assert [m.label for m in a.modes] == [m.label for m in b.modes]
+        for x, y in zip(a.modes, b.modes):
+            assert x.period == y.period and np.array_equal(x.shape, y.shape) and x.dominant == y.dominant

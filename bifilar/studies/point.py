@@ -443,11 +443,14 @@ class _LawRuns:
     runs: Any = None
 
 
-def _law_runs(scene, rest, ms, labels, chosen: dict, amplitude: float) -> _LawRuns:
+def _law_runs(scene, rest, ms, labels, chosen: dict, amplitude: float, at=None) -> _LawRuns:
     """What :func:`_amplitude_laws` runs for the components ``chosen``
     {component: mode index} (each stepped as invert's
     :func:`~bifilar.estimation.solve.stated_amplitude_law` steps it:
-    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment)."""
+    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment).
+    ``at``: the point's :func:`_stiffness` (the stepped scenes' modes from
+    its eigenproblem, the same bits as their own ``linear_modes``), else
+    each stepped scene's ``linear_modes``."""
     from dataclasses import replace
 
     from ..analysis.modes import linear_modes
@@ -464,7 +467,7 @@ def _law_runs(scene, rest, ms, labels, chosen: dict, amplitude: float) -> _LawRu
         if i != j:
             I[j, i] += h
         sc = replace(scene, inertia=I)
-        stepped.append((sc, linear_modes(sc, rest)))
+        stepped.append((sc, at(I) if at is not None else linear_modes(sc, rest)))
     n = len(modes) + len(comps)
     return _LawRuns(comps, modes, h, [scene] * len(modes) + [sc for sc, _ in stepped],
                     [labels[k] for k in modes] + [labels[k] for _, k in comps],
@@ -488,7 +491,7 @@ def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
 
     law = pre.law
     if law is None:
-        law = _law_runs(pre.scene, pre.rest, pre.ms, pre.labels, pre.chosen, pre.amplitude)
+        law = _law_runs(pre.scene, pre.rest, pre.ms, pre.labels, pre.chosen, pre.amplitude, pre.at)
     comps = [(n, c, k) for n, (c, k) in enumerate(law.comps) if sims.get(k) is not None and sims[k].period]
     if not comps:
         return {}
@@ -822,7 +825,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         # go on to the runs (solved once)
         if pre.runs:
             # the amplitude laws' runs' start poses in the same call (one solve: tests/test_point_cost.py)
-            pre.law = _law_runs(scene, rest, ms, labels, chosen, amplitude)
+            pre.law = _law_runs(scene, rest, ms, labels, chosen, amplitude, at)
             law = pre.law
             sp = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude,
                                      more=(law.scenes, law.rests, [m.get(lab) for m, lab in zip(law.mode_sets, law.labels)],
