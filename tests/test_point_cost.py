@@ -1782,3 +1782,35 @@ def test_law_runs_stepped_modes_from_the_points_stiffness_equal_their_linear_mod
         assert [m.label for m in a.modes] == [m.label for m in b.modes]
         for x, y in zip(a.modes, b.modes):
             assert x.period == y.period and np.array_equal(x.shape, y.shape) and x.dominant == y.dominant
+
+
+@pytest.mark.parametrize("name, params", [("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {})])
+def test_law_runs_without_health_have_the_periods_of_the_runs_with_it(name, params):
+    """(session 8) The amplitude laws' runs skip the health figures (only
+    their periods are read): every run's period and crossings those of the
+    same run with its health, bit for bit; and a planner's screen of the
+    point (``evaluate_points``: all its laws' runs in one call without
+    health) gives what the point alone gives."""
+    import json
+
+    from bifilar.analysis.batch import simulate_batch
+    from bifilar.studies import point as pt
+    from bifilar.studies import sweep as sw
+
+    cfg = read_yaml(CONFIGS / f"{name}.yaml")
+    st = sw.resolve_settings(cfg)
+    res, pre = pt._prepare(cfg, name, params, st)
+    law = pre.law
+    assert law is not None and len(law.labels) >= 2
+    kw = dict(mode=law.labels, amplitude=law.amplitudes, periods=st.periods, rtol=st.rtol, rests=law.rests,
+              modes=law.mode_sets, errors="return")
+    with_health = simulate_batch(law.scenes, **kw)
+    got = pt._runs_at(law, st)
+    assert np.all(np.isnan([r.max_constraint_violation for r in got]))  # the health was skipped
+    for a, b in zip(got, with_health):
+        assert a.period is not None and a.period == b.period and np.array_equal(a.crossings, b.crossings)
+    for screen in (False, True):
+        alone = sw.evaluate_point(cfg, name, params, st, screen=screen)
+        batch = pt.evaluate_points(cfg, name, [params], st, screen=screen)[0]
+        assert alone["valid"] and json.dumps(alone, sort_keys=True, default=str) == json.dumps(batch, sort_keys=True,
+                                                                                                default=str)
