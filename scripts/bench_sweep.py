@@ -215,7 +215,8 @@ PARTS = [("sensitivity", "bifilar.studies.point", "point_sensitivity"),
          ("  of which sigma points re-solved", "bifilar.estimation.budget", "_resolve"),
          ("  of which sigma points re-solved", "bifilar.estimation.budget", "_one_step"),  # their first steps, batched
          ("start poses of the runs (checked)", "bifilar.analysis.simulate", "checked_start_poses"),
-         ("nonlinear runs", "bifilar.studies.point", "_nonlinear_runs"),
+         ("amplitude laws' stepped scenes and their modes", "bifilar.studies.point", "_law_runs"),
+         ("nonlinear runs (the point's and its amplitude laws')", "bifilar.studies.point", "_runs_at"),
          ("bias: thesis rung", "bifilar.studies.point", "_Ladder.thesis"),
          ("bias: linear estimate", "bifilar.studies.point", "linear_estimate")]
 

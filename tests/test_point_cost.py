@@ -1681,3 +1681,136 @@ def test_start_poses_without_masks_or_copies_equal_the_ones_before():
     for ii in (np.arange(len(cases[0][0]))[::-1], np.array([0, 0, 1]), np.arange(2)):  # ... only for all, in order
         sub = rig.take(ii)
         assert sub is not rig and all(np.array_equal(v[ii], sub.__dict__[k]) for k, v in rig.__dict__.items())
+
+
+def test_start_poses_with_more_rows_equal_the_calls_of_their_own():
+    """(session 8, the amplitude law's runs) ``checked_start_poses(...,
+    more=)``: the law's runs' start poses (another amplitude, stepped
+    scenes) solved in the point's call are, row by row, the bits of the two
+    calls they replace; a refusal of the point's own rows is the same."""
+    from bifilar.analysis.simulate import checked_start_poses
+    from bifilar.analysis.start_pose import start_poses
+    from bifilar.errors import InputError
+    from bifilar.studies.point import _law_runs
+
+    for name, params, amp in [("solar_boat", {"spacing": 3.0}, 0.3), ("trifilar_kth", {}, 0.05)]:
+        scene = _scene(name, params)
+        rest = rest_pose(scene)
+        ms = linear_modes(scene, rest)
+        idx = [k for k, m in enumerate(ms.modes) if m.period][:3]
+        timed = [ms.modes[k] for k in idx]
+        chosen = dict(zip(COMPS, idx))
+        law = _law_runs(scene, rest, ms, [m.label for m in ms.modes], chosen, amp)
+        more_modes = [m.get(lab) for m, lab in zip(law.mode_sets, law.labels)]
+        got = checked_start_poses(scene, rest, timed, amp, more=(law.scenes, law.rests, more_modes, law.amplitudes))
+        own = checked_start_poses(scene, rest, timed, amp)
+        other = start_poses(law.scenes, law.rests, more_modes, law.amplitudes)
+        ref = own.concat([own, other])
+        assert len(got.feasible) == len(timed) + len(law.labels) == 2 * len(timed) + len(set(chosen.values()))
+        for f in ("com", "R", "q", "x", "residual", "feasible", "gap", "amplitude"):
+            assert np.array_equal(getattr(got, f), getattr(ref, f)), f
+    scene = _scene("thesis_plate_rest", {"spacing": 3.0})  # a refused start: the error of the call alone
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    swing = ms.get("swing-y")
+    with pytest.raises(InputError) as alone:
+        checked_start_poses(scene, rest, [swing], 1.2)
+    with pytest.raises(InputError) as more:
+        checked_start_poses(scene, rest, [swing], 1.2, more=([scene], [rest], [swing], [0.01]))
+    assert str(more.value) == str(alone.value)
+
+
+@pytest.mark.parametrize("name, params, amp", [("solar_boat", {"spacing": 3.0}, None),
+                                               ("thesis_lin2_pitch", {}, None),
+                                               ("trifilar_kth", {}, 0.3)])
+def test_point_with_its_laws_runs_in_its_call_equals_the_separate_calls(name, params, amp, monkeypatch):
+    """(session 8) A point's amplitude laws' runs, their start poses solved
+    and the runs run in the point's own calls, give every figure of the
+    point bit for bit as the path before: the point's runs first, then the
+    laws' runs in a call of their own solving their own start poses."""
+    import json
+
+    from bifilar.analysis import simulate as simm
+    from bifilar.studies import point as pt
+    from bifilar.studies import sweep as sw
+
+    cfg = read_yaml(CONFIGS / f"{name}.yaml")
+    st = sw.resolve_settings(cfg, **({"amplitude": amp} if amp else {}))
+    got = sw.evaluate_point(cfg, name, params, st)
+    assert got["valid"] and all(e["amplitude_budget"]["budgeted"] for e in got["components"].values()
+                                if e.get("mode"))
+    real = simm.checked_start_poses
+    monkeypatch.setattr(simm, "checked_start_poses", lambda s, r, m, a, more=None: real(s, r, m, a))
+
+    def before(base_cfg, source, params, st, screen=False):  # the path before: two solves, two calls
+        res, pre = pt._prepare(base_cfg, source, params, st, screen)
+        pre.law = None
+        sims = dict(zip(pre.runs, pt._nonlinear_runs(pre.scene, pre.rest, pre.ms, [pre.labels[k] for k in pre.runs],
+                                                     pre.amplitude, st, pre.starts)))
+        return pt._finish(res, pre, sims, st, screen)
+
+    monkeypatch.setattr(pt, "_evaluate", before)
+    ref = sw.evaluate_point(cfg, name, params, st)
+    assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)
+
+
+@pytest.mark.parametrize("name, params", [("solar_boat", {"spacing": 3.0}), ("thesis_lin2_pitch", {})])
+def test_law_runs_stepped_modes_from_the_points_stiffness_equal_their_linear_modes(name, params):
+    """(session 8) The amplitude laws' stepped scenes take their modes from
+    the point's stiffness (``modes_of_inertia``): every label, period and
+    shape those of each stepped scene's own ``linear_modes``, bit for bit;
+    the stepped inertia is the one invert steps (``FACTOR_STEP`` of the
+    largest moment, on the component and its transpose)."""
+    from bifilar.estimation.solve import FACTOR_STEP
+    from bifilar.studies.point import _IDX, _law_runs
+
+    scene = _scene(name, params)
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    idx = [k for k, m in enumerate(ms.modes) if m.period][:3]
+    chosen = dict(zip(COMPS + ["Ixy"], idx + idx[:1]))
+    labels = [m.label for m in ms.modes]
+    got = _law_runs(scene, rest, ms, labels, chosen, 0.05, modes_of_inertia(scene, rest))
+    ref = _law_runs(scene, rest, ms, labels, chosen, 0.05)
+    h = FACTOR_STEP * np.max(np.linalg.eigvalsh(scene.inertia))
+    n = len(got.modes)
+    for (c, _), sc, a, b in zip(got.comps, got.scenes[n:], got.mode_sets[n:], ref.mode_sets[n:]):
+        i, j = _IDX[c]
+        dI = np.zeros((3, 3))
+        dI[i, j] = dI[j, i] = h
+        assert np.allclose(sc.inertia - scene.inertia, dI, rtol=0, atol=1e-9 * h)
+        assert [m.label for m in a.modes] == [m.label for m in b.modes]
+        for x, y in zip(a.modes, b.modes):
+            assert x.period == y.period and np.array_equal(x.shape, y.shape) and x.dominant == y.dominant
+
+
+@pytest.mark.parametrize("name, params", [("solar_boat", {"spacing": 3.0}), ("trifilar_kth", {})])
+def test_law_runs_without_health_have_the_periods_of_the_runs_with_it(name, params):
+    """(session 8) The amplitude laws' runs skip the health figures (only
+    their periods are read): every run's period and crossings those of the
+    same run with its health, bit for bit; and a planner's screen of the
+    point (``evaluate_points``: all its laws' runs in one call without
+    health) gives what the point alone gives."""
+    import json
+
+    from bifilar.analysis.batch import simulate_batch
+    from bifilar.studies import point as pt
+    from bifilar.studies import sweep as sw
+
+    cfg = read_yaml(CONFIGS / f"{name}.yaml")
+    st = sw.resolve_settings(cfg)
+    res, pre = pt._prepare(cfg, name, params, st)
+    law = pre.law
+    assert law is not None and len(law.labels) >= 2
+    kw = dict(mode=law.labels, amplitude=law.amplitudes, periods=st.periods, rtol=st.rtol, rests=law.rests,
+              modes=law.mode_sets, errors="return")
+    with_health = simulate_batch(law.scenes, **kw)
+    got = pt._runs_at(law, st)
+    assert np.all(np.isnan([r.max_constraint_violation for r in got]))  # the health was skipped
+    for a, b in zip(got, with_health):
+        assert a.period is not None and a.period == b.period and np.array_equal(a.crossings, b.crossings)
+    for screen in (False, True):
+        alone = sw.evaluate_point(cfg, name, params, st, screen=screen)
+        batch = pt.evaluate_points(cfg, name, [params], st, screen=screen)[0]
+        assert alone["valid"] and json.dumps(alone, sort_keys=True, default=str) == json.dumps(batch, sort_keys=True,
+                                                                                                default=str)

@@ -102,9 +102,12 @@ def test_a_point_solves_its_start_poses_once(monkeypatch):
     solves = _counting(monkeypatch, spm, "solve_start_poses")
     p = sw.evaluate_point(cfg, "solar_boat", {"spacing": 3.0}, st)
     assert p["valid"] and runs and runs[0] >= 2  # a point with several runs ...
-    # ... solves their start poses once (was 1 + 2 + one a run), and once those of its amplitude laws' runs (the
-    # stated amplitude's slope and dr/dI: other amplitudes and other scenes, docs/design.md "The stated amplitude")
-    assert len(solves) == 2
+    # ... solves their start poses once (was 1 + 2 + one a run), those of its amplitude laws' runs (the stated
+    # amplitude's slope and dr/dI: other amplitudes and other scenes, docs/design.md "The stated amplitude") in
+    # the same call (was a second one); its runs and the laws' runs of its scene go in one call of the batched
+    # engine (one scene: shared kernels and sample passes), the stepped scenes' (without health) in a second
+    n_comps = sum(e.get("mode") is not None for e in p["components"].values())
+    assert len(solves) == 1 and len(runs) == 2 and runs[1] == n_comps
 
 
 @pytest.mark.parametrize("name, amplitude", [("solar_boat", 0.05), ("thesis_plate_rest", 0.6)])
@@ -176,9 +179,9 @@ def test_evaluate_points_hands_each_points_starts_to_the_batch(monkeypatch):
     solves = _counting(monkeypatch, spm, "solve_start_poses")
     got = pt.evaluate_points(cfg, "thesis_plate_rest", grid, st, screen=True)
     assert sum(p["valid"] for p in got) >= 4 and not all(p["valid"] for p in got)  # refusals among them
-    # one a point (its check), none in the batch, a refused point's not repeated; and one a valid point for its
-    # amplitude laws' runs
-    assert len(solves) == len(grid) + sum(p["valid"] for p in got)
+    # one a point (its check, its amplitude laws' runs' start poses in the same call), none in the batch, a refused
+    # point's not repeated
+    assert len(solves) == len(grid)
     for p, params in zip(got, grid):
         if not p["valid"]:  # the error a point alone gives
             assert p == sw.evaluate_point(cfg, "thesis_plate_rest", params, st, screen=True)

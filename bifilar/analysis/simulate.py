@@ -150,12 +150,19 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
     return mx.pack(sp.com[0], sp.q[0])
 
 
-def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitude: float) -> StartPoses:
+def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitude: float,
+                        more=None) -> StartPoses:
     """Start poses of one scene displaced along each of ``modes`` (solved
     together, :func:`~bifilar.analysis.start_pose.start_poses`) with
     :func:`initial_state`'s checks: raises what :func:`initial_state` of
     each mode in turn raises first.  For a point's refusal check whose
-    start poses then go to ``simulate_batch(..., starts=)``: solved once."""
+    start poses then go to ``simulate_batch(..., starts=)``: solved once.
+    ``more``: (scenes, rests, modes, amplitudes) of further runs with the
+    same number of wires (a sweep point's amplitude laws' runs), solved in
+    the same call and appended after ``modes``' rows, not checked (their
+    ``feasible`` says; ``simulate_batch`` refuses them run by run).  Rows
+    are solved independently (per-row iterations), so each row is what a
+    call of its own gives (tests/test_point_cost.py)."""
     if not np.isfinite(amplitude):
         raise InputError("--amplitude", f"must be finite, got {amplitude}")
     beyond = None
@@ -167,7 +174,12 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
                                                f"{mode.label} mode (|amplitude| <= {limit:.4g} {unit})")
             modes = modes[:j]  # the modes before it are checked first, as one by one
             break
-    sp = start_poses([scene] * len(modes), [rest] * len(modes), modes, amplitude) if modes else None
+    n = len(modes)
+    if more is not None and beyond is None and n and len(more[0]):
+        sp = start_poses([scene] * n + list(more[0]), [rest] * n + list(more[1]), list(modes) + list(more[2]),
+                         np.r_[np.full(n, float(amplitude)), np.asarray(more[3], float)])
+    else:
+        sp = start_poses([scene] * n, [rest] * n, modes, amplitude) if modes else None
     for j, mode in enumerate(modes):
         if not sp.feasible[j]:
             raise refusal(scene, mode, amplitude, float(sp.gap[j]))

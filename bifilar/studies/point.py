@@ -418,58 +418,132 @@ def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: f
     return math.sqrt(max(var, 0.0)), c_t / g, c_a, shares
 
 
+@dataclass
+class _LawRuns:
+    """The runs of a point's amplitude laws (:func:`_amplitude_laws`), SI:
+    per timed mode one at :data:`~bifilar.estimation.solve.STATED_LAW_RATIO`
+    of the amplitude (``modes``, mode indices), then per component one of
+    the scene with it stepped by ``h`` (kg m^2) at the amplitude
+    (``comps``: (component, mode index)); ``scenes`` .. ``mode_sets`` the
+    :func:`~bifilar.analysis.batch.simulate_batch` arguments in that order,
+    ``starts`` their start poses once solved (with the point's own, one
+    call: :func:`~bifilar.analysis.simulate.checked_start_poses`'s
+    ``more``), ``runs`` the runs once run (with the point's own, one call:
+    :func:`_evaluate`)."""
+
+    comps: list
+    modes: list
+    h: float
+    scenes: list
+    labels: list
+    amplitudes: list
+    rests: list
+    mode_sets: list
+    starts: Any = None
+    runs: Any = None
+
+
+def _law_runs(scene, rest, ms, labels, chosen: dict, amplitude: float, at=None) -> _LawRuns:
+    """What :func:`_amplitude_laws` runs for the components ``chosen``
+    {component: mode index} (each stepped as invert's
+    :func:`~bifilar.estimation.solve.stated_amplitude_law` steps it:
+    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment).
+    ``at``: the point's :func:`_stiffness` (the stepped scenes' modes from
+    its eigenproblem, the same bits as their own ``linear_modes``), else
+    each stepped scene's ``linear_modes``."""
+    from dataclasses import replace
+
+    from ..analysis.modes import linear_modes
+    from ..estimation.solve import FACTOR_STEP, STATED_LAW_RATIO
+
+    comps = list(chosen.items())
+    modes = sorted({k for _, k in comps})
+    h = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(scene.inertia)))
+    stepped = []
+    for c, _ in comps:
+        I = np.array(scene.inertia, float)
+        i, j = _IDX[c]
+        I[i, j] += h
+        if i != j:
+            I[j, i] += h
+        sc = replace(scene, inertia=I)
+        stepped.append((sc, at(I) if at is not None else linear_modes(sc, rest)))
+    n = len(modes) + len(comps)
+    return _LawRuns(comps, modes, h, [scene] * len(modes) + [sc for sc, _ in stepped],
+                    [labels[k] for k in modes] + [labels[k] for _, k in comps],
+                    [STATED_LAW_RATIO * amplitude] * len(modes) + [amplitude] * len(comps), [rest] * n,
+                    [ms] * len(modes) + [m for _, m in stepped])
+
+
 def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
     """{component: (A dr/dA, dr/dI)} of every component whose mode has a
     run at the point's amplitude: the law's second run at
     :data:`~bifilar.estimation.solve.STATED_LAW_RATIO` of the amplitude
     per mode, and one run per component with it stepped by
     :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment (as
-    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`), all in
-    one call of the batched engine, as the point's own runs (periods, rtol);
-    a component whose runs fail is left out (its sigma then says so)."""
-    from dataclasses import replace
+    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`;
+    :func:`_law_runs`), as the point's own runs (periods, rtol): run with
+    them if :func:`_evaluate` did (``pre.law.runs``), else in one call of
+    the batched engine from the start poses solved with the point's
+    (``pre.law.starts``); a component whose runs fail is left out (its
+    sigma then says so)."""
+    from ..estimation.solve import STATED_LAW_RATIO, amplitude_law
 
-    from ..analysis.modes import linear_modes
-    from ..estimation.solve import FACTOR_STEP, STATED_LAW_RATIO, amplitude_law
-
-    comps = [(c, k) for c, k in pre.chosen.items() if sims.get(k) is not None and sims[k].period]
+    law = pre.law
+    if law is None:
+        law = _law_runs(pre.scene, pre.rest, pre.ms, pre.labels, pre.chosen, pre.amplitude, pre.at)
+    comps = [(n, c, k) for n, (c, k) in enumerate(law.comps) if sims.get(k) is not None and sims[k].period]
     if not comps:
         return {}
-    modes = sorted({k for _, k in comps})
-    h = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(pre.scene.inertia)))
-    stepped = []
-    for c, _ in comps:
-        I = np.array(pre.scene.inertia, float)
-        i, j = _IDX[c]
-        I[i, j] += h
-        if i != j:
-            I[j, i] += h
-        sc = replace(pre.scene, inertia=I)
-        stepped.append((sc, linear_modes(sc, pre.rest)))
-    scenes = [pre.scene] * len(modes) + [sc for sc, _ in stepped]
-    try:
-        runs = _runs_at(scenes, [pre.labels[k] for k in modes] + [pre.labels[k] for _, k in comps],
-                        [STATED_LAW_RATIO * pre.amplitude] * len(modes) + [pre.amplitude] * len(comps), st,
-                        [pre.rest] * len(scenes), [pre.ms] * len(modes) + [ms for _, ms in stepped])
-    except BifilarError:
-        return {}
+    runs = law.runs
+    if runs is None:
+        try:
+            runs = _runs_at(law, st)
+        except BifilarError:
+            return {}
     out = {}
-    for n, (c, k) in enumerate(comps):
-        half, step = runs[modes.index(k)], runs[len(modes) + n]
+    for n, c, k in comps:
+        half, step = runs[law.modes.index(k)], runs[len(law.modes) + n]
         if half.error or step.error or not half.period or not step.period:
             continue
         r = sims[k].period / float(pre.periods[k])
-        law = amplitude_law(pre.amplitude, r, STATED_LAW_RATIO, half.period / float(pre.periods[k]))
-        out[c] = (pre.amplitude * law.slope(), (step.period / step.linear_period - r) / h)
+        fit = amplitude_law(pre.amplitude, r, STATED_LAW_RATIO, half.period / float(pre.periods[k]))
+        out[c] = (pre.amplitude * fit.slope(), (step.period / step.linear_period - r) / law.h)
     return out
 
 
-def _runs_at(scenes, labels, amplitudes, st: SweepSettings, rests, modes) -> list:
-    """Nonlinear runs of ``scenes`` (one call of the batched engine, errors returned per run)."""
+def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
+    """The runs of ``law`` (errors returned per run, from ``law.starts`` if
+    solved), then only their periods read: run without the health figures
+    (``simulate_batch(..., health=False)``: the same steps and samples, so
+    the same periods, tests/test_point_cost.py).  ``own``: (scene, rest,
+    mode set, labels, amplitude, their start poses) of the point's own
+    runs, put first with the law's runs of the point's scene in one call
+    (one scene: its runs share the parameters, kernels and sample passes,
+    :func:`~bifilar.analysis.batch.simulate_batch`), the stepped scenes'
+    in a second one; returns the point's runs, then the law's."""
     from ..analysis.batch import simulate_batch
+    from ..analysis.start_pose import StartPoses
 
-    return simulate_batch(scenes, mode=labels, amplitude=amplitudes, periods=st.periods, rtol=st.rtol, rests=rests,
-                          modes=modes, errors="return")
+    def call(ii, health, first=None):
+        scenes, labels, amps = [law.scenes[i] for i in ii], [law.labels[i] for i in ii], [law.amplitudes[i] for i in ii]
+        rests, mss = [law.rests[i] for i in ii], [law.mode_sets[i] for i in ii]
+        starts = None if law.starts is None else law.starts.take(ii)
+        if first is not None:
+            scene, rest, ms, own_labels, amplitude, own_starts = first
+            n = len(own_labels)
+            scenes, labels, amps = [scene] * n + scenes, list(own_labels) + labels, [amplitude] * n + amps
+            rests, mss = [rest] * n + rests, [ms] * n + mss
+            starts = None if starts is None else StartPoses.concat([own_starts, starts])
+        if not scenes:
+            return []
+        return simulate_batch(scenes, mode=labels, amplitude=amps, periods=st.periods, rtol=st.rtol, rests=rests,
+                              modes=mss, errors="return", starts=starts, health=health)
+
+    if own is None:
+        return call(list(range(len(law.labels))), False)
+    m = len(law.modes)
+    return call(list(range(m)), True, own) + call(list(range(m, len(law.labels))), False)
 
 
 def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings) -> None:
@@ -763,7 +837,14 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         # the refusal `simulate` gives (InputError) rather than a run from an unreachable start; the start poses
         # go on to the runs (solved once)
         if pre.runs:
-            pre.starts = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude)
+            # the amplitude laws' runs' start poses in the same call (one solve: tests/test_point_cost.py)
+            pre.law = _law_runs(scene, rest, ms, labels, chosen, amplitude, at)
+            law = pre.law
+            sp = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude,
+                                     more=(law.scenes, law.rests, [m.get(lab) for m, lab in zip(law.mode_sets, law.labels)],
+                                           law.amplitudes))
+            n = len(pre.runs)
+            pre.starts, law.starts = sp.take(np.arange(n)), sp.take(np.arange(n, len(sp.feasible)))
     return res, pre
 
 
@@ -794,14 +875,25 @@ class _Prepared:
     starts: Any = None  # their start poses (StartPoses, in the order of runs), checked
     at: Any = None  # modes_of_inertia of scene about rest (_stiffness), or None
     budgets: dict = None  # {component: its Budget at a small amplitude (predicted_budgets)}
+    law: Any = None  # the runs of its amplitude laws (_LawRuns), planned with its own runs
 
 
 def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False) -> dict:
     res, pre = _prepare(base_cfg, source, params, st, screen)
     sims: dict[int, Any] = {}
     if pre.runs:
-        sims = dict(zip(pre.runs, _nonlinear_runs(pre.scene, pre.rest, pre.ms, [pre.labels[k] for k in pre.runs],
-                                                  pre.amplitude, st, pre.starts)))
+        labels = [pre.labels[k] for k in pre.runs]
+        runs = None
+        if pre.law is not None and pre.law.starts is not None:
+            # the point's runs and its amplitude laws' in one call (each run as alone: the same figures)
+            runs = _runs_at(pre.law, st, own=(pre.scene, pre.rest, pre.ms, labels, pre.amplitude, pre.starts))
+            if any(r.error for r in runs[:len(labels)]):
+                runs = None  # the point's own runs again, alone: the error they raise
+            else:
+                runs, pre.law.runs = runs[:len(labels)], runs[len(labels):]
+        if runs is None:
+            runs = _nonlinear_runs(pre.scene, pre.rest, pre.ms, labels, pre.amplitude, st, pre.starts)
+        sims = dict(zip(pre.runs, runs))
     return _finish(res, pre, sims, st, screen)
 
 
