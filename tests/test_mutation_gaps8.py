@@ -1,0 +1,347 @@
+"""Tests written to kill surviving mutants of round 8 (docs/mutation.md,
+"Round 8"): the crossing period (``bifilar/estimation/signal_crossings.py``),
+the linear modes (``bifilar/analysis/modes.py``), the config checks
+(``bifilar/config/plausibility.py``, ``fields.py``, ``inertia.py``), the
+timing advice (``bifilar/studies/timing.py``) and the stop handling
+(``bifilar/interrupts.py``).
+
+Truths: hand-worked cases (every expected number is worked out in the
+comments), closed forms (the two-wire bifilar torsion period, the
+stopwatch and Cramer-Rao formulas of the module docstrings), invariance
+to the unit of time, and known noise levels -- never output of the code
+under test pasted in.  Each test runs in well under 2 s.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bifilar.estimation.signal_crossings import _crossing_time, period_from_crossings
+
+# ---------------------------------------------------------------------------
+# signal_crossings.py: where one crossing lies
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("ds,expected", [
+    # t = 0, 1, 2; line through (-1, 0.2, 1): slope ((-1)(-1) + (1)(1)) / 2 = 1 about t_mean = 1,
+    # mean 0.2 / 3: zero at 1 - 0.2 / 3 = 0.9333 (between t0 and t1; linear interpolation of the
+    # sign change would say 1 / 1.2 = 0.8333)
+    ([-1.0, 0.2, 1.0], 1.0 - 0.2 / 3),
+    # (-1, -0.2, 1): slope 1, mean -0.2 / 3: zero at 1.0667 (between t1 and t2; interpolation 1.1667)
+    ([-1.0, -0.2, 1.0], 1.0 + 0.2 / 3),
+    # t = 0..3, (-1, -0.2, 0.6, 1): slope (1.5 + 0.1 + 0.3 + 1.5) / 5 = 0.68 about 1.5, mean 0.1:
+    # zero at 1.5 - 0.1 / 0.68 = 1.35294 (interpolation 1.25)
+    ([-1.0, -0.2, 0.6, 1.0], 1.5 - 0.1 / 0.68),
+    # the same samples negated (a falling crossing): the line's zero does not move
+    ([1.0, 0.2, -0.6, -1.0], 1.5 - 0.1 / 0.68),
+])
+def test_crossing_time_is_the_zero_of_the_least_squares_line(ds, expected):
+    ts = np.arange(len(ds), dtype=float)
+    assert _crossing_time(ts, np.asarray(ds), 0, len(ds) - 1) == pytest.approx(expected, abs=1e-12)
+    # the same in another unit of time and origin (t -> 100 + 0.01 t)
+    assert _crossing_time(100 + 0.01 * ts, np.asarray(ds), 0, len(ds) - 1) == pytest.approx(
+        100 + 0.01 * expected, abs=1e-10)
+
+
+@pytest.mark.parametrize("ds,expected", [
+    ([-0.3, 0.2], 1.0 + 0.3 * 0.5 / 0.5),  # t = 1, 1.5: 0.3 of the 0.5 rise, 1.3
+    ([0.2, -0.3], 1.0 + 0.2 * 0.5 / 0.5),  # falling: 1.2
+])
+def test_crossing_time_of_two_samples_is_linear_interpolation(ds, expected):
+    assert _crossing_time(np.array([1.0, 1.5]), np.asarray(ds), 0, 1) == pytest.approx(expected, abs=1e-12)
+
+
+@pytest.mark.parametrize("ds,k,expected", [
+    # 8 samples, middle 3.5; the least-squares line crosses at t = 9.1 (outside 0..7): fall back on
+    # the sign changes 0-1, 2-3, 6-7; nearest the middle 2-3 (1.5 away): 2 + 0.31 / 0.45
+    ([-0.6, 0.38, 0.31, -0.14, -0.37, -0.48, -0.46, 0.58], 2, 2 + 0.31 / 0.45),
+    # 9 samples, middle 4; the line crosses at 10.7; sign changes 0-1, 2-3, 3-4, 4-5, 7-8: the
+    # middle one 4-5: 4 + 0.1 / 0.5
+    ([-0.6, 0.3, 0.2, -0.1, 0.1, -0.4, -0.4, -0.4, 0.5], 4, 4 + 0.1 / 0.5),
+])
+def test_crossing_time_falls_back_on_the_sign_change_nearest_the_middle(ds, k, expected):
+    ds = np.asarray(ds)
+    ts = np.arange(ds.size, dtype=float)
+    slope, icpt = np.polyfit(ts, ds, 1)
+    assert not 0 <= -icpt / slope <= ts[-1]  # (the premise: the line's zero is outside the bracket)
+    assert ds[k] * ds[k + 1] < 0
+    assert _crossing_time(ts, ds, 0, ds.size - 1) == pytest.approx(expected, abs=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# signal_crossings.py: the period
+# ---------------------------------------------------------------------------
+
+
+def _sine_with_spikes(scale=1.0):
+    """sin(2 pi t / 1.25) sampled every 1 ms for 20 s, noise 1e-3, with a spike of -2 over 3
+    samples at every peak and +2 at every trough (each crosses the level twice, down and back
+    up: an even burst, a glitch), the last one at 19.6875 s after the last real crossing
+    (19.375 s); times in units of ``scale`` s."""
+    T, dt = 1.25, 0.001
+    t = np.arange(0, 20, dt)
+    y = np.sin(2 * np.pi * t / T) + 1e-3 * np.random.default_rng(0).standard_normal(t.size)
+    for k in range(16):
+        for tp, s in ((T / 4 + k * T, -2.0), (3 * T / 4 + k * T, 2.0)):
+            if tp < 20:
+                i = int(round(tp / dt))
+                y[i:i + 3] += s
+    return t / scale, y
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-3, 1e2])
+def test_spikes_away_from_the_level_are_dropped_in_any_unit_of_time(scale):
+    """Real crossings: ups at 1.25, 2.5, ..., 18.75 (15; t = 0 starts on the level), downs at
+    0.625, ..., 19.375 (16): 14 + 15 same-direction intervals of 1.25 s.  The spikes' pairs of
+    crossings (1.5 ms apart, far below 0.2 x the 0.625 s median spacing) are glitches.  The rule
+    has no time scale of its own: the same record in ms or in units of 100 s gives the same
+    crossings."""
+    t, y = _sine_with_spikes(scale)
+    cr = period_from_crossings(t, y)
+    assert cr.up_times.size == 15 and cr.down_times.size == 16 and cr.n_periods == 29
+    assert cr.period == pytest.approx(1.25 / scale, rel=1e-5)
+    assert cr.mean_period == pytest.approx(1.25 / scale, rel=1e-5)
+    assert cr.down_times[-1] == pytest.approx(19.375 / scale, rel=1e-5)
+
+
+def test_default_hysteresis_is_three_times_the_white_noise_level():
+    """The documented default band: 3 x the white-noise standard deviation (here known: 0.01)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(0, 20, 0.001)
+    y = np.sin(2 * np.pi * t / 1.25) + 0.01 * rng.standard_normal(t.size)
+    cr = period_from_crossings(t, y)
+    # the robust estimate from 20 000 second differences: ~1 % scatter; the sine adds
+    # (2 pi / 1.25)^2 1e-6 = 2.5e-5 to differences of std 0.01 sqrt(6): negligible
+    assert cr.hysteresis == pytest.approx(3 * 0.01, rel=0.05)
+
+
+@pytest.mark.parametrize("t0,t1,ups,downs", [
+    (0.1, 2.6, [1.0, 2.0], [0.5, 1.5, 2.5]),  # sin(2 pi t): 2 ups, 3 downs
+    (0.6, 3.1, [1.0, 2.0, 3.0], [1.5, 2.5]),  # 3 ups, 2 downs
+])
+def test_five_crossings_are_two_full_periods(t0, t1, ups, downs):
+    """The documented minimum: two full periods, i.e. five crossings, at least two each way
+    (3 same-direction intervals of 1 s here)."""
+    t = np.arange(t0, t1, 0.001)
+    cr = period_from_crossings(t, np.sin(2 * np.pi * t), level=0.0, hysteresis=0.01)
+    assert cr.up_times == pytest.approx(ups, abs=1e-9) and cr.down_times == pytest.approx(downs, abs=1e-9)
+    assert cr.period == pytest.approx(1.0, abs=1e-9) and cr.n_periods == 3
+
+
+def test_four_crossings_are_refused():
+    """0.1 .. 2.2 s of sin(2 pi t): ups at 1, 2, downs at 0.5, 1.5 -- one and a half periods."""
+    from bifilar.estimation.signal import SignalError
+
+    t = np.arange(0.1, 2.2, 0.001)
+    with pytest.raises(SignalError) as e:
+        period_from_crossings(t, np.sin(2 * np.pi * t), level=0.0, hysteresis=0.01)
+    assert e.value.field == "signal" and "only 4 crossings" in str(e.value)
+
+
+# ---------------------------------------------------------------------------
+# modes.py
+# ---------------------------------------------------------------------------
+
+G = 9.81
+
+
+def _bifilar(mass=2.0, inertia=(0.1, 0.15, 0.2), half_sep=0.5, length=1.5):
+    """Two vertical wires of ``length`` m, ``2 half_sep`` m apart along y, attached 0.1 m above
+    the CoM of a body of ``mass`` kg and principal moments ``inertia`` kg m^2."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.config import scene_from_dict
+
+    r = half_sep
+    scene = scene_from_dict({
+        "gravity": G,
+        "body": {"mass": mass, "inertia": {"principal": list(inertia)}},
+        "rig": {"anchors": [[0, -r, 0], [0, r, 0]], "attachments": [[0, -r, 0.1], [0, r, 0.1]],
+                "lengths": [length, length]}}, warn=False)
+    return scene, rest_pose(scene)
+
+
+def test_bifilar_modes_are_the_closed_forms_found_by_label_prefix_and_index():
+    """Torsion T = 2 pi sqrt(I L / (m g r^2)); the sideways swing in the wires' plane is a
+    parallelogram (the body translates): T = 2 pi sqrt(L / g).  Labels by prefix and 1-based
+    index; the default mode is the torsion."""
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.errors import InputError
+
+    m, Izz, r, L = 2.0, 0.2, 0.5, 1.5
+    ms = linear_modes(*_bifilar(m, (0.1, 0.15, Izz), r, L))
+    assert len(ms.modes) == 4  # 6 - 2 wires
+    tors = ms.get("tors")  # a unique prefix
+    assert tors.label == "torsion" and tors.period == pytest.approx(2 * math.pi * math.sqrt(Izz * L / (m * G * r * r)),
+                                                                    rel=1e-9)
+    assert tors.dominant == 5 and tors.shape[5] == pytest.approx(1.0) and tors.energy_share[5] == pytest.approx(1.0)
+    assert ms.get("swing-y").period == pytest.approx(2 * math.pi * math.sqrt(L / G), rel=1e-9)
+    periods = [md.period for md in ms.modes]
+    assert periods == sorted(periods, reverse=True)  # slowest first
+    for k in range(1, 5):
+        assert ms.get(k) is ms.modes[k - 1] and ms.get(str(k)) is ms.modes[k - 1]
+    for bad in (0, 5, "swing", "bounce"):  # out of range, ambiguous prefix (swing-x, swing-y), absent
+        with pytest.raises(KeyError):
+            ms.get(bad)
+    assert ms.pick(None) is tors
+    with pytest.raises(InputError) as e:
+        ms.pick("swing", option="--measure")
+    assert e.value.field == "--measure"
+    for md in ms.modes:  # shapes scaled to a largest component of +1, shares summing to 1
+        assert np.max(np.abs(md.shape)) == pytest.approx(1.0) and md.shape[md.dominant] == pytest.approx(1.0)
+        assert md.energy_share.sum() == pytest.approx(1.0)
+
+
+def test_without_a_torsion_the_default_mode_is_the_slowest():
+    from bifilar.analysis.modes import ModeSet, linear_modes
+
+    ms = linear_modes(*_bifilar())
+    rest = ModeSet([md for md in ms.modes if md.label != "torsion"], ms.mass_matrix, ms.basis)
+    assert rest.pick(None) is rest.modes[0] and rest.modes[0].label == "swing-x"
+
+
+def _diag_problem(w2):
+    """K y = w M y with M = I and K = diag(w2): Y = I, and each eigenvalue's resolution is
+    DEGENERATE_RTOL |y|^T |K| |y| = 1e-10 w."""
+    w2 = np.asarray(w2, float)
+    return w2, np.eye(w2.size), np.diag(w2)
+
+
+@pytest.mark.parametrize("d,plain_batch,plain_one", [
+    (1e-9, True, True),  # split by 1e-9 > 2 x 2e-10: apart, with the batch's margin
+    (3e-10, False, True),  # apart (> 2e-10) but within twice the resolution: the batch declines
+    (1e-10, False, False),  # within the resolution: one degenerate cluster
+])
+def test_plain_order_is_eigenvalues_apart_by_twice_their_resolution(d, plain_batch, plain_one):
+    from bifilar.analysis.modes import _plain_one, plain_order
+
+    w2, Y, K = _diag_problem([1.0, 2.0, 2.0 + d])
+    assert bool(plain_order(w2[None], Y[None], K[None])[0]) is plain_batch
+    assert _plain_one(w2, Y, K) is plain_one
+    # two modes only (a 4-wire rig): the same rule for its pair
+    w2, Y, K = _diag_problem([2.0, 2.0 + d])
+    assert bool(plain_order(w2[None], Y[None], K[None])[0]) is plain_batch
+
+
+@pytest.mark.parametrize("w2", [[-1.0, 2.0, 3.0], [0.0, 2.0, 3.0], [1e-14, 2.0, 3.0]])
+def test_a_negative_or_neutral_eigenvalue_is_never_plain(w2):
+    from bifilar.analysis.modes import _plain_one, plain_order
+
+    w2, Y, K = _diag_problem(w2)
+    assert not plain_order(w2[None], Y[None], K[None])[0]
+    assert not _plain_one(w2, Y, K)
+
+
+def test_plain_order_takes_each_pairs_own_resolution():
+    """A stiff mode (1e4) mixed with a soft one (1) by a 45 degree rotation: the soft mode's
+    resolution 1e-10 |y|^T |K| |y| is ~1e-6 (the rotated stiffness's terms), far above 1e-10 of
+    its eigenvalue.  The pair 2, 2 + 1e-8 of two unmixed modes (resolution 2e-10 each) is apart:
+    the soft mode's coarse resolution is not theirs."""
+    from bifilar.analysis.modes import eigh_generalized, plain_order
+
+    c = math.sqrt(0.5)
+    Q = np.eye(4)
+    Q[np.ix_([0, 3], [0, 3])] = [[c, -c], [c, c]]
+    K = Q @ np.diag([1.0, 2.0, 2.0 + 1e-8, 1e4]) @ Q.T
+    w2, Y = eigh_generalized(K, np.eye(4))
+    assert w2 == pytest.approx([1.0, 2.0, 2.0 + 1e-8, 1e4], rel=1e-9)
+    res = 1e-10 * np.einsum("ik,ij,jk->k", np.abs(Y), np.abs(K), np.abs(Y))
+    assert res[0] > 1e-7 and res[1] < 1e-9  # (the premise)
+    assert plain_order(w2[None], Y[None], K[None])[0]
+
+
+def test_crossing_period_std_is_the_pooled_regressions_standard_error():
+    """t = a + T n (+ delta for downward crossings): by Frisch-Waugh the slope is the pooled
+    within-direction regression, T = Sxy / Sxx with each direction centred on its own means, and
+    its standard error sqrt(RSS / (N - 3) / Sxx) (three parameters).  Cycle numbers by hand:
+    every crossing of this record is found, so they run 0, 1, 2, ... each way."""
+    rng = np.random.default_rng(11)
+    t = np.arange(0, 20, 0.002)
+    y = np.sin(2 * np.pi * t / 1.3 + 0.4) + 0.05 * rng.standard_normal(t.size)
+    cr = period_from_crossings(t, y)
+    sxx = sxy = rss = 0.0
+    n_all = 0
+    for times in (cr.up_times, cr.down_times):
+        assert np.all(np.abs(np.diff(times) - 1.3) < 0.1)  # no crossing lost or doubled
+        n = np.arange(times.size, dtype=float)
+        dn, dt = n - n.mean(), times - times.mean()
+        sxx += dn @ dn
+        sxy += dn @ dt
+        n_all += times.size
+    T = sxy / sxx
+    for times in (cr.up_times, cr.down_times):
+        n = np.arange(times.size, dtype=float)
+        r = (times - times.mean()) - T * (n - n.mean())
+        rss += r @ r
+    assert cr.period == pytest.approx(T, rel=1e-12)
+    assert cr.std == pytest.approx(math.sqrt(rss / (n_all - 3) / sxx), rel=1e-9)
+    assert cr.n_periods == n_all - 2 and cr.periods.size == n_all - 2
+    assert cr.scatter == pytest.approx(np.std(np.r_[np.diff(cr.up_times), np.diff(cr.down_times)], ddof=1), rel=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# config/plausibility.py: the documented rules, each side of each threshold
+# ---------------------------------------------------------------------------
+
+
+def _warnings(anchors=((0, -0.5, 0), (0, 0.5, 0)), attachments=((0, -0.5, 0.1), (0, 0.5, 0.1)),
+              lengths=(1.5, 1.5), mass=2.0, k=None, principal=(0.1, 0.1, 0.2), box=None, gravity=9.81):
+    """plausibility_warnings of a bifilar config; ``k``: principal moments m k^2 (0.6, 0.6, 1)
+    (the largest moment m k^2, so the radius of gyration is k)."""
+    from bifilar.config import scene_from_dict
+    from bifilar.config.plausibility import plausibility_warnings
+
+    if k is not None:
+        principal = (0.6 * mass * k * k, 0.6 * mass * k * k, mass * k * k)
+    body = {"mass": mass, "inertia": {"principal": list(principal)}}
+    if box is not None:
+        body["bounding_box"] = {"min": [-box] * 3, "max": [box] * 3}
+    cfg = {"gravity": gravity, "body": body,
+           "rig": {"anchors": [list(a) for a in anchors], "attachments": [list(p) for p in attachments],
+                   "lengths": list(lengths)}}
+    return plausibility_warnings(scene_from_dict(cfg, warn=False))
+
+
+def test_wires_over_a_kilometre_warn_and_name_the_longest():
+    wide = ((0, -10, 0), (0, 10, 0))  # anchors 20 m apart: not the millimetre rule (spans under 10 m)
+    assert _warnings(anchors=wide, lengths=(999.0, 999.0)) == []
+    w = _warnings(anchors=wide, lengths=(1001.0, 1002.0))
+    assert len(w) == 1 and w[0].startswith("rig.lengths.1 = 1002 m is implausibly long")
+
+
+def test_lengths_in_millimetres_need_every_wire_long_in_a_small_rig():
+    """Every wire over 100 m while anchors and attachments span under 10 m."""
+    assert "millimetres" in _warnings(anchors=((0, -4.5, 0), (0, 4.5, 0)), lengths=(101.0, 101.0))[0]
+    assert _warnings(anchors=((0, -5.5, 0), (0, 5.5, 0)), lengths=(101.0, 101.0)) == []  # 11 m span
+    assert _warnings(lengths=(99.0, 101.0)) == []  # not every wire
+
+
+@pytest.mark.parametrize("g,n", [(1.0, 0), (30.0, 0), (0.99, 1), (30.1, 1), (981.0, 1)])
+def test_gravity_from_one_to_thirty_is_plausible(g, n):
+    assert len(_warnings(gravity=g)) == n
+
+
+@pytest.mark.parametrize("k,n", [(0.9, 0), (1.1, 1)])
+def test_a_known_shape_bounds_the_radius_of_gyration_by_twice_its_reach(k, n):
+    """Bounding box +-0.5 m (reach h = 0.5 m along each body axis): k > 2 h = 1 m warns."""
+    w = _warnings(k=k, box=0.5)
+    assert len(w) == n and all("does not fit a body reaching 0.5 m" in x for x in w)
+
+
+@pytest.mark.parametrize("k,n", [(0.02, 0), (0.015, 1), (14.0, 0), (16.0, 1)])
+def test_attachments_alone_bound_the_radius_of_gyration_thirty_fold_either_way(k, n):
+    """Attachments reaching 0.5 m (along y), no shape: warn when k > 30 x 0.5 = 15 m or
+    k < 0.5 / 30 = 0.0167 m.  1000 kg: the mass rule (k > 10 m (m / 1 kg)^(1/3) = 100 m) is quiet."""
+    w = _warnings(k=k, mass=1000.0)
+    assert len(w) == n and all("(attachments)" in x for x in w)
+
+
+@pytest.mark.parametrize("reach,n", [(0.09, 0), (0.11, 1)])
+def test_attachments_beyond_ten_times_the_shape_warn(reach, n):
+    """A 1 cm box: attachments up to 10 cm from the CoM are plausible, beyond are not."""
+    att = ((0, -reach, 0.0), (0, reach, 0.0))
+    w = _warnings(attachments=att, anchors=((0, -reach, 1.0), (0, reach, 1.0)), box=0.01, k=0.05)
+    assert [x for x in w if x.startswith("rig.attachments reach")] == w and len(w) == n
