@@ -72,6 +72,18 @@ def test_crossing_time_falls_back_on_the_sign_change_nearest_the_middle(ds, k, e
     assert _crossing_time(ts, ds, 0, ds.size - 1) == pytest.approx(expected, abs=1e-12)
 
 
+def test_a_line_falling_through_a_rising_crossing_is_not_trusted():
+    """Band +-1; the samples rise from -1.01 to 1.01 but wander inside the band, high early and
+    low late: the least-squares slope, (8.08 - 12) / 60, is negative (its zero, 4.85, lies inside
+    the bracket).  A line falling through a rising crossing is no crossing's line: the sign
+    change nearest the middle (4 -> 5) is interpolated instead, 4 + 0.5 / 1.5."""
+    ds = np.array([-1.01, 1.0, 1.0, 1.0, 0.5, -1.0, -1.0, -1.0, 1.01])
+    ts = np.arange(ds.size, dtype=float)
+    slope, icpt = np.polyfit(ts, ds, 1)
+    assert slope < 0 and 0 <= -icpt / slope <= ts[-1]  # (the premise)
+    assert _crossing_time(ts, ds, 0, ds.size - 1) == pytest.approx(4 + 0.5 / 1.5, abs=1e-12)
+
+
 # ---------------------------------------------------------------------------
 # signal_crossings.py: the period
 # ---------------------------------------------------------------------------
@@ -205,24 +217,27 @@ def test_without_a_torsion_the_default_mode_is_the_slowest():
 
 def _diag_problem(w2):
     """K y = w M y with M = I and K = diag(w2): Y = I, and each eigenvalue's resolution is
-    DEGENERATE_RTOL |y|^T |K| |y| = 1e-10 w."""
+    DEGENERATE_RTOL |y|^T |K| |y| = DEGENERATE_RTOL w."""
     w2 = np.asarray(w2, float)
     return w2, np.eye(w2.size), np.diag(w2)
 
 
 @pytest.mark.parametrize("d,plain_batch,plain_one", [
-    (1e-9, True, True),  # split by 1e-9 > 2 x 2e-10: apart, with the batch's margin
-    (3e-10, False, True),  # apart (> 2e-10) but within twice the resolution: the batch declines
-    (1e-10, False, False),  # within the resolution: one degenerate cluster
+    (5.0, True, True),  # split by 5 resolutions of the pair: apart, with the batch's margin of 2
+    (1.5, False, True),  # apart (> 1 resolution) but within twice it: the batch declines
+    (0.5, False, False),  # within the resolution: one degenerate cluster
 ])
 def test_plain_order_is_eigenvalues_apart_by_twice_their_resolution(d, plain_batch, plain_one):
-    from bifilar.analysis.modes import _plain_one, plain_order
+    """Eigenvalues 1, 2, 2 + d x (the pair's resolution, DEGENERATE_RTOL x 2): written in units of
+    the constant, whose value is a tuning choice."""
+    from bifilar.analysis.modes import DEGENERATE_RTOL, _plain_one, plain_order
 
-    w2, Y, K = _diag_problem([1.0, 2.0, 2.0 + d])
+    gap = d * DEGENERATE_RTOL * 2.0
+    w2, Y, K = _diag_problem([1.0, 2.0, 2.0 + gap])
     assert bool(plain_order(w2[None], Y[None], K[None])[0]) is plain_batch
     assert _plain_one(w2, Y, K) is plain_one
     # two modes only (a 4-wire rig): the same rule for its pair
-    w2, Y, K = _diag_problem([2.0, 2.0 + d])
+    w2, Y, K = _diag_problem([2.0, 2.0 + gap])
     assert bool(plain_order(w2[None], Y[None], K[None])[0]) is plain_batch
 
 
@@ -319,6 +334,21 @@ def test_lengths_in_millimetres_need_every_wire_long_in_a_small_rig():
     assert _warnings(lengths=(99.0, 101.0)) == []  # not every wire
 
 
+def test_the_documented_bounds_themselves_are_plausible():
+    """"Longer than", "heavier than", "less than", "outside": the bounds are not flagged."""
+    assert _warnings(anchors=((0, -5.0, 0), (0, 5.0, 0)), lengths=(101.0, 101.0)) == []  # spans exactly 10 m
+    assert _warnings(lengths=(100.0, 100.0)) == []  # exactly 100 m wires in a 1 m rig
+    assert _warnings(anchors=((0, -10, 0), (0, 10, 0)), lengths=(1000.0, 1000.0)) == []
+    assert _warnings(mass=1e5, k=0.5) == []
+
+
+def test_a_wide_body_is_no_millimetre_rig():
+    """Anchors span 9 m but the attachments 12 m (x): not 'everything under 10 m'."""
+    w = _warnings(anchors=((-4.5, 0, 0), (4.5, 0, 0)), attachments=((-6, 0, 0.1), (6, 0, 0.1)),
+                  lengths=(101.0, 101.0), k=1.0)
+    assert w == []
+
+
 @pytest.mark.parametrize("g,n", [(1.0, 0), (30.0, 0), (0.99, 1), (30.1, 1), (981.0, 1)])
 def test_gravity_from_one_to_thirty_is_plausible(g, n):
     assert len(_warnings(gravity=g)) == n
@@ -345,3 +375,196 @@ def test_attachments_beyond_ten_times_the_shape_warn(reach, n):
     att = ((0, -reach, 0.0), (0, reach, 0.0))
     w = _warnings(attachments=att, anchors=((0, -reach, 1.0), (0, reach, 1.0)), box=0.01, k=0.05)
     assert [x for x in w if x.startswith("rig.attachments reach")] == w and len(w) == n
+
+
+# ---------------------------------------------------------------------------
+# studies/timing.py: the module docstring's rules, worked by hand
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("sep,N", [
+    (None, 10), (math.inf, 10),  # no other mode: the usual ten
+    (0.0, 50), (-0.1, 50), (math.nan, 50),  # no separation: the most
+    (0.5, 10), (0.05, 20), (1 / 30, 30), (0.01, 50),  # ceil(1 / s) within 10 .. 50
+    (1 / 30.5, 31),
+])
+def test_cycles_per_trial_span_a_beat_within_ten_to_fifty(sep, N):
+    from bifilar.studies.timing import cycles_per_trial
+
+    assert cycles_per_trial(sep) == N
+
+
+def test_stopwatch_and_sensor_sigmas_are_the_documented_formulas():
+    """sigma_T = reaction / (N sqrt(n)); the sensor: Kay's bound var(w) = 12 / (eta M^3) for the
+    frequency in radians per sample, eta = A^2 / (2 sigma^2) = 1 / (2 noise^2), w = 2 pi dt / T."""
+    from bifilar.studies.timing import sensor_sigma, stopwatch_sigma
+
+    assert stopwatch_sigma(0.1, 10, 4) == pytest.approx(0.1 / 20, rel=1e-12)
+    assert stopwatch_sigma(0.2, 25, 1) == pytest.approx(0.008, rel=1e-12)
+    T, noise, rate, N = 2.0, 0.01, 100.0, 10
+    M, dt = rate * N * T, 1 / rate  # 2000 samples
+    sd_w_per_sample = math.sqrt(12 / (M ** 3 / (2 * noise ** 2)))
+    sd_T = T ** 2 / (2 * math.pi) * sd_w_per_sample / dt  # T = 2 pi / w: dT = T^2 dw / (2 pi)
+    for n in (1, 4, 9):
+        assert sensor_sigma(T, noise, rate, N, n) == pytest.approx(sd_T / math.sqrt(n), rel=1e-12)
+
+
+@pytest.mark.parametrize("target,n", [(0.01, 1), (0.005, 4), (0.004, 7), (0.0025, 16)])
+def test_trials_are_the_fewest_reaching_the_target(target, n):
+    """One 10-cycle stopwatch trial: 0.1 / 10 = 0.01 s; n trials 0.01 / sqrt(n): the target 0.005
+    needs exactly 4 (the ratio squared, 4, not rounded up to 5), 0.004 needs 6.25 -> 7."""
+    from bifilar.studies.timing import advice
+
+    row = advice(2.0, None, target, reaction=0.1)
+    sw = row["stopwatch"]
+    assert row["cycles_per_trial"] == 10 and sw["trials"] == n
+    assert sw["sigma"] == pytest.approx(0.01 / math.sqrt(n), rel=1e-12)
+    assert sw["time_s"] == pytest.approx(n * 10 * 2.0, rel=1e-12)  # n trials of 10 cycles of 2 s
+
+
+def test_sensor_records_are_the_fewest_reaching_the_target():
+    from bifilar.studies.timing import advice, sensor_sigma
+
+    one = sensor_sigma(2.0, 0.01, 100.0, 10, 1)
+    row = advice(2.0, None, one / 3, reaction=0.1, sensor=(0.01, 100.0))  # (1 / (1/3))^2 = 9 records
+    se = row["sensor"]
+    assert (se["noise"], se["rate"], se["records"]) == (0.01, 100.0, 9)
+    assert se["sigma"] == pytest.approx(one / 3, rel=1e-12) and se["time_s"] == pytest.approx(9 * 10 * 2.0)
+
+
+def test_an_exact_timing_target_is_reported_as_such():
+    from bifilar.studies.timing import advice, describe
+
+    row = advice(2.0, None, 0.0, sensor=(0.01, 100.0))
+    assert row["stopwatch"]["trials"] == 0 and row["stopwatch"]["sigma"] is None
+    assert row["sensor"]["records"] == 0 and row["sensor"]["sigma"] is None
+    row["mode"], row["components"] = "torsion", ["Izz"]
+    assert describe(row) == "torsion (T = 2 s): the plan assumes exact timing (timing = 0)"
+
+
+def test_the_timing_line_quotes_minutes_and_milliseconds():
+    from bifilar.studies.timing import advice, describe
+
+    row = {"mode": "torsion", "components": ["Izz", "Ixx"],
+           **advice(3.0, 0.05, 0.001, reaction=0.1, sensor=(0.01, 100.0))}
+    # 20 cycles (sep 0.05); 0.1 / 20 = 5 ms a trial: 25 trials, 25 x 20 x 3 s = 25 min, +-1 ms
+    assert describe(row).startswith(
+        "torsion (T = 3 s, for Izz, Ixx): time 20 cycles per trial; stopwatch (+-0.1 s a trial): 25 trials "
+        "(~25 min) for +-1 ms a period; sensor: 1 record(s) of 20 cycles (+-")
+
+
+def test_how_to_time_separates_each_timed_mode_from_its_nearest_finite_neighbour():
+    """Modes 2.0, 1.9, 1.0 s and a neutral one: torsion (2.0) is |2.0 - 1.9| / 2.0 = 5 % from its
+    nearest -> 20 cycles; the 1.0 s mode, relative to its own period, |1.0 - 1.9| / 1.0 = 0.9 -> 10.
+    Only identifiable components with a mode are timed, each mode once."""
+    from bifilar.studies.timing import how_to_time
+
+    point = {"periods": {"torsion": 2.0, "swing": 1.9, "pitch": 1.0, "bounce": None},
+             "components": {"Izz": {"identifiable": True, "mode": "torsion"},
+                            "Ixx": {"identifiable": True, "mode": "pitch"},
+                            "Iyy": {"identifiable": True, "mode": "pitch"},
+                            "Ixy": {"identifiable": False, "mode": "swing"},
+                            "Ixz": {"identifiable": True, "mode": None}}}
+    rows = {r["mode"]: r for r in how_to_time(point, 0.01, reaction=0.1)}
+    assert set(rows) == {"torsion", "pitch"}
+    assert rows["torsion"]["separation"] == pytest.approx(0.05, rel=1e-12) and rows["torsion"]["cycles_per_trial"] == 20
+    assert rows["pitch"]["separation"] == pytest.approx(0.9, rel=1e-12) and rows["pitch"]["cycles_per_trial"] == 10
+    assert rows["pitch"]["components"] == ["Ixx", "Iyy"] and rows["torsion"]["period"] == 2.0
+
+
+@pytest.mark.parametrize("text,ok", [("0.01,100", (0.01, 100.0)), ("1e-3, 2e3", (1e-3, 2e3)), (None, None)])
+def test_sensor_spec_parses(text, ok):
+    from bifilar.studies.timing import parse_sensor
+
+    assert parse_sensor(text) == ok
+
+
+@pytest.mark.parametrize("text", ["0.01", "0.01,100,3", "a,b", "0,100", "0.01,0", "-0.01,100", "inf,100", "0.01,nan"])
+def test_bad_sensor_specs_name_the_option(text):
+    from bifilar.errors import InputError
+    from bifilar.studies.timing import parse_sensor
+
+    with pytest.raises(InputError) as e:
+        parse_sensor(text)
+    assert e.value.field == "--sensor"
+
+
+@pytest.mark.parametrize("r", [0.0, -0.1, math.inf, math.nan])
+def test_the_reaction_sigma_must_be_positive_and_finite(r):
+    from bifilar.errors import InputError
+    from bifilar.studies.timing import check_reaction
+
+    with pytest.raises(InputError) as e:
+        check_reaction(r)
+    assert e.value.field == "--stopwatch"
+    assert check_reaction(0.25) == 0.25
+
+
+# ---------------------------------------------------------------------------
+# interrupts.py
+# ---------------------------------------------------------------------------
+
+
+def _chain(depth, last):
+    """An exception whose __context__ chain reaches ``last`` after ``depth`` links."""
+    exc = last
+    for k in range(depth):
+        try:
+            try:
+                raise exc
+            except BaseException:
+                raise ValueError(k)
+        except ValueError as e:
+            exc = e
+    return exc
+
+
+def test_is_terminated_follows_causes_contexts_and_the_flag():
+    from bifilar.interrupts import Terminated, is_terminated
+
+    assert is_terminated(Terminated()) and not is_terminated(KeyboardInterrupt())
+    assert is_terminated(_chain(5, Terminated())) and not is_terminated(_chain(5, KeyboardInterrupt()))
+    try:  # raised *from* a SIGTERM
+        raise RuntimeError("wrapped") from Terminated()
+    except RuntimeError as e:
+        assert is_terminated(e)
+    flagged = KeyboardInterrupt()
+    flagged.terminated = True  # re-raised under another type, marked
+    assert is_terminated(flagged) and is_terminated(_chain(3, flagged))
+    a, b = ValueError("a"), ValueError("b")  # a cycle of contexts ends, False
+    a.__context__, b.__context__ = b, a
+    assert not is_terminated(a)
+
+
+def test_the_last_stop_signalled_is_the_one_raised_again():
+    import signal
+
+    from bifilar import interrupts
+
+    with interrupts.stop_handlers():
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            with pytest.raises(KeyboardInterrupt):
+                interrupts._on_signal(sig, None)
+        assert interrupts.stop_requested() is interrupts.Terminated
+        with pytest.raises(interrupts.Terminated):
+            interrupts.raise_if_stop_requested()
+    assert interrupts.stop_requested() is None
+
+
+def test_stop_handlers_outside_the_main_thread_change_nothing():
+    import signal
+    import threading
+
+    from bifilar import interrupts
+
+    before = signal.getsignal(signal.SIGINT)
+    seen = []
+
+    def run():
+        with interrupts.stop_handlers():
+            seen.append(signal.getsignal(signal.SIGINT))
+
+    th = threading.Thread(target=run)
+    th.start()
+    th.join()
+    assert seen == [before]
