@@ -241,6 +241,24 @@ def test_plain_order_is_eigenvalues_apart_by_twice_their_resolution(d, plain_bat
     assert bool(plain_order(w2[None], Y[None], K[None])[0]) is plain_batch
 
 
+def test_mode_set_without_a_stiffness_resolves_relative_to_the_largest_eigenvalue():
+    """Without K, one resolution DEGENERATE_RTOL x max |omega^2| for all: translations of a 2 kg
+    body with omega^2 = 1, 1 + 0.1 R x 100 and 100 (R = DEGENERATE_RTOL): the first two are one
+    cluster (identical periods, the mean's), the third apart."""
+    from bifilar.analysis.modes import DEGENERATE_RTOL, mode_set
+
+    m = 2.0
+    N = np.eye(6)[:, :3]  # x, y, z translations
+    M = np.diag([m, m, m, 1.0, 1.0, 1.0])
+    Y = np.eye(3) / math.sqrt(m)  # M-normalised: Y^T N^T M N Y = I
+    w2 = np.array([1.0, 1.0 + 0.1 * DEGENERATE_RTOL * 100.0, 100.0])
+    ms = mode_set(N, Y, w2, m, M)
+    P = sorted(md.period for md in ms.modes)
+    assert P[1] == P[2] == pytest.approx(2 * math.pi / math.sqrt(w2[:2].mean()), rel=1e-15)
+    assert P[0] == pytest.approx(2 * math.pi / 10.0, rel=1e-12)
+    assert [md.label for md in ms.modes] == ["swing-x", "swing-y", "bounce"]
+
+
 @pytest.mark.parametrize("w2", [[-1.0, 2.0, 3.0], [0.0, 2.0, 3.0], [1e-14, 2.0, 3.0]])
 def test_a_negative_or_neutral_eigenvalue_is_never_plain(w2):
     from bifilar.analysis.modes import _plain_one, plain_order
@@ -303,7 +321,8 @@ def test_crossing_period_std_is_the_pooled_regressions_standard_error():
 
 
 def _warnings(anchors=((0, -0.5, 0), (0, 0.5, 0)), attachments=((0, -0.5, 0.1), (0, 0.5, 0.1)),
-              lengths=(1.5, 1.5), mass=2.0, k=None, principal=(0.1, 0.1, 0.2), box=None, gravity=9.81):
+              lengths=(1.5, 1.5), mass=2.0, k=None, principal=(0.1, 0.1, 0.2), box=None, gravity=9.81,
+              parts=None):
     """plausibility_warnings of a bifilar config; ``k``: principal moments m k^2 (0.6, 0.6, 1)
     (the largest moment m k^2, so the radius of gyration is k)."""
     from bifilar.config import scene_from_dict
@@ -311,9 +330,10 @@ def _warnings(anchors=((0, -0.5, 0), (0, 0.5, 0)), attachments=((0, -0.5, 0.1), 
 
     if k is not None:
         principal = (0.6 * mass * k * k, 0.6 * mass * k * k, mass * k * k)
-    body = {"mass": mass, "inertia": {"principal": list(principal)}}
-    if box is not None:
-        body["bounding_box"] = {"min": [-box] * 3, "max": [box] * 3}
+    body = {"mass": mass, "inertia": {"principal": list(principal)}} if parts is None else {"parts": parts}
+    if box is not None:  # +-box, or (min, max) corners
+        lo, hi = box if isinstance(box, tuple) else ([-box] * 3, [box] * 3)
+        body["bounding_box"] = {"min": list(lo), "max": list(hi)}
     cfg = {"gravity": gravity, "body": body,
            "rig": {"anchors": [list(a) for a in anchors], "attachments": [list(p) for p in attachments],
                    "lengths": list(lengths)}}
@@ -568,3 +588,22 @@ def test_stop_handlers_outside_the_main_thread_change_nothing():
     th.start()
     th.join()
     assert seen == [before]
+
+
+def test_a_bodys_reach_counts_the_negative_axes_too():
+    """A box from -0.5 to +0.01 m along each axis: it reaches 0.5 m (along -x, -y, -z).  Its radius
+    of gyration 0.9 m is within 2 x 0.5; attachments 1 m out are within 10 x 0.5.  Reading only
+    the positive axes (0.2 m with the attachments at y = +-0.2; 0.01 m for the shape alone) would
+    flag both."""
+    box = ([-0.5] * 3, [0.01] * 3)
+    assert _warnings(anchors=((0, -0.2, 0), (0, 0.2, 0)), attachments=((-0.3, -0.2, 0), (-0.3, 0.2, 0)),
+                     k=0.9, box=box) == []
+    assert _warnings(anchors=((0, -1, 0), (0, 1, 0)), attachments=((0, -1, 0), (0, 1, 0)), k=0.5, box=box) == []
+
+
+def test_attachments_beyond_the_parts_name_the_parts():
+    """One 2 cm cube part (reach 0.01 m) hung from points 0.5 m out: 50 x its reach."""
+    part = [{"shape": "box", "mass": 2.0, "size": [0.02, 0.02, 0.02], "position": [0, 0, 0]}]
+    w = _warnings(attachments=((0, -0.5, 0), (0, 0.5, 0)), parts=part)
+    assert w == ["rig.attachments reach 0.5 m from the centre of mass along a body axis, but the body "
+                 "(body.parts) only 0.01 m; are the rig's coordinates in other units (cm, mm)?"]
