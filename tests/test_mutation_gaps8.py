@@ -607,3 +607,114 @@ def test_attachments_beyond_the_parts_name_the_parts():
     w = _warnings(attachments=((0, -0.5, 0), (0, 0.5, 0)), parts=part)
     assert w == ["rig.attachments reach 0.5 m from the centre of mass along a body axis, but the body "
                  "(body.parts) only 0.01 m; are the rig's coordinates in other units (cm, mm)?"]
+
+
+# ---------------------------------------------------------------------------
+# config/fields.py: limits, scales, geometry -- each side of each documented bound
+# ---------------------------------------------------------------------------
+
+
+def _errors(anchors=((0, -0.5, 0), (0, 0.5, 0)), attachments=((0, -0.5, 0.1), (0, 0.5, 0.1)),
+            lengths=(1.5, 1.5), body=None, **top):
+    """(field, message) of every problem scene_from_dict finds in a bifilar-like config."""
+    from bifilar.config import scene_from_dict
+    from bifilar.errors import InputError
+
+    cfg = {"body": body or {"mass": 2.0, "inertia": {"principal": [0.1, 0.1, 0.2]}},
+           "rig": {"anchors": [list(a) for a in anchors], "attachments": [list(p) for p in attachments],
+                   "lengths": list(lengths)}, **top}
+    try:
+        scene_from_dict(cfg, warn=False)
+    except InputError as e:
+        return [(x.field, x.message) for x in getattr(e, "errors", [e])]
+    return []
+
+
+def test_wires_differing_over_ten_thousand_fold_are_refused():
+    wide = ((0, -2.0, 0), (0, 2.0, 0))
+    assert _errors(anchors=wide, lengths=(1.0, 1e4)) == []  # exactly 1e4: accepted
+    assert _errors(anchors=wide, lengths=(1.0, 10001.0)) == [
+        ("rig.lengths", "wire 2 (10001 m) is more than 10000 times longer than wire 1 (1 m); check the units")]
+
+
+@pytest.mark.parametrize("key,other", [("anchors", "attachments"), ("attachments", "anchors")])
+def test_a_rig_over_ten_thousand_times_its_longest_wire_is_refused(key, other):
+    """Wires of 1 mm: points spanning 10 m are within 1e4 x; 12 m are not (the other points 1 mm
+    apart; that the wires cannot reach is another error)."""
+    def cfg(half):
+        pts = {key: ((0, -half, 0), (0, half, 0)), other: ((0, -5e-4, 0), (0, 5e-4, 0))}
+        return _errors(lengths=(1e-3, 1e-3), **pts)
+
+    assert not any("times the longest wire" in m for _, m in cfg(5.0))
+    assert cfg(6.0)[0] == (f"rig.{key}", "span 12 m, more than 10000 times the longest wire (0.001 m); "
+                                         "check the units")
+
+
+@pytest.mark.parametrize("key", ["anchors", "attachments"])
+def test_points_closer_than_a_billionth_of_the_rig_coincide(key):
+    """The rig's size here is the 1.5 m wires: 1e-9 x 1.5 m.  1e-9 m apart is one point,
+    3e-9 m apart are two."""
+    other = "attachments" if key == "anchors" else "anchors"
+    far = ((0, -0.5, 0), (0, 0.5, 0))
+    for gap, n in ((1e-9, 1), (3e-9, 0)):
+        errs = _errors(lengths=(1.5, 1.5), **{key: ((0, 0, 0), (0, gap, 0)), other: far})
+        hits = [e for e in errs if "coincides" in e[1]]
+        assert len(hits) == n
+        if n:
+            assert hits[0][0] == f"rig.{key}.1" and hits[0][1].startswith(f"coincides with rig.{key}.0")
+
+
+@pytest.mark.parametrize("far", ["anchors", "attachments"])
+def test_two_wires_must_reach_across_the_farther_pair(far):
+    """Points 4 m apart on one side, 1 m on the other: 1.5 + 1.5 + 1 = 4 m just reaches (a straight
+    line); 1.4 + 1.5 + 1 = 3.9 m does not, by 0.1 m."""
+    near = "attachments" if far == "anchors" else "anchors"
+    pts = {far: ((0, -2, 0), (0, 2, 0)), near: ((0, -0.5, 0), (0, 0.5, 0))}
+    assert not any("cannot reach" in m for _, m in _errors(lengths=(1.5, 1.5), **pts))
+    assert _errors(lengths=(1.4, 1.5), **pts) == [(
+        "rig.lengths", f"wires 1 and 2 cannot reach: {far} 1 and 2 are 4 m apart but {near} 1 m apart plus wires "
+                       f"1.4 + 1.5 m only span 3.9 m; lengthen them by 0.1 m in total or move the {far} closer")]
+
+
+def test_three_attachments_on_one_line_are_refused_and_a_millimetre_off_it_is_not():
+    anchors = ((-0.5, 0, 0), (0.5, 0, 0), (0, 0.5, 0))
+    line = _errors(anchors=anchors, attachments=((-0.5, 0, 0), (0.5, 0, 0), (0, 0, 0)), lengths=(1, 1, 1))
+    assert line == [("rig.attachments", "all 3 attachments lie on one line: the body could spin freely about it; "
+                                        "move one off the line")]
+    assert _errors(anchors=anchors, attachments=((-0.5, 0, 0), (0.5, 0, 0), (0, 1e-3, 0)), lengths=(1, 1, 1)) == []
+
+
+@pytest.mark.parametrize("field,value,message", [
+    ("gravity", 1e4, None), ("gravity", 1e-3, None),  # the documented bounds themselves
+    ("gravity", 1.1e4, "must be at most 10000 m/s^2 in magnitude, got 11000.0"),
+    ("gravity", 5e-4, "must be at least 0.001 m/s^2, got 0.0005"),
+    ("gravity", 0, "must be positive, got 0"),
+    ("gravity", True, "must be a number, got bool True"),
+    ("gravity", "9.81", "must be a number, got str '9.81' (a number in quotes is text; remove the quotes)"),
+    ("gravity", "fast", "must be a number, got str 'fast'"),
+    ("gravity", 10 ** 400, "must be finite, got an integer with 401 digits"),
+    ("gravity", float("inf"), "must be finite, got inf"),
+])
+def test_a_number_is_checked_against_its_documented_limits(field, value, message):
+    errs = _errors(**{field: value})
+    assert errs == ([] if message is None else [(field, message)])
+
+
+@pytest.mark.parametrize("mass,message", [
+    (1e-6, None), (1e9, None),
+    (9e-7, "must be at least 1e-06 kg, got 9e-07"), (2e9, "must be at most 1e+09 kg in magnitude, got 2000000000.0")])
+def test_the_mass_limits_are_one_milligram_to_a_megatonne(mass, message):
+    k2 = 0.05  # k = 0.22 m: the inertia scales with the mass
+    errs = _errors(body={"mass": mass, "inertia": {"principal": [k2 * mass, k2 * mass, 1.5 * k2 * mass]}})
+    assert errs == ([] if message is None else [("body.mass", message)])
+
+
+@pytest.mark.parametrize("key,shown", [
+    ("a.b", "'a.b'"), ("with space", "'with space'"), ("x" * 40, "x" * 40),
+    ("x" * 41, "'" + "x" * 41 + "'"), ("x" * 70, "'" + "x" * 56 + "...")])
+def test_an_unknown_key_is_named_on_one_unambiguous_line(key, shown):
+    """Keys with dots, blanks or over 40 characters are quoted; a path element is at most 60
+    characters (57 and '...')."""
+    body = {"mass": 2.0, "inertia": {"principal": [0.1, 0.1, 0.2]}, key: 1}
+    errs = _errors(body=body)
+    assert len(errs) == 1 and errs[0][0] == f"body.{shown}" and errs[0][1].startswith("unknown key")
