@@ -718,3 +718,77 @@ def test_an_unknown_key_is_named_on_one_unambiguous_line(key, shown):
     body = {"mass": 2.0, "inertia": {"principal": [0.1, 0.1, 0.2]}, key: 1}
     errs = _errors(body=body)
     assert len(errs) == 1 and errs[0][0] == f"body.{shown}" and errs[0][1].startswith("unknown key")
+
+
+# ---------------------------------------------------------------------------
+# config/inertia.py
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("spec,names", [
+    ({"principal": [1.0, 2.0, None]}, ["Izz"]),
+    ({"principal": [None, 2.0, 3.0]}, ["Ixx"]),
+    ({"tensor": [[1, 0, 0], [0, 2, 0], [0, 0, None]]}, ["Izz"]),
+    ({"tensor": [[1, None, 0], [0, 2, 0], [0, 0, 3]]}, ["Ixy"]),  # either entry of a product
+    ({"tensor": [[1, 0, 0], [0, 2, 0], [None, 0, 3]]}, ["Ixz"]),
+    ({"tensor": [[None, 0, 0], [0, 2, None], [0, 0, 3]]}, ["Ixx", "Iyz"]),
+    ({"tensor": [[1, 0], [0, 2]]}, []), ({"principal": "x"}, []), ("x", []),
+])
+def test_null_components_are_the_ones_marked_null(spec, names):
+    from bifilar.config.inertia import null_components
+
+    assert null_components({"body": {"inertia": spec}}) == names
+    assert null_components({"body": {}}) == [] and null_components(None) == []
+
+
+def test_unknown_components_get_placeholders_and_only_invert_accepts_them():
+    """An unknown moment starts at the mean of the known ones, an unknown product at 0."""
+    from bifilar.config import scene_from_dict
+
+    def cfg(inertia):
+        return {"body": {"mass": 2.0, "inertia": inertia},
+                "rig": {"anchors": [[0, -0.5, 0], [0, 0.5, 0]], "attachments": [[0, -0.5, 0.1], [0, 0.5, 0.1]],
+                        "lengths": [1.5, 1.5]}}
+
+    s = scene_from_dict(cfg({"principal": [0.1, 0.2, None]}), warn=False, unknown=("Izz",))
+    assert s.inertia == pytest.approx(np.diag([0.1, 0.2, 0.15]), abs=1e-15)
+    s = scene_from_dict(cfg({"tensor": [[0.1, None, 0.01], [None, 0.2, 0.0], [0.01, 0.0, None]]}), warn=False,
+                        unknown=("Ixy", "Izz"))
+    assert s.inertia == pytest.approx(np.array([[0.1, 0.0, 0.01], [0.0, 0.2, 0.0], [0.01, 0.0, 0.15]]), abs=1e-15)
+    assert _errors(body={"mass": 2.0, "inertia": {"principal": [0.1, 0.2, None]}}) == [
+        ("body.inertia", "Izz is null (unknown): only `bifilar invert` accepts an unknown component (it solves for "
+                         "it); give its value")]
+
+
+@pytest.mark.parametrize("inertia,message", [
+    ({"principal": [0.1, 0.1, 0.2], "tensor": [[0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.2]]},
+     "give exactly one of 'tensor' (3x3) or 'principal' ([I1, I2, I3]), got tensor and principal"),
+    ({}, "give exactly one of 'tensor' (3x3) or 'principal' ([I1, I2, I3]), got neither"),
+])
+def test_exactly_one_form_of_the_inertia(inertia, message):
+    assert _errors(body={"mass": 2.0, "inertia": inertia}) == [("body.inertia", message)]
+
+
+def test_symmetry_is_checked_to_a_billionth_of_the_largest_entry():
+    def tensor(eps):
+        return {"mass": 2.0, "inertia": {"tensor": [[0.2, 0.01 + eps, 0], [0.01, 0.2, 0], [0, 0, 0.3]]}}
+
+    assert _errors(body=tensor(0.3 * 0.5e-9)) == []  # 0.5e-9 of the largest entry, 0.3
+    assert _errors(body=tensor(0.3 * 2e-9)) == [(
+        "body.inertia.tensor", "inertia tensor must be symmetric; row 0, column 1 is 0.01 but row 1, column 0 is 0.01")]
+
+
+def test_the_radius_of_gyration_must_lie_between_a_micrometre_and_a_hundred_kilometres():
+    """1 kg with moments 1e-13 .. 1.5e-13 kg m^2: k = sqrt(1e-13) = 3.16e-7 m < 1e-6 m;
+    4e-13 .. 6e-13 (k >= 6.3e-7) still, 1e-12 .. 1.5e-12 (k >= 1e-6) accepted."""
+    def body(s):
+        return {"mass": 1.0, "inertia": {"principal": [s, s, 1.5 * s]}}
+
+    assert _errors(body=body(1e-13)) == [(
+        "body.inertia", "radius of gyration sqrt(I/m) = 3.16e-07 m is outside 1e-06 .. 100000 m (principal moments "
+                        "[1e-13, 1e-13, 1.5e-13] kg m^2, mass 1 kg): are the units kg and m?")]
+    assert len(_errors(body=body(4e-13))) == 1
+    assert _errors(body=body(1.0001e-12)) == []
+    # the upper bound: k_max = sqrt(1.5 I / m) > 1e5 m
+    assert _errors(body=body(6e9)) == []  # k_max = 9.5e4 m
+    assert "radius of gyration sqrt(I/m) = 1.22e+05 m" in _errors(body=body(1e10))[0][1]
