@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from bifilar.estimation.signal_crossings import _crossing_time, period_from_crossings
+from bifilar.estimation.signal_io import SignalError
 
 # ---------------------------------------------------------------------------
 # signal_crossings.py: where one crossing lies
@@ -146,8 +147,6 @@ def test_five_crossings_are_two_full_periods(t0, t1, ups, downs):
 
 def test_four_crossings_are_refused():
     """0.1 .. 2.2 s of sin(2 pi t): ups at 1, 2, downs at 0.5, 1.5 -- one and a half periods."""
-    from bifilar.estimation.signal import SignalError
-
     t = np.arange(0.1, 2.2, 0.001)
     with pytest.raises(SignalError) as e:
         period_from_crossings(t, np.sin(2 * np.pi * t), level=0.0, hysteresis=0.01)
@@ -698,6 +697,18 @@ def test_three_attachments_on_one_line_are_refused_and_a_millimetre_off_it_is_no
 def test_a_number_is_checked_against_its_documented_limits(field, value, message):
     errs = _errors(**{field: value})
     assert errs == ([] if message is None else [(field, message)])
+
+
+@pytest.mark.parametrize("length,message", [
+    (1e-4, None), (1e5, None), (0.9e-4, "must be at least 0.0001 m, got 9e-05"),
+    (1.1e5, "must be at most 100000 m in magnitude, got 110000.0")])
+def test_wire_lengths_from_a_tenth_of_a_millimetre_to_a_hundred_kilometres(length, message):
+    """Two wires of ``length`` m hung from anchors exactly above their attachments, 2 h apart
+    (h = the length, at most 0.5 m: the points have limits of their own)."""
+    h = min(length, 0.5)
+    a = p = ((0, -h, 0), (0, h, 0))
+    errs = _errors(anchors=a, attachments=p, lengths=(length, length))
+    assert errs == ([] if message is None else [("rig.lengths.0", message), ("rig.lengths.1", message)])
 
 
 @pytest.mark.parametrize("mass,message", [
