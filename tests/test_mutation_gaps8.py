@@ -258,6 +258,25 @@ def test_mode_set_without_a_stiffness_resolves_relative_to_the_largest_eigenvalu
     assert [md.label for md in ms.modes] == ["swing-x", "swing-y", "bounce"]
 
 
+@pytest.mark.parametrize("f,neutral", [(0.1, True), (10.0, False)])
+def test_an_eigenvalue_below_neutral_rtol_of_the_largest_has_no_period(f, neutral):
+    """omega^2 = f x NEUTRAL_RTOL x 100 beside 1 and 100 (each resolved to DEGENERATE_RTOL of
+    itself, K = diag): below the threshold it is neutral (no period, listed last), above it has
+    its period 2 pi / omega."""
+    from bifilar.analysis.modes import NEUTRAL_RTOL, mode_set
+
+    m = 2.0
+    N = np.eye(6)[:, :3]
+    M = np.diag([m, m, m, 1.0, 1.0, 1.0])
+    w2 = np.array([f * NEUTRAL_RTOL * 100.0, 1.0, 100.0])
+    ms = mode_set(N, np.eye(3) / math.sqrt(m), w2, m, M, K=np.diag(w2) * m)
+    last = ms.modes[-1]
+    if neutral:
+        assert last.period is None and last.label == "swing-x"
+    else:
+        assert ms.modes[0].period == pytest.approx(2 * math.pi / math.sqrt(w2[0]), rel=1e-12)
+
+
 @pytest.mark.parametrize("w2", [[-1.0, 2.0, 3.0], [0.0, 2.0, 3.0], [1e-14, 2.0, 3.0]])
 def test_a_negative_or_neutral_eigenvalue_is_never_plain(w2):
     from bifilar.analysis.modes import _plain_one, plain_order
@@ -613,6 +632,11 @@ def test_attachments_beyond_the_parts_name_the_parts():
 # ---------------------------------------------------------------------------
 
 
+def _pts(x):
+    """Points given as a tuple of tuples as a YAML list of lists; anything else as it is."""
+    return [list(a) for a in x] if isinstance(x, tuple) else x
+
+
 def _errors(anchors=((0, -0.5, 0), (0, 0.5, 0)), attachments=((0, -0.5, 0.1), (0, 0.5, 0.1)),
             lengths=(1.5, 1.5), body=None, **top):
     """(field, message) of every problem scene_from_dict finds in a bifilar-like config."""
@@ -620,8 +644,7 @@ def _errors(anchors=((0, -0.5, 0), (0, 0.5, 0)), attachments=((0, -0.5, 0.1), (0
     from bifilar.errors import InputError
 
     cfg = {"body": body or {"mass": 2.0, "inertia": {"principal": [0.1, 0.1, 0.2]}},
-           "rig": {"anchors": [list(a) for a in anchors], "attachments": [list(p) for p in attachments],
-                   "lengths": list(lengths)}, **top}
+           "rig": {"anchors": _pts(anchors), "attachments": _pts(attachments), "lengths": list(lengths)}, **top}
     try:
         scene_from_dict(cfg, warn=False)
     except InputError as e:
@@ -803,3 +826,13 @@ def test_the_radius_of_gyration_must_lie_between_a_micrometre_and_a_hundred_kilo
     # the upper bound: k_max = sqrt(1.5 I / m) > 1e5 m
     assert _errors(body=body(6e9)) == []  # k_max = 9.5e4 m
     assert "radius of gyration sqrt(I/m) = 1.22e+05 m" in _errors(body=body(1e10))[0][1]
+
+
+@pytest.mark.parametrize("value,message", [
+    ([], "must be a non-empty list of [x, y, z] points, got a list of 0 item(s)"),
+    ("ab", "must be a non-empty list of [x, y, z] points, got str 'ab'"),
+    ([[0, 0, 0]] * 101, "must list one [x, y, z] point per wire (at most 5), got 101 items"),
+])
+def test_the_points_must_be_a_list_of_points(value, message):
+    errs = _errors(anchors=value)
+    assert ("rig.anchors", message) in errs
