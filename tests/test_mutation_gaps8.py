@@ -118,6 +118,7 @@ def test_spikes_away_from_the_level_are_dropped_in_any_unit_of_time(scale):
     assert cr.up_times.size == 15 and cr.down_times.size == 16 and cr.n_periods == 29
     assert cr.period == pytest.approx(1.25 / scale, rel=1e-5)
     assert cr.mean_period == pytest.approx(1.25 / scale, rel=1e-5)
+    assert cr.frequency == pytest.approx(scale / 1.25, rel=1e-5)  # Hz
     assert cr.down_times[-1] == pytest.approx(19.375 / scale, rel=1e-5)
 
 
@@ -135,6 +136,9 @@ def test_default_hysteresis_is_three_times_the_white_noise_level():
 @pytest.mark.parametrize("t0,t1,ups,downs", [
     (0.1, 2.6, [1.0, 2.0], [0.5, 1.5, 2.5]),  # sin(2 pi t): 2 ups, 3 downs
     (0.6, 3.1, [1.0, 2.0, 3.0], [1.5, 2.5]),  # 3 ups, 2 downs
+    # the record ends 2 ms after its last crossing, at the first sample beyond the band
+    # (sin(2 pi 0.002) = 0.0126 > 0.01)
+    (0.1, 2.5025, [1.0, 2.0], [0.5, 1.5, 2.5]),
 ])
 def test_five_crossings_are_two_full_periods(t0, t1, ups, downs):
     """The documented minimum: two full periods, i.e. five crossings, at least two each way
@@ -143,6 +147,7 @@ def test_five_crossings_are_two_full_periods(t0, t1, ups, downs):
     cr = period_from_crossings(t, np.sin(2 * np.pi * t), level=0.0, hysteresis=0.01)
     assert cr.up_times == pytest.approx(ups, abs=1e-9) and cr.down_times == pytest.approx(downs, abs=1e-9)
     assert cr.period == pytest.approx(1.0, abs=1e-9) and cr.n_periods == 3
+    assert cr.frequency == pytest.approx(1.0, abs=1e-9)
 
 
 def test_four_crossings_are_refused():
@@ -836,3 +841,12 @@ def test_the_radius_of_gyration_must_lie_between_a_micrometre_and_a_hundred_kilo
 def test_the_points_must_be_a_list_of_points(value, message):
     errs = _errors(anchors=value)
     assert ("rig.anchors", message) in errs
+
+
+def test_the_coincidence_tolerance_scales_with_the_rigs_largest_extent():
+    """Anchors 20 m apart along x (the rig's size; wires 10.5 m): attachments 1.5e-8 m apart are
+    within 1e-9 x 20 m, one point; 3e-8 m apart are two."""
+    anchors = ((-10, 0, 0), (10, 0, 0))
+    for gap, n in ((1.5e-8, 1), (3e-8, 0)):
+        errs = _errors(anchors=anchors, attachments=((0, 0, 0), (gap, 0, 0)), lengths=(10.5, 10.5))
+        assert len([e for e in errs if e[0] == "rig.attachments.1" and "coincides" in e[1]]) == n
