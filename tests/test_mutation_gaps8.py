@@ -268,18 +268,21 @@ def test_an_eigenvalue_below_neutral_rtol_of_the_largest_has_no_period(f, neutra
     """omega^2 = f x NEUTRAL_RTOL x 100 beside 1 and 100 (each resolved to DEGENERATE_RTOL of
     itself, K = diag): below the threshold it is neutral (no period, listed last), above it has
     its period 2 pi / omega."""
-    from bifilar.analysis.modes import NEUTRAL_RTOL, mode_set
+    from bifilar.analysis.modes import NEUTRAL_RTOL, mode_set, mode_sets
 
     m = 2.0
     N = np.eye(6)[:, :3]
     M = np.diag([m, m, m, 1.0, 1.0, 1.0])
     w2 = np.array([f * NEUTRAL_RTOL * 100.0, 1.0, 100.0])
     ms = mode_set(N, np.eye(3) / math.sqrt(m), w2, m, M, K=np.diag(w2) * m)
-    last = ms.modes[-1]
-    if neutral:
-        assert last.period is None and last.label == "swing-x"
-    else:
-        assert ms.modes[0].period == pytest.approx(2 * math.pi / math.sqrt(w2[0]), rel=1e-12)
+    # the batch's mode_sets decide the same for a batch of one
+    (batch,) = mode_sets(N[None], (np.eye(3) / math.sqrt(m))[None], w2[None], np.array([m]), M[None],
+                         (np.diag(w2) * m)[None])
+    for s in (ms, batch):
+        if neutral:
+            assert s.modes[-1].period is None and s.modes[-1].label == "swing-x"
+        else:
+            assert s.modes[0].period == pytest.approx(2 * math.pi / math.sqrt(w2[0]), rel=1e-12)
 
 
 @pytest.mark.parametrize("w2", [[-1.0, 2.0, 3.0], [0.0, 2.0, 3.0], [1e-14, 2.0, 3.0]])
@@ -709,6 +712,11 @@ def test_three_attachments_on_one_line_are_refused_and_a_millimetre_off_it_is_no
     assert line == [("rig.attachments", "all 3 attachments lie on one line: the body could spin freely about it; "
                                         "move one off the line")]
     assert _errors(anchors=anchors, attachments=((-0.5, 0, 0), (0.5, 0, 0), (0, 1e-3, 0)), lengths=(1, 1, 1)) == []
+    # the tolerance is relative to the rig's size: a 1 mm rig with a point 1e-7 m (1e-4 of it)
+    # off the line is no line
+    small = tuple(tuple(1e-3 * x for x in a) for a in anchors)
+    assert _errors(anchors=small, attachments=((-5e-4, 0, 0), (5e-4, 0, 0), (0, 1e-7, 0)),
+                   lengths=(1e-3, 1e-3, 1e-3)) == []
 
 
 @pytest.mark.parametrize("field,value,message", [
@@ -850,3 +858,13 @@ def test_the_coincidence_tolerance_scales_with_the_rigs_largest_extent():
     for gap, n in ((1.5e-8, 1), (3e-8, 0)):
         errs = _errors(anchors=anchors, attachments=((0, 0, 0), (gap, 0, 0)), lengths=(10.5, 10.5))
         assert len([e for e in errs if e[0] == "rig.attachments.1" and "coincides" in e[1]]) == n
+
+
+def test_the_default_stopwatch_is_the_hand_timed_trial_invert_assumes():
+    """0.1 s a trial (module docstring), the same as invert's default trial-time sigma."""
+    from bifilar.estimation.uncertainty import DEFAULT_TRIAL_TIME_SIGMA
+    from bifilar.studies.timing import advice
+
+    row = advice(2.0, None, 0.005)
+    assert row["stopwatch"]["reaction_sigma"] == DEFAULT_TRIAL_TIME_SIGMA == 0.1
+    assert row["stopwatch"]["trials"] == 4  # (0.1 / 10 / 0.005)^2
