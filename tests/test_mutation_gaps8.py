@@ -219,6 +219,17 @@ def test_without_a_torsion_the_default_mode_is_the_slowest():
     assert rest.pick(None) is rest.modes[0] and rest.modes[0].label == "swing-x"
 
 
+def test_a_modes_description_names_its_two_main_components_over_one_percent():
+    from bifilar.analysis.modes import Mode
+
+    def desc(share):
+        return Mode("m", 1.0, 1.0, np.eye(6)[0], np.asarray(share, float), 0).description
+
+    assert desc([0.5, 0.3, 0.2, 0, 0, 0]) == "x 50%, y 30%"  # the two largest, not the third
+    assert desc([0, 0, 0, 0.05, 0, 0.95]) == "rz 95%, rx 5%"
+    assert desc([0.995, 0.005, 0, 0, 0, 0]) == "x 100%"  # 0.5 % is no main component
+
+
 def _diag_problem(w2):
     """K y = w M y with M = I and K = diag(w2): Y = I, and each eigenvalue's resolution is
     DEGENERATE_RTOL |y|^T |K| |y| = DEGENERATE_RTOL w."""
@@ -243,6 +254,9 @@ def test_plain_order_is_eigenvalues_apart_by_twice_their_resolution(d, plain_bat
     # two modes only (a 4-wire rig): the same rule for its pair
     w2, Y, K = _diag_problem([2.0, 2.0 + gap])
     assert bool(plain_order(w2[None], Y[None], K[None])[0]) is plain_batch
+    # one mode (a 5-wire rig): nothing to cluster, positive: plain
+    w2, Y, K = _diag_problem([2.0])
+    assert plain_order(w2[None], Y[None], K[None])[0] and _plain_one(w2, Y, K)
 
 
 def test_mode_set_without_a_stiffness_resolves_relative_to_the_largest_eigenvalue():
@@ -758,10 +772,10 @@ def test_the_mass_limits_are_one_milligram_to_a_megatonne(mass, message):
 
 @pytest.mark.parametrize("key,shown", [
     ("a.b", "'a.b'"), ("with space", "'with space'"), ("x" * 40, "x" * 40),
-    ("x" * 41, "'" + "x" * 41 + "'"), ("x" * 70, "'" + "x" * 56 + "...")])
+    ("x" * 41, "'" + "x" * 41 + "'"), ("y" * 58, "'" + "y" * 58 + "'"), ("x" * 70, "'" + "x" * 56 + "...")])
 def test_an_unknown_key_is_named_on_one_unambiguous_line(key, shown):
     """Keys with dots, blanks or over 40 characters are quoted; a path element is at most 60
-    characters (57 and '...')."""
+    characters (57 and '...'; 60 are shown whole)."""
     body = {"mass": 2.0, "inertia": {"principal": [0.1, 0.1, 0.2]}, key: 1}
     errs = _errors(body=body)
     assert len(errs) == 1 and errs[0][0] == f"body.{shown}" and errs[0][1].startswith("unknown key")
@@ -851,13 +865,13 @@ def test_the_points_must_be_a_list_of_points(value, message):
     assert ("rig.anchors", message) in errs
 
 
-def test_the_coincidence_tolerance_scales_with_the_rigs_largest_extent():
-    """Anchors 20 m apart along x (the rig's size; wires 10.5 m): attachments 1.5e-8 m apart are
-    within 1e-9 x 20 m, one point; 3e-8 m apart are two."""
-    anchors = ((-10, 0, 0), (10, 0, 0))
+@pytest.mark.parametrize("wide,close", [("anchors", "attachments"), ("attachments", "anchors")])
+def test_the_coincidence_tolerance_scales_with_the_rigs_largest_extent(wide, close):
+    """One pair of points 20 m apart along x (the rig's size; wires 10.5 m): the other pair 1.5e-8 m
+    apart is within 1e-9 x 20 m, one point; 3e-8 m apart, two."""
     for gap, n in ((1.5e-8, 1), (3e-8, 0)):
-        errs = _errors(anchors=anchors, attachments=((0, 0, 0), (gap, 0, 0)), lengths=(10.5, 10.5))
-        assert len([e for e in errs if e[0] == "rig.attachments.1" and "coincides" in e[1]]) == n
+        errs = _errors(lengths=(10.5, 10.5), **{wide: ((-10, 0, 0), (10, 0, 0)), close: ((0, 0, 0), (gap, 0, 0))})
+        assert len([e for e in errs if e[0] == f"rig.{close}.1" and "coincides" in e[1]]) == n
 
 
 def test_the_default_stopwatch_is_the_hand_timed_trial_invert_assumes():
