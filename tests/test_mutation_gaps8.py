@@ -794,6 +794,7 @@ def test_an_unknown_key_is_named_on_one_unambiguous_line(key, shown):
     ({"tensor": [[1, 0, 0], [0, 2, 0], [None, 0, 3]]}, ["Ixz"]),
     ({"tensor": [[None, 0, 0], [0, 2, None], [0, 0, 3]]}, ["Ixx", "Iyz"]),
     ({"tensor": [[1, 0], [0, 2]]}, []), ({"principal": "x"}, []), ("x", []),
+    ({"principal": [1.0, None]}, ["Iyy"]),  # a short list: its own entries only (refused later)
 ])
 def test_null_components_are_the_ones_marked_null(spec, names):
     from bifilar.config.inertia import null_components
@@ -811,6 +812,12 @@ def test_unknown_components_get_placeholders_and_only_invert_accepts_them():
                 "rig": {"anchors": [[0, -0.5, 0], [0, 0.5, 0]], "attachments": [[0, -0.5, 0.1], [0, 0.5, 0.1]],
                         "lengths": [1.5, 1.5]}}
 
+    from bifilar.errors import InputError
+
+    with pytest.raises(InputError) as e:
+        scene_from_dict(cfg({"principal": [0.1, None]}), warn=False, unknown=("Iyy",))
+    assert (e.value.field, e.value.message) == (
+        "body.inertia.principal", "must be a list of 3 numbers (or null for an unknown one), got a list of 2 item(s)")
     s = scene_from_dict(cfg({"principal": [0.1, 0.2, None]}), warn=False, unknown=("Izz",))
     assert s.inertia == pytest.approx(np.diag([0.1, 0.2, 0.15]), abs=1e-15)
     s = scene_from_dict(cfg({"tensor": [[0.1, None, 0.01], [None, 0.2, 0.0], [0.01, 0.0, None]]}), warn=False,
