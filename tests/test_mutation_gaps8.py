@@ -889,3 +889,25 @@ def test_the_default_stopwatch_is_the_hand_timed_trial_invert_assumes():
     row = advice(2.0, None, 0.005)
     assert row["stopwatch"]["reaction_sigma"] == DEFAULT_TRIAL_TIME_SIGMA == 0.1
     assert row["stopwatch"]["trials"] == 4  # (0.1 / 10 / 0.005)^2
+
+
+@pytest.mark.parametrize("inertia,unknown,field,message", [
+    ({"principal": [0.1, -0.2, None]}, ("Izz",), "body.inertia.principal.1", "must be positive, got -0.2"),
+    ({"tensor": [[0.1, 0, 0], [0, -0.2, 0], [0, 0, None]]}, ("Izz",), "body.inertia.tensor.1.1",
+     "must be positive, got -0.2"),
+    ({"tensor": [[0.1, "a", 0], ["a", 0.2, 0], [0, 0, None]]}, ("Izz",), "body.inertia.tensor.0.1",
+     "must be a number, got str 'a'"),
+])
+def test_a_bad_known_component_beside_an_unknown_is_named_by_its_path(inertia, unknown, field, message):
+    """Known moments must be positive numbers, known products numbers (either sign)."""
+    from bifilar.config import scene_from_dict
+    from bifilar.errors import InputError
+
+    cfg = {"body": {"mass": 2.0, "inertia": inertia},
+           "rig": {"anchors": [[0, -0.5, 0], [0, 0.5, 0]], "attachments": [[0, -0.5, 0.1], [0, 0.5, 0.1]],
+                   "lengths": [1.5, 1.5]}}
+    with pytest.raises(InputError) as e:
+        scene_from_dict(cfg, warn=False, unknown=unknown)
+    assert (field, message) in [(x.field, x.message) for x in getattr(e.value, "errors", [e.value])]
+    cfg["body"]["inertia"] = {"tensor": [[0.1, -0.01, 0], [-0.01, 0.2, 0], [0, 0, None]]}  # a negative product
+    assert scene_from_dict(cfg, warn=False, unknown=unknown).inertia[0, 1] == -0.01
