@@ -895,7 +895,7 @@ def test_the_default_stopwatch_is_the_hand_timed_trial_invert_assumes():
     ({"principal": [0.1, -0.2, None]}, ("Izz",), "body.inertia.principal.1", "must be positive, got -0.2"),
     ({"tensor": [[0.1, 0, 0], [0, -0.2, 0], [0, 0, None]]}, ("Izz",), "body.inertia.tensor.1.1",
      "must be positive, got -0.2"),
-    ({"tensor": [[0.1, "a", 0], ["a", 0.2, 0], [0, 0, None]]}, ("Izz",), "body.inertia.tensor.0.1",
+    ({"tensor": [[0.1, "a", 0], [0.0, 0.2, 0], [0, 0, None]]}, ("Izz",), "body.inertia.tensor.0.1",
      "must be a number, got str 'a'"),
 ])
 def test_a_bad_known_component_beside_an_unknown_is_named_by_its_path(inertia, unknown, field, message):
@@ -908,6 +908,7 @@ def test_a_bad_known_component_beside_an_unknown_is_named_by_its_path(inertia, u
                    "lengths": [1.5, 1.5]}}
     with pytest.raises(InputError) as e:
         scene_from_dict(cfg, warn=False, unknown=unknown)
-    assert (field, message) in [(x.field, x.message) for x in getattr(e.value, "errors", [e.value])]
+    # that one problem alone (no follow-up error about a tensor built with a placeholder for it)
+    assert [(x.field, x.message) for x in getattr(e.value, "errors", [e.value])] == [(field, message)]
     cfg["body"]["inertia"] = {"tensor": [[0.1, -0.01, 0], [-0.01, 0.2, 0], [0, 0, None]]}  # a negative product
     assert scene_from_dict(cfg, warn=False, unknown=unknown).inertia[0, 1] == -0.01
