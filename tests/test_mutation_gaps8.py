@@ -846,6 +846,14 @@ def test_symmetry_is_checked_to_a_billionth_of_the_largest_entry():
         "body.inertia.tensor", "inertia tensor must be symmetric; row 0, column 1 is 0.01 but row 1, column 0 is 0.01")]
 
 
+def test_an_asymmetric_tensor_is_one_error_even_when_its_lower_half_is_indefinite():
+    """[[0.2, 0.5], [0.4, 0.2]] (and 0.3): not symmetric -- the one problem reported; its lower
+    half, [[0.2, 0.4], [0.4, 0.2]], has a moment -0.2, which is no second problem of the input."""
+    errs = _errors(body={"mass": 2.0, "inertia": {"tensor": [[0.2, 0.5, 0], [0.4, 0.2, 0], [0, 0, 0.3]]}})
+    assert errs == [("body.inertia.tensor",
+                     "inertia tensor must be symmetric; row 0, column 1 is 0.5 but row 1, column 0 is 0.4")]
+
+
 def test_the_radius_of_gyration_must_lie_between_a_micrometre_and_a_hundred_kilometres():
     """1 kg with moments 1e-13 .. 1.5e-13 kg m^2: k = sqrt(1e-13) = 3.16e-7 m < 1e-6 m;
     4e-13 .. 6e-13 (k >= 6.3e-7) still, 1e-12 .. 1.5e-12 (k >= 1e-6) accepted."""
