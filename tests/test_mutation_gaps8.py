@@ -532,7 +532,8 @@ def test_how_to_time_separates_each_timed_mode_from_its_nearest_finite_neighbour
     assert rows["pitch"]["components"] == ["Ixx", "Iyy"] and rows["torsion"]["period"] == 2.0
 
 
-@pytest.mark.parametrize("text,ok", [("0.01,100", (0.01, 100.0)), ("1e-3, 2e3", (1e-3, 2e3)), (None, None)])
+@pytest.mark.parametrize("text,ok", [("0.01,100", (0.01, 100.0)), ("1e-3, 2e3", (1e-3, 2e3)), ("2,0.5", (2.0, 0.5)),
+                                     (None, None)])
 def test_sensor_spec_parses(text, ok):
     from bifilar.studies.timing import parse_sensor
 
