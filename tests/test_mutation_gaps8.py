@@ -461,8 +461,8 @@ def test_stopwatch_and_sensor_sigmas_are_the_documented_formulas():
 
     assert stopwatch_sigma(0.1, 10, 4) == pytest.approx(0.1 / 20, rel=1e-12)
     assert stopwatch_sigma(0.2, 25, 1) == pytest.approx(0.008, rel=1e-12)
-    T, noise, rate, N = 2.0, 0.01, 100.0, 10
-    M, dt = rate * N * T, 1 / rate  # 2000 samples
+    T, noise, rate, N = 3.0, 0.01, 100.0, 10
+    M, dt = rate * N * T, 1 / rate  # 3000 samples
     sd_w_per_sample = math.sqrt(12 / (M ** 3 / (2 * noise ** 2)))
     sd_T = T ** 2 / (2 * math.pi) * sd_w_per_sample / dt  # T = 2 pi / w: dT = T^2 dw / (2 pi)
     for n in (1, 4, 9):
