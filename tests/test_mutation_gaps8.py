@@ -230,6 +230,16 @@ def test_a_modes_description_names_its_two_main_components_over_one_percent():
     assert desc([0.995, 0.005, 0, 0, 0, 0]) == "x 100%"  # 0.5 % is no main component
 
 
+def test_degenerate_clusters_are_runs_of_two_or_more_within_rel_of_the_scale():
+    """Neighbours within rel x scale of a run's first member; a lone eigenvalue is no cluster."""
+    from bifilar.analysis.modes import degenerate_clusters
+
+    w2 = np.array([1.0, 2.0, 2.0 + 0.5e-3, 2.0 + 0.9e-3, 3.0, 4.0, 4.0 + 2e-3])
+    assert degenerate_clusters(w2, scale=1.0, rel=1e-3) == [(1, 4)]  # 4 + 2e-3 is 2e-3 away
+    assert degenerate_clusters(w2, scale=10.0, rel=1e-3) == [(1, 4), (5, 7)]
+    assert degenerate_clusters(np.array([1.0, 2.0, 3.0]), scale=3.0) == []
+
+
 def _diag_problem(w2):
     """K y = w M y with M = I and K = diag(w2): Y = I, and each eigenvalue's resolution is
     DEGENERATE_RTOL |y|^T |K| |y| = DEGENERATE_RTOL w."""
