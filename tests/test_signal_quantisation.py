@@ -119,3 +119,41 @@ def test_quantised_120fps_std_is_not_twice_the_error():
         stds.append(fit.std)
     ratio = float(np.median(stds)) / sd_err
     assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
+
+
+def _calibration(k):
+    """A calibration polynomial from pixels (300 px = 1 unit) to an angle:
+    even and odd terms, so the levels are unevenly spaced and the signal
+    in the angle gains a slowly decaying offset."""
+    x = k / 300.0
+    return x + 0.08 * x ** 2 - 0.3 * x ** 3
+
+
+def test_record_resting_on_a_level_std_is_not_inflated_by_its_offset():
+    """15 pixels of amplitude at 30 fps for 40 s, resting on a pixel (an
+    encoder zeroed at rest), through a calibration polynomial: the
+    quantisation error is odd about the rest level, which makes the
+    period's error least there (1.4e-5 s; 4 x that at a random rest
+    offset).  The copies about the fitted offset and drift, which miss the
+    level by their own quantisation error (~0.01-0.03 step), overstated it:
+    std 1.5-1.7 x the error, sd(z) 0.63-0.69 (150 draws).  The record is
+    now found resting on the level and the copies are centred there.  The
+    error's sd from 300 cheap fits (4 % standard error), the std from the
+    median of 16 full fits (40 copies each, ~11 % each; ~3.5 % for the
+    median; ~5.5 % for the ratio): ratio 1.66 before, 1.00 after; the
+    bounds lie 6 of those standard errors from both."""
+    from bifilar.estimation.signal import _fit_window
+
+    kw = dict(fs=30.0, dur=40.0, steps=15)
+    err = [_fit_window(t, _calibration(k), "viscous", True, None, (), "BIC")[0].period - T_TRUE
+           for t, k in _quantised_draws(300, seed=21, **kw)]
+    sd_err = float(np.sqrt(np.mean(np.square(err))))
+    stds = []
+    for t, k in _quantised_draws(16, seed=22, **kw):
+        fit = fit_period(t, _calibration(k), model="viscous", crossing_check=False, split_check=False)
+        qt = fit.uncertainty["quantisation_test"]
+        assert qt["uniform"] is False and qt["rest_on_level"], qt
+        stds.append(fit.std)
+    ratio = float(np.median(stds)) / sd_err
+    assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
+
