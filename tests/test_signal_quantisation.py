@@ -157,3 +157,37 @@ def test_record_resting_on_a_level_std_is_not_inflated_by_its_offset():
     ratio = float(np.median(stds)) / sd_err
     assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
 
+
+def test_copies_spread_carries_its_dof_into_invert(tmp_path):
+    """The std of a quantised 120 fps record is the rms spread of its m =
+    40 re-quantised copies about the fitted period: m sq^2 / sigma^2 is
+    chi^2_m, so the period's 95 % interval is Student's with m dof (2.02
+    std, not 1.96), as for a period from timed trials.  The fit says so
+    (``uncertainty["dof"]``), and ``invert --signal``'s measurement carries
+    it into the budget (``Measurement.dof``: infinite before), whose
+    coverage factor is then t_{0.975, 40}.  A record whose std is the
+    least-squares one keeps infinitely many dof."""
+    from scipy import stats
+
+    from bifilar.estimation.measurements import signal_measurement
+    from bifilar.estimation.uncertainty import propagate
+
+    t, y = next(_quantised_draws(1, fs=120.0, steps=10, seed=6))
+    fit = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+    qt = fit.uncertainty["quantisation_test"]
+    assert qt["replaces_noise"] and fit.std_nonstationary == 0.0
+    assert math.isclose(fit.uncertainty["dof"], qt["draws"], rel_tol=1e-6)
+    rec = tmp_path / "encoder.csv"
+    rec.write_text("t,angle\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(t, y)))
+    m = signal_measurement("torsion", rec, "--signal", model="viscous")
+    assert math.isclose(m.dof, qt["draws"], rel_tol=1e-3), m.dof  # the damping term hardly counts
+    b = propagate(["Izz"], [[1.0]], [m.std], np.zeros((1, 0)), [], [], timing_dof=[m.dof])
+    assert math.isclose(b.coverage_factor[0], stats.t.ppf(0.975, m.dof), rel_tol=1e-9)
+    assert b.coverage_factor[0] > 2.0
+
+    rng = np.random.default_rng(4)
+    noisy = np.cos(2 * np.pi / T_TRUE * t) + 0.01 * rng.standard_normal(t.size)
+    fit = fit_period(t, noisy, model="viscous", crossing_check=False, split_check=False)
+    assert fit.uncertainty["dof"] is None
+    rec.write_text("t,angle\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(t, noisy)))
+    assert signal_measurement("torsion", rec, "--signal", model="viscous").dof == math.inf

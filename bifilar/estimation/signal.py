@@ -754,7 +754,10 @@ def _compose_std(fit: PeriodFit):
     quantisation together: the least-squares and serial-correlation stds
     read the quantisation error as noise spread over all frequencies, and
     overstate it when the signal dwells on each level for several samples
-    (x2.4 for 10 steps at 120 fps)."""
+    (x2.4 for 10 steps at 120 fps).  ``uncertainty["dof"]``: the degrees
+    of freedom of the std (None: infinite, normal); finite, the number of
+    copies, when their spread is the std (a Student interval, as for a
+    period from timed trials)."""
     noise = float(fit.std_raw)
     serial = noise * float(fit.std_inflation)
     ns = float(fit.std_nonstationary)
@@ -770,8 +773,15 @@ def _compose_std(fit: PeriodFit):
     if replaced:
         fit.uncertainty["noise_replaced_by_quantisation"] = True
     dom = max(("quantisation", "nonstationarity") if replaced else terms, key=terms.get)
+    # the copies' rms spread about the fitted period, from m copies, has m
+    # dof (m sq^2 / sigma^2 ~ chi^2_m); the other terms count as normal
+    dof = math.inf
+    if replaced:
+        from .uncertainty import combined_dof
+
+        dof = combined_dof([(quant, float(fit.uncertainty["quantisation_test"]["draws"])), (ns, math.inf)])
     fit.uncertainty = dict(terms, total=total, dominant=dom, serial_factor=float(fit.std_inflation),
-                           **fit.uncertainty)
+                           dof=dof if math.isfinite(dof) else None, **fit.uncertainty)
     fit.std = total
     if fit.modes:
         fit.modes[0]["std_total"] = total
