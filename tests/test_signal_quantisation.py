@@ -191,3 +191,18 @@ def test_copies_spread_carries_its_dof_into_invert(tmp_path):
     assert fit.uncertainty["dof"] is None
     rec.write_text("t,angle\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(t, noisy)))
     assert signal_measurement("torsion", rec, "--signal", model="viscous").dof == math.inf
+
+
+def test_combined_dof_is_the_budgets_rule():
+    """``uncertainty.combined_dof`` against the linear budget's effective
+    dof of the same two independent terms (its own implementation of the
+    quadrature of Student half-widths), and a lone term keeps its dof."""
+    from bifilar.estimation.uncertainty import combined_dof, propagate
+
+    for s1, nu1, s2 in ((1.0, 5.0, 1.0), (2e-5, 40.0, 1e-5), (1.0, 3.0, 0.2)):
+        b = propagate(["Izz"], [[1.0], [1.0]], [s1, s2], np.zeros((2, 0)), [], [], timing_dof=[nu1, math.inf])
+        # a budget of two periods weights them: compare the terms as the budget sees them
+        c = [abs(float(v[0])) for v in b.contributions.values()]
+        assert math.isclose(combined_dof([(c[0], nu1), (c[1], math.inf)]), b.effective_dof[0], rel_tol=1e-9)
+    assert combined_dof([(3.0, 40.0), (0.0, math.inf)]) == 40.0
+    assert combined_dof([(3.0, math.inf)]) == math.inf

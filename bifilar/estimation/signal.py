@@ -49,8 +49,11 @@ Uncertainty (the headline ``std``)
 * ``std_quantisation``: a quantised record (few distinct values: a
   camera's pixel, an ADC's bit, or pixels converted to an angle, whose
   levels are unevenly spaced) with too little noise to dither the steps is
-  re-quantised onto its own levels and refitted (:func:`_quantisation`);
-  the spread of those periods replaces the noise term when larger.
+  re-quantised onto its own levels and refitted (:func:`_quantisation`;
+  about the level it rests on when it is found resting on one); the
+  spread of those periods replaces the noise term when larger, or alone
+  is the std (with as many dof as copies: ``uncertainty["dof"]``) when
+  the copies' noise terms reach the record's.
 
 ``uncertainty`` lists the terms and which one dominates.
 
@@ -591,8 +594,10 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     refitted with the chosen model; the rms spread of those periods about
     the fitted one, ``std_quantisation``, is the std when it exceeds the
     noise term (a lattice shifted at random instead under-covers a signal
-    centred on a level, as an encoder zeroed at rest is).  The draws are
-    seeded by the record, so a result is reproducible."""
+    centred on a level, as an encoder zeroed at rest is).  A record found
+    resting on a level (:func:`_rest_on_level`) is re-quantised again about
+    that level, without drift, and those copies give the spread.  The
+    draws are seeded by the record, so a result is reproducible."""
     lev = quantisation_levels(y)
     if lev is None or fit.model not in _KIND or fit.residuals is None:
         return

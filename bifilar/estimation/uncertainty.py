@@ -251,9 +251,12 @@ def combined_dof(terms) -> float:
     of :attr:`LinearBudget.coverage_factor`: the 95 % half-width is the
     quadrature of the terms' own Student half-widths ``t_{0.975, nu_j}
     s_j``, and the dof are those of its factor (:func:`equivalent_dof`;
-    ``inf``: normal)."""
+    ``inf``: normal); one nonzero term keeps its own."""
     from scipy import stats
 
+    terms = [(s, nu) for s, nu in terms if s > 0]
+    if len(terms) == 1:  # one term: its own dof, exactly
+        return float(terms[0][1])
     var = exp2 = 0.0
     for s, nu in terms:
         t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) else Z95
