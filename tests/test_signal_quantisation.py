@@ -119,3 +119,90 @@ def test_quantised_120fps_std_is_not_twice_the_error():
         stds.append(fit.std)
     ratio = float(np.median(stds)) / sd_err
     assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
+
+
+def _calibration(k):
+    """A calibration polynomial from pixels (300 px = 1 unit) to an angle:
+    even and odd terms, so the levels are unevenly spaced and the signal
+    in the angle gains a slowly decaying offset."""
+    x = k / 300.0
+    return x + 0.08 * x ** 2 - 0.3 * x ** 3
+
+
+def test_record_resting_on_a_level_std_is_not_inflated_by_its_offset():
+    """15 pixels of amplitude at 30 fps for 40 s, resting on a pixel (an
+    encoder zeroed at rest), through a calibration polynomial: the
+    quantisation error is odd about the rest level, which makes the
+    period's error least there (1.4e-5 s; 4 x that at a random rest
+    offset).  The copies about the fitted offset and drift, which miss the
+    level by their own quantisation error (~0.01-0.03 step), overstated it:
+    std 1.5-1.7 x the error, sd(z) 0.63-0.69 (150 draws).  The record is
+    now found resting on the level and the copies are centred there.  The
+    error's sd from 300 cheap fits (4 % standard error), the std from the
+    median of 16 full fits (40 copies each, ~11 % each; ~3.5 % for the
+    median; ~5.5 % for the ratio): ratio 1.66 before, 1.00 after; the
+    bounds lie 6 of those standard errors from both."""
+    from bifilar.estimation.signal import _fit_window
+
+    kw = dict(fs=30.0, dur=40.0, steps=15)
+    err = [_fit_window(t, _calibration(k), "viscous", True, None, (), "BIC")[0].period - T_TRUE
+           for t, k in _quantised_draws(300, seed=21, **kw)]
+    sd_err = float(np.sqrt(np.mean(np.square(err))))
+    stds = []
+    for t, k in _quantised_draws(16, seed=22, **kw):
+        fit = fit_period(t, _calibration(k), model="viscous", crossing_check=False, split_check=False)
+        qt = fit.uncertainty["quantisation_test"]
+        assert qt["uniform"] is False and qt["rest_on_level"], qt
+        stds.append(fit.std)
+    ratio = float(np.median(stds)) / sd_err
+    assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
+
+
+def test_copies_spread_carries_its_dof_into_invert(tmp_path):
+    """The std of a quantised 120 fps record is the rms spread of its m =
+    40 re-quantised copies about the fitted period: m sq^2 / sigma^2 is
+    chi^2_m, so the period's 95 % interval is Student's with m dof (2.02
+    std, not 1.96), as for a period from timed trials.  The fit says so
+    (``uncertainty["dof"]``), and ``invert --signal``'s measurement carries
+    it into the budget (``Measurement.dof``: infinite before), whose
+    coverage factor is then t_{0.975, 40}.  A record whose std is the
+    least-squares one keeps infinitely many dof."""
+    from scipy import stats
+
+    from bifilar.estimation.measurements import signal_measurement
+    from bifilar.estimation.uncertainty import propagate
+
+    t, y = next(_quantised_draws(1, fs=120.0, steps=10, seed=6))
+    fit = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+    qt = fit.uncertainty["quantisation_test"]
+    assert qt["replaces_noise"] and fit.std_nonstationary == 0.0
+    assert math.isclose(fit.uncertainty["dof"], qt["draws"], rel_tol=1e-6)
+    rec = tmp_path / "encoder.csv"
+    rec.write_text("t,angle\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(t, y)))
+    m = signal_measurement("torsion", rec, "--signal", model="viscous")
+    assert math.isclose(m.dof, qt["draws"], rel_tol=1e-3), m.dof  # the damping term hardly counts
+    b = propagate(["Izz"], [[1.0]], [m.std], np.zeros((1, 0)), [], [], timing_dof=[m.dof])
+    assert math.isclose(b.coverage_factor[0], stats.t.ppf(0.975, m.dof), rel_tol=1e-9)
+    assert b.coverage_factor[0] > 2.0
+
+    rng = np.random.default_rng(4)
+    noisy = np.cos(2 * np.pi / T_TRUE * t) + 0.01 * rng.standard_normal(t.size)
+    fit = fit_period(t, noisy, model="viscous", crossing_check=False, split_check=False)
+    assert fit.uncertainty["dof"] is None
+    rec.write_text("t,angle\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(t, noisy)))
+    assert signal_measurement("torsion", rec, "--signal", model="viscous").dof == math.inf
+
+
+def test_combined_dof_is_the_budgets_rule():
+    """``uncertainty.combined_dof`` against the linear budget's effective
+    dof of the same two independent terms (its own implementation of the
+    quadrature of Student half-widths), and a lone term keeps its dof."""
+    from bifilar.estimation.uncertainty import combined_dof, propagate
+
+    for s1, nu1, s2 in ((1.0, 5.0, 1.0), (2e-5, 40.0, 1e-5), (1.0, 3.0, 0.2)):
+        b = propagate(["Izz"], [[1.0], [1.0]], [s1, s2], np.zeros((2, 0)), [], [], timing_dof=[nu1, math.inf])
+        # a budget of two periods weights them: compare the terms as the budget sees them
+        c = [abs(float(v[0])) for v in b.contributions.values()]
+        assert math.isclose(combined_dof([(c[0], nu1), (c[1], math.inf)]), b.effective_dof[0], rel_tol=1e-9)
+    assert combined_dof([(3.0, 40.0), (0.0, math.inf)]) == 40.0
+    assert combined_dof([(3.0, math.inf)]) == math.inf

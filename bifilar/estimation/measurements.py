@@ -121,9 +121,11 @@ class Measurement:
         """Degrees of freedom of ``std``: ``n - 1`` for a period from ``n >=
         2`` timed trials whose std is the trials' own (their scatter, or the
         reaction-time floor standing in for it; :func:`period_from_trials`),
+        a recording whose std is the spread of its re-quantised copies (their
+        number, with the damping term as normal: ``details["dof"]``);
         infinite (``math.inf``) otherwise: a stated ``time_std``, one trial,
-        a ``--period`` with its sigma, a fitted recording."""
-        nu = self.details.get("dof") if self.source == "timed" else None
+        a ``--period`` with its sigma, any other fitted recording."""
+        nu = self.details.get("dof") if self.source in ("timed", "signal") else None
         return float(nu) if nu is not None else math.inf
 
     def state_amplitude(self, amplitude: float | None, amplitude_std: float | None = None) -> None:
@@ -198,10 +200,13 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
            "amplitude_source": "fit (the amplitude the fitted period refers to)" if r["amplitude"] is not None else None,
            "decay": r["decay"]}
     std = r["std"]
+    if r.get("dof") is not None:
+        det["dof"] = r["dof"]
     if std < MIN_RELATIVE_SIGMA * r["period"]:  # a noise-free record: below what the model's period resolves
         std = MIN_RELATIVE_SIGMA * r["period"]
         det["std_floor"] = (f"the fitted std {r['std']:.3g} s is below {MIN_RELATIVE_SIGMA:g} of the period, "
                             f"which the model does not resolve; {std:.3g} s is used")
+        det.pop("dof", None)  # the floor is a stated sigma
     m = Measurement(label, r["period"], std, "signal", fld, hanging=hanging, amplitude=r["amplitude"],
                     cycles=min(r["cycles"], MAX_SIM_CYCLES), observed_period=r["observed_period"],
                     damping_ratio=r["damping_ratio"], std_given=True, details=det, fit=fit, signal=(r["t"], r["y"]))

@@ -344,7 +344,9 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
 
     Returns a dict: ``period`` (s, undamped: the fitted damped period times
     ``sqrt(1 - zeta^2)``), ``std`` (s, including the damping ratio's
-    uncertainty), ``observed_period``, ``damping_ratio``, ``amplitude``
+    uncertainty), ``dof`` (of ``std``: finite when the fit's std is the
+    spread of re-quantised copies, None otherwise: normal),
+    ``observed_period``, ``damping_ratio``, ``amplitude``
     (rad or m, None unless ``quantity`` is ``angle`` or ``rate``),
     ``decay`` (the amplitude the period refers to over the envelope at the
     fit window's start, unit-free, <= 1 for a decaying record; None for a
@@ -375,6 +377,12 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
     c = math.sqrt(1.0 - zeta * zeta)
     Tn = Td * c
     std = math.hypot(c * float(fit.std), Td * zeta / c * zstd)
+    nu = fit.uncertainty.get("dof")
+    if nu is not None:  # the fit's std from re-quantised copies; the damping term normal
+        from .uncertainty import combined_dof
+
+        nu = combined_dof([(c * float(fit.std), float(nu)), (Td * zeta / c * zstd, math.inf)])
+        nu = nu if math.isfinite(nu) else None
     amp = decay = None
     if fit.model != "crossings":
         a_start = float(np.abs(fit.envelope(np.array([fit.t0])))[0])
@@ -386,5 +394,5 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
                 a_eff /= 2 * math.pi / Td
             amp = a_eff
     cycles = max((fit.t1 - fit.t0) / Td, 1.0)
-    return {"period": Tn, "std": std, "observed_period": Td, "damping_ratio": zeta, "amplitude": amp,
+    return {"period": Tn, "std": std, "dof": nu, "observed_period": Td, "damping_ratio": zeta, "amplitude": amp,
             "decay": decay, "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta}

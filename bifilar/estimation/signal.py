@@ -49,8 +49,11 @@ Uncertainty (the headline ``std``)
 * ``std_quantisation``: a quantised record (few distinct values: a
   camera's pixel, an ADC's bit, or pixels converted to an angle, whose
   levels are unevenly spaced) with too little noise to dither the steps is
-  re-quantised onto its own levels and refitted (:func:`_quantisation`);
-  the spread of those periods replaces the noise term when larger.
+  re-quantised onto its own levels and refitted (:func:`_quantisation`;
+  about the level it rests on when it is found resting on one); the
+  spread of those periods replaces the noise term when larger, or alone
+  is the std (with as many dof as copies: ``uncertainty["dof"]``) when
+  the copies' noise terms reach the record's.
 
 ``uncertainty`` lists the terms and which one dominates.
 
@@ -491,6 +494,87 @@ DITHER_STEPS = 0.5
 QUANT_DRAWS = 40
 
 
+def _requantised_copies(fit: PeriodFit, t, lev, p, s_steps, drift, rng, criterion, ref=None,
+                        in_index=False):
+    """``QUANT_DRAWS`` copies of the curve of parameters ``p`` (the fit's
+    model; times ``ref = (t0, t_ref)``, default the fit's), each shifted by
+    a random phase, given ``s_steps`` (local steps) of noise, put onto the
+    levels ``lev`` and refitted: their periods (s), noise terms (s) and
+    offsets at the record's two ends minus the curve's ((m, 2), [y]).  The
+    curve is in [y], or in level indices when ``in_index``.  Copies whose
+    fit fails are left out."""
+    kind = fit._kind
+    t0, t_ref = ref if ref is not None else (fit.t0, fit.t_ref)
+    t_end = np.array([t[0], t[-1]])
+    periods, noise_terms, ends = [], [], []
+    for _ in range(QUANT_DRAWS):
+        pb = p.copy()
+        dphi = rng.uniform(0.0, 2 * math.pi)
+        for i in range(2, pb.size if kind != "quadratic" else 4, 4):
+            a, b = pb[i], pb[i + 1]
+            pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
+        kb = _model(kind, pb, t, t0, t_ref)
+        kb = (kb if in_index else lev.index(kb)) + s_steps * rng.standard_normal(t.size)
+        yb = lev.level(np.round(kb))
+        try:
+            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
+        except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
+                ZeroDivisionError):
+            continue
+        if fb.converged and np.isfinite(fb.period):
+            periods.append(fb.period)
+            noise_terms.append(fb.std)  # the copy's own noise term (with its serial factor)
+            if not in_index:
+                ends.append(fb.params[0] + fb.params[1] * (t_end - fb.t_ref) - (p[0] + p[1] * (t_end - t_ref)))
+    return periods, noise_terms, np.reshape(ends, (-1, 2))
+
+
+#: the record rests on a level when its offsets at both ends lie within
+#: this chi^2_2 quantile (99 %) of the level, on the copies' covariance
+REST_LEVEL_CHI2 = 0.99
+
+
+def _rest_on_level(fit: PeriodFit, t, y, lev, ends, drift, criterion):
+    """The record's fit in level indices with its offset on the nearest
+    level and no drift (parameters, ``(t0, t_ref)``), or None.
+
+    A record centred on a level (an encoder zeroed at rest) has the least
+    period error of any offset: its quantisation error is odd about the
+    level.  Its fitted offset and drift miss the level by their own
+    quantisation error, and copies about them overstate the error (x1.4
+    for 15 steps at 30 fps).  The record (its level indices, where a
+    camera's pixels lie on a lattice whatever map took them to [y]) is
+    fitted with the chosen model; it rests on the nearest level when its
+    offsets at both ends, minus that level, lie within the
+    ``REST_LEVEL_CHI2`` quantile of chi^2_2 on the covariance of the
+    copies' own offset errors (``ends``, in local steps; chi^2_1 on the
+    offset alone for a fit without drift)."""
+    if ends.shape[0] < 10:
+        return None
+    k = lev.index(y)
+    try:
+        fk, _ = _fit_window(t, k, fit.model, drift, fit.frequency, (), criterion)
+    except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
+            ZeroDivisionError):
+        return None
+    p = fk.params.copy()
+    t_end = np.array([t[0], t[-1]]) - fk.t_ref
+    level = float(np.round(p[0]))
+    d = p[0] + p[1] * t_end - level
+    e = ends / lev.step(np.array([lev.level(np.array([level]))[0]]))[0]
+    if not drift:  # one offset: both ends alike
+        d, e = d[:1], e[:, :1]
+    C = e.T @ e / e.shape[0]
+    try:
+        chi2 = float(d @ np.linalg.solve(C, d))
+    except np.linalg.LinAlgError:
+        return None
+    if not np.isfinite(chi2) or chi2 > stats.chi2.ppf(REST_LEVEL_CHI2, d.size):
+        return None
+    p[0], p[1] = level, 0.0
+    return p, (fk.t0, fk.t_ref)
+
+
 def _quantisation(fit: PeriodFit, t, y, criterion):
     """Std of the period a quantised record (a camera's pixel, an ADC's
     bit, or pixels converted to an angle; :func:`.signal_checks.quantisation_levels`)
@@ -510,8 +594,10 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     refitted with the chosen model; the rms spread of those periods about
     the fitted one, ``std_quantisation``, is the std when it exceeds the
     noise term (a lattice shifted at random instead under-covers a signal
-    centred on a level, as an encoder zeroed at rest is).  The draws are
-    seeded by the record, so a result is reproducible."""
+    centred on a level, as an encoder zeroed at rest is).  A record found
+    resting on a level (:func:`_rest_on_level`) is re-quantised again about
+    that level, without drift, and those copies give the spread.  The
+    draws are seeded by the record, so a result is reproducible."""
     lev = quantisation_levels(y)
     if lev is None or fit.model not in _KIND or fit.residuals is None:
         return
@@ -522,31 +608,22 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
     fit.uncertainty["quantisation_step"] = q
     if s_steps >= DITHER_STEPS:
         return
-    kind = fit._kind
     p = fit.params.copy()
     drift = fit.selection.get("drift", True)
     k_rec = np.round(lev.index(y))
     rng = np.random.default_rng([t.size, int(np.sum(k_rec) % (1 << 31))])
-    periods, noise_terms = [], []
-    for _ in range(QUANT_DRAWS):
-        pb = p.copy()
-        dphi = rng.uniform(0.0, 2 * math.pi)
-        for i in range(2, pb.size if kind != "quadratic" else 4, 4):
-            a, b = pb[i], pb[i + 1]
-            pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
-        kb = lev.index(_model(kind, pb, t, fit.t0, fit.t_ref)) + s_steps * rng.standard_normal(t.size)
-        yb = lev.level(np.round(kb))
-        try:
-            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
-        except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
-                ZeroDivisionError):
-            continue
-        if fb.converged and np.isfinite(fb.period):
-            periods.append(fb.period)
-            noise_terms.append(fb.std)  # the copy's own noise term (with its serial factor)
+    periods, noise_terms, ends = _requantised_copies(fit, t, lev, p, s_steps, drift, rng, criterion)
     if len(periods) < QUANT_DRAWS // 2:
         fit.notes.append(f"quantisation check failed: only {len(periods)} of {QUANT_DRAWS} simulated records fitted")
         return
+    rest = _rest_on_level(fit, t, y, lev, ends, drift, criterion)
+    if rest is not None:
+        again = _requantised_copies(fit, t, lev, rest[0], s_steps, drift, rng, criterion, ref=rest[1],
+                                    in_index=True)
+        if len(again[0]) >= QUANT_DRAWS // 2:
+            periods, noise_terms, _ = again
+        else:
+            rest = None
     dev = np.asarray(periods) - fit.period
     sq = float(np.sqrt(np.mean(dev ** 2)))  # about the fitted period: the copies' shift counts too
     fit.std_quantisation = sq
@@ -560,14 +637,16 @@ def _quantisation(fit: PeriodFit, t, y, criterion):
                                             "noise_before_quantisation": sigma0, "noise_steps": s_steps,
                                             "draws": len(periods), "std": sq,
                                             "noise_term": noise, "copies_noise_term_max": max(noise_terms),
-                                            "replaces_noise": replaces,
+                                            "replaces_noise": replaces, "rest_on_level": rest is not None,
                                             "mean_shift": float(np.mean(periods)) - fit.period}
     where = (f"in steps of {q:.3g}" if uniform else
              f"on {lev.values.size} unevenly spaced levels (median step {q:.3g}; a map of a lattice, e.g. "
              f"pixels converted to an angle)")
     fit.notes.append(f"the record is quantised {where} with little noise ({s_steps:.2g} step, below "
                      f"{DITHER_STEPS:g} step): the period of {len(periods)} re-quantised copies of the fit "
-                     f"spreads by {sq:.2g} s")
+                     f"spreads by {sq:.2g} s"
+                     + (" (copies centred on the level the record rests on, within its offset's "
+                        "quantisation error, without drift)" if rest is not None else ""))
 
 
 def _residual_peaks(fit: PeriodFit):
@@ -680,7 +759,10 @@ def _compose_std(fit: PeriodFit):
     quantisation together: the least-squares and serial-correlation stds
     read the quantisation error as noise spread over all frequencies, and
     overstate it when the signal dwells on each level for several samples
-    (x2.4 for 10 steps at 120 fps)."""
+    (x2.4 for 10 steps at 120 fps).  ``uncertainty["dof"]``: the degrees
+    of freedom of the std (None: infinite, normal); finite, the number of
+    copies, when their spread is the std (a Student interval, as for a
+    period from timed trials)."""
     noise = float(fit.std_raw)
     serial = noise * float(fit.std_inflation)
     ns = float(fit.std_nonstationary)
@@ -696,8 +778,15 @@ def _compose_std(fit: PeriodFit):
     if replaced:
         fit.uncertainty["noise_replaced_by_quantisation"] = True
     dom = max(("quantisation", "nonstationarity") if replaced else terms, key=terms.get)
+    # the copies' rms spread about the fitted period, from m copies, has m
+    # dof (m sq^2 / sigma^2 ~ chi^2_m); the other terms count as normal
+    dof = math.inf
+    if replaced:
+        from .uncertainty import combined_dof
+
+        dof = combined_dof([(quant, float(fit.uncertainty["quantisation_test"]["draws"])), (ns, math.inf)])
     fit.uncertainty = dict(terms, total=total, dominant=dom, serial_factor=float(fit.std_inflation),
-                           **fit.uncertainty)
+                           dof=dof if math.isfinite(dof) else None, **fit.uncertainty)
     fit.std = total
     if fit.modes:
         fit.modes[0]["std_total"] = total

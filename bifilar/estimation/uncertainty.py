@@ -245,6 +245,26 @@ def equivalent_dof(k: float) -> float:
     return float(optimize.brentq(f, 0.5, 1e8, rtol=1e-10))
 
 
+def combined_dof(terms) -> float:
+    """Degrees of freedom of a std ``sqrt(sum s_j^2)`` made of independent
+    terms ``(s_j, nu_j)`` (any unit; ``nu_j`` may be ``inf``), by the rule
+    of :attr:`LinearBudget.coverage_factor`: the 95 % half-width is the
+    quadrature of the terms' own Student half-widths ``t_{0.975, nu_j}
+    s_j``, and the dof are those of its factor (:func:`equivalent_dof`;
+    ``inf``: normal); one nonzero term keeps its own."""
+    from scipy import stats
+
+    terms = [(s, nu) for s, nu in terms if s > 0]
+    if len(terms) == 1:  # one term: its own dof, exactly
+        return float(terms[0][1])
+    var = exp2 = 0.0
+    for s, nu in terms:
+        t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) else Z95
+        var += s * s
+        exp2 += (t * s) ** 2
+    return equivalent_dof(math.sqrt(exp2 / var)) if var > 0 else math.inf
+
+
 # ---------------------------------------------------------------------------
 # linear propagation
 # ---------------------------------------------------------------------------
