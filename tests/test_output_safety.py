@@ -229,3 +229,45 @@ def test_a_torn_monte_carlo_journal_resumes_to_the_full_result(tmp_path):
     assert again.exit_code == 0, again.stderr
     assert json.loads(again.stdout)["monte_carlo"] == json.loads(full.stdout)["monte_carlo"]
     assert [json.loads(x) for x in j.read_text().splitlines()] == [json.loads(x) for x in lines]
+
+
+def test_a_sweep_journal_of_an_earlier_version_is_refused_not_mixed(tmp_path, monkeypatch):
+    """A journal's points are only resumed by the code whose figures they hold:
+    one written under an earlier JOURNAL_VERSION (session 8 changed every
+    point's sigma: the amplitude law) is refused naming --resume, rather than
+    finished with points of two kinds; the same journal under the current
+    version resumes."""
+    from bifilar.studies.shorthands import parse_param
+
+    cfg, st = _sweep_setup()
+    grid = sw.build_grid([parse_param("spacing=2.8:4.0:3")])
+    j = tmp_path / "s.csv.partial.jsonl"
+    monkeypatch.setattr(sw, "JOURNAL_VERSION", sw.JOURNAL_VERSION - 1)
+    with pytest.raises(sw.SweepInterrupted):
+        sw.run_sweep(cfg, "s", grid, st, journal=j, stop_after=1)
+    monkeypatch.undo()
+    with pytest.raises(sw.InputError) as e:
+        sw.run_sweep(cfg, "s", grid, st, journal=j, resume=True)
+    assert e.value.field == "--resume" and "another version" in str(e.value)
+    j.unlink()
+    with pytest.raises(sw.SweepInterrupted):
+        sw.run_sweep(cfg, "s", grid, st, journal=j, stop_after=1)
+    assert sw.run_sweep(cfg, "s", grid, st, journal=j, resume=True) == sw.run_sweep(cfg, "s", grid, st)
+
+
+def test_a_monte_carlo_journal_of_an_earlier_draw_scheme_is_refused(tmp_path, monkeypatch):
+    """Draws made by an earlier scheme (session 8: the amplitude law, the
+    copies' dof) are not mixed with the current ones on --resume."""
+    from bifilar.estimation import montecarlo
+
+    j = tmp_path / "mc.jsonl"
+    r = CliRunner()
+    args = INVERT + ["--monte-carlo", "10", "--seed", "1", "--journal", str(j)]
+    monkeypatch.setattr(montecarlo, "DRAW_SCHEME", montecarlo.DRAW_SCHEME - 1)
+    assert r.invoke(main, args).exit_code == 0
+    monkeypatch.undo()
+    res = r.invoke(main, args + ["--resume"])
+    assert res.exit_code == 2 and "another version" in res.stderr, res.stderr
+    j.unlink()
+    assert r.invoke(main, args).exit_code == 0
+    assert r.invoke(main, args + ["--resume"]).exit_code == 0

@@ -295,9 +295,12 @@ def _modes_or_none(modes_batch, scenes, rests) -> list:
         return out
 
 
-DRAW_SCHEME = 2
-"""Version of how the draws are made, part of a journal's key: 2 draws a
-period from n timed trials with Student's t (n - 1 dof), 1 drew it normal.
+DRAW_SCHEME = 3
+"""Version of how the draws are made, part of a journal's key: 3 draws the
+amplitude factor from the mode's amplitude law and a recording's period
+with the dof of its re-quantised copies (session 8), 2 the factor by the
+quadratic rule and every recording normal, 2 and 3 a period from n timed
+trials with Student's t (n - 1 dof), 1 drew it normal.
 A journal of another scheme is refused on ``--resume`` instead of mixing
 the two kinds of draws."""
 
@@ -333,7 +336,8 @@ def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | 
             if not isinstance(head, dict) or head.get("kind") != "bifilar-monte-carlo" or type(head.get("seed")) is not int:
                 raise InputError("--journal", f"{path} is not a bifilar Monte Carlo journal")
             if head.get("key") != key:
-                raise InputError("--journal", f"{path} belongs to another problem or settings; it cannot be resumed here")
+                raise InputError("--journal", f"{path} belongs to another problem or settings, or to another "
+                                                 "version of bifilar's draws; it cannot be resumed here")
 
         def is_record(rec) -> bool:
             return (isinstance(rec, dict) and type(rec.get("chunk")) is int and 0 <= rec["chunk"] < n_chunks

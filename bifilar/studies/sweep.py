@@ -90,8 +90,8 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        resolve_uncertainty)
 from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 4  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
-# 4: the sigma budgets the stated amplitude (amplitude_budget)
+JOURNAL_VERSION = 5  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
+# 4: the sigma budgets the stated amplitude (amplitude_budget); 5: the amplitude law and the factor's derivative (session 8)
 
 
 # --------------------------------------------------------------------------
@@ -154,7 +154,8 @@ def read_journal(path: Path, fp: str) -> dict[str, dict]:
             raise InputError("--resume", f"{path} is not a sweep journal")
         if head.get("fingerprint") != fp:
             raise InputError("--resume", f"{path} was written for another config or other settings "
-                                         "(components, amplitude, uncertainties, tensions); rerun with --force to start over")
+                                         "(components, amplitude, uncertainties, tensions) or by another version of bifilar, "
+                                         "whose points are not this one's; rerun with --force to start over")
 
     def is_record(rec) -> bool:
         return isinstance(rec, dict) and isinstance(rec.get("key"), str) and isinstance(rec.get("point"), dict)
