@@ -142,8 +142,14 @@ def _terminated_point(*args, **kwargs):  # module level: the worker processes un
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_terminated_plan_with_workers_exits_143(monkeypatch):
     """A worker's point ends in Terminated (as when the pool is signalled):
-    the plan stops with 143 'terminated', not 130 'interrupted'."""
+    the plan stops with 143 'terminated', not 130 'interrupted'.  The plan
+    module binds ``evaluate_point`` when first imported: patched there too
+    (and imported first), or a first import under the patch would keep
+    ``_terminated_point`` for every later plan in this process."""
+    from bifilar.studies import plan as pl
+
     monkeypatch.setattr(sw, "evaluate_point", _terminated_point)
+    monkeypatch.setattr(pl, "evaluate_point", _terminated_point)
     code, out, err = run(["plan", SOLAR, "--param", "spacing=2.8:4.8", "--no-tensions", "--workers", "2"])
     assert code == 143 and err_lines(err)[-1] == "terminated" and out == "", err
 
