@@ -25,14 +25,20 @@ from bifilar.analysis.simulate import simulate  # noqa: E402
 from bifilar.config import load_scene  # noqa: E402
 
 
+def plate_torsion():
+    """The thesis plate's scene, rest pose, modes and torsion's label (the
+    benchmarks' ``simulate`` case)."""
+    scene = load_scene(ROOT / "configs" / "thesis_plate_rest.yaml")
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    return scene, rest, ms, ms.pick(None).label
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pairs", type=int, default=7)
     args = ap.parse_args(argv)
-    scene = load_scene(ROOT / "configs" / "thesis_plate_rest.yaml")
-    rest = rest_pose(scene)
-    ms = linear_modes(scene, rest)
-    mode = ms.pick(None).label
+    scene, rest, ms, mode = plate_torsion()
 
     def run(progress):
         t0 = time.process_time()
