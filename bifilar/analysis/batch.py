@@ -423,7 +423,10 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     scene from one rest pose (a sweep point's modes) share its parameters
     and compiled kernels and, on LSODA with one length and no samples
     kept, have their samples processed together
-    (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`); every run's
+    (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`); without
+    ``health`` (only the periods read: a point's amplitude laws' runs, some
+    of them on stepped scenes) the runs of all the scenes go through that
+    pass together, each integrated with its own scene's kernel; every run's
     lowest point goes into one fold at the end (one support-function call a
     body).  The same figures, bit for bit, as each
     run alone (tests/test_run_cost.py, tests/test_batch_determinism.py)."""

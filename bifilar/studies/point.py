@@ -428,8 +428,8 @@ class _LawRuns:
     :func:`~bifilar.analysis.batch.simulate_batch` arguments in that order,
     ``starts`` their start poses once solved (with the point's own, one
     call: :func:`~bifilar.analysis.simulate.checked_start_poses`'s
-    ``more``), ``runs`` the runs once run (with the point's own, one call:
-    :func:`_evaluate`)."""
+    ``more``), ``runs`` the runs once run (beside the point's own:
+    :func:`_evaluate`, :func:`_runs_at`)."""
 
     comps: list
     modes: list
@@ -879,7 +879,8 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, scre
         labels = [pre.labels[k] for k in pre.runs]
         runs = None
         if pre.law is not None and pre.law.starts is not None:
-            # the point's runs and its amplitude laws' in one call (each run as alone: the same figures)
+            # the point's runs (with their health) and its amplitude laws' (without), each run as alone: the
+            # same figures
             runs = _runs_at(pre.law, st, own=(pre.scene, pre.rest, pre.ms, labels, pre.amplitude, pre.starts))
             if any(r.error for r in runs[:len(labels)]):
                 runs = None  # the point's own runs again, alone: the error they raise
