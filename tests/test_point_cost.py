@@ -1814,3 +1814,46 @@ def test_law_runs_without_health_have_the_periods_of_the_runs_with_it(name, para
         batch = pt.evaluate_points(cfg, name, [params], st, screen=screen)[0]
         assert alone["valid"] and json.dumps(alone, sort_keys=True, default=str) == json.dumps(batch, sort_keys=True,
                                                                                                 default=str)
+
+
+@pytest.mark.parametrize("name, params", [("solar_boat", {"spacing": 3.0}), ("thesis_plate_rest", {"spacing": 3.0})])
+def test_point_computes_the_health_of_its_own_runs_only_and_takes_its_laws_crossings_in_one_pass(name, params,
+                                                                                                   monkeypatch):
+    """(session 9) A point's runs with their health are its own runs only
+    (the laws' runs at 0.9 of the amplitude shared that call, their health
+    computed and never read), and all its laws' runs -- the 0.9 ones and
+    the stepped scenes' -- have their crossings taken in one pass (was one
+    a scene); every figure of the point is the one of the path before
+    (its own runs alone, then each of the laws' runs as ``simulate_batch``
+    runs it alone with its health), bit for bit."""
+    import json
+
+    import bifilar.analysis.batch_lsoda as bl
+    from bifilar.analysis.batch import run_one
+    from bifilar.studies import point as pt
+    from bifilar.studies import sweep as sw
+
+    cfg = read_yaml(CONFIGS / f"{name}.yaml")
+    st = sw.resolve_settings(cfg)
+    rows, windows = [], []
+    real_health, real_window = bl.sample_health, bl._window
+    monkeypatch.setattr(bl, "sample_health", lambda Ys, *a, **kw: rows.append(Ys.shape[1]) or real_health(Ys, *a, **kw))
+    monkeypatch.setattr(bl, "_window", lambda Ys, *a, **kw: windows.append(Ys.shape[1]) or real_window(Ys, *a, **kw))
+    got = sw.evaluate_point(cfg, name, params, st)
+    res, pre = pt._prepare(cfg, name, params, st)
+    assert got["valid"] and rows == [len(pre.runs)]
+    assert windows == [len(pre.runs), len(pre.law.labels)]
+    monkeypatch.undo()
+
+    def before(base_cfg, source, params, st, screen=False):  # each run alone, the laws' with their health
+        res, pre = pt._prepare(base_cfg, source, params, st, screen)
+        sims = {k: run_one(pre.scene, pre.rest, pre.ms.modes[k], pre.amplitude, st.periods, rtol=st.rtol)
+                for k in pre.runs}
+        law = pre.law
+        law.runs = [run_one(s_, r_, m_.get(lab), a_, st.periods, rtol=st.rtol)
+                    for s_, r_, m_, lab, a_ in zip(law.scenes, law.rests, law.mode_sets, law.labels, law.amplitudes)]
+        return pt._finish(res, pre, sims, st, screen)
+
+    monkeypatch.setattr(pt, "_evaluate", before)
+    ref = sw.evaluate_point(cfg, name, params, st)
+    assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)

@@ -104,10 +104,12 @@ def test_a_point_solves_its_start_poses_once(monkeypatch):
     assert p["valid"] and runs and runs[0] >= 2  # a point with several runs ...
     # ... solves their start poses once (was 1 + 2 + one a run), those of its amplitude laws' runs (the stated
     # amplitude's slope and dr/dI: other amplitudes and other scenes, docs/design.md "The stated amplitude") in
-    # the same call (was a second one); its runs and the laws' runs of its scene go in one call of the batched
-    # engine (one scene: shared kernels and sample passes), the stepped scenes' (without health) in a second
+    # the same call (was a second one); its own runs go in one call of the batched engine (one scene: shared
+    # kernels and sample passes, with their health), all the laws' runs (without health: the 0.9 amplitude ones
+    # and the stepped scenes', crossings in one pass) in a second (session 9; the 0.9 ones were in the first)
     n_comps = sum(e.get("mode") is not None for e in p["components"].values())
-    assert len(solves) == 1 and len(runs) == 2 and runs[1] == n_comps
+    n_modes = len({e["mode"] for e in p["components"].values() if e.get("mode") is not None})
+    assert len(solves) == 1 and runs == [n_modes, n_modes + n_comps]
 
 
 @pytest.mark.parametrize("name, amplitude", [("solar_boat", 0.05), ("thesis_plate_rest", 0.6)])
@@ -416,6 +418,44 @@ def test_runs_of_one_scene_take_their_samples_through_crossings_and_health_toget
         assert len(passes) == (1 if periods[0] == periods[1] else 3)
         for m, p, r in zip(modes, periods, runs):
             assert _figures(r) == _figures(run_one(s, rest, m, 0.05, p, rtol=1e-8))
+        monkeypatch.undo()
+
+
+@pytest.mark.parametrize("name", ["solar_boat", "thesis_plate_rest", "trifilar_kth"])
+def test_runs_of_several_scenes_without_health_take_their_crossings_together(name, monkeypatch):
+    """Runs of several scenes of one wire count whose periods only are read
+    (``health=False``: a point's amplitude laws' stepped scenes, the inertia
+    changed) are each integrated as alone with their own scene's kernel and
+    their crossings taken in one pass (``batch_lsoda._lsoda_joint`` with one
+    float parameter set a run; was one pass a scene): every figure of each
+    run alone (``run_one``), bit for bit; with health, or runs of different
+    lengths, they are taken scene by scene, with the same figures."""
+    import bifilar.analysis.batch_lsoda as bl
+    from bifilar.analysis.batch import run_one
+
+    s = _scene(name, {"spacing": 3.0} if name != "trifilar_kth" else {})
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    Imax = float(np.max(np.linalg.eigvalsh(s.inertia)))
+    scenes, mss = [], []
+    for i, j in [(0, 0), (2, 2), (0, 1)]:  # moments and a product stepped, as the law steps them
+        inertia = np.array(s.inertia, float)
+        inertia[i, j] += 1e-3 * Imax
+        inertia[j, i] = inertia[i, j]
+        sc = dataclasses.replace(s, inertia=inertia)
+        scenes.append(sc)
+        mss.append(linear_modes(sc, rest))
+    labels = [m.label for m in modes] + [modes[0].label] * (3 - len(modes))
+    for health, periods in ((False, [3.0] * 3), (False, [3.0, 2.0, 3.0]), (True, [3.0] * 3)):
+        windows = _counting(monkeypatch, bl, "_window")
+        runs = simulate_batch(scenes, mode=labels, amplitude=0.05, periods=periods, rtol=1e-8, rests=[rest] * 3,
+                              modes=mss, health=health)
+        assert len(windows) == (1 if not health and periods[0] == periods[1] else 3)
+        for sc, m, lab, p, r in zip(scenes, mss, labels, periods, runs):
+            alone = run_one(sc, rest, m.get(lab), 0.05, p, rtol=1e-8, health=health)
+            assert repr(_figures(r)) == repr(_figures(alone))  # (repr: exact floats, and NaN health figures equal)
+            assert r.period is not None and abs(r.period / m.get(lab).period - 1) < 1e-2
         monkeypatch.undo()
 
 

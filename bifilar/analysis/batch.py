@@ -423,7 +423,10 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     scene from one rest pose (a sweep point's modes) share its parameters
     and compiled kernels and, on LSODA with one length and no samples
     kept, have their samples processed together
-    (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`); every run's
+    (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`); without
+    ``health`` (only the periods read: a point's amplitude laws' runs, some
+    of them on stepped scenes) the runs of all the scenes go through that
+    pass together, each integrated with its own scene's kernel; every run's
     lowest point goes into one fold at the end (one support-function call a
     body).  The same figures, bit for bit, as each
     run alone (tests/test_run_cost.py, tests/test_batch_determinism.py)."""
@@ -433,6 +436,24 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     for j in range(Bn):
         groups.setdefault((id(scenes[j]), np.asarray(rests[j].com, float).tobytes()), []).append(j)
     low = LowestPoint(scenes, np.array([r.com for r in rests])) if (lowest_point and health) else None
+    if len(groups) > 1 and method == "lsoda" and not spp and not health:
+        # runs of several scenes whose periods only are read (a point's amplitude laws' stepped scenes): each
+        # integrated as alone with its scene's kernel, their crossings taken together (tests/test_run_cost.py)
+        Pg = _shifted_params(scenes, np.array([r.com for r in rests], float))
+        P1: list = [None] * Bn
+        for js in groups.values():
+            p1 = Pg.take(js[0])  # (a scene's rows: the same values; one kernel for its runs)
+            for j in js:
+                P1[j] = p1
+        try:
+            runs = _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, None, method,
+                              health, y0, (Pg, P1), None, True)
+        except _NotJoint:
+            runs = None
+        if runs is not None:
+            if progress is not None:
+                progress(1.0, 1.0)
+            return runs
     done = 0
     for js in groups.values():
         Pg = _shifted_params([scenes[j] for j in js], np.array([rests[j].com for j in js], float))

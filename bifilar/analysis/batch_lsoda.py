@@ -188,7 +188,7 @@ def _close(obs: Health, tt, y_last, stop_tau, T_ref, pers, status, cross_cols, c
             status[b] = 1
 
 
-def _lsoda_joint(P1: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0, health: bool,
+def _lsoda_joint(P1, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, com0, health: bool,
                  on_slack: str):
     """Runs of one scene (its float parameters ``P1``: one compiled kernel
     for all), each integrated as :func:`_lsoda` integrates a scene alone
@@ -196,23 +196,37 @@ def _lsoda_joint(P1: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, 
     samples, bit for bit), their samples then taken through the crossings
     and the health together: one pass of numpy calls for the 2-3 runs of a
     sweep point instead of one a run, row by row the same expressions
-    (tests/test_run_cost.py, tests/test_batch_determinism.py).  Needs runs
+    (tests/test_run_cost.py, tests/test_batch_determinism.py).  ``P1`` may
+    also be a list, each run's float parameters (runs of several scenes
+    with one wire count, e.g. a point's amplitude laws' stepped scenes;
+    each list entry's kernels serve the runs that share it): only without
+    ``health`` (the health's kernel is one scene's), so only the crossings
+    are taken together.  Needs runs
     of one length in one window of samples that all succeed: else raises
     :class:`_NotJoint` before anything is recorded (the caller runs them
     one by one)."""
     from scipy.integrate import odeint
 
     Bn = len(T_ref)
-    n = int(P1.lengths.shape[-1])
+    per_run = isinstance(P1, list)
+    if per_run and health:
+        raise ValueError("runs of several scenes go through the crossings together only without their health")
+    n = int((P1[0] if per_run else P1).lengths.shape[-1])
     if np.any(pers != pers[0]):
         raise _NotJoint
     tau_end, K_total, taus = _sample_grid(pers, spp)
     if not 0 < K_total <= _window_samples(spp, 1):
         raise _NotJoint
-    f, kx = _one_scene_kernels(P1)
+    if per_run:
+        kernels: dict = {}
+        fs = [kernels.setdefault(id(p), (p, mx.compiled_kernel(p, signature="odeint")))[1] for p in P1]
+        kx = None
+    else:
+        f, kx = _one_scene_kernels(P1)
+        fs = [f] * Bn
     Ys = np.empty((K_total + 1, Bn, 13))
     nfe, nst = np.zeros(Bn, int), np.zeros(Bn, int)
-    for b in range(Bn):
+    for b, f in enumerate(fs):
         Y, info = odeint(f, ys0[b].copy(), taus * float(T_ref[b]), rtol=rtol, atol=np.ascontiguousarray(at[:, b]),
                          full_output=True, mxstep=100000, ml=12, mu=12)
         if info["message"] != "Integration successful." or not np.all(np.isfinite(Y)):

@@ -428,8 +428,8 @@ class _LawRuns:
     :func:`~bifilar.analysis.batch.simulate_batch` arguments in that order,
     ``starts`` their start poses once solved (with the point's own, one
     call: :func:`~bifilar.analysis.simulate.checked_start_poses`'s
-    ``more``), ``runs`` the runs once run (with the point's own, one call:
-    :func:`_evaluate`)."""
+    ``more``), ``runs`` the runs once run (beside the point's own:
+    :func:`_evaluate`, :func:`_runs_at`)."""
 
     comps: list
     modes: list
@@ -516,34 +516,28 @@ def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
     """The runs of ``law`` (errors returned per run, from ``law.starts`` if
     solved), then only their periods read: run without the health figures
     (``simulate_batch(..., health=False)``: the same steps and samples, so
-    the same periods, tests/test_point_cost.py).  ``own``: (scene, rest,
+    the same periods, tests/test_point_cost.py), all in one call (its runs
+    of the point's scene share that scene's parameters and kernels, and
+    every run's crossings are taken in one pass,
+    :func:`~bifilar.analysis.batch.simulate_batch`).  ``own``: (scene, rest,
     mode set, labels, amplitude, their start poses) of the point's own
-    runs, put first with the law's runs of the point's scene in one call
-    (one scene: its runs share the parameters, kernels and sample passes,
-    :func:`~bifilar.analysis.batch.simulate_batch`), the stepped scenes'
-    in a second one; returns the point's runs, then the law's."""
+    runs, run first in a call of their own with their health (which the
+    law's runs no longer share: their health was computed and not read);
+    returns the point's runs, then the law's."""
     from ..analysis.batch import simulate_batch
-    from ..analysis.start_pose import StartPoses
 
-    def call(ii, health, first=None):
-        scenes, labels, amps = [law.scenes[i] for i in ii], [law.labels[i] for i in ii], [law.amplitudes[i] for i in ii]
-        rests, mss = [law.rests[i] for i in ii], [law.mode_sets[i] for i in ii]
-        starts = None if law.starts is None else law.starts.take(ii)
-        if first is not None:
-            scene, rest, ms, own_labels, amplitude, own_starts = first
-            n = len(own_labels)
-            scenes, labels, amps = [scene] * n + scenes, list(own_labels) + labels, [amplitude] * n + amps
-            rests, mss = [rest] * n + rests, [ms] * n + mss
-            starts = None if starts is None else StartPoses.concat([own_starts, starts])
+    def call(scenes, labels, amps, rests, mss, starts, health):
         if not scenes:
             return []
         return simulate_batch(scenes, mode=labels, amplitude=amps, periods=st.periods, rtol=st.rtol, rests=rests,
                               modes=mss, errors="return", starts=starts, health=health)
 
-    if own is None:
-        return call(list(range(len(law.labels))), False)
-    m = len(law.modes)
-    return call(list(range(m)), True, own) + call(list(range(m, len(law.labels))), False)
+    first = []
+    if own is not None:
+        scene, rest, ms, own_labels, amplitude, own_starts = own
+        n = len(own_labels)
+        first = call([scene] * n, list(own_labels), [amplitude] * n, [rest] * n, [ms] * n, own_starts, True)
+    return first + call(law.scenes, law.labels, law.amplitudes, law.rests, law.mode_sets, law.starts, False)
 
 
 def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings) -> None:
@@ -885,7 +879,8 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, scre
         labels = [pre.labels[k] for k in pre.runs]
         runs = None
         if pre.law is not None and pre.law.starts is not None:
-            # the point's runs and its amplitude laws' in one call (each run as alone: the same figures)
+            # the point's runs (with their health) and its amplitude laws' (without), each run as alone: the
+            # same figures
             runs = _runs_at(pre.law, st, own=(pre.scene, pre.rest, pre.ms, labels, pre.amplitude, pre.starts))
             if any(r.error for r in runs[:len(labels)]):
                 runs = None  # the point's own runs again, alone: the error they raise
