@@ -268,3 +268,33 @@ def test_the_cylinders_swing_drift_is_not_an_amplitude_change():
     assert abs(r.period - ref.period) <= r.period_error
     assert not any("integration error" in w for w in r.warnings)
 
+
+# --------------------------------------------------------------------------- sweep points carry the health
+
+
+def test_sweep_points_carry_their_runs_health(tmp_path):
+    """A sweep point's nonlinear runs gave their periods and tensions but none
+    of simulate's health: the point's JSON now has, per timed mode, the run's
+    period, energy drift, its resolution and the period's error bound, which
+    must cover the distance to a converged run of the same scene and agree
+    with simulate's own single run (another code path) on the resolution."""
+    import yaml
+
+    from bifilar.config import scene_from_dict
+
+    r = CliRunner().invoke(main, ["sweep", str(PLATE), "--param", "spacing=3", "--json"])
+    assert r.exit_code == 0, r.stderr
+    pt = json.loads(r.stdout)["points"][0]
+    assert set(pt["runs"]) == {"torsion", "swing-y"}
+    cfg = yaml.safe_load(PLATE.read_text())
+    scale = 3.0 / 5.0  # spacing: the attachments 5 m apart -> 3 m
+    cfg["rig"]["attachments"] = [[x * scale, y * scale, z] for x, y, z in cfg["rig"]["attachments"]]
+    sc = scene_from_dict(cfg)
+    for label, run in pt["runs"].items():
+        assert run["period_error"] > 0 and run["energy_drift_below_resolution"] is False
+        conv = simulate(sc, label, pt["amplitude"], 3, method="DOP853", rtol=1e-12)
+        assert abs(run["period"] - conv.period) <= run["period_error"]
+        assert run["period_error"] <= 20 * 1e-8 * run["period"]  # the sweep's rtol 1e-8: the bound's order
+        own = simulate(sc, label, pt["amplitude"], 3, method="auto", rtol=1e-8)
+        assert run["energy_drift_resolution"] == pytest.approx(own.energy_drift_resolution, rel=1e-6)
+        assert run["period"] == pytest.approx(own.period, rel=1e-9)
