@@ -66,8 +66,8 @@ from .batch_lsoda import _BatchFailed, _lsoda, _lsoda_joint, _NotJoint
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
-from .simulate import (RunSummary, measured_period, no_period_warning, small_amplitude_period, state_scale,
-                       timed_crossings, untimed)
+from .simulate import (RunSummary, drift_floor, measured_period, no_period_warning, period_accuracy,
+                       small_amplitude_period, state_scale, timed_crossings, untimed)
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -158,15 +158,22 @@ class SceneRun(RunSummary):
     error: str | None = None
     model: str = "maximal"
     method: str = "LSODA"
+    energy_drift_resolution: float = float("nan")
+    """As :attr:`SimulationResult.energy_drift_resolution` (nan without the health figures)."""
+    period_error: float = float("nan")
+    """As :attr:`SimulationResult.period_error`, s (nan without a period or without the health
+    figures, whose energy drift is part of it)."""
 
     def to_json(self) -> dict:
         """The keys of :meth:`SimulationResult.to_json` (interface.md) where they apply."""
-        from .simulate import run_json
+        from .simulate import health_json, run_json
 
         doc = run_json(self, {"method": self.method, "rtol": self.rtol, "nfev": int(self.nfev),
                               "steps": int(self.nsteps), "runtime_s": float(self.runtime)})
         doc["error"] = self.error
+        doc.update(health_json(self))
         return doc
+
 
 
 _METHOD_NAME = {"lsoda": "LSODA (scipy odeint, batch in normalised time)",
@@ -583,6 +590,11 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         E0 = obs.E0[b]
         drift = (float(obs.dE[b] / abs(E0)) if E0 != 0 and not untimed(float(amps[b]), mds[b].dominant, float(Lmax[b]))
                  else float("nan"))  # relative to no oscillation energy (or one at rounding): undefined
+        # simulate's health figures: a few float operations on what the run measured
+        res_ = drift_floor(P.mass[b], P.gravity[b], P.anchors[b], E0) if np.isfinite(drift) else float("nan")
+        perr = (period_accuracy(period if small is None else small[0], "auto" if method == "lsoda" else method,
+                                float(rt[b]), float(amps[b]), mds[b].dominant, float(Lmax[b]),
+                                linear_period=float(T_ref[b]), drift=drift)[0] if health else float("nan"))
         slack = [(i + 1, float(obs.slack_t[b, i])) for i in range(n) if np.isfinite(obs.slack_t[b, i])]
         warnings = [] if small is None else [small[1]]
         if small is not None:
@@ -615,6 +627,6 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             mode=mds[b].label, amplitude=float(amps[b]), coordinate_name=COMPONENTS[mds[b].dominant],
             rtol=float(rt[b]), nfev=int(nfev[b]), nsteps=int(nsteps[b]), runtime=runtime, t=t_s, y=y_s, tensions=T_s,
             t_final=float(obs.t_final[b]), y_final=obs.y_final[b] + np.r_[com0[b], np.zeros(10)],
-            warnings=warnings, method=_METHOD_NAME[method],
+            warnings=warnings, method=_METHOD_NAME[method], energy_drift_resolution=res_, period_error=perr,
         ))
     return out

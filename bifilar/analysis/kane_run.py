@@ -128,10 +128,12 @@ def from_world(km: KaneMap, y13: np.ndarray) -> np.ndarray:
 
 def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, amplitude: float = 0.05,
                   periods: float = 10.0, theta=None, rtol: float = 1e-10, method: str = "DOP853",
-                  samples_per_period: int = 64, progress=None):
+                  samples_per_period: int = 64, progress=None, timing: float | None = None):
     """Integrate the thesis's model; ``theta`` ("t1,t2,t3,t4" rad or a sequence)
     sets the initial angles (rates zero, theta5 from the constraint), otherwise
-    the start is the same displaced rest as the default model's.
+    the start is the same displaced rest as the default model's.  ``timing``
+    (s): the stated timing uncertainty the period's error is held against
+    (:func:`~bifilar.analysis.simulate.period_accuracy`).
 
     Returns a :class:`~bifilar.analysis.simulate.SimulationResult` (world frame)
     with an extra attribute ``theta`` (k, 5).  Raises
@@ -193,6 +195,6 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     T = np.array([kn.tensions(th[:, i], km.p)[:2] for i in range(th.shape[1])])
     res = summarise_run(scene, rest, m, amplitude if theta is None else float("nan"), ts, Y, T,
                         lambda tt: to_world(km, sol.sol(tt)), viol, drift, "kane", method, rtol, rtol * amp,
-                        int(sol.nfev), runtime, [])
+                        int(sol.nfev), runtime, [], timing=timing)
     res.theta = th.T
     return res

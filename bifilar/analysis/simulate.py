@@ -97,18 +97,37 @@ class SimulationResult(RunSummary):
     def energy_drift_below_resolution(self) -> bool | None:
         """True when :attr:`energy_drift` is no larger than the rounding floor of the energy
         bookkeeping (a number that is not drift); None where either is undefined."""
-        if not (np.isfinite(self.energy_drift) and np.isfinite(self.energy_drift_resolution)):
-            return None
-        return bool(self.energy_drift <= self.energy_drift_resolution)
+        return below_resolution(self.energy_drift, self.energy_drift_resolution)
 
     def to_json(self) -> dict:
         doc = run_json(self, {"method": self.method, "rtol": self.rtol, "atol": self.atol, "nfev": int(self.nfev),
                               "runtime_s": float(self.runtime)})
-        res = self.energy_drift_resolution
-        doc["energy_drift_resolution"] = float(res) if np.isfinite(res) else None
-        doc["energy_drift_below_resolution"] = self.energy_drift_below_resolution
-        doc["period_error"] = float(self.period_error) if np.isfinite(self.period_error) else None
+        doc.update(health_json(self))
         return doc
+
+
+def below_resolution(drift: float, resolution: float) -> bool | None:
+    """Whether a relative energy ``drift`` is no larger than its ``resolution``
+    (:func:`drift_resolution`: a number that is rounding, not drift); None where either is undefined."""
+    if not (np.isfinite(drift) and np.isfinite(resolution)):
+        return None
+    return bool(drift <= resolution)
+
+
+def health_json(r) -> dict:
+    """The health keys a run adds to interface.md's (JSON null where undefined):
+    ``energy_drift_resolution``, ``energy_drift_below_resolution``, ``period_error``
+    (s) and ``period_error_drift`` (s, the energy drift's part of it), from a run
+    with the fields of :class:`~bifilar.analysis.batch.SceneRun` (or a :class:`SimulationResult`)."""
+    def f(x):
+        return float(x) if x is not None and np.isfinite(x) else None
+
+    perr = f(r.period_error)
+    return {"energy_drift_resolution": f(r.energy_drift_resolution),
+            "energy_drift_below_resolution": below_resolution(r.energy_drift, r.energy_drift_resolution),
+            "period_error": perr,
+            "period_error_drift": None if perr is None else drift_period_error(r.period, r.linear_period,
+                                                                                r.energy_drift)}
 
 
 def run_json(r, integrator: dict) -> dict:
@@ -303,11 +322,20 @@ def drift_resolution(scene: Scene, rest: RestPose, y_start: np.ndarray) -> float
     nan when there is no oscillation energy."""
     y = np.asarray(y_start, float).copy()
     y[0:3] -= rest.com
-    e_osc = abs(float(mx.energy(y, mx.params_from_scenes(scene))))
+    e_osc = float(mx.energy(y, mx.params_from_scenes(scene)))
+    return drift_floor(scene.mass, scene.gravity, scene.anchors - rest.com, e_osc)
+
+
+def drift_floor(mass: float, gravity: float, anchors_rel: np.ndarray, e_osc: float) -> float:
+    """:func:`drift_resolution` from its parts: ``mass`` kg, ``gravity`` m/s^2,
+    ``anchors_rel`` (n, 3) the anchors relative to the rest CoM (m, world
+    frame), ``e_osc`` the oscillation energy E0 - E_rest (J); nan where that
+    is zero or undefined."""
+    e_osc = abs(float(e_osc))
     if not e_osc > 0:
         return float("nan")
-    lever = float(np.max(np.linalg.norm(scene.anchors - rest.com, axis=1)))
-    return DRIFT_FLOOR_ULPS * np.finfo(float).eps * scene.mass * scene.gravity * lever / e_osc
+    lever = float(np.max(np.linalg.norm(anchors_rel, axis=1)))
+    return DRIFT_FLOOR_ULPS * np.finfo(float).eps * float(mass) * float(gravity) * lever / e_osc
 
 
 PERIOD_ERROR_PER_RTOL = {"auto": 15.0, "LSODA": 8.0, "DOP853": 4.0, "RK45": 5.0, "RK23": 7.0, "Radau": 0.05,
@@ -333,23 +361,50 @@ PERIOD_ERROR_FLOOR = 1e-12
 """Smallest relative period error claimed: the 1e-12 reference runs agree
 with each other (LSODA against DOP853) to 1e-12, so nothing finer was checked."""
 PERIOD_ERROR_WARN = 1e-8
-"""Relative period error above which a run warns: a tenth of the best timing
-the planner considers (a sensor record of 50 cycles at 1 kHz with 0.1 %
-noise: ~1e-7 of the period, :mod:`bifilar.studies.timing`); a stopwatch's
-is 1e-3."""
+"""Relative period error above which a run warns when the config states no
+timing uncertainty (the fallback of :func:`period_warn_threshold`): a tenth
+of the best timing the planner considers (a sensor record of 50 cycles at
+1 kHz with 0.1 % noise: ~1e-7 of the period, :mod:`bifilar.studies.timing`);
+a stopwatch's is 1e-3."""
+TIMING_SHARE = 0.1
+"""Share of the stated timing uncertainty a period's numerical error may reach
+before a run warns: below a tenth of the period's std it adds under 0.5 % to
+it in quadrature (sqrt(1 + 0.1^2) = 1.005), so it is negligible against what
+the experiment can reach."""
+
+
+def period_warn_threshold(period: float, timing: float | None = None) -> float:
+    """Numerical period error (s) above which a run warns: :data:`TIMING_SHARE`
+    of ``timing`` (s, the standard uncertainty of one measured period, the
+    config's ``uncertainty.timing``) where one is stated and positive, else
+    :data:`PERIOD_ERROR_WARN` of ``period`` (s)."""
+    return TIMING_SHARE * float(timing) if _timing_stated(timing) else PERIOD_ERROR_WARN * period
+
+
+def _timing_stated(timing: float | None) -> bool:
+    """Whether ``timing`` (s) is a usable stated timing uncertainty (finite, positive)."""
+    return timing is not None and math.isfinite(timing) and timing > 0
 
 
 def period_accuracy(period: float | None, method: str, rtol: float, amplitude: float | None = None,
-                    dominant: int = 3, Lmax: float = 1.0, model: str = "maximal") -> tuple[float, str | None]:
+                    dominant: int = 3, Lmax: float = 1.0, model: str = "maximal",
+                    timing: float | None = None, linear_period: float | None = None,
+                    drift: float = float("nan")) -> tuple[float, str | None]:
     """(error, warning) of a run's measured ``period`` (s): a bound on its
     numerical error, s (nan without a period), and a warning when the bound
-    exceeds :data:`PERIOD_ERROR_WARN` of the period (else None).
+    exceeds :func:`period_warn_threshold` (a tenth of ``timing``, s, the
+    stated standard uncertainty of a measured period; without one
+    :data:`PERIOD_ERROR_WARN` of the period), else None.
 
-    The bound is :data:`PERIOD_ERROR_PER_RTOL` [``method``] x ``rtol`` of the
-    period (``model="kane"``: :data:`PERIOD_ERROR_PER_RTOL_KANE`), at least :data:`PERIOD_ERROR_FLOOR`; for a release too small to
-    time (``amplitude``, ``dominant``, ``Lmax`` as :func:`small_amplitude_period`),
-    whose period is the linear one, the wire angle squared.  A method without
-    a measured bound (a name not in the table) gets the largest one."""
+    The bound is the integrator's part, :data:`PERIOD_ERROR_PER_RTOL` [``method``]
+    x ``rtol`` of the period (``model="kane"``: :data:`PERIOD_ERROR_PER_RTOL_KANE`),
+    at least :data:`PERIOD_ERROR_FLOOR`, plus the energy drift's part
+    (:func:`drift_period_error`: ``drift``, the run's relative energy drift,
+    times the period's distance from ``linear_period``, s); for a release too
+    small to time (``amplitude``, ``dominant``, ``Lmax`` as
+    :func:`small_amplitude_period`), whose period is the linear one, the wire
+    angle squared.  A method without a measured bound (a name not in the
+    table) gets the largest one."""
     if period is None:
         return float("nan"), None
     small = _small_amplitude(amplitude, dominant, Lmax)
@@ -358,13 +413,42 @@ def period_accuracy(period: float | None, method: str, rtol: float, amplitude: f
         return max(angle**2, PERIOD_ERROR_FLOOR) * period, None
     table = PERIOD_ERROR_PER_RTOL_KANE if model == "kane" else PERIOD_ERROR_PER_RTOL
     c = table.get(method, max(table.values()))
-    err = max(c * rtol, PERIOD_ERROR_FLOOR) * period
-    if err <= PERIOD_ERROR_WARN * period:
+    err_int = max(c * rtol, PERIOD_ERROR_FLOOR) * period
+    err_drift = drift_period_error(period, linear_period, drift)
+    err = err_int + err_drift
+    limit = period_warn_threshold(period, timing)
+    if err <= limit:
         return err, None
-    need = max(10.0 ** math.floor(math.log10(PERIOD_ERROR_WARN / c)), MIN_RTOL)
+    what = (f"a tenth of the config's timing uncertainty (uncertainty.timing {timing:g} s)" if _timing_stated(timing)
+            else f"the {PERIOD_ERROR_WARN:g} a sensor's timing resolves")
+    # both parts shrink about as rtol (the drift's not exactly: rerun to check)
+    need = max(10.0 ** math.floor(math.log10(rtol * limit / err)), MIN_RTOL)
+    reach = max(c * need, PERIOD_ERROR_FLOOR) * period + err_drift * need / rtol
+    cure = (f"--rtol {need:g} brings it below" if reach <= limit else
+            f"no --rtol brings it below (the floor is {PERIOD_ERROR_FLOOR:g} of the period)")
+    if err_drift > err_int:
+        return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative), most of "
+                     f"it from the energy drift: {drift:.1e} of the oscillation energy moves the amplitude, and "
+                     f"with it the period (the run's is {period - linear_period:+.1e} s from the linear one), by up "
+                     f"to {err_drift:.1g} s, beside {c:g} x rtol {rtol:g} for {method}; above {what}; {cure}")
     return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative: {c:g} x rtol "
-                 f"{rtol:g} for {method}), above the {PERIOD_ERROR_WARN:g} a sensor's timing resolves; --rtol "
-                 f"{need:g} brings it below")
+                 f"{rtol:g} for {method}), above {what}; {cure}")
+
+
+def drift_period_error(period: float | None, linear_period: float | None, drift: float) -> float:
+    """The part of a run's period error (s) that its energy drift makes:
+    ``drift`` (max |E - E0| over the oscillation energy, which is ~A^2)
+    times |``period`` - ``linear_period``| (s).  The period's distance from the
+    linear one is the amplitude's effect on it, ~A^2 to leading order, so a
+    relative change ``drift`` of the oscillation energy moves it by at most
+    ``drift`` times itself: an integration that loses or gains energy times a
+    motion of another amplitude than the one released.  Measured (docs/design.md, "The period's
+    error against what the user needs"): at 0.3 rad over 100 periods the true
+    error was 0.36-0.55 of this, and it exceeded the integrator's part alone.
+    0 where either is undefined (no period, nan drift)."""
+    if period is None or linear_period is None or not np.isfinite(drift):
+        return 0.0
+    return abs(float(period) - float(linear_period)) * float(drift)
 
 
 def timed_crossings(tc: np.ndarray, amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> np.ndarray:
@@ -420,6 +504,7 @@ def simulate(
     on_slack: str = "continue",
     progress=None,
     max_evaluations: float = 1e6,
+    timing: float | None = None,
 ) -> SimulationResult:
     """Integrate the nonlinear motion started from ``amplitude`` x a mode shape.
 
@@ -451,6 +536,10 @@ def simulate(
         projected beyond it is refused before integrating
         (:func:`_stiffness_check`), and one that exceeds it is stopped
         (:func:`_with_budget`), both with :class:`InputError` on ``--periods``.
+    timing : the standard uncertainty of one measured period the user can reach,
+        s (the config's ``uncertainty.timing``; None: not stated): the run warns
+        where its period's numerical error exceeds a tenth of it
+        (:func:`period_accuracy`).
     """
     if on_slack not in ("continue", "stop"):
         raise InputError("--on-slack", "must be 'continue' or 'stop'")
@@ -470,7 +559,7 @@ def simulate(
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
         if method == "auto":
             return _simulate_engine(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period, on_slack,
-                                    progress)
+                                    progress, timing)
         y0 = initial_state(scene, rest, m, amplitude)
     T_ref = (m.period if m is not None else None) or min((x.period for x in modes.modes if x.period), default=1.0)
     if t_end is None:
@@ -513,7 +602,7 @@ def simulate(
             warnings.append("run stopped at t = 0 s because a wire went slack")
             viol0 = float(np.max(mx.constraint_violation(Y0, P)))
             return summarise_run(scene, rest, m, amplitude, np.zeros(1), Y0, T0[None, :], lambda tt: Y0, viol0, 0.0,
-                                 "maximal", method, rtol, float(np.min(atol_v)), 0, 0.0, warnings)
+                                 "maximal", method, rtol, float(np.min(atol_v)), 0, 0.0, warnings, timing=timing)
     t0 = time.perf_counter()
     sol = solve_ivp(f, (0.0, t_end), ys0, method=method, rtol=rtol, atol=atol_v, dense_output=True, events=events)
     runtime = time.perf_counter() - t0
@@ -551,7 +640,7 @@ def simulate(
         # the event stops where the tension reaches zero, which the samples there show as +0 or a hair above
         stopped_slack = (int(np.argmin(mx.tensions(sol.y[:, -1], Pshift))) + 1, float(t_stop))
     return summarise_run(scene, rest, m, amplitude, ts, Y, T, state_at, viol, drift, "maximal", method, rtol,
-                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack)
+                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack, timing=timing)
 
 
 STIFF_RATIO = 1e3
@@ -621,7 +710,7 @@ def _with_budget(f, t_end: float, max_evaluations: float):
 
 
 def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, periods: float, rtol: float, atol,
-                     samples_per_period: int, on_slack: str, progress) -> SimulationResult:
+                     samples_per_period: int, on_slack: str, progress, timing: float | None = None) -> SimulationResult:
     """``simulate(method="auto")``: the batched engine's one-scene LSODA path,
     its samples turned into a :class:`SimulationResult` (tensions and the
     timed coordinate at the samples; period, crossings and health from the run)."""
@@ -643,7 +732,8 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     c = relative_pose(run.y, rest, m.dominant)
     scale = state_scale(amplitude, m.dominant, float(np.max(scene.lengths)), 2 * np.pi / m.period)
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
-    perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, float(np.max(scene.lengths)))
+    perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, float(np.max(scene.lengths)),
+                              timing=timing, linear_period=m.period, drift=run.energy_drift)
     warnings = list(run.warnings) + ([w] if w else [])
     return SimulationResult(
         t=run.t, y=run.y, coordinate=c, coordinate_name=run.coordinate_name, tensions=T,
@@ -673,7 +763,7 @@ def no_period_warning(amplitude: float | None, stopped: bool) -> str:
 def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,
                   T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
                   atol: float, nfev: int, runtime: float, warnings: list,
-                  stopped_slack: tuple[int, float] | None = None) -> SimulationResult:
+                  stopped_slack: tuple[int, float] | None = None, timing: float | None = None) -> SimulationResult:
     """Measured period, slack wires, clearance and health of a run, whatever the model.
 
     ts (k,) s and Y (k, 13) world-frame maximal states at dense samples; T (k, n)
@@ -682,6 +772,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     ``stopped_slack``: (wire, 1-based, and t, s) where an event stopped the run
     at a wire's zero tension (``on_slack="stop"``), reported as slack even
     when the samples there show the tension as a rounding above zero.
+    ``timing``: the stated timing uncertainty, s (:func:`period_accuracy`).
     """
     rel = relative_pose(Y, rest)
     dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
@@ -716,7 +807,8 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     if period is None:
         stopped = any(w.startswith("run stopped at t = ") for w in warnings)
         warnings.append(no_period_warning(amplitude if m is not None else None, stopped))
-    perr, w = period_accuracy(period, method, rtol, amplitude if m is not None else None, dom, Lmax, model)
+    perr, w = period_accuracy(period, method, rtol, amplitude if m is not None else None, dom, Lmax, model, timing,
+                              m.period if m is not None else None, drift)
     if w:
         warnings.append(w)
     return SimulationResult(

@@ -50,9 +50,12 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..analysis.simulate import simulate as run
-    from ..config import load_scene
+    from ..config import read_yaml, scene_from_dict
+    from ..studies.settings import stated_timing
 
-    scene = load_scene(config)
+    cfg = read_yaml(config)
+    scene = scene_from_dict(cfg, source=str(config))
+    timing = stated_timing(cfg)  # the period's numerical error is held against a tenth of it
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
     from ..analysis.equilibrium import indeterminate_warning
@@ -68,7 +71,7 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
             try:
                 res = simulate_kane(scene, rest, ms, mode=mode, amplitude=amplitude, periods=periods, theta=theta,
                                     rtol=rtol, method="DOP853" if method == "auto" else method,
-                                    progress=upd)
+                                    progress=upd, timing=timing)
             except InputError as exc:
                 if exc.field != "theta1to4":  # the model's name for the angles --theta gives
                     raise
@@ -77,7 +80,7 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
         mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
             res = run(scene, mode, amplitude, periods, rest=rest, modes=ms, method=method, rtol=rtol,
-                      on_slack=on_slack, progress=upd)
+                      on_slack=on_slack, progress=upd, timing=timing)
     if out_p:
         from ..report import write_timeseries_csv
 

@@ -892,6 +892,20 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, scre
     return _finish(res, pre, sims, st, screen)
 
 
+def run_health(run) -> dict:
+    """A point's nonlinear run's health, as ``simulate --json`` gives it (SI):
+    its period (s), constraint violation (m), energy drift and the
+    health keys of :func:`~bifilar.analysis.simulate.health_json`
+    (``period_error``, ``energy_drift_resolution``, ...); JSON null where undefined."""
+    from ..analysis.simulate import health_json
+
+    def f(x):
+        return float(x) if x is not None and np.isfinite(x) else None
+
+    return {"period": f(run.period), "max_constraint_violation": f(run.max_constraint_violation),
+            "energy_drift": f(run.energy_drift), **health_json(run)}
+
+
 def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bool) -> dict:
     """The point's figures from its nonlinear runs ``sims`` {mode index: run} on."""
     scene, rest, ms, labels, periods, sens, chosen = (pre.scene, pre.rest, pre.ms, pre.labels, pre.periods,
@@ -905,12 +919,14 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
                               labels[k]: {"max": s.tension_max, "min": s.tension_min} for k, s in sims.items()}}
         depth_max = max([rest.depth] + [s.depth_max for s in sims.values()])
         res["depth"] = {"rest": rest.depth, "max": depth_max}
+        res["runs"] = {labels[k]: run_health(s) for k, s in sims.items()}
         for s in sims.values():
             res["warnings"] += [f"{s.mode}: {w}" for w in s.warnings]
     else:
         res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
+        res["runs"] = {}
     _stated_amplitude(res, pre, sims, st)
     if screen:
         return res

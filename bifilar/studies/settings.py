@@ -124,6 +124,15 @@ def resolve_uncertainty(cfg: dict, overrides: dict | None = None) -> dict:
     return out
 
 
+def stated_timing(cfg: dict) -> float | None:
+    """The config's ``uncertainty.timing`` (s, the standard uncertainty of one
+    measured period), None where the config does not state it; the whole
+    ``uncertainty:`` block is checked as :func:`resolve_uncertainty` checks it."""
+    unc = resolve_uncertainty(cfg)
+    block = cfg.get("uncertainty") if isinstance(cfg, dict) else None
+    return unc["timing"] if block and "timing" in block else None
+
+
 def plan_block(cfg: dict) -> dict:
     """The config's ``plan:`` block, checked (keys: :data:`PLAN_KEYS`)."""
     block = cfg.get("plan") if isinstance(cfg, dict) else None
