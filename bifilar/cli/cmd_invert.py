@@ -35,7 +35,7 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
                    "the component its period is most sensitive to.")
 @click.option("--method", default=None, help="auto (default), small-angle, thesis, linear or nonlinear.")
 @click.option("--uncertainty", "uncertainty", multiple=True, metavar="KEY=VALUE",
-              help="Override an assumed input uncertainty: length, position, com (m), mass, amplitude (relative), "
+              help="Override an assumed input uncertainty: length, position, com (m), mass, gravity, amplitude (relative), "
                    "timing, trial_time (s); repeatable.")
 @click.option("--monte-carlo", "monte_carlo", default=None, metavar="N",
               help="Check the linear uncertainty with N Monte Carlo re-estimates on the full model.")

@@ -556,6 +556,8 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
         if not ks:
             continue
         names = [n for n in measured_inputs(scene) if not n.startswith("com.")]
+        if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known)
+            names.append("gravity")
         names += list(COM_UNKNOWNS)
         ck = ("sensitivity", scene_key(scene), tuple(names))
         if cache is not None and ck in cache:

@@ -7,7 +7,7 @@ journaled, resumable variant.  SI units.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,6 +21,54 @@ from .uncertainty import MonteCarloSummary, summarise
 if TYPE_CHECKING:
     from .invert import InversionResult
 
+
+@dataclass
+class FactorDraw(MeasurementSet):
+    """A Monte Carlo draw whose amplitude factors follow the unknowns.
+
+    Measurement ``k``'s ``period`` is the drawn period divided by the factor
+    ``r_k(A_k; p_hat)`` at the drawn amplitude and the estimate; the draw's
+    model period is ``T_lin,k(p) rho_k(p)`` with
+    ``rho_k(p) = 1 + slope[k] @ (unit * p - p_ref)`` (dimensionless), i.e.
+    the drawn period is matched by ``T_lin,k(p) r_k(A_k; p)``, ``r``
+    linearised about ``p_ref`` = ``p_hat`` as the budget linearises it.
+
+    slope : (K, P) ``w(A_k) dr_k/dp / r_k(A_k; p_hat)`` per unit of each
+        unknown (kg m^2 or m); ``dr/dp`` is the law's at the stated
+        amplitude, ``w = (r(A) - 1) / (r(A0) - 1)`` carries it to the drawn
+        one (:meth:`~bifilar.estimation.solve.AmplitudeLaw.release_weight`).
+    unit : (P,) ``m_hat / m_draw`` for inertia unknowns, 1 for CoM shifts:
+        the motion depends on the mass only through ``I / m``, so the
+        factor at the draw's mass and ``p`` is the estimate-mass factor at
+        ``p m_hat / m_draw``.
+    p_ref : (P,) the estimate ``p_hat``."""
+
+    slope: np.ndarray | None = None
+    unit: np.ndarray | None = None
+    p_ref: np.ndarray | None = None
+
+    def factor(self, p) -> np.ndarray:
+        """(K,) ``rho_k(p)`` at unknowns ``p`` (SI)."""
+        return 1.0 + self.slope @ (self.unit * np.asarray(p, float) - self.p_ref)
+
+
+@dataclass
+class _FactorProblem(Problem):
+    """A draw's :class:`Problem` whose ``linear_periods`` are the model
+    periods ``T_lin(p) rho(p)`` of its :class:`FactorDraw` (s), so that
+    :func:`solve_linear` (root finding, Gauss-Newton with its Jacobian by
+    differences of these periods) solves the drawn periods with the factor
+    following the unknowns."""
+
+    draw: FactorDraw | None = None
+
+    @classmethod
+    def of(cls, pb: Problem, draw: FactorDraw) -> _FactorProblem:
+        return cls(**{f.name: getattr(pb, f.name) for f in fields(Problem)}, draw=draw)
+
+    def linear_periods(self, p) -> np.ndarray:
+        return super().linear_periods(p) * self.draw.factor(p)
+
 def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> list:
     """``n`` perturbed measurement sets for :func:`monte_carlo_check`: inputs,
     periods and amplitudes drawn from their assumed distributions (centred on
@@ -29,8 +77,16 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     what the trials support and whose 2.5-97.5 % quantiles are the
     Student interval; for ``n <= 3`` it has no finite variance); the amplitude factor at the drawn amplitude is
     the mode's amplitude law ``r(A) = 1 + a A^2 + b A^4`` (nonlinear method;
-    ``res.amplitude_laws``, :class:`~bifilar.estimation.solve.AmplitudeLaw`) and each drawn period is divided by it,
-    so every draw is a linear-model problem.  Every input is perturbed,
+    ``res.amplitude_laws``, :class:`~bifilar.estimation.solve.AmplitudeLaw`) and each drawn period is divided by it.
+    Where the law has a derivative in the unknowns (a stated amplitude) the
+    draw is a :class:`FactorDraw`: its factor follows the re-estimated
+    unknowns through ``dr/dp`` (the full model's gain, as the budget's
+    timing and amplitude terms), not held at the estimate's (a fixed factor
+    gave the Solar Boat's torsion at 0.3 rad 0.90 of the budget's timing
+    term).  The drawn inputs do not move the factor (no ``dr/dx`` is
+    measured; exact for gravity, which only scales time), except the mass
+    through ``I / m`` (:attr:`FactorDraw.unit`); other draws are
+    plain linear-model problems.  Every input is perturbed,
     degenerate ones (no derivative) too: their finite-size effect is what the
     linear budget cannot see.  A draw that cannot even be built
     is ``None``.  Reproducible for a given generator state."""
@@ -45,6 +101,7 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
             dg = rng.normal(0.0, unc.get("gravity", 0.0))
             dcom = np.array([0.0 if f"com.{a}" in solved_com else rng.normal(0.0, unc["com"]) for a in "xyz"])
             hangs = []
+            slope = np.zeros((len(pb.measurements), len(pb.unknowns)))
             for hm in pb.models:
                 s = hm.hanging.scene
                 att = s.attachments - (hm.R @ dcom)[None, :]
@@ -69,9 +126,16 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                 if m.amplitude and res.method == "nonlinear":
                     sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * abs(m.amplitude)
                     A = m.amplitude + rng.normal(0.0, sA)
-                    r = float(res.amplitude_laws[k].factor(A))
+                    law = res.amplitude_laws[k]
+                    r = float(law.factor(A))
+                    if law.dr_dp is not None:
+                        slope[k] = law.release_weight((A / law.amplitude) ** 2) * law.dr_dp / r
                 meas.append(replace(m, period=T / r))
-            draws.append(MeasurementSet(hangs, meas))
+            if np.any(slope):
+                unit = np.array([1.0 / (1.0 + dm) if x in _IDX else 1.0 for x in pb.unknowns])
+                draws.append(FactorDraw(hangs, meas, slope=slope, unit=unit, p_ref=np.asarray(res.values, float)))
+            else:
+                draws.append(MeasurementSet(hangs, meas))
         except BifilarError:
             draws.append(None)
     return draws
@@ -85,8 +149,9 @@ def batched_applies(pb: Problem) -> bool:
 
 def solve_draws_loop(res: InversionResult, draws: list, progress=None) -> np.ndarray:
     """(n, P) re-estimates of the unknowns, one :func:`solve_linear` of the
-    full perturbed problem per draw (NaN rows: draws whose inversion failed).
-    Any problem shape; ~30 ms a draw."""
+    full perturbed problem per draw (NaN rows: draws whose inversion failed);
+    a :class:`FactorDraw`'s model periods ``T_lin(p) rho(p)``
+    (:class:`_FactorProblem`).  Any problem shape; ~30 ms a draw."""
     pb = res.problem
     out = np.full((len(draws), len(pb.unknowns)), np.nan)
     for it, ms2 in enumerate(draws):
@@ -94,6 +159,8 @@ def solve_draws_loop(res: InversionResult, draws: list, progress=None) -> np.nda
             try:
                 pb2 = build_problem(ms2, unc=None, like=pb)
                 pb2.I_ref0 = pb.I_ref0
+                if isinstance(ms2, FactorDraw):
+                    pb2 = _FactorProblem.of(pb2, ms2)
                 out[it] = solve_linear(pb2, p0=res.values)
             except BifilarError:
                 pass
@@ -132,7 +199,8 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
     problems with :func:`batched_applies`.
 
     Each draw solves the same equation as :func:`solve_linear` does for it:
-    ``T_lin(x) = T_draw`` (s) for the unknown inertia component ``x``
+    ``T_lin(x) rho(x) = T_draw`` (s; ``rho`` = 1 but for a
+    :class:`FactorDraw`) for the unknown inertia component ``x``
     (kg m^2, reference body axes) in its physical interval, the mode tracked
     as :func:`build_problem` and :class:`HangingModel` track it (MAC against
     the estimate's base modes, then against the draw's own modes at the
@@ -166,12 +234,19 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
     ok = [b for b, d in enumerate(draws) if d is not None]
     scenes0 = [replace(draws[b].hangings[0].scene, inertia=I0w) for b in ok]
     targets = np.array([draws[b].measurements[0].period for b in ok], float)
+    # each draw's factor rho(x) = 1 + g (u x - x_ref) (FactorDraw; g = 0: held)
+    fd = [draws[b] if isinstance(draws[b], FactorDraw) else None for b in ok]
+    f_slope = np.array([d.slope[0, 0] if d is not None else 0.0 for d in fd])
+    f_unit = np.array([d.unit[0] if d is not None else 1.0 for d in fd])
+    f_ref = np.array([d.p_ref[0] if d is not None else 0.0 for d in fd])
     rests = rest_poses(scenes0, hm.rest0, errors="return") if scenes0 else []
     keep = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
     ok = [ok[q] for q in keep]
     scenes0 = [scenes0[q] for q in keep]
     rests = [rests[q] for q in keep]
     targets = targets[keep]
+    f_slope, f_unit, f_ref = f_slope[keep], f_unit[keep], f_ref[keep]
+    follows = bool(np.any(f_slope))
     B = len(ok)
     if B == 0:
         if progress:
@@ -196,7 +271,7 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
     k0 = _mac_track(Sbase, Mbase, S0, np.full(B, pb.mode_index[0]))
 
     def f_of(idx: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """T^2 - target^2 (s^2) of draws ``idx`` at component values ``x``."""
+        """(T rho)^2 - target^2 (s^2) of draws ``idx`` at component values ``x``."""
         if not len(idx):
             return np.zeros(0)
         I = np.broadcast_to(I0, (len(idx), 3, 3)).copy()
@@ -213,6 +288,8 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
             for q, k in zip(good, kk):
                 per = mss[q].modes[k].period
                 T[q] = per if per else np.nan
+        if follows:
+            T = T * (1.0 + f_slope[idx] * (f_unit[idx] * x - f_ref[idx]))
         return T * T - targets[idx] ** 2
 
     lo, hi = physical_interval(I0, name)
@@ -295,8 +372,10 @@ def _modes_or_none(modes_batch, scenes, rests) -> list:
         return out
 
 
-DRAW_SCHEME = 3
-"""Version of how the draws are made, part of a journal's key: 3 draws the
+DRAW_SCHEME = 4
+"""Version of how the draws are made, part of a journal's key: 4 lets a
+stated amplitude's factor follow the re-estimated unknowns through the
+law's ``dr/dp`` (:class:`FactorDraw`, session 9), 3 draws the
 amplitude factor from the mode's amplitude law and a recording's period
 with the dof of its re-quantised copies (session 8), 2 the factor by the
 quadratic rule and every recording normal, 2 and 3 a period from n timed
