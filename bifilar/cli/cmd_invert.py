@@ -101,7 +101,9 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
         from ..config import load_scene
 
         scene = load_scene(config, unknown=tuple(solve_for))
-        ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config))
+        # the config's uncertainty block (what sweep/plan budgeted) below --uncertainty
+        ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config),
+                               uncertainty=mm.config_uncertainty(config))
     merged = dict(unc)
     ms.uncertainty = {**ms.uncertainty, **merged}
     for label, T, s in p_specs:

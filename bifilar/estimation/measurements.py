@@ -292,6 +292,25 @@ _MEAS = {"mode", "period", "std", "cycles", "times", "time_std", "signal", "colu
          "scale", "model", "t_start", "t_stop", "trim", "amplitude", "amplitude_std", "note"}
 
 
+def config_uncertainty(path) -> dict:
+    """The ``uncertainty:`` block of the scene config at ``path`` (the block
+    ``sweep`` and ``plan`` budget and ``--write-config`` writes), checked as
+    ``--uncertainty`` is: {key: value} in the units of
+    :data:`~bifilar.estimation.uncertainty.UNCERTAINTY_KEYS` (``timing`` s:
+    a period given without ``+-SIGMA``; ``length``/``position``/``com`` m;
+    ``mass``/``gravity``/``amplitude`` relative); {} without a block.  Bad
+    values exit 2 naming ``uncertainty.KEY``."""
+    from ..config import read_yaml
+
+    doc = read_yaml(path)
+    block = doc.get("uncertainty") if isinstance(doc, dict) else None
+    if block is None:
+        return {}
+    if not isinstance(block, dict):
+        raise InputError("uncertainty", "must be a mapping like {timing: 0.001, length: 0.001}")
+    return parse_uncertainty_overrides(block, "uncertainty")
+
+
 def load_measurements(path, config_override: str | None = None, unknown: tuple = ()) -> MeasurementSet:
     """Read and validate a measurements file (module docstring); every
     problem is reported at once (:class:`~bifilar.errors.ConfigErrors`),

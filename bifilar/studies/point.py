@@ -755,7 +755,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     """(the point's figures up to its nonlinear runs, :class:`_Prepared`); raises for a bad point."""
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
-    from ..estimation.sensitivity import best_mode_for, grouped_shares, measured_inputs
+    from ..estimation.sensitivity import best_mode_for, grouped_shares, input_sigma, measured_inputs
 
     cfg, amp_override = apply_params(base_cfg, params, source)
     amplitude = st.amplitude if amp_override is None else amp_override
@@ -765,6 +765,8 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
     unc = point_uncertainty(st, params)
     names = list(st.components) + measured_inputs(scene)
+    if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known), as invert's budget
+        names.append("gravity")
     at = _stiffness(scene, rest0)
     sens, notes = point_sensitivity(scene, names, rest0, at=at)
     ms, rest = sens.modes, sens.rest
