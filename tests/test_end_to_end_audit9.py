@@ -51,3 +51,27 @@ def test_unstated_amplitude_shift_has_one_sign_for_a_negative_product():
     # -1.1 std here; now -15 % and -1.1 std)
     assert abs(nstd) > 0.1
     assert np.sign(pct) == np.sign(nstd), warn
+
+
+def test_refusal_names_a_mode_without_a_period_at_the_best_fit(monkeypatch):
+    # Iyy, Izz and com.z from torsion, pitch and swing-y of a leaning bifilar whose inputs are off by 1 cm
+    # (the audit's inputs-dominant case): in one draw of 200 the best admissible fit moved the CoM up until
+    # the pitch was neutral, and the refusal read 'torsion +6.42, pitch +nan, swing-y +0.00156 sigma'.
+    # The solver's best fit is stubbed here with such a residual vector (the draw costs seconds).
+    from bifilar.errors import InputError
+    from bifilar.estimation import roots
+
+    scene = scene_from_dict({"body": {"mass": 30.0, "inertia": {"principal": [2.0, 1.0, 2.5]}},
+                             "rig": {"anchors": [[0, -0.9, 1.2], [0, 0.9, 1.2]],
+                                     "attachments": [[0, -0.5, 0.15], [0, 0.5, 0.15]], "lengths": [1.2, 1.2]}},
+                            "lean", warn=False)
+    meas = [Measurement(lab, 1.0, 1e-3, "period", "--period") for lab in ("torsion", "pitch", "swing-y")]
+    pb = build_problem(MeasurementSet([Hanging("ref", scene, np.eye(3))], meas), ["Iyy", "Izz", "com.z"])
+    best = {"p": pb.prior, "z": np.array([6.42, np.nan, 0.00156]), "chi2": np.inf, "test": "|residual| <= 0.1 sigma"}
+    monkeypatch.setattr(roots, "multi_roots", lambda pb, targets=None: ([], best))
+    try:
+        roots.find_roots(pb)
+    except InputError as exc:
+        msg = str(exc)
+    assert "nan" not in msg.lower(), msg  # before: 'pitch +nan'
+    assert "pitch none (no period there: a neutral mode)" in msg and "torsion +6.42" in msg, msg
