@@ -395,7 +395,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                                                                             unc_all, rtol, laws=laws)
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
-        worst = ", ".join(f"{n} {100 * D[i] / p_hat[i]:+.2g} % ({D[i] / budget.std[i]:+.2g} std)"
+        # the shift in % of |value| so that its sign is the shift's, as the std's is (a negative product
+        # read -8 % beside +0.28 std: the same shift with both signs)
+        worst = ", ".join(f"{n} {100 * D[i] / abs(p_hat[i]):+.2g} % ({D[i] / budget.std[i]:+.2g} std)"
                           for i, n in enumerate(pb.unknowns) if p_hat[i] and budget.std[i] > 0)
         warnings.append(f"no amplitude given for mode '{lab}': release amplitudes are assumed uniform in 0 .. "
                         f"{DEFAULT_AMPLITUDE_RANGE_DEG:g} degrees ({A_max:.4g} in the mode's dominant coordinate), "

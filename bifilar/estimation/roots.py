@@ -618,7 +618,9 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None) -> list[Root]:
     z = best["z"]
     k = int(np.nanargmax(np.abs(np.where(np.isfinite(z), z, np.inf))))
     vals = ", ".join(f"{n} = {v:.6g}" for n, v in zip(pb.unknowns, best["p"]))
-    zs = ", ".join(f"{m.label} {zk:+.3g}" for m, zk in zip(pb.measurements, z))
+    # a mode that is neutral at the best fit has no period there (NaN): said so, not printed as "+nan"
+    zs = ", ".join(f"{m.label} {zk:+.3g}" if np.isfinite(zk) else f"{m.label} none (no period there: a neutral mode)"
+                   for m, zk in zip(pb.measurements, z))
     raise InputError(pb.measurements[k].field,
                      f"no physical tensor reproduces the measured periods: the best admissible fit ({vals}) "
                      f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); check the "
