@@ -46,6 +46,13 @@ Uncertainty (the headline ``std``)
   DerSimonian-Laird estimate; for equal stds ``sqrt(((T1 - T2)^2 - s1^2 -
   s2^2) / 2)``) is added in quadrature: the period changes along the
   record by that much, so "the" period of the record is not known better;
+  unless the difference is the record's amplitude law: a viscous fit whose
+  halves disagree is refitted with the frequency following the envelope's
+  square (``viscous+chirp``, :func:`_amplitude_law`), which replaces it
+  when it explains the halves (lower criterion, a resolved shift, an
+  ``A^4`` term a pendulum can have, and its own halves agreeing); its
+  period is the one at ``amplitude_period`` and its std the fit's own
+  (``amplitude_law`` says which path was taken);
 * ``std_quantisation``: a quantised record (few distinct values: a
   camera's pixel, an ADC's bit, or pixels converted to an angle, whose
   levels are unevenly spaced) with too little noise to dither the steps is
@@ -233,7 +240,8 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     split_check : bool
         Also fit the two halves of the window (``half_periods``,
         ``windows``) and add their disagreement beyond noise to ``std``
-        (``std_nonstationary``).
+        (``std_nonstationary``); when a viscous fit's halves disagree, try
+        the amplitude law (:func:`_amplitude_law`, ``amplitude_law``).
     fallback : bool
         If the nonlinear fit fails, return the crossing period
         (``model="crossings"``) instead of raising.
@@ -494,7 +502,7 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
     _residual_peaks(fit)
     if split_check:
         _stationarity(fit, t, y)
-        fit = _amplitude_law(fit, t, y, criterion)
+        fit = _amplitude_law(fit, t, y, criterion, len(notes))
     _quantisation(fit, t, y, criterion)
     _compose_std(fit)
     return fit
@@ -779,7 +787,7 @@ def _stationarity(fit: PeriodFit, t, y):
                                        "p": float(stats.chi2.sf(Q, K - 1))}
 
 
-def _amplitude_law(fit: PeriodFit, t, y, criterion) -> PeriodFit:
+def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> PeriodFit:
     """A viscous fit whose halves disagree (``std_nonstationary > 0``) is
     refitted with the frequency following the envelope's square
     (:data:`AMPLITUDE_LAW_MODEL`, :func:`.signal_models._fit_chirp`: a
@@ -793,14 +801,19 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion) -> PeriodFit:
     with the fit's own std.  A drift the law cannot explain (a period that
     changes with time, not with the amplitude) keeps the viscous fit and
     its between-half std.  ``fit.amplitude_law`` says which (``used``,
-    ``reason``) and holds the law's numbers."""
+    ``reason``) and holds the law's numbers.  The law's fit keeps the
+    first ``n_general`` notes of ``fit`` (the window's: trimming, a leading
+    rest) and its runner-ups; the viscous fit's notes on itself are
+    replaced by one line."""
     if fit.std_nonstationary <= 0 or _KIND.get(fit.model, ("",))[0] != "viscous":
         return fit
     drift = fit.selection.get("drift", True)
     t0, tm = float(t[0]), float(0.5 * (t[0] + t[-1]))
     key = criterion.lower()
     info: dict = {"used": False, "model": AMPLITUDE_LAW_MODEL, "criterion": criterion,
-                  "without_law": {"model": fit.model, "period": fit.period, "std_nonstationary": fit.std_nonstationary,
+                  "without_law": {"model": fit.model, "period": fit.period,
+                                  "std": math.hypot(fit.std, fit.std_nonstationary),  # before quantisation
+                                  "std_nonstationary": fit.std_nonstationary,
                                   "half_periods": [list(h) for h in fit.half_periods or ()]}}
     fit.amplitude_law = info
     # the decay's white-noise std (the chirp's residuals inflate the serial factor)
@@ -820,7 +833,8 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion) -> PeriodFit:
         return fit
     delta = float(getattr(law, key) - getattr(fit, key))
     md = law.modes[0]
-    info.update(criterion_delta=delta, beta=md["beta"], beta_std=md["beta_std"],
+    info.update(criterion_delta=delta, beta=md["beta"], beta_std=md["beta_std"], beta2=md["beta2"],
+                beta2_std=md["beta2_std"],
                 reference_amplitude=md["reference_amplitude"], period_zero_amplitude=md["period_zero_amplitude"],
                 period_start=md["period_start"])
     why = _inadmissible(law)
@@ -863,10 +877,13 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion) -> PeriodFit:
         f"then {AMPLITUDE_LAW_MODEL}: {info['reason']}"
     law.oscillation = fit.oscillation
     law.amplitude_law = info
-    law.notes = fit.notes + [
+    keep = fit.notes[:n_general] + [n for n in fit.notes[n_general:] if n.startswith("runner-up ")]
+    law.notes = keep + [
         f"period changes along the record with the amplitude: fitted with the frequency following the "
-        f"envelope's square ({AMPLITUDE_LAW_MODEL}; {fit.model} alone: T = {fit.period:.6f} +- {fit.std:.2g} s, "
-        f"halves {', '.join(f'{h[0]:.6f}' for h in (fit.half_periods or ()))} s); the period is the one at "
+        f"envelope's square ({AMPLITUDE_LAW_MODEL}; {fit.model} alone: T = {fit.period:.6f} +- "
+        f"{info['without_law']['std']:.2g} s, "
+        f"halves {', '.join(f'{h[0]:.6f}' for h in (fit.half_periods or ()))} s, between-half std "
+        f"{fit.std_nonstationary:.2g} s); the period is the one at "
         f"amplitude {md['reference_amplitude']:.4g} (amplitude_period), from {md['period_start']:.6f} s at the "
         f"window's start to {md['period_zero_amplitude']:.6f} s at zero amplitude"] + law.notes
     _residual_peaks(law)

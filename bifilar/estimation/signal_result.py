@@ -28,11 +28,17 @@ class PeriodFit:
     ----------
     model : str
         ``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode``,
-        ``three_mode`` or ``crossings`` (fallback).
+        ``three_mode``, ``viscous+chirp`` (the viscous model whose
+        frequency follows the envelope's square, ``omega(t) = omega +
+        beta u + beta2 u^2`` with ``u = (A(t) / A(t0))^2``; only in place of
+        a viscous fit whose halves disagree, ``amplitude_law``) or
+        ``crossings`` (fallback).
     period : float
         s, the observed (damped) period ``2 pi / omega`` of the oscillation;
         for ``two_mode`` / ``three_mode`` the mode with the largest
-        amplitude at ``t0``.
+        amplitude at ``t0``; for ``viscous+chirp`` the period at the
+        amplitude ``amplitude_period`` (a stated constant in [y]: its std
+        holds the frequency, ``beta``, ``beta2`` and ``A(t0)``).
     std : float
         s, 1-sigma uncertainty of ``period``:
         ``hypot(max(std_raw * std_inflation, std_quantisation),
@@ -91,6 +97,20 @@ class PeriodFit:
         levels such as pixels converted to an angle) with too little noise
         to dither them (0 otherwise; ``signal._quantisation``); it replaces
         the noise term (with its serial factor) when larger.
+    amplitude_law : dict or None
+        None unless a viscous fit's halves disagreed.  Then ``used`` (bool:
+        the fit is ``viscous+chirp``), ``reason`` (one sentence),
+        ``without_law`` (the viscous fit's ``period``, ``std``,
+        ``std_nonstationary``, ``half_periods``) and, when the law was
+        fitted, ``criterion_delta`` (its BIC/AIC minus the viscous one),
+        ``beta``, ``beta_std``, ``beta2``, ``beta2_std`` (rad/s, the
+        frequency shift at ``t0`` in ``A^2`` and ``A^4``),
+        ``curvature_ratio`` (``beta2 omega / beta^2 = 1 - d/c^2`` for ``T
+        = T0 (1 + c A^2 + d A^4)``), ``reference_amplitude`` ([y],
+        ``amplitude_period``), ``period_zero_amplitude`` and
+        ``period_start`` (s, at zero amplitude and at ``t0``), and its own
+        split check ``halves`` (each half's period at the reference
+        amplitude, with the law held), ``Q``, ``critical_Q``.
     uncertainty : dict
         ``noise``, ``serial_correlation`` (the extra std it adds, s),
         ``quantisation`` (the extra std of an undithered quantised record, s),
