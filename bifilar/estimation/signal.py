@@ -396,9 +396,20 @@ def _inadmissible(f: PeriodFit) -> str | None:
     return None
 
 
-def _fit_window(t, y, model, drift, freq_guess, candidates, criterion):
+def _fit_window(t, y, model, drift, freq_guess, candidates, criterion, start=None):
+    """``model`` (or ``auto``) on ``(t, y)``; returns the fit and the
+    viscous solution (None when ``start``, the amplitude law's parameters
+    for these ``t0``, ``tm``, was enough: a copy of a fitted record)."""
     t0 = float(t[0])
     tm = float(0.5 * (t[0] + t[-1]))
+    if start is not None and model == AMPLITUDE_LAW_MODEL:
+        free = np.ones(start.size, bool)
+        free[1] = drift
+        raw = _solve("chirp", t, y, t0, tm, start, free)
+        if raw.converged:
+            f = _build(raw, t, y, model, [])
+            f.selection["drift"] = bool(drift)
+            return f, None
     visc, env = _fit_viscous(t, y, t0, tm, freq_guess, drift)
     if model != "auto":
         return _fit_one(model, t, y, t0, tm, visc, env, drift), visc
@@ -515,6 +526,16 @@ DITHER_STEPS = 0.5
 QUANT_DRAWS = 40
 
 
+def _turned(p, kind: str, dphi: float) -> np.ndarray:
+    """Parameters ``p`` of a ``kind`` model with every oscillation's phase
+    advanced by ``dphi`` (rad): each ``(a, b)`` pair turned."""
+    pb = np.array(p, dtype=float)
+    for i in range(2, pb.size if kind in ("viscous", "two_mode", "three_mode") else 4, 4):
+        a, b = pb[i], pb[i + 1]
+        pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
+    return pb
+
+
 def _requantised_copies(fit: PeriodFit, t, lev, p, s_steps, drift, rng, criterion, ref=None,
                         in_index=False):
     """``QUANT_DRAWS`` copies of the curve of parameters ``p`` (the fit's
@@ -529,16 +550,15 @@ def _requantised_copies(fit: PeriodFit, t, lev, p, s_steps, drift, rng, criterio
     t_end = np.array([t[0], t[-1]])
     periods, noise_terms, ends = [], [], []
     for _ in range(QUANT_DRAWS):
-        pb = p.copy()
         dphi = rng.uniform(0.0, 2 * math.pi)
-        for i in range(2, pb.size if kind in ("viscous", "two_mode", "three_mode") else 4, 4):
-            a, b = pb[i], pb[i + 1]
-            pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
+        pb = _turned(p, kind, dphi)
         kb = _model(kind, pb, t, t0, t_ref)
         kb = (kb if in_index else lev.index(kb)) + s_steps * rng.standard_normal(t.size)
         yb = lev.level(np.round(kb))
+        # the law's fit starts from the record's own, turned alike (one solve)
+        start = _turned(fit.params, kind, dphi) if kind == "chirp" else None
         try:
-            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
+            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion, start)
         except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
                 ZeroDivisionError):
             continue
