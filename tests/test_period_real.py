@@ -114,6 +114,9 @@ def test_gyro_std_reflects_its_split_half_drift():
     # the headline std carries it (not the 7e-5 s of noise and correlation)
     assert fit.uncertainty["dominant"] == "nonstationarity"
     assert 0.5 * (T1 - T2) < fit.std < (T1 - T2)
+    # its drift is no amplitude law (session 9): the law's shift over the
+    # envelope is not resolved, the viscous fit and its split term stay
+    assert fit.amplitude_law is not None and fit.amplitude_law["used"] is False
     # a growing "second mode" is no reason to prefer two modes
     assert fit.model == "viscous"
     assert not fit.selection["candidates"]["two_mode"]["admissible"]

@@ -46,6 +46,13 @@ Uncertainty (the headline ``std``)
   DerSimonian-Laird estimate; for equal stds ``sqrt(((T1 - T2)^2 - s1^2 -
   s2^2) / 2)``) is added in quadrature: the period changes along the
   record by that much, so "the" period of the record is not known better;
+  unless the difference is the record's amplitude law: a viscous fit whose
+  halves disagree is refitted with the frequency following the envelope's
+  square (``viscous+chirp``, :func:`_amplitude_law`), which replaces it
+  when it explains the halves (lower criterion, a resolved shift, an
+  ``A^4`` term a pendulum can have, and its own halves agreeing); its
+  period is the one at ``amplitude_period`` and its std the fit's own
+  (``amplitude_law`` says which path was taken);
 * ``std_quantisation``: a quantised record (few distinct values: a
   camera's pixel, an ADC's bit, or pixels converted to an angle, whose
   levels are unevenly spaced) with too little noise to dither the steps is
@@ -96,6 +103,7 @@ from .signal_io import (
 )
 from .signal_models import (
     _auto_trim,
+    _fit_chirp,
     _fit_quadratic,
     _fit_three_mode,
     _fit_two_mode,
@@ -132,10 +140,19 @@ MODELS = ("viscous", "quadratic", "quadratic+viscous", "two_mode", "three_mode")
 MIN_WINDOW_CYCLES = 2.0
 #: the windows disagree beyond noise when Cochran's Q exceeds this quantile
 WINDOW_Q_LEVEL = 0.99
+#: the viscous model whose frequency follows the envelope's square, tried
+#: when a viscous fit's halves disagree (:func:`_amplitude_law`)
+AMPLITUDE_LAW_MODEL = "viscous+chirp"
+#: a law ``T = T0 (1 + c A^2 + d A^4)`` is a pendulum's when ``d / c^2`` lies
+#: in this range (a simple pendulum 0.92; a period linear in ``A^2`` 0; a
+#: frequency linear in it 1): the fit's ``beta2 w / beta^2 = 1 - d / c^2``
+#: must lie in ``1 - range`` within 3 of its std.  A drift in time fitted
+#: as a law of the decaying amplitude needs ``|d / c^2|`` of tens
+AMPLITUDE_LAW_D_RANGE = (-1.0, 2.0)
 
 _KIND = {"viscous": ("viscous", False), "quadratic": ("quadratic", False),
          "quadratic+viscous": ("quadratic", True), "two_mode": ("two_mode", False),
-         "three_mode": ("three_mode", False)}
+         "three_mode": ("three_mode", False), AMPLITUDE_LAW_MODEL: ("chirp", False)}
 _MODEL_CHOICES = MODELS + ("auto",)
 
 
@@ -223,7 +240,8 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     split_check : bool
         Also fit the two halves of the window (``half_periods``,
         ``windows``) and add their disagreement beyond noise to ``std``
-        (``std_nonstationary``).
+        (``std_nonstationary``); when a viscous fit's halves disagree, try
+        the amplitude law (:func:`_amplitude_law`, ``amplitude_law``).
     fallback : bool
         If the nonlinear fit fails, return the crossing period
         (``model="crossings"``) instead of raising.
@@ -346,6 +364,8 @@ def _fit_one(name, t, y, t0, tm, visc, env, drift, two: PeriodFit | None = None)
         raw = _fit_quadratic(t, y, t0, tm, visc, env, drift, vt)
     elif kind == "two_mode":
         raw = _fit_two_mode(t, y, t0, tm, visc, drift)
+    elif kind == "chirp":
+        raw = _fit_chirp(t, y, t0, tm, visc.p, drift)
     else:
         if two is None:
             raw2 = _fit_two_mode(t, y, t0, tm, visc, drift)
@@ -376,9 +396,20 @@ def _inadmissible(f: PeriodFit) -> str | None:
     return None
 
 
-def _fit_window(t, y, model, drift, freq_guess, candidates, criterion):
+def _fit_window(t, y, model, drift, freq_guess, candidates, criterion, start=None):
+    """``model`` (or ``auto``) on ``(t, y)``; returns the fit and the
+    viscous solution (None when ``start``, the amplitude law's parameters
+    for these ``t0``, ``tm``, was enough: a copy of a fitted record)."""
     t0 = float(t[0])
     tm = float(0.5 * (t[0] + t[-1]))
+    if start is not None and model == AMPLITUDE_LAW_MODEL:
+        free = np.ones(start.size, bool)
+        free[1] = drift
+        raw = _solve("chirp", t, y, t0, tm, start, free)
+        if raw.converged:
+            f = _build(raw, t, y, model, [])
+            f.selection["drift"] = bool(drift)
+            return f, None
     visc, env = _fit_viscous(t, y, t0, tm, freq_guess, drift)
     if model != "auto":
         return _fit_one(model, t, y, t0, tm, visc, env, drift), visc
@@ -482,6 +513,7 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
     _residual_peaks(fit)
     if split_check:
         _stationarity(fit, t, y)
+        fit = _amplitude_law(fit, t, y, criterion, len(notes))
     _quantisation(fit, t, y, criterion)
     _compose_std(fit)
     return fit
@@ -492,6 +524,16 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
 DITHER_STEPS = 0.5
 #: simulated records of the quantisation check
 QUANT_DRAWS = 40
+
+
+def _turned(p, kind: str, dphi: float) -> np.ndarray:
+    """Parameters ``p`` of a ``kind`` model with every oscillation's phase
+    advanced by ``dphi`` (rad): each ``(a, b)`` pair turned."""
+    pb = np.array(p, dtype=float)
+    for i in range(2, pb.size if kind in ("viscous", "two_mode", "three_mode") else 4, 4):
+        a, b = pb[i], pb[i + 1]
+        pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
+    return pb
 
 
 def _requantised_copies(fit: PeriodFit, t, lev, p, s_steps, drift, rng, criterion, ref=None,
@@ -508,16 +550,15 @@ def _requantised_copies(fit: PeriodFit, t, lev, p, s_steps, drift, rng, criterio
     t_end = np.array([t[0], t[-1]])
     periods, noise_terms, ends = [], [], []
     for _ in range(QUANT_DRAWS):
-        pb = p.copy()
         dphi = rng.uniform(0.0, 2 * math.pi)
-        for i in range(2, pb.size if kind != "quadratic" else 4, 4):
-            a, b = pb[i], pb[i + 1]
-            pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
+        pb = _turned(p, kind, dphi)
         kb = _model(kind, pb, t, t0, t_ref)
         kb = (kb if in_index else lev.index(kb)) + s_steps * rng.standard_normal(t.size)
         yb = lev.level(np.round(kb))
+        # the law's fit starts from the record's own, turned alike (one solve)
+        start = _turned(fit.params, kind, dphi) if kind == "chirp" else None
         try:
-            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion)
+            fb, _ = _fit_window(t, yb, fit.model, drift, fit.frequency, (), criterion, start)
         except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
                 ZeroDivisionError):
             continue
@@ -679,6 +720,19 @@ def _window_fit(fit: PeriodFit, th, yh) -> PeriodFit:
     drift = fit.selection.get("drift", True)
     t0 = float(th[0])
     tm = float(0.5 * (th[0] + th[-1]))
+    if kind == "chirp":  # the whole record's amplitude law, carried to the window's start
+        visc, _ = _fit_viscous(th, yh, t0, tm, fit.frequency, drift)
+        sg = float(fit.params[5])
+        u0 = math.exp(-2.0 * sg * (t0 - fit.t0))
+        beta, beta2 = float(fit.params[6]) * u0, float(fit.params[7]) * u0 * u0
+        um = math.exp(-2.0 * sg * (tm - t0))
+        w = float(visc.p[4]) - beta * um - beta2 * um * um
+        coef, _ = _linear_amplitudes(th, yh, t0, tm, [w], [sg])
+        free = np.ones(8, bool)
+        free[1] = drift
+        free[6:] = False
+        p0 = np.array([coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w, sg, beta, beta2])
+        return _build(_solve(kind, th, yh, t0, tm, p0, free), th, yh, fit.model, [])
     if kind not in ("two_mode", "three_mode"):
         visc, env = _fit_viscous(th, yh, t0, tm, fit.frequency, drift)
         return _fit_one(fit.model, th, yh, t0, tm, visc, env, drift)
@@ -704,6 +758,8 @@ def _window_periods(fit: PeriodFit, t, y, K: int) -> list[dict]:
         f = _window_fit(fit, t[m], y[m])
         md = next((d for d in f.modes if d["omega"] == f.params[4]), f.modes[0])
         T, s = md["period"], md["std"]
+        if f._kind == "chirp":  # each window's frequency at the whole record's reference amplitude
+            T = 2 * math.pi / (f.params[4] + 2 * math.pi / fit.period - fit.params[4])
         out.append({"t0": float(a), "t1": float(b), "period": float(T), "std": float(s)})
     return out
 
@@ -749,6 +805,109 @@ def _stationarity(fit: PeriodFit, t, y):
     fit.std_nonstationary = tau
     fit.uncertainty["windows_test"] = {"windows": K, "Q": Q, "critical_Q": crit,
                                        "p": float(stats.chi2.sf(Q, K - 1))}
+
+
+def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> PeriodFit:
+    """A viscous fit whose halves disagree (``std_nonstationary > 0``) is
+    refitted with the frequency following the envelope's square
+    (:data:`AMPLITUDE_LAW_MODEL`, :func:`.signal_models._fit_chirp`: a
+    pendulum's ``T = T0 (1 + c A^2)`` as it decays).  The law replaces the
+    fit only when it explains the halves' difference: its ``criterion``
+    (BIC/AIC) is lower, and the split check on its own fit (each half
+    fitted with the law held at the whole record's ``beta``, its period
+    referred to the same amplitude) finds no disagreement beyond noise.
+    The period is then the one at the amplitude the least-squares phase
+    weights (``amplitude_period``, :func:`.signal_result.period_amplitude`)
+    with the fit's own std.  A drift the law cannot explain (a period that
+    changes with time, not with the amplitude) keeps the viscous fit and
+    its between-half std.  ``fit.amplitude_law`` says which (``used``,
+    ``reason``) and holds the law's numbers.  The law's fit keeps the
+    first ``n_general`` notes of ``fit`` (the window's: trimming, a leading
+    rest) and its runner-ups; the viscous fit's notes on itself are
+    replaced by one line."""
+    if fit.std_nonstationary <= 0 or _KIND.get(fit.model, ("",))[0] != "viscous":
+        return fit
+    drift = fit.selection.get("drift", True)
+    t0, tm = float(t[0]), float(0.5 * (t[0] + t[-1]))
+    key = criterion.lower()
+    info: dict = {"used": False, "model": AMPLITUDE_LAW_MODEL, "criterion": criterion,
+                  "without_law": {"model": fit.model, "period": fit.period,
+                                  "std": math.hypot(fit.std, fit.std_nonstationary),  # before quantisation
+                                  "std_nonstationary": fit.std_nonstationary,
+                                  "half_periods": [list(h) for h in fit.half_periods or ()]}}
+    fit.amplitude_law = info
+    # the decay's white-noise std (the chirp's residuals inflate the serial factor)
+    sg, sg_std = float(fit.params[5]), math.sqrt(max(float(fit.covariance[5, 5]), 0.0))
+    if not sg > 3 * sg_std:
+        info["reason"] = (f"the amplitude law was not tried: the envelope does not decay measurably (sigma = "
+                          f"{sg:.3g} +- {sg_std:.2g} 1/s), so an amplitude law cannot be told from a drift")
+        fit.notes.append(f"period changes along the record; {info['reason']}")
+        return fit
+    try:
+        law = _build(_fit_chirp(t, y, t0, tm, fit.params, drift), t, y, AMPLITUDE_LAW_MODEL, [])
+        law.selection["drift"] = bool(drift)
+    except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
+            ZeroDivisionError) as exc:
+        info["reason"] = f"the amplitude law could not be fitted: {exc}"
+        fit.notes.append(f"period changes along the record; {info['reason']}")
+        return fit
+    delta = float(getattr(law, key) - getattr(fit, key))
+    md = law.modes[0]
+    info.update(criterion_delta=delta, beta=md["beta"], beta_std=md["beta_std"], beta2=md["beta2"],
+                beta2_std=md["beta2_std"],
+                reference_amplitude=md["reference_amplitude"], period_zero_amplitude=md["period_zero_amplitude"],
+                period_start=md["period_start"])
+    why = _inadmissible(law)
+    if why is None and not delta < 0:
+        why = f"it does not lower {criterion} ({delta:+.1f})"
+    if why is None and not abs(md["beta"]) >= 3 * md["beta_std"]:
+        why = (f"its frequency shift over the envelope ({md['beta']:.3g} +- {md['beta_std']:.2g} rad/s) is not "
+               "resolved: too little decay to tell an amplitude law from a drift")
+    if why is None:
+        b, b2, s2 = md["beta"], md["beta2"], md["beta2_std"]
+        unit = b * b / float(law.params[4])  # beta2 of a period linear in A^2
+        lo, hi = (1.0 - AMPLITUDE_LAW_D_RANGE[1]) * unit, (1.0 - AMPLITUDE_LAW_D_RANGE[0]) * unit
+        info["curvature_ratio"] = b2 / unit if unit > 0 else float("nan")
+        if not (lo - 3 * s2 <= b2 <= hi + 3 * s2):
+            why = (f"its A^4 term is {info['curvature_ratio']:.3g} x the square of its A^2 term's (1 - d/c^2 "
+                   f"for T = T0 (1 + c A^2 + d A^4), a pendulum's within {1 - AMPLITUDE_LAW_D_RANGE[1]:g}.."
+                   f"{1 - AMPLITUDE_LAW_D_RANGE[0]:g}): the period drifts along the record, not with the amplitude")
+    if why is None:
+        law.notes = []
+        _stationarity(law, t, y)
+        q = law.uncertainty.get("windows_test")
+        if q is None:
+            why = "its own split check could not be made"
+        else:
+            info.update(halves=[list(h) for h in law.half_periods], Q=q["Q"], critical_Q=q["critical_Q"])
+            if law.std_nonstationary > 0:
+                why = (f"its halves still disagree (Q = {q['Q']:.1f} > {q['critical_Q']:.1f}): the period "
+                       "changes along the record by more than the amplitude explains")
+    if why is not None:
+        info["reason"] = f"the amplitude law was not used: {why}"
+        fit.notes.append(f"period changes along the record; {info['reason']}; the between-half std stays")
+        return fit
+    info["used"] = True
+    info["reason"] = (f"the halves' difference follows the envelope's square: {criterion} {delta:+.1f}, halves "
+                      f"agree once referred to one amplitude (Q = {info['Q']:.1f} <= {info['critical_Q']:.1f})")
+    for k in ("selection", "alternatives", "chosen_by", "crossing"):
+        setattr(law, k, getattr(fit, k))
+    law.selection = dict(fit.selection, **{k: v for k, v in law.selection.items() if k == "free_parameters"})
+    law.choice_reason = ((fit.choice_reason + "; ") if fit.choice_reason else "") + \
+        f"then {AMPLITUDE_LAW_MODEL}: {info['reason']}"
+    law.oscillation = fit.oscillation
+    law.amplitude_law = info
+    keep = fit.notes[:n_general] + [n for n in fit.notes[n_general:] if n.startswith("runner-up ")]
+    law.notes = keep + [
+        f"period changes along the record with the amplitude: fitted with the frequency following the "
+        f"envelope's square ({AMPLITUDE_LAW_MODEL}; {fit.model} alone: T = {fit.period:.6f} +- "
+        f"{info['without_law']['std']:.2g} s, "
+        f"halves {', '.join(f'{h[0]:.6f}' for h in (fit.half_periods or ()))} s, between-half std "
+        f"{fit.std_nonstationary:.2g} s); the period is the one at "
+        f"amplitude {md['reference_amplitude']:.4g} (amplitude_period), from {md['period_start']:.6f} s at the "
+        f"window's start to {md['period_zero_amplitude']:.6f} s at zero amplitude"] + law.notes
+    _residual_peaks(law)
+    return law
 
 
 def _compose_std(fit: PeriodFit):

@@ -90,6 +90,7 @@ def _lag1(r) -> float:
 _NAMES = {
     "viscous": ("c0", "c1", "a", "b", "omega_d", "sigma"),
     "quadratic": ("c0", "c1", "a", "b", "omega", "kappa", "sigma"),
+    "chirp": ("c0", "c1", "a", "b", "omega", "sigma", "beta", "beta2"),
     "two_mode": ("c0", "c1", "a1", "b1", "omega1", "sigma1", "a2", "b2", "omega2", "sigma2"),
     "three_mode": ("c0", "c1", "a1", "b1", "omega1", "sigma1", "a2", "b2", "omega2", "sigma2",
                    "a3", "b3", "omega3", "sigma3"),
@@ -152,6 +153,26 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
             J[:, 4] = g * tau * (b * c - a * sn)
             J[:, 5] = -g * E / D * osc
             J[:, 6] = (-tau * g - g * kap * dE / D) * osc
+    elif kind == "chirp":
+        # viscous envelope, frequency following its square u = (A / A0)^2:
+        # omega(tau) = omega + beta u + beta2 u^2, u = exp(-2 sigma tau),
+        # phase omega tau + beta E(2 sigma, tau) + beta2 E(4 sigma, tau)
+        a, b, w, sg, beta, beta2 = p[2:8]
+        e = np.exp(-sg * tau)
+        E2, dE2 = _E(2.0 * sg, tau)
+        E4, dE4 = _E(4.0 * sg, tau)
+        th = w * tau + beta * E2 + beta2 * E4
+        c, sn = np.cos(th), np.sin(th)
+        osc = a * c + b * sn
+        y = y + e * osc
+        if J is not None:
+            dth = e * (b * c - a * sn)  # d(e osc)/d(theta)
+            J[:, 2] = e * c
+            J[:, 3] = e * sn
+            J[:, 4] = dth * tau
+            J[:, 5] = -tau * e * osc + dth * (beta * 2.0 * dE2 + beta2 * 4.0 * dE4)
+            J[:, 6] = dth * E2
+            J[:, 7] = dth * E4
     else:  # pragma: no cover - guarded by fit_period
         raise ValueError(kind)
     return (y, J) if want_jac else y
@@ -160,7 +181,7 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
 def _envelope(kind: str, p, t, t0):
     """Amplitude envelope ([y]) of the (first) oscillation."""
     tau = t - t0
-    if kind in ("viscous", "two_mode", "three_mode"):
+    if kind in ("viscous", "two_mode", "three_mode", "chirp"):
         return math.hypot(p[2], p[3]) * np.exp(-p[5] * tau)
     E, _ = _E(p[6], tau)
     return math.hypot(p[2], p[3]) * np.exp(-p[6] * tau) / (1.0 + p[5] * E)
@@ -316,6 +337,47 @@ def _fit_quadratic(t, y, t0, tm, visc: _Raw, env, drift, viscous_term):
     for p0 in starts:
         raw = _solve("quadratic", t, y, t0, tm, np.array(p0), free, squared=(5, 6))
         if best is None or raw.cost < best.cost:
+            best = raw
+    return best
+
+
+def _fit_chirp(t, y, t0, tm, pv, drift, curvature=True):
+    """The viscous model whose frequency follows the envelope's square (a
+    pendulum's first nonlinear term, ``omega(A) = omega_0 + gamma A^2``):
+    ``omega(tau) = omega + beta exp(-2 sigma tau)``, ``beta = gamma A0^2``
+    the shift at ``t0``.  Started from the viscous fit's parameters
+    ``pv`` (same ``t0``, ``tm``) with
+    ``beta = 0`` and with the ``beta`` the viscous fits of the two halves
+    imply (their frequencies against ``exp(-2 sigma tau)`` at their
+    middles); the lower cost is kept.  With ``curvature`` the frequency
+    has a term in ``A^4`` too (``beta2``, the shift at ``t0``), so the
+    period at the reference amplitude is right to that order whether the
+    frequency or the period is linear in ``A^2`` (they differ there)."""
+    w, sg = float(pv[4]), float(pv[5])
+    free = np.ones(8, bool)
+    free[1] = drift
+    free[7] = curvature
+    starts = [np.r_[pv, 0.0, 0.0]]
+    mid = 0.5 * (t[0] + t[-1])
+    halves = (t <= mid, t >= mid)
+    try:
+        om, u = [], []
+        for m in halves:
+            th, yh = t[m], y[m]
+            rh, _ = _fit_viscous(th, yh, float(th[0]), float(0.5 * (th[0] + th[-1])), w / (2 * math.pi), drift)
+            om.append(float(rh.p[4]))
+            u.append(math.exp(-2.0 * sg * (0.5 * (th[0] + th[-1]) - t0)))
+        if abs(u[0] - u[1]) > 1e-6:
+            beta0 = (om[0] - om[1]) / (u[0] - u[1])
+            w0 = om[0] - beta0 * u[0]
+            coef, _ = _linear_amplitudes(t, y, t0, tm, [w0], [sg])
+            starts.append(np.array([coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w0, sg, beta0, 0.0]))
+    except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError):
+        pass
+    best = None
+    for p0 in starts:
+        raw = _solve("chirp", t, y, t0, tm, p0, free)
+        if best is None or (raw.converged and (not best.converged or raw.cost < best.cost)):
             best = raw
     return best
 

@@ -28,11 +28,17 @@ class PeriodFit:
     ----------
     model : str
         ``viscous``, ``quadratic``, ``quadratic+viscous``, ``two_mode``,
-        ``three_mode`` or ``crossings`` (fallback).
+        ``three_mode``, ``viscous+chirp`` (the viscous model whose
+        frequency follows the envelope's square, ``omega(t) = omega +
+        beta u + beta2 u^2`` with ``u = (A(t) / A(t0))^2``; only in place of
+        a viscous fit whose halves disagree, ``amplitude_law``) or
+        ``crossings`` (fallback).
     period : float
         s, the observed (damped) period ``2 pi / omega`` of the oscillation;
         for ``two_mode`` / ``three_mode`` the mode with the largest
-        amplitude at ``t0``.
+        amplitude at ``t0``; for ``viscous+chirp`` the period at the
+        amplitude ``amplitude_period`` (a stated constant in [y]: its std
+        holds the frequency, ``beta``, ``beta2`` and ``A(t0)``).
     std : float
         s, 1-sigma uncertainty of ``period``:
         ``hypot(max(std_raw * std_inflation, std_quantisation),
@@ -91,6 +97,20 @@ class PeriodFit:
         levels such as pixels converted to an angle) with too little noise
         to dither them (0 otherwise; ``signal._quantisation``); it replaces
         the noise term (with its serial factor) when larger.
+    amplitude_law : dict or None
+        None unless a viscous fit's halves disagreed.  Then ``used`` (bool:
+        the fit is ``viscous+chirp``), ``reason`` (one sentence),
+        ``without_law`` (the viscous fit's ``period``, ``std``,
+        ``std_nonstationary``, ``half_periods``) and, when the law was
+        fitted, ``criterion_delta`` (its BIC/AIC minus the viscous one),
+        ``beta``, ``beta_std``, ``beta2``, ``beta2_std`` (rad/s, the
+        frequency shift at ``t0`` in ``A^2`` and ``A^4``),
+        ``curvature_ratio`` (``beta2 omega / beta^2 = 1 - d/c^2`` for ``T
+        = T0 (1 + c A^2 + d A^4)``), ``reference_amplitude`` ([y],
+        ``amplitude_period``), ``period_zero_amplitude`` and
+        ``period_start`` (s, at zero amplitude and at ``t0``), and its own
+        split check ``halves`` (each half's period at the reference
+        amplitude, with the law held), ``Q``, ``critical_Q``.
     uncertainty : dict
         ``noise``, ``serial_correlation`` (the extra std it adds, s),
         ``quantisation`` (the extra std of an undithered quantised record, s),
@@ -166,6 +186,7 @@ class PeriodFit:
     half_periods: tuple | None = None
     std_nonstationary: float = 0.0
     std_quantisation: float = 0.0
+    amplitude_law: dict | None = None
     uncertainty: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
     residual_check: dict = field(default_factory=dict)
@@ -210,7 +231,7 @@ class PeriodFit:
         """JSON-friendly scalars (no arrays)."""
         keys = ("model", "period", "std", "frequency", "period_undamped", "damping_ratio", "damping",
                 "amplitude", "amplitude_rms", "amplitude_period", "phase", "offset", "drift", "residual_rms", "r_squared", "n_samples",
-                "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "std_quantisation", "uncertainty",
+                "t0", "t1", "std_raw", "std_inflation", "std_nonstationary", "std_quantisation", "amplitude_law", "uncertainty",
                 "lag1_autocorr", "noise_std", "aic", "bic", "converged", "modes", "selection",
                 "chosen_by", "choice_reason", "windows", "residual_check", "oscillation", "notes")
         d = {k: getattr(self, k) for k in keys}
@@ -246,20 +267,27 @@ def _hc_std(raw: _Raw, covf, s2: float, r, dof: int) -> dict:
     serial-correlation factor instead (smooth, deterministic residuals such
     as a sensor's harmonics would make the sandwich overstate the std)."""
     out: dict = {}
-    if not np.all(np.isfinite(covf)) or not s2 > 0:
-        return out
-    fi = np.nonzero(raw.free)[0]
-    A = covf / s2  # (J^T J)^-1
-    n = r.size
+    if not np.all(np.isfinite(covf)) or not s2 > 0 or raw.kind == "chirp":
+        return out  # the chirp's frequency is a combination: _hc_lin_std
     for iw in range(4, raw.p.size, 4):
-        hit = np.nonzero(fi == iw)[0]
-        if hit.size == 0:
-            continue
-        g = raw.J @ A[:, hit[0]]
-        v = float(np.sum((g * r) ** 2)) * n / dof
-        if np.isfinite(v) and v >= 0:
-            out[iw] = math.sqrt(v)
+        if raw.free[iw]:
+            v = _hc_lin_std(raw, covf, s2, r, dof, {iw: 1.0})
+            if np.isfinite(v):
+                out[iw] = v
     return out
+
+
+def _hc_lin_std(raw: _Raw, covf, s2: float, r, dof: int, grad: dict) -> float:
+    """Sandwich std (as :func:`_hc_std`) of the linear combination
+    ``sum grad[i] p[i]`` of the parameters (``grad`` by index into
+    ``raw.p``; fixed parameters ignored); nan when undefined."""
+    if not np.all(np.isfinite(covf)) or not s2 > 0:
+        return float("nan")
+    fi = np.nonzero(raw.free)[0]
+    c = np.array([grad.get(int(i), 0.0) for i in fi])
+    g = raw.J @ (covf / s2 @ c)  # J (J^T J)^-1 c
+    v = float(np.sum((g * r) ** 2)) * r.size / dof
+    return math.sqrt(v) if np.isfinite(v) and v >= 0 else float("nan")
 
 
 def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
@@ -311,11 +339,15 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     p = raw.p
     names = _NAMES[raw.kind]
 
-    def mode(ia, ib, iw, isg):
+    def mode(ia, ib, iw, isg, w=None, sd_w=None):
+        """One damped cosine; ``w`` (rad/s) and its std ``sd_w`` default
+        to the parameter ``p[iw]`` and its std."""
         fac = facs[iw]
-        a, b, w, sg = (float(p[i]) for i in (ia, ib, iw, isg))
+        a, b, sg = (float(p[i]) for i in (ia, ib, isg))
+        w = float(p[iw]) if w is None else w
         T = 2 * math.pi / w
-        sdT_raw = 2 * math.pi / w ** 2 * max(_std(cov, iw), hc.get(iw, 0.0))
+        sd_w = max(_std(cov, iw), hc.get(iw, 0.0)) if sd_w is None else sd_w
+        sdT_raw = 2 * math.pi / w ** 2 * sd_w
         wn = math.hypot(w, sg)
         zeta = sg / wn
         zstd = _grad_std(cov, [iw, isg], [-sg * w / wn ** 3, w ** 2 / wn ** 3])
@@ -330,6 +362,28 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         m = modes[0]
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"],
                    "zeta": m["damping_ratio"], "zeta_std": m["damping_ratio_std"]}
+        T_und = m["period_undamped"]
+    elif raw.kind == "chirp":
+        # the frequency at the amplitude the least-squares phase weights
+        # (period_amplitude of the envelope), a stated constant
+        a, b, w, sg, beta, beta2 = (float(v) for v in p[2:8])
+        A0 = math.hypot(a, b)
+        a_ref = period_amplitude(t, A0 * np.exp(-sg * (t - raw.t0)))
+        u = (a_ref / A0) ** 2 if A0 > 0 else 0.0
+        du = -2.0 * u * (beta + 2.0 * beta2 * u) / A0 ** 2 if A0 > 0 else 0.0  # d(omega)/dA0 / A0
+        grad = {2: du * a, 3: du * b, 4: 1.0, 6: u, 7: u * u}
+        idx = sorted(grad)
+        sd_w = _grad_std(cov, idx, [grad[i] for i in idx])
+        if white and not roundoff:
+            sd_w = max(sd_w, _hc_lin_std(raw, covf, s2, r, dof, grad))
+        modes = [mode(2, 3, 4, 5, w=w + beta * u + beta2 * u * u, sd_w=sd_w)]
+        m = modes[0]
+        bstd = _std(cov, 6) * infl
+        damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"],
+                   "zeta": m["damping_ratio"], "zeta_std": m["damping_ratio_std"]}
+        m.update(reference_amplitude=a_ref, beta=beta, beta_std=bstd,
+                 beta2=beta2, beta2_std=_std(cov, 7) * infl if raw.free[7] else 0.0,
+                 period_zero_amplitude=2 * math.pi / w, period_start=2 * math.pi / (w + beta + beta2))
         T_und = m["period_undamped"]
     elif multi:
         modes = [mode(i, i + 1, i + 2, i + 3) for i in range(2, p.size, 4)]
