@@ -257,7 +257,10 @@ def test_the_cylinders_swing_drift_is_not_an_amplitude_change():
     rest = rest_pose(sc)
     ms = linear_modes(sc, rest)
     r = simulate(sc, "swing-y", 4e-5, 100, rest=rest, modes=ms, method="auto")
-    assert r.energy_drift > r.energy_drift_resolution  # printed as drift
+    # the drift itself is rounding-level at this amplitude: 6.8e-3 (above its resolution, printed as a drift)
+    # under one BLAS kernel, 6e-5 (below it) under another (OPENBLAS_CORETYPE=Sandybridge); either way the
+    # checks below hold and nothing warns
+    assert math.isfinite(r.energy_drift) and r.energy_drift < 0.1
     y = r.y.copy()
     y[:, :3] -= rest.com
     E = mx.energy(y, mx.params_from_scenes(sc))  # oscillation energy: kinetic + m g (z - z_rest)
