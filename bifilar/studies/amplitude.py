@@ -5,7 +5,7 @@ amplitude, and what leaving it out of ``invert`` costs
 The sweep's sigma of a component is the std ``bifilar invert --period
 MODE=T+-s --amplitude A --solve-for C`` prints for the period ``T`` timed
 at the sweep's amplitude ``A`` (its default 10 % relative uncertainty
-budgeted: :func:`bifilar.studies.point.stated_amplitude_budget`).  Told
+budgeted: :func:`bifilar.studies.point_amplitude.stated_amplitude_budget`).  Told
 nothing about the amplitude, ``invert`` budgets a release anywhere in 0 to
 :data:`~bifilar.estimation.budget.DEFAULT_AMPLITUDE_RANGE_DEG` degrees
 (a systematic term of its own) and prints a larger std: that std is

@@ -47,7 +47,8 @@ import numpy as np
 from ..errors import BifilarError, InputError
 from ..estimation.invert import std_unavailable_text
 from ..estimation.sensitivity import input_sigma
-from .point import IDENTIFIABLE_MIN, component_scale, point_uncertainty
+from .limits import component_scale
+from .point import IDENTIFIABLE_MIN, point_uncertainty
 from .remedy import HANGINGS, hanging_config, hanging_sensitivity, reference_column, rotation
 from .settings import _IDX, SweepSettings
 from .shorthands import apply_params
@@ -317,7 +318,7 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components
     (invert's default 10 %) adds to the period, ``(T_lin A dr/dA rel)^2``
     with the slope of the mode's amplitude law (a second run at
     :data:`~bifilar.estimation.solve.STATED_LAW_RATIO` of ``A``, as invert's;
-    :func:`bifilar.studies.point.stated_amplitude_budget`), and the
+    :func:`bifilar.studies.point_amplitude.stated_amplitude_budget`), and the
     factor's derivative in each of ``components`` (reference body axes, 1 /
     kg m^2; a run with the component stepped by
     :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment, as

@@ -37,7 +37,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import BifilarError
-from .point import IDENTIFIABLE_MIN, _one_line, component_scale, predicted_budget, point_sensitivity, rig_of
+from .limits import component_scale
+from .point import IDENTIFIABLE_MIN, _one_line, predicted_budget, point_sensitivity, rig_of
 from .settings import _IDX, SweepSettings
 from .shorthands import apply_params
 

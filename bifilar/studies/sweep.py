@@ -19,7 +19,7 @@ the body axes of the point's scene):
   (:func:`~bifilar.studies.point.predicted_budget`, for the point's
   uncertainties: the settings', or a swept ``uncertainty.KEY``; the
   period timed at the point's amplitude and that amplitude stated to
-  ``invert`` with its default 10 %, :func:`~bifilar.studies.point.stated_amplitude_budget`,
+  ``invert`` with its default 10 %, :func:`~bifilar.studies.point_amplitude.stated_amplitude_budget`,
   the small-amplitude figure in ``amplitude_budget``), the
   variance shares by kind, the modes its period depends on
   (``from_modes``: ``|d ln T / d ln I|`` per mode), the separation of its

@@ -1,0 +1,232 @@
+"""A sweep point's stated amplitude: the sigma ``invert --period MODE=T
+--amplitude A`` prints, from the small-amplitude budget, the point's
+nonlinear run (the amplitude factor) and the mode's amplitude law (its
+slope, from a run at :data:`~bifilar.estimation.solve.STATED_LAW_RATIO` of
+the amplitude, and the factor's derivative in the component, from a run of
+the scene with the component stepped), run as ``invert`` runs them.  SI
+units.  Split from :mod:`bifilar.studies.point`, which calls
+:func:`_law_runs` (with its own runs) and :func:`_stated_amplitude`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import BifilarError
+from .limits import component_scale, physical_limits
+from .settings import _IDX, SweepSettings
+
+if TYPE_CHECKING:
+    from .point import _Prepared
+
+
+def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: float | None = None,
+                            dr_dI: float = 0.0):
+    """The budget ``invert --period MODE=T --amplitude A`` prints (one
+    period, one unknown, the nonlinear rung) from the small-amplitude one
+    (``--amplitude 0``) of the same component and mode: ``budget`` (a
+    :class:`~bifilar.estimation.sensitivity.Budget`, its ``value_sigma``
+    the honest std, kg m^2), ``T_lin`` the mode's linear period (s), ``r =
+    T(A) / T_lin`` the amplitude factor at the stated amplitude ``A``,
+    ``rel`` the amplitude's relative standard uncertainty (invert's default
+    :data:`~bifilar.estimation.uncertainty.DEFAULT_AMPLITUDE_REL` for an
+    ``--amplitude`` without ``+-``), ``slope`` = ``A dr/dA`` from the
+    mode's amplitude law (:class:`~bifilar.estimation.solve.AmplitudeLaw`;
+    None: the quadratic rule's ``2 (r - 1)``, only for a caller without the
+    law's run) and ``dr_dI`` the factor's derivative in the component
+    (1 / kg m^2; invert's forward difference, see
+    :func:`~bifilar.estimation.solve.stated_amplitude_law`).
+
+    The nonlinear rung fits ``T_lin(I) r(A; I) = T``
+    (:mod:`bifilar.estimation.budget`, ``_budget``): the period's derivative
+    in ``I`` is ``g dT_lin/dI`` with ``g = r + T_lin dr_dI dI/dT``, so the
+    timing's contribution ``s_T / (g dT/dI)`` is the small-amplitude one
+    divided by ``g``, the stated amplitude's own uncertainty ``s_A = rel A``
+    adds ``T_lin (dr/dA) s_A / (g dT/dI)`` = ``|slope rel T_lin dI/dT /
+    g|``, and an input's contribution is unchanged (the factor taken to
+    depend on the inputs as on the unknown: ``budget._with_factor_gain``).
+    The second-order terms (re-solved sigma points) are those of the
+    small-amplitude budget (the factor cancels in them), so the same change
+    applies to the honest std.  Returns (std, timing contribution, amplitude
+    contribution, variance shares by kind), kg m^2."""
+    c_t = float(budget.contributions["timing"])
+    g = r + T_lin * dr_dI * float(budget.dI_dT)
+    slope = 2.0 * (r - 1.0) if slope is None else slope
+    c_a = abs(slope * rel * T_lin * float(budget.dI_dT) / g)
+    sd = float(budget.value_sigma)
+    var = sd * sd - c_t * c_t * (1.0 - 1.0 / (g * g)) + c_a * c_a
+    lin = {k: float(c) for k, c in budget.contributions.items()}
+    lin["timing"] = c_t / g
+    lin["amplitude"] = c_a
+    tot = sum(c * c for c in lin.values())
+    shares = {k: (c * c / tot if tot > 0 else 0.0) for k, c in lin.items()}
+    return math.sqrt(max(var, 0.0)), c_t / g, c_a, shares
+
+
+@dataclass
+class _LawRuns:
+    """The runs of a point's amplitude laws (:func:`_amplitude_laws`), SI:
+    per timed mode one at :data:`~bifilar.estimation.solve.STATED_LAW_RATIO`
+    of the amplitude (``modes``, mode indices), then per component one of
+    the scene with it stepped by ``h`` (kg m^2) at the amplitude
+    (``comps``: (component, mode index)); ``scenes`` .. ``mode_sets`` the
+    :func:`~bifilar.analysis.batch.simulate_batch` arguments in that order,
+    ``starts`` their start poses once solved (with the point's own, one
+    call: :func:`~bifilar.analysis.simulate.checked_start_poses`'s
+    ``more``), ``runs`` the runs once run (beside the point's own:
+    :func:`_evaluate`, :func:`_runs_at`)."""
+
+    comps: list
+    modes: list
+    h: float
+    scenes: list
+    labels: list
+    amplitudes: list
+    rests: list
+    mode_sets: list
+    starts: Any = None
+    runs: Any = None
+
+
+def _law_runs(scene, rest, ms, labels, chosen: dict, amplitude: float, at=None) -> _LawRuns:
+    """What :func:`_amplitude_laws` runs for the components ``chosen``
+    {component: mode index} (each stepped as invert's
+    :func:`~bifilar.estimation.solve.stated_amplitude_law` steps it:
+    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment).
+    ``at``: the point's :func:`_stiffness` (the stepped scenes' modes from
+    its eigenproblem, the same bits as their own ``linear_modes``), else
+    each stepped scene's ``linear_modes``."""
+    from dataclasses import replace
+
+    from ..analysis.modes import linear_modes
+    from ..estimation.solve import FACTOR_STEP, STATED_LAW_RATIO
+
+    comps = list(chosen.items())
+    modes = sorted({k for _, k in comps})
+    h = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(scene.inertia)))
+    stepped = []
+    for c, _ in comps:
+        I = np.array(scene.inertia, float)
+        i, j = _IDX[c]
+        I[i, j] += h
+        if i != j:
+            I[j, i] += h
+        sc = replace(scene, inertia=I)
+        stepped.append((sc, at(I) if at is not None else linear_modes(sc, rest)))
+    n = len(modes) + len(comps)
+    return _LawRuns(comps, modes, h, [scene] * len(modes) + [sc for sc, _ in stepped],
+                    [labels[k] for k in modes] + [labels[k] for _, k in comps],
+                    [STATED_LAW_RATIO * amplitude] * len(modes) + [amplitude] * len(comps), [rest] * n,
+                    [ms] * len(modes) + [m for _, m in stepped])
+
+
+def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
+    """{component: (A dr/dA, dr/dI)} of every component whose mode has a
+    run at the point's amplitude: the law's second run at
+    :data:`~bifilar.estimation.solve.STATED_LAW_RATIO` of the amplitude
+    per mode, and one run per component with it stepped by
+    :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment (as
+    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`;
+    :func:`_law_runs`), as the point's own runs (periods, rtol): run with
+    them if :func:`_evaluate` did (``pre.law.runs``), else in one call of
+    the batched engine from the start poses solved with the point's
+    (``pre.law.starts``); a component whose runs fail is left out (its
+    sigma then says so)."""
+    from ..estimation.solve import STATED_LAW_RATIO, amplitude_law
+
+    law = pre.law
+    if law is None:
+        law = _law_runs(pre.scene, pre.rest, pre.ms, pre.labels, pre.chosen, pre.amplitude, pre.at)
+    comps = [(n, c, k) for n, (c, k) in enumerate(law.comps) if sims.get(k) is not None and sims[k].period]
+    if not comps:
+        return {}
+    runs = law.runs
+    if runs is None:
+        try:
+            runs = _runs_at(law, st)
+        except BifilarError:
+            return {}
+    out = {}
+    for n, c, k in comps:
+        half, step = runs[law.modes.index(k)], runs[len(law.modes) + n]
+        if half.error or step.error or not half.period or not step.period:
+            continue
+        r = sims[k].period / float(pre.periods[k])
+        fit = amplitude_law(pre.amplitude, r, STATED_LAW_RATIO, half.period / float(pre.periods[k]))
+        out[c] = (pre.amplitude * fit.slope(), (step.period / step.linear_period - r) / law.h)
+    return out
+
+
+def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
+    """The runs of ``law`` (errors returned per run, from ``law.starts`` if
+    solved), then only their periods read: run without the health figures
+    (``simulate_batch(..., health=False)``: the same steps and samples, so
+    the same periods, tests/test_point_cost.py), all in one call (its runs
+    of the point's scene share that scene's parameters and kernels, and
+    every run's crossings are taken in one pass,
+    :func:`~bifilar.analysis.batch.simulate_batch`).  ``own``: (scene, rest,
+    mode set, labels, amplitude, their start poses) of the point's own
+    runs, run first in a call of their own with their health (which the
+    law's runs no longer share: their health was computed and not read);
+    returns the point's runs, then the law's."""
+    from ..analysis.batch import simulate_batch
+
+    def call(scenes, labels, amps, rests, mss, starts, health):
+        if not scenes:
+            return []
+        return simulate_batch(scenes, mode=labels, amplitude=amps, periods=st.periods, rtol=st.rtol, rests=rests,
+                              modes=mss, errors="return", starts=starts, health=health)
+
+    first = []
+    if own is not None:
+        scene, rest, ms, own_labels, amplitude, own_starts = own
+        n = len(own_labels)
+        first = call([scene] * n, list(own_labels), [amplitude] * n, [rest] * n, [ms] * n, own_starts, True)
+    return first + call(law.scenes, law.labels, law.amplitudes, law.rests, law.mode_sets, law.starts, False)
+
+
+def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings) -> None:
+    """Each component's sigma for the amplitude stated to ``invert`` (the
+    point's nonlinear run gives the amplitude factor, :func:`_amplitude_laws`
+    its slope and its derivative in the component;
+    :func:`stated_amplitude_budget`), the small-amplitude figure kept in
+    ``amplitude_budget``; without a run (``--no-tensions``, a planner's
+    screen without runs) the sigma stays the small-amplitude one and
+    ``amplitude_budget.budgeted`` is false."""
+    from ..estimation.sensitivity import Budget, grouped_shares
+    from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+
+    laws = _amplitude_laws(pre, sims, st)
+    for comp, k in pre.chosen.items():
+        e = res["components"][comp]
+        b = pre.budgets[comp]
+        sd0 = float(b.value_sigma)
+        run = sims.get(k)
+        T_lin = float(pre.periods[k])
+        r = run.period / T_lin if run is not None and run.period else None
+        info = {"amplitude": pre.amplitude, "relative_std": DEFAULT_AMPLITUDE_REL, "budgeted": False,
+                "period_factor": r, "contribution": None,
+                "sigma_small_amplitude": sd0 if math.isfinite(sd0) else None,
+                "rel_sigma_small_amplitude": e["rel_sigma"] if math.isfinite(sd0) else None}
+        e["amplitude_budget"] = info
+        if r is None or not math.isfinite(sd0) or comp not in laws:
+            info["note"] = ("no nonlinear run at this point: the sigma is for a small amplitude stated as such "
+                            "(invert --amplitude 0)" if r is None else "no sigma" if not math.isfinite(sd0) else
+                            "the amplitude law's runs failed: the sigma is for a small amplitude stated as such "
+                            "(invert --amplitude 0)")
+            continue
+        slope, dr_dI = laws[comp]
+        sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI)
+        info.update(budgeted=True, contribution=c_a, slope=slope, quadratic_slope=2.0 * (r - 1.0),
+                    factor_gain=r + T_lin * dr_dI * float(b.dI_dT))
+        scale = component_scale(pre.scene.inertia, comp)
+        e.update(sigma=sd, rel_sigma=sd / scale if scale else math.inf,
+                 shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))
+        e.pop("physical_limit", None)
+        e.update(physical_limits(pre.scene.inertia, comp, Budget(comp, b.mode, sd, {"timing": c_t}, shares,
+                                                                 b.dI_dT, b.rel_sensitivity),
+                                 interval=e["physical_interval"]))
