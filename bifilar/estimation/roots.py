@@ -529,6 +529,44 @@ def _sampled_periods(pb: Problem) -> list[np.ndarray]:
     return [T[:, k][np.isfinite(T[:, k])] for k in range(T.shape[1])]
 
 
+#: an unknown whose timing-only std at the best fit exceeds this fraction of its scale
+#: (:meth:`~bifilar.estimation.problem.Problem.scales`: the largest moment, or 1 % of the longest
+#: wire for a CoM coordinate) is named as barely determined in a refusal
+LOOSE_UNKNOWN = 0.1
+
+
+def loosely_determined(pb: Problem, p) -> list[tuple[str, float]]:
+    """[(unknown, std)] of the unknowns the measured periods barely fix at
+    ``p``: the linear least-squares std from the timing stds alone (kg m^2
+    or m) above :data:`LOOSE_UNKNOWN` of the unknown's scale, largest
+    first; [] where the Jacobian cannot be formed or inverted."""
+    sig = np.array([m.std for m in pb.measurements], float)
+    try:
+        J = pb.jacobian(np.asarray(p, float)) / sig[:, None]
+        std = np.sqrt(np.diag(np.linalg.pinv(J.T @ J)))
+    except (BifilarError, np.linalg.LinAlgError, ValueError):
+        return []
+    sc = pb.scales()
+    loose = [(n, float(s)) for n, s, c in zip(pb.unknowns, std, sc) if np.isfinite(s) and s > LOOSE_UNKNOWN * c]
+    return sorted(loose, key=lambda x: -x[1] / sc[pb.unknowns.index(x[0])])
+
+
+def _loose_hint(pb: Problem) -> str:
+    """The refusal's advice: the unknowns the periods barely determine at
+    the config's values (the starting guess ``pb.prior``; at a failed best
+    fit the Jacobian is often near singular) first, then the periods and
+    the config."""
+    loose = loosely_determined(pb, pb.prior)
+    if not loose:
+        return "check the periods, their modes and the config, or solve for other components"
+    unit = {n: ("m" if n.startswith("com.") else "kg m^2") for n, _ in loose}
+    names = " and ".join(n for n, _ in loose)
+    stds = ", ".join(f"{n} +-{s:.2g} {unit[n]}" for n, s in loose)
+    return (f"the periods barely determine {names} (from the timing alone, at the config's values: {stds}), so the timing's and "
+            "the inputs' errors move them far: measure them and solve for fewer components, or add modes or "
+            "hangings that depend on them; else check the periods, their modes and the config")
+
+
 def _sampled_slip(pb: Problem, k: int) -> str:
     """:func:`slip_hint` for measurement ``k`` when its period lies outside
     the range its mode spans over the start design, else ``""``."""
@@ -623,8 +661,7 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None) -> list[Root]:
                    for m, zk in zip(pb.measurements, z))
     raise InputError(pb.measurements[k].field,
                      f"no physical tensor reproduces the measured periods: the best admissible fit ({vals}) "
-                     f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); check the "
-                     "periods, their modes and the config, or solve for other components" + _sampled_slip(pb, k))
+                     f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); " + _loose_hint(pb) + _sampled_slip(pb, k))
 
 
 def separating_measurement(pbs: list, roots: list, sigma: float) -> dict | None:
