@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
 from .settings import Constraints
@@ -210,9 +211,28 @@ def pareto_front(points: list[dict], target: str | None, among=None) -> list[int
     return front
 
 
-def assess(points: list[dict], constraints: Constraints, target: str | None) -> dict:
+def assess(points: list[dict], constraints: Constraints, target: str | None, hangings: bool = False) -> dict:
     """Mark each point ``feasible`` / ``violations`` / ``objective`` / ``rank``
     (in place) and return the recommendation document.
+
+    ``hangings``: the experiment times the multi-hanging plan, which applies
+    ``min_separation`` to each mode it times.  When no point's own hanging
+    meets ``min_separation``, the points are assessed again without that
+    guard (``separation_guard`` ``"multi_hanging"``; else
+    ``"planned_hanging"``) and the hangings plan at the recommended point
+    must time only separated modes
+    (:func:`bifilar.studies.hangings.check_separated`).
+    """
+    doc = _assess(points, constraints, target)
+    doc["separation_guard"] = "planned_hanging"
+    if hangings and doc.get("binding") == CONSTRAINT_FLAGS["min_separation"]:
+        doc = _assess(points, replace(constraints, min_separation=None), target)
+        doc.update(constraints=constraints.describe(), separation_guard="multi_hanging")
+    return doc
+
+
+def _assess(points: list[dict], constraints: Constraints, target: str | None) -> dict:
+    """:func:`assess` under ``constraints`` as given.
 
     Without a target the objective is the worst of the measurable components
     (:func:`measurable_components`); ``identifiability`` says per component
