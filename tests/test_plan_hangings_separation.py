@@ -77,6 +77,7 @@ def test_plan_hangings_times_only_separated_modes(tmp_path):
     assert mh["not_identified"] == [] and mh["min_separation"] == MIN_SEP and len(mh["hangings"]) >= 2
     gaps = _timed_gaps(wm)
     assert len(gaps) == len(mh["measurements"]) >= 3
+    assert "time these modes only: each is at least 2 % (--min-separation)" in wm.read_text()
     assert all(g >= MIN_SEP for _, _, g in gaps), gaps
     # the single hanging's advice keeps only its separated modes (its swings are 0.3 % apart) ...
     periods = doc["optimum"]["periods"]

@@ -169,7 +169,9 @@ def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, con
         click.echo(f"warning: {warnings[0]}", err=True)
     doc["multi_hanging"] = hp.to_json()
     if wm_p:
-        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}",
+        sep = ([f"time these modes only: each is at least {100 * cons.min_separation:g} % (--min-separation) from "
+                "every other mode of its hanging"] if cons.min_separation else [])
+        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}", *sep,
                                                      "the periods are the PLANNED ones (the config's inertia): "
                                                      "replace them with the measured periods",
                                                      f"then: bifilar invert --measurements {wm_p.name}"])
