@@ -102,7 +102,7 @@ def test_plan_hangings_ranks_by_the_multi_hanging_plan():
     worse (0.41 % against 0.23 %)."""
     from bifilar.config import read_yaml
     from bifilar.studies import sweep as sw
-    from bifilar.studies.plan import hangings_objective
+    from bifilar.studies.hangings import hangings_objective
 
     code, out, err = run("plan", *ARGS, "--param", "spacing=0.8:1.6", "--hangings", "--json")
     assert code == 0, err
@@ -130,16 +130,31 @@ def test_plan_hangings_that_cannot_separate_refuses_in_one_line(tmp_path):
 
 def test_sweep_hangings_recommends_and_times_only_separated_modes(tmp_path):
     """The same for sweep: before, no point was feasible and --hangings
-    exited 2 ("no recommended point to plan the hangings at")."""
+    exited 2 ("no recommended point to plan the hangings at").  Spacing
+    0.8 and 1.6: the points' own (swing) figures prefer 0.8, the hangings
+    plan 1.6."""
     wm = tmp_path / "planned.yaml"
     code, out, err = run("sweep", *ARGS, "--param", "spacing=0.8:1.6:2", "--hangings", "--write-measurements", wm,
                          "--json")
     assert code == 0, err
     rec = json.loads(out)["recommendation"]
     assert rec["best"] is not None and rec["separation_guard"] == "multi_hanging"
+    # ranked by the plan that is timed: the multi-hanging plan's worst sigma (--no-tensions: as ranked)
+    points = json.loads(out)["points"]
+    worst = max(a["rel_sigma"] for a in rec["multi_hanging"]["accuracy"].values())
+    assert rec["hangings_objective"] == pytest.approx(worst, rel=1e-9)
+    assert all(worst <= p["hangings_objective"] * (1 + 1e-9) for p in points)
     assert rec["multi_hanging"]["not_identified"] == []
     assert all(g >= MIN_SEP for _, _, g in _timed_gaps(wm))
     assert yaml.safe_load(wm.read_text())["solve_for"] == ["Ixx", "Iyy", "Izz"]
+
+
+def test_sweep_hangings_that_cannot_separate_refuses_in_one_line():
+    code, out, err = run("sweep", *ARGS, "--param", "spacing=0.8:1.6:2", "--hangings", "--min-separation", 0.5,
+                         "--json")
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: --min-separation: ") and "0.5" in lines[0], err
 
 
 def test_sweep_without_hangings_keeps_no_recommendation():

@@ -326,7 +326,10 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         sw.write_points_csv(out_p, points, names, list(settings.components))
         journal.unlink(missing_ok=True)
 
-    rec = sw.assess(points, cons, target, hangings=hangings)
+    from ..studies.hangings import hangings_objective
+
+    rec = sw.assess(points, cons, target, hangings=(lambda p: hangings_objective(
+        cfg, config, p["params"], settings, cons.min_separation, target)) if hangings else None)
     if not rec["n_valid"]:
         # nothing to rank, draw or recommend: refuse as `plan` does; the CSV keeps every point's reason
         if out_p:
@@ -346,7 +349,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:
-        raise InputError("--hangings", "no recommended point to plan the hangings at: " + rec["reason"])
+        raise InputError(rec["binding"] if rec["separation_guard"] == "multi_hanging" else "--hangings",
+                         "no recommended point to plan the hangings at: " + rec["reason"])
     if wc_p:
         if rec.get("best") is None:
             raise InputError("--write-config", "no recommended point to write: " + rec["reason"])

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from dataclasses import replace as _replace
 
 import numpy as np
 
@@ -317,6 +318,23 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                        undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing])
 
 
+def hangings_objective(base_cfg: dict, source: str, params: dict, settings: SweepSettings,
+                       min_separation: float | None, target: str | None) -> float:
+    """The relative standard uncertainty of ``target`` (or the worst of the
+    components) by the multi-hanging plan at ``params``
+    (:func:`bifilar.studies.hangings.plan_hangings`, small amplitude: no
+    nonlinear runs, as the hangings' selection ranks them), each timed
+    mode at least ``min_separation`` from the other modes of its hanging;
+    inf when that plan leaves a component unidentified or without a sigma."""
+    hp = plan_hangings(base_cfg, source, params, _replace(settings, tensions=False), list(settings.components),
+                       min_separation)
+    if hp.missing:
+        return math.inf
+    acc = hp.accuracy()
+    vals = [acc[c]["rel_sigma"] for c in ([target] if target else settings.components)]
+    return float(max(vals)) if all(math.isfinite(v) for v in vals) else math.inf
+
+
 def check_separated(plan: HangingPlan) -> None:
     """Refuse (:class:`InputError` on ``--min-separation``) a plan that
     leaves a component unidentified because every mode of the hangings
@@ -458,5 +476,5 @@ def close_modes_warning(point: dict, min_separation: float, what: str = "the poi
             f"not the point's own modes closer than that: {modes}")
 
 
-__all__ = ["HangingPlan", "candidate_hangings", "check_separated", "close_modes_warning", "describe", "joint_covariance", "measurements_document",
+__all__ = ["HangingPlan", "candidate_hangings", "check_separated", "close_modes_warning", "describe", "hangings_objective", "joint_covariance", "measurements_document",
            "plan_hangings"]

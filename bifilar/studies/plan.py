@@ -53,7 +53,7 @@ With ``hangings`` (``plan --hangings``: the multi-hanging plan is what is
 timed) and no point whose own hanging meets ``min_separation`` (the
 degenerate swings of a symmetric trifilar), the search is run again without
 that guard and the points it evaluated are ranked by their multi-hanging
-plan (:func:`hangings_objective`), which applies the guard to every mode it
+plan (:func:`~bifilar.studies.hangings.hangings_objective`), which applies the guard to every mode it
 times (``separation_guard`` ``"multi_hanging"``).
 
 Deterministic: no random numbers, so the same inputs give the same plan.
@@ -212,30 +212,11 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
                    active=_active(best, relaxed, bounds), hangings_objective=hob)
 
 
-def hangings_objective(base_cfg: dict, source: str, params: dict, settings: SweepSettings,
-                       min_separation: float | None, target: str | None) -> float:
-    """The relative standard uncertainty of ``target`` (or the worst of the
-    components) by the multi-hanging plan at ``params``
-    (:func:`bifilar.studies.hangings.plan_hangings`, small amplitude: no
-    nonlinear runs, as the hangings' selection ranks them), each timed
-    mode at least ``min_separation`` from the other modes of its hanging;
-    inf when that plan leaves a component unidentified or without a sigma."""
-    from .hangings import plan_hangings
-
-    hp = plan_hangings(base_cfg, source, params, replace(settings, tensions=False), list(settings.components),
-                       min_separation)
-    if hp.missing:
-        return math.inf
-    acc = hp.accuracy()
-    vals = [acc[c]["rel_sigma"] for c in ([target] if target else settings.components)]
-    return float(max(vals)) if all(math.isfinite(v) for v in vals) else math.inf
-
-
 def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: SweepSettings,
                        relaxed: Constraints, min_separation: float | None) -> tuple[dict | None, float | None]:
     """Of the points the search without the separation guard evaluated
     (``relaxed``: feasible otherwise), the one whose multi-hanging plan
-    (:func:`hangings_objective`, ``min_separation`` applied to its timed
+    (:func:`~bifilar.studies.hangings.hangings_objective`, ``min_separation`` applied to its timed
     modes) is the most accurate, evaluated in full (its ``objective`` the
     planned hanging's own, as without hangings), and that plan's
     objective; (None, None) when no plan identifies every component
@@ -244,6 +225,8 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     target, among = res.target, res.among
     cands = [p for p in res.evaluated if p.get("valid") and not violations(p, relaxed, target)
              and math.isfinite(objective(p, target, among))]
+    from .hangings import hangings_objective
+
     score = {id(p): hangings_objective(base_cfg, source, p["params"], settings, min_separation, target)
              for p in cands}
     keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
