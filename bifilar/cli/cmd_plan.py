@@ -53,14 +53,19 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     wc_p = check_output_path(write_config, force, [config], "--write-config")
     wm_p = check_output_path(write_measurements, force, [config, write_config], "--write-measurements")
     with progress_bar("planning", enabled=True) as upd:
-        res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_)
+        res = run_plan(cfg, config, bounds, settings, cons, target, workers=workers, progress=upd, zip_=zip_,
+                       hangings=hangings)
     doc = res.to_json()
-    doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point")
-    doc["settings"] = settings.describe()
-    doc["how_to_time"] = timing_advice(res.best, reaction, sensor)
-    doc["amplitude_advice"] = amplitude_advice(cfg, config, res.best, settings)
+    deferred = res.separation_guard == "multi_hanging"  # --min-separation left to the hangings plan
     ident = doc["identifiability"]
     need = [c for c, e in ident.items() if not e["identifiable"]]
+    # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
+    mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
+                                hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
+    doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point") + mh_warnings
+    doc["settings"] = settings.describe()
+    doc["how_to_time"] = timing_advice(res.best, reaction, sensor, cons.min_separation if deferred else None)
+    doc["amplitude_advice"] = amplitude_advice(cfg, config, res.best, settings)
     if need:
         from ..studies.remedy import add_remedies
 
@@ -68,8 +73,6 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     if wc_p:
         write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
         doc["config_written"] = str(wc_p)
-    multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor, hangings or bool(need), wm_p,
-                  "bifilar plan")
     if as_json:
         emit_json(doc)
         return
@@ -85,7 +88,12 @@ def _render(cfg, res, settings, doc) -> None:
     for n, lo, hi in res.bounds:
         con.print(f"  {esc(n)} = {b['params'][n]:.6g}   (searched {lo:g} .. {hi:g})")
     what = f"the target {res.target}" if res.target else "the worst component"
-    con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
+    if res.hangings_objective is not None:  # ranked by the multi-hanging plan (--min-separation left to it)
+        con.print(f"  predicted relative uncertainty of {what}: {_pct(res.hangings_objective)} % by the multi-hanging "
+                  f"plan below (small amplitude; no hanging as planned meets --min-separation, so the points were "
+                  f"ranked by it); the planned hanging alone: {_pct(b['objective'])} %")
+    else:
+        con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:
         con.print("  limited by: " + esc("; ".join(res.active)))
     t = Table(title="expected accuracy of each inertia component",

@@ -149,21 +149,34 @@ def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> N
 
 
 def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
-                  wm_p, who: str) -> None:
+                  wm_p, who: str, deferred: dict | None = None) -> list[str]:
     """Add the multi-hanging plan at ``params`` to ``doc`` (when ``wanted``
-    or a measurements file is asked for) and write that file."""
+    or a measurements file is asked for) and write that file.  ``deferred``:
+    the planned point, when the search left ``--min-separation`` to this
+    plan (``separation_guard`` ``multi_hanging``): a plan that cannot meet
+    it exits 2, and the warning returned (also logged) names the point's
+    own modes not to time."""
     if not (wanted or wm_p):
-        return
-    from ..studies.hangings import measurements_document, plan_hangings
+        return []
+    from ..studies.hangings import check_separated, close_modes_warning, measurements_document, plan_hangings
 
     hp = plan_hangings(cfg, config, params, settings, list(settings.components), cons.min_separation, reaction, sensor)
+    warnings = []
+    if deferred is not None:
+        check_separated(hp)
+        warnings = [close_modes_warning(deferred, cons.min_separation,
+                                        "the planned point" if who == "bifilar plan" else "the recommended point")]
+        click.echo(f"warning: {warnings[0]}", err=True)
     doc["multi_hanging"] = hp.to_json()
     if wm_p:
-        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}",
+        sep = ([f"time these modes only: each is at least {100 * cons.min_separation:g} % (--min-separation) from "
+                "every other mode of its hanging"] if cons.min_separation else [])
+        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}", *sep,
                                                      "the periods are the PLANNED ones (the config's inertia): "
                                                      "replace them with the measured periods",
                                                      f"then: bifilar invert --measurements {wm_p.name}"])
         doc["measurements_written"] = str(wm_p)
+    return warnings
 
 
 def render_multi_hanging(con, doc: dict) -> None:
@@ -180,12 +193,15 @@ def render_multi_hanging(con, doc: dict) -> None:
                   f"(bifilar invert --measurements {doc['measurements_written']})")
 
 
-def timing_advice(point: dict, reaction: float, sensor) -> list[dict]:
+def timing_advice(point: dict, reaction: float, sensor, min_separation: float | None = None) -> list[dict]:
     """How to time the point's modes to reach its assumed timing sigma
-    (:func:`bifilar.studies.timing.how_to_time`)."""
+    (:func:`bifilar.studies.timing.how_to_time`); ``min_separation``: only
+    the modes at least that far from the others (the search left the guard
+    to the multi-hanging plan, whose measurements say how to time the rest)."""
     from ..studies.timing import how_to_time
 
-    return how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
+    rows = how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
+    return [r for r in rows if not min_separation or r["separation"] is None or r["separation"] >= min_separation]
 
 
 def amplitude_advice(cfg: dict, source: str, point: dict, settings) -> dict:
@@ -310,7 +326,10 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         sw.write_points_csv(out_p, points, names, list(settings.components))
         journal.unlink(missing_ok=True)
 
-    rec = sw.assess(points, cons, target)
+    from ..studies.hangings import hangings_objective
+
+    rec = sw.assess(points, cons, target, hangings=(lambda p: hangings_objective(
+        cfg, config, p["params"], settings, cons.min_separation, target)) if hangings else None)
     if not rec["n_valid"]:
         # nothing to rank, draw or recommend: refuse as `plan` does; the CSV keeps every point's reason
         if out_p:
@@ -320,13 +339,18 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     remedies_for(rec, points, cfg, config, settings)
     warnings = []
     if rec.get("best") is not None:
-        warnings = point_warnings(cfg, config, points[rec["best"]], "the recommended point")
-        rec["how_to_time"] = timing_advice(points[rec["best"]], reaction, sensor)
-        rec["amplitude_advice"] = amplitude_advice(cfg, config, points[rec["best"]], settings)
-        multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
-                      hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep")
+        best = points[rec["best"]]
+        deferred = rec["separation_guard"] == "multi_hanging"  # --min-separation left to the hangings plan
+        # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
+        mh_warnings = multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
+                                    hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
+                                    best if deferred else None)
+        warnings = point_warnings(cfg, config, best, "the recommended point") + mh_warnings
+        rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
+        rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:
-        raise InputError("--hangings", "no recommended point to plan the hangings at: " + rec["reason"])
+        raise InputError(rec["binding"] if rec["separation_guard"] == "multi_hanging" else "--hangings",
+                         "no recommended point to plan the hangings at: " + rec["reason"])
     if wc_p:
         if rec.get("best") is None:
             raise InputError("--write-config", "no recommended point to write: " + rec["reason"])

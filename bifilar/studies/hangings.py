@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from dataclasses import replace as _replace
 
 import numpy as np
 
@@ -86,6 +87,10 @@ class HangingPlan:
     missing: list = field(default_factory=list)
     #: inputs with no derivative for a timed period and a nonzero sigma: no sigma can be given (NaN covariance)
     undefined: list = field(default_factory=list)
+    #: the guard applied to every timed mode (relative gap to its hanging's other modes; None: none)
+    min_separation: float | None = None
+    #: of ``missing``, the components some mode of a hanging tried depends on, left out for the guard
+    separation_blocked: list = field(default_factory=list)
 
     def accuracy(self) -> dict:
         sd = np.sqrt(np.clip(np.diag(self.covariance), 0, None)) if len(self.covariance) else []
@@ -101,6 +106,7 @@ class HangingPlan:
                 "hangings": [{"name": h.name, "rotation_deg": list(h.rotvec_deg), "notes": h.notes}
                              for h in self.hangings],
                 "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing,
+                "min_separation": self.min_separation,
                 "sigma_unavailable": (std_unavailable_text(self.undefined, "--sigma KEY=VALUE")
                                       if self.undefined else None)}
 
@@ -235,13 +241,16 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     values = {c: float(ref.inertia[_IDX[c]]) for c in components}
     data = [_rows(h, components, unc) for h in hs]
     cands = []
+    close = np.zeros(len(components), bool)  # some mode too close to another depends on the component
     for hi, h in enumerate(hs):
         T = h.sens.periods
         for k in range(len(T)):
-            if not np.isfinite(T[k]) or (min_separation and h.separation[k] < min_separation):
+            if not np.isfinite(T[k]):
                 continue
             rel = np.abs(data[hi][0][k]) * np.array([scales[c] for c in components]) / T[k]
-            if rel.max() >= IDENTIFIABLE_MIN:
+            if min_separation and h.separation[k] < min_separation:
+                close |= rel >= IDENTIFIABLE_MIN
+            elif rel.max() >= IDENTIFIABLE_MIN:
                 cands.append((hi, k))
     chosen: list[tuple[int, int]] = []
 
@@ -307,7 +316,39 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     if undefined:  # the selection left them out; the prediction cannot (invert gives no std either)
         C = np.full_like(C, np.nan)
     return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing,
-                       undefined)
+                       undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing])
+
+
+def hangings_objective(base_cfg: dict, source: str, params: dict, settings: SweepSettings,
+                       min_separation: float | None, target: str | None) -> float:
+    """The relative standard uncertainty of ``target`` (or the worst of the
+    components) by the multi-hanging plan at ``params``
+    (:func:`bifilar.studies.hangings.plan_hangings`, small amplitude: no
+    nonlinear runs, as the hangings' selection ranks them), each timed
+    mode at least ``min_separation`` from the other modes of its hanging;
+    inf when that plan leaves a component unidentified or without a sigma."""
+    hp = plan_hangings(base_cfg, source, params, _replace(settings, tensions=False), list(settings.components),
+                       min_separation)
+    if hp.missing:
+        return math.inf
+    acc = hp.accuracy()
+    vals = [acc[c]["rel_sigma"] for c in ([target] if target else settings.components)]
+    return float(max(vals)) if all(math.isfinite(v) for v in vals) else math.inf
+
+
+def check_separated(plan: HangingPlan) -> None:
+    """Refuse (:class:`InputError` on ``--min-separation``) a plan that
+    leaves a component unidentified because every mode of the hangings
+    tried that depends on it is within ``min_separation`` of another mode
+    of its hanging: the planner left that guard to this plan
+    (:func:`bifilar.studies.plan.plan` with ``hangings``), so it cannot be
+    made at the planned point."""
+    if plan.separation_blocked:
+        raise InputError("--min-separation", f"no configuration meets --min-separation {plan.min_separation:g} "
+                         f"with the hangings either: every mode of the hangings tried that depends on "
+                         f"{', '.join(plan.separation_blocked)} is within {100 * plan.min_separation:g} % of "
+                         "another mode of its hanging at the planned point; lower --min-separation or change "
+                         "the --param ranges")
 
 
 def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components: list) -> dict | None:
@@ -409,6 +450,9 @@ def describe_json(doc: dict) -> list[str]:
                      + ": time " + ", ".join(f"{m['mode']} (T = {m['period']:.5g} s, sep {100 * m['separation']:.3g} %; "
                                              f"{m['cycles_per_trial']} cycles x {m['stopwatch']['trials']} stopwatch trials)"
                                              for m in modes))
+    if doc.get("min_separation"):
+        lines.append(f"each timed mode is at least {100 * doc['min_separation']:g} % (--min-separation) from "
+                     "every other mode of its hanging")
     for c, a in doc["accuracy"].items():
         ok = a["sigma"] is not None and math.isfinite(a["sigma"])
         lines.append(f"{c} = {a['value']:.6g} +- {a['sigma']:.3g} kg m^2 ({100 * a['rel_sigma']:.3g} %)" if ok
@@ -419,5 +463,19 @@ def describe_json(doc: dict) -> list[str]:
     return lines
 
 
-__all__ = ["HangingPlan", "candidate_hangings", "describe", "joint_covariance", "measurements_document",
+def close_modes_warning(point: dict, min_separation: float, what: str = "the point") -> str:
+    """The warning of a planned point whose own hanging's timed modes the
+    search did not hold to ``min_separation`` (left to the multi-hanging
+    plan): which of them are too close to another mode, not to be timed."""
+    close = {}
+    for c, e in point["components"].items():
+        if e.get("identifiable") and e.get("separation") is not None and e["separation"] < min_separation:
+            close.setdefault(e["mode"], []).append(f"{c}, separation {100 * e['separation']:.2g} %")
+    modes = "; ".join(f"{m} ({', '.join(v)})" for m, v in close.items()) or "none"
+    return (f"{what}: no point's own hanging meets --min-separation {min_separation:g}, so time the modes of the "
+            f"multi-hanging plan (each at least {100 * min_separation:g} % from the other modes of its hanging), "
+            f"not the point's own modes closer than that: {modes}")
+
+
+__all__ = ["HangingPlan", "candidate_hangings", "check_separated", "close_modes_warning", "describe", "hangings_objective", "joint_covariance", "measurements_document",
            "plan_hangings"]

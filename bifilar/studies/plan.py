@@ -49,6 +49,13 @@ When ``lengths_available`` is given and a wire length is a search
 parameter, that parameter is searched over the available lengths within its
 bounds (discrete) and the others continuously for each of them.
 
+With ``hangings`` (``plan --hangings``: the multi-hanging plan is what is
+timed) and no point whose own hanging meets ``min_separation`` (the
+degenerate swings of a symmetric trifilar), the search is run again without
+that guard and the points it evaluated are ranked by their multi-hanging
+plan (:func:`~bifilar.studies.hangings.hangings_objective`), which applies the guard to every mode it
+times (``separation_guard`` ``"multi_hanging"``).
+
 Deterministic: no random numbers, so the same inputs give the same plan.
 """
 
@@ -83,6 +90,14 @@ class PlanResult:
     among : the measurable components (identifiable somewhere in the range);
         without a target the worst of them is minimised.
     zip : the parameters moved together (one search variable).
+    separation_guard : where ``constraints.min_separation`` applies:
+        ``"planned_hanging"`` (the timed modes of the planned point's own
+        hanging) or ``"multi_hanging"`` (left to the multi-hanging plan's
+        timed modes, :func:`plan` with ``hangings``).
+    hangings_objective : with ``separation_guard`` ``"multi_hanging"``, the
+        objective of the optimum's multi-hanging plan (small amplitude), by
+        which the points were ranked (``best["objective"]`` stays the
+        planned hanging's own).
     """
 
     best: dict
@@ -93,6 +108,8 @@ class PlanResult:
     active: list[str] = field(default_factory=list)
     among: list[str] = field(default_factory=list)
     zip: bool = False
+    separation_guard: str = "planned_hanging"
+    hangings_objective: float | None = None
 
     def accuracy(self) -> dict:
         """Predicted accuracy per component at the optimum (kg m^2, relative, mode, period s)."""
@@ -109,12 +126,13 @@ class PlanResult:
             "optimum": {"params": b["params"], "objective": b["objective"], "accuracy": self.accuracy(),
                         "tension": b["tension"], "depth": b["depth"], "periods": b["periods"],
                         "rig": b.get("rig"), "separation": point_separation(b),
-                        "active_constraints": self.active},
+                        "active_constraints": self.active, "hangings_objective": self.hangings_objective},
             "target": self.target or "worst relative of " + ", ".join(self.among),
             "identifiability": self.identifiability(),
             "constraints": self.constraints.describe(),
             "bounds": {n: [lo, hi] for n, lo, hi in self.bounds},
             "zip": self.zip,
+            "separation_guard": self.separation_guard,
             "evaluations": len(self.evaluated),
         }
 
@@ -159,7 +177,7 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
 def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
          constraints: Constraints, target: str | None = None, *, workers: int = 1,
          progress: Callable[[int, int], None] | None = None, max_local: int | None = None,
-         zip_: bool = False) -> PlanResult:
+         zip_: bool = False, hangings: bool = False) -> PlanResult:
     """Search ``bounds`` [(name, lo, hi)] for the feasible configuration with
     the smallest predicted relative uncertainty (see the module docstring).
 
@@ -167,9 +185,63 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     range (one search variable), e.g. ``spacing`` and ``ceiling_spacing``
     over the same range keep the wires parallel.
 
+    ``hangings``: the experiment times the multi-hanging plan
+    (:func:`bifilar.studies.hangings.plan_hangings`, which applies
+    ``min_separation`` to each mode it times).  When no point's own hanging
+    meets ``min_separation`` (e.g. the degenerate swings of a symmetric
+    trifilar), the search is run again without that guard
+    (``separation_guard`` ``"multi_hanging"``): the hangings plan at the
+    optimum must then time only separated modes
+    (:func:`bifilar.studies.hangings.check_separated`).  Where a point meets
+    it the answer is the one without ``hangings``.
+
     Raises :class:`InputError` naming the binding constraint's flag (e.g.
     ``--max-tension``) when no evaluated configuration is feasible.
     """
+    kw = dict(workers=workers, progress=progress, max_local=max_local, zip_=zip_)
+    try:
+        return _plan(base_cfg, source, bounds, settings, constraints, target, **kw)
+    except InputError as exc:
+        if not (hangings and exc.field == "--min-separation"):
+            raise
+    relaxed = replace(constraints, min_separation=None)
+    res = _plan(base_cfg, source, bounds, settings, relaxed, target, **kw)
+    best, hob = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
+    best = best or res.best
+    return replace(res, best=best, constraints=constraints, separation_guard="multi_hanging",
+                   active=_active(best, relaxed, bounds), hangings_objective=hob)
+
+
+def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: SweepSettings,
+                       relaxed: Constraints, min_separation: float | None) -> tuple[dict | None, float | None]:
+    """Of the points the search without the separation guard evaluated
+    (``relaxed``: feasible otherwise), the one whose multi-hanging plan
+    (:func:`~bifilar.studies.hangings.hangings_objective`, ``min_separation`` applied to its timed
+    modes) is the most accurate, evaluated in full (its ``objective`` the
+    planned hanging's own, as without hangings), and that plan's
+    objective; (None, None) when no plan identifies every component
+    (:func:`bifilar.studies.hangings.check_separated` then says why at
+    ``res.best``)."""
+    target, among = res.target, res.among
+    cands = [p for p in res.evaluated if p.get("valid") and not violations(p, relaxed, target)
+             and math.isfinite(objective(p, target, among))]
+    from .hangings import hangings_objective
+
+    score = {id(p): hangings_objective(base_cfg, source, p["params"], settings, min_separation, target)
+             for p in cands}
+    keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
+    for i in rank_order(cands, keep, lambda p: score[id(p)]):
+        p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
+        if p.get("valid") and not violations(p, relaxed, target) and math.isfinite(objective(p, target, among)):
+            return {**p, "objective": objective(p, target, among)}, score[id(cands[i])]
+    return None, None
+
+
+def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
+          constraints: Constraints, target: str | None = None, *, workers: int = 1,
+          progress: Callable[[int, int], None] | None = None, max_local: int | None = None,
+          zip_: bool = False) -> PlanResult:
+    """:func:`plan` under ``constraints`` as given."""
     if not bounds:
         raise InputError("--param", "give at least one --param NAME=LO:HI")
     names = [b[0] for b in bounds]

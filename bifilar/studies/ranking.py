@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
 from .settings import Constraints
@@ -210,9 +211,42 @@ def pareto_front(points: list[dict], target: str | None, among=None) -> list[int
     return front
 
 
-def assess(points: list[dict], constraints: Constraints, target: str | None) -> dict:
+def assess(points: list[dict], constraints: Constraints, target: str | None, hangings=None) -> dict:
     """Mark each point ``feasible`` / ``violations`` / ``objective`` / ``rank``
     (in place) and return the recommendation document.
+
+    ``hangings``: the experiment times the multi-hanging plan, which applies
+    ``min_separation`` to each mode it times; ``hangings(point)`` is that
+    plan's objective at a point (:func:`bifilar.studies.hangings.hangings_objective`).
+    When no point's own hanging meets ``min_separation``, the points are
+    assessed again without that guard (``separation_guard``
+    ``"multi_hanging"``; else ``"planned_hanging"``) and ranked by
+    ``hangings(point)`` (each feasible point's ``hangings_objective``); the
+    hangings plan at the recommended point must time only separated modes
+    (:func:`bifilar.studies.hangings.check_separated`).
+    """
+    doc = _assess(points, constraints, target)
+    doc["separation_guard"] = "planned_hanging"
+    if hangings is not None and doc.get("binding") == CONSTRAINT_FLAGS["min_separation"]:
+        doc = _assess(points, replace(constraints, min_separation=None), target, hangings)
+        doc.update(constraints=constraints.describe(), separation_guard="multi_hanging")
+        if doc.get("best") is not None:
+            doc["why"].insert(0, f"ranked by the multi-hanging plan (no point's own hanging meets --min-separation "
+                                 f"{constraints.min_separation:g}): its {'target' if target else 'worst component'} "
+                                 f"+- {100 * doc['hangings_objective']:.3g} % (small amplitude); the point's own "
+                                 "figures follow")
+        elif doc["n_feasible"]:
+            doc.update(binding=CONSTRAINT_FLAGS["min_separation"], reason=(
+                f"no configuration meets --min-separation {constraints.min_separation:g} with the hangings either: "
+                "no point's multi-hanging plan identifies every component from modes that far from the other "
+                "modes of their hanging"))
+    return doc
+
+
+def _assess(points: list[dict], constraints: Constraints, target: str | None, hangings=None) -> dict:
+    """:func:`assess` under ``constraints`` as given; ``hangings``: rank by
+    it (each feasible point's ``hangings_objective``), the points whose
+    multi-hanging plan gives no sigma left out.
 
     Without a target the objective is the worst of the measurable components
     (:func:`measurable_components`); ``identifiability`` says per component
@@ -226,8 +260,14 @@ def assess(points: list[dict], constraints: Constraints, target: str | None) -> 
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
-    ranked = rank_order(points, [i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None],
-                        lambda p: p["objective"])
+    ok = [i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None]
+    key = lambda p: p["objective"]  # noqa: E731
+    if hangings is not None:
+        for i in ok:
+            points[i]["hangings_objective"] = _plain(hangings(points[i]))
+        ok = [i for i in ok if points[i]["hangings_objective"] is not None]
+        key = lambda p: p["hangings_objective"]  # noqa: E731
+    ranked = rank_order(points, ok, key)
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
@@ -237,11 +277,15 @@ def assess(points: list[dict], constraints: Constraints, target: str | None) -> 
                  "constraints": constraints.describe(), "pareto_front": front,
                  "n_valid": sum(bool(p.get("valid")) for p in points),
                  "n_feasible": sum(bool(p["feasible"]) for p in points)}
-    if not ranked:
+    if not ranked and hangings is not None and doc["n_feasible"]:
+        doc.update(best=None)  # no multi-hanging plan gives a sigma: assess says why
+    elif not ranked:
         flag, msg = binding_constraint(points, constraints, target, among)
         doc.update(best=None, binding=flag, reason=msg)
     else:
         i = ranked[0]
+        if hangings is not None:
+            doc["hangings_objective"] = points[i]["hangings_objective"]
         doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
                    why=explain(points[i], constraints, target, among), ranking=ranked[:10],
                    rig=points[i].get("rig"), separation=point_separation(points[i]))
