@@ -530,7 +530,9 @@ def _turned(p, kind: str, dphi: float) -> np.ndarray:
     """Parameters ``p`` of a ``kind`` model with every oscillation's phase
     advanced by ``dphi`` (rad): each ``(a, b)`` pair turned."""
     pb = np.array(p, dtype=float)
-    for i in range(2, pb.size if kind in ("viscous", "two_mode", "three_mode") else 4, 4):
+    pairs = range(2, pb.size, 4) if kind in ("viscous", "two_mode", "three_mode") else \
+        [2] + list(range(8, pb.size, 4)) if kind == "chirp" else [2]
+    for i in pairs:
         a, b = pb[i], pb[i + 1]
         pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
     return pb
@@ -727,12 +729,17 @@ def _window_fit(fit: PeriodFit, th, yh) -> PeriodFit:
         beta, beta2 = float(fit.params[6]) * u0, float(fit.params[7]) * u0 * u0
         um = math.exp(-2.0 * sg * (tm - t0))
         w = float(visc.p[4]) - beta * um - beta2 * um * um
-        coef, _ = _linear_amplitudes(th, yh, t0, tm, [w], [sg])
-        free = np.ones(8, bool)
+        # other oscillations the fit carries: frequencies and dampings fixed (as for two_mode)
+        ws, ss = [w] + list(fit.params[10::4]), [sg] + list(fit.params[11::4])
+        coef, _ = _linear_amplitudes(th, yh, t0, tm, ws, ss)
+        p0 = [coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w, sg, beta, beta2]
+        for k in range(1, len(ws)):
+            p0 += [coef[2 + 2 * k], coef[3 + 2 * k], ws[k], ss[k]]
+        free = np.zeros(len(p0), bool)
+        free[[0, 2, 3, 4, 5]] = True
         free[1] = drift
-        free[6:] = False
-        p0 = np.array([coef[0], coef[1] if drift else 0.0, coef[2], coef[3], w, sg, beta, beta2])
-        return _build(_solve(kind, th, yh, t0, tm, p0, free), th, yh, fit.model, [])
+        free[8::4] = free[9::4] = True
+        return _build(_solve(kind, th, yh, t0, tm, np.array(p0), free), th, yh, fit.model, [])
     if kind not in ("two_mode", "three_mode"):
         visc, env = _fit_viscous(th, yh, t0, tm, fit.frequency, drift)
         return _fit_one(fit.model, th, yh, t0, tm, visc, env, drift)
@@ -807,6 +814,62 @@ def _stationarity(fit: PeriodFit, t, y):
                                        "p": float(stats.chi2.sf(Q, K - 1))}
 
 
+#: an oscillation left in the amplitude law's residuals is fitted with the
+#: law when it lies at least this many periodogram bins (1 / record length)
+#: from the fundamental and from zero
+OTHER_BINS = 3.0
+#: ... and below this many times the fundamental frequency
+OTHER_MAX_RATIO = 4.0
+#: at most this many of them (the strongest), one solve each
+OTHER_MAX = 3
+
+
+def _with_other_oscillations(law: PeriodFit, t, y, drift: bool, key: str) -> PeriodFit:
+    """The amplitude law's fit with the other oscillations its residuals
+    keep (significant periodogram peaks that are neither the fundamental
+    nor its harmonics: a coupled swing the release excites) fitted with it
+    as damped cosines, when that lowers the criterion ``key`` (``bic`` /
+    ``aic``).  Left in the residuals such a swing leaks into the law's
+    frequency: on the damped trifilar of tests/test_chirp_coupled_swing.py
+    it put the period at ``amplitude_period`` one std above the truth in
+    every noise draw (docs/invert.md, "Signal audit, session 9")."""
+    try:
+        peaks = residual_peaks(t, law.residuals, law.frequency)
+    except (ValueError, np.linalg.LinAlgError):
+        return law
+    T_rec = float(t[-1] - t[0])
+    # separate oscillations of the rig only: a peak within OTHER_BINS
+    # periodogram bins of the fundamental (or of zero) is the law's own
+    # misfit, which a cosine there would absorb into the fundamental's
+    # place; one above OTHER_MAX_RATIO times the fundamental (a sensor's
+    # hum) leaks too little into it to matter
+    sep, f0 = OTHER_BINS / T_rec, law.frequency
+    fr = [pk["frequency"] for pk in peaks if pk["harmonic"] is None and sep < pk["frequency"] < OTHER_MAX_RATIO * f0
+          and abs(pk["frequency"] - f0) > sep]
+    t0, tm = law.t0, law.t_ref
+    sg = float(law.params[5])
+    best = law
+    for f in fr[:OTHER_MAX]:  # strongest first, each kept when it lowers the criterion
+        w = 2 * math.pi * f
+        try:
+            coef, _ = _linear_amplitudes(t, best.residuals, t0, tm, [w], [sg])
+            p0 = np.r_[best.params, coef[2], coef[3], w, sg]
+            free = np.ones(p0.size, bool)
+            free[1] = drift
+            joint = _build(_solve("chirp", t, y, t0, tm, p0, free, max_nfev_per_param=50), t, y,
+                           AMPLITUDE_LAW_MODEL, [])
+        except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
+                ZeroDivisionError):
+            continue
+        if not (joint.converged and np.isfinite(joint.period) and getattr(joint, key) < getattr(best, key)):
+            continue
+        # each cosine stays the oscillation it was started at (within a bin)
+        if any(abs(wj - w0) > 2 * math.pi / T_rec for wj, w0 in zip(joint.params[10::4], np.r_[best.params[10::4], w])):
+            continue
+        best = joint
+    return best
+
+
 def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> PeriodFit:
     """A viscous fit whose halves disagree (``std_nonstationary > 0``) is
     refitted with the frequency following the envelope's square
@@ -845,6 +908,9 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> Perio
         return fit
     try:
         law = _build(_fit_chirp(t, y, t0, tm, fit.params, drift), t, y, AMPLITUDE_LAW_MODEL, [])
+        m0 = law.modes[0]  # other oscillations only for a law that may be used (their solves cost)
+        if getattr(law, key) < getattr(fit, key) and abs(m0["beta"]) >= 3 * m0["beta_std"]:
+            law = _with_other_oscillations(law, t, y, drift, key)
         law.selection["drift"] = bool(drift)
     except (SignalError, ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError,
             ZeroDivisionError) as exc:
@@ -856,7 +922,9 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> Perio
     info.update(criterion_delta=delta, beta=md["beta"], beta_std=md["beta_std"], beta2=md["beta2"],
                 beta2_std=md["beta2_std"],
                 reference_amplitude=md["reference_amplitude"], period_zero_amplitude=md["period_zero_amplitude"],
-                period_start=md["period_start"])
+                period_start=md["period_start"],
+                other_oscillations=[{k: o[k] for k in ("frequency", "period", "amplitude", "damping_ratio")}
+                                    for o in law.modes[1:]])
     why = _inadmissible(law)
     if why is None and not delta < 0:
         why = f"it does not lower {criterion} ({delta:+.1f})"
@@ -905,7 +973,10 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> Perio
         f"halves {', '.join(f'{h[0]:.6f}' for h in (fit.half_periods or ()))} s, between-half std "
         f"{fit.std_nonstationary:.2g} s); the period is the one at "
         f"amplitude {md['reference_amplitude']:.4g} (amplitude_period), from {md['period_start']:.6f} s at the "
-        f"window's start to {md['period_zero_amplitude']:.6f} s at zero amplitude"] + law.notes
+        f"window's start to {md['period_zero_amplitude']:.6f} s at zero amplitude"] + [
+        f"fitted with the law: another oscillation at {o['frequency']:.4g} Hz (amplitude {o['amplitude']:.3g}; "
+        "left in the residuals it would leak into the law's frequency)" for o in info["other_oscillations"]] \
+        + law.notes
     _residual_peaks(law)
     return law
 

@@ -173,9 +173,22 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
             J[:, 5] = -tau * e * osc + dth * (beta * 2.0 * dE2 + beta2 * 4.0 * dE4)
             J[:, 6] = dth * E2
             J[:, 7] = dth * E4
+        # other oscillations the record carries (a coupled swing the
+        # release excites), plain damped cosines: (a, b, omega, sigma) each
+        for col in range(8, len(p), 4):
+            y = y + _damped(p[col], p[col + 1], p[col + 2], p[col + 3], tau, J, col)
     else:  # pragma: no cover - guarded by fit_period
         raise ValueError(kind)
     return (y, J) if want_jac else y
+
+
+def _names(kind: str, n: int) -> tuple:
+    """Parameter names of a ``kind`` model with ``n`` parameters (a
+    ``chirp`` may carry other oscillations after its eight)."""
+    names = _NAMES[kind]
+    if kind == "chirp":
+        names = names + tuple(f"{nm}{k}" for k in range(2, 2 + (n - 8) // 4) for nm in ("a", "b", "omega", "sigma"))
+    return names
 
 
 def _envelope(kind: str, p, t, t0):

@@ -13,7 +13,7 @@ import numpy as np
 
 from .signal_checks import LB_ALPHA, ljung_box, serial_factor
 from .signal_crossings import CrossingPeriod
-from .signal_models import _NAMES, _Raw, _envelope, _lag1, _mode_rank, _model, _noise_sigma
+from .signal_models import _Raw, _names, _envelope, _lag1, _mode_rank, _model, _noise_sigma
 
 # ---------------------------------------------------------------------------
 # result
@@ -337,12 +337,12 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     aic = n * math.log(rss_n) + 2 * npar
     bic = n * math.log(rss_n) + npar * math.log(n)
     p = raw.p
-    names = _NAMES[raw.kind]
+    names = _names(raw.kind, p.size)
 
     def mode(ia, ib, iw, isg, w=None, sd_w=None):
         """One damped cosine; ``w`` (rad/s) and its std ``sd_w`` default
         to the parameter ``p[iw]`` and its std."""
-        fac = facs[iw]
+        fac = facs.get(iw, infl)
         a, b, sg = (float(p[i]) for i in (ia, ib, isg))
         w = float(p[iw]) if w is None else w
         T = 2 * math.pi / w
@@ -377,6 +377,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         if white and not roundoff:
             sd_w = max(sd_w, _hc_lin_std(raw, covf, s2, r, dof, grad))
         modes = [mode(2, 3, 4, 5, w=w + beta * u + beta2 * u * u, sd_w=sd_w)]
+        modes += [mode(i, i + 1, i + 2, i + 3) for i in range(8, p.size, 4)]  # other oscillations
         m = modes[0]
         bstd = _std(cov, 6) * infl
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"],
