@@ -7,7 +7,7 @@ the period at ``amplitude_period`` lay 8e-6 s (1.1 of its 7.2e-6 s std)
 above the true one on the noise-free record, and one std above it in every
 noise draw (z mean +0.98; docs/invert.md, "Signal audit, session 9").  The
 law is now fitted together with the other oscillations its residuals keep
-(``signal._with_other_oscillations``).
+(``signal_law._with_other_oscillations``).
 
 The truth is independent of the code under test's law: the same rig
 released without damping at two amplitudes bracketing the reference one,

@@ -5,7 +5,7 @@ widened the std to cover the period at any amplitude of the record (~100x
 the error of the period at the amplitude ``invert`` refers it to,
 docs/design.md "Found, not fixed").  Now a viscous fit whose halves
 disagree is refitted with the frequency following the envelope's square
-(``viscous+chirp``, ``signal._amplitude_law``): used only when it explains
+(``viscous+chirp``, ``signal_law._amplitude_law``): used only when it explains
 the halves, it reports the period at ``amplitude_period`` with its own std.
 
 The truths are the generators' laws, evaluated at the amplitude the fit
