@@ -1,0 +1,336 @@
+"""How far a run's figures can be trusted, and what it cannot time: the
+integrator's tolerance floor (:data:`MIN_RTOL`), amplitudes too small to
+time (:func:`small_amplitude_period`), the energy drift's rounding floor
+(:func:`drift_resolution`), the bound on the period's numerical error
+(:func:`period_accuracy`: a per-method constant times rtol, plus the energy
+drift's part) held against the user's timing, and the second run that
+checks that bound where the motion is not clean (:func:`check_period`).
+SI units (s, rad, m, J).  Split from :mod:`bifilar.analysis.simulate`,
+which runs the motion and reports these figures.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import IntegrationError, InputError
+from ..models import maximal as mx
+from ..scene import Scene
+from .equilibrium import RestPose
+
+
+def below_resolution(drift: float, resolution: float) -> bool | None:
+    """Whether a relative energy ``drift`` is no larger than its ``resolution``
+    (:func:`drift_resolution`: a number that is rounding, not drift); None where either is undefined."""
+    if not (np.isfinite(drift) and np.isfinite(resolution)):
+        return None
+    return bool(drift <= resolution)
+
+
+MIN_RTOL = 100 * float(np.finfo(float).eps)
+"""Smallest relative tolerance a run takes (2.2e-14): ODEPACK's LSODA (the
+``auto`` method) refuses anything tighter ("Illegal input detected", exit 1
+after NaN warnings), and :func:`scipy.integrate.solve_ivp` silently raises it
+to this value while the report would state the tighter one."""
+
+
+def check_rtol(rtol: float) -> None:
+    """Refuse (:class:`InputError` on ``--rtol``) a relative tolerance below
+    :data:`MIN_RTOL`, which no integrator here keeps."""
+    if not rtol >= MIN_RTOL:
+        raise InputError("--rtol", f"must be at least {MIN_RTOL:.3g} (100 x the double precision: the integrators "
+                                   f"refuse a tighter tolerance or loosen it to that), got {rtol:g}")
+
+
+MIN_TIMED_ANGLE = 1e-6
+"""Smallest release amplitude, as a wire angle (rad: the amplitude of a
+rotation-dominated mode, a translation's metres over the longest wire), from
+which a run times a period: the integrator's tolerances stop shrinking with
+the amplitude there (:func:`state_scale`) and the state's rounding follows, so
+below it the crossings time the tolerance and the rounding, not the motion
+(at 1e-9 rad the thesis cylinder's torsion came out 1e-7 off its period, at
+1e-12 rad 3e-4, at 1e-300 rad 44 %, all with exit status 0).  The run itself
+(its record, tensions, health) is still given."""
+
+
+def _small_amplitude(amplitude, dominant: int, Lmax: float) -> tuple[str, float] | None:
+    """(unit, least amplitude) when ``amplitude`` (None: an explicit start,
+    not judged) is nonzero but below :data:`MIN_TIMED_ANGLE` as a wire angle
+    (``dominant`` the timed coordinate's index in dx dy dz rx ry rz, ``Lmax``
+    the longest wire, m), else None."""
+    if amplitude is None or amplitude == 0 or not np.isfinite(amplitude):
+        return None
+    unit, least = ("rad", MIN_TIMED_ANGLE) if dominant >= 3 else ("m", MIN_TIMED_ANGLE * Lmax)
+    return (unit, least) if abs(amplitude) < least else None
+
+
+_SMALL_WHY = ("below {least:.3g} {unit} the simulated crossings follow the integrator's tolerance and the rounding "
+              "of the state, not the motion")
+
+
+def small_amplitude_period(amplitude, dominant: int, Lmax: float, linear_period) -> tuple[float, str] | None:
+    """(period, warning) of a run released at an amplitude too small to time
+    (:data:`MIN_TIMED_ANGLE`): the linear period (s), which such a motion has
+    to ~A^2 (below 1e-12 of it), and why it is given instead of the crossings';
+    None otherwise (and for a mode without a period)."""
+    small = _small_amplitude(amplitude, dominant, Lmax)
+    if small is None or not linear_period:
+        return None
+    why = _SMALL_WHY.format(least=small[1], unit=small[0])
+    return float(linear_period), (f"amplitude {amplitude:g} {small[0]} is too small to time: {why}; the period "
+                                  "given is the linear one, which such a motion has to within ~amplitude^2 "
+                                  f"(give |amplitude| >= {small[1]:.3g} {small[0]} to time it)")
+
+
+def untimed(amplitude: float | None, dominant: int = 3, Lmax: float = 1.0) -> bool:
+    """True when a run released at ``amplitude`` (None: an explicit start,
+    not judged) cannot be timed: amplitude 0 or below :data:`MIN_TIMED_ANGLE`
+    as a wire angle.  Its oscillation energy (~A^2, at most 1e-12 of the
+    rig's) is then zero or at the rounding of the energy bookkeeping, so the
+    drift relative to it is undefined too (nan: 0.0 or 0.32 for the same
+    run, depending on the BLAS kernel's last bits)."""
+    return amplitude is not None and (amplitude == 0 or _small_amplitude(amplitude, dominant, Lmax) is not None)
+
+
+DRIFT_FLOOR_ULPS = 20.0
+"""Rounding floor of a run's absolute energy error, in units of eps m g D
+(D: the farthest anchor from the rest CoM, the lever the wire constraints
+round their positions on).  Measured (docs/design.md, "Simulate's health
+at the edges"): at amplitudes 2e-6 and 1e-5 rad, where the tolerances' part
+(~rtol, relative) is negligible, |E - E0| was 0.2-10 eps m g D over every
+mode of the shipped configs, LSODA and DOP853, 3-300 periods (it grows
+slowly with the run's length: x2 from 10 to 100 periods); 20 covers these
+with a margin of 2."""
+
+
+def drift_resolution(scene: Scene, rest: RestPose, y_start: np.ndarray) -> float:
+    """Smallest relative energy drift a run released at ``y_start`` (13,),
+    world frame, can tell from the rounding of its own energy bookkeeping:
+    :data:`DRIFT_FLOOR_ULPS` eps m g D over the oscillation energy E0 - E_rest
+    (J; kinetic plus m g (z - z_rest), taken as a difference so that it is not
+    rounded itself).  The oscillation energy grows as A^2, the floor does not,
+    so at tiny amplitudes the measured drift is this floor (1/A^2: 7e-6 at
+    1e-5 rad on the thesis plate) and says nothing about the integration.
+    nan when there is no oscillation energy."""
+    y = np.asarray(y_start, float).copy()
+    y[0:3] -= rest.com
+    e_osc = float(mx.energy(y, mx.params_from_scenes(scene)))
+    return drift_floor(scene.mass, scene.gravity, scene.anchors - rest.com, e_osc)
+
+
+def drift_floor(mass: float, gravity: float, anchors_rel: np.ndarray, e_osc: float) -> float:
+    """:func:`drift_resolution` from its parts: ``mass`` kg, ``gravity`` m/s^2,
+    ``anchors_rel`` (n, 3) the anchors relative to the rest CoM (m, world
+    frame), ``e_osc`` the oscillation energy E0 - E_rest (J); nan where that
+    is zero or undefined."""
+    e_osc = abs(float(e_osc))
+    if not e_osc > 0:
+        return float("nan")
+    lever = float(np.max(np.linalg.norm(anchors_rel, axis=1)))
+    return DRIFT_FLOOR_ULPS * np.finfo(float).eps * float(mass) * float(gravity) * lever / e_osc
+
+
+PERIOD_ERROR_PER_RTOL = {"auto": 15.0, "LSODA": 8.0, "DOP853": 4.0, "RK45": 5.0, "RK23": 7.0, "Radau": 0.05,
+                         "BDF": 10.0}
+"""Bound on a run's relative period error per unit of ``rtol``, by method
+(``auto``: the batched engine's LSODA, ``scipy.integrate.odeint``; the others
+:func:`scipy.integrate.solve_ivp`'s).  Measured (docs/design.md, "Simulate's
+health at the edges"): the period of every mode of the shipped configs at
+0.001-0.3 rad (translations: times the longest wire), 3-100 periods, rtol
+1e-4..1e-10 (RK23 and BDF: the plate, to 1e-8), against the same run at rtol
+1e-12 with DOP853; the largest error over rtol was 6.6 (auto), 3.6 (LSODA),
+1.7 (DOP853), 2.2 (RK45), 3.5 (RK23), 0.016 (Radau), 4.6 (BDF).  Each bound
+is about twice that (three times for Radau).
+The error is the integration's phase error, so it is relative and does not
+grow with the number of periods."""
+
+
+PERIOD_ERROR_PER_RTOL_KANE = {"DOP853": 8.0, "RK45": 30.0, "LSODA": 40.0}
+"""The same for the thesis's kane model (``--model kane``), whose equations
+the tolerances meet differently: every mode of the plate and the pitch rig
+at 0.001 and 0.05 rad, rtol 1e-4, 1e-6, 1e-8, 1e-10, against the kane run at
+1e-12; largest error over rtol 3.4 (DOP853, its default; 0.8 from 1e-6 on),
+14 (RK45), 20 (LSODA).  Other methods get the largest bound."""
+
+
+PERIOD_ERROR_FLOOR = 1e-12
+"""Smallest relative period error claimed: the 1e-12 reference runs agree
+with each other (LSODA against DOP853) to 1e-12, so nothing finer was checked."""
+
+
+PERIOD_ERROR_WARN = 1e-8
+"""Relative period error above which a run warns when the config states no
+timing uncertainty (the fallback of :func:`period_warn_threshold`): a tenth
+of the best timing the planner considers (a sensor record of 50 cycles at
+1 kHz with 0.1 % noise: ~1e-7 of the period, :mod:`bifilar.studies.timing`);
+a stopwatch's is 1e-3."""
+
+
+TIMING_SHARE = 0.1
+"""Share of the stated timing uncertainty a period's numerical error may reach
+before a run warns: below a tenth of the period's std it adds under 0.5 % to
+it in quadrature (sqrt(1 + 0.1^2) = 1.005), so it is negligible against what
+the experiment can reach."""
+
+
+def period_warn_threshold(period: float, timing: float | None = None) -> float:
+    """Numerical period error (s) above which a run warns: :data:`TIMING_SHARE`
+    of ``timing`` (s, the standard uncertainty of one measured period, the
+    config's ``uncertainty.timing``) where one is stated and positive, else
+    :data:`PERIOD_ERROR_WARN` of ``period`` (s)."""
+    return TIMING_SHARE * float(timing) if _timing_stated(timing) else PERIOD_ERROR_WARN * period
+
+
+def _timing_stated(timing: float | None) -> bool:
+    """Whether ``timing`` (s) is a usable stated timing uncertainty (finite, positive)."""
+    return timing is not None and math.isfinite(timing) and timing > 0
+
+
+def period_accuracy(period: float | None, method: str, rtol: float, amplitude: float | None = None,
+                    dominant: int = 3, Lmax: float = 1.0, model: str = "maximal",
+                    timing: float | None = None, linear_period: float | None = None,
+                    drift: float = float("nan")) -> tuple[float, str | None]:
+    """(error, warning) of a run's measured ``period`` (s): a bound on its
+    numerical error, s (nan without a period), and a warning when the bound
+    exceeds :func:`period_warn_threshold` (a tenth of ``timing``, s, the
+    stated standard uncertainty of a measured period; without one
+    :data:`PERIOD_ERROR_WARN` of the period), else None.
+
+    The bound is the integrator's part, :data:`PERIOD_ERROR_PER_RTOL` [``method``]
+    x ``rtol`` of the period (``model="kane"``: :data:`PERIOD_ERROR_PER_RTOL_KANE`),
+    at least :data:`PERIOD_ERROR_FLOOR`, plus the energy drift's part
+    (:func:`drift_period_error`: ``drift``, the run's relative energy drift,
+    times the period's distance from ``linear_period``, s); for a release too
+    small to time (``amplitude``, ``dominant``, ``Lmax`` as
+    :func:`small_amplitude_period`), whose period is the linear one, the wire
+    angle squared.  A method without a measured bound (a name not in the
+    table) gets the largest one."""
+    if period is None:
+        return float("nan"), None
+    small = _small_amplitude(amplitude, dominant, Lmax)
+    if small is not None:
+        angle = abs(amplitude) / (1.0 if dominant >= 3 else Lmax)
+        return max(angle**2, PERIOD_ERROR_FLOOR) * period, None
+    table = PERIOD_ERROR_PER_RTOL_KANE if model == "kane" else PERIOD_ERROR_PER_RTOL
+    c = table.get(method, max(table.values()))
+    err_int = max(c * rtol, PERIOD_ERROR_FLOOR) * period
+    err_drift = drift_period_error(period, linear_period, drift)
+    err = err_int + err_drift
+    limit = period_warn_threshold(period, timing)
+    if err <= limit:
+        return err, None
+    what = (f"a tenth of the config's timing uncertainty (uncertainty.timing {timing:g} s)" if _timing_stated(timing)
+            else f"the {PERIOD_ERROR_WARN:g} a sensor's timing resolves")
+    # both parts shrink about as rtol (the drift's not exactly: rerun to check)
+    need = max(10.0 ** math.floor(math.log10(rtol * limit / err)), MIN_RTOL)
+    reach = max(c * need, PERIOD_ERROR_FLOOR) * period + err_drift * need / rtol
+    cure = (f"--rtol {need:g} brings it below" if reach <= limit else
+            f"no --rtol brings it below (the floor is {PERIOD_ERROR_FLOOR:g} of the period)")
+    if err_drift > err_int:
+        return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative), most of "
+                     f"it from the energy drift: {drift:.1e} of the oscillation energy moves the amplitude, and "
+                     f"with it the period (the run's is {period - linear_period:+.1e} s from the linear one), by up "
+                     f"to {err_drift:.1g} s, beside {c:g} x rtol {rtol:g} for {method}; above {what}; {cure}")
+    return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative: {c:g} x rtol "
+                 f"{rtol:g} for {method}), above {what}; {cure}")
+
+
+def drift_period_error(period: float | None, linear_period: float | None, drift: float) -> float:
+    """The part of a run's period error (s) that its energy drift makes:
+    ``drift`` (max |E - E0| over the oscillation energy, which is ~A^2)
+    times |``period`` - ``linear_period``| (s).  The period's distance from the
+    linear one is the amplitude's effect on it, ~A^2 to leading order, so a
+    relative change ``drift`` of the oscillation energy moves it by at most
+    ``drift`` times itself: an integration that loses or gains energy times a
+    motion of another amplitude than the one released.  Measured (docs/design.md, "The period's
+    error against what the user needs"): at 0.3 rad over 100 periods the true
+    error was 0.36-0.55 of this, and it exceeded the integrator's part alone.
+    0 where either is undefined (no period, nan drift)."""
+    if period is None or linear_period is None or not np.isfinite(drift):
+        return 0.0
+    return abs(float(period) - float(linear_period)) * float(drift)
+
+
+IRREGULAR_SPREAD = 1e-6
+"""Spread of a run's single-cycle periods (``period_std`` over the period) above
+which :func:`simulate` checks its period's error with a second run
+(:func:`check_period`) instead of trusting the error model, which was measured
+on regular motions only.  Every mode of the shipped configs at 0.05 and 0.3 rad
+(translations: times the longest wire) over 10 and 40 periods (docs/design.md,
+"A motion that is not regular"): clean modes spread by at most 2e-8 of the
+period, and the default runs (0.05, 10 periods) of all but the modes that beat
+with another stay below 1e-6; beating (regular) spreads 1e-6 to 3e-3, the
+irregular plate's swing-y at 1.5 m 7e-3.  The spread alone does not tell
+beating from irregular; the check run does."""
+
+
+CHECK_RTOL_RATIO = 100.0
+"""The check run's tolerance is the run's rtol over this (its error model's
+bound is then a hundredth of the run's, so the difference is the run's error
+where the motion is regular), or, where that is below :data:`MIN_RTOL`, the
+other engine (DOP853 against LSODA) at the same rtol."""
+
+
+IRREGULAR_FACTOR = 2.0
+"""The check run's difference over the run's error bound above which the
+motion is reported as not regular.  On the survey of :data:`IRREGULAR_SPREAD`
+the regular (beating) runs' differences were at most 0.31 of the bound, the
+plate's swing-y at 1.5 m over 40 periods 75x (over 50: 2000x)."""
+
+
+def needs_check(r) -> bool:
+    """Whether run ``r`` (a :class:`SimulationResult`) spread its single-cycle
+    periods by more than :data:`IRREGULAR_SPREAD` of its period: a motion that
+    is not clean, whose period's error the error model may not bound."""
+    return (r.period is not None and r.period_std is not None and np.isfinite(r.period_std)
+            and r.period_std > IRREGULAR_SPREAD * r.period)
+
+
+def check_period(r, again, method: str, atol, timing: float | None = None) -> None:
+    """Check the period's error bound of run ``r`` (:class:`SimulationResult`,
+    updated in place) with a second run from the same start:
+    ``again(method, rtol, atol) -> SimulationResult`` at rtol /
+    :data:`CHECK_RTOL_RATIO` with ``method`` (the run's, as asked: ``auto``
+    too) and ``atol`` (None: scaled, else over the same ratio), or with the
+    other engine at the same rtol where that would be below :data:`MIN_RTOL`.
+
+    ``r.period_error`` becomes max(the model's bound, the two periods'
+    difference, s) and ``r.period_check`` says what was run.  A difference above
+    :data:`IRREGULAR_FACTOR` x the bound (or above the bound and above
+    :func:`period_warn_threshold` of ``timing``, s) means the motion is not
+    regular: its mean period depends on the start and on the run length (energy
+    passing between modes), so no tolerance-based bound holds; a warning says
+    so.  For such a motion the difference is an estimate, not a bound: other
+    starts as close move the mean period by as much or more.  A check run that
+    fails leaves the model's bound and says it could not be checked."""
+    model = float(r.period_error)
+    tight = r.rtol / CHECK_RTOL_RATIO
+    if tight >= MIN_RTOL:
+        how, args = f"rtol {tight:g}", (method, tight, None if atol is None else np.asarray(atol) / CHECK_RTOL_RATIO)
+    else:
+        other = "LSODA" if r.method == "DOP853" else "DOP853"
+        how, args = f"{other} at the same rtol", (other, r.rtol, atol)
+    spread = (f"its single-cycle periods spread by {r.period_std:.1g} s ({r.period_std / r.period:.1g} of the "
+              "period)")
+    try:
+        chk = again(*args)
+    except (InputError, IntegrationError) as exc:
+        r.warnings.append(f"the motion may not be regular ({spread}) and the run checking its period's error "
+                          f"({how}) failed ({exc}): the period's error bound is the error model's and may not hold")
+        return
+    if chk.period is None:
+        r.warnings.append(f"the motion may not be regular ({spread}) and the run checking its period's error "
+                          f"({how}) timed no period: the period's error bound is the error model's and may not hold")
+        return
+    diff = abs(float(r.period) - float(chk.period))
+    r.period_check = {"method": chk.method, "rtol": float(chk.rtol), "period": float(chk.period),
+                      "difference": diff, "model_bound": model}
+    r.period_error = max(model, diff)
+    if diff > IRREGULAR_FACTOR * model or (diff > model and diff > period_warn_threshold(r.period, timing)):
+        r.warnings.append(f"the motion is not regular: the mean period depends on the start and on the run length "
+                          f"({spread}); a second run from the same start at {how} differs by {diff:.1g} s, "
+                          f"{diff / model:.3g} x the integration error bound of {model:.1g} s, so the period's "
+                          "error is at least that (period_error), and other starts as close can move it "
+                          "further; time fewer periods or release at a smaller amplitude")
