@@ -156,3 +156,19 @@ def test_invert_does_not_pay_for_the_check(monkeypatch):
                                   "--no-ladder", "--json"])
     assert r.exit_code == 0, r.stderr
     assert calls == []
+
+
+def test_a_difference_of_several_bounds_warns_below_the_users_timing():
+    """Below the timing threshold (a stated 1 ms: 1e-4 s) only the ratio to
+    the model's bound decides: 1.5x is what a regular run may show (survey:
+    at most 0.31x), 3x is over IRREGULAR_FACTOR = 2 and warns; the reported
+    error is the difference either way (pins the factor: a mutation to 200
+    passed every other test, the plate case also crossing the 1e-8 default)."""
+    for ratio, warns in ((1.5, False), (3.0, True)):
+        def again(method, rtol, atol, ratio=ratio):
+            return Run(period=2.0 + ratio * 1e-9)
+
+        r = Run()
+        sim.check_period(r, again, "DOP853", None, timing=1e-3)
+        assert r.period_error == pytest.approx(ratio * 1e-9, rel=1e-6)
+        assert bool(r.warnings) is warns and (not warns or "not regular" in r.warnings[0])
