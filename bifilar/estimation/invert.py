@@ -324,7 +324,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         for k, m in enumerate(pb.measurements):
             if m.amplitude:
                 r0[k], _ = amplitude_factor(pb.models[m.hanging], pb.values(pb.prior), pb.mode_index[k],
-                                            m.amplitude, m.cycles, rtol)
+                                            m.amplitude, m.cycles, rtol, m.fundamental)
         targets0 = np.array([m.period for m in pb.measurements]) / r0
     if physical_only:
         roots = find_roots(pb, targets0)

@@ -128,6 +128,15 @@ class Measurement:
         nu = self.details.get("dof") if self.source in ("timed", "signal") else None
         return float(nu) if nu is not None else math.inf
 
+    @property
+    def fundamental(self) -> bool:
+        """Whether the period and amplitude are a fitted record's: its
+        fundamental's period and amplitude (the other oscillations fitted
+        with it), which the nonlinear model must then reproduce
+        (:func:`~bifilar.estimation.solve.amplitude_factor`); a period timed
+        between crossings, and a stated release amplitude, otherwise."""
+        return self.source == "signal"
+
     def state_amplitude(self, amplitude: float | None, amplitude_std: float | None = None) -> None:
         """Set the amplitude a user states (rad or m, the mode's dominant
         coordinate; None: unknown) and its std.  For a recording it is the

@@ -320,13 +320,29 @@ def _check_identifiable(pb: Problem, Js: np.ndarray) -> None:
 
 
 def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
-                     rtol: float = 1e-10):
+                     rtol: float = 1e-10, fundamental: bool = False):
     """r = T_sim / T_lin of base mode ``mode_index`` at ``values``, simulated
     from rest displaced by ``amplitude`` x the mode shape for ``cycles``
     linear periods.  Returns (r, SimulationResult).  The run's period error
     is not read here, so a beating motion is not run twice to check it
     (``simulate(check=False)``: invert's CPU on the example file was +19 %
-    with the check)."""
+    with the check).
+
+    ``fundamental`` (a fitted record's period, :attr:`Measurement.fundamental`):
+    ``T_sim`` is the period of the mode's fundamental and ``amplitude`` the
+    fundamental's amplitude, as the record's fit reports them
+    (:func:`~bifilar.analysis.fundamental.mode_fundamental`), not the mean
+    period between the run's first and last crossings at a release of
+    ``amplitude``: on the damped trifilar the other modes the release
+    excites put that one 3.6e-6 s (one std of the record) below the
+    fundamental's, and the release's fundamental is 1.0003 times it
+    (+8.6e-7 s); Izz's z had mean +0.59 over 12 noise draws, the record's
+    own -0.13 (docs/invert.md, "Signal audit, session 10").  The run is
+    released at ``amplitude`` and ``r`` carried from its fundamental's
+    amplitude ``a`` to ``amplitude`` by the quadratic rule ``dr/dA = 2 (r -
+    1) / a`` (the step is ~3e-4 of the amplitude: a quartic law's slope,
+    up to 10 % off that rule, moves ``r`` by ~1e-8 of itself)."""
+    from ..analysis.fundamental import mode_fundamental
     from ..analysis.simulate import simulate
 
     scene = hm.scene(values)
@@ -335,7 +351,12 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
     sim = simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, rtol=rtol, check=False)
     if sim.period is None:
         raise ConvergenceError(f"the simulated {ms.modes[k].label} motion showed fewer than two crossings")
-    return sim.period / ms.modes[k].period, sim
+    T_lin = ms.modes[k].period
+    if not fundamental:
+        return sim.period / T_lin, sim
+    T_f, a_f = mode_fundamental(sim.t, sim.y, rest, ms, k, sim.period)
+    r = T_f / T_lin
+    return r + 2.0 * (r - 1.0) / a_f * (abs(amplitude) - a_f), sim
 
 
 #: the stated amplitude's law is fitted through ``A`` and this fraction of it
@@ -428,14 +449,15 @@ def amplitude_law(A: float, r_A: float, lam: float, r_lam: float, dr_dp=None) ->
 
 
 def amplitude_law_at(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
-                     rtol: float = 1e-10, r_A: float | None = None, lam: float = RELEASE_LAW_RATIO) -> AmplitudeLaw:
+                     rtol: float = 1e-10, r_A: float | None = None, lam: float = RELEASE_LAW_RATIO,
+                     fundamental: bool = False) -> AmplitudeLaw:
     """The :class:`AmplitudeLaw` of base mode ``mode_index`` at ``values``
     from runs at ``amplitude`` (skipped when its factor ``r_A`` is given)
     and at ``lam`` times it, each for ``cycles`` linear periods at ``rtol``
-    (:func:`amplitude_factor`)."""
+    (:func:`amplitude_factor`, with ``fundamental``)."""
     if r_A is None:
-        r_A, _ = amplitude_factor(hm, values, mode_index, amplitude, cycles, rtol)
-    r_lam, _ = amplitude_factor(hm, values, mode_index, lam * amplitude, cycles, rtol)
+        r_A, _ = amplitude_factor(hm, values, mode_index, amplitude, cycles, rtol, fundamental)
+    r_lam, _ = amplitude_factor(hm, values, mode_index, lam * amplitude, cycles, rtol, fundamental)
     return amplitude_law(amplitude, r_A, lam, r_lam)
 
 
@@ -452,14 +474,15 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
     ``rtol``."""
     m = pb.measurements[k]
     hm, idx = pb.models[m.hanging], pb.mode_index[k]
-    law = amplitude_law_at(hm, pb.values(p), idx, m.amplitude, m.cycles, rtol, r_A, STATED_LAW_RATIO)
+    law = amplitude_law_at(hm, pb.values(p), idx, m.amplitude, m.cycles, rtol, r_A, STATED_LAW_RATIO,
+                           m.fundamental)
     sc = pb.scales()
     d = np.zeros(len(p))
     for j in range(len(p)):
         q = np.array(p, float)
         h = FACTOR_STEP * sc[j]
         q[j] += h
-        d[j] = (amplitude_factor(hm, pb.values(q), idx, m.amplitude, m.cycles, rtol)[0] - r_A) / h
+        d[j] = (amplitude_factor(hm, pb.values(q), idx, m.amplitude, m.cycles, rtol, m.fundamental)[0] - r_A) / h
     law.dr_dp = d
     return law
 
@@ -484,7 +507,7 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
         for k, m in enumerate(pb.measurements):
             if m.amplitude:
                 r[k], sims[k] = amplitude_factor(pb.models[m.hanging], vals, pb.mode_index[k], m.amplitude,
-                                                 m.cycles, rtol)
+                                                 m.cycles, rtol, m.fundamental)
             if progress:
                 progress(it - 1 + (k + 1) / K, 3)
         pn = solve_linear(pb, _targets(pb, r), p0=p)
