@@ -1,6 +1,5 @@
-"""invert's amplitude runs and ``simulate --model kane`` on a motion that is
-not regular (docs/design.md, "A motion that is not regular", and its
-session-10 paragraphs on invert and kane).
+"""invert's amplitude runs on a motion that is not regular (docs/design.md,
+"A motion that is not regular", "invert's amplitude runs").
 
 The Solar Boat's swing-y at 1.7 m (0.57 x its 3 m wires) over 10 cycles
 passes energy between modes: its crossing-timed mean period is no smooth
@@ -8,8 +7,8 @@ function of the body (r = 0.997, 0.993, 1.008, 1.026 at Ixx 83.14, 83.11,
 86.2, 72.7), and invert printed Ixx = 50.6 +- 4.3 for a period the model
 gives at the config's Ixx = 83.14 (7.6 std off, exit 0, no warning; at rtol
 1e-12 113.1 +- 0.86).  The references are independent runs (the maximal
-model for the kane runs, the budget's own timing term for the integration
-term), never the output of the code under test."""
+model's period at the config's tensor, the budget's own timing term for the
+integration term), never the output of the code under test."""
 
 from __future__ import annotations
 
@@ -22,7 +21,6 @@ from click.testing import CliRunner
 import bifilar.analysis.run_accuracy as ra
 import bifilar.analysis.simulate as sim
 from bifilar.analysis.equilibrium import rest_pose
-from bifilar.analysis.kane_run import simulate_kane
 from bifilar.analysis.modes import linear_modes
 from bifilar.analysis.simulate import simulate
 from bifilar.cli import main
@@ -130,41 +128,6 @@ def test_an_irregularity_over_a_tenth_of_the_timing_is_refused(monkeypatch):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: --period: mode 'pitch'")
     assert "2e-06 s" in lines[0] and "0.1 of the period's std 1e-05 s" in lines[0]
-
-
-# --------------------------------------------------------------------------- simulate --model kane
-
-
-def test_kane_checks_a_run_that_is_not_regular():
-    """The plate's swing-y at 1.5 m over 17 periods, kane model: its
-    single-cycle periods spread by 1.3e-6, and its period was 2.7e-7 s from
-    the maximal model's (which is regular there: LSODA and DOP853 at 1e-12
-    agree to 1e-11) while period_error said 7e-9 s.  Now the check widens it
-    and warns."""
-    sc, rest, ms = setup("thesis_plate_rest.yaml")
-    k = simulate_kane(sc, rest, ms, mode="swing-y", amplitude=1.5, periods=17)
-    ref = simulate(sc, "swing-y", 1.5, 17, rest=rest, modes=ms, method="DOP853", rtol=1e-12, check=False)
-    other = simulate(sc, "swing-y", 1.5, 17, rest=rest, modes=ms, method="LSODA", rtol=1e-12, check=False)
-    assert abs(ref.period - other.period) < 1e-10  # the reference is reproducible
-    true = abs(k.period - ref.period)
-    assert k.period_check is not None and true > 10 * k.period_check["model_bound"]  # the model's bound fails
-    assert k.period_error >= 0.5 * true
-    assert any("not regular" in w for w in k.warnings)
-
-
-def test_kane_json_has_the_check_of_a_beating_run():
-    """The pitch rig's pitch beats (7e-6 of the period): checked, agreeing
-    within the bound, no warning; before, kane's period_check was always null."""
-    r = CliRunner().invoke(main, ["simulate", str(PITCH_RIG), "--model", "kane", "--mode", "pitch", "--json"])
-    assert r.exit_code == 0, r.stderr
-    doc = json.loads(r.stdout)
-    chk = doc["period_check"]
-    assert chk is not None and chk["rtol"] == pytest.approx(doc["integrator"]["rtol"] / 100)
-    assert chk["difference"] < chk["model_bound"] and doc["period_error"] == pytest.approx(chk["model_bound"])
-    assert not any("regular" in w for w in doc["warnings"])
-    sc, rest, ms = setup("thesis_lin2_pitch.yaml")
-    ref = simulate(sc, "pitch", 0.05, 10, rest=rest, modes=ms, method="DOP853", rtol=1e-12, check=False)
-    assert abs(doc["period"] - ref.period) <= doc["period_error"]
 
 
 def test_the_refusal_does_not_depend_on_the_tolerance():

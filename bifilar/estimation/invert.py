@@ -88,7 +88,8 @@ from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
 from .roots import Root, find_roots
 from .roots import separating_measurement
 from .signal_alias import check_signal_aliases
-from .solve import amplitude_factor, gauss_newton, measured_factor, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
+from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
+from .solve import measured_factor
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
 

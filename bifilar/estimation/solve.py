@@ -513,7 +513,8 @@ def amplitude_law_at(hm: HangingModel, values: dict, mode_index: int, amplitude:
     return amplitude_law(amplitude, r_A, lam, r_lam)
 
 
-def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10, irregular: float = 0.0) -> AmplitudeLaw:
+def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10,
+                         irregular: float = 0.0) -> AmplitudeLaw:
     """The law of measurement ``k`` (a stated amplitude) at the unknowns
     ``p`` for the budget: the slope from a run at :data:`STATED_LAW_RATIO`
     of the amplitude, and ``dr/dp`` by forward differences (one run per
