@@ -4,7 +4,9 @@ time (:func:`small_amplitude_period`), the energy drift's rounding floor
 (:func:`drift_resolution`), the bound on the period's numerical error
 (:func:`period_accuracy`: a per-method constant times rtol, plus the energy
 drift's part) held against the user's timing, and the second run that
-checks that bound where the motion is not clean (:func:`check_period`).
+checks that bound where the motion is not clean (:func:`check_period`;
+:func:`check_matters` where a caller holds the period against a measured
+one's std, :func:`not_regular` its verdict).
 SI units (s, rad, m, J).  Split from :mod:`bifilar.analysis.simulate`,
 which runs the motion and reports these figures.
 """
