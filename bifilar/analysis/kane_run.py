@@ -30,7 +30,7 @@ from ..rotations import matrix_to_quat, quat_to_matrix
 from ..scene import Scene
 from .equilibrium import RestPose
 from .modes import ModeSet
-from .simulate import check_rtol, initial_state, summarise_run
+from .simulate import check_period, check_rtol, initial_state, needs_check, summarise_run
 
 
 @dataclass(frozen=True)
@@ -128,12 +128,18 @@ def from_world(km: KaneMap, y13: np.ndarray) -> np.ndarray:
 
 def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, amplitude: float = 0.05,
                   periods: float = 10.0, theta=None, rtol: float = 1e-10, method: str = "DOP853",
-                  samples_per_period: int = 64, progress=None, timing: float | None = None):
+                  samples_per_period: int = 64, progress=None, timing: float | None = None, check: bool = True):
     """Integrate the thesis's model; ``theta`` ("t1,t2,t3,t4" rad or a sequence)
     sets the initial angles (rates zero, theta5 from the constraint), otherwise
     the start is the same displaced rest as the default model's.  ``timing``
     (s): the stated timing uncertainty the period's error is held against
-    (:func:`~bifilar.analysis.simulate.period_accuracy`).
+    (:func:`~bifilar.analysis.simulate.period_accuracy`).  ``check``: as
+    :func:`~bifilar.analysis.simulate.simulate`'s, where the single-cycle
+    periods spread by more than :data:`~bifilar.analysis.run_accuracy.IRREGULAR_SPREAD`
+    of the period the same start is run again at rtol / 100
+    (:func:`~bifilar.analysis.run_accuracy.check_period`: ``period_check``,
+    ``period_error`` at least the difference, a warning for a motion that is
+    not regular); False: the error model alone.
 
     Returns a :class:`~bifilar.analysis.simulate.SimulationResult` (world frame)
     with an extra attribute ``theta`` (k, 5).  Raises
@@ -167,6 +173,25 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
         y0 = kn.complete_initial_state(y0[:4], y0[5:9], km.p, theta5_guess=y0[4])
     T_ref = (m.period if m is not None and m.period else None) or min(x.period for x in modes.modes if x.period)
     t_end = periods * T_ref
+    amp = max(abs(amplitude), 1e-6) if theta is None else 0.1
+
+    def once(method: str, rtol: float, atol, progress=None):
+        return _integrate(scene, rest, km, m, y0, t_end, T_ref, amplitude if theta is None else float("nan"),
+                          method, rtol, rtol * amp if atol is None else atol, samples_per_period, progress, timing)
+
+    res = once(method, rtol, None, progress)
+    if check and needs_check(res):
+        check_period(res, once, method, None, timing)
+    return res
+
+
+def _integrate(scene: Scene, rest: RestPose, km: KaneMap, m, y0: np.ndarray, t_end: float, T_ref: float,
+               amplitude: float, method: str, rtol: float, atol: float, samples_per_period: int, progress,
+               timing: float | None):
+    """One run of :func:`simulate_kane` from the thesis state ``y0`` (10,) for
+    ``t_end`` s (``T_ref`` the timed mode's period, s; ``m`` that mode or
+    None), at ``rtol`` and ``atol`` (the angles' absolute tolerance, rad):
+    a :class:`~bifilar.analysis.simulate.SimulationResult` in the world frame."""
     last = [-1.0]
 
     def f(t, y):
@@ -175,9 +200,8 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
             progress(t, t_end)
         return kn.rhs(t, y, km.p)
 
-    amp = max(abs(amplitude), 1e-6) if theta is None else 0.1
     t0 = time.perf_counter()
-    sol = solve_ivp(f, (0.0, t_end), y0, method=method, rtol=rtol, atol=rtol * amp, dense_output=True)
+    sol = solve_ivp(f, (0.0, t_end), y0, method=method, rtol=rtol, atol=atol, dense_output=True)
     runtime = time.perf_counter() - t0
     if sol.status == -1:
         raise IntegrationError(f"integrator {method} failed on the kane model: {sol.message}")
@@ -193,8 +217,7 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     th = sol.sol(ts)
     Y = to_world(km, th)
     T = np.array([kn.tensions(th[:, i], km.p)[:2] for i in range(th.shape[1])])
-    res = summarise_run(scene, rest, m, amplitude if theta is None else float("nan"), ts, Y, T,
-                        lambda tt: to_world(km, sol.sol(tt)), viol, drift, "kane", method, rtol, rtol * amp,
-                        int(sol.nfev), runtime, [], timing=timing)
+    res = summarise_run(scene, rest, m, amplitude, ts, Y, T, lambda tt: to_world(km, sol.sol(tt)), viol, drift,
+                        "kane", method, rtol, atol, int(sol.nfev), runtime, [], timing=timing)
     res.theta = th.T
     return res

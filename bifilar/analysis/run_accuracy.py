@@ -4,7 +4,9 @@ time (:func:`small_amplitude_period`), the energy drift's rounding floor
 (:func:`drift_resolution`), the bound on the period's numerical error
 (:func:`period_accuracy`: a per-method constant times rtol, plus the energy
 drift's part) held against the user's timing, and the second run that
-checks that bound where the motion is not clean (:func:`check_period`).
+checks that bound where the motion is not clean (:func:`check_period`;
+:func:`check_matters` where a caller holds the period against a measured
+one's std, :func:`not_regular` its verdict).
 SI units (s, rad, m, J).  Split from :mod:`bifilar.analysis.simulate`,
 which runs the motion and reports these figures.
 """
@@ -288,6 +290,41 @@ def needs_check(r) -> bool:
             and r.period_std > IRREGULAR_SPREAD * r.period)
 
 
+def not_regular(period_check: dict | None, period: float, timing: float | None = None) -> bool:
+    """Whether a check run (``period_check`` as :func:`check_period` writes
+    it: ``difference`` and ``model_bound``, s; None: no check ran) shows a
+    motion that is not regular: a difference above :data:`IRREGULAR_FACTOR` x
+    the model's bound, or above the bound and above
+    :func:`period_warn_threshold` of ``period`` and ``timing`` (s)."""
+    if period_check is None:
+        return False
+    diff, model = period_check["difference"], period_check["model_bound"]
+    return bool(diff > IRREGULAR_FACTOR * model or (diff > model and diff > period_warn_threshold(period, timing)))
+
+
+def lost_start_span(r) -> float:
+    """Span (s) of run ``r``'s single-cycle periods (largest minus smallest
+    interval between successive crossings; 0 under two cycles): the most its
+    mean period can move where the motion loses its start, the mean of
+    cycles that each lie within that span (a run from another start on the
+    same energy shell spans the same periods)."""
+    per = np.diff(np.asarray(r.crossings, float))
+    return float(per.max() - per.min()) if per.size > 1 else 0.0
+
+
+def check_matters(r, timing: float) -> bool:
+    """Whether run ``r`` needs the check of :func:`check_period` for a
+    caller that holds its period against ``timing`` (s, the standard
+    uncertainty of the measured period it is compared with): its
+    single-cycle periods spread (:func:`needs_check`) and their span
+    (:func:`lost_start_span`, the most a lost start could move the mean)
+    exceeds :data:`TIMING_SHARE` of ``timing``.  Below that, even a motion
+    that is not regular moves the period by under a tenth of its std:
+    nothing to check (a beating run of the example measurements, span
+    4e-5 s against 5e-4 s, pays nothing)."""
+    return needs_check(r) and lost_start_span(r) > TIMING_SHARE * float(timing)
+
+
 def check_period(r, again, method: str, atol, timing: float | None = None) -> None:
     """Check the period's error bound of run ``r`` (:class:`SimulationResult`,
     updated in place) with a second run from the same start:
@@ -328,7 +365,7 @@ def check_period(r, again, method: str, atol, timing: float | None = None) -> No
     r.period_check = {"method": chk.method, "rtol": float(chk.rtol), "period": float(chk.period),
                       "difference": diff, "model_bound": model}
     r.period_error = max(model, diff)
-    if diff > IRREGULAR_FACTOR * model or (diff > model and diff > period_warn_threshold(r.period, timing)):
+    if not_regular(r.period_check, r.period, timing):
         r.warnings.append(f"the motion is not regular: the mean period depends on the start and on the run length "
                           f"({spread}); a second run from the same start at {how} differs by {diff:.1g} s, "
                           f"{diff / model:.3g} x the integration error bound of {model:.1g} s, so the period's "

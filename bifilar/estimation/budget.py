@@ -640,7 +640,10 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
     mass: re-solved, ratio 1.000), not in general (``dr/dx`` would need a
     run per input: the Solar Boat at spacing 1, length 2, torsion at 0.3
     rad, the wire lengths' and the anchors' and attachments' x terms are
-    1.11-1.21 too small; docs/design.md, "The stated amplitude")."""
+    1.11-1.21 too small; docs/design.md, "The stated amplitude").  A law
+    whose runs are not a regular motion (``law.irregular``, s: the check
+    run's difference) adds ``integration[mode]``, that difference in the
+    model period through the same gain."""
     from .uncertainty import gain_matrix
 
     P = Jp.shape[1]
@@ -652,6 +655,9 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
         if m.amplitude:
             lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
             contrib[f"amplitude[{lab}]"] = -Gf[:, k] * s_amp[k]
+            if laws[k] is not None and laws[k].irregular > 0:
+                # a motion that is not regular: its model period known only to the check run's difference
+                contrib[f"integration[{lab}]"] = Gf[:, k] * laws[k].irregular
     cov = np.zeros_like(budget.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)

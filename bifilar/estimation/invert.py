@@ -89,6 +89,7 @@ from .roots import Root, find_roots
 from .roots import separating_measurement
 from .signal_alias import check_signal_aliases
 from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
+from .solve import measured_factor
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
 
@@ -323,8 +324,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         r0 = np.ones(K)
         for k, m in enumerate(pb.measurements):
             if m.amplitude:
-                r0[k], _ = amplitude_factor(pb.models[m.hanging], pb.values(pb.prior), pb.mode_index[k],
-                                            m.amplitude, m.cycles, rtol, m.fundamental)
+                r0[k] = measured_factor(pb, k, pb.prior, rtol)[0]  # checked: an irregular one refused
         targets0 = np.array([m.period for m in pb.measurements]) / r0
     if physical_only:
         roots = find_roots(pb, targets0)
@@ -360,6 +360,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         for s in est_nl.sims:
             if s is not None:
                 warnings.extend(f"nonlinear simulation: {w}" for w in s.warnings)
+        warnings += irregular_warnings(pb, est_nl)
     ladder_rows = []
     if scalar and (ladder or method in ("small-angle", "thesis")):
         for name in ("small-angle", "thesis"):
@@ -524,6 +525,24 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                             "the model is not linear over the input uncertainties; quote the Monte Carlo interval")
     res.runtime = time.perf_counter() - t0
     return res
+
+
+def irregular_warnings(pb: Problem, est) -> list[str]:
+    """One warning per measurement whose amplitude runs at the nonlinear
+    estimate ``est`` are not a regular motion (``law.irregular`` > 0, s: below
+    a tenth of the period's std, else the runs were refused)."""
+    out = []
+    for k, law in enumerate(est.laws):
+        if law is None or not law.irregular > 0:
+            continue
+        m, sim = pb.measurements[k], est.sims[k]
+        spread = f"{sim.period_std:.1g} s" if sim is not None and sim.period_std is not None else "widely"
+        out.append(f"mode '{m.label}' at amplitude {m.amplitude:g} over {m.cycles:g} cycles is not a regular motion: "
+                   f"its single-cycle periods spread by {spread} and a second run from the same start differs by up "
+                   f"to {law.irregular:.1g} s (below a tenth of the period's std {m.std:.1g} s); the nonlinear "
+                   f"estimate's std includes it (the budget's integration term), and other starts as close may move it "
+                   "further: time fewer cycles or release at a smaller amplitude to make it regular")
+    return out
 
 
 def _with_start_guesses(ms: MeasurementSet, solve_for) -> tuple[MeasurementSet, list]:

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..analysis.run_accuracy import TIMING_SHARE
 from ..errors import BifilarError, ConvergenceError, InputError
 from .problem import _IDX, HangingModel, Problem, admissible, physical_interval
 
@@ -320,13 +321,21 @@ def _check_identifiable(pb: Problem, Js: np.ndarray) -> None:
 
 
 def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
-                     rtol: float = 1e-10, fundamental: bool = False):
+                     rtol: float = 1e-10, timing: float | None = None,
+                     fundamental: bool = False):
     """r = T_sim / T_lin of base mode ``mode_index`` at ``values``, simulated
     from rest displaced by ``amplitude`` x the mode shape for ``cycles``
-    linear periods.  Returns (r, SimulationResult).  The run's period error
-    is not read here, so a beating motion is not run twice to check it
-    (``simulate(check=False)``: invert's CPU on the example file was +19 %
-    with the check).
+    linear periods.  Returns (r, SimulationResult).
+
+    ``timing``: the standard uncertainty (s) of the measured period the
+    factor serves.  Where given, a run whose single-cycle periods spread by
+    enough to matter against it (:func:`~bifilar.analysis.run_accuracy.check_matters`:
+    their span over a tenth of ``timing``) is run again from the same start
+    at rtol / 100 (:func:`~bifilar.analysis.run_accuracy.check_period`; the
+    result's ``period_check`` says what it found).  A beating run whose
+    span is below that pays nothing (the example measurements: no second
+    run; checking every beating run cost them 19 % more CPU for nothing).
+    None: the period alone (the 3-cycle law runs of an unstated amplitude).
 
     ``fundamental`` (a fitted record's period, :attr:`Measurement.fundamental`):
     ``T_sim`` is the period of the mode's fundamental and ``amplitude`` the
@@ -343,20 +352,83 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
     1) / a`` (the step is ~3e-4 of the amplitude: a quartic law's slope,
     up to 10 % off that rule, moves ``r`` by ~1e-8 of itself)."""
     from ..analysis.fundamental import mode_fundamental
+    from ..analysis.run_accuracy import check_matters, check_period
     from ..analysis.simulate import simulate
 
     scene = hm.scene(values)
     rest, ms, match = hm.locate(scene)
     k = int(match[mode_index])
-    sim = simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, rtol=rtol, check=False)
+
+    def run(method: str = "DOP853", rtol: float = rtol, atol=None):
+        return simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, method=method, rtol=rtol, atol=atol,
+                        check=False)
+
+    sim = run()
     if sim.period is None:
         raise ConvergenceError(f"the simulated {ms.modes[k].label} motion showed fewer than two crossings")
+    if timing is not None and check_matters(sim, timing):
+        check_period(sim, run, sim.method, None, timing)
+        # invert says it once per measurement (irregular_difference), in its own terms
+        sim.warnings = [w for w in sim.warnings if not w.startswith("the motion is not regular")]
     T_lin = ms.modes[k].period
     if not fundamental:
         return sim.period / T_lin, sim
     T_f, a_f = mode_fundamental(sim.t, sim.y, rest, ms, k, sim.period)
     r = T_f / T_lin
     return r + 2.0 * (r - 1.0) / a_f * (abs(amplitude) - a_f), sim
+
+
+#: an amplitude run whose motion is not regular is refused where its check
+#: run's difference exceeds this share of the measured period's std (below
+#: it the difference joins the budget as ``integration[mode]``): the share
+#: below which simulate's period error need not warn either
+IRREGULAR_REFUSE_SHARE = TIMING_SHARE
+
+
+def measured_factor(pb: Problem, k: int, p, rtol: float = 1e-10, amplitude: float | None = None):
+    """(r, SimulationResult, d) of measurement ``k``'s mode at the unknowns
+    ``p``: :func:`amplitude_factor` at the measured amplitude (or
+    ``amplitude``) over the measured cycles, checked against the period's
+    std, and ``d`` (s) the check run's difference where the motion is not
+    regular (:func:`irregular_difference`; 0 otherwise)."""
+    m = pb.measurements[k]
+    A = m.amplitude if amplitude is None else amplitude
+    r, sim = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], A, m.cycles, rtol,
+                              timing=m.std, fundamental=m.fundamental)
+    return r, sim, irregular_difference(pb, k, p, sim)
+
+
+def irregular_difference(pb: Problem, k: int, p, sim) -> float:
+    """The difference (s) between measurement ``k``'s amplitude run ``sim``
+    (at the unknowns ``p``) and its check run where the check shows a motion
+    that is not regular (:func:`~bifilar.analysis.run_accuracy.not_regular`,
+    against the measured period's std); 0 for a regular or unchecked run.
+
+    Raises :class:`InputError` on the measurement's field where that
+    difference exceeds :data:`IRREGULAR_REFUSE_SHARE` of the period's std:
+    the simulated mean period then depends on the integrator's rounding at a
+    level the measurement resolves, the difference is only an estimate of
+    that dependence (other starts as close move it further:
+    docs/design.md, "A motion that is not regular"), and the amplitude law's
+    slope and the factor's derivative in the unknowns are differences of
+    the same irregular function, so neither the estimate nor its std can be
+    given."""
+    from ..analysis.run_accuracy import not_regular
+
+    m = pb.measurements[k]
+    if not not_regular(sim.period_check, sim.period, m.std):
+        return 0.0
+    d = float(sim.period_check["difference"])
+    if d > IRREGULAR_REFUSE_SHARE * m.std:
+        at = ", ".join(f"{n} = {v:.6g}" for n, v in zip(pb.unknowns, np.asarray(p, float)))
+        raise InputError(m.field, (
+            f"mode '{m.label}' released at {sim.amplitude:g} and simulated over {m.cycles:g} cycles ({at}) is not a "
+            f"regular motion: its single-cycle periods spread by {sim.period_std:.1g} s and a second run from the "
+            f"same start at rtol {sim.period_check['rtol']:g} differs by {d:.1g} s, more than "
+            f"{IRREGULAR_REFUSE_SHARE:g} of the period's std {m.std:.1g} s, so the nonlinear model's period (and the "
+            "estimate) depends on the integrator's rounding and cannot be given to the measurement's accuracy; "
+            "time fewer cycles (--cycles with --period) or release at a smaller amplitude"))
+    return d
 
 
 #: the stated amplitude's law is fitted through ``A`` and this fraction of it
@@ -396,6 +468,9 @@ class AmplitudeLaw:
     b: float  # 1 / unit^4
     #: d r(A0) / d p (P,) per unit of each unknown (a stated amplitude's law; None otherwise)
     dr_dp: np.ndarray | None = None
+    #: s: the largest difference a check run found where the measurement's amplitude runs at the estimate (the
+    #: factor's, the law's, the derivative's) are not a regular motion (:func:`irregular_difference`); 0 otherwise
+    irregular: float = 0.0
 
     def factor(self, A) -> np.ndarray | float:
         """r(A) (dimensionless; array in, array out)."""
@@ -456,12 +531,13 @@ def amplitude_law_at(hm: HangingModel, values: dict, mode_index: int, amplitude:
     and at ``lam`` times it, each for ``cycles`` linear periods at ``rtol``
     (:func:`amplitude_factor`, with ``fundamental``)."""
     if r_A is None:
-        r_A, _ = amplitude_factor(hm, values, mode_index, amplitude, cycles, rtol, fundamental)
-    r_lam, _ = amplitude_factor(hm, values, mode_index, lam * amplitude, cycles, rtol, fundamental)
+        r_A, _ = amplitude_factor(hm, values, mode_index, amplitude, cycles, rtol, fundamental=fundamental)
+    r_lam, _ = amplitude_factor(hm, values, mode_index, lam * amplitude, cycles, rtol, fundamental=fundamental)
     return amplitude_law(amplitude, r_A, lam, r_lam)
 
 
-def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10) -> AmplitudeLaw:
+def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10,
+                         irregular: float = 0.0) -> AmplitudeLaw:
     """The law of measurement ``k`` (a stated amplitude) at the unknowns
     ``p`` for the budget: the slope from a run at :data:`STATED_LAW_RATIO`
     of the amplitude, and ``dr/dp`` by forward differences (one run per
@@ -470,21 +546,54 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
     ``r dT_lin/dp + T_lin dr/dp``, and the second term is not small where
     the amplitude factor depends on the body (the Solar Boat's torsion at
     spacing 2.5, 0.6 rad: 0.29 of the first, opposite sign).  ``r_A``: the
-    factor at ``p`` (simulated already).  Each run ``m.cycles`` periods at
-    ``rtol``."""
+    factor at ``p`` (simulated already; ``irregular`` its run's
+    :func:`irregular_difference`, s).  Each run ``m.cycles`` periods at
+    ``rtol``, checked as :func:`measured_factor` does (``law.irregular``:
+    the largest difference)."""
     m = pb.measurements[k]
-    hm, idx = pb.models[m.hanging], pb.mode_index[k]
-    law = amplitude_law_at(hm, pb.values(p), idx, m.amplitude, m.cycles, rtol, r_A, STATED_LAW_RATIO,
-                           m.fundamental)
+    r_lam, _, d = measured_factor(pb, k, p, rtol, STATED_LAW_RATIO * m.amplitude)
+    law = amplitude_law(m.amplitude, r_A, STATED_LAW_RATIO, r_lam)
+    irregular = max(irregular, d)
     sc = pb.scales()
-    d = np.zeros(len(p))
+    dr = np.zeros(len(p))
     for j in range(len(p)):
         q = np.array(p, float)
         h = FACTOR_STEP * sc[j]
         q[j] += h
-        d[j] = (amplitude_factor(hm, pb.values(q), idx, m.amplitude, m.cycles, rtol, m.fundamental)[0] - r_A) / h
-    law.dr_dp = d
+        r_q, _, d = measured_factor(pb, k, q, rtol)
+        dr[j] = (r_q - r_A) / h
+        irregular = max(irregular, d)
+    law.dr_dp = dr
+    law.irregular = irregular
     return law
+
+
+def _refuse_unsettled(pb: Problem, p, p_at, r, seen, max_sims: int) -> None:
+    """Raise :class:`InputError` where the fixed point of :func:`solve_nonlinear`
+    stopped after ``max_sims`` simulations at ``p`` (the factors ``r`` simulated
+    at ``p_at``) with a measurement's model period still moving by more than
+    :data:`IRREGULAR_REFUSE_SHARE` of its std, while its runs were not a regular
+    motion (``seen``: the largest check difference of each measurement, s).  The
+    factor is then no smooth function of the body (the Solar Boat's swing-y at
+    1.7 m over 10 cycles: r 0.997, 0.993, 1.008, 1.026 at Ixx 83.14, 83.11, 86.2,
+    72.7), and the last iterate (there 50.6 against a truth of 83.1, 7 std off,
+    every check passed) is no solution; nothing is refused where the motion was
+    regular (there the fixed point stops within ~1e-4 of the scales)."""
+    dT = np.abs(pb.linear_periods(p) - pb.linear_periods(p_at)) * r
+    for k, m in enumerate(pb.measurements):
+        if seen[k] > 0 and dT[k] > IRREGULAR_REFUSE_SHARE * m.std:
+            raise InputError(m.field, _unsettled_message(m, seen[k], (
+                f"the fixed point T = T_lin r did not settle in {max_sims} simulations (its last step moved the model "
+                f"period by {dT[k]:.1g} s, more than {IRREGULAR_REFUSE_SHARE:g} of the period's std {m.std:.1g} s)")))
+
+
+def _unsettled_message(m, seen: float, why: str) -> str:
+    """The refusal of :func:`_refuse_unsettled` for measurement ``m``: ``seen``
+    its largest check difference (s), ``why`` what the fixed point did."""
+    return (f"mode '{m.label}' released at {m.amplitude:g} over {m.cycles:g} cycles is not a regular motion near the "
+            f"estimate: the nonlinear model's period is no smooth function of the body there (a second run from the "
+            f"same start differed by up to {seen:.1g} s) and {why}, so the estimate cannot be given; time fewer "
+            "cycles or release at a smaller amplitude")
 
 
 def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: float = 1e-9,
@@ -493,28 +602,46 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
     factors ``r`` simulated at each iterate (measurements without an
     amplitude keep r = 1); then the amplitude law of each measurement with
     an amplitude (:func:`stated_amplitude_law` at the last iterate: 1 + P
-    more runs), whose slope and ``dr/dp`` the budget uses."""
+    more runs), whose slope and ``dr/dp`` the budget uses.  Every run is
+    checked against the measured period's std (:func:`measured_factor`): a
+    motion that is not regular is refused above a tenth of it, below it its
+    difference is the law's ``irregular``, a budget term; a fixed point that
+    does not settle where its runs were not regular is refused
+    (:func:`_refuse_unsettled`)."""
     K = len(pb.measurements)
     r = np.ones(K)
     p = np.asarray(p_lin, float)
     sc = pb.scales()
     sims = [None] * K
+    irregular = np.zeros(K)  # s, per measurement (irregular_difference of the latest iterate's run)
+    seen = np.zeros(K)  # s, the largest over the iterates
     it = 0
     p_at = p
     for it in range(1, max_sims + 1):
         p_at = p  # where r is simulated
-        vals = pb.values(p)
         for k, m in enumerate(pb.measurements):
             if m.amplitude:
-                r[k], sims[k] = amplitude_factor(pb.models[m.hanging], vals, pb.mode_index[k], m.amplitude,
-                                                 m.cycles, rtol, m.fundamental)
+                r[k], sims[k], irregular[k] = measured_factor(pb, k, p, rtol)
+                seen[k] = max(seen[k], irregular[k])
             if progress:
                 progress(it - 1 + (k + 1) / K, 3)
-        pn = solve_linear(pb, _targets(pb, r), p0=p)
+        try:
+            pn = solve_linear(pb, _targets(pb, r), p0=p)
+        except BifilarError as exc:
+            if not np.any(seen > 0):
+                raise
+            # the factor of a motion that is not regular took the targets out of reach (the Solar Boat's
+            # swing-y at 1.7 m, rtol 1e-11: r = 1.25 at Ixx = 129, "no Ixx gives 2.998 s", a period never measured)
+            k = int(np.argmax(seen))
+            raise InputError(pb.measurements[k].field, _unsettled_message(
+                pb.measurements[k], seen[k], f"the fixed point T = T_lin r left the periods the model reaches ({exc})"
+            )) from None
         done = np.max(np.abs(pn - p) / sc) < tol
         p = pn
         if done:
             break
-    laws = [stated_amplitude_law(pb, p_at, k, r[k], rtol) if m.amplitude else None
+    if not done and np.any(seen > 0):
+        _refuse_unsettled(pb, p, p_at, r, seen, max_sims)
+    laws = [stated_amplitude_law(pb, p_at, k, r[k], rtol, irregular[k]) if m.amplitude else None
             for k, m in enumerate(pb.measurements)]
     return Estimate(p, "nonlinear", r.copy(), it, sims, laws)
