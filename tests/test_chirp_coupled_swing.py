@@ -159,7 +159,7 @@ def test_the_nonlinear_models_period_at_a_records_amplitude_is_the_true_one(trif
     assert m.fundamental
     pb = build_problem(mm.MeasurementSet([mm.Hanging("reference", scene, np.eye(3))], [m]), ["Izz"])
     p = np.array([float(np.asarray(scene.inertia)[2, 2])])
-    r, _ = amplitude_factor(pb.models[0], pb.values(p), pb.mode_index[0], A, m.cycles, 1e-10, m.fundamental)
+    r, _ = amplitude_factor(pb.models[0], pb.values(p), pb.mode_index[0], A, m.cycles, 1e-10, fundamental=m.fundamental)
     T_model = float(pb.linear_periods(p)[0]) * r
     T_true, s_true = _true_period(truth, A)
     assert abs(T_model - T_true) < math.hypot(0.1 * RECORD_STD, 2 * s_true), (T_model, T_true, s_true)
