@@ -242,3 +242,25 @@ def test_plan_predicts_the_covariance_invert_prints_for_its_measurements_file(tm
         assert list(res.names) == hp.components
         C = res.budget.covariance
         assert np.allclose(C, hp.covariance, rtol=0.02, atol=0.02 * np.max(np.diag(C))), (rig, C, hp.covariance)
+
+
+def test_a_sigma_point_moves_only_the_hangings_its_input_belongs_to():
+    from bifilar.estimation.budget import _perturbed_scene
+
+    # two rigs (one length differs): y-up's length.1 is its own input; before, a pair of sigma points
+    # moved every hanging of the pair by it (the prefix was stripped whatever the hanging)
+    rig2 = {**RIG, "lengths": [1.0, 1.0, 1.01]}
+    hs = _hangings(rots={"x-up": ROTS["x-up"]}) + _hangings(rig=rig2, rots={"y-up": ROTS["y-up"]})
+    pb = build_problem(_measurements(hs, np.ones(2)), ["Ixx", "Iyy"])
+    moves = [("y-up:length.1", 1e-3), ("x-up:anchor.2.z", 2e-3)]
+    a = _perturbed_scene(pb, 0, hs[0].scene, moves)
+    b = _perturbed_scene(pb, 1, hs[1].scene, moves)
+    assert np.array_equal(a.lengths, hs[0].scene.lengths)
+    assert a.anchors[1, 2] == pytest.approx(hs[0].scene.anchors[1, 2] + 2e-3, abs=1e-15)
+    assert b.lengths[0] == pytest.approx(1.001, abs=1e-15)
+    assert np.array_equal(b.anchors, hs[1].scene.anchors)
+    # one rig: the shared key moves both
+    hs = _hangings(rots={k: ROTS[k] for k in ("x-up", "y-up")})
+    pb = build_problem(_measurements(hs, np.ones(2)), ["Ixx", "Iyy"])
+    for h in (0, 1):
+        assert _perturbed_scene(pb, h, hs[h].scene, [("x-up+y-up:length.3", 1e-3)]).lengths[2] == pytest.approx(1.001)
