@@ -66,24 +66,19 @@ def _brute_covariance(hs, shared: bool):
     def moved(edit):  # edit(h, scene) -> the scene with the input moved
         return [replace(h, scene=edit(i, h.scene)) for i, h in enumerate(hs)]
 
-    def add(arr, idx, d):
-        a = np.array(arr, float)
-        a[idx] += d
-        return a
-
     inputs = []  # (edit(step), sigma)
     n = hs[0].scene.n_wires
     for i in range(n):
         for hh in ([None] if shared else range(len(hs))):
-            inputs.append((lambda d, i=i, hh=hh: (lambda h, s: replace(s, lengths=add(s.lengths, i, d))
+            inputs.append((lambda d, i=i, hh=hh: (lambda h, s: replace(s, lengths=_add(s.lengths, i, d))
                                                   if hh in (None, h) else s), 1e-3))
             for a in range(3):
-                inputs.append((lambda d, i=i, a=a, hh=hh: (lambda h, s: replace(s, anchors=add(s.anchors, (i, a), d))
+                inputs.append((lambda d, i=i, a=a, hh=hh: (lambda h, s: replace(s, anchors=_add(s.anchors, (i, a), d))
                                                            if hh in (None, h) else s), 1e-3))
     for hh in range(len(hs)):  # the attachments: other body points in each hanging
         for i in range(n):
             for a in range(3):
-                inputs.append((lambda d, i=i, a=a, hh=hh: (lambda h, s: replace(s, attachments=add(s.attachments, (i, a), d))
+                inputs.append((lambda d, i=i, a=a, hh=hh: (lambda h, s: replace(s, attachments=_add(s.attachments, (i, a), d))
                                                            if h == hh else s), 1e-3))
     inputs.append((lambda d: (lambda h, s: replace(s, mass=s.mass + d)), 1e-3 * 8.0))
     for b in range(3):  # the CoM in reference axes: a shift d seen as R_h d
@@ -264,3 +259,59 @@ def test_a_sigma_point_moves_only_the_hangings_its_input_belongs_to():
     pb = build_problem(_measurements(hs, np.ones(2)), ["Ixx", "Iyy"])
     for h in (0, 1):
         assert _perturbed_scene(pb, h, hs[h].scene, [("x-up+y-up:length.3", 1e-3)]).lengths[2] == pytest.approx(1.001)
+
+
+def test_body_points_two_hangings_share_are_budgeted_as_one_point_each():
+    # the trifilar body re-hung from the same three lugs, turned 120 degrees about the vertical: each
+    # config lists the same numbers (the lugs permuted), so the rig and the three body points are shared;
+    # Izz from the two torsion periods.  Brute force: each lug moved in the body (reference axes) moves
+    # its attachment in both hangings by R_h e; each rig entry moves in both.
+    hs = _hangings(rots={"z0": "identity", "z120": [{"z": 120}]})
+
+    def meas(T, rig):
+        return MeasurementSet(hs, [Measurement("torsion", float(T[h]), SIG_T, "period", "--period", hanging=h,
+                                               amplitude=0.0) for h in range(2)], rig=rig)
+
+    def periods(edit):  # edit(h, scene) -> the scene with the input moved
+        pb = build_problem(MeasurementSet([replace(h, scene=edit(q, h.scene)) for q, h in enumerate(hs)],
+                                          meas(np.ones(2), "shared").measurements), ["Izz"])
+        return pb.linear_periods(pb.prior), pb
+
+    T0, pb = periods(lambda h, s: s)
+    J = pb.jacobian(pb.prior)
+    G = np.linalg.solve(J.T @ J, J.T)[0]
+    assert [g["inputs"] for g in pb.links.shared][:2] == ["wire lengths and anchors",
+                                                          "attachment 1 of 'z0' (one body point)"]
+
+    def effect(edit_of, sig, step=1e-5):  # the std-scaled change of the estimate (kg m^2)
+        return float(G @ (periods(edit_of(step))[0] - periods(edit_of(-step))[0])) / (2 * step) * sig
+
+    def lug(j, b):
+        def edit_of(d):
+            def edit(q, s):
+                R = hs[q].rotation
+                i = int(np.argmin(np.linalg.norm(s.attachments @ R - hs[0].scene.attachments[j], axis=1)))
+                return replace(s, attachments=_add(s.attachments, (i, slice(None)), R[:, b] * d))
+            return edit
+        return edit_of
+
+    effects = [effect(lug(j, b), 1e-3) for j in range(3) for b in range(3)]
+    effects += [effect(lambda d, i=i: (lambda q, s: replace(s, lengths=_add(s.lengths, i, d))), 1e-3) for i in range(3)]
+    effects += [effect(lambda d, i=i, a=a: (lambda q, s: replace(s, anchors=_add(s.anchors, (i, a), d))), 1e-3)
+                for i in range(3) for a in range(3)]
+    effects += [effect(lambda d, b=b: (lambda q, s: replace(s, attachments=s.attachments
+                                                          - (hs[q].rotation[:, b] * d)[None, :])), 2e-3)
+                for b in range(3)]
+    effects.append(effect(lambda d: (lambda q, s: replace(s, mass=s.mass + d)), 8e-3, step=8e-5))
+    var = SIG_T ** 2 * float(G @ G) + sum(e * e for e in effects)
+    res = invert(meas(T0, "shared"), solve_for=["Izz"], ladder=False)
+    assert res.sigma("Izz") == pytest.approx(math.sqrt(var), rel=2e-3)
+    # measured apart, the lugs' errors would average over the hangings: a smaller std (wrong for one lug set)
+    sep = invert(meas(T0, "separate"), solve_for=["Izz"], ladder=False)
+    assert sep.sigma("Izz") < 0.95 * res.sigma("Izz")
+
+
+def _add(arr, idx, d):
+    a = np.array(arr, float)
+    a[idx] += d
+    return a

@@ -489,6 +489,11 @@ def describe_json(doc: dict) -> list[str]:
                      + ": time " + ", ".join(f"{m['mode']} (T = {m['period']:.5g} s, sep {100 * m['separation']:.3g} %; "
                                              f"{m['cycles_per_trial']} cycles x {m['stopwatch']['trials']} stopwatch trials)"
                                              for m in modes))
+    if len(doc["hangings"]) > 1 and doc.get("rig"):
+        lines.append("the hangings' wire lengths and anchors are budgeted as measured once for all of them (one "
+                     "rig, --rig shared)" if doc["rig"] == "shared" else
+                     "each hanging's wire lengths, anchors and attachments are budgeted as measured again for it "
+                     "(--rig separate)")
     if doc.get("min_separation"):
         lines.append(f"each timed mode is at least {100 * doc['min_separation']:g} % (--min-separation) from "
                      "every other mode of its hanging")
