@@ -4,8 +4,8 @@ several hangings' configs are measured once, so their errors are one for
 all those hangings -- in invert's budget, its Monte Carlo and the
 multi-hanging plan.  Before, each hanging's were budgeted as measured for
 it: on the session-9 audit's trifilar (Ixx, Iyy, Ixy from three torsions)
-the realised Ixx-Iyy correlation was 0.32 +- 0.06 where 0.05 was printed
-(closed loop, docs/invert.md)."""
+the realised Ixx-Iyy correlation was 0.32 +- 0.04 where 0.05 was printed
+(closed loop of 600 experiments, docs/design.md)."""
 
 from __future__ import annotations
 
@@ -103,7 +103,7 @@ def test_printed_covariance_is_the_sum_over_each_inputs_effect_on_every_hanging_
     scale = float(np.max(np.diag(brute)))
     assert np.allclose(C, brute, rtol=2e-3, atol=2e-3 * scale), (C, brute)
     corr = C[0, 1] / math.sqrt(C[0, 0] * C[1, 1])
-    # the models differ where it matters (the closed loop realised 0.32 +- 0.06): shared 0.23, separate 0.05
+    # the models differ where it matters (the closed loop realised 0.32 +- 0.04): shared 0.23, separate 0.05
     assert (corr > 0.15) if rig == "shared" else (corr < 0.1), corr
     doc = res.to_json()
     assert doc["rig"]["model"] == rig
