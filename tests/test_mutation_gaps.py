@@ -309,13 +309,23 @@ def test_key_hanging_mass_and_com_affect_every_hanging():
     from types import SimpleNamespace as NS
 
     from bifilar.estimation.budget import _key_hanging
+    from bifilar.estimation.rig import rig_links
 
-    pb = NS(models=[NS(hanging=NS(name="h1")), NS(hanging=NS(name="h2"))])
+    def scene(L):
+        return NS(n_wires=2, lengths=np.array([L, L]), anchors=np.array([[-1.0, 0, 1], [1.0, 0, 1]]),
+                  attachments=np.array([[-0.5, 0, 0.1], [0.5, 0, 0.1]]))
+
+    # two rigs (another wire length): each wire input is its hanging's own (the rig model in tests/test_rig_shared.py)
+    pb = NS(models=[NS(hanging=NS(name="h1")), NS(hanging=NS(name="h2"))],
+            links=rig_links(["h1", "h2"], [scene(1.0), scene(1.5)], [np.eye(3)] * 2))
     for key in ("com.x", "com.z", "mass", "gravity"):
         assert _key_hanging(pb, key) == [0, 1], key
     assert _key_hanging(pb, "h2:length.1") == [1]
-    assert _key_hanging(pb, "h1:attachment.2.y") == [0]
-    assert _key_hanging(NS(models=[NS(hanging=NS(name="ref"))]), "length.1") == [0]
+    assert _key_hanging(pb, "h1:length.2") == [0]
+    # the same body points in both (equal attachments, equal rotations): one input for both hangings
+    assert _key_hanging(pb, "h1+h2:attachment.2.y") == [0, 1]
+    assert _key_hanging(NS(models=[NS(hanging=NS(name="ref"))], links=rig_links(["ref"], [scene(1.0)], [np.eye(3)])),
+                        "length.1") == [0]
 
 
 def test_default_amplitude_range_is_ten_degrees():

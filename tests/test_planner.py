@@ -268,11 +268,17 @@ def monte_carlo_of_plan(hp, n, rng, offset):
     for _ in range(n):
         meas = []
         # the body's own inputs err once for every hanging (one weighing; one
-        # CoM, reference body axes, d_h = R d_ref); the rig's once per hanging
+        # CoM, reference body axes, d_h = R d_ref), and so do the one rig's wire
+        # lengths and anchors (the plan's default rig model, shared); the
+        # attachments once per hanging (other body points)
         body = draw_deltas(hp.hangings[0].scene, list(shared), rng, hp.unc)
         d_ref = np.array([body["com.x"], body["com.y"], body["com.z"]])
+        sc0 = hp.hangings[0].scene
+        rig = draw_deltas(sc0, [x for x in measured_inputs(sc0) if x.startswith(("length", "anchor"))], rng, hp.unc)
         for h, ks in zip(hp.hangings, idx):
-            deltas = draw_deltas(h.scene, [x for x in measured_inputs(h.scene) if x not in shared], rng, hp.unc)
+            deltas = draw_deltas(h.scene, [x for x in measured_inputs(h.scene) if x.startswith("attachment")], rng,
+                                 hp.unc)
+            deltas.update(rig)
             deltas.update({"mass": body["mass"], **dict(zip(("com.x", "com.y", "com.z"), h.R @ d_ref))})
             true_sc = perturb_many(replace(h.scene, inertia=h.R @ I_true @ h.R.T), deltas)
             T = periods_of(true_sc, h.sens.modes, h.sens.rest)[ks]

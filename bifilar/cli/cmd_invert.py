@@ -45,6 +45,10 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @click.option("--resume", is_flag=True, help="Continue the Monte Carlo journal given by --journal.")
 @click.option("--measurements", "measurements", type=click.Path(dir_okay=False), default=None,
               help="Measurements YAML file (several modes, hangings, recordings; docs/invert.md).")
+@click.option("--rig", default=None, metavar="shared|separate",
+              help="Several hangings: shared (default) budgets wire lengths, anchors and attachments that are the "
+                   "same in their configs as measured once (one error for all of them); separate as measured "
+                   "again for each hanging.  Overrides the measurements file's rig key.")
 @click.option("--no-ladder", is_flag=True, help="Only the chosen method (skip the comparison).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
@@ -54,7 +58,7 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @handle_errors
 def invert(config, periods, timed, signals, column, sample_rate, signal_model, signal_quantity, signal_scale,
            amplitudes, cycles, solve_for, method, uncertainty, monte_carlo, seed, journal, resume, measurements,
-           no_ladder, as_json, plot, force):
+           rig, no_ladder, as_json, plot, force):
     """Estimate inertia components of CONFIG's body from measured periods."""
     from pathlib import Path
 
@@ -64,6 +68,10 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
 
     if method is not None and method not in mm.METHOD_NAMES:
         raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
+    from ..estimation.rig import RIG_MODELS
+
+    if rig is not None and rig not in RIG_MODELS:
+        raise InputError("--rig", f"must be one of {', '.join(RIG_MODELS)}, got {rig!r}")
     n_mc = _int(monte_carlo, "--monte-carlo", minimum=0)
     seed_v = _int(seed, "--seed", minimum=0)
     if resume and journal is None:
@@ -104,6 +112,8 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
         # the config's uncertainty block (what sweep/plan budgeted) below --uncertainty
         ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config),
                                uncertainty=mm.config_uncertainty(config))
+    if rig is not None:
+        ms.rig = rig
     merged = dict(unc)
     ms.uncertainty = {**ms.uncertainty, **merged}
     for label, T, s in p_specs:

@@ -24,7 +24,7 @@ from .common import check_output_path, check_workers, console, emit_json, esc, f
 @handle_errors
 def plan(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, as_json, workers, hangings,
-         write_measurements, force):
+         rig, write_measurements, force):
     """Search the parameters of CONFIG for the configuration that minimises
     the predicted uncertainty of the target inertia subject to the
     constraints; report the expected accuracy of each component.  Exit 2,
@@ -49,7 +49,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
         raise InputError("--zip", "needs two parameters or more to move together")
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
                                          lengths_available, min_separation, no_tensions, sim_periods,
-                                         [b[0] for b in bounds], config)
+                                         [b[0] for b in bounds], config, rig)
     wc_p = check_output_path(write_config, force, [config], "--write-config")
     wm_p = check_output_path(write_measurements, force, [config, write_config], "--write-measurements")
     with progress_bar("planning", enabled=True) as upd:

@@ -43,6 +43,10 @@ def common_options(fn):
                      help="Plan several hangings (orientations of the body on the recommended rig) and the modes to "
                           "time in each, so that every --component is identified (automatic when one hanging "
                           "cannot); predicts each component from the joint fit."),
+        click.option("--rig", default="shared", show_default=True, metavar="shared|separate",
+                     help="The multi-hanging plan's wire lengths and anchors (and attachments at a body point "
+                          "two hangings use): shared = the one rig measured once for every hanging, separate = "
+                          "measured again for each hanging."),
         click.option("--write-measurements", type=click.Path(dir_okay=False), default=None,
                      help="Write the multi-hanging plan as a measurements file for `bifilar invert --measurements` "
                           "(planned periods: replace them with the measured ones)."),
@@ -76,23 +80,30 @@ SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.length
 
 
 def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-                min_separation, no_tensions, sim_periods, names=(), source="config"):
+                min_separation, no_tensions, sim_periods, names=(), source="config", rig="shared"):
     """(settings, constraints, target) from the config and the flags; exit 2
     on bad input, or at once when no point of a search over the parameters
     ``names`` can meet a constraint."""
+    from dataclasses import replace
+
     from ..errors import InputError
     from ..studies.shorthands import parse_values
     from ..studies.sweep import resolve_constraints, resolve_settings, resolve_target
     from ..studies.settings import unreachable
 
+    from ..estimation.rig import RIG_MODELS
+
     if sim_periods is not None and sim_periods > MAX_SWEEP_PERIODS:
         raise InputError("--periods", f"must be at most {MAX_SWEEP_PERIODS} periods per mode, got {sim_periods:g}")
+    if rig not in RIG_MODELS:
+        raise InputError("--rig", f"must be one of {', '.join(RIG_MODELS)}, got {rig!r}")
     la = None
     if lengths_available is not None:
         la = [float(v) for v in parse_values(lengths_available, "--lengths-available")]
     cons = resolve_constraints(cfg, max_tension, max_depth, la, min_separation)
     settings = resolve_settings(cfg, components=list(components) or None, amplitude=amplitude,
                                 sigma=parse_sigmas(sigmas), tensions=not no_tensions, periods=sim_periods)
+    settings = replace(settings, rig=rig)
     if no_tensions and cons.needs_nonlinear:
         which = "--max-tension" if cons.max_tension is not None else "--max-depth"
         raise InputError("--no-tensions", f"{which} needs the nonlinear run; drop one of them")
@@ -272,8 +283,8 @@ def render_rig(con, rig: dict, title: str = "the rig to build") -> None:
 @click.option("--stop-after", type=int, default=None, hidden=True, help="Stop after N new points (tests: a stand-in for Ctrl-C).")
 @handle_errors
 def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, hangings, write_measurements, as_json,
-          out, resume, plot, workers, force, stop_after):
+          min_separation, no_tensions, sim_periods, write_config, reaction, sensor, hangings, rig, write_measurements,
+          as_json, out, resume, plot, workers, force, stop_after):
     """Compare suspension configurations of CONFIG: predicted inertia
     uncertainty, estimator bias, mode separation, tensions and clearance per
     point; rank the feasible points and recommend one."""
@@ -299,7 +310,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
                                          lengths_available, min_separation, no_tensions, sim_periods,
-                                         [s.name for s in specs], config)
+                                         [s.name for s in specs], config, rig)
     journal = None
     if out:
         journal = check_journal_path(sw.journal_path(out), [config, plot], "--out", resume=resume)

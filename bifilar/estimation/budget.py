@@ -101,23 +101,25 @@ def _key_hanging(pb: Problem, key: str) -> list:
     """Indices of the hangings an input key affects."""
     if key.startswith("com.") or key in ("mass", "gravity"):
         return list(range(len(pb.models)))
-    if len(pb.models) > 1:
-        name = key.split(":", 1)[0]
-        return [h for h, hm in enumerate(pb.models) if hm.hanging.name == name]
-    return [0]
+    return pb.links.hangings(key)
 
 
 def _perturbed_scene(pb: Problem, h: int, scene, moves):
     """Hanging ``h``'s ``scene`` with each input ``key`` of ``moves``
     [(key, d), ...] changed by ``d`` (SI; a ``com.*`` key is a shift in the
-    reference body frame)."""
+    reference body frame; a rig or attachment key moves this hanging's
+    inputs it stands for, :class:`~bifilar.estimation.rig.RigLinks`, and
+    nothing in a hanging it does not act on)."""
     for key, d in moves:
         if key.startswith("com."):
             v = np.zeros(3)
             v["xyz".index(key[-1])] = d
             scene = scene_with(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
+        elif key in ("mass", "gravity"):
+            scene = perturb(scene, key, d)
         else:
-            scene = perturb(scene, key.split(":", 1)[1] if len(pb.models) > 1 and ":" in key else key, d)
+            for n, c in pb.links.moves(key, h):
+                scene = perturb(scene, n, c * d)
     return scene
 
 
@@ -539,7 +541,6 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
     mode ``pb.mode_index[k]`` tracked by MAC)."""
     K = len(pb.measurements)
     r = np.asarray(r, float)
-    multi = len(pb.models) > 1
     cols: dict[str, np.ndarray] = {}
     sigmas: dict[str, float] = {}
     degenerate: list[str] = []
@@ -566,8 +567,10 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
             sens, failed = robust_sensitivity(scene, rest, ms_h, names, scheme="forward")
             if cache is not None:
                 cache[ck] = (sens, failed)
-        pre = f"{hm.hanging.name}:" if multi else ""
-        degenerate += [(n if n.startswith("com.") or n in ("mass", "gravity") else pre + n) for n in failed]
+        links = pb.links
+        degenerate += [d for n in failed
+                       for d in ([n] if n.startswith("com.") or n in ("mass", "gravity") else
+                                 [key for key, _ in links.of(h, n)])]
         row = {k: (match[pb.mode_index[k]] if rows is None else rows(h, ms_h, match, k)) for k in ks}
         for j, n in enumerate(sens.names):
             col = np.zeros(K)
@@ -586,8 +589,11 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
                 cols[n] = cols.get(n, np.zeros(K)) + col
                 sigmas[n] = input_sigma(scene, n, unc)
             else:
-                cols[pre + n] = col
-                sigmas[pre + n] = input_sigma(scene, n, unc)
+                # a rig or attachment input: its keys (one per hanging, or one shared by the hangings
+                # that measured it once: their effects add before squaring)
+                for key, c in links.of(h, n):
+                    cols[key] = cols.get(key, np.zeros(K)) + col * c
+                    sigmas[key] = input_sigma(scene, n, unc)
     degenerate = [d for d in dict.fromkeys(degenerate) if d not in solved_com]
     return cols, sigmas, degenerate, scenes, rests, modes, matches
 
@@ -704,9 +710,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
         if d.startswith("com."):
             all_sig[d] = float(unc["com"])
         else:
-            n = d.split(":", 1)[-1]
             h = next(iter(_key_hanging(pb, d)))
-            all_sig[d] = input_sigma(scenes[h], n, unc)
+            all_sig[d] = input_sigma(scenes[h], pb.links.moves(d, h)[0][0] if d not in ("mass", "gravity") else d, unc)
     ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
                         list(degenerate), scenes, rests, modes, matches, cache=cache)
     return budget, degenerate, T_lin, ctx

@@ -111,7 +111,7 @@ def inputs_explain(pb: Problem, p, res: np.ndarray, other_var: np.ndarray, lim: 
     would accept any period: this one does not."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
-    from .sensitivity import perturb
+    from .budget import _perturbed_scene
 
     res = np.asarray(res, float)
     keys, J, s = _input_columns(pb, p)
@@ -127,17 +127,8 @@ def inputs_explain(pb: Problem, p, res: np.ndarray, other_var: np.ndarray, lim: 
         ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
         if not ks:
             continue
-        pre = f"{hm.hanging.name}:" if len(pb.models) > 1 else ""
-        scene, d_com = hm.scene(vals), np.zeros(3)
-        for key, d in zip(keys, dx):
-            if key.startswith("com."):
-                d_com["xyz".index(key[-1])] += d
-            elif key in ("mass", "gravity"):
-                scene = perturb(scene, key, d)
-            elif key.startswith(pre) and ":" not in key[len(pre):]:
-                scene = perturb(scene, key[len(pre):], d)
-        for ax, d in zip("xyz", hm.R @ d_com):  # a CoM shift in the reference frame, seen in this hanging's
-            scene = perturb(scene, f"com.{ax}", d)
+        # every input key moved by dx (a shared one in each hanging it acts on; a CoM shift in the reference frame)
+        scene = _perturbed_scene(pb, h, hm.scene(vals), list(zip(keys, dx)))
         try:
             ms = linear_modes(scene, rest_pose(scene, guess=hm.rest0))
         except (BifilarError, np.linalg.LinAlgError):

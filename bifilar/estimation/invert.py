@@ -213,6 +213,8 @@ class InversionResult:
             "degenerate_inputs": self.degenerate_inputs,
             "monte_carlo": self.monte_carlo.to_json() if self.monte_carlo is not None else None,
             "std_unavailable": self.std_unavailable,
+            # which rig inputs the hangings share (one error for all of them) and under which model
+            "rig": self.problem.links.to_json() if self.problem is not None else None,
             "warnings": list(self.warnings),
             "notes": list(self.notes),
             "runtime_s": self.runtime,
@@ -432,6 +434,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                 if extra in rg:
                     row[extra] = rg[extra]
         ladder_rows.append(row)
+    for g in pb.links.shared:
+        notes.append(f"hangings {', '.join(repr(n) for n in g['hangings'])} share {g['inputs']} (the same entries in "
+                     "their configs: measured once, one error for all of them in the budget and the Monte Carlo; "
+                     "--rig separate if each hanging's were measured again)")
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
     if fit.get("chi2_with_inputs") is not None and fit["dof"] == 0:
         notes.append(f"the measured period(s) lie beyond what a physical tensor gives, by up to "

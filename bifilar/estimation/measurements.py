@@ -17,6 +17,8 @@ One hanging::
     method: auto                       # optional: auto, small-angle, thesis, linear, nonlinear
     monte_carlo: 200                   # optional: number of Monte Carlo draws (0 = off)
     seed: 1                            # optional
+    rig: shared                        # optional: shared (default) or separate (several hangings,
+                                       # bifilar.estimation.rig: entries equal in their configs measured once)
     uncertainty:                       # optional overrides (units: see uncertainty.UNCERTAINTY_KEYS)
       length: 0.001
     measurements:
@@ -192,6 +194,10 @@ class MeasurementSet:
     seed: int | None = None
     source: str = ""
     notes: list = field(default_factory=list)
+    #: how the hangings' wire lengths, anchors and attachments were measured:
+    #: ``shared`` (entries equal in several configs measured once) or ``separate``
+    #: (:mod:`bifilar.estimation.rig`)
+    rig: str = "shared"
 
 
 
@@ -295,7 +301,7 @@ def _vec3(v, fld) -> np.ndarray:
 # ---------------------------------------------------------------------------
 
 _TOP = {"name", "description", "config", "measurements", "hangings", "solve_for", "method", "monte_carlo",
-        "seed", "uncertainty"}
+        "seed", "uncertainty", "rig"}
 _HANG = {"name", "config", "rotation", "measurements", "description"}
 _MEAS = {"mode", "period", "std", "cycles", "times", "time_std", "signal", "column", "sample_rate", "quantity",
          "scale", "model", "t_start", "t_stop", "trim", "amplitude", "amplitude_std", "note"}
@@ -359,6 +365,13 @@ def load_measurements(path, config_override: str | None = None, unknown: tuple =
             errs.append(InputError("method", f"must be one of {', '.join(METHOD_NAMES)}, got {doc['method']!r}"))
         else:
             ms.method = doc["method"]
+    if "rig" in doc:
+        from .rig import RIG_MODELS
+
+        if doc["rig"] not in RIG_MODELS:
+            errs.append(InputError("rig", f"must be one of {', '.join(RIG_MODELS)}, got {doc['rig']!r}"))
+        else:
+            ms.rig = doc["rig"]
     if "monte_carlo" in doc:
         v = doc["monte_carlo"]
         if isinstance(v, bool) or not isinstance(v, int) or v < 0:

@@ -75,7 +75,9 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     the measured values; normal, except a period from ``n`` timed trials:
     ``T + std T_{n-1}``, Student's t with the trials' dof, whose spread is
     what the trials support and whose 2.5-97.5 % quantiles are the
-    Student interval; for ``n <= 3`` it has no finite variance); the amplitude factor at the drawn amplitude is
+    Student interval; for ``n <= 3`` it has no finite variance); a rig
+    input or body point several hangings share (``pb.links``,
+    :mod:`bifilar.estimation.rig`) is drawn once for all of them; the amplitude factor at the drawn amplitude is
     the mode's amplitude law ``r(A) = 1 + a A^2 + b A^4`` (nonlinear method;
     ``res.amplitude_laws``, :class:`~bifilar.estimation.solve.AmplitudeLaw`) and each drawn period is divided by it.
     Where the law has a derivative in the unknowns (a stated amplitude) the
@@ -93,6 +95,7 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     pb = res.problem
     unc = pb.unc
     solved_com = {x for x in pb.unknowns if x in COM_UNKNOWNS}
+    links = pb.links  # which rig inputs the hangings share (drawn once)
     draws: list = []
     for _ in range(n):
         try:
@@ -102,16 +105,26 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
             dcom = np.array([0.0 if f"com.{a}" in solved_com else rng.normal(0.0, unc["com"]) for a in "xyz"])
             hangs = []
             slope = np.zeros((len(pb.measurements), len(pb.unknowns)))
-            for hm in pb.models:
+            drawn: dict = {}  # rig and attachment input key -> its error: one draw for every hanging sharing it
+
+            def error(h, name, sd):
+                e = 0.0
+                for key, c in links.of(h, name):
+                    if key not in drawn:
+                        drawn[key] = rng.normal(0.0, sd)
+                    e += c * drawn[key]
+                return e
+
+            for h, hm in enumerate(pb.models):
                 s = hm.hanging.scene
                 att = s.attachments - (hm.R @ dcom)[None, :]
                 an = s.anchors.copy()
                 L = s.lengths.copy()
                 for i in range(s.n_wires):
-                    L[i] += rng.normal(0.0, unc["length"])
+                    L[i] += error(h, f"length.{i + 1}", unc["length"])
                     for a in range(3):
-                        an[i, a] += rng.normal(0.0, unc["position"])
-                        att[i, a] += rng.normal(0.0, unc["position"])
+                        an[i, a] += error(h, f"anchor.{i + 1}.{'xyz'[a]}", unc["position"])
+                        att[i, a] += error(h, f"attachment.{i + 1}.{'xyz'[a]}", unc["position"])
                 s2 = replace(s, mass=s.mass * (1 + dm), gravity=s.gravity * (1 + dg), lengths=L, anchors=an,
                              attachments=att)
                 hangs.append(replace(hm.hanging, scene=s2))
@@ -372,8 +385,10 @@ def _modes_or_none(modes_batch, scenes, rests) -> list:
         return out
 
 
-DRAW_SCHEME = 4
-"""Version of how the draws are made, part of a journal's key: 4 lets a
+DRAW_SCHEME = 5
+"""Version of how the draws are made, part of a journal's key (with the
+rig model, ``shared`` or ``separate``): 5 draws a rig input or body point
+several hangings share once for all of them (session 10), 4 lets a
 stated amplitude's factor follow the re-estimated unknowns through the
 law's ``dr/dp`` (:class:`FactorDraw`, session 9), 3 draws the
 amplitude factor from the mode's amplitude law and a recording's period
@@ -404,7 +419,7 @@ def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | 
 
     path = Path(journal)
     key = hashlib.sha256(json.dumps([list(res.names), [float(v) for v in res.values], [float(v) for v in res.std],
-                                     int(n), int(chunk), res.method, DRAW_SCHEME], sort_keys=True).encode()).hexdigest()[:16]
+                                     int(n), int(chunk), res.method, DRAW_SCHEME, res.problem.rig], sort_keys=True).encode()).hexdigest()[:16]
     n_chunks = (n + chunk - 1) // chunk
     done: dict[int, np.ndarray] = {}
     if path.exists():

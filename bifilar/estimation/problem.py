@@ -11,7 +11,7 @@ the same body with ``I_h = R_h I_ref R_h^T``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -290,6 +290,21 @@ class Problem:
     unknowns: list
     I_ref0: np.ndarray
     unc: dict
+    #: how the hangings' rig inputs are measured (:data:`~bifilar.estimation.rig.RIG_MODELS`)
+    rig: str = "shared"
+    _links: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def links(self):
+        """The hangings' rig and attachment inputs as independent measured
+        quantities (:func:`~bifilar.estimation.rig.rig_links` of the
+        configs' geometry under :attr:`rig`)."""
+        if self._links is None or self._links.model != self.rig:
+            from .rig import rig_links
+
+            self._links = rig_links([hm.hanging.name for hm in self.models], [hm.hanging.scene for hm in self.models],
+                                    [hm.R for hm in self.models], self.rig)
+        return self._links
 
     @property
     def prior(self) -> np.ndarray:
@@ -365,7 +380,8 @@ def build_problem(ms: MeasurementSet, solve_for: list | None = None, unc: dict |
         for k, m in enumerate(ms.measurements):
             unknowns.append(best_component(tmp, k))
         unknowns = [n for n in SOLVABLE if n in unknowns]
-    pb = Problem(models, ms.measurements, idx, unknowns, I_ref0, default_uncertainty(unc))
+    pb = Problem(models, ms.measurements, idx, unknowns, I_ref0, default_uncertainty(unc),
+                 rig=like.rig if like is not None else ms.rig)
     if like is None and len(unknowns) > len(ms.measurements):
         raise InputError("--solve-for", f"{len(unknowns)} unknowns ({', '.join(unknowns)}) but only "
                                         f"{len(ms.measurements)} measured period(s): measure more modes or "

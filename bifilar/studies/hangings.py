@@ -14,11 +14,14 @@ The joint fit: the unknowns ``theta`` are the requested components (kg m^2,
 reference body axes); each timed period ``T_m`` (s) depends on them through
 ``J[m, c] = dT_m / dI_c`` (chain rule through ``R``).  The periods'
 covariance ``S`` holds the timing variance ``sigma_T^2`` of each period,
-within a hanging the errors of the inputs re-measured for it propagated to
-its periods (``Jx Sx Jx^T``: wire lengths, anchor and attachment
-coordinates; independent between hangings), and across hangings those of
-the body's own inputs (mass, CoM in reference body axes: one error for
-every hanging).  The estimate is the one ``bifilar invert --measurements``
+within a hanging the errors of the inputs measured for it alone propagated
+to its periods (``Jx Sx Jx^T``), and across hangings those of the inputs
+measured once for several: the body's own (mass, CoM in reference body
+axes) and, with the rig model ``shared`` (the default; ``--rig``,
+:mod:`bifilar.estimation.rig`), the rig's wire lengths and anchors, which
+every candidate hangs on, and an attachment at a body point another
+candidate uses too (``separate``: those measured again for each hanging).
+The estimate is the one ``bifilar invert --measurements``
 makes, least squares weighted by the timing variances, with the covariance
 ``C = (J^T J)^-1 J^T S J (J^T J)^-1``; the plan reports ``sqrt(C_cc)`` per
 component and the correlations.  The selection below ranks measurements by
@@ -91,6 +94,8 @@ class HangingPlan:
     min_separation: float | None = None
     #: of ``missing``, the components some mode of a hanging tried depends on, left out for the guard
     separation_blocked: list = field(default_factory=list)
+    #: the rig model the covariance assumes (:mod:`bifilar.estimation.rig`)
+    rig: str = "shared"
 
     def accuracy(self) -> dict:
         sd = np.sqrt(np.clip(np.diag(self.covariance), 0, None)) if len(self.covariance) else []
@@ -106,7 +111,7 @@ class HangingPlan:
                 "hangings": [{"name": h.name, "rotation_deg": list(h.rotvec_deg), "notes": h.notes}
                              for h in self.hangings],
                 "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing,
-                "min_separation": self.min_separation,
+                "min_separation": self.min_separation, "rig": self.rig,
                 "sigma_unavailable": (std_unavailable_text(self.undefined, "--sigma KEY=VALUE")
                                       if self.undefined else None)}
 
@@ -143,27 +148,59 @@ SHARED_INPUTS = ("mass", "com.x", "com.y", "com.z")
 one CoM: reference body axes), as ``bifilar invert --measurements`` has them."""
 
 
-def _rows(h: Hanging, comps: list[str], unc: dict):
+def _rows(h: Hanging, comps: list[str], unc: dict, rig: tuple | None = None):
     """Per mode of a hanging: dT/dtheta (K, C), the part of the periods'
-    covariance (K, K, s^2) from the inputs re-measured for this hanging
-    (wire lengths, anchors, attachments), and dT/dx times sigma_x (K, 4, s)
-    for the body's own inputs (:data:`SHARED_INPUTS`; the CoM in reference
-    body axes, ``d_h = R d_ref``)."""
+    covariance (K, K, s^2) from the inputs measured for this hanging alone
+    (wire lengths, anchors, attachments), and dT/dx times sigma_x (K, 4 + S,
+    s) for the inputs every hanging shares: the body's own
+    (:data:`SHARED_INPUTS`; the CoM in reference body axes, ``d_h = R
+    d_ref``), then the ``S`` rig inputs and body points measured once for
+    several hangings.  ``rig``: (:class:`~bifilar.estimation.rig.RigLinks`
+    of the candidate hangings, this hanging's index in them, the shared
+    keys in column order); None: every rig input measured for this hanging
+    (``separate``)."""
     J = np.column_stack([reference_column(h.sens, h.R, c) for c in comps])
     names = h.sens.names
     xs = [j for j, n in enumerate(names) if n not in _IDX and n not in SHARED_INPUTS]
     sx = np.array([input_sigma(h.scene, names[j], unc) for j in xs])
     Jx = _stated(h.sens.jacobian[:, xs], sx)
+    Jrig = np.zeros((len(J), 0))
+    if rig is not None:  # each input's effect carried to its key: one of this hanging's, or a shared column
+        links, hi, shared = rig
+        own: dict = {}
+        A_own, A_sh = [], np.zeros((len(xs), len(shared)))
+        for q, j in enumerate(xs):
+            for key, c in links.of(hi, names[j]):
+                if key in shared:
+                    A_sh[q, shared.index(key)] += c
+                else:
+                    if key not in own:
+                        own[key] = len(own)
+                        A_own.append(np.zeros(len(xs)))
+                    A_own[own[key]][q] += c
+        Jx, Jrig = Jx @ np.array(A_own).reshape(-1, len(xs)).T, Jx @ A_sh
     col = {n: (h.sens.column(n) if n in names else np.zeros(len(J))) for n in SHARED_INPUTS}
     s_com = input_sigma(h.scene, "com.x", unc)
     Jcom = _stated(np.column_stack([col["com.x"], col["com.y"], col["com.z"]]), np.full(3, s_com)) @ h.R
-    Js = np.column_stack([_stated(col["mass"][:, None], np.array([input_sigma(h.scene, "mass", unc)])), Jcom])
+    Js = np.column_stack([_stated(col["mass"][:, None], np.array([input_sigma(h.scene, "mass", unc)])), Jcom, Jrig])
     # per mode: the inputs without a derivative (a knife edge) and a nonzero sigma: no std can be given
     # from that period (as invert gives none)
     stated = [(names[j], h.sens.jacobian[:, j]) for j, s in zip(xs, sx) if s > 0]
     stated += [(n, col[n]) for n in SHARED_INPUTS if n in names and input_sigma(h.scene, n, unc) > 0]
     undefined = [[n for n, c in stated if not np.isfinite(c[k])] for k in range(len(J))]
     return J, Jx @ Jx.T, Js, undefined
+
+
+def rig_split(hs: list, model: str) -> list:
+    """Per candidate hanging of ``hs`` the ``rig`` argument of :func:`_rows`
+    under the rig model ``model`` (:mod:`bifilar.estimation.rig`; the
+    candidates hang on one rig, so ``shared`` makes the wire lengths and
+    anchors one input for all of them, and a body point several use one)."""
+    from ..estimation.rig import rig_links
+
+    links = rig_links([h.name for h in hs], [h.scene for h in hs], [h.R for h in hs], model)
+    shared = [k for k in links.keys if len(links.hangings(k)) > 1]
+    return [(links, hi, shared) for hi in range(len(hs))]
 
 
 def _stated(jac: np.ndarray, sigma: np.ndarray) -> np.ndarray:
@@ -178,7 +215,8 @@ def _stated(jac: np.ndarray, sigma: np.ndarray) -> np.ndarray:
 def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True):
     """(C, rank, unresolved) of the joint fit over hangings; S = timing^2 I
     + the input covariance of each hanging's chosen modes (block diagonal)
-    + the body's shared inputs' ``Js Js^T`` across hangings; ``blocks``: per
+    + the shared inputs' ``Js Js^T`` across hangings (the body's, and the
+    rig's measured once: :func:`_rows`); ``blocks``: per
     hanging (J rows, input covariance, shared-input rows ``Js``, and with
     a stated amplitude the rows of the model's full derivative ``r dT_lin/dI
     + T_lin dr/dI`` and the amplitude's variance per period (s^2): the
@@ -239,7 +277,7 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     ref = hs[0].scene
     scales = {c: component_scale(ref.inertia, c) for c in components}
     values = {c: float(ref.inertia[_IDX[c]]) for c in components}
-    data = [_rows(h, components, unc) for h in hs]
+    data = [_rows(h, components, unc, r) for h, r in zip(hs, rig_split(hs, settings.rig))]
     cands = []
     close = np.zeros(len(components), bool)  # some mode too close to another depends on the component
     for hi, h in enumerate(hs):
@@ -316,7 +354,8 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     if undefined:  # the selection left them out; the prediction cannot (invert gives no std either)
         C = np.full_like(C, np.nan)
     return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing,
-                       undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing])
+                       undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing],
+                       settings.rig)
 
 
 def hangings_objective(base_cfg: dict, source: str, params: dict, settings: SweepSettings,
@@ -433,7 +472,7 @@ def measurements_document(plan: HangingPlan, reaction: float | None = None) -> d
                  "measurements": ms}
         hangs.append(entry)
     unc = {k: v for k, v in plan.unc.items() if k != "timing"}
-    return {"solve_for": list(plan.components), "uncertainty": unc, "hangings": hangs}
+    return {"solve_for": list(plan.components), "uncertainty": unc, "rig": plan.rig, "hangings": hangs}
 
 
 def describe(plan: HangingPlan) -> list[str]:
@@ -450,6 +489,11 @@ def describe_json(doc: dict) -> list[str]:
                      + ": time " + ", ".join(f"{m['mode']} (T = {m['period']:.5g} s, sep {100 * m['separation']:.3g} %; "
                                              f"{m['cycles_per_trial']} cycles x {m['stopwatch']['trials']} stopwatch trials)"
                                              for m in modes))
+    if len(doc["hangings"]) > 1 and doc.get("rig"):
+        lines.append("the hangings' wire lengths and anchors are budgeted as measured once for all of them (one "
+                     "rig, --rig shared)" if doc["rig"] == "shared" else
+                     "each hanging's wire lengths, anchors and attachments are budgeted as measured again for it "
+                     "(--rig separate)")
     if doc.get("min_separation"):
         lines.append(f"each timed mode is at least {100 * doc['min_separation']:g} % (--min-separation) from "
                      "every other mode of its hanging")

@@ -80,6 +80,9 @@ class SweepSettings:
     tensions: bool = True
     periods: float = 3.0
     rtol: float = 1e-8
+    #: the multi-hanging plan's rig model (:mod:`bifilar.estimation.rig`): ``shared`` (the
+    #: candidate hangings' one rig measured once) or ``separate``; a point's figures do not depend on it
+    rig: str = "shared"
 
     @property
     def unc(self) -> dict:

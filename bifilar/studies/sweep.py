@@ -131,7 +131,8 @@ def point_key(params: dict) -> str:
 
 def fingerprint(base_cfg: dict, settings: SweepSettings) -> str:
     """Hash of everything that determines a point's figures besides its parameters."""
-    doc = json.dumps({"config": base_cfg, "settings": settings.describe(), "version": JOURNAL_VERSION},
+    st = {k: v for k, v in settings.describe().items() if k != "rig"}  # (only the hangings plan depends on it)
+    doc = json.dumps({"config": base_cfg, "settings": st, "version": JOURNAL_VERSION},
                      sort_keys=True, default=str)
     return hashlib.sha256(doc.encode()).hexdigest()[:16]
 
