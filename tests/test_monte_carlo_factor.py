@@ -94,7 +94,7 @@ def test_draws_solve_the_full_model_and_both_solvers_agree(case):
     # every input drawn (default 1 mm, 0.1 %): the loop (root finding on T_lin rho) and the batched
     # secant must give the same estimates (both stop at |T - T_draw| <= 1e-12 T_draw), and each
     # estimate must reproduce the drawn period with the factor at the estimate, recomputed here from the
-    # draw's own problem: T_lin(p) (1 + slope (unit p - p_hat)) = T_draw / r(A_draw; p_hat)
+    # draw's own problem: T_lin(p) (1 + offset + slope (unit p - p_hat)) = T_draw / r(A_draw; p_hat)
     scene, A, T = case
     res = _invert(scene, T, {"length": 1e-3, "position": 1e-3, "mass": 1e-3, "com": 2e-3, "gravity": 0.0,
                              "timing": 1e-3, "amplitude": 0.1}, A)
@@ -112,7 +112,7 @@ def test_draws_solve_the_full_model_and_both_solvers_agree(case):
         assert 0.6 < d.slope[0, 0] / (law.dr_dp[0] / res.factors[0]) < 1.5
         pb = build_problem(d, like=res.problem)
         pb.I_ref0 = res.problem.I_ref0
-        rho = 1.0 + d.slope[0, 0] * (d.unit[0] * p[0] - res.values[0])
+        rho = 1.0 + d.offset[0] + d.slope[0, 0] * (d.unit[0] * p[0] - res.values[0])
         assert pb.linear_periods(p)[0] * rho == pytest.approx(d.measurements[0].period, rel=1e-10)
         moved += abs(rho - 1) > 1e-5
     assert moved >= 10  # the factor really follows the estimate
@@ -164,7 +164,7 @@ def test_two_unknowns_solve_the_full_model():
     for d, p in zip(draws, est):
         pb = build_problem(d, like=res.problem)
         pb.I_ref0 = res.problem.I_ref0
-        rho = 1.0 + d.slope @ (d.unit * p - res.values)
+        rho = 1.0 + d.offset + d.slope @ (d.unit * p - res.values)
         assert np.max(np.abs(rho - 1)) > 1e-5
         np.testing.assert_allclose(pb.linear_periods(p) * rho, [m.period for m in d.measurements], rtol=1e-10)
 

@@ -375,6 +375,14 @@ class AmplitudeLaw:
     b: float  # 1 / unit^4
     #: d r(A0) / d p (P,) per unit of each unknown (a stated amplitude's law; None otherwise)
     dr_dp: np.ndarray | None = None
+    #: {input key: d r(A0) / d x per SI unit} of the budgeted inputs (a stated amplitude's law, once the
+    #: budget has measured it: :func:`~bifilar.estimation.budget.factor_input_derivatives`; None before)
+    dr_dx: dict | None = None
+    #: input keys whose ``dr/dx`` could not be measured (their stepped run failed: left at 0)
+    dr_dx_failed: list = field(default_factory=list)
+    #: {input key: the exact route that gave its ``dr/dx`` without a run} (``gravity``, ``translation``,
+    #: ``com``, ``scaling``: :func:`~bifilar.estimation.budget._factor_routes`)
+    dr_dx_derived: dict = field(default_factory=dict)
 
     def factor(self, A) -> np.ndarray | float:
         """r(A) (dimensionless; array in, array out)."""
