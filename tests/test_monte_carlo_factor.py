@@ -120,8 +120,10 @@ def test_draws_solve_the_full_model_and_both_solvers_agree(case):
 
 def test_mass_moves_the_factor_through_i_over_m():
     # the motion depends on the mass only through I / m: with only the mass drawn, the torsion of the
-    # symmetric boat is matched exactly by Izz_hat m / m_hat, the factor unchanged.  A factor that took
-    # the mass as fixed (unit 1) moved the estimate 1.09x (spacing 1) / 1.38x (spacing 2.5) too far
+    # symmetric boat is matched by Izz_hat m / m_hat, the factor unchanged.  The factor follows the drawn
+    # mass through the budget's measured dr/dm (FactorDraw.offset; here by the mass's own stepped run, the
+    # geometry being exact); a factor that took the mass as fixed moved the estimate 1.09x (spacing 1) /
+    # 1.38x (spacing 2.5) too far
     point, A = POINTS["spacing 2.5"]
     scene = _boat(point)
     res = _invert(scene, float(_periods(scene, [A])[0]), {**EXACT_INPUTS, "mass": 1e-3, "timing": 1e-9,
