@@ -94,7 +94,7 @@ def test_draws_solve_the_full_model_and_both_solvers_agree(case):
     # every input drawn (default 1 mm, 0.1 %): the loop (root finding on T_lin rho) and the batched
     # secant must give the same estimates (both stop at |T - T_draw| <= 1e-12 T_draw), and each
     # estimate must reproduce the drawn period with the factor at the estimate, recomputed here from the
-    # draw's own problem: T_lin(p) (1 + slope (unit p - p_hat)) = T_draw / r(A_draw; p_hat)
+    # draw's own problem: T_lin(p) (1 + offset + slope (unit p - p_hat)) = T_draw / r(A_draw; p_hat)
     scene, A, T = case
     res = _invert(scene, T, {"length": 1e-3, "position": 1e-3, "mass": 1e-3, "com": 2e-3, "gravity": 0.0,
                              "timing": 1e-3, "amplitude": 0.1}, A)
@@ -112,7 +112,7 @@ def test_draws_solve_the_full_model_and_both_solvers_agree(case):
         assert 0.6 < d.slope[0, 0] / (law.dr_dp[0] / res.factors[0]) < 1.5
         pb = build_problem(d, like=res.problem)
         pb.I_ref0 = res.problem.I_ref0
-        rho = 1.0 + d.slope[0, 0] * (d.unit[0] * p[0] - res.values[0])
+        rho = 1.0 + d.offset[0] + d.slope[0, 0] * (d.unit[0] * p[0] - res.values[0])
         assert pb.linear_periods(p)[0] * rho == pytest.approx(d.measurements[0].period, rel=1e-10)
         moved += abs(rho - 1) > 1e-5
     assert moved >= 10  # the factor really follows the estimate
@@ -120,8 +120,10 @@ def test_draws_solve_the_full_model_and_both_solvers_agree(case):
 
 def test_mass_moves_the_factor_through_i_over_m():
     # the motion depends on the mass only through I / m: with only the mass drawn, the torsion of the
-    # symmetric boat is matched exactly by Izz_hat m / m_hat, the factor unchanged.  A factor that took
-    # the mass as fixed (unit 1) moved the estimate 1.09x (spacing 1) / 1.38x (spacing 2.5) too far
+    # symmetric boat is matched by Izz_hat m / m_hat, the factor unchanged.  The factor follows the drawn
+    # mass through the budget's measured dr/dm (FactorDraw.offset; here by the mass's own stepped run, the
+    # geometry being exact); a factor that took the mass as fixed moved the estimate 1.09x (spacing 1) /
+    # 1.38x (spacing 2.5) too far
     point, A = POINTS["spacing 2.5"]
     scene = _boat(point)
     res = _invert(scene, float(_periods(scene, [A])[0]), {**EXACT_INPUTS, "mass": 1e-3, "timing": 1e-9,
@@ -164,7 +166,7 @@ def test_two_unknowns_solve_the_full_model():
     for d, p in zip(draws, est):
         pb = build_problem(d, like=res.problem)
         pb.I_ref0 = res.problem.I_ref0
-        rho = 1.0 + d.slope @ (d.unit * p - res.values)
+        rho = 1.0 + d.offset + d.slope @ (d.unit * p - res.values)
         assert np.max(np.abs(rho - 1)) > 1e-5
         np.testing.assert_allclose(pb.linear_periods(p) * rho, [m.period for m in d.measurements], rtol=1e-10)
 

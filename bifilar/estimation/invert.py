@@ -136,6 +136,10 @@ class InversionResult:
     #: per measurement its amplitude law (nonlinear method with a stated amplitude,
     #: :class:`~bifilar.estimation.solve.AmplitudeLaw`) or None
     amplitude_laws: list = field(default_factory=list, repr=False)
+    #: {input key: (P,) what the amplitude factor's dependences add to that input's term} (nonlinear
+    #: method: ``dr/dx`` and the full gain, :func:`~bifilar.estimation.budget._with_factor_gain`); the
+    #: input's term without them, as the sweep and plan take it, is its contribution minus this
+    input_factor_shift: dict = field(default_factory=dict, repr=False)
 
     @property
     def std(self) -> np.ndarray:
@@ -192,6 +196,10 @@ class InversionResult:
                                               / m.amplitude,
                                               "quartic_share": (law.quartic_share if math.isfinite(law.quartic_share)
                                                                 else None)}
+                if law.dr_dx is not None:  # the factor's derivative in each budgeted input (invert's budget)
+                    res[-1]["factor_inputs"] = {"dr_dx": {key: float(v) for key, v in law.dr_dx.items()},
+                                                "derived": dict(law.dr_dx_derived),
+                                                "failed": list(law.dr_dx_failed)}
         doc = {
             "inertia": inertia,
             "method": self.method,
@@ -407,6 +415,11 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                         f"which lengthen the period by up to {100 * (r_max - 1):.2g} %: the truth may differ from "
                         f"this small-amplitude estimate by up to {worst}; carried in the budget as a systematic "
                         "term (mean offset and spread); give --amplitude (0 for a small one) to remove it")
+    for law in laws or []:
+        if law is not None and law.dr_dx_failed:
+            warnings.append("the amplitude factor's derivative in " + ", ".join(law.dr_dx_failed) + " could not be "
+                            "measured (the stepped scene's run failed): the budget takes the factor to depend on "
+                            "them as on the unknowns")
     if bctx.nonlinear:
         warnings.append("the estimate is not linear in " + ", ".join(bctx.nonlinear) + " over their uncertainties "
                         "(curvature or a vanishing derivative): those inputs are propagated to second order "
@@ -463,6 +476,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           list(pb.measurements), list(ms.hangings), T_lin_hat, np.asarray(r_hat, float),
                           _assumed(unc_all), degenerate, warnings, notes, problem=pb,
                           sims=(est_nl.sims if est_nl is not None else []), amplitude_laws=list(laws or []))
+    res.input_factor_shift = dict(bctx.factor_shift)
     if degenerate:
         # inputs with no derivative (a knife edge): within their stated
         # uncertainty the scene changes qualitatively, and a budget without
@@ -681,7 +695,7 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
     budget context, {mode: (assumed max amplitude, its period factor)}).
     ``cache``: shared by budgets at the same scenes (``BudgetContext.cache``).
     ``laws``: the amplitude laws of the nonlinear method (``Estimate.laws``)."""
-    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws)
+    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws, rtol)
     std_lin = budget.std
     amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
     if any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):

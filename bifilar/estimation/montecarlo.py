@@ -29,27 +29,36 @@ class FactorDraw(MeasurementSet):
     Measurement ``k``'s ``period`` is the drawn period divided by the factor
     ``r_k(A_k; p_hat)`` at the drawn amplitude and the estimate; the draw's
     model period is ``T_lin,k(p) rho_k(p)`` with
-    ``rho_k(p) = 1 + slope[k] @ (unit * p - p_ref)`` (dimensionless), i.e.
-    the drawn period is matched by ``T_lin,k(p) r_k(A_k; p)``, ``r``
-    linearised about ``p_ref`` = ``p_hat`` as the budget linearises it.
+    ``rho_k(p) = 1 + offset[k] + slope[k] @ (unit * p - p_ref)``
+    (dimensionless), i.e. the drawn period is matched by ``T_lin,k(p)
+    r_k(A_k; p, x)``, ``r`` linearised about ``p_ref`` = ``p_hat`` and the
+    measured inputs as the budget linearises it.
 
     slope : (K, P) ``w(A_k) dr_k/dp / r_k(A_k; p_hat)`` per unit of each
         unknown (kg m^2 or m); ``dr/dp`` is the law's at the stated
         amplitude, ``w = (r(A) - 1) / (r(A0) - 1)`` carries it to the drawn
         one (:meth:`~bifilar.estimation.solve.AmplitudeLaw.release_weight`).
-    unit : (P,) ``m_hat / m_draw`` for inertia unknowns, 1 for CoM shifts:
-        the motion depends on the mass only through ``I / m``, so the
-        factor at the draw's mass and ``p`` is the estimate-mass factor at
-        ``p m_hat / m_draw``.
+    offset : (K,) ``w(A_k) sum_j dr_k/dx_j dx_j / r_k(A_k; p_hat)``: the
+        factor's change with the draw's input errors ``dx_j`` (the law's
+        ``dr_dx``, measured by the budget, the mass's included), as it
+        follows the unknowns through ``dr/dp``.
+    unit : (P,) ones where the law has ``dr_dx``; without it (a law the
+        budget did not reach) ``m_hat / m_draw`` for inertia unknowns, 1 for
+        CoM shifts: the motion depends on the mass only through ``I / m``,
+        so the factor at the draw's mass and ``p`` is the estimate-mass
+        factor at ``p m_hat / m_draw`` where the unknowns are the only
+        inertia the factor depends on.
     p_ref : (P,) the estimate ``p_hat``."""
 
     slope: np.ndarray | None = None
     unit: np.ndarray | None = None
     p_ref: np.ndarray | None = None
+    offset: np.ndarray | None = None
 
     def factor(self, p) -> np.ndarray:
         """(K,) ``rho_k(p)`` at unknowns ``p`` (SI)."""
-        return 1.0 + self.slope @ (self.unit * np.asarray(p, float) - self.p_ref)
+        off = 0.0 if self.offset is None else self.offset
+        return 1.0 + off + self.slope @ (self.unit * np.asarray(p, float) - self.p_ref)
 
 
 @dataclass
@@ -85,10 +94,9 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     unknowns through ``dr/dp`` (the full model's gain, as the budget's
     timing and amplitude terms), not held at the estimate's (a fixed factor
     gave the Solar Boat's torsion at 0.3 rad 0.90 of the budget's timing
-    term).  The drawn inputs do not move the factor (no ``dr/dx`` is
-    measured; exact for gravity, which only scales time), except the mass
-    through ``I / m`` (:attr:`FactorDraw.unit`); other draws are
-    plain linear-model problems.  Every input is perturbed,
+    term), and the drawn inputs move it through the law's ``dr/dx``
+    (:attr:`FactorDraw.offset`; gravity's is 0 exactly, it only scales
+    time); other draws are plain linear-model problems.  Every input is perturbed,
     degenerate ones (no derivative) too: their finite-size effect is what the
     linear budget cannot see.  A draw that cannot even be built
     is ``None``.  Reproducible for a given generator state."""
@@ -105,6 +113,7 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
             dcom = np.array([0.0 if f"com.{a}" in solved_com else rng.normal(0.0, unc["com"]) for a in "xyz"])
             hangs = []
             slope = np.zeros((len(pb.measurements), len(pb.unknowns)))
+            offset = np.zeros(len(pb.measurements))
             drawn: dict = {}  # rig and attachment input key -> its error: one draw for every hanging sharing it
 
             def error(h, name, sd):
@@ -128,6 +137,10 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                 s2 = replace(s, mass=s.mass * (1 + dm), gravity=s.gravity * (1 + dg), lengths=L, anchors=an,
                              attachments=att)
                 hangs.append(replace(hm.hanging, scene=s2))
+            # each input's error under its budget key (input_columns's keys: a shared rig input's once), for the
+            # factor's dr/dx
+            dx = {"mass": pb.models[0].hanging.scene.mass * dm, "gravity": pb.models[0].hanging.scene.gravity * dg,
+                  **{f"com.{a}": dcom[q] for q, a in enumerate("xyz")}, **drawn}
             meas = []
             for k, m in enumerate(pb.measurements):
                 # a period from n timed trials: its std is estimated with
@@ -142,11 +155,15 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                     law = res.amplitude_laws[k]
                     r = float(law.factor(A))
                     if law.dr_dp is not None:
-                        slope[k] = law.release_weight((A / law.amplitude) ** 2) * law.dr_dp / r
+                        w = law.release_weight((A / law.amplitude) ** 2)
+                        slope[k] = w * law.dr_dp / r
+                        offset[k] = w * sum(v * dx.get(key, 0.0) for key, v in (law.dr_dx or {}).items()) / r
                 meas.append(replace(m, period=T / r))
             if np.any(slope):
-                unit = np.array([1.0 / (1.0 + dm) if x in _IDX else 1.0 for x in pb.unknowns])
-                draws.append(FactorDraw(hangs, meas, slope=slope, unit=unit, p_ref=np.asarray(res.values, float)))
+                measured = all(law is None or law.dr_dp is None or law.dr_dx is not None for law in res.amplitude_laws)
+                unit = np.array([1.0 if measured or x not in _IDX else 1.0 / (1.0 + dm) for x in pb.unknowns])
+                draws.append(FactorDraw(hangs, meas, slope=slope, unit=unit, p_ref=np.asarray(res.values, float),
+                                        offset=offset))
             else:
                 draws.append(MeasurementSet(hangs, meas))
         except BifilarError:
@@ -247,18 +264,19 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
     ok = [b for b, d in enumerate(draws) if d is not None]
     scenes0 = [replace(draws[b].hangings[0].scene, inertia=I0w) for b in ok]
     targets = np.array([draws[b].measurements[0].period for b in ok], float)
-    # each draw's factor rho(x) = 1 + g (u x - x_ref) (FactorDraw; g = 0: held)
+    # each draw's factor rho(x) = 1 + o + g (u x - x_ref) (FactorDraw; g = 0: held)
     fd = [draws[b] if isinstance(draws[b], FactorDraw) else None for b in ok]
     f_slope = np.array([d.slope[0, 0] if d is not None else 0.0 for d in fd])
     f_unit = np.array([d.unit[0] if d is not None else 1.0 for d in fd])
     f_ref = np.array([d.p_ref[0] if d is not None else 0.0 for d in fd])
+    f_off = np.array([d.offset[0] if d is not None and d.offset is not None else 0.0 for d in fd])
     rests = rest_poses(scenes0, hm.rest0, errors="return") if scenes0 else []
     keep = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
     ok = [ok[q] for q in keep]
     scenes0 = [scenes0[q] for q in keep]
     rests = [rests[q] for q in keep]
     targets = targets[keep]
-    f_slope, f_unit, f_ref = f_slope[keep], f_unit[keep], f_ref[keep]
+    f_slope, f_unit, f_ref, f_off = f_slope[keep], f_unit[keep], f_ref[keep], f_off[keep]
     follows = bool(np.any(f_slope))
     B = len(ok)
     if B == 0:
@@ -302,7 +320,7 @@ def solve_draws_batched(res: InversionResult, draws: list, progress=None, rtol: 
                 per = mss[q].modes[k].period
                 T[q] = per if per else np.nan
         if follows:
-            T = T * (1.0 + f_slope[idx] * (f_unit[idx] * x - f_ref[idx]))
+            T = T * (1.0 + f_off[idx] + f_slope[idx] * (f_unit[idx] * x - f_ref[idx]))
         return T * T - targets[idx] ** 2
 
     lo, hi = physical_interval(I0, name)
@@ -385,10 +403,12 @@ def _modes_or_none(modes_batch, scenes, rests) -> list:
         return out
 
 
-DRAW_SCHEME = 5
+DRAW_SCHEME = 6
 """Version of how the draws are made, part of a journal's key (with the
-rig model, ``shared`` or ``separate``): 5 draws a rig input or body point
-several hangings share once for all of them (session 10), 4 lets a
+rig model, ``shared`` or ``separate``): 6 lets the factor follow the drawn
+inputs too, through the law's ``dr/dx`` (:attr:`FactorDraw.offset`,
+session 10), 5 draws a rig input or body point several hangings share
+once for all of them (session 10), 4 lets a
 stated amplitude's factor follow the re-estimated unknowns through the
 law's ``dr/dp`` (:class:`FactorDraw`, session 9), 3 draws the
 amplitude factor from the mode's amplitude law and a recording's period

@@ -47,8 +47,13 @@ def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: f
     timing's contribution ``s_T / (g dT/dI)`` is the small-amplitude one
     divided by ``g``, the stated amplitude's own uncertainty ``s_A = rel A``
     adds ``T_lin (dr/dA) s_A / (g dT/dI)`` = ``|slope rel T_lin dI/dT /
-    g|``, and an input's contribution is unchanged (the factor taken to
-    depend on the inputs as on the unknown: ``budget._with_factor_gain``).
+    g|``, and an input's contribution is unchanged: the factor is taken to
+    depend on the inputs as on the unknown.  ``invert`` does not take that:
+    it measures ``dr/dx`` by one run per input and puts each input through
+    the full gain (``budget._with_factor_gain``); those terms are not in
+    this std (``amplitude_budget.input_factor_terms: false``; the Solar
+    Boat's Izz at spacing 1, length 2: invert's std 1.12 of it at 0.3 rad,
+    docs/design.md, "The stated amplitude").
     The second-order terms (re-solved sigma points) are those of the
     small-amplitude budget (the factor cancels in them), so the same change
     applies to the honest std.  Returns (std, timing contribution, amplitude
@@ -221,8 +226,10 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings
             continue
         slope, dr_dI = laws[comp]
         sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI)
+        # input_factor_terms: invert also measures dr/dx (one run per input) and puts each input
+        # through the full gain; the sweep's sigma leaves those terms out (docs/design.md)
         info.update(budgeted=True, contribution=c_a, slope=slope, quadratic_slope=2.0 * (r - 1.0),
-                    factor_gain=r + T_lin * dr_dI * float(b.dI_dT))
+                    factor_gain=r + T_lin * dr_dI * float(b.dI_dT), input_factor_terms=False)
         scale = component_scale(pre.scene.inertia, comp)
         e.update(sigma=sd, rel_sigma=sd / scale if scale else math.inf,
                  shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))
