@@ -8,7 +8,7 @@ import click
 from .common import check_journal_path, check_output_path, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 @click.command("invert")
-@click.argument("config", required=False, type=click.Path(dir_okay=False))
+@click.argument("config", required=False, type=click.Path())
 @click.option("--period", "periods", multiple=True, metavar="LABEL=SECONDS[+-SIGMA]",
               help="Measured period of a mode (label or 1-based index); repeatable.  Without +-SIGMA the "
                    "default timing uncertainty is used.")
@@ -40,14 +40,14 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @click.option("--monte-carlo", "monte_carlo", default=None, metavar="N",
               help="Check the linear uncertainty with N Monte Carlo re-estimates on the full model.")
 @click.option("--seed", default=None, help="Random seed of the Monte Carlo draws.")
-@click.option("--journal", type=click.Path(dir_okay=False), default=None,
+@click.option("--journal", type=click.Path(), default=None,
               help="Run the Monte Carlo in chunks appended to this file as they finish (survives Ctrl-C).")
 @click.option("--resume", is_flag=True, help="Continue the Monte Carlo journal given by --journal.")
-@click.option("--measurements", "measurements", type=click.Path(dir_okay=False), default=None,
+@click.option("--measurements", "measurements", type=click.Path(), default=None,
               help="Measurements YAML file (several modes, hangings, recordings; docs/invert.md).")
 @click.option("--no-ladder", is_flag=True, help="Only the chosen method (skip the comparison).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+@click.option("--plot", type=click.Path(), default=None,
               help="Period-vs-inertia curves with the measurement marked (PNG/PDF/SVG); signal fits go to "
                    "FILE's name + .fit-LABEL.")
 @click.option("--force", is_flag=True, help="Replace existing --plot files.")

@@ -41,9 +41,9 @@ def body_document(scene) -> dict:
 
 
 @click.command("modes")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--out", type=click.Path(dir_okay=False), help="Write the modes to this CSV file.")
+@click.option("--out", type=click.Path(), help="Write the modes to this CSV file.")
 @click.option("--force", is_flag=True, help="Replace an existing --out file.")
 @handle_errors
 def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:

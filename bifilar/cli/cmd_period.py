@@ -14,7 +14,7 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "thr
 
 
 @click.command("period")
-@click.argument("signal", type=click.Path(dir_okay=False), required=False)
+@click.argument("signal", type=click.Path(), required=False)
 @click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time numeric one.")
 @click.option("--sample-rate", default=None, help="Sample rate, Hz (ignores a time column).")
 @click.option("--model", default="auto", show_default=True,
@@ -32,7 +32,7 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "thr
 @click.option("--uncertainty", multiple=True, metavar="KEY=VALUE",
               help="With --timed: override trial_time, the reaction-time floor of one trial's total time (s).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+@click.option("--plot", type=click.Path(), default=None,
               help="Draw the signal, the fit and the residuals to this image file.")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file.")
 @handle_errors
