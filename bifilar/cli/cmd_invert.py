@@ -96,7 +96,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
     if measurements is not None:
-        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for))
+        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for), overrides=unc)
     else:
         from ..config import load_scene
 
@@ -107,11 +107,16 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     merged = dict(unc)
     ms.uncertainty = {**ms.uncertainty, **merged}
     for label, T, s in p_specs:
-        ms.measurements.append(mm.Measurement(label, T, s if s is not None else mm.default_uncertainty(ms.uncertainty)["timing"],
-                                              "period", "--period", cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
-                                              std_given=s is not None))
+        given = s is not None
+        if not given:  # the assumed timing: checked as a stated +-SIGMA is, naming where it came from
+            s = mm.default_uncertainty(ms.uncertainty)["timing"]
+            _check_assumed(T, s, f"--period {label}", "timing", unc, ms.uncertainty)
+        ms.measurements.append(mm.Measurement(label, T, s, "period", "--period",
+                                              cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
+                                              std_given=given))
     for label, n, times in t_specs:
         T, s, det = ps.period_from_trials(n, times, None, ms.uncertainty)
+        _check_assumed(T, s, f"--timed {label}", "trial_time", unc, ms.uncertainty)
         ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
                                               details=det))
     for label, path in s_specs:
@@ -159,6 +164,19 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
             click.echo(f"warning: {w}", err=True)
         return
     _render(ms, res)
+
+
+def _check_assumed(T: float, s: float, what: str, key: str, flags: dict, unc: dict) -> None:
+    """Check the period std ``s`` (s) that the stated uncertainty ``key``
+    gave the period ``T`` (s) of ``what``, naming where it was stated:
+    ``--uncertainty`` (the flags) or ``uncertainty.KEY`` (the config's
+    block).  The built-in defaults are not checked here: for an absurd
+    period the inversion's refusal (no physical inertia gives it, a unit
+    slip?) says more."""
+    from ..estimation import period_specs as ps
+
+    if key in flags or key in unc:
+        ps.check_assumed_sigma(T, s, what, "--uncertainty" if key in flags else f"uncertainty.{key}")
 
 
 def _eye():

@@ -169,6 +169,8 @@ def _timed(spec, target, uncertainty, as_json):
     label, n, times = ps.parse_timed_spec(spec)
     unc = ps.parse_uncertainty_overrides(uncertainty)
     T, s, det = ps.period_from_trials(n, times, None, unc)
+    if "trial_time" in unc:  # a stated floor, checked as a stated period std is
+        ps.check_assumed_sigma(T, s, f"--timed {label}", "--uncertainty")
     warnings = [w for w in (ps.implausible_period(T, label, "--timed", cycles=n),) if w]
     plan = None
     if target is not None:

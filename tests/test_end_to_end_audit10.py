@@ -1,0 +1,152 @@
+"""End-to-end audit, session 10 (docs/design.md, "End-to-end audit, session
+10"): bad input the earlier audits did not feed.  What it found wrong, and
+this file tests:
+
+* A period given without ``+-`` takes its std from the assumed timing
+  (``--uncertainty timing=``, the config's or the measurements file's
+  ``uncertainty.timing``), timed trials from the ``trial_time`` floor; those
+  were never checked as a stated ``+-SIGMA`` is: ``timing=0`` ended in exit 1
+  ('normalised residuals +inf'), ``timing: 1e300`` in exit 1, an internal
+  error (a singular matrix), ``period --timed`` printed a std of 1e299 s.
+* ``invert --measurements FILE --uncertainty timing=...`` (or
+  ``trial_time=``) printed the flag's value in ``assumed_uncertainty`` while
+  the file's periods kept the file's (or the default) timing.
+* Uncertainties far beyond any meaning (``length=1e160``, ``mass: 2``)
+  overflowed the budget's squares: exit 1 (internal error) or overflow
+  warnings; they now have upper limits
+  (``bifilar.estimation.sensitivity.MAX_UNCERTAINTY``).
+* A directory given as CONFIG or as an output was refused by click's own
+  three-line usage error instead of the project's one line.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from bifilar.cli import main
+from conftest import CONFIGS
+
+ROD = """\
+body:
+  mass: 5.0
+  inertia: {principal: [1.0, 0.01, 1.0]}
+rig:
+  anchors: [[0.0, -0.4, 0.0], [0.0, 0.4, 0.0]]
+  attachments: [[0.0, -0.4, 0.1], [0.0, 0.4, 0.1]]
+  lengths: [1, 1]
+"""
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def one_error_line(res, field):
+    err = [ln for ln in res.stderr.splitlines() if ln.strip() and not ln.startswith("warning:")]
+    assert res.exit_code == 2, (res.exit_code, res.stderr)
+    assert len(err) == 1 and err[0].startswith(f"error: {field}: "), res.stderr
+    assert "Traceback" not in res.stderr and res.stdout == ""
+    return err[0]
+
+
+@pytest.fixture
+def rod(tmp_path):
+    p = tmp_path / "rod.yaml"
+    p.write_text(ROD)
+    return p
+
+
+@pytest.mark.parametrize("timing, words", [("50", "not smaller than the period"), ("0", "cannot be weighted"),
+                                           ("1e-20", "below 1e-12 of the period")])
+def test_assumed_timing_is_checked_as_a_stated_sigma(rod, tmp_path, timing, words):
+    # before: exit 1 (internal error: singular matrix; ConvergenceError: residuals +inf sigma)
+    msg = one_error_line(run("invert", rod, "--period", "torsion=2.24", "--uncertainty", f"timing={timing}",
+                             "--amplitude", "0.05", "--json"), "--uncertainty")
+    assert words in msg and "--period torsion" in msg
+    cfg = tmp_path / "rod_block.yaml"
+    cfg.write_text(ROD + f"uncertainty: {{timing: {timing}}}\n")
+    msg = one_error_line(run("invert", cfg, "--period", "torsion=2.24", "--amplitude", "0.05", "--json"),
+                         "uncertainty.timing")
+    assert words in msg
+
+
+def test_trial_time_floor_is_checked_as_a_stated_sigma(rod):
+    # one trial of 10 cycles with a 1000 s floor: a period std of 100 s (before, with 1e300: invert exit 1,
+    # period --timed exit 0 printing a std of 1e299 s and an interval of +-2e299 s about 2.24 s)
+    one_error_line(run("invert", rod, "--timed", "torsion=10:22.4", "--uncertainty", "trial_time=1000",
+                       "--amplitude", "0.05", "--json"), "--uncertainty")
+    one_error_line(run("period", "--timed", "torsion=10:22.4", "--uncertainty", "trial_time=1000", "--json"),
+                   "--uncertainty")
+    # an ordinary floor still gives its period and std: 0.1 s / 10 cycles
+    res = run("period", "--timed", "torsion=10:22.4", "--json")
+    assert res.exit_code == 0, res.stderr
+    assert math.isclose(json.loads(res.stdout)["std"], 0.01, rel_tol=1e-12)
+
+
+def test_measurements_file_periods_take_the_uncertainty_flags(tmp_path):
+    # the shipped example with its pitch period stated without +-: the flags' timing (0.01 s) is that
+    # period's std, and the torsion trials' floor (1 s) sets their std: 1 s / sqrt(3 trials) / 10 cycles
+    # (before: 0.001 s and 0.1 / sqrt(3) / 10, while assumed_uncertainty printed 0.01 and 1)
+    src = (CONFIGS / "measurements_example.yaml").read_text()
+    src = src.replace("period: 1.9136 +- 0.0005", "period: 1.9136")
+    src = src.replace("config: thesis_lin2_pitch.yaml", f"config: {CONFIGS / 'thesis_lin2_pitch.yaml'}")
+    f = tmp_path / "m.yaml"
+    f.write_text(src)
+    res = run("invert", "--measurements", f, "--uncertainty", "timing=0.01", "--uncertainty", "trial_time=1",
+              "--method", "linear", "--no-ladder", "--json")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    std = {m["mode"]: m["std"] for m in doc["measurements"]}
+    assert math.isclose(std["pitch"], 0.01, rel_tol=1e-12)
+    assert math.isclose(std["torsion"], 1.0 / math.sqrt(3) / 10, rel_tol=1e-12)
+    assert math.isclose(std["swing-y"], 0.0005, rel_tol=1e-12)  # stated with +-: kept
+    assert doc["assumed_uncertainty"]["timing"]["value"] == 0.01
+    # and a bad flag is named for the file's period it would set
+    msg = one_error_line(run("invert", "--measurements", f, "--uncertainty", "timing=0", "--json"),
+                         "--uncertainty")
+    assert "measurements.1.period" in msg
+
+
+@pytest.mark.parametrize("args, field", [
+    (("invert", "{rod}", "--period", "torsion=2.24", "--uncertainty", "length=1e160", "--json"), "--uncertainty"),
+    (("invert", "{rod}", "--period", "torsion=2.24", "--uncertainty", "mass=1.5", "--json"), "--uncertainty"),
+    (("sweep", "{rod}", "--param", "length=1,1.2", "--no-tensions", "--sigma", "com=1e200", "--json"), "--sigma"),
+    (("sweep", "{rod}", "--param", "length=1,1.2", "--param", "uncertainty.mass=0.1,2", "--no-tensions",
+      "--json"), "--param"),
+])
+def test_uncertainty_beyond_meaning_is_refused(rod, args, field):
+    # before: invert exit 1 (an internal error after overflow warnings), sweep exit 0 with overflow warnings
+    one_error_line(run(*(a.format(rod=rod) for a in args)), field)
+
+
+def test_uncertainty_block_beyond_meaning_is_refused(tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(ROD + "uncertainty: {mass: 2}\n")
+    for cmd in (("simulate", cfg, "--json"), ("sweep", cfg, "--param", "length=1,1.2", "--no-tensions", "--json"),
+                ("invert", cfg, "--period", "torsion=2.24", "--json")):
+        one_error_line(run(*cmd), "uncertainty.mass")
+    # the limits themselves are accepted
+    ok = tmp_path / "ok.yaml"
+    ok.write_text(ROD + "uncertainty: {mass: 1.0, timing: 0.001}\n")
+    assert run("simulate", ok, "--periods", "2", "--json").exit_code == 0
+
+
+def test_a_directory_is_refused_in_one_line(rod, tmp_path):
+    d = tmp_path / "a.yaml"
+    d.mkdir()
+    for cmd in ("modes", "simulate", "tensions"):
+        assert "is a directory" in one_error_line(run(cmd, d), "config")
+    one_error_line(run("sweep", d, "--param", "length=1,2"), "config")
+    one_error_line(run("invert", d, "--period", "torsion=2"), "config")
+    one_error_line(run("invert", rod, "--measurements", d), "--measurements")
+    out = tmp_path / "out.csv"
+    out.mkdir()
+    one_error_line(run("modes", rod, "--out", out), "--out")
+    one_error_line(run("simulate", rod, "--plot", tmp_path / "a.yaml"), "--plot")
+    assert "is a directory" in one_error_line(run("period", d), "path")
+    assert Path(d).is_dir() and Path(out).is_dir()
