@@ -150,3 +150,13 @@ def test_a_directory_is_refused_in_one_line(rod, tmp_path):
     one_error_line(run("simulate", rod, "--plot", tmp_path / "a.yaml"), "--plot")
     assert "is a directory" in one_error_line(run("period", d), "path")
     assert Path(d).is_dir() and Path(out).is_dir()
+
+
+@pytest.mark.parametrize("extra, field", [(("--plot", "{tmp}/t.png"), "--plot"), (("--column", "y"), "--column"),
+                                          (("--sample-rate", "100"), "--sample-rate"), (("--trim",), "--trim"),
+                                          (("--model", "viscous"), "--model")])
+def test_period_timed_refuses_a_recordings_options(tmp_path, extra, field):
+    # before: exit 0, the option ignored (--plot drew nothing and said nothing)
+    args = [a.format(tmp=tmp_path) for a in extra]
+    one_error_line(run("period", "--timed", "torsion=10:22.4", *args, "--json"), field)
+    assert not (tmp_path / "t.png").exists()

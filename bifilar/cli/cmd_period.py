@@ -51,6 +51,13 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     if timed is not None:
         if signal is not None:
             raise InputError("--timed", "give either SIGNAL or --timed, not both")
+        # a recording's options were silently ignored (--plot drew nothing): refused, as --target without --timed is
+        for name, v in (("--plot", plot), ("--column", column), ("--sample-rate", sample_rate),
+                        ("--t-start", t_start), ("--t-stop", t_stop), ("--trim", trim or None),
+                        ("--model", None if model == "auto" else model)):
+            if v is not None:
+                raise InputError(name, "only with a recording (SIGNAL); --timed trials have no record to "
+                                       f"{'draw' if name == '--plot' else 'fit'}")
         return _timed(timed, target, uncertainty, as_json)
     if target is not None:
         raise InputError("--target", "only with --timed (a recording's precision is set by the recording)")
