@@ -58,9 +58,11 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     timing = stated_timing(cfg)  # the period's numerical error is held against a tenth of it
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
-    from ..analysis.equilibrium import indeterminate_warning
+    from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 
     if (w := indeterminate_warning(scene, rest)) is not None:  # the tension figures are one split of many
+        click.echo(f"warning: {w}", err=True)
+    if (w := stretching_warning(scene, rest, ms.modes, only=ms.pick(mode).label)) is not None:
         click.echo(f"warning: {w}", err=True)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
