@@ -320,6 +320,65 @@ def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
             "those shown are the least-squares split; the real one depends on the wires' stretch and length tolerances")
 
 
+#: a mode of a dependent rig whose second-order change of the wires' lengths has a self-stress component
+#: above this fraction of its size cannot be followed with every wire at its length (see :func:`stretching_modes`);
+#: a symmetric rig's modes give rounding there (1e-16), a 4-wire table with wires of 1.0 .. 1.6 m 0.03 .. 0.06
+STRETCH_REL = 1e-6
+
+
+def stretching_modes(scene: Scene, rest: RestPose, modes) -> list[tuple[str, float]]:
+    """The linear modes of a rig with dependent wires (4 or 5 at rest,
+    :func:`tensions_determined` false) along which the wires cannot all keep
+    their lengths: (label, share) for each, ``share`` the part of the second-
+    order change of the constraints along the mode's shape ``v``
+    (``q_i = v^T H_i v``, :func:`constraint_hessians`) in the rig's
+    self-stress directions (the null space of ``G^T``), relative to ``|q|``.
+
+    Where it is zero (a symmetric rig: a twist lifts every corner of a
+    table on equal vertical wires alike) the body follows the mode on the
+    wires; where not (the same table on wires of unequal length: a twist
+    lifts each corner by ``r^2 theta^2 / 2 L_i``, which no rigid tilt fits),
+    rigid wires admit no motion along the mode alone: the model's body must
+    swing as well, at first order, and hold the wires by tensions that push
+    (measured on such a table: tensions of -734 N at 0.001 rad for a 98 N
+    body, a period 0.1 % off the linear one at 1e-5 rad).  A real rig's
+    wires stretch by that second-order amount instead, so its small
+    oscillations are the linear modes, and the rigid model's nonlinear runs
+    of such a mode are not physical at any amplitude.  [] when the wires
+    are independent."""
+    d, w, G = constraint_jacobian(scene, rest.com, rest.R)
+    U, sv, _ = np.linalg.svd(G)
+    rank = int(np.sum(sv > 1e-12 * sv[0]))
+    if rank >= scene.n_wires:
+        return []
+    S = U[:, rank:]  # orthonormal self-stresses (n, n - rank)
+    H = constraint_hessians(d, w)
+    out = []
+    for m in modes:
+        v = np.asarray(m.shape, float)
+        q = np.einsum("i,nij,j->n", v, H, v)
+        nq = float(np.linalg.norm(q))
+        share = float(np.linalg.norm(S.T @ q)) / nq if nq > 0 else 0.0
+        if share > STRETCH_REL:
+            out.append((m.label, share))
+    return out
+
+
+def stretching_warning(scene: Scene, rest: RestPose, modes, only: str | None = None) -> str | None:
+    """The warning for the modes :func:`stretching_modes` finds (``only``: a
+    mode label, warned about alone), or None."""
+    hits = [(lb, s) for lb, s in stretching_modes(scene, rest, modes) if only is None or lb == only]
+    if not hits:
+        return None
+    names = ", ".join(f"'{lb}'" for lb, _ in hits)
+    return (f"rig: the {scene.n_wires} wires are dependent at rest and mode{'s' if len(hits) > 1 else ''} {names} "
+            "would stretch them at second order (a twist or swing lifts their ends by unequal amounts that no tilt "
+            "of the body fits): the rigid-wire model follows such a motion only with the body swinging as well and "
+            "wires that push, so its nonlinear runs of it (simulate, invert --amplitude, sweep's tensions and "
+            "amplitude terms) are not physical at any amplitude; a real rig's wires stretch instead and its small "
+            "oscillations keep the linear periods: time them at a small amplitude and give invert --amplitude 0")
+
+
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,
               global_search: bool = False) -> RestPose:
     """Find the static equilibrium of ``scene`` with every wire taut.

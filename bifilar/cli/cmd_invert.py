@@ -8,7 +8,7 @@ import click
 from .common import check_journal_path, check_output_path, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 @click.command("invert")
-@click.argument("config", required=False, type=click.Path(dir_okay=False))
+@click.argument("config", required=False, type=click.Path())
 @click.option("--period", "periods", multiple=True, metavar="LABEL=SECONDS[+-SIGMA]",
               help="Measured period of a mode (label or 1-based index); repeatable.  Without +-SIGMA the "
                    "default timing uncertainty is used.")
@@ -40,10 +40,10 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @click.option("--monte-carlo", "monte_carlo", default=None, metavar="N",
               help="Check the linear uncertainty with N Monte Carlo re-estimates on the full model.")
 @click.option("--seed", default=None, help="Random seed of the Monte Carlo draws.")
-@click.option("--journal", type=click.Path(dir_okay=False), default=None,
+@click.option("--journal", type=click.Path(), default=None,
               help="Run the Monte Carlo in chunks appended to this file as they finish (survives Ctrl-C).")
 @click.option("--resume", is_flag=True, help="Continue the Monte Carlo journal given by --journal.")
-@click.option("--measurements", "measurements", type=click.Path(dir_okay=False), default=None,
+@click.option("--measurements", "measurements", type=click.Path(), default=None,
               help="Measurements YAML file (several modes, hangings, recordings; docs/invert.md).")
 @click.option("--rig", default=None, metavar="shared|separate",
               help="Several hangings: shared (default) budgets wire lengths, anchors and attachments that are the "
@@ -51,7 +51,7 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
                    "again for each hanging.  Overrides the measurements file's rig key.")
 @click.option("--no-ladder", is_flag=True, help="Only the chosen method (skip the comparison).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+@click.option("--plot", type=click.Path(), default=None,
               help="Period-vs-inertia curves with the measurement marked (PNG/PDF/SVG); signal fits go to "
                    "FILE's name + .fit-LABEL.")
 @click.option("--force", is_flag=True, help="Replace existing --plot files.")
@@ -104,7 +104,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
     if measurements is not None:
-        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for))
+        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for), overrides=unc)
     else:
         from ..config import load_scene
 
@@ -117,11 +117,16 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     merged = dict(unc)
     ms.uncertainty = {**ms.uncertainty, **merged}
     for label, T, s in p_specs:
-        ms.measurements.append(mm.Measurement(label, T, s if s is not None else mm.default_uncertainty(ms.uncertainty)["timing"],
-                                              "period", "--period", cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
-                                              std_given=s is not None))
+        given = s is not None
+        if not given:  # the assumed timing: checked as a stated +-SIGMA is, naming where it came from
+            s = mm.default_uncertainty(ms.uncertainty)["timing"]
+            _check_assumed(T, s, f"--period {label}", "timing", unc, ms.uncertainty)
+        ms.measurements.append(mm.Measurement(label, T, s, "period", "--period",
+                                              cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
+                                              std_given=given))
     for label, n, times in t_specs:
         T, s, det = ps.period_from_trials(n, times, None, ms.uncertainty)
+        _check_assumed(T, s, f"--timed {label}", "trial_time", unc, ms.uncertainty)
         ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
                                               details=det))
     for label, path in s_specs:
@@ -169,6 +174,19 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
             click.echo(f"warning: {w}", err=True)
         return
     _render(ms, res)
+
+
+def _check_assumed(T: float, s: float, what: str, key: str, flags: dict, unc: dict) -> None:
+    """Check the period std ``s`` (s) that the stated uncertainty ``key``
+    gave the period ``T`` (s) of ``what``, naming where it was stated:
+    ``--uncertainty`` (the flags) or ``uncertainty.KEY`` (the config's
+    block).  The built-in defaults are not checked here: for an absurd
+    period the inversion's refusal (no physical inertia gives it, a unit
+    slip?) says more."""
+    from ..estimation import period_specs as ps
+
+    if key in flags or key in unc:
+        ps.check_assumed_sigma(T, s, what, "--uncertainty" if key in flags else f"uncertainty.{key}")
 
 
 def _eye():

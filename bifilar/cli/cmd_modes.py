@@ -41,9 +41,9 @@ def body_document(scene) -> dict:
 
 
 @click.command("modes")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--out", type=click.Path(dir_okay=False), help="Write the modes to this CSV file.")
+@click.option("--out", type=click.Path(), help="Write the modes to this CSV file.")
 @click.option("--force", is_flag=True, help="Replace an existing --out file.")
 @handle_errors
 def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
@@ -56,9 +56,11 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     scene = load_scene(config)
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
-    from ..analysis.equilibrium import indeterminate_warning
+    from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 
     if (w := indeterminate_warning(scene, rest)) is not None:
+        click.echo(f"warning: {w}", err=True)
+    if (w := stretching_warning(scene, rest, ms.modes)) is not None:
         click.echo(f"warning: {w}", err=True)
     if out_p:
         rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]

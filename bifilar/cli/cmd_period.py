@@ -14,7 +14,7 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "thr
 
 
 @click.command("period")
-@click.argument("signal", type=click.Path(dir_okay=False), required=False)
+@click.argument("signal", type=click.Path(), required=False)
 @click.option("--column", default=None, help="Signal column (CSV) or variable (.mat); default: the first non-time numeric one.")
 @click.option("--sample-rate", default=None, help="Sample rate, Hz (ignores a time column).")
 @click.option("--model", default="auto", show_default=True,
@@ -32,7 +32,7 @@ _MODELS = ("auto", "viscous", "quadratic", "quadratic+viscous", "two_mode", "thr
 @click.option("--uncertainty", multiple=True, metavar="KEY=VALUE",
               help="With --timed: override trial_time, the reaction-time floor of one trial's total time (s).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+@click.option("--plot", type=click.Path(), default=None,
               help="Draw the signal, the fit and the residuals to this image file.")
 @click.option("--force", is_flag=True, help="Replace an existing --plot file.")
 @handle_errors
@@ -51,6 +51,13 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     if timed is not None:
         if signal is not None:
             raise InputError("--timed", "give either SIGNAL or --timed, not both")
+        # a recording's options were silently ignored (--plot drew nothing): refused, as --target without --timed is
+        for name, v in (("--plot", plot), ("--column", column), ("--sample-rate", sample_rate),
+                        ("--t-start", t_start), ("--t-stop", t_stop), ("--trim", trim or None),
+                        ("--model", None if model == "auto" else model)):
+            if v is not None:
+                raise InputError(name, "only with a recording (SIGNAL); --timed trials have no record to "
+                                       f"{'draw' if name == '--plot' else 'fit'}")
         return _timed(timed, target, uncertainty, as_json)
     if target is not None:
         raise InputError("--target", "only with --timed (a recording's precision is set by the recording)")
@@ -169,6 +176,8 @@ def _timed(spec, target, uncertainty, as_json):
     label, n, times = ps.parse_timed_spec(spec)
     unc = ps.parse_uncertainty_overrides(uncertainty)
     T, s, det = ps.period_from_trials(n, times, None, unc)
+    if "trial_time" in unc:  # a stated floor, checked as a stated period std is
+        ps.check_assumed_sigma(T, s, f"--timed {label}", "--uncertainty")
     warnings = [w for w in (ps.implausible_period(T, label, "--timed", cycles=n),) if w]
     plan = None
     if target is not None:

@@ -12,7 +12,7 @@ from .common import check_output_path, check_workers, console, emit_json, esc, f
 
 
 @click.command("plan")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=click.Path())
 @click.option("--param", "params", multiple=True, required=True, metavar="NAME=LO:HI",
               help="Parameter to search within bounds (repeatable). " + SHORTHAND_HELP)
 @click.option("--zip", "zip_", is_flag=True,

@@ -10,7 +10,7 @@ from .common import check_output_path, console, emit_json, esc, fmt, handle_erro
 
 
 @click.command("simulate")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=click.Path())
 @click.option("--mode", "mode", default=None, help="Mode label or 1-based index (default: torsion, else the slowest).")
 @click.option("--amplitude", type=float, default=0.05, show_default=True,
               help="Initial displacement: this times the mode's normalised shape (rad or m).")
@@ -25,8 +25,8 @@ from .common import check_output_path, console, emit_json, esc, fmt, handle_erro
 @click.option("--on-slack", type=click.Choice(["continue", "stop"]), default="continue", show_default=True,
               help="What to do when a wire goes slack during the motion.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (interface.md).")
-@click.option("--out", type=click.Path(dir_okay=False), help="Write the time series to this CSV file.")
-@click.option("--plot", type=click.Path(dir_okay=False), help="Draw the time series to this image file (PNG, PDF, SVG).")
+@click.option("--out", type=click.Path(), help="Write the time series to this CSV file.")
+@click.option("--plot", type=click.Path(), help="Draw the time series to this image file (PNG, PDF, SVG).")
 @click.option("--force", is_flag=True, help="Replace existing --out/--plot files.")
 @handle_errors
 def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_slack, as_json, out, plot, force):
@@ -58,9 +58,11 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     timing = stated_timing(cfg)  # the period's numerical error is held against a tenth of it
     rest = rest_pose(scene)
     ms = linear_modes(scene, rest)
-    from ..analysis.equilibrium import indeterminate_warning
+    from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 
     if (w := indeterminate_warning(scene, rest)) is not None:  # the tension figures are one split of many
+        click.echo(f"warning: {w}", err=True)
+    if (w := stretching_warning(scene, rest, ms.modes, only=ms.pick(mode).label)) is not None:
         click.echo(f"warning: {w}", err=True)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane

@@ -30,7 +30,7 @@ def common_options(fn):
         click.option("--no-tensions", is_flag=True, help="Skip the nonlinear runs (no tensions, swing depth or amplitude bias)."),
         click.option("--periods", "sim_periods", type=float, default=3.0, show_default=True,
                      help="Periods simulated per mode for the tensions."),
-        click.option("--write-config", "write_config", type=click.Path(dir_okay=False), default=None,
+        click.option("--write-config", "write_config", type=click.Path(), default=None,
                      help="Write the recommended point as a config (anchors, attachments, lengths) that "
                           "`bifilar modes` accepts."),
         click.option("--stopwatch", "reaction", type=float, default=0.1, show_default=True, metavar="SECONDS",
@@ -47,7 +47,7 @@ def common_options(fn):
                      help="The multi-hanging plan's wire lengths and anchors (and attachments at a body point "
                           "two hangings use): shared = the one rig measured once for every hanging, separate = "
                           "measured again for each hanging."),
-        click.option("--write-measurements", type=click.Path(dir_okay=False), default=None,
+        click.option("--write-measurements", type=click.Path(), default=None,
                      help="Write the multi-hanging plan as a measurements file for `bifilar invert --measurements` "
                           "(planned periods: replace them with the measured ones)."),
         click.option("--json", "as_json", is_flag=True, help="Print one JSON document."),
@@ -269,15 +269,15 @@ def render_rig(con, rig: dict, title: str = "the rig to build") -> None:
 
 
 @click.command("sweep")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=click.Path())
 @click.option("--param", "params", multiple=True, required=True, metavar="NAME=VALUES",
               help="Parameter to vary (repeatable); VALUES as START:STOP:NUM, log:START:STOP:NUM, [a, b, c] or "
                    "a,b,c. " + SHORTHAND_HELP)
 @click.option("--zip", "zip_", is_flag=True, help="Vary the parameters together instead of over a grid.")
 @common_options
-@click.option("--out", type=click.Path(dir_okay=False), help="Write one CSV row per point (and a resumable journal FILE.partial.jsonl while running).")
+@click.option("--out", type=click.Path(), help="Write one CSV row per point (and a resumable journal FILE.partial.jsonl while running).")
 @click.option("--resume", is_flag=True, help="Reuse the finished points of an interrupted sweep with the same --out.")
-@click.option("--plot", type=click.Path(dir_okay=False), help="Draw the figures to this image file (PNG, PDF, SVG).")
+@click.option("--plot", type=click.Path(), help="Draw the figures to this image file (PNG, PDF, SVG).")
 @click.option("--workers", type=int, default=1, show_default=True, help="Processes to use (1..1024; at most one per CPU and per point starts).")
 @click.option("--force", is_flag=True, help="Replace existing --out/--plot files (and a stale journal).")
 @click.option("--stop-after", type=int, default=None, hidden=True, help="Stop after N new points (tests: a stand-in for Ctrl-C).")

@@ -11,18 +11,18 @@ from .common import check_output_path, console, emit_json, esc, handle_errors, p
 
 
 @click.command("tensions")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=click.Path())
 @click.option("--mode", default=None, help="Mode label or 1-based index (default: torsion, else the slowest).")
 @click.option("--amplitude", type=float, default=0.05, show_default=True, help="Initial displacement x mode shape.")
 @click.option("--periods", type=float, default=4.0, show_default=True, help="Linear periods to simulate.")
-@click.option("--motion", type=click.Path(dir_okay=False), default=None,
+@click.option("--motion", type=click.Path(), default=None,
               help="Use a recorded motion instead: CSV with columns t, com_x..z, q_w..q_z, tension_1..n "
                    "(the format `bifilar simulate --out` writes), e.g. load-cell rig data.")
 @click.option("--solve-for", "solve_for", multiple=True,
               type=click.Choice(["Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"]),
               help="Inertia components to estimate from the tensions (default: Ixx, Iyy, Izz).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
-@click.option("--out", type=click.Path(dir_okay=False), help="CSV: time, model tensions, thesis-method tensions.")
+@click.option("--out", type=click.Path(), help="CSV: time, model tensions, thesis-method tensions.")
 @click.option("--force", is_flag=True, help="Replace an existing --out file.")
 @handle_errors
 def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, force):

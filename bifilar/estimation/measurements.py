@@ -70,7 +70,7 @@ import numpy as np
 
 from ..errors import ConfigErrors, InputError
 from .sensitivity import INERTIA_COMPONENTS
-from .period_specs import (MIN_RELATIVE_SIGMA, check_period_sigma, parse_times, parse_uncertainty_overrides,
+from .period_specs import (MIN_RELATIVE_SIGMA, check_assumed_sigma, check_period_sigma, parse_times, parse_uncertainty_overrides,
                            parse_value_sigma, period_from_signal, period_from_trials)
 from .uncertainty import default_uncertainty
 
@@ -326,7 +326,8 @@ def config_uncertainty(path) -> dict:
     return parse_uncertainty_overrides(block, "uncertainty")
 
 
-def load_measurements(path, config_override: str | None = None, unknown: tuple = ()) -> MeasurementSet:
+def load_measurements(path, config_override: str | None = None, unknown: tuple = (),
+                      overrides: dict | None = None) -> MeasurementSet:
     """Read and validate a measurements file (module docstring); every
     problem is reported at once (:class:`~bifilar.errors.ConfigErrors`),
     fields named by their dotted path in the file.
@@ -334,7 +335,11 @@ def load_measurements(path, config_override: str | None = None, unknown: tuple =
     ``config_override``: a config path given on the command line, used when
     the file names none (a single-hanging file).  ``unknown``: components
     solved for (from the command line; the file's ``solve_for`` adds to
-    them), whose config values are starting guesses only."""
+    them), whose config values are starting guesses only.  ``overrides``:
+    the command line's ``--uncertainty`` values, above the file's block: a
+    period without ``+-`` gets their ``timing``, timed trials their
+    ``trial_time`` floor (the file's ``uncertainty`` keeps only the file's
+    block; the caller merges the flags into it)."""
     from ..config import read_yaml
 
     p = Path(path)
@@ -360,6 +365,9 @@ def load_measurements(path, config_override: str | None = None, unknown: tuple =
         except InputError as exc:
             errs.append(exc)
     ms = MeasurementSet([], [], source=str(p), uncertainty=unc)
+    overrides = dict(overrides or {})
+    src = {k: "--uncertainty" if k in overrides else f"uncertainty.{k}" for k in {**unc, **overrides}}
+    unc = {**unc, **overrides}  # what the measurements below use
     if "method" in doc:
         if doc["method"] not in METHOD_NAMES:
             errs.append(InputError("method", f"must be one of {', '.join(METHOD_NAMES)}, got {doc['method']!r}"))
@@ -414,7 +422,7 @@ def load_measurements(path, config_override: str | None = None, unknown: tuple =
                 if k not in _HANG:
                     errs.append(InputError(f"{fh}.{k}", f"unknown key; expected one of {', '.join(sorted(_HANG))}"))
             _hanging(ms, h.get("config"), h.get("rotation"), h.get("name") or f"hanging {i + 1}",
-                     h.get("measurements"), fh, base, errs, unc, unknown=tuple(unknown) + tuple(ms.solve_for or ()))
+                     h.get("measurements"), fh, base, errs, unc, src=src, unknown=tuple(unknown) + tuple(ms.solve_for or ()))
     else:
         cfg = doc.get("config")
         if cfg is None:
@@ -424,7 +432,7 @@ def load_measurements(path, config_override: str | None = None, unknown: tuple =
         elif config_override is not None:
             errs.append(InputError("config", "the file names a config and so does the command line; give one"))
         if cfg is not None:
-            _hanging(ms, cfg, None, doc.get("name") or "reference", doc.get("measurements", []), "", base, errs, unc,
+            _hanging(ms, cfg, None, doc.get("name") or "reference", doc.get("measurements", []), "", base, errs, unc, src=src,
                      cli_config=config_override is not None and doc.get("config") is None,
                      unknown=tuple(unknown) + tuple(ms.solve_for or ()))
     if errs:
@@ -433,7 +441,7 @@ def load_measurements(path, config_override: str | None = None, unknown: tuple =
 
 
 def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs: list, unc: dict,
-             cli_config: bool = False, unknown: tuple = ()) -> None:
+             cli_config: bool = False, unknown: tuple = (), src: dict | None = None) -> None:
     from ..config import load_scene, scene_from_dict
 
     pre = f"{fh}." if fh else ""
@@ -470,7 +478,7 @@ def _hanging(ms: MeasurementSet, cfg, rot, name, meas, fh: str, base: Path, errs
     for j, m in enumerate(meas):
         fm = f"{pre}measurements.{j}"
         try:
-            mm = _measurement(m, fm, base, unc)
+            mm = _measurement(m, fm, base, unc, src)
             mm.hanging = h_index
             ms.measurements.append(mm)
         except ConfigErrors as exc:
@@ -499,7 +507,7 @@ def _same_body(ref: Hanging, scene, fld: str) -> list[InputError]:
     return out
 
 
-def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:
+def _measurement(m: Any, fm: str, base: Path, unc: dict, src: dict | None = None) -> Measurement:
     if not isinstance(m, dict):
         raise InputError(fm, "must be a mapping with mode and one of period, times, signal")
     bad = [InputError(f"{fm}.{k}", f"unknown key; expected one of {', '.join(sorted(_MEAS))}") for k in m if k not in _MEAS]
@@ -536,7 +544,10 @@ def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:
             raise InputError(f"{fm}.std", "must be positive")
         check_period_sigma(T, s, f"{fm}.period")
         given = s is not None
-        s = s if given else default_uncertainty(unc)["timing"]
+        if not given:  # the assumed timing, checked as a stated one, naming where it came from
+            s = default_uncertainty(unc)["timing"]
+            if "timing" in (src or {}):  # stated (not the built-in default, whose misfit the inversion names)
+                check_assumed_sigma(T, s, f"{fm}.period", src["timing"])
         return Measurement(label, T, s, "period", f"{fm}.period", amplitude=amp, amplitude_std=amp_s,
                            cycles=min(cycles or DEFAULT_CYCLES, MAX_SIM_CYCLES), std_given=given)
     if kind == "times":
@@ -545,6 +556,8 @@ def _measurement(m: Any, fm: str, base: Path, unc: dict) -> Measurement:
         times = parse_times(m["times"], f"{fm}.times")
         ts = _num(m["time_std"], f"{fm}.time_std") if "time_std" in m else None
         T, s, det = period_from_trials(cycles, times, ts, unc)
+        if ts is not None or "trial_time" in (src or {}):
+            check_assumed_sigma(T, s, f"{fm}.times", f"{fm}.time_std" if ts is not None else src["trial_time"])
         return Measurement(label, T, s, "timed", f"{fm}.times", amplitude=amp, amplitude_std=amp_s,
                            cycles=min(cycles, MAX_SIM_CYCLES), std_given=True, details=det)
     sig = m["signal"]

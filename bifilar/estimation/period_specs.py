@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from .sensitivity import uncertainty_too_large
 from .uncertainty import UNCERTAINTY_KEYS, default_uncertainty
 
 _PM = re.compile(r"\s*(?:\+-|\+/-|±)\s*")
@@ -82,6 +83,29 @@ def check_period_sigma(T: float, s: float | None, fld: str) -> None:
         raise InputError(fld, f"the uncertainty {s:g} s is below {MIN_RELATIVE_SIGMA:g} of the period {T:g} s: "
                          "no timing is that precise, and the model computes a period only to about 1e-14 of it, "
                          "so no answer could be checked against it; give the period's standard uncertainty")
+
+
+def check_assumed_sigma(T: float, s: float, fld: str, source: str) -> None:
+    """Check a period's standard uncertainty ``s`` (s) that the user did not
+    give with the period but that comes from an assumed uncertainty
+    (``source``: the field that set it, e.g. ``uncertainty.timing`` or
+    ``--uncertainty``, or the reaction-time floor ``trial_time`` of timed
+    trials), as :func:`check_period_sigma` checks a stated one, naming
+    ``source`` as the field: zero cannot be weighted (the fit divided by it:
+    exit 1, 'normalised residuals +inf'), and one not smaller than the
+    period ``T`` says nothing (``timing: 1e300`` made the weighted normal
+    equations singular: exit 1, an internal error)."""
+    if s <= 0:
+        raise InputError(source, f"the period {T:g} s of {fld} gets an uncertainty of 0 s from it, which cannot "
+                                 "be weighted; give a positive one (or the period's own as +-SIGMA)")
+    if s >= T:
+        raise InputError(source, f"the period {T:g} s of {fld} gets an uncertainty of {s:g} s from it, not smaller "
+                                 "than the period: such a measurement says nothing about the period; give the "
+                                 "period's standard uncertainty")
+    if s < MIN_RELATIVE_SIGMA * T:
+        raise InputError(source, f"the period {T:g} s of {fld} gets an uncertainty of {s:g} s from it, below "
+                                 f"{MIN_RELATIVE_SIGMA:g} of the period: no timing is that precise; give the "
+                                 "period's standard uncertainty")
 
 
 MIN_RELATIVE_SIGMA = 1e-12
@@ -197,6 +221,9 @@ def parse_uncertainty_overrides(specs, fld: str = "--uncertainty") -> dict:
             raise InputError(sub, f"{k} must be a number ({UNCERTAINTY_KEYS[k]}), got {v!r}") from None
         if not (math.isfinite(x) and x >= 0):
             raise InputError(sub, f"{k} must be a non-negative number ({UNCERTAINTY_KEYS[k]}), got {v!r}")
+        too_large = uncertainty_too_large(k, x)
+        if too_large:
+            raise InputError(sub, too_large)
         out[k] = x
     return out
 

@@ -46,6 +46,28 @@ DEFAULT_UNCERTAINTY = {
     "timing": 1e-3,       # s, standard uncertainty of one measured period (if not given)
 }
 
+#: the largest standard uncertainty each kind of input may be given (its unit
+#: as in :data:`DEFAULT_UNCERTAINTY`): a length's at most the longest length a
+#: config holds (1e5 m, ``bifilar.parts.MAX_SIZE``), a time's 1e5 s, a
+#: relative one 1 (100 % of the quantity, which is positive).  Beyond them a
+#: budget says nothing, and far beyond (1e160) its squares overflowed:
+#: ``invert`` ended in exit 1 (an internal error) and ``sweep`` printed
+#: overflow warnings
+MAX_UNCERTAINTY = {"length": 1e5, "position": 1e5, "com": 1e5, "mass": 1.0, "gravity": 1.0, "amplitude": 1.0,
+                   "timing": 1e5, "trial_time": 1e5}
+
+
+def uncertainty_too_large(key: str, value: float) -> str | None:
+    """The refusal (text) of a standard uncertainty ``value`` of input
+    ``key`` above :data:`MAX_UNCERTAINTY`, None when it is within it."""
+    hi = MAX_UNCERTAINTY.get(key)
+    if hi is None or value <= hi:
+        return None
+    unit = {"mass": "relative", "gravity": "relative", "amplitude": "relative",
+            "timing": "s", "trial_time": "s"}.get(key, "m")
+    what = "(100 % of the quantity)" if unit == "relative" else "(beyond it a budget says nothing)"
+    return f"{key} must be at most {hi:g} {unit} {what}, got {value:g}"
+
 
 def perturb(scene: Scene, name: str, delta: float) -> Scene:
     """Return ``scene`` with input ``name`` changed by ``delta`` (SI units)."""

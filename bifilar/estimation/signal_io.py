@@ -154,6 +154,8 @@ def read_signal(path, column: str | None = None, sample_rate: float | None = Non
     p = Path(path)
     if not p.exists():
         raise SignalError("path", f"no such file: {p}")
+    if p.is_dir():
+        raise SignalError("path", f"is a directory, not a recording: {p}")
     if not p.is_file():
         raise SignalError("path", f"not a file: {p}")
     if p.suffix.lower() == ".mat":

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import re
+from functools import cmp_to_key
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
@@ -60,19 +61,44 @@ TIE_REL = 1e-9
 
 def rank_order(points: list[dict], idx, key) -> list[int]:
     """The indices ``idx`` of ``points`` by increasing ``key(point)``
-    (finite), ties broken by the parameters, not by the grid order or
-    rounding: the points whose key is within :data:`TIE_REL` of the
-    smallest remaining one form a group, ordered by their parameter values
-    (as given, in the sweep's parameter order); then the next group."""
+    (finite), ties broken by the other components, then the parameters,
+    not by the grid order or rounding: the points whose key is within
+    :data:`TIE_REL` of the smallest remaining one form a group, ordered by
+    their components' relative sigmas, largest first, each compared within
+    :data:`TIE_REL` (:func:`_tie_order`), then by their parameter values
+    (as given, in the sweep's parameter order); then the next group.
+
+    The components come first because the worst one alone can tie where
+    the others differ: a thin rod's Ixx (its roll, 10.9 %, set by the CoM's
+    2 mm whatever the spacing) tied at spacing 0.7 and 0.9, and the smaller
+    spacing was recommended with its Izz at 0.30 % against 0.27 %."""
     order = sorted(idx, key=lambda i: key(points[i]))
     out: list[int] = []
     while order:
         head = key(points[order[0]])
         group = [i for i in order if key(points[i]) <= head + TIE_REL * abs(head)]
-        group.sort(key=lambda i: tuple(float(v) for v in points[i].get("params", {}).values()))
+        group.sort(key=cmp_to_key(lambda i, j: _tie_order(points[i], points[j])))
         out += group
         order = [i for i in order if i not in group]
     return out
+
+
+def _tie_order(a: dict, b: dict) -> int:
+    """-1, 0 or 1: ``a`` before ``b`` among points whose objective ties: the
+    lower sorted-descending vector of component relative sigmas (an entry
+    within :data:`TIE_REL` of the other's counts as equal; a missing one as
+    inf), then the smaller parameters."""
+    def sig(p):
+        v = [rel_sigma(e) for e in (p.get("components") or {}).values() if isinstance(e, dict)]
+        return sorted((math.inf if x is None else float(x) for x in v), reverse=True)
+
+    for x, y in zip(sig(a), sig(b)):
+        if x == y or abs(x - y) <= TIE_REL * max(abs(x), abs(y)):
+            continue
+        return -1 if x < y else 1
+    pa = tuple(float(v) for v in a.get("params", {}).values())
+    pb = tuple(float(v) for v in b.get("params", {}).values())
+    return (pa > pb) - (pa < pb)
 
 
 def measurable_components(points: list[dict]) -> list[str]:

@@ -16,7 +16,7 @@ from typing import Any
 
 
 from ..errors import InputError
-from ..estimation.sensitivity import DEFAULT_UNCERTAINTY, INERTIA_COMPONENTS
+from ..estimation.sensitivity import DEFAULT_UNCERTAINTY, INERTIA_COMPONENTS, uncertainty_too_large
 from .shorthands import ParamSpec
 
 _IDX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
@@ -124,6 +124,9 @@ def resolve_uncertainty(cfg: dict, overrides: dict | None = None) -> dict:
                 raise InputError(f"{src}.{k}" if src == "uncertainty" else src,
                                  f"unknown uncertainty key {k!r}; keys: {', '.join(DEFAULT_UNCERTAINTY)}")
             out[k] = _number(v, f"{src}.{k}" if src == "uncertainty" else src, nonneg=True)
+            too_large = uncertainty_too_large(k, out[k])
+            if too_large:
+                raise InputError(f"{src}.{k}" if src == "uncertainty" else src, too_large)
     return out
 
 

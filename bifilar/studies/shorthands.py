@@ -228,13 +228,16 @@ def check_param(cfg: dict, name: str, values=()) -> None:
     sweep parameters)."""
     head = name.split(".")
     if head[0] == "uncertainty":
-        from ..estimation.sensitivity import DEFAULT_UNCERTAINTY
+        from ..estimation.sensitivity import DEFAULT_UNCERTAINTY, uncertainty_too_large
 
         if len(head) != 2 or head[1] not in DEFAULT_UNCERTAINTY:
             raise InputError("--param", f"{name}: use uncertainty.KEY with KEY one of {', '.join(DEFAULT_UNCERTAINTY)}")
         bad = [v for v in values if v < 0]
         if bad:
             raise InputError("--param", f"{name}: a standard uncertainty must not be negative, got {bad[0]:g}")
+        too_large = [uncertainty_too_large(head[1], v) for v in values]
+        if any(too_large):
+            raise InputError("--param", f"{name}: {next(t for t in too_large if t)}")
         return
     if head[0] == "plan":
         raise InputError("--param", f"{name}: the plan block holds options (target, constraints, amplitude), "
