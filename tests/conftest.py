@@ -69,3 +69,14 @@ rig:
   attachments: [[1.0, 0.0, 0.0], [-0.5, 0.8660254, 0.0], [-0.5, -0.8660254, 0.0]]
   lengths:     [0.995, 0.995, 0.995]
 """
+
+
+def one_error_line(res, field: str) -> str:
+    """The CLI contract for bad input (a click ``Result``): exit 2, one
+    ``error: FIELD: ...`` line on stderr besides warnings, nothing on stdout,
+    no traceback; returns that line."""
+    err = [ln for ln in res.stderr.splitlines() if ln.strip() and not ln.startswith("warning:")]
+    assert res.exit_code == 2, (res.exit_code, res.stderr)
+    assert len(err) == 1 and err[0].startswith(f"error: {field}: "), res.stderr
+    assert "Traceback" not in res.stderr and res.stdout == ""
+    return err[0]

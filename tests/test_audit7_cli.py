@@ -9,20 +9,13 @@ import pytest
 from click.testing import CliRunner
 
 from bifilar.cli import main
-from conftest import CONFIGS
+from conftest import CONFIGS, one_error_line
 
 PLATE = str(CONFIGS / "thesis_plate_rest.yaml")
 
 
 def run(*args):
     return CliRunner().invoke(main, [str(a) for a in args])
-
-
-def one_error_line(res, option):
-    err = [ln for ln in res.stderr.splitlines() if ln.strip() and not ln.startswith("warning:")]
-    assert res.exit_code == 2, (res.exit_code, res.stderr)
-    assert len(err) == 1 and err[0].startswith(f"error: {option}: "), res.stderr
-    assert "Traceback" not in res.stderr and res.stdout == ""
 
 
 @pytest.mark.parametrize("sigma", ["1e-15", "1e-17"])

@@ -30,7 +30,7 @@ import pytest
 from click.testing import CliRunner
 
 from bifilar.cli import main
-from conftest import CONFIGS
+from conftest import CONFIGS, one_error_line
 
 ROD = """\
 body:
@@ -45,14 +45,6 @@ rig:
 
 def run(*args):
     return CliRunner().invoke(main, [str(a) for a in args])
-
-
-def one_error_line(res, field):
-    err = [ln for ln in res.stderr.splitlines() if ln.strip() and not ln.startswith("warning:")]
-    assert res.exit_code == 2, (res.exit_code, res.stderr)
-    assert len(err) == 1 and err[0].startswith(f"error: {field}: "), res.stderr
-    assert "Traceback" not in res.stderr and res.stdout == ""
-    return err[0]
 
 
 @pytest.fixture
