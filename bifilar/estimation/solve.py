@@ -472,12 +472,12 @@ class AmplitudeLaw:
     #: factor's, the law's, the derivative's) are not a regular motion (:func:`irregular_difference`); 0 otherwise
     irregular: float = 0.0
     #: {input key: d r(A0) / d x per SI unit} of the budgeted inputs (a stated amplitude's law, once the
-    #: budget has measured it: :func:`~bifilar.estimation.budget.factor_input_derivatives`; None before)
+    #: budget has measured it: :func:`~bifilar.estimation.factor_inputs.factor_input_derivatives`; None before)
     dr_dx: dict | None = None
     #: input keys whose ``dr/dx`` could not be measured (their stepped run failed: left at 0)
     dr_dx_failed: list = field(default_factory=list)
     #: {input key: the exact route that gave its ``dr/dx`` without a run} (``gravity``, ``translation``,
-    #: ``com``, ``scaling``: :func:`~bifilar.estimation.budget._factor_routes`)
+    #: ``com``, ``scaling``: :func:`~bifilar.estimation.factor_inputs._factor_routes`)
     dr_dx_derived: dict = field(default_factory=dict)
 
     def factor(self, A) -> np.ndarray | float:

@@ -1,0 +1,154 @@
+"""The amplitude factor's dependence on the measured inputs: ``dr/dx``
+of a stated amplitude's law for every budgeted input (wire lengths,
+anchors, attachments, the CoM, the mass, gravity), by one forward-difference
+run per input or, where one holds, an exact route without a run (gravity
+only scales time; moving every anchor moves the whole motion; a CoM shift
+moves every attachment; ``r`` depends on ``m`` and ``I`` only through
+``I/m`` and is unchanged when every length scales by ``s`` and ``I`` by
+``s^2``).  Used by :func:`~bifilar.estimation.budget._budget` (the
+inputs' terms with the full gain) and, through the law's ``dr_dx``, by the
+Monte Carlo (:class:`~bifilar.estimation.montecarlo.FactorDraw`).  Split
+from :mod:`bifilar.estimation.budget`; SI units, input keys as
+:func:`~bifilar.estimation.budget.input_columns`'s.
+"""
+
+from __future__ import annotations
+
+from .budget import _key_hanging, _perturbed_scene
+from .problem import Problem
+from .sensitivity import input_value, mac_matches, n_modes
+
+
+def _factor_routes(pb: Problem, h: int, keys: list) -> tuple[list, dict]:
+    """How :func:`factor_input_derivatives` gets ``dr/dx`` of each input
+    ``keys`` of hanging ``h``: (keys run with the input stepped, {key: why
+    derived}).  Derived exactly, without a run: ``gravity`` (``r`` is a
+    ratio of periods and ``g`` only scales time: 0); the last wire's anchor
+    coordinates (moving every anchor by ``d`` moves the rest pose and the
+    motion by ``d``: minus the sum over the other anchors); ``com.*`` (a
+    CoM shift ``v``, reference frame, moves every attachment by ``-R v``:
+    minus the attachments' derivatives through ``R``); the ``mass`` (``r``
+    depends on ``m`` and ``I`` only through ``I/m``, and scaling every
+    length by ``s`` and ``I`` by ``s^2`` leaves ``r`` unchanged, a
+    translation amplitude scaled with them: ``2 m dr/dm = sum_j x_j
+    dr/dx_j + A dr/dA``, the sum over every wire length, anchor and
+    attachment coordinate (body frame at the CoM), ``A dr/dA`` only where
+    the mode's dominant coordinate is a translation).  Each where the
+    inputs it needs are among ``keys`` (the same uncertainty for every
+    wire: all or none), else run."""
+    pre = f"{pb.models[h].hanging.name}:" if len(pb.models) > 1 else ""
+    nw = pb.models[h].hanging.scene.n_wires
+    have = set(keys)
+    att = [f"{pre}attachment.{i + 1}.{a}" for i in range(nw) for a in "xyz"]
+    geom = ([f"{pre}length.{i + 1}" for i in range(nw)] + [f"{pre}anchor.{i + 1}.{a}" for i in range(nw) for a in "xyz"]
+            + att)
+    derived = {}
+    for key in keys:
+        if key == "gravity":
+            derived[key] = "gravity"
+        elif key.startswith(f"{pre}anchor.{nw}.") and all(f"{pre}anchor.{i + 1}.{key[-1]}" in have
+                                                             for i in range(nw - 1)):
+            derived[key] = "translation"
+        elif key.startswith("com.") and have.issuperset(att):
+            derived[key] = "com"
+        elif key == "mass" and have.issuperset(geom):
+            derived[key] = "scaling"
+    return [k for k in keys if k not in derived], derived
+
+
+def factor_input_derivatives(pb: Problem, laws, keys: list, sigmas: dict, scenes, rests, modes, matches,
+                             rtol: float = 1e-10) -> None:
+    """Set ``laws[k].dr_dx`` {input key: d r_k / d x, per SI unit} for each
+    measurement ``k`` with a stated amplitude's law (``dr_dp`` set): the
+    amplitude factor's derivative in every budgeted input ``keys`` with a
+    non-zero uncertainty ``sigmas`` that moves ``k``'s hanging (keys as
+    :func:`input_columns`'s).  Forward differences, each input stepped as
+    :func:`~bifilar.estimation.uncertainty.robust_sensitivity` steps it but
+    by :data:`~bifilar.estimation.solve.FACTOR_STEP` of its scale (a length
+    or position: of the longest wire), each stepped scene and the estimate's
+    own run at the stated amplitude for ``m.cycles`` periods at ``rtol``,
+    all in one :func:`~bifilar.analysis.batch.simulate_batch` call (the
+    estimate's factor from that call, so that the difference is taken
+    between runs of one engine); the inputs with an exact route are derived
+    instead (:func:`_factor_routes`).  ``scenes`` .. ``matches``: per
+    hanging at the estimate (:func:`input_columns`).  A stepped scene that
+    cannot hang, whose mode is lost or whose run fails leaves its input at
+    0 and in ``laws[k].dr_dx_failed`` (the factor taken to depend on it as
+    on the unknowns, the budget before session 10)."""
+    from ..analysis.batch import modes_batch, rest_poses, simulate_batch
+    from .montecarlo import _modes_or_none
+    from .solve import FACTOR_STEP
+    from .uncertainty import _step
+
+    multi = len(pb.models) > 1
+    jobs = []  # (k, key, step, scene, rest, modes, mode index); key None: the estimate's own run
+    plans = {}
+    for k, m in enumerate(pb.measurements):
+        law = laws[k] if laws is not None else None
+        if law is None or law.dr_dp is None or not m.amplitude:
+            continue
+        h = m.hanging
+        mine = [key for key in keys if sigmas.get(key, 0) > 0 and h in _key_hanging(pb, key)]
+        run, derived = _factor_routes(pb, h, mine)
+        plans[k] = (mine, derived)
+        jobs.append((k, None, 0.0, scenes[h], rests[h], modes[h], int(matches[h][pb.mode_index[k]])))
+        stepped = []
+        for key in run:
+            name = key.split(":", 1)[1] if multi and ":" in key else key
+            d = _step(scenes[h], name, FACTOR_STEP)
+            stepped.append((key, d, _perturbed_scene(pb, h, scenes[h], [(key, d)])))
+        rs = rest_poses([s for _, _, s in stepped], rests[h], errors="return") if stepped else []
+        good = [q for q, r in enumerate(rs) if not isinstance(r, BaseException)]
+        mss = _modes_or_none(modes_batch, [stepped[q][2] for q in good], [rs[q] for q in good]) if good else []
+        kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and n_modes(ms) == n_modes(modes[h])]
+        cols = mac_matches(modes[h], [ms for _, ms in kept]) if kept else []
+        for (q, ms), col in zip(kept, cols):
+            key, d, s = stepped[q]
+            jobs.append((k, key, d, s, rs[q], ms, int(col[matches[h][pb.mode_index[k]]])))
+        ran = {q for q, _ in kept}
+        law.dr_dx_failed = [stepped[q][0] for q in range(len(stepped)) if q not in ran]
+    if not jobs:
+        return
+    runs = simulate_batch([j[3] for j in jobs], mode=[j[6] + 1 for j in jobs],
+                          amplitude=[pb.measurements[j[0]].amplitude for j in jobs],
+                          periods=[pb.measurements[j[0]].cycles for j in jobs], rtol=rtol,
+                          rests=[j[4] for j in jobs], modes=[j[5] for j in jobs], errors="return", health=False)
+    r0 = {}
+    for j, run in zip(jobs, runs):
+        if j[1] is None and not run.error and run.period:
+            r0[j[0]] = run.period / run.linear_period
+    for k, (mine, derived) in plans.items():
+        law = laws[k]
+        law.dr_dx_derived = dict(derived)
+        dx = {key: 0.0 for key in mine}
+        for j, run in zip(jobs, runs):
+            if j[0] != k or j[1] is None:
+                continue
+            if k in r0 and not run.error and run.period:
+                dx[j[1]] = (run.period / run.linear_period - r0[k]) / j[2]
+            else:
+                law.dr_dx_failed.append(j[1])
+        if k not in r0:
+            law.dr_dx_failed = list(dx)
+            law.dr_dx = {key: 0.0 for key in mine}
+            continue
+        h = pb.measurements[k].hanging
+        pre = f"{pb.models[h].hanging.name}:" if multi else ""
+        nw = pb.models[h].hanging.scene.n_wires
+        for key, why in derived.items():
+            if why == "translation":
+                dx[key] = -sum(dx[f"{pre}anchor.{i + 1}.{key[-1]}"] for i in range(nw - 1))
+        for key, why in derived.items():
+            if why == "com":
+                a = "xyz".index(key[-1])
+                R = pb.models[h].R
+                dx[key] = -sum(R[b, a] * dx[f"{pre}attachment.{i + 1}.{'xyz'[b]}"] for i in range(nw) for b in range(3))
+            elif why == "scaling":
+                sc = scenes[h]
+                s = sum(input_value(sc, x.split(":", 1)[-1]) * v for x, v in dx.items()
+                        if x.split(":", 1)[-1].split(".")[0] in ("length", "anchor", "attachment"))
+                md = modes[h].modes[int(matches[h][pb.mode_index[k]])]
+                if md.dominant < 3:
+                    s += law.amplitude * law.slope()
+                dx[key] = s / (2.0 * sc.mass)
+        law.dr_dx = dx
