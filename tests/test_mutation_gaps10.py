@@ -67,3 +67,59 @@ def test_loose_unknowns_come_largest_relative_std_first():
     loose = loosely_determined(pb, [0.0, 0.0])
     assert [n for n, _ in loose] == ["com.y", "com.x"]
     assert [s for _, s in loose] == pytest.approx([0.3, 0.5], rel=1e-9)
+
+
+# ---------------------------------------------------------------------------
+# measurements.py / cmd_invert: the config's uncertainty block under invert
+# ---------------------------------------------------------------------------
+
+
+def _boat_config(tmp_path, name, unc):
+    import yaml
+
+    from conftest import CONFIGS
+
+    cfg = yaml.safe_load((CONFIGS / "solar_boat.yaml").read_text())
+    cfg.pop("uncertainty", None)
+    if unc is not None:
+        cfg["uncertainty"] = unc
+    p = tmp_path / name
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+def _invert_cli(*args):
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    return CliRunner().invoke(main, ["invert", *map(str, args)])
+
+
+INVERT_IZZ = ["--amplitude", "0", "--solve-for", "Izz", "--json"]
+
+
+@pytest.mark.parametrize("block", [0.001, [0.001, 0.002], "timing=0.001"])
+def test_an_uncertainty_block_that_is_no_mapping_exits_2_naming_it(tmp_path, block):
+    # docs/errors.md: one line naming the field, exit 2 (without the check: exit 1, "internal error
+    # (TypeError ...)" for a number, another field's wording for a list)
+    res = _invert_cli(_boat_config(tmp_path, "c.yaml", block), "--period", "torsion=2.0+-0.001", *INVERT_IZZ)
+    assert res.exit_code == 2, res.output
+    assert "error: uncertainty: must be a mapping" in res.output and "Traceback" not in res.output
+
+
+def test_the_timing_flag_overrides_the_blocks_for_a_period_without_its_std(tmp_path):
+    # the block states timing 5 ms, --uncertainty timing=0.001: a --period without +- takes the flag's
+    # 1 ms (README: invert budgets the block *below* its --uncertainty flags), so Izz's std is the one of
+    # the period given with +-0.001 on a config without a block
+    import json
+
+    stated = _boat_config(tmp_path, "stated.yaml", {"timing": 0.005})
+    plain = _boat_config(tmp_path, "plain.yaml", None)
+    a = _invert_cli(stated, "--period", "torsion=2.0", "--uncertainty", "timing=0.001", *INVERT_IZZ)
+    b = _invert_cli(plain, "--period", "torsion=2.0+-0.001", *INVERT_IZZ)
+    c = _invert_cli(stated, "--period", "torsion=2.0", *INVERT_IZZ)
+    assert a.exit_code == b.exit_code == c.exit_code == 0, (a.output, b.output, c.output)
+    sa, sb, sc = (json.loads(r.stdout)["inertia"]["Izz"]["std"] for r in (a, b, c))
+    assert sa == pytest.approx(sb, rel=1e-9)
+    assert sc > 3 * sb  # the block's 5 ms itself is used without the flag (the test can tell)
