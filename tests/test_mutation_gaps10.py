@@ -123,3 +123,140 @@ def test_the_timing_flag_overrides_the_blocks_for_a_period_without_its_std(tmp_p
     sa, sb, sc = (json.loads(r.stdout)["inertia"]["Izz"]["std"] for r in (a, b, c))
     assert sa == pytest.approx(sb, rel=1e-9)
     assert sc > 3 * sb  # the block's 5 ms itself is used without the flag (the test can tell)
+
+
+# ---------------------------------------------------------------------------
+# signal_law.py: which amplitude law is a pendulum's, which other oscillations go with it
+# ---------------------------------------------------------------------------
+
+CH_T0, CH_C, CH_A0, CH_Q, CH_CYCLES = 1.3, 1 / 16, 0.5, 100.0, 40
+CH_F0 = 1 / CH_T0
+CH_BIN = 1 / (CH_CYCLES * CH_T0)  # periodogram bin of the record, Hz
+
+
+def _chirp(d_over_c2=0.0, others=(), t_start=0.0, noise=1e-4, seed=1):
+    """A decaying record (rad) whose frequency is ``w0 (1 - c A^2 + (c^2 - d) A^4)``, the series of
+    ``T = T0 (1 + c A^2 + d A^4)`` to A^4, with A = A0 exp(-sigma tau), Q = 100, 40 cycles at 30 Hz: with
+    ``u = (A / A0)^2`` the law's ``beta = -w0 c A0^2``, ``beta2 = w0 (c^2 - d) A0^4``, so ``beta2 w0 / beta^2 =
+    1 - d / c^2`` exactly.  The phase is integrated in closed form (int_0^tau exp(-k s) ds = (1 - exp(-k
+    tau)) / k); ``others``: (Hz, amplitude / A0) undamped cosines; white noise of ``noise`` A0; time from
+    ``t_start``.  Returns t, y and the law's period (s) at an amplitude."""
+    rng = np.random.default_rng(seed)
+    w0 = 2 * math.pi / CH_T0
+    sg = w0 / (2 * CH_Q)
+    d = d_over_c2 * CH_C**2
+    tau = np.arange(0.0, CH_CYCLES * CH_T0, 1 / 30.0)
+
+    def E(k):
+        return (1 - np.exp(-k * tau)) / k
+
+    ph = w0 * tau - w0 * CH_C * CH_A0**2 * E(2 * sg) + w0 * (CH_C**2 - d) * CH_A0**4 * E(4 * sg) + 0.3
+    y = CH_A0 * np.exp(-sg * tau) * np.cos(ph)
+    for f, a in others:
+        y = y + a * CH_A0 * np.cos(2 * math.pi * f * tau + 1.1)
+    y = y + noise * CH_A0 * rng.standard_normal(tau.size)
+
+    def T_of(A):
+        return 2 * math.pi / (w0 * (1 - CH_C * A**2 + (CH_C**2 - d) * A**4))
+
+    return tau + t_start, y, T_of
+
+
+@pytest.mark.parametrize("d_over_c2", [0.0, -0.5, 1.5, -1.5, 3.0])
+def test_the_amplitude_law_is_used_only_for_a_pendulums_a4_term(d_over_c2):
+    # AMPLITUDE_LAW_D_RANGE: T = T0 (1 + c A^2 + d A^4) is a pendulum's for d / c^2 in -1 .. 2 (the
+    # fit's beta2 w / beta^2 = 1 - d / c^2 within -1 .. 2, noise here leaving its std ~1e-3 of that
+    # unit).  Inside (0: a period linear in A^2; -0.5; 1.5) the law is used and the period at
+    # amplitude_period is the generator's there; outside (-1.5, 3) it is refused for its A^4 term
+    from bifilar.estimation.signal import AMPLITUDE_LAW_MODEL, fit_period
+
+    t, y, T_of = _chirp(d_over_c2)
+    fit = fit_period(t, y, model="auto")
+    law = fit.amplitude_law
+    assert law["curvature_ratio"] == pytest.approx(1 - d_over_c2, abs=0.05)  # the fit sees the generator's law
+    inside = -1.0 <= d_over_c2 <= 2.0
+    assert law["used"] is inside, law["reason"]
+    if inside:
+        assert fit.model == AMPLITUDE_LAW_MODEL
+        assert abs(fit.period - T_of(fit.amplitude_period)) < 4 * fit.std
+    else:
+        assert "A^4 term" in law["reason"] and fit.model != AMPLITUDE_LAW_MODEL
+
+
+@pytest.mark.parametrize("t_start", [0.0, 1000.0])
+@pytest.mark.parametrize("name, others, fitted", [
+    # OTHER_BINS: another oscillation 4.5 bins from the fundamental (or from zero) is the rig's and is
+    # fitted with the law; 2 bins from either is the law's own misfit and is not
+    ("4.5 bins above f0", [(CH_F0 + 4.5 * CH_BIN, 0.01)], [CH_F0 + 4.5 * CH_BIN]),
+    ("2 bins above f0", [(CH_F0 + 2 * CH_BIN, 0.01)], []),
+    ("4.5 bins above zero", [(4.5 * CH_BIN, 0.01)], [4.5 * CH_BIN]),
+    ("2 bins above zero", [(2 * CH_BIN, 0.01)], []),
+    # OTHER_MAX_RATIO: below 4 f0 (3.5 f0) fitted, above (4.5 f0: a hum) not
+    ("3.5 f0", [(3.5 * CH_F0, 0.01)], [3.5 * CH_F0]),
+    ("4.5 f0", [(4.5 * CH_F0, 0.01)], []),
+    # OTHER_MAX: of four, the three strongest
+    ("four", [(0.3 * CH_F0, 0.02), (1.7 * CH_F0, 0.015), (2.5 * CH_F0, 0.01), (3.3 * CH_F0, 0.005)],
+     [0.3 * CH_F0, 1.7 * CH_F0, 2.5 * CH_F0]),
+])
+def test_the_law_fits_the_other_oscillations_of_the_documented_band(name, others, fitted, t_start):
+    # each oscillation 100x the noise; the record's time origin (t_start) changes nothing: the bands are
+    # in bins of the record's length.  The period at amplitude_period stays the generator's
+    from bifilar.estimation.signal import fit_period
+
+    t, y, T_of = _chirp(0.0, others, t_start)
+    fit = fit_period(t, y, model="auto")
+    law = fit.amplitude_law
+    assert law["used"], law["reason"]
+    got = sorted(o["frequency"] for o in law["other_oscillations"])
+    assert len(got) == len(fitted), (name, got)
+    for g, f in zip(got, sorted(fitted)):
+        assert abs(g - f) < 0.1 * CH_BIN
+    assert abs(fit.period - T_of(fit.amplitude_period)) < 4 * fit.std
+
+
+# ---------------------------------------------------------------------------
+# run_accuracy.py: the period's error bound, the drift term, the irregular-motion check
+# ---------------------------------------------------------------------------
+
+
+def test_below_resolution_is_none_where_either_figure_is_undefined():
+    # "no larger than its resolution"; None where either is undefined (docstring)
+    from bifilar.analysis.run_accuracy import below_resolution
+
+    assert below_resolution(1e-7, 1e-6) is True
+    assert below_resolution(1e-6, 1e-6) is True  # equal: no larger (both given, not computed)
+    assert below_resolution(1e-5, 1e-6) is False
+    for d, r in ((math.nan, 1e-6), (1e-7, math.nan), (math.inf, 1e-6), (math.nan, math.nan)):
+        assert below_resolution(d, r) is None, (d, r)
+
+
+def test_the_tightest_rtol_is_a_hundred_times_the_double_precision():
+    # MIN_RTOL: 100 eps = 2.2e-14, itself accepted, 99 eps refused naming --rtol
+    from bifilar.analysis.run_accuracy import check_rtol
+    from bifilar.errors import InputError
+
+    eps = float(np.finfo(float).eps)
+    check_rtol(100 * eps)
+    check_rtol(1e-10)
+    with pytest.raises(InputError) as e:
+        check_rtol(99 * eps)
+    assert e.value.field == "--rtol"
+
+
+def test_too_small_to_time_is_a_microradian_of_wire_angle():
+    # MIN_TIMED_ANGLE: 1e-6 rad for a rotation (dominant index 3, 4, 5: rx ry rz), 1e-6 of the longest
+    # wire (m) for a translation (0, 1, 2).  On 2 m wires: a rotation of 1.5e-6 rad is timed, a
+    # translation of 1.5e-6 m (0.75e-6 rad of wire angle) is not
+    from bifilar.analysis.run_accuracy import small_amplitude_period, untimed
+
+    for dominant in (3, 4, 5):
+        assert not untimed(1.5e-6, dominant, 2.0)
+        assert untimed(0.5e-6, dominant, 2.0)
+        T, why = small_amplitude_period(-0.5e-6, dominant, 2.0, 1.9)
+        assert T == 1.9 and "below 1e-06 rad the simulated crossings" in why
+    for dominant in (0, 1, 2):
+        assert untimed(1.5e-6, dominant, 2.0) and not untimed(2.5e-6, dominant, 2.0)
+        T, why = small_amplitude_period(1.5e-6, dominant, 2.0, 1.9)
+        assert "below 2e-06 m the simulated crossings" in why and "|amplitude| >= 2e-06 m" in why
+    assert untimed(0.0) and not untimed(None)
+    assert small_amplitude_period(2.5e-6, 0, 2.0, 1.9) is None and small_amplitude_period(0.5e-6, 3, 2.0, None) is None
