@@ -260,3 +260,34 @@ def test_too_small_to_time_is_a_microradian_of_wire_angle():
         assert "below 2e-06 m the simulated crossings" in why and "|amplitude| >= 2e-06 m" in why
     assert untimed(0.0) and not untimed(None)
     assert small_amplitude_period(2.5e-6, 0, 2.0, 1.9) is None and small_amplitude_period(0.5e-6, 3, 2.0, None) is None
+
+
+# ---------------------------------------------------------------------------
+# point_amplitude.py: the sigma invert prints with the amplitude stated
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dTlin_dI, dr_dI, slope", [(0.02, -0.002, 0.025), (-0.02, 0.003, 0.04),
+                                                    (0.02, 0.0, None)])
+def test_stated_amplitude_budget_is_the_implicit_function_theorem_on_t_lin_times_r(dTlin_dI, dr_dI, slope):
+    # invert solves T_lin(I) r(A; I) = T for I: dI = (dT - T_lin (dr/dA) dA) / (dT/dI) with the full
+    # derivative dT/dI = r dT_lin/dI + T_lin dr/dI.  So the timing's contribution is s_T / |dT/dI|,
+    # the stated amplitude's (s_A = rel A, slope = A dr/dA) T_lin slope rel / |dT/dI|, the inputs' and
+    # the second-order excess q^2 of the small-amplitude budget unchanged; shares over the linear terms.
+    # slope None: the quadratic rule's A dr/dA = 2 (r - 1)
+    from bifilar.estimation.sensitivity import Budget
+    from bifilar.studies.point_amplitude import stated_amplitude_budget
+
+    s_T, c_len, q, T_lin, r, rel = 1e-3, 0.03, 0.01, 2.0, 1.01, 0.1
+    c_t0 = s_T / abs(dTlin_dI)  # the small-amplitude timing contribution
+    b = Budget("Izz", "torsion", math.sqrt(c_t0**2 + c_len**2 + q**2), {"timing": c_t0, "length.0": c_len},
+               {}, 1 / dTlin_dI, 0.5)
+    sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, rel, slope, dr_dI)
+    dT_dI = r * dTlin_dI + T_lin * dr_dI
+    A_dr_dA = 2 * (r - 1) if slope is None else slope
+    t_exp, a_exp = s_T / abs(dT_dI), T_lin * A_dr_dA * rel / abs(dT_dI)
+    assert c_t == pytest.approx(t_exp, rel=1e-12) and c_a == pytest.approx(a_exp, rel=1e-12)
+    assert sd == pytest.approx(math.sqrt(c_len**2 + q**2 + t_exp**2 + a_exp**2), rel=1e-12)
+    tot = t_exp**2 + a_exp**2 + c_len**2
+    assert shares == pytest.approx({"timing": t_exp**2 / tot, "length.0": c_len**2 / tot, "amplitude": a_exp**2 / tot},
+                                   rel=1e-12)
