@@ -291,3 +291,35 @@ def test_stated_amplitude_budget_is_the_implicit_function_theorem_on_t_lin_times
     tot = t_exp**2 + a_exp**2 + c_len**2
     assert shares == pytest.approx({"timing": t_exp**2 / tot, "length.0": c_len**2 / tot, "amplitude": a_exp**2 / tot},
                                    rel=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# montecarlo.py: the draws
+# ---------------------------------------------------------------------------
+
+
+def test_a_solved_com_coordinate_is_not_drawn():
+    # draw_monte_carlo: a CoM coordinate solved for is re-estimated by every draw, so it is not drawn;
+    # the others shift every attachment together by -R dcom, dcom ~ N(0, unc.com) (2 mm).  Only the CoM
+    # is uncertain here, so each draw's attachments differ from the config's by one common vector whose
+    # x is exactly zero (com.x solved) and whose y, z spread by 2 mm (200 draws: the sample std within
+    # 25 %, 5 of its own sd)
+    from bifilar.config import read_yaml, scene_from_dict
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.montecarlo import draw_monte_carlo
+    from bifilar.estimation.problem import build_problem
+
+    from conftest import CONFIGS
+
+    scene = scene_from_dict(read_yaml(CONFIGS / "trifilar_kth.yaml"), warn=False)
+    ms = MeasurementSet([Hanging("reference", scene, np.eye(3))],
+                        [Measurement(lb, 2.0, 1e-3, "period", "--period", amplitude=0.0) for lb in ("torsion", "swing-x")])
+    unc = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 2e-3, "gravity": 0.0, "timing": 1e-3}
+    pb = build_problem(ms, ["Izz", "com.x"], unc)
+    res = SimpleNamespace(problem=pb, factors=[1.0, 1.0], method="linear", amplitude_laws=[None, None],
+                          values=np.asarray(pb.prior, float))
+    draws = draw_monte_carlo(res, 200, np.random.default_rng(0))
+    shift = np.array([d.hangings[0].scene.attachments - scene.attachments for d in draws])  # (200, 3 wires, 3)
+    assert np.max(np.abs(shift - shift[:, :1, :])) < 1e-15  # one vector per draw
+    assert np.max(np.abs(shift[:, :, 0])) == 0.0
+    assert shift[:, 0, 1:].std(axis=0) == pytest.approx([2e-3, 2e-3], rel=0.25)
