@@ -323,3 +323,138 @@ def test_a_solved_com_coordinate_is_not_drawn():
     assert np.max(np.abs(shift - shift[:, :1, :])) < 1e-15  # one vector per draw
     assert np.max(np.abs(shift[:, :, 0])) == 0.0
     assert shift[:, 0, 1:].std(axis=0) == pytest.approx([2e-3, 2e-3], rel=0.25)
+
+
+def test_period_warn_threshold_is_a_tenth_of_a_stated_timing_else_1e_8_of_the_period():
+    from bifilar.analysis.run_accuracy import period_warn_threshold
+
+    assert period_warn_threshold(2.0, 1e-3) == pytest.approx(1e-4, rel=1e-12)
+    for timing in (None, 0.0, -1e-3, math.nan, math.inf):
+        assert period_warn_threshold(2.0, timing) == pytest.approx(2e-8, rel=1e-12), timing
+
+
+def test_drift_period_error_is_the_drift_times_the_periods_distance_from_the_linear_one():
+    from bifilar.analysis.run_accuracy import drift_period_error
+
+    assert drift_period_error(2.0, 1.9, 0.01) == pytest.approx(1e-3, rel=1e-9)
+    assert drift_period_error(1.9, 2.0, 0.01) == pytest.approx(1e-3, rel=1e-9)
+    assert drift_period_error(2.0, None, 0.01) == 0.0 and drift_period_error(None, 2.0, 0.01) == 0.0
+    assert drift_period_error(2.0, 1.9, math.nan) == 0.0
+
+
+@pytest.mark.parametrize("method, model, rtol, per_rtol", [
+    ("auto", "maximal", 1e-10, 15.0), ("DOP853", "maximal", 1e-10, 4.0), ("Radau", "maximal", 1e-8, 0.05),
+    ("RK23", "maximal", 1e-9, 7.0), ("DOP853", "kane", 1e-10, 8.0), ("LSODA", "kane", 1e-10, 40.0),
+    ("no-such", "maximal", 1e-10, 15.0), ("no-such", "kane", 1e-10, 40.0),  # unmeasured: the largest
+    ("auto", "maximal", 1e-15, None),  # below the floor: 1e-12 of the period
+])
+def test_period_error_is_the_methods_constant_times_rtol_of_the_period(method, model, rtol, per_rtol):
+    # PERIOD_ERROR_PER_RTOL(_KANE) and PERIOD_ERROR_FLOOR as documented; T = 2 s, no drift: no warning
+    # below 1e-8 of the period (2e-8 s)
+    from bifilar.analysis.run_accuracy import period_accuracy
+
+    err, warn = period_accuracy(2.0, method, rtol, model=model)
+    rel = 1e-12 if per_rtol is None else per_rtol * rtol
+    assert err == pytest.approx(rel * 2.0, rel=1e-12)
+    assert warn is None
+
+
+def test_period_error_adds_the_drifts_part_and_says_where_the_error_comes_from():
+    from bifilar.analysis.run_accuracy import period_accuracy
+
+    # 15 x 1e-10 x 2 s = 3e-9 s of integration, plus 1e-6 x |2.0 - 1.9| = 1e-7 s of drift: above 2e-8
+    err, warn = period_accuracy(2.0, "auto", 1e-10, linear_period=1.9, drift=1e-6)
+    assert err == pytest.approx(3e-9 + 1e-7, rel=1e-12)
+    assert "most of it from the energy drift" in warn and "+1.0e-01 s from the linear one" in warn
+    # the drift's part alone below the limit: no warning
+    err, warn = period_accuracy(2.0, "auto", 1e-10, linear_period=1.9, drift=1e-8)
+    assert err == pytest.approx(3e-9 + 1e-9, rel=1e-12) and warn is None
+
+
+@pytest.mark.parametrize("rtol, timing, cure", [
+    # err 15 rtol 2 s = 3e-5 s against 2e-8 s (no timing): rtol x limit / err = 6.7e-10 -> 1e-10, where
+    # the error is 3e-9 s, below
+    (1e-6, None, "--rtol 1e-10 brings it below"),
+    # against a tenth of a 1 ms timing (1e-4 s): 3e-4 s at 1e-5; 1e-5 x 1e-4 / 3e-4 = 3.3e-6 -> 1e-6
+    (1e-5, 1e-3, "--rtol 1e-06 brings it below"),
+    # a tenth of 1e-12 s: below the floor (1e-12 of the period, 2e-12 s) whatever the rtol
+    (1e-10, 1e-12, "no --rtol brings it below"),
+])
+def test_a_period_error_above_the_limit_names_the_rtol_that_cures_it(rtol, timing, cure):
+    from bifilar.analysis.run_accuracy import period_accuracy
+
+    err, warn = period_accuracy(2.0, "auto", rtol, timing=timing)
+    assert err == pytest.approx(max(15 * rtol, 1e-12) * 2.0, rel=1e-12)
+    assert warn is not None and cure in warn
+    assert ("uncertainty.timing" in warn) is (timing is not None)
+
+
+def test_needs_check_above_a_millionth_of_the_period():
+    from bifilar.analysis.run_accuracy import needs_check
+
+    def run(period, std):
+        return SimpleNamespace(period=period, period_std=std)
+
+    assert needs_check(run(2.0, 2.2e-6)) and not needs_check(run(2.0, 1.8e-6))
+    assert not needs_check(run(None, 1.0)) and not needs_check(run(2.0, None)) and not needs_check(run(2.0, math.nan))
+
+
+def _checked(diff, *, rtol=1e-10, method="LSODA", atol=None, timing=None, fail=None, period=2.0, model=4e-9):
+    """check_period on a fake run (period 2 s, model bound ``model`` s) whose check run differs by ``diff``
+    s (None: times no period); returns the run and the check's arguments."""
+    from bifilar.analysis.run_accuracy import check_period
+
+    r = SimpleNamespace(period=period, period_std=1e-5, period_error=model, rtol=rtol, method=method, warnings=[],
+                        period_check=None)
+    calls = []
+
+    def again(m, rt, at):
+        calls.append((m, rt, at))
+        if fail is not None:
+            raise fail
+        return SimpleNamespace(period=None if diff is None else period + diff, method=m, rtol=rt)
+
+    check_period(r, again, "auto", atol, timing=timing)
+    return r, calls
+
+
+def test_the_check_runs_at_a_hundredth_of_the_rtol_or_with_the_other_engine():
+    r, calls = _checked(1e-9)
+    assert calls == [("auto", pytest.approx(1e-12, rel=1e-12), None)]
+    r, calls = _checked(1e-9, atol=np.array([1e-8, 2e-8]))
+    assert calls[0][2] == pytest.approx([1e-10, 2e-10], rel=1e-12)
+    # a hundredth of 1e-12 is below MIN_RTOL (2.2e-14): the other engine at the same rtol and atol
+    for method, other in (("LSODA", "DOP853"), ("DOP853", "LSODA")):
+        r, calls = _checked(1e-9, rtol=1e-12, method=method, atol=np.array([1e-8]))
+        assert calls[0][0] == other and calls[0][1] == 1e-12 and calls[0][2] == pytest.approx([1e-8], rel=1e-12)
+
+
+@pytest.mark.parametrize("diff, timing, error, warns", [
+    (1e-9, None, 4e-9, False),   # within the model's bound: it stands
+    (6e-9, None, 6e-9, False),   # 1.5 x the bound, below 2 x and below 1e-8 of the period (2e-8 s)
+    (9e-9, None, 9e-9, True),    # 2.25 x the bound: IRREGULAR_FACTOR = 2
+    (-9e-9, None, 9e-9, True),   # either side
+    (6e-9, 1e-8, 6e-9, True),    # 1.5 x the bound and above a tenth of the stated 1e-8 s timing
+    (3e-9, 1e-8, 4e-9, False),   # above a tenth of the timing but within the bound
+])
+def test_the_check_widens_the_error_to_the_runs_difference_and_warns_beyond_the_documented_factor(
+        diff, timing, error, warns):
+    r, _ = _checked(diff, timing=timing)
+    assert r.period_error == pytest.approx(error, rel=1e-6)
+    assert r.period_check["difference"] == pytest.approx(abs(diff), rel=1e-6)
+    assert r.period_check["model_bound"] == 4e-9 and r.period_check["period"] == pytest.approx(2.0 + diff)
+    got = [w for w in r.warnings if "not regular" in w]
+    assert bool(got) is warns
+    if warns:
+        assert f"{abs(diff) / 4e-9:.3g} x the integration error bound" in got[0]
+
+
+def test_a_failed_or_periodless_check_keeps_the_models_bound_and_says_so():
+    from bifilar.errors import IntegrationError
+
+    r, _ = _checked(1e-9, fail=IntegrationError("step size too small"))
+    assert r.period_error == 4e-9 and r.period_check is None
+    assert len(r.warnings) == 1 and "failed (step size too small)" in r.warnings[0]
+    r, _ = _checked(None)
+    assert r.period_error == 4e-9 and r.period_check is None
+    assert len(r.warnings) == 1 and "timed no period" in r.warnings[0]
