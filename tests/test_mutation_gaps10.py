@@ -291,6 +291,8 @@ def test_stated_amplitude_budget_is_the_implicit_function_theorem_on_t_lin_times
     tot = t_exp**2 + a_exp**2 + c_len**2
     assert shares == pytest.approx({"timing": t_exp**2 / tot, "length.0": c_len**2 / tot, "amplitude": a_exp**2 / tot},
                                    rel=1e-12)
+    if dr_dI == 0.0 and slope is None:  # the defaults: no derivative in I, the quadratic rule
+        assert stated_amplitude_budget(b, T_lin, r, rel)[:3] == pytest.approx((sd, c_t, c_a), rel=1e-12)
 
 
 # ---------------------------------------------------------------------------
