@@ -460,3 +460,43 @@ def test_a_failed_or_periodless_check_keeps_the_models_bound_and_says_so():
     r, _ = _checked(None)
     assert r.period_error == 4e-9 and r.period_check is None
     assert len(r.warnings) == 1 and "timed no period" in r.warnings[0]
+
+
+def test_a_factor_draws_slope_is_the_laws_dr_dp_carried_to_the_drawn_amplitude():
+    # FactorDraw.slope[k] = w dr/dp / r(A), w = (r(A) - 1) / (r(A0) - 1) (the law's release weight,
+    # its docstring), r(A) the factor at the drawn amplitude.  With the period drawn to 1e-12 s, the
+    # draw's period is T / r(A), so r(A) is read off each draw -- whatever amplitude it drew -- and the
+    # slope follows from the law's factor at A0 and its dr/dp.  A hand-made law with a quartic term
+    # (r(0.6) = 1 + 0.3 0.36 + 0.1 0.1296 = 1.121), an inversion's result stubbed around it
+    from bifilar.config import read_yaml, scene_from_dict
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.montecarlo import FactorDraw, draw_monte_carlo
+    from bifilar.estimation.problem import build_problem
+    from bifilar.estimation.solve import AmplitudeLaw
+
+    from conftest import CONFIGS
+
+    scene = scene_from_dict(read_yaml(CONFIGS / "solar_boat.yaml"), warn=False)
+    T, A0 = 2.1, 0.6
+    ms = MeasurementSet([Hanging("reference", scene, np.eye(3))],
+                        [Measurement("torsion", T, 1e-12, "period", "--period", amplitude=A0)])
+    unc = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0, "gravity": 0.0, "timing": 1e-12,
+           "amplitude": 0.1}
+    pb = build_problem(ms, ["Izz"], unc)
+    law = AmplitudeLaw(amplitude=A0, a=0.3, b=0.1, dr_dp=np.array([-0.004]))
+    r0 = 1 + 0.3 * A0**2 + 0.1 * A0**4
+    res = SimpleNamespace(problem=pb, factors=[r0], method="nonlinear", amplitude_laws=[law],
+                          values=np.array([scene.inertia[2, 2]]))
+    draws = draw_monte_carlo(res, 30, np.random.default_rng(4))
+    assert all(isinstance(d, FactorDraw) for d in draws)
+    rs = np.array([T / d.measurements[0].period for d in draws])
+    assert np.std(rs) > 0.01  # the amplitudes really differ (10 % of 0.6 rad)
+    for d, r in zip(draws, rs):
+        expected = (r - 1) / (r0 - 1) * -0.004 / r
+        assert d.slope[0, 0] == pytest.approx(expected, rel=1e-8)
+        assert d.unit[0] == 1.0 and d.p_ref[0] == res.values[0]
+    # the linear method, or no stated amplitude: plain draws, the factor held
+    for method, amplitude in (("linear", A0), ("nonlinear", 0.0)):
+        ms.measurements[0].amplitude = amplitude
+        res.method = method
+        assert not any(isinstance(d, FactorDraw) for d in draw_monte_carlo(res, 3, np.random.default_rng(4)))
