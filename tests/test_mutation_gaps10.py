@@ -500,3 +500,28 @@ def test_a_factor_draws_slope_is_the_laws_dr_dp_carried_to_the_drawn_amplitude()
         ms.measurements[0].amplitude = amplitude
         res.method = method
         assert not any(isinstance(d, FactorDraw) for d in draw_monte_carlo(res, 3, np.random.default_rng(4)))
+
+
+def test_the_drift_resolution_does_not_depend_on_where_the_rig_hangs():
+    # drift_resolution: 20 eps m g D over the oscillation energy, D the farthest anchor from the rest
+    # CoM.  The whole rig moved 5 m sideways and 3 m up hangs and swings the same (D, the energy), so
+    # the resolution is the same; D measured from the origin instead of the CoM would grow ~5x
+    from dataclasses import replace
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.analysis.run_accuracy import drift_resolution
+    from bifilar.analysis.simulate import initial_state
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    out = []
+    for shift in ((0.0, 0.0, 0.0), (5.0, 0.0, 3.0)):
+        sc = load_scene(CONFIGS / "thesis_plate_rest.yaml")
+        sc = replace(sc, anchors=sc.anchors + np.array(shift))
+        rest = rest_pose(sc)
+        md = linear_modes(sc, rest).get("torsion")
+        out.append(drift_resolution(sc, rest, initial_state(sc, rest, md, 0.05)))
+    assert np.isfinite(out[0]) and out[0] > 0
+    assert out[1] == pytest.approx(out[0], rel=1e-6)
