@@ -345,8 +345,10 @@ def test_drift_period_error_is_the_drift_times_the_periods_distance_from_the_lin
 
 
 @pytest.mark.parametrize("method, model, rtol, per_rtol", [
-    ("auto", "maximal", 1e-10, 15.0), ("DOP853", "maximal", 1e-10, 4.0), ("Radau", "maximal", 1e-8, 0.05),
-    ("RK23", "maximal", 1e-9, 7.0), ("DOP853", "kane", 1e-10, 8.0), ("LSODA", "kane", 1e-10, 40.0),
+    ("auto", "maximal", 1e-10, 15.0), ("LSODA", "maximal", 1e-10, 8.0), ("DOP853", "maximal", 1e-10, 4.0),
+    ("RK45", "maximal", 1e-10, 5.0), ("RK23", "maximal", 1e-9, 7.0), ("Radau", "maximal", 1e-8, 0.05),
+    ("BDF", "maximal", 1e-10, 10.0),
+    ("DOP853", "kane", 1e-10, 8.0), ("RK45", "kane", 1e-10, 30.0), ("LSODA", "kane", 1e-10, 40.0),
     ("no-such", "maximal", 1e-10, 15.0), ("no-such", "kane", 1e-10, 40.0),  # unmeasured: the largest
     ("auto", "maximal", 1e-15, None),  # below the floor: 1e-12 of the period
 ])
@@ -480,7 +482,7 @@ def test_a_factor_draws_slope_is_the_laws_dr_dp_carried_to_the_drawn_amplitude()
     T, A0 = 2.1, 0.6
     ms = MeasurementSet([Hanging("reference", scene, np.eye(3))],
                         [Measurement("torsion", T, 1e-12, "period", "--period", amplitude=A0)])
-    unc = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0, "gravity": 0.0, "timing": 1e-12,
+    unc = {"length": 0.0, "position": 0.0, "mass": 1e-3, "com": 0.0, "gravity": 0.0, "timing": 1e-12,
            "amplitude": 0.1}
     pb = build_problem(ms, ["Izz"], unc)
     law = AmplitudeLaw(amplitude=A0, a=0.3, b=0.1, dr_dp=np.array([-0.004]))
@@ -494,7 +496,10 @@ def test_a_factor_draws_slope_is_the_laws_dr_dp_carried_to_the_drawn_amplitude()
     for d, r in zip(draws, rs):
         expected = (r - 1) / (r0 - 1) * -0.004 / r
         assert d.slope[0, 0] == pytest.approx(expected, rel=1e-8)
-        assert d.unit[0] == 1.0 and d.p_ref[0] == res.values[0]
+        # an inertia's unit is m_hat / m_draw (the motion depends on I / m)
+        assert d.unit[0] == pytest.approx(scene.mass / d.hangings[0].scene.mass, rel=1e-12)
+        assert d.p_ref[0] == res.values[0]
+    assert np.std([d.unit[0] for d in draws]) > 5e-4  # the mass really drawn (0.1 %)
     # the linear method, or no stated amplitude: plain draws, the factor held
     for method, amplitude in (("linear", A0), ("nonlinear", 0.0)):
         ms.measurements[0].amplitude = amplitude
@@ -525,3 +530,31 @@ def test_the_drift_resolution_does_not_depend_on_where_the_rig_hangs():
         out.append(drift_resolution(sc, rest, initial_state(sc, rest, md, 0.05)))
     assert np.isfinite(out[0]) and out[0] > 0
     assert out[1] == pytest.approx(out[0], rel=1e-6)
+
+
+def test_a_com_unknowns_factor_unit_does_not_follow_the_mass():
+    # FactorDraw.unit: m_hat / m_draw for an inertia (the motion depends on I / m), 1 for a CoM shift
+    # (metres do not scale with the mass).  Izz and com.x from a stated-amplitude torsion and a swing
+    from bifilar.config import read_yaml, scene_from_dict
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.montecarlo import FactorDraw, draw_monte_carlo
+    from bifilar.estimation.problem import build_problem
+    from bifilar.estimation.solve import AmplitudeLaw
+
+    from conftest import CONFIGS
+
+    scene = scene_from_dict(read_yaml(CONFIGS / "solar_boat.yaml"), warn=False)
+    ms = MeasurementSet([Hanging("reference", scene, np.eye(3))],
+                        [Measurement("torsion", 2.1, 1e-3, "period", "--period", amplitude=0.3),
+                         Measurement("swing-x", 3.0, 1e-3, "period", "--period", amplitude=0.0)])
+    unc = {"length": 0.0, "position": 0.0, "mass": 1e-3, "com": 0.0, "gravity": 0.0, "timing": 1e-3,
+           "amplitude": 0.1}
+    pb = build_problem(ms, ["Izz", "com.x"], unc)
+    law = AmplitudeLaw(amplitude=0.3, a=0.3, b=0.0, dr_dp=np.array([-0.004, 0.02]))
+    res = SimpleNamespace(problem=pb, factors=[float(law.factor(0.3)), 1.0], method="nonlinear",
+                          amplitude_laws=[law, None], values=np.array([scene.inertia[2, 2], 0.0]))
+    draws = draw_monte_carlo(res, 10, np.random.default_rng(6))
+    assert all(isinstance(d, FactorDraw) for d in draws)
+    for d in draws:
+        np.testing.assert_allclose(d.unit, [scene.mass / d.hangings[0].scene.mass, 1.0], rtol=1e-12)
+        assert np.all(d.slope[1] == 0.0) and np.all(d.slope[0] != 0.0)  # only the stated amplitude's row
