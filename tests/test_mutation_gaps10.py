@@ -558,3 +558,46 @@ def test_a_com_unknowns_factor_unit_does_not_follow_the_mass():
     for d in draws:
         np.testing.assert_allclose(d.unit, [scene.mass / d.hangings[0].scene.mass, 1.0], rtol=1e-12)
         assert np.all(d.slope[1] == 0.0) and np.all(d.slope[0] != 0.0)  # only the stated amplitude's row
+
+
+def test_a_release_too_small_to_time_claims_the_floor_of_the_period():
+    # period_accuracy for a release below MIN_TIMED_ANGLE: its period is the linear one, to within the
+    # wire angle squared -- below 1e-12 there, so the bound is PERIOD_ERROR_FLOOR x the period, s.  A
+    # translation's angle is metres over the longest wire: 4e-6 m on 5 m wires is 8e-7 rad (4e-6 x 5 =
+    # 2e-5 would claim 4e-10)
+    from bifilar.analysis.run_accuracy import period_accuracy
+
+    for amplitude, dominant, Lmax in ((5e-7, 3, 1.0), (-9e-7, 5, 5.0), (4e-6, 0, 5.0), (4e-6, 2, 5.0)):
+        err, warn = period_accuracy(2.0, "auto", 1e-4, amplitude=amplitude, dominant=dominant, Lmax=Lmax)
+        assert err == pytest.approx(2e-12, rel=1e-12) and warn is None, (amplitude, dominant)
+
+
+def test_the_batched_monte_carlo_takes_one_hanging_one_period_one_inertia_unknown():
+    from bifilar.config import read_yaml, scene_from_dict
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.montecarlo import batched_applies
+    from bifilar.estimation.problem import build_problem
+
+    from conftest import CONFIGS
+
+    scene = scene_from_dict(read_yaml(CONFIGS / "solar_boat.yaml"), warn=False)
+
+    def pb(labels, unknowns):
+        ms = MeasurementSet([Hanging("reference", scene, np.eye(3))],
+                            [Measurement(lb, 2.0, 1e-3, "period", "--period", amplitude=0.0) for lb in labels])
+        return build_problem(ms, unknowns, {})
+
+    assert batched_applies(pb(["torsion"], ["Izz"]))
+    assert not batched_applies(pb(["torsion", "roll"], ["Izz"]))  # two periods
+    assert not batched_applies(pb(["torsion", "roll"], ["Izz", "Ixx"]))  # two unknowns
+    assert not batched_applies(pb(["torsion"], ["com.x"]))  # not an inertia component
+
+
+def test_the_loop_reports_its_progress_draw_by_draw():
+    # solve_draws_loop's progress(done, total) after each draw, failed ones (None) too
+    from bifilar.estimation.montecarlo import solve_draws_loop
+
+    res = SimpleNamespace(problem=SimpleNamespace(unknowns=["Izz"]))
+    calls = []
+    out = solve_draws_loop(res, [None, None, None], progress=lambda i, n: calls.append((i, n)))
+    assert calls == [(1, 3), (2, 3), (3, 3)] and out.shape == (3, 1) and np.all(np.isnan(out))
