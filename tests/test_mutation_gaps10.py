@@ -211,6 +211,11 @@ def test_the_law_fits_the_other_oscillations_of_the_documented_band(name, others
     assert len(got) == len(fitted), (name, got)
     for g, f in zip(got, sorted(fitted)):
         assert abs(g - f) < 0.1 * CH_BIN
+    # the fit names its own free parameters: the law's c0 (c1 with a drift), a, b, omega, sigma, beta,
+    # beta2, then a, b, omega, sigma of each other oscillation (the viscous fit's five were reported)
+    drift = ["c1"] if fit.selection["drift"] else []
+    others = [f"{nm}{k}" for k in range(2, 2 + len(fitted)) for nm in ("a", "b", "omega", "sigma")]
+    assert fit.selection["free_parameters"] == ["c0", *drift, "a", "b", "omega", "sigma", "beta", "beta2", *others]
     assert abs(fit.period - T_of(fit.amplitude_period)) < 4 * fit.std
 
 
