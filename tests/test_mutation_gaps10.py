@@ -606,3 +606,16 @@ def test_the_loop_reports_its_progress_draw_by_draw():
     calls = []
     out = solve_draws_loop(res, [None, None, None], progress=lambda i, n: calls.append((i, n)))
     assert calls == [(1, 3), (2, 3), (3, 3)] and out.shape == (3, 1) and np.all(np.isnan(out))
+
+
+def test_the_cure_counts_the_drifts_part_shrinking_with_the_rtol():
+    # 3e-9 s of integration (15 x 1e-10 x 2 s) and 7e-9 s of drift (7e-8 x 0.1 s) against a tenth of a
+    # 2.5e-11 s timing (2.5e-12 s): the rtol that would scale the error below it, 2.5e-12 / 1e-8 x 1e-10
+    # = 2.5e-14 -> 1e-14, is below MIN_RTOL (2.2e-14), where the integration claims its floor 2e-12 s
+    # and the drift's part is 7e-9 x 2.2e-14 / 1e-10 = 1.5e-12 s: 3.5e-12 s together, above the limit
+    # (either part alone, 2e-12 or 1.5e-12, is not)
+    from bifilar.analysis.run_accuracy import period_accuracy
+
+    err, warn = period_accuracy(2.0, "auto", 1e-10, timing=2.5e-11, linear_period=1.9, drift=7e-8)
+    assert err == pytest.approx(1e-8, rel=1e-9)
+    assert "most of it from the energy drift" in warn and "no --rtol brings it below" in warn
