@@ -619,3 +619,23 @@ def test_the_cure_counts_the_drifts_part_shrinking_with_the_rtol():
     err, warn = period_accuracy(2.0, "auto", 1e-10, timing=2.5e-11, linear_period=1.9, drift=7e-8)
     assert err == pytest.approx(1e-8, rel=1e-9)
     assert "most of it from the energy drift" in warn and "no --rtol brings it below" in warn
+
+
+def test_a_sweep_points_amplitude_budget_reports_its_own_figures_consistently():
+    # the Solar Boat at spacing 2.5, 0.3 rad, Izz from torsion: amplitude_budget's quadratic_slope is the
+    # quadratic rule 2 (r - 1) of its period_factor r; rel_sigma is sigma / |Izz| (component_scale of a
+    # moment), before and after the amplitude; factor_gain g is the one the amplitude's contribution
+    # was divided by: contribution = |slope rel T_lin dI/dT| / g with dI/dT = (rel. sensitivity) I / T_lin
+    from test_planner_amplitude import SOLAR, _point
+
+    st, scene, p = _point(SOLAR, {"spacing": 2.5, "length": 2.0}, components=["Izz"], amplitude=0.3)
+    e = p["components"]["Izz"]
+    ab = e["amplitude_budget"]
+    I = abs(float(scene.inertia[2, 2]))
+    assert ab["budgeted"] and ab["period_factor"] > 1.01
+    assert ab["quadratic_slope"] == pytest.approx(2 * (ab["period_factor"] - 1), rel=1e-12)
+    assert e["rel_sigma"] == pytest.approx(e["sigma"] / I, rel=1e-12)
+    assert ab["rel_sigma_small_amplitude"] == pytest.approx(ab["sigma_small_amplitude"] / I, rel=1e-12)
+    g = abs(ab["slope"] * ab["relative_std"] * e["rel_sensitivity_period"] * I) / ab["contribution"]
+    assert ab["factor_gain"] == pytest.approx(g, rel=1e-9)
+    assert abs(ab["factor_gain"] - ab["period_factor"]) > 0.05  # dr/dI moves the gain off r (the test can tell)
