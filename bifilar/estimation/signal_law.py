@@ -176,9 +176,10 @@ def _amplitude_law(fit: PeriodFit, t, y, criterion, n_general: int = 0) -> Perio
     info["used"] = True
     info["reason"] = (f"the halves' difference follows the envelope's square: {criterion} {delta:+.1f}, halves "
                       f"agree once referred to one amplitude (Q = {info['Q']:.1f} <= {info['critical_Q']:.1f})")
+    own = law.selection  # the law's own free parameters (before the viscous fit's selection replaces it)
     for k in ("selection", "alternatives", "chosen_by", "crossing"):
         setattr(law, k, getattr(fit, k))
-    law.selection = dict(fit.selection, **{k: v for k, v in law.selection.items() if k == "free_parameters"})
+    law.selection = dict(fit.selection, **{k: v for k, v in own.items() if k == "free_parameters"})
     law.choice_reason = ((fit.choice_reason + "; ") if fit.choice_reason else "") + \
         f"then {AMPLITUDE_LAW_MODEL}: {info['reason']}"
     law.oscillation = fit.oscillation
