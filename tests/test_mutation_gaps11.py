@@ -140,3 +140,186 @@ def test_a_point_with_a_law_but_no_sigma_says_no_sigma(monkeypatch):
     monkeypatch.undo()
     st, scene, p = _law_point(monkeypatch)
     assert p["components"]["Izz"]["amplitude_budget"]["budgeted"] is True
+
+
+# ---------------------------------------------------------------------------
+# fundamental.py: the frequency of the nearest periodic function
+# ---------------------------------------------------------------------------
+
+FW = 2 * math.pi / 1.7
+FT = np.arange(0.0, 20 * 1.7, 1 / 60.0)
+
+
+def _periodic(tone: float) -> np.ndarray:
+    """A constant and three harmonics of FW at arbitrary phases (a release not at a turning point: the
+    sines matter), plus ``tone`` times a cosine at 0.43 FW (another mode's swing)."""
+    return (0.01 + 0.3 * np.cos(FW * FT + 0.7) + 0.02 * np.cos(2 * FW * FT - 1.1) + 0.005 * np.cos(3 * FW * FT + 2.0)
+            + tone * np.cos(0.43 * FW * FT + 0.4))
+
+
+def _profile(omega: float, y: np.ndarray) -> float:
+    """min over the coefficients of |y - periodic(omega)|^2, a constant and three harmonics (numpy's lstsq)."""
+    cols = [np.ones_like(FT)] + [f(k * omega * FT) for k in (1, 2, 3) for f in (np.cos, np.sin)]
+    X = np.stack(cols, axis=1)
+    r = y - X @ np.linalg.lstsq(X, y, rcond=None)[0]
+    return float(r @ r)
+
+
+@pytest.mark.parametrize("start", [1e-3, -5e-3])
+def test_the_fundamentals_frequency_of_a_periodic_record_is_its_own(start):
+    # exactly periodic with phases: the least-squares frequency is the generator's (to rounding), from a
+    # start 0.1-0.5 % off (the harmonics' sines and the Gauss-Newton iteration's residual matter here;
+    # the torsion run of tests/test_mode_fundamental.py starts at a turning point, its sines ~0)
+    from bifilar.analysis.fundamental import _fit_frequency
+
+    assert _fit_frequency(FT, _periodic(0.0), FW * (1 + start)) == pytest.approx(FW, rel=1e-11)
+
+
+@pytest.mark.parametrize("start", [1e-3, -5e-3])
+def test_the_fundamentals_frequency_is_the_least_squares_one_beside_another_oscillation(start):
+    # _fit_frequency: "the angular frequency of the periodic function (constant and three harmonics)
+    # nearest y(t) in least squares": with another oscillation (5 % of the record) the residual is not
+    # zero and the minimum moves off the generator's frequency (3e-5 here); the returned frequency is the
+    # minimum of the profile sum of squares, found independently (numpy's lstsq per frequency, central
+    # differences: Newton's step from it measured 4e-13 of the frequency; band 1e-9).  A Gauss-Newton
+    # step with a wrong derivative column stops where the residual is orthogonal to the wrong column
+    from bifilar.analysis.fundamental import _fit_frequency
+
+    y = _periodic(0.05)
+    w = _fit_frequency(FT, y, FW * (1 + start))
+    h = 1e-6 * w
+    sp, s0, sm = _profile(w + h, y), _profile(w, y), _profile(w - h, y)
+    newton = -((sp - sm) / (2 * h)) / ((sp - 2 * s0 + sm) / h**2)
+    assert abs(newton) < 1e-9 * w
+    assert abs(w / FW - 1) > 1e-6  # the other oscillation did move the minimum (the test can tell)
+
+
+@pytest.mark.parametrize("off", [0.1, -0.2, 0.3])
+def test_a_start_far_off_gives_the_frequency_or_says_it_did_not_converge(off):
+    # a start 10-30 % off the fundamental (several bins of the 20-cycle record): the answer is the
+    # periodic record's own frequency or a ConvergenceError, never another frequency (an alias or a
+    # harmonic's) presented as the fundamental's
+    from bifilar.analysis.fundamental import _fit_frequency
+    from bifilar.errors import ConvergenceError
+
+    try:
+        w = _fit_frequency(FT, _periodic(0.0), FW * (1 + off))
+    except ConvergenceError as exc:
+        assert "did not converge" in str(exc)
+        return
+    assert w == pytest.approx(FW, rel=1e-11)
+
+
+def test_mode_fundamental_takes_the_other_modes_out_through_the_mass_matrix(monkeypatch):
+    # mode_fundamental's rule on a motion written from its modes: d(t) = q_a(t) phi_a + q_b(t) phi_b with
+    # phi_a^T M phi_b = 0 (M diagonal), q_a a constant and three harmonics of FW at arbitrary phases,
+    # q_b another mode at 0.43 FW that also moves a's dominant coordinate (8.6 x q_b there).  The modal
+    # projection gives q_a exactly, so the period is 2 pi / FW; the amplitude is the fundamental's in the
+    # dominant coordinate with b's part taken out: 0.3 x phi_a[dom] = 0.3 (the 1st harmonic's amplitude).
+    # The pose is the test's d (relative_pose replaced by the identity: the rest is the origin)
+    from types import SimpleNamespace as NS
+
+    import bifilar.analysis.fundamental as fu
+
+    M = np.diag([2.0, 2.0, 2.0, 0.05, 0.03, 0.07])
+    phi_a = np.array([0.3, 0.0, 0.0, 0.0, 0.0, 1.0])
+    phi_b = np.array([1.0, 0.0, 0.0, 0.0, 0.0, -2.0 * 0.3 / 0.07])
+    assert abs(phi_a @ M @ phi_b) < 1e-12
+    q_a = _periodic(0.0)
+    q_b = 0.1 * np.cos(0.43 * FW * FT + 0.4)
+    d = np.outer(q_a, phi_a) + np.outer(q_b, phi_b)
+    modes = NS(modes=[NS(shape=phi_b, dominant=0), NS(shape=phi_a, dominant=5)], mass_matrix=M)
+    monkeypatch.setattr(fu, "relative_pose", lambda Y, rest: Y)
+    T, a = fu.mode_fundamental(FT, d, None, modes, 1, 2 * math.pi / FW * (1 + 2e-3))
+    assert T == pytest.approx(2 * math.pi / FW, rel=1e-11)
+    assert a == pytest.approx(0.3, rel=1e-9)
+
+
+# ---------------------------------------------------------------------------
+# factor_inputs.py: which inputs' dr/dx are derived without a run
+# ---------------------------------------------------------------------------
+
+def _routes_problem(names, nw=4):
+    from types import SimpleNamespace as NS
+
+    return NS(models=[NS(hanging=NS(name=n, scene=NS(n_wires=nw))) for n in names])
+
+
+def _all_keys(pre="", nw=4):
+    return (["gravity", "mass", "com.x", "com.y", "com.z"] + [f"{pre}length.{i}" for i in range(1, nw + 1)]
+            + [f"{pre}{p}.{i}.{a}" for p in ("anchor", "attachment") for i in range(1, nw + 1) for a in "xyz"])
+
+
+@pytest.mark.parametrize("names", [["only"], ["a", "b"]])
+def test_the_exact_routes_of_dr_dx_follow_the_documented_rule(names):
+    # _factor_routes' docstring: gravity (0, time scaling), the last wire's anchor coordinates (translation
+    # invariance: all the other anchors' same coordinate needed), com.* (all the attachments needed) and
+    # the mass (the scaling identity: every length, anchor and attachment needed) are derived, the rest
+    # run.  Keys carry the hanging's name as prefix only with several hangings
+    from bifilar.estimation.factor_inputs import _factor_routes
+
+    pb = _routes_problem(names)
+    pre = f"{names[0]}:" if len(names) > 1 else ""
+    keys = _all_keys(pre)
+    run, derived = _factor_routes(pb, 0, keys)
+    want = {"gravity": "gravity", "mass": "scaling", "com.x": "com", "com.y": "com", "com.z": "com",
+            f"{pre}anchor.4.x": "translation", f"{pre}anchor.4.y": "translation", f"{pre}anchor.4.z": "translation"}
+    assert derived == want
+    assert sorted(run) == sorted(k for k in keys if k not in want)
+    # one input missing takes its route away: anchor.2.y (the last anchor's y, and the mass), an
+    # attachment (com and the mass), a length (the mass)
+    for gone, lost in ((f"{pre}anchor.2.y", {f"{pre}anchor.4.y", "mass"}),
+                       (f"{pre}attachment.3.z", {"com.x", "com.y", "com.z", "mass"}),
+                       (f"{pre}length.1", {"mass"})):
+        _, d = _factor_routes(pb, 0, [k for k in keys if k != gone])
+        assert set(d) == set(want) - lost, gone
+
+
+# ---------------------------------------------------------------------------
+# rig.py: the same measurement within SAME_TOL of the longest wire
+# ---------------------------------------------------------------------------
+
+def _rig_scene(dz: float, L: float = 2.0):
+    from types import SimpleNamespace as NS
+
+    anchors = np.array([[0.3, 0.0, L], [-0.3, 0.0, L]])
+    anchors[1, 2] += dz
+    return NS(anchors=anchors, lengths=np.array([L, 1.5]), attachments=np.array([[0.3, 0.0, 0.0], [-0.3, 0.0, 0.0]]),
+              n_wires=2)
+
+
+@pytest.mark.parametrize("frac, same", [(0.5e-9, True), (1.5e-9, False)])
+def test_two_hangings_share_a_rig_within_a_billionth_of_the_longest_wire(frac, same):
+    # SAME_TOL: anchors and lengths equal within 1e-9 of the longest wire (2 m here) are one measurement:
+    # an anchor 0.5e-9 x 2 m off is the same rig (one key per length and anchor, both hangings'), 1.5e-9 x
+    # 2 m off two rigs (each hanging its own keys)
+    from bifilar.estimation.rig import rig_links
+
+    links = rig_links(["a", "b"], [_rig_scene(0.0), _rig_scene(frac * 2.0)], [np.eye(3), np.eye(3)])
+    length_keys = [k for k in links.keys if "length.1" in k]
+    if same:
+        assert length_keys == ["a+b:length.1"] and links.hangings("a+b:anchor.2.z") == [0, 1]
+    else:
+        assert sorted(length_keys) == ["a:length.1", "b:length.1"]
+
+
+@pytest.mark.parametrize("case", ["no law", "law without dr_dp", "no amplitude"])
+def test_dr_dx_is_measured_only_for_a_stated_amplitudes_law(monkeypatch, case):
+    # factor_input_derivatives: dr/dx "for each measurement k with a stated amplitude's law (dr_dp set)":
+    # a measurement without a law, with an unstated release's law (no dr_dp) or without an amplitude runs
+    # nothing and its law is left untouched
+    from types import SimpleNamespace as NS
+
+    import bifilar.analysis.batch as batch
+    from bifilar.estimation.factor_inputs import factor_input_derivatives
+
+    def no_runs(*a, **k):
+        raise AssertionError("ran a simulation")
+
+    monkeypatch.setattr(batch, "simulate_batch", no_runs)
+    law = None if case == "no law" else NS(dr_dp=None if case == "law without dr_dp" else np.ones(1), amplitude=0.3)
+    m = NS(amplitude=0.0 if case == "no amplitude" else 0.3, hanging=0, cycles=10)
+    pb = NS(measurements=[m], models=[NS(hanging=NS(name="only", scene=NS(n_wires=2)))], mode_index=[0])
+    factor_input_derivatives(pb, [law], ["gravity"], {"gravity": 1e-4}, [None], [None], [None], [[0]])
+    if law is not None:
+        assert not hasattr(law, "dr_dx") and not hasattr(law, "dr_dx_failed")
