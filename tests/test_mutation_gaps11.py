@@ -323,3 +323,65 @@ def test_dr_dx_is_measured_only_for_a_stated_amplitudes_law(monkeypatch, case):
     factor_input_derivatives(pb, [law], ["gravity"], {"gravity": 1e-4}, [None], [None], [None], [[0]])
     if law is not None:
         assert not hasattr(law, "dr_dx") and not hasattr(law, "dr_dx_failed")
+
+
+# ---------------------------------------------------------------------------
+# kane_run.py: the kane model's runs checked as the maximal model's
+# ---------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def pitch_rig():
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    sc = load_scene(CONFIGS / "thesis_lin2_pitch.yaml")
+    rest = rest_pose(sc)
+    return sc, rest, linear_modes(sc, rest)
+
+
+def test_kane_checks_only_a_run_whose_cycles_spread_and_only_when_asked(pitch_rig):
+    # simulate_kane's check: "where the single-cycle periods spread by more than IRREGULAR_SPREAD of the
+    # period the same start is run again at rtol / 100"; check=False: the error model alone.  The pitch rig's
+    # pitch at 0.05 rad spreads (7e-6 of its period over 5 cycles), its swing-y does not (1e-10)
+    from bifilar.analysis.kane_run import simulate_kane
+    from bifilar.analysis.run_accuracy import IRREGULAR_SPREAD
+
+    sc, rest, ms = pitch_rig
+    calm = simulate_kane(sc, rest, ms, mode="swing-y", amplitude=0.05, periods=3, rtol=1e-9)
+    assert calm.period_std < IRREGULAR_SPREAD * calm.period and calm.period_check is None
+    spread = simulate_kane(sc, rest, ms, mode="pitch", amplitude=0.05, periods=5, rtol=1e-8)
+    assert spread.period_std > IRREGULAR_SPREAD * spread.period
+    assert spread.period_check is not None and spread.period_check["rtol"] == pytest.approx(1e-10, rel=1e-12)
+    unchecked = simulate_kane(sc, rest, ms, mode="pitch", amplitude=0.05, periods=5, rtol=1e-8, check=False)
+    assert unchecked.period_check is None
+
+
+
+# ---------------------------------------------------------------------------
+# solve.py: a stated amplitude's law carries the largest irregularity of its runs
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("given, diffs, largest", [(9e-7, [2e-7, 5e-7, 1e-7], 9e-7), (3e-7, [2e-7, 5e-7, 1e-7], 5e-7),
+                                                   (0.0, [0.0, 0.0, 0.0], 0.0)])
+def test_a_laws_irregularity_is_the_largest_of_its_runs(monkeypatch, given, diffs, largest):
+    # stated_amplitude_law: "law.irregular: the largest difference" of the factor's own run (given) and the
+    # law's runs (one at 0.9 A, one per unknown stepped); the runs replaced by factors of a quadratic law
+    # with their check differences
+    from types import SimpleNamespace as NS
+
+    import bifilar.estimation.solve as so
+
+    calls = iter(zip([1.0 + 0.002 * 0.81, 1.0021, 1.0019], diffs))
+
+    def measured(pb, k, p, rtol=1e-10, amplitude=None):
+        r, d = next(calls)
+        return r, None, d
+
+    monkeypatch.setattr(so, "measured_factor", measured)
+    pb = NS(measurements=[NS(amplitude=0.3)], scales=lambda: np.ones(2))
+    law = so.stated_amplitude_law(pb, np.array([1.0, 2.0]), 0, 1.002, irregular=given)
+    assert law.irregular == largest
+    assert law.dr_dp == pytest.approx([(1.0021 - 1.002) / so.FACTOR_STEP, (1.0019 - 1.002) / so.FACTOR_STEP], rel=1e-6)
