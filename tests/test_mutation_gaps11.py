@@ -13,6 +13,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from test_amplitude_law import boat  # noqa: F401  (the Solar Boat at spacing 1, length 2: a module fixture)
+
 # ---------------------------------------------------------------------------
 # signal_law.py: the law's own split check
 # ---------------------------------------------------------------------------
@@ -462,3 +464,36 @@ def test_dr_dx_of_a_factor_linear_in_the_inputs(monkeypatch, dominant, own_fails
     assert set(law.dr_dx) == set(keys)
     for k in keys:
         assert law.dr_dx[k] == pytest.approx(want[k], rel=1e-6, abs=1e-9), k
+
+
+# ---------------------------------------------------------------------------
+# montecarlo.py: a draw's factor offset from its mass, CoM and gravity errors
+# ---------------------------------------------------------------------------
+
+def test_each_draw_moves_the_factor_by_its_own_mass_com_and_gravity_errors(boat):  # noqa: F811
+    # as tests/test_factor_inputs.py's test for the rig inputs: a FactorDraw's offset is sum_j dr/dx_j e_j / r
+    # (the amplitude exact: w = 1), here for the mass, the CoM and gravity, each e_j read back from the drawn
+    # scene against the measured one (the mass and gravity their differences, the CoM from the attachments'
+    # common shift -R dcom, the positions exact).  The drawn mass m (1 - dm) against an offset for +m dm
+    # (s.mass * -> /) passed every test
+    from bifilar.estimation.montecarlo import draw_monte_carlo
+
+    from test_amplitude_law import A0, _invert, _periods
+    from test_factor_inputs import EXACT
+
+    T = float(_periods(boat, [A0])[0])
+    res = _invert(boat, T, {**EXACT, "mass": 1e-2, "com": 2e-3, "gravity": 1e-3, "timing": 1e-9})
+    law = res.amplitude_laws[0]
+    assert law.dr_dx_failed == [] and law.dr_dx["gravity"] == 0.0
+    r = float(law.factor(A0))
+    R = res.problem.models[0].R
+    for d in draw_monte_carlo(res, 4, np.random.default_rng(5)):
+        s = d.hangings[0].scene
+        shift = s.attachments - boat.attachments
+        assert np.ptp(shift, axis=0) == pytest.approx(np.zeros(3), abs=1e-15)  # one common shift
+        dcom = -R.T @ shift[0]
+        e = {"mass": s.mass - boat.mass, "gravity": s.gravity - boat.gravity,
+             **{f"com.{a}": dcom[q] for q, a in enumerate("xyz")}}
+        expect = sum(v * e[k] for k, v in law.dr_dx.items()) / r
+        assert abs(law.dr_dx["mass"] * e["mass"] / r) > 1e-7  # the mass's part is there to see
+        assert float(d.offset[0]) == pytest.approx(expect, rel=1e-6, abs=1e-15)
