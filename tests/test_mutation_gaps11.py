@@ -393,15 +393,16 @@ def test_a_laws_irregularity_is_the_largest_of_its_runs(monkeypatch, given, diff
 # factor_inputs.py: dr/dx of a factor linear in the inputs, through every route
 # ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize("dominant, own_fails", [(0, False), (3, False), (0, True)])
-def test_dr_dx_of_a_factor_linear_in_the_inputs(monkeypatch, dominant, own_fails):
+@pytest.mark.parametrize("dominant, own_fails, pre", [(0, False, ""), (3, False, ""), (0, True, ""), (0, False, "a:")])
+def test_dr_dx_of_a_factor_linear_in_the_inputs(monkeypatch, dominant, own_fails, pre):
     # factor_input_derivatives with the engine replaced by a factor linear in the inputs, r = r0 + sum g_x
     # dx (a run's period r T_lin): a forward difference returns g_x exactly; the exact routes are the
     # docstring's identities on those g: gravity 0; the last anchor's coordinate minus the sum over the
     # other anchors'; com.a = -sum_i sum_b R[b, a] g(attachment i, b); the mass (sum_x x g_x + A dr/dA for a
     # translation mode only) / 2m.  One stepped run fails (attachment.1.y): its input is listed in
     # dr_dx_failed and left at 0 (and, there, the com and mass routes read that 0).  When the estimate's own
-    # run fails, every input is failed and 0 (no difference can be taken)
+    # run fails, every input is failed and 0 (no difference can be taken).  pre "a:": hanging "a" of two, its
+    # rig and attachment keys prefixed, each stepped as its own input (the name without the prefix)
     from types import SimpleNamespace as NS
 
     import bifilar.analysis.batch as batch
@@ -410,12 +411,12 @@ def test_dr_dx_of_a_factor_linear_in_the_inputs(monkeypatch, dominant, own_fails
 
     nw, A, T_lin, r0, m_body, slope_A = 2, 0.3, 1.7, 1.01, 3.0, 0.02
     rng = np.random.default_rng(3)
-    keys = (["gravity", "mass", "com.x", "com.y", "com.z"] + [f"length.{i}" for i in (1, 2)]
-            + [f"{p}.{i}.{a}" for p in ("anchor", "attachment") for i in (1, 2) for a in "xyz"])
+    keys = (["gravity", "mass", "com.x", "com.y", "com.z"] + [f"{pre}length.{i}" for i in (1, 2)]
+            + [f"{pre}{p}.{i}.{a}" for p in ("anchor", "attachment") for i in (1, 2) for a in "xyz"])
     g = {k: float(rng.normal()) for k in keys if k not in ("gravity", "mass") and not k.startswith("com.")}
-    value = {k: float(rng.uniform(0.2, 1.5)) for k in g}
-    step = {k: 1e-4 * (1 + 0.1 * n) for n, k in enumerate(keys)}
-    failed = "attachment.1.y"
+    value = {k.split(":")[-1]: float(rng.uniform(0.2, 1.5)) for k in g}
+    step = {k.split(":")[-1]: 1e-4 * (1 + 0.1 * n) for n, k in enumerate(keys)}
+    failed = f"{pre}attachment.1.y"
     th = 0.4
     R = np.array([[math.cos(th), -math.sin(th), 0.0], [math.sin(th), math.cos(th), 0.0], [0.0, 0.0, 1.0]])
     base = NS(mass=m_body)
@@ -443,22 +444,25 @@ def test_dr_dx_of_a_factor_linear_in_the_inputs(monkeypatch, dominant, own_fails
 
     monkeypatch.setattr(batch, "simulate_batch", runs)
     law = NS(dr_dp=np.ones(1), amplitude=A, slope=lambda: slope_A)
+    models = [NS(hanging=NS(name=n, scene=NS(n_wires=nw)), R=R) for n in (["a", "b"] if pre else ["a"])]
     pb = NS(measurements=[NS(amplitude=A, hanging=0, cycles=10)], mode_index=[0], links=NS(hangings=lambda k: [0]),
-            models=[NS(hanging=NS(name="only", scene=NS(n_wires=nw)), R=R)])
+            models=models)
     sig = {k: 1e-3 for k in keys}
-    fi.factor_input_derivatives(pb, [law], keys, sig, [base], [None], [NS(modes=[NS(dominant=dominant)])], [[0]])
+    H = len(models)
+    fi.factor_input_derivatives(pb, [law], keys, sig, [base] * H, [None] * H, [NS(modes=[NS(dominant=dominant)])] * H,
+                                [[0]] * H)
 
     if own_fails:
         assert sorted(law.dr_dx_failed) == sorted(keys) and law.dr_dx == {k: 0.0 for k in keys}
         return
     gm = dict(g, **{failed: 0.0})
-    want = {k: gm[k] for k in g if not k.startswith("anchor.2.")}
+    want = {k: gm[k] for k in g if not k.startswith(f"{pre}anchor.2.")}
     want["gravity"] = 0.0
     for a in "xyz":
-        want[f"anchor.2.{a}"] = -gm[f"anchor.1.{a}"]
-        want[f"com.{a}"] = -sum(R[b, "xyz".index(a)] * gm[f"attachment.{i}.{'xyz'[b]}"] for i in (1, 2)
+        want[f"{pre}anchor.2.{a}"] = -gm[f"{pre}anchor.1.{a}"]
+        want[f"com.{a}"] = -sum(R[b, "xyz".index(a)] * gm[f"{pre}attachment.{i}.{'xyz'[b]}"] for i in (1, 2)
                                 for b in range(3))
-    geo = sum(value[k] * want[k] for k in g)
+    geo = sum(value[k.split(":")[-1]] * want[k] for k in g)
     want["mass"] = (geo + (A * slope_A if dominant < 3 else 0.0)) / (2 * m_body)
     assert law.dr_dx_failed == [failed]
     assert set(law.dr_dx) == set(keys)
