@@ -501,3 +501,11 @@ def test_each_draw_moves_the_factor_by_its_own_mass_com_and_gravity_errors(boat)
         expect = sum(v * e[k] for k, v in law.dr_dx.items()) / r
         assert abs(law.dr_dx["mass"] * e["mass"] / r) > 1e-7  # the mass's part is there to see
         assert float(d.offset[0]) == pytest.approx(expect, rel=1e-6, abs=1e-15)
+    # unit: ones where the law has dr_dx; without it (a law the budget did not reach) m_hat / m_draw for an
+    # inertia unknown (the motion depends on the mass only through I / m)
+    assert all(np.all(d.unit == 1.0) for d in draw_monte_carlo(res, 2, np.random.default_rng(6)))
+    law.dr_dx = None
+    for d in draw_monte_carlo(res, 3, np.random.default_rng(6)):
+        m_draw = d.hangings[0].scene.mass
+        assert abs(m_draw / boat.mass - 1) > 1e-4
+        assert d.unit == pytest.approx([boat.mass / m_draw], rel=1e-12)
