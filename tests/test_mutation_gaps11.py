@@ -509,3 +509,28 @@ def test_each_draw_moves_the_factor_by_its_own_mass_com_and_gravity_errors(boat)
         m_draw = d.hangings[0].scene.mass
         assert abs(m_draw / boat.mass - 1) > 1e-4
         assert d.unit == pytest.approx([boat.mass / m_draw], rel=1e-12)
+
+
+def test_a_period_without_an_amplitude_beside_a_stated_ones_law_draws_unit_ones(boat):  # noqa: F811
+    # the boat's torsion at 0.3 rad (a law with dr_dx) and its pitch at --amplitude 0 (no law): FactorDraws
+    # whose unit is 1 (the law has dr_dx; the pitch has no factor to follow the mass); the law-less
+    # measurement is skipped, not read (measured's first or -> and read None.dr_dp)
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.estimation.invert import invert
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.montecarlo import FactorDraw, draw_monte_carlo
+
+    from test_amplitude_law import A0, _periods
+
+    T = float(_periods(boat, [A0])[0])
+    Tp = next(m.period for m in linear_modes(boat, rest_pose(boat)).modes if m.label == "pitch")
+    unc = {"length": 0.0, "position": 0.0, "mass": 1e-2, "com": 0.0, "gravity": 0.0, "amplitude": 0.0, "timing": 1e-9}
+    ms = MeasurementSet([Hanging("reference", boat, np.eye(3))],
+                        [Measurement("torsion", T, 1e-9, "period", "--period", amplitude=A0),
+                         Measurement("pitch", Tp, 1e-9, "period", "--period", amplitude=0.0)])
+    ms.uncertainty = dict(unc)
+    res = invert(ms, solve_for=["Izz"], ladder=False, unc=dict(unc))
+    assert res.method == "nonlinear" and res.amplitude_laws[1] is None and res.amplitude_laws[0].dr_dx is not None
+    draws = draw_monte_carlo(res, 2, np.random.default_rng(1))
+    assert all(isinstance(d, FactorDraw) and np.all(d.unit == 1.0) for d in draws)
