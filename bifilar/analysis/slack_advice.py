@@ -146,7 +146,7 @@ def _dependent_advice(scene: Scene, idx, s0, floor, heads: list) -> str | None:
     """Advice for slack wires ``idx`` that, shortened by their slack ``s0``
     (m), make the wires dependent (parallel vertical wires: a table's legs):
     no shortening past that loads them without slackening another, so the
-    advice is that length, if its rig hangs with the least-squares split
+    advice is that length, if its rig hangs with the model's split (least squares of T_i / L_i)
     giving every wire at least ``floor`` N; else None."""
     checked = _printed_lengths(scene, idx, s0, lambda T: np.min(T) >= floor)
     if checked is None:
@@ -169,4 +169,4 @@ def _dependent_advice(scene: Scene, idx, s0, floor, heads: list) -> str | None:
              for k, i in enumerate(idx)]
     return ("; ".join(parts) + f": then the {scene.n_wires} wires are dependent (like a table's legs: their tensions "
             f"are statically indeterminate, set by the wires' stretch and a fraction of a mm of length); the "
-            f"least-squares split gives every wire at least {np.min(T):.3g} N{shorter}")
+            f"model's split (least squares of T_i / L_i) gives every wire at least {np.min(T):.3g} N{shorter}")
