@@ -150,3 +150,47 @@ def test_modes_states_the_split_and_the_range(tmp_path):
     W = 98.1
     assert np.allclose(eq["tension_range"], [[0, W / 2]] * 4, atol=1e-9 * W)
     assert "statics allows wire 1 0 .. 49.05 N" in res.stderr and "T_i / L_i" in res.stderr
+
+
+# -- nonlinear runs on modes the wires cannot follow -------------------------------------------------------
+
+
+def test_invert_refuses_an_amplitude_on_a_mode_the_wires_cannot_follow(tmp_path):
+    # before: exit 1, 'the simulated torsion motion showed fewer than two crossings'
+    uneq, eq = tmp_path / "uneq.yaml", tmp_path / "eq.yaml"
+    uneq.write_text(vertical(CORNERS, [1.0, 1.2, 1.4, 1.6]))
+    eq.write_text(vertical(CORNERS, [1.0] * 4))
+    line = one_error_line(run("invert", uneq, "--period", "torsion=1.52", "--amplitude", "0.05"), "--amplitude")
+    assert "would stretch them at second order" in line and "--amplitude torsion=0" in line
+    res = run("invert", uneq, "--period", "torsion=1.52", "--amplitude", "torsion=0", "--json")
+    assert res.exit_code == 0 and json.loads(res.stdout)["method"] == "linear"
+    # the equal table follows its torsion: no refusal (the nonlinear method runs)
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.estimation.problem import build_problem, refuse_stretching_amplitudes
+
+    for path, refused in ((eq, False), (uneq, True)):
+        m = Measurement("torsion", 1.5, 1e-3, "period", "--period", amplitude=0.05)
+        ms = MeasurementSet([Hanging("reference", scene_of(path.read_text()), np.eye(3), str(path))], [m],
+                            source=str(path))
+        pb = build_problem(ms, ["Izz"], {})
+        if refused:
+            with pytest.raises(Exception, match="would stretch"):
+                refuse_stretching_amplitudes(pb)
+        else:
+            refuse_stretching_amplitudes(pb)
+
+
+def test_sweep_warns_where_the_wires_cannot_follow_the_runs(tmp_path):
+    # before: every point's wires 'slack', no word of why
+    uneq, eq = tmp_path / "uneq.yaml", tmp_path / "eq.yaml"
+    uneq.write_text(vertical(CORNERS, [1.0, 1.2, 1.4, 1.6]))
+    eq.write_text(vertical(CORNERS, [1.0] * 4))
+    res = run("sweep", uneq, "--param", "length=1.0:1.4:2", "--component", "Izz", "--json")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert "at 2 of 2 points" in doc["warnings"][0] and "--no-tensions" in doc["warnings"][0]
+    assert "warning: at 2 of 2 points" in res.stderr
+    assert all(p["stretching_modes"] == ["torsion"] for p in doc["points"])
+    res = run("sweep", eq, "--param", "length=1.0:1.4:2", "--component", "Izz", "--json")
+    assert res.exit_code == 0 and "cannot follow" not in res.stderr
+    assert not any(p.get("stretching_modes") for p in json.loads(res.stdout)["points"])

@@ -411,16 +411,27 @@ def stretching_modes(scene: Scene, rest: RestPose, modes) -> list[tuple[str, flo
 def stretching_warning(scene: Scene, rest: RestPose, modes, only: str | None = None) -> str | None:
     """The warning for the modes :func:`stretching_modes` finds (``only``: a
     mode label, warned about alone), or None."""
-    hits = [(lb, s) for lb, s in stretching_modes(scene, rest, modes) if only is None or lb == only]
-    if not hits:
-        return None
-    names = ", ".join(f"'{lb}'" for lb, _ in hits)
-    return (f"rig: the {scene.n_wires} wires are dependent at rest and mode{'s' if len(hits) > 1 else ''} {names} "
+    hits = [lb for lb, s in stretching_modes(scene, rest, modes) if only is None or lb == only]
+    return stretching_text(scene, hits) if hits else None
+
+
+def stretching_text(scene: Scene, labels: list) -> str:
+    """The warning of :func:`stretching_warning` for modes ``labels``."""
+    return (f"rig: {stretching_reason(scene, labels)}, so its nonlinear runs of it (simulate, invert --amplitude, "
+            "tensions, sweep's and plan's tensions and amplitude terms) are not physical at any amplitude; a real "
+            "rig's wires stretch instead and its small oscillations keep the linear periods: time them at a small "
+            "amplitude and give invert --amplitude 0")
+
+
+def stretching_reason(scene: Scene, labels: list) -> str:
+    """Why the rigid-wire model cannot follow modes ``labels`` (found by
+    :func:`stretching_modes`) of ``scene``: the words every command's
+    warning or refusal of it shares."""
+    names = ", ".join(f"'{lb}'" for lb in labels)
+    return (f"the {scene.n_wires} wires are dependent at rest and mode{'s' if len(labels) > 1 else ''} {names} "
             "would stretch them at second order (a twist or swing lifts their ends by unequal amounts that no tilt "
             "of the body fits): the rigid-wire model follows such a motion only with the body swinging as well and "
-            "wires that push, so its nonlinear runs of it (simulate, invert --amplitude, sweep's tensions and "
-            "amplitude terms) are not physical at any amplitude; a real rig's wires stretch instead and its small "
-            "oscillations keep the linear periods: time them at a small amplitude and give invert --amplitude 0")
+            "wires that push")
 
 
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,

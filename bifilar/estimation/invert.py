@@ -83,7 +83,8 @@ from .montecarlo import (  # noqa: F401
     solve_draws_loop,
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
-from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
+from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
+                      start_guesses)
 from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
 from .roots import Root, find_roots
 from .roots import separating_measurement
@@ -305,6 +306,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     K, P = len(pb.measurements), len(pb.unknowns)
     scalar = K == 1 and P == 1
     has_amp = any(m.amplitude for m in pb.measurements)
+    if has_amp:  # the rigid-wire model's nonlinear run of a mode dependent wires cannot follow says nothing
+        refuse_stretching_amplitudes(pb)
     best = "nonlinear" if has_amp else "linear"
     if method == "auto":
         method = best
