@@ -152,6 +152,69 @@ def test_modes_states_the_split_and_the_range(tmp_path):
     assert "statics allows wire 1 0 .. 49.05 N" in res.stderr and "T_i / L_i" in res.stderr
 
 
+# -- a slack wire within the measured inputs' uncertainty ------------------------------------------------
+
+
+def _gap_by_hand(cfg: dict, k: int) -> float:
+    """Slack (m) of wire k (0-based) of config ``cfg``: its length minus the distance between its ends at
+    the rest pose of the rig without it."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.config import scene_from_dict
+
+    c = json.loads(json.dumps(cfg))
+    for key in ("anchors", "attachments", "lengths"):
+        c["rig"][key] = [v for i, v in enumerate(c["rig"][key]) if i != k]
+    rp = rest_pose(scene_from_dict(c, "x", warn=False))
+    a, p = np.array(cfg["rig"]["anchors"][k]), np.array(cfg["rig"]["attachments"][k])
+    return cfg["rig"]["lengths"][k] - float(np.linalg.norm(rp.com + rp.R @ p - a))
+
+
+def test_slack_sigma_against_sampled_inputs():
+    # the slack's first-order std (finite differences, slack_cause) against the spread of the slack when
+    # the lengths, points (1 mm) and CoM (2 mm) are drawn from their stds: 300 draws, +-4 % sampling error
+    # (realised 0.955)
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.errors import SlackWireError
+    from bifilar.estimation.slack_cause import slack_gap_sigmas
+
+    text = SHIFTED.replace("LAST", "1.1628")
+    cfg = yaml.safe_load(text)
+    scene = scene_of(text)
+    with pytest.raises(SlackWireError) as ei:
+        rest_pose(scene)
+    assert ei.value.wires == [4]
+    assert math.isclose(ei.value.gaps[0], _gap_by_hand(cfg, 3), rel_tol=1e-4, abs_tol=1e-9)
+    sig = slack_gap_sigmas(scene, [3], {})[0]
+    rng = np.random.default_rng(5)
+    gaps = []
+    for _ in range(300):
+        c = json.loads(json.dumps(cfg))
+        com = rng.normal(0, 2e-3, 3)
+        c["rig"]["lengths"] = (np.array(cfg["rig"]["lengths"]) + rng.normal(0, 1e-3, 4)).tolist()
+        c["rig"]["anchors"] = (np.array(cfg["rig"]["anchors"]) + rng.normal(0, 1e-3, (4, 3))).tolist()
+        c["rig"]["attachments"] = (np.array(cfg["rig"]["attachments"]) + rng.normal(0, 1e-3, (4, 3))
+                                   - com).tolist()  # the CoM moved by com relative to the attachments
+        gaps.append(_gap_by_hand(c, 3))
+    assert abs(np.std(gaps) / sig - 1) < 0.15, (np.std(gaps), sig)
+
+
+@pytest.mark.parametrize("last, within", [("1.1628", True), ("1.1928", False)])
+def test_invert_says_when_a_slack_wire_is_within_the_inputs_uncertainty(tmp_path, last, within):
+    # slack by 1.13 mm where the inputs' stds give its slack 3.4 mm (before: only 'shorten it'); with wire 4
+    # 30 mm longer, slack by 31 mm, beyond 3 sigma: the rig's own doing
+    p = tmp_path / "lean.yaml"
+    p.write_text(SHIFTED.replace("LAST", last))
+    line = one_error_line(run("invert", p, "--period", "torsion=1.3"), "rig.lengths")
+    assert "wire 4 is slack at rest by" in line and "shorten it by" in line
+    assert ("within 3 standard uncertainties" in line) is within
+    if within:
+        assert "the lengths' 1 mm, the points' 1 mm and the CoM's 2 mm: the defaults" in line
+        # stated more finely, the same slack is beyond them
+        line = one_error_line(run("invert", p, "--period", "torsion=1.3", "--uncertainty", "length=1e-5",
+                                  "--uncertainty", "position=1e-5", "--uncertainty", "com=1e-5"), "rig.lengths")
+        assert "within" not in line
+
+
 # -- nonlinear runs on modes the wires cannot follow -------------------------------------------------------
 
 
@@ -194,3 +257,26 @@ def test_sweep_warns_where_the_wires_cannot_follow_the_runs(tmp_path):
     res = run("sweep", eq, "--param", "length=1.0:1.4:2", "--component", "Izz", "--json")
     assert res.exit_code == 0 and "cannot follow" not in res.stderr
     assert not any(p.get("stretching_modes") for p in json.loads(res.stdout)["points"])
+
+
+def test_advice_for_two_slack_wires_says_lengthen_where_the_amount_is_negative(tmp_path):
+    # a draw of the leaning table within 1 mm: wires 2 and 4 slack; with wire 4 shortened, wire 2 needs to be
+    # 0.1 mm longer to carry its aim (before: 'shorten it by -0.1 mm')
+    rig = {"anchors": [[0.55142, 0.40073, 0.00084], [-0.49884, 0.35079, 0.10084], [-0.44992, -0.42143, -0.00014],
+                       [0.59923, -0.30142, 0.05026]],
+           "attachments": [[0.34943, 0.24897, 0.04896], [-0.34973, 0.25036, 0.05132], [-0.35001, -0.24896, 0.0514],
+                           [0.35115, -0.25237, 0.05123]],
+           "lengths": [1.09992, 1.2323, 1.15069, 1.16204]}
+    cfg = yaml.safe_load(LEAN.replace("LAST", "1.1628"))
+    cfg["rig"] = rig
+    p = tmp_path / "draw.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    line = one_error_line(run("modes", p), "rig.lengths")
+    import re
+
+    parts = re.findall(r"wire (\d) is slack at rest by [0-9.]+ mm: (shorten|lengthen) it by ([0-9.]+) mm, to ([0-9.]+) m",
+                       line)
+    assert len(parts) == 2 and "by -" not in line
+    for w, verb, mm, to in parts:
+        change = (float(to) - rig["lengths"][int(w) - 1]) * 1000  # + longer
+        assert math.isclose(abs(change), float(mm), abs_tol=0.051) and (verb == "lengthen") == (change > 0)

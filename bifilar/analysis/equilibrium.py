@@ -719,7 +719,7 @@ def _raise_slack(scene: Scene, idx, gap, L, tensions=None, pose=None):
     if pose is not None and not _NO_ADVICE.get():
         from .slack_advice import slack_advice
         advise = lambda: slack_advice(scene, idx, gap, *pose, plain, heads)  # noqa: E731
-    raise SlackWireError([i + 1 for i in idx], plain, advise)
+    raise SlackWireError([i + 1 for i in idx], plain, advise, gaps=gap)
 
 
 def _yaw_share(scene: Scene, R: np.ndarray, dr: np.ndarray, dtheta: np.ndarray) -> float:

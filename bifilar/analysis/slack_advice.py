@@ -102,8 +102,9 @@ def slack_advice(scene: Scene, idx, gap, com, R, plain: str, heads: list) -> str
         return plain + NO_AMOUNT
     Ls, Tr, res = checked
     digits = int(round(-math.log10(res)))
-    parts = [f"{heads[k]}: shorten it by {(L[i] - Ls[i]) * 1000:.{max(digits - 3, 0)}f} mm, to {Ls[i]:.{digits}f} m, "
-             f"so that it carries {Tr[i]:.3g} N at rest" for k, i in enumerate(idx)]
+    # (with two or more slack wires one may need lengthening once the other is shortened)
+    parts = [f"{heads[k]}: {'shorten' if L[i] >= Ls[i] else 'lengthen'} it by {abs(L[i] - Ls[i]) * 1000:.{max(digits - 3, 0)}f} "
+             f"mm, to {Ls[i]:.{digits}f} m, so that it carries {Tr[i]:.3g} N at rest" for k, i in enumerate(idx)]
     slope = float(np.max(np.abs(np.diag(J)))) * 1e-3  # N per mm of a slack wire's own length (NaN: not sampled)
     fine = f"; a slack wire's tension changes by ~{slope:.3g} N per mm of its length" if np.isfinite(slope) else ""
     if res < 1e-4:
