@@ -280,3 +280,14 @@ def test_advice_for_two_slack_wires_says_lengthen_where_the_amount_is_negative(t
     for w, verb, mm, to in parts:
         change = (float(to) - rig["lengths"][int(w) - 1]) * 1000  # + longer
         assert math.isclose(abs(change), float(mm), abs_tol=0.051) and (verb == "lengthen") == (change > 0)
+
+
+def test_tensions_warns_as_simulate_does(tmp_path):
+    # `tensions` simulates the mode with the rigid-wire model too (before: only the indeterminate warning)
+    uneq, eq = tmp_path / "uneq.yaml", tmp_path / "eq.yaml"
+    uneq.write_text(vertical(CORNERS, [1.0, 1.2, 1.4, 1.6]))
+    eq.write_text(vertical(CORNERS, [1.0] * 4))
+    for path, warned in ((uneq, True), (eq, False)):
+        res = run("tensions", path, "--periods", "0.05", "--amplitude", "1e-5", "--json")
+        assert res.exit_code == 0
+        assert ("mode 'torsion' would stretch them at second order" in res.stderr) is warned
