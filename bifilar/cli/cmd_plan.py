@@ -63,6 +63,11 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
                                 hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
     doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point") + mh_warnings
+    from ..studies.sweep import stretching_summary
+
+    if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow
+        click.echo(f"warning: {w}", err=True)
+        doc["warnings"].append(w)
     doc["settings"] = settings.describe()
     doc["how_to_time"] = timing_advice(res.best, reaction, sensor, cons.min_separation if deferred else None)
     doc["amplitude_advice"] = amplitude_advice(cfg, config, res.best, settings)

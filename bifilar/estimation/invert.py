@@ -67,7 +67,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
+from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable, SlackWireError
 from .budget import (DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95,
                      second_order, stated_amplitude_period_std)
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
@@ -83,7 +83,8 @@ from .montecarlo import (  # noqa: F401
     solve_draws_loop,
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
-from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
+from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
+                      start_guesses)
 from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
 from .roots import Root, find_roots
 from .roots import separating_measurement
@@ -295,9 +296,15 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         w = implausible_period(m.period, m.label, m.field, m.details.get("cycles") if m.source == "timed" else None)
         if w:
             warnings.append(w)
-    ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
+    try:
+        ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
+        pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
+    except SlackWireError as e:  # a measured config that does not hang: is it the measurement's doing?
+        from .slack_cause import explain_slack, uncertainty_source
+
+        raise explain_slack(e, [h.scene for h in ms.hangings], unc_all,
+                            uncertainty_source(unc or {}, ms.uncertainty)) from None
     notes += start_notes
-    pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
     warnings += check_signal_aliases(pb)  # a recording sampled too slowly for its mode (refused if only an alias fits)
     if solve_for or ms.solve_for:  # chosen by the user, not picked per period: each must be measured
         refuse_unmeasured(pb)
@@ -305,6 +312,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     K, P = len(pb.measurements), len(pb.unknowns)
     scalar = K == 1 and P == 1
     has_amp = any(m.amplitude for m in pb.measurements)
+    if has_amp:  # the rigid-wire model's nonlinear run of a mode dependent wires cannot follow says nothing
+        refuse_stretching_amplitudes(pb)
     best = "nonlinear" if has_amp else "linear"
     if method == "auto":
         method = best

@@ -124,6 +124,24 @@ def point_warnings(base_cfg: dict, source: str, params: dict) -> list[str]:
     return [w for w in plausibility_warnings(scene_from_dict(cfg, source, warn=False)) if w not in base]
 
 
+def stretching_summary(points: list[dict]) -> str | None:
+    """One warning for the points of a sweep or plan whose rig's dependent
+    wires cannot follow a mode they run (``stretching_modes``, set by
+    :func:`~bifilar.studies.point.evaluate_point`; each point's own warning
+    says why), or None: their tensions, slack and amplitude terms come
+    from rigid-wire runs that are not physical at any amplitude."""
+    hit = [p for p in points if p.get("stretching_modes")]
+    if not hit:
+        return None
+    labels = sorted({lb for p in hit for lb in p["stretching_modes"]})
+    first = ", ".join(f"{k}={v:g}" for k, v in hit[0]["params"].items())
+    return (f"at {len(hit)} of {len(points)} points ({first}{', ...' if len(hit) > 1 else ''}) the rig's dependent "
+            f"wires cannot follow mode{'s' if len(labels) > 1 else ''} {', '.join(repr(lb) for lb in labels)} "
+            "rigidly (each point's warnings say why): the nonlinear runs' tensions, slack wires and amplitude "
+            "terms there are not physical at any amplitude; a real rig's wires stretch and keep the linear "
+            "periods: leave the runs out (--no-tensions) and time at a small amplitude (invert --amplitude 0)")
+
+
 def point_key(params: dict) -> str:
     """Canonical text of a point's parameters (exact floats)."""
     return json.dumps({k: float(v) for k, v in params.items()}, sort_keys=True)
