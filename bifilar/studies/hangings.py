@@ -517,7 +517,7 @@ def close_modes_warning(point: dict, min_separation: float, what: str = "the poi
         if e.get("identifiable") and e.get("separation") is not None and e["separation"] < min_separation:
             close.setdefault(e["mode"], []).append(f"{c}, separation {100 * e['separation']:.2g} %")
     modes = "; ".join(f"{m} ({', '.join(v)})" for m, v in close.items()) or "none"
-    return (f"{what}: no point's own hanging meets --min-separation {min_separation:g}, so time the modes of the "
+    return (f"{what}: its own hanging does not meet --min-separation {min_separation:g}, so time the modes of the "
             f"multi-hanging plan (each at least {100 * min_separation:g} % from the other modes of its hanging), "
             f"not the point's own modes closer than that: {modes}")
 
