@@ -93,10 +93,12 @@ def _render(cfg, res, settings, doc) -> None:
     for n, lo, hi in res.bounds:
         con.print(f"  {esc(n)} = {b['params'][n]:.6g}   (searched {lo:g} .. {hi:g})")
     what = f"the target {res.target}" if res.target else "the worst component"
-    if res.hangings_objective is not None:  # ranked by the multi-hanging plan (--min-separation left to it)
+    if res.hangings_objective is not None:  # ranked by the multi-hanging plan (--hangings)
+        why = "--hangings: the points were ranked by it" + (
+            "; the planned hanging's own modes do not meet --min-separation" if res.separation_guard == "multi_hanging"
+            else "")
         con.print(f"  predicted relative uncertainty of {what}: {_pct(res.hangings_objective)} % by the multi-hanging "
-                  f"plan below (small amplitude; no hanging as planned meets --min-separation, so the points were "
-                  f"ranked by it); the planned hanging alone: {_pct(b['objective'])} %")
+                  f"plan below ({why}); the planned hanging alone: {_pct(b['objective'])} %")
     else:
         con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:
