@@ -108,3 +108,29 @@ def test_a_screen_runs_no_dr_dx_and_says_so(monkeypatch):
     _, _, p = _point(SOLAR, {"spacing": 1.0, "length": 2.0}, screen=True, components=["Izz"], amplitude=0.3)
     ab = p["components"]["Izz"]["amplitude_budget"]
     assert ab["input_factor_terms"] is False and ab["input_factor_bound"] > pi.FACTOR_INPUT_ENOUGH
+
+
+def test_an_input_without_a_derivative_keeps_its_old_term_and_is_named(monkeypatch):
+    # a stepped run that fails (here: length.1's dropped after the real runs) leaves that input, and the
+    # inputs derived from the measured ones (mass, CoM, the last anchor), with the small-amplitude term;
+    # the point names them and keeps the bound for what is left out
+    from bifilar.estimation import factor_inputs as fi
+
+    real = fi.stepped_factor_runs
+
+    def drop_length(groups, rtol):
+        real(groups, rtol)
+        for g in groups:
+            for k in g.idx:
+                g.dr_dx[k].pop("length.1", None)
+                g.failed[k].append("length.1")
+
+    _, _, full = _point(SOLAR, {"spacing": 1.0, "length": 2.0}, components=["Izz"], amplitude=0.3)
+    monkeypatch.setattr(fi, "stepped_factor_runs", drop_length)
+    _, _, p = _point(SOLAR, {"spacing": 1.0, "length": 2.0}, components=["Izz"], amplitude=0.3)
+    ab, e = p["components"]["Izz"]["amplitude_budget"], p["components"]["Izz"]
+    assert ab["input_factor_terms"] is True and ab["input_factor_bound"] > pi.FACTOR_INPUT_ENOUGH
+    assert "length.1" in ab["note"] and "mass" in ab["note"] and "com.z" in ab["note"]
+    # length.1's (and the derived inputs') terms the small-amplitude ones, the rest measured: the sigma
+    # below the full one (2.105), above the small amplitude's (1.83)
+    assert ab["sigma_small_amplitude"] < e["sigma"] < full["components"]["Izz"]["sigma"]
