@@ -11,8 +11,9 @@ depending on the input as on the unknown).  A point measures ``dr/dx``
 (one stepped run per input without an exact route, its timed modes' in
 one batched call) only for a mode where the inputs' factor terms could
 change a component's sigma by more than :data:`FACTOR_INPUT_ENOUGH` of
-it: a bound from :data:`FACTOR_INPUT_K` (an assumed bound on ``|dr/dx|``,
-stated below) and the point's own figures, no run.  SI units.
+it: a bound from :data:`FACTOR_INPUT_K` (an assumed bound on how far
+``dr/dx`` departs from that, stated below) and the point's own figures, no
+run.  SI units.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from .settings import _IDX
 FACTOR_INPUT_K = 6.5
 #: a mode's ``dr/dx`` is measured when the bound on what its inputs' factor terms change a
 #: component's sigma exceeds this fraction of the sigma (below it the sigma keeps the
-#: small-amplitude input terms and ``amplitude_budget.input_factor_bound`` states the bound, 20 to
+#: small-amplitude input terms and ``amplitude_budget.input_factor_bound`` states the bound, 5 to
 #: 300 times the change measured at the default amplitude: the bound sums every input's worst
 #: case)
 FACTOR_INPUT_ENOUGH = 0.1
