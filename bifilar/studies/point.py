@@ -677,7 +677,7 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
         res["runs"] = {}
-    _stated_amplitude(res, pre, sims, st)
+    _stated_amplitude(res, pre, sims, st, screen)
     if screen:
         return res
     # biases at the prescribed amplitude

@@ -90,9 +90,10 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        resolve_uncertainty)
 from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 6  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
+JOURNAL_VERSION = 7  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
 # 4: the sigma budgets the stated amplitude (amplitude_budget); 5: the amplitude law and the factor's derivative (session 8);
-# 6: points carry their runs' health (runs: period_error, energy_drift_resolution, ...)
+# 6: points carry their runs' health (runs: period_error, energy_drift_resolution, ...); 7: the inputs' factor terms
+# (dr/dx) where they can matter, input_factor_bound (session 11)
 
 
 # --------------------------------------------------------------------------
