@@ -710,6 +710,43 @@ def _solve_full_scalar(pb: Problem, p, rtol: float, runs: dict):
     return [(np.array([x]), *runs[x]) for x in sorted(roots)]
 
 
+def _settle_by_secant(pb: Problem, steps: list, rtol: float, max_more: int = 8):
+    """One unknown from several periods, where the fixed point ``x ->
+    Phi(x)`` of :func:`solve_nonlinear` (``Phi``: the linear model's fit to
+    ``T_meas / r(x)``) did not settle: secant steps on ``Phi(x) - x`` from
+    its last two iterates (``steps``: (x, Phi(x)) pairs), which converge
+    where the fixed point's gain lies outside (0, 2), at most ``max_more``
+    more evaluations (each one run per measurement with an amplitude),
+    until ``Phi`` moves the model periods by under :data:`FULL_MAP_SHARE`
+    of their std.  Returns (x, Phi(x), r, runs, irregular differences), or
+    None (then refused by :func:`_refuse_unsettled`)."""
+    K = len(pb.measurements)
+    lo, hi = admissible_interval(pb.I_ref0, pb.unknowns[0]) if pb.unknowns[0] in _IDX else (-math.inf, math.inf)
+    std = np.array([m.std for m in pb.measurements])
+    (x0, f0), (x1, f1) = [(float(a[0]), float(b[0]) - float(a[0])) for a, b in steps[-2:]]
+    for _ in range(max_more):
+        if f1 == f0 or not math.isfinite(f1 - f0):
+            return None
+        x = x1 - f1 * (x1 - x0) / (f1 - f0)
+        x = min(max(x, lo + 1e-9 * (hi - lo)), hi - 1e-9 * (hi - lo)) if math.isfinite(hi - lo) else x
+        r = np.ones(K)
+        sims, irr = [None] * K, np.zeros(K)
+        for k, m in enumerate(pb.measurements):
+            if m.amplitude:
+                r[k], sims[k], irr[k] = measured_factor(pb, k, np.array([x]), rtol)
+        if np.any(irr > 0):
+            return None
+        try:
+            px = solve_linear(pb, _targets(pb, r), p0=np.array([x]))
+        except BifilarError:
+            return None
+        dT = np.abs(pb.linear_periods(px) - pb.linear_periods([x])) * r
+        if np.all(dT <= FULL_MAP_SHARE * std):
+            return np.array([x]), px, r, sims, irr
+        (x0, f0), (x1, f1) = (x1, f1), (x, float(px[0]) - x)
+    return None
+
+
 def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: float = 1e-9,
                     max_sims: int = 6, progress=None) -> Estimate:
     """Fixed point ``p = solve_linear(T_meas / r(p))`` with the amplitude
@@ -737,6 +774,7 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
     scalar = K == 1 and len(p) == 1 and bool(pb.measurements[0].amplitude)
     runs: dict = {}  # one unknown: {x: measured_factor's (r, run, difference)} of every iterate
     other: list = []  # further roots of the full model (one unknown, where the fixed point did not settle)
+    steps: list = []  # one unknown: (p, its fixed-point image) of every iterate
     for it in range(1, max_sims + 1):
         p_at = p  # where r is simulated
         for k, m in enumerate(pb.measurements):
@@ -761,9 +799,16 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
                 pb.measurements[k], seen[k], f"the fixed point T = T_lin r left the periods the model reaches ({exc})"
             )) from None
         done = np.max(np.abs(pn - p) / sc) < tol
+        steps.append((p, pn))
         p = pn
         if done:
             break
+    if not done and not scalar and len(p) == 1 and not np.any(seen > 0) and len(steps) >= 2:
+        settled = _settle_by_secant(pb, steps, rtol)
+        if settled is not None:
+            p_at, p, r, sims, irregular = settled
+            seen = np.maximum(seen, irregular)
+            done = True
     if not done and np.any(seen > 0):
         _refuse_unsettled(pb, p, p_at, r, seen, max_sims)
     if not done and scalar:
