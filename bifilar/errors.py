@@ -50,10 +50,13 @@ class SlackWireError(InputError):
     rig); it is called on first use of the message (``str``, ``.message``),
     so callers that catch and drop the error (finite-difference neighbours,
     sweep points) do not pay for it.  If it fails, ``message`` stands.
+    ``gaps``: how far each of ``wires`` is from straight at rest (m; 0 for
+    a straight wire without load), where known.
     """
 
-    def __init__(self, wires: list[int], message: str, advise=None):
+    def __init__(self, wires: list[int], message: str, advise=None, gaps=None):
         self.wires = list(wires)
+        self.gaps = None if gaps is None else [float(g) for g in gaps]
         self._advise = advise
         super().__init__("rig.lengths", message)
 
@@ -77,7 +80,7 @@ class SlackWireError(InputError):
         return super().__str__()
 
     def __reduce__(self):  # picklable (sweep workers), with the advice computed
-        return (type(self), (self.wires, self.message))
+        return (type(self), (self.wires, self.message, None, self.gaps))
 
 
 class UnstableRestError(InputError):

@@ -364,7 +364,8 @@ def test_entry_point_success_and_input_error_via_subprocess(tmp_path):
     assert lines(bad.stderr) == ["error: rig.lengths: wire 3 is slack at rest by 50 mm: shorten it by exactly that "
                                  "much, to 1.0000 m: then the 4 wires are dependent (like a table's legs: their "
                                  "tensions are statically indeterminate, set by the wires' stretch and a fraction of a "
-                                 "mm of length); the least-squares split gives every wire at least 1.96 N; 1 mm "
+                                 "mm of length); the model's split (least squares of T_i / L_i) gives every wire at "
+                                 "least 1.96 N; 1 mm "
                                  "shorter leaves another wire slack"]
     assert bad.stdout == ""
     dbg = _python_m("--debug", "modes", SLACK)

@@ -298,7 +298,7 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     """Whether the wire tensions at rest follow from statics alone: the wire
     directions' constraint Jacobian has full rank n (else 4 or 5 dependent
     wires, e.g. parallel vertical ones, admit a self-stress and the tensions
-    printed are only the least-squares split; the real one depends on the
+    printed are only one split (:func:`indeterminate_warning`); the real one depends on the
     wires' stretch).  Same rank tolerance as :func:`reduced_stiffness`."""
     return not _wires_dependent(scene, rest.com, rest.R)
 
@@ -311,13 +311,57 @@ def _wires_dependent(scene: Scene, com: np.ndarray, R: np.ndarray) -> bool:
     return int(np.sum(s > 1e-12 * s[0])) < scene.n_wires
 
 
+def tension_range(scene: Scene, rest: RestPose) -> np.ndarray:
+    """The least and greatest tension (n, 2) N each wire can carry at the
+    rest pose ``rest`` with every wire pulling (``T >= 0``) and the body
+    balanced (``sum_i T_i u_i`` and its moment equal to the weight's, ``u_i``
+    the wire directions): what statics alone says of the split.  A rig whose
+    tensions are determined (:func:`tensions_determined`) has one split, its
+    rest tensions in both columns; on dependent wires (4 or 5, rank below n)
+    the tensions can move along the self-stresses until a wire goes slack:
+    a level table on four vertical wires at the corners of a rectangle,
+    CoM at its centre, allows 0 .. m g / 2 for every wire.  A linear
+    programme per bound (scipy's HiGHS, ~1 ms each), on the equilibrium
+    equations reduced to their rank (dependent rows are rounding apart)."""
+    T0 = np.asarray(rest.tensions, float)
+    if tensions_determined(scene, rest):
+        return np.column_stack([T0, T0])
+    from scipy.optimize import linprog  # only for dependent wires
+
+    d, _, G = constraint_jacobian(scene, rest.com, rest.R)
+    W = scene.mass * scene.gravity
+    A = (G / np.linalg.norm(d, axis=1)[:, None]).T  # (6, n): A T = -grad V, the rows force, moment
+    b = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 0.0])  # per unit weight
+    U, sv, _ = np.linalg.svd(A)
+    rank = int(np.sum(sv > 1e-12 * sv[0]))
+    Ar, br = U[:, :rank].T @ A, U[:, :rank].T @ b
+    n = scene.n_wires
+    out = np.column_stack([T0, T0])
+    for i in range(n):
+        for col, sign in ((0, 1.0), (1, -1.0)):
+            c = np.zeros(n)
+            c[i] = sign
+            res = linprog(c, A_eq=Ar, b_eq=br, bounds=(0, None), method="highs")
+            if res.status == 0:  # else (never met: the rest tensions are a feasible point) keep them
+                out[i, col] = W * float(res.x[i])
+    return np.where(out < 1e-9 * W, 0.0, out)  # a bound at zero, not the solver's rounding about it
+
+
 def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
     """The warning for a rig whose tensions statics cannot fix (see
-    :func:`tensions_determined`), or None."""
+    :func:`tensions_determined`), or None.  It says which split the model
+    reports (the minimum-norm multipliers ``lambda_i = T_i / L_i``: least
+    squares of the tension per unit length, not of the tensions) and the
+    range statics leaves each wire (:func:`tension_range`)."""
     if tensions_determined(scene, rest):
         return None
+    rng = tension_range(scene, rest)
+    spans = ", ".join(f"wire {i + 1} {lo:.4g} .. {hi:.4g} N" for i, (lo, hi) in enumerate(rng))
     return (f"rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically indeterminate: "
-            "those shown are the least-squares split; the real one depends on the wires' stretch and length tolerances")
+            f"statics allows {spans} (any split in these ranges with the same resultant holds the body); those shown "
+            "are the model's split, the least-squares multipliers T_i / L_i (tension per metre of wire, not the "
+            "tensions themselves: on wires of unequal length it favours the longer ones, where equal elastic "
+            "wires favour the shorter); the real split is set by the wires' stretch and their lengths' tolerances")
 
 
 #: a mode of a dependent rig whose second-order change of the wires' lengths has a self-stress component
@@ -367,16 +411,27 @@ def stretching_modes(scene: Scene, rest: RestPose, modes) -> list[tuple[str, flo
 def stretching_warning(scene: Scene, rest: RestPose, modes, only: str | None = None) -> str | None:
     """The warning for the modes :func:`stretching_modes` finds (``only``: a
     mode label, warned about alone), or None."""
-    hits = [(lb, s) for lb, s in stretching_modes(scene, rest, modes) if only is None or lb == only]
-    if not hits:
-        return None
-    names = ", ".join(f"'{lb}'" for lb, _ in hits)
-    return (f"rig: the {scene.n_wires} wires are dependent at rest and mode{'s' if len(hits) > 1 else ''} {names} "
+    hits = [lb for lb, s in stretching_modes(scene, rest, modes) if only is None or lb == only]
+    return stretching_text(scene, hits) if hits else None
+
+
+def stretching_text(scene: Scene, labels: list) -> str:
+    """The warning of :func:`stretching_warning` for modes ``labels``."""
+    return (f"rig: {stretching_reason(scene, labels)}, so its nonlinear runs of it (simulate, invert --amplitude, "
+            "tensions, sweep's and plan's tensions and amplitude terms) are not physical at any amplitude; a real "
+            "rig's wires stretch instead and its small oscillations keep the linear periods: time them at a small "
+            "amplitude and give invert --amplitude 0")
+
+
+def stretching_reason(scene: Scene, labels: list) -> str:
+    """Why the rigid-wire model cannot follow modes ``labels`` (found by
+    :func:`stretching_modes`) of ``scene``: the words every command's
+    warning or refusal of it shares."""
+    names = ", ".join(f"'{lb}'" for lb in labels)
+    return (f"the {scene.n_wires} wires are dependent at rest and mode{'s' if len(labels) > 1 else ''} {names} "
             "would stretch them at second order (a twist or swing lifts their ends by unequal amounts that no tilt "
             "of the body fits): the rigid-wire model follows such a motion only with the body swinging as well and "
-            "wires that push, so its nonlinear runs of it (simulate, invert --amplitude, sweep's tensions and "
-            "amplitude terms) are not physical at any amplitude; a real rig's wires stretch instead and its small "
-            "oscillations keep the linear periods: time them at a small amplitude and give invert --amplitude 0")
+            "wires that push")
 
 
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,
@@ -664,7 +719,7 @@ def _raise_slack(scene: Scene, idx, gap, L, tensions=None, pose=None):
     if pose is not None and not _NO_ADVICE.get():
         from .slack_advice import slack_advice
         advise = lambda: slack_advice(scene, idx, gap, *pose, plain, heads)  # noqa: E731
-    raise SlackWireError([i + 1 for i in idx], plain, advise)
+    raise SlackWireError([i + 1 for i in idx], plain, advise, gaps=gap)
 
 
 def _yaw_share(scene: Scene, R: np.ndarray, dr: np.ndarray, dtheta: np.ndarray) -> float:

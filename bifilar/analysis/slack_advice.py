@@ -102,8 +102,9 @@ def slack_advice(scene: Scene, idx, gap, com, R, plain: str, heads: list) -> str
         return plain + NO_AMOUNT
     Ls, Tr, res = checked
     digits = int(round(-math.log10(res)))
-    parts = [f"{heads[k]}: shorten it by {(L[i] - Ls[i]) * 1000:.{max(digits - 3, 0)}f} mm, to {Ls[i]:.{digits}f} m, "
-             f"so that it carries {Tr[i]:.3g} N at rest" for k, i in enumerate(idx)]
+    # (with two or more slack wires one may need lengthening once the other is shortened)
+    parts = [f"{heads[k]}: {'shorten' if L[i] >= Ls[i] else 'lengthen'} it by {abs(L[i] - Ls[i]) * 1000:.{max(digits - 3, 0)}f} "
+             f"mm, to {Ls[i]:.{digits}f} m, so that it carries {Tr[i]:.3g} N at rest" for k, i in enumerate(idx)]
     slope = float(np.max(np.abs(np.diag(J)))) * 1e-3  # N per mm of a slack wire's own length (NaN: not sampled)
     fine = f"; a slack wire's tension changes by ~{slope:.3g} N per mm of its length" if np.isfinite(slope) else ""
     if res < 1e-4:
@@ -146,7 +147,7 @@ def _dependent_advice(scene: Scene, idx, s0, floor, heads: list) -> str | None:
     """Advice for slack wires ``idx`` that, shortened by their slack ``s0``
     (m), make the wires dependent (parallel vertical wires: a table's legs):
     no shortening past that loads them without slackening another, so the
-    advice is that length, if its rig hangs with the least-squares split
+    advice is that length, if its rig hangs with the model's split (least squares of T_i / L_i)
     giving every wire at least ``floor`` N; else None."""
     checked = _printed_lengths(scene, idx, s0, lambda T: np.min(T) >= floor)
     if checked is None:
@@ -169,4 +170,4 @@ def _dependent_advice(scene: Scene, idx, s0, floor, heads: list) -> str | None:
              for k, i in enumerate(idx)]
     return ("; ".join(parts) + f": then the {scene.n_wires} wires are dependent (like a table's legs: their tensions "
             f"are statically indeterminate, set by the wires' stretch and a fraction of a mm of length); the "
-            f"least-squares split gives every wire at least {np.min(T):.3g} N{shorter}")
+            f"model's split (least squares of T_i / L_i) gives every wire at least {np.min(T):.3g} N{shorter}")

@@ -11,12 +11,14 @@ def modes_document(scene, rest, ms) -> dict:
     """The JSON document of ``interface.md`` (plus extra fields); ``dof`` is
     the number of modes (6 minus the rank of the wires, not 6 - n when wires
     are dependent)."""
-    from ..analysis.equilibrium import tensions_determined
+    from ..analysis.equilibrium import tension_range, tensions_determined
 
     return {
         "equilibrium": {
             "com": rest.com, "rotation": rest.R, "tensions": rest.tensions,
             "tensions_determined": tensions_determined(scene, rest),
+            # what statics allows each wire (N): [T, T] where the tensions are determined
+            "tension_range": tension_range(scene, rest),
             "lowest_point_z": rest.lowest_z, "depth_below_ceiling": rest.depth,
             "clearance_source": scene.support_source, "kkt_residual": rest.kkt_residual,
         },

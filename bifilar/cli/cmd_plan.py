@@ -63,6 +63,11 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
                                 hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
     doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point") + mh_warnings
+    from ..studies.sweep import stretching_summary
+
+    if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow
+        click.echo(f"warning: {w}", err=True)
+        doc["warnings"].append(w)
     doc["settings"] = settings.describe()
     doc["how_to_time"] = timing_advice(res.best, reaction, sensor, cons.min_separation if deferred else None)
     doc["amplitude_advice"] = amplitude_advice(cfg, config, res.best, settings)
@@ -88,10 +93,12 @@ def _render(cfg, res, settings, doc) -> None:
     for n, lo, hi in res.bounds:
         con.print(f"  {esc(n)} = {b['params'][n]:.6g}   (searched {lo:g} .. {hi:g})")
     what = f"the target {res.target}" if res.target else "the worst component"
-    if res.hangings_objective is not None:  # ranked by the multi-hanging plan (--min-separation left to it)
+    if res.hangings_objective is not None:  # ranked by the multi-hanging plan (--hangings)
+        why = "--hangings: the points were ranked by it" + (
+            "; the planned hanging's own modes do not meet --min-separation" if res.separation_guard == "multi_hanging"
+            else "")
         con.print(f"  predicted relative uncertainty of {what}: {_pct(res.hangings_objective)} % by the multi-hanging "
-                  f"plan below (small amplitude; no hanging as planned meets --min-separation, so the points were "
-                  f"ranked by it); the planned hanging alone: {_pct(b['objective'])} %")
+                  f"plan below ({why}); the planned hanging alone: {_pct(b['objective'])} %")
     else:
         con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:

@@ -349,6 +349,9 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
     remedies_for(rec, points, cfg, config, settings)
     warnings = []
+    if (w := sw.stretching_summary(points)) is not None:
+        click.echo(f"warning: {w}", err=True)
+        warnings.append(w)
     if rec.get("best") is not None:
         best = points[rec["best"]]
         deferred = rec["separation_guard"] == "multi_hanging"  # --min-separation left to the hangings plan
@@ -356,7 +359,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         mh_warnings = multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                                     hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
                                     best if deferred else None)
-        warnings = point_warnings(cfg, config, best, "the recommended point") + mh_warnings
+        warnings += point_warnings(cfg, config, best, "the recommended point") + mh_warnings
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:

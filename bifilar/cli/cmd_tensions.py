@@ -52,12 +52,14 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
     if motion is None:
         rest = rest_pose(scene)
-        from ..analysis.equilibrium import indeterminate_warning
+        from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 
         if (w := indeterminate_warning(scene, rest)) is not None:  # the model's tensions are one split of many
             click.echo(f"warning: {w}", err=True)
         ms = linear_modes(scene, rest)
         mode = ms.pick(mode).label
+        if (w := stretching_warning(scene, rest, ms.modes, only=mode)) is not None:  # as simulate's run
+            click.echo(f"warning: {w}", err=True)
         with progress_bar("simulating", enabled=True) as upd:
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=SIM_RTOL,
                            samples_per_period=200, progress=upd)

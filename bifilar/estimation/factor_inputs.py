@@ -14,15 +14,25 @@ from :mod:`bifilar.estimation.budget`; SI units, input keys as
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import Any
+
 from .budget import _key_hanging, _perturbed_scene
 from .problem import Problem
 from .sensitivity import input_value, mac_matches, n_modes
 
 
 def _factor_routes(pb: Problem, h: int, keys: list) -> tuple[list, dict]:
-    """How :func:`factor_input_derivatives` gets ``dr/dx`` of each input
-    ``keys`` of hanging ``h``: (keys run with the input stepped, {key: why
-    derived}).  Derived exactly, without a run: ``gravity`` (``r`` is a
+    """:func:`factor_routes` of hanging ``h`` of ``pb`` (its keys carry the
+    hanging's name where there are several)."""
+    pre = f"{pb.models[h].hanging.name}:" if len(pb.models) > 1 else ""
+    return factor_routes(pb.models[h].hanging.scene.n_wires, keys, pre)
+
+
+def factor_routes(n_wires: int, keys: list, pre: str = "") -> tuple[list, dict]:
+    """How ``dr/dx`` of each input ``keys`` of a hanging with ``n_wires``
+    wires (keys prefixed ``pre``) is got: (keys run with the input stepped,
+    {key: why derived}).  Derived exactly, without a run: ``gravity`` (``r`` is a
     ratio of periods and ``g`` only scales time: 0); the last wire's anchor
     coordinates (moving every anchor by ``d`` moves the rest pose and the
     motion by ``d``: minus the sum over the other anchors); ``com.*`` (a
@@ -35,9 +45,8 @@ def _factor_routes(pb: Problem, h: int, keys: list) -> tuple[list, dict]:
     attachment coordinate (body frame at the CoM), ``A dr/dA`` only where
     the mode's dominant coordinate is a translation).  Each where the
     inputs it needs are among ``keys`` (the same uncertainty for every
-    wire: all or none), else run."""
-    pre = f"{pb.models[h].hanging.name}:" if len(pb.models) > 1 else ""
-    nw = pb.models[h].hanging.scene.n_wires
+    wire: all or none), else run.  :func:`derive_factor_routes` fills them in."""
+    nw = n_wires
     have = set(keys)
     att = [f"{pre}attachment.{i + 1}.{a}" for i in range(nw) for a in "xyz"]
     geom = ([f"{pre}length.{i + 1}" for i in range(nw)] + [f"{pre}anchor.{i + 1}.{a}" for i in range(nw) for a in "xyz"]
@@ -54,6 +63,99 @@ def _factor_routes(pb: Problem, h: int, keys: list) -> tuple[list, dict]:
         elif key == "mass" and have.issuperset(geom):
             derived[key] = "scaling"
     return [k for k in keys if k not in derived], derived
+
+
+def derive_factor_routes(dx: dict, derived: dict, scene, R, pre: str = "", translation_slope: float = 0.0) -> None:
+    """Fill ``dx`` {key: dr/dx} in for the inputs ``derived`` {key: why}
+    (:func:`factor_routes`) from the measured ones in ``dx``: ``scene`` the
+    hanging's scene (its ``mass`` and input values), ``R`` its body frame
+    in the reference one (a CoM shift is given there), ``pre`` its keys'
+    prefix, ``translation_slope`` ``A dr/dA`` where the mode's dominant
+    coordinate is a translation, else 0 (the scaling identity's term)."""
+    nw = scene.n_wires
+    for key, why in derived.items():
+        if why == "translation":
+            dx[key] = -sum(dx[f"{pre}anchor.{i + 1}.{key[-1]}"] for i in range(nw - 1))
+        elif why == "gravity":
+            dx[key] = 0.0
+    for key, why in derived.items():
+        if why == "com":
+            a = "xyz".index(key[-1])
+            dx[key] = -sum(R[b, a] * dx[f"{pre}attachment.{i + 1}.{'xyz'[b]}"] for i in range(nw) for b in range(3))
+        elif why == "scaling":
+            s = sum(input_value(scene, x.split(":", 1)[-1]) * v for x, v in dx.items()
+                    if x.split(":", 1)[-1].split(".")[0] in ("length", "anchor", "attachment"))
+            dx[key] = (s + translation_slope) / (2.0 * scene.mass)
+
+
+@dataclass
+class SteppedFactors:
+    """One scene's stepped runs for ``dr/dx`` (:func:`stepped_factor_runs`):
+    the scene, its rest pose and modes, the mode indices ``idx`` run at
+    ``amplitude`` (times each mode's normalised shape) for ``cycles``
+    periods, and ``steps`` [(key, step d in SI, the scene with the input
+    moved by d)].  Filled in: ``r0`` {mode index: the factor of the scene's
+    own run in the same call}, ``dr_dx`` {mode index: {key: d r / d x}}
+    and ``failed`` {mode index: [keys whose stepped scene cannot hang,
+    lost the mode or whose run failed]}; a mode whose own run fails has no
+    ``r0`` and every key failed."""
+
+    scene: Any
+    rest: Any
+    modes: Any
+    idx: list
+    amplitude: float
+    cycles: float
+    steps: list
+    r0: dict = field(default_factory=dict)
+    dr_dx: dict = field(default_factory=dict)
+    failed: dict = field(default_factory=dict)
+
+
+def stepped_factor_runs(groups: list, rtol: float) -> None:
+    """Forward differences of the amplitude factor ``r = T(A) / T_lin`` in
+    each stepped input of every :class:`SteppedFactors` of ``groups``: the
+    stepped scenes' rest poses (from the scene's) and modes batched, each
+    mode found again by MAC, and all the groups' runs (each mode's own run
+    first, then the stepped ones) in one
+    :func:`~bifilar.analysis.batch.simulate_batch` call at ``rtol`` (the
+    difference taken between runs of one engine).  Fills the groups in."""
+    from ..analysis.batch import modes_batch, rest_poses, simulate_batch
+    from .montecarlo import _modes_or_none
+
+    jobs = []  # (group, mode index, key, step, scene, rest, modes, the mode's index there); key None: own run
+    for g in groups:
+        for k in g.idx:
+            jobs.append((g, k, None, 0.0, g.scene, g.rest, g.modes, k))
+        stepped = g.steps
+        rs = rest_poses([s for _, _, s in stepped], g.rest, errors="return") if stepped else []
+        good = [q for q, r in enumerate(rs) if not isinstance(r, BaseException)]
+        mss = _modes_or_none(modes_batch, [stepped[q][2] for q in good], [rs[q] for q in good]) if good else []
+        kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and n_modes(ms) == n_modes(g.modes)]
+        cols = mac_matches(g.modes, [ms for _, ms in kept]) if kept else []
+        for (q, ms), col in zip(kept, cols):
+            key, d, s = stepped[q]
+            for k in g.idx:
+                jobs.append((g, k, key, d, s, rs[q], ms, int(col[k])))
+        ran = {q for q, _ in kept}
+        g.failed = {k: [stepped[q][0] for q in range(len(stepped)) if q not in ran] for k in g.idx}
+        g.dr_dx = {k: {} for k in g.idx}
+    if not jobs:
+        return
+    runs = simulate_batch([j[4] for j in jobs], mode=[j[7] + 1 for j in jobs], amplitude=[j[0].amplitude for j in jobs],
+                          periods=[j[0].cycles for j in jobs], rtol=rtol, rests=[j[5] for j in jobs],
+                          modes=[j[6] for j in jobs], errors="return", health=False)
+    for j, run in zip(jobs, runs):
+        if j[2] is None and not run.error and run.period:
+            j[0].r0[j[1]] = run.period / run.linear_period
+    for j, run in zip(jobs, runs):
+        g, k, key = j[0], j[1], j[2]
+        if key is None:
+            continue
+        if k in g.r0 and not run.error and run.period:
+            g.dr_dx[k][key] = (run.period / run.linear_period - g.r0[k]) / j[3]
+        else:
+            g.failed[k].append(key)
 
 
 def factor_input_derivatives(pb: Problem, laws, keys: list, sigmas: dict, scenes, rests, modes, matches,
@@ -75,13 +177,10 @@ def factor_input_derivatives(pb: Problem, laws, keys: list, sigmas: dict, scenes
     cannot hang, whose mode is lost or whose run fails leaves its input at
     0 and in ``laws[k].dr_dx_failed`` (the factor taken to depend on it as
     on the unknowns, the budget before session 10)."""
-    from ..analysis.batch import modes_batch, rest_poses, simulate_batch
-    from .montecarlo import _modes_or_none
     from .solve import FACTOR_STEP
     from .uncertainty import _step
 
     multi = len(pb.models) > 1
-    jobs = []  # (k, key, step, scene, rest, modes, mode index); key None: the estimate's own run
     plans = {}
     for k, m in enumerate(pb.measurements):
         law = laws[k] if laws is not None else None
@@ -90,65 +189,29 @@ def factor_input_derivatives(pb: Problem, laws, keys: list, sigmas: dict, scenes
         h = m.hanging
         mine = [key for key in keys if sigmas.get(key, 0) > 0 and h in _key_hanging(pb, key)]
         run, derived = _factor_routes(pb, h, mine)
-        plans[k] = (mine, derived)
-        jobs.append((k, None, 0.0, scenes[h], rests[h], modes[h], int(matches[h][pb.mode_index[k]])))
         stepped = []
         for key in run:
             name = key.split(":", 1)[1] if multi and ":" in key else key
             d = _step(scenes[h], name, FACTOR_STEP)
             stepped.append((key, d, _perturbed_scene(pb, h, scenes[h], [(key, d)])))
-        rs = rest_poses([s for _, _, s in stepped], rests[h], errors="return") if stepped else []
-        good = [q for q, r in enumerate(rs) if not isinstance(r, BaseException)]
-        mss = _modes_or_none(modes_batch, [stepped[q][2] for q in good], [rs[q] for q in good]) if good else []
-        kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and n_modes(ms) == n_modes(modes[h])]
-        cols = mac_matches(modes[h], [ms for _, ms in kept]) if kept else []
-        for (q, ms), col in zip(kept, cols):
-            key, d, s = stepped[q]
-            jobs.append((k, key, d, s, rs[q], ms, int(col[matches[h][pb.mode_index[k]]])))
-        ran = {q for q, _ in kept}
-        law.dr_dx_failed = [stepped[q][0] for q in range(len(stepped)) if q not in ran]
-    if not jobs:
+        j = int(matches[h][pb.mode_index[k]])
+        plans[k] = (mine, derived, j, SteppedFactors(scenes[h], rests[h], modes[h], [j], m.amplitude, m.cycles, stepped))
+    if not plans:
         return
-    runs = simulate_batch([j[3] for j in jobs], mode=[j[6] + 1 for j in jobs],
-                          amplitude=[pb.measurements[j[0]].amplitude for j in jobs],
-                          periods=[pb.measurements[j[0]].cycles for j in jobs], rtol=rtol,
-                          rests=[j[4] for j in jobs], modes=[j[5] for j in jobs], errors="return", health=False)
-    r0 = {}
-    for j, run in zip(jobs, runs):
-        if j[1] is None and not run.error and run.period:
-            r0[j[0]] = run.period / run.linear_period
-    for k, (mine, derived) in plans.items():
+    stepped_factor_runs([p[3] for p in plans.values()], rtol)
+    for k, (mine, derived, j, g) in plans.items():
         law = laws[k]
         law.dr_dx_derived = dict(derived)
-        dx = {key: 0.0 for key in mine}
-        for j, run in zip(jobs, runs):
-            if j[0] != k or j[1] is None:
-                continue
-            if k in r0 and not run.error and run.period:
-                dx[j[1]] = (run.period / run.linear_period - r0[k]) / j[2]
-            else:
-                law.dr_dx_failed.append(j[1])
-        if k not in r0:
-            law.dr_dx_failed = list(dx)
+        law.dr_dx_failed = list(g.failed[j])
+        if j not in g.r0:
+            law.dr_dx_failed = list(mine)
             law.dr_dx = {key: 0.0 for key in mine}
             continue
+        dx = {key: 0.0 for key in mine}
+        dx.update(g.dr_dx[j])
         h = pb.measurements[k].hanging
-        pre = f"{pb.models[h].hanging.name}:" if multi else ""
-        nw = pb.models[h].hanging.scene.n_wires
-        for key, why in derived.items():
-            if why == "translation":
-                dx[key] = -sum(dx[f"{pre}anchor.{i + 1}.{key[-1]}"] for i in range(nw - 1))
-        for key, why in derived.items():
-            if why == "com":
-                a = "xyz".index(key[-1])
-                R = pb.models[h].R
-                dx[key] = -sum(R[b, a] * dx[f"{pre}attachment.{i + 1}.{'xyz'[b]}"] for i in range(nw) for b in range(3))
-            elif why == "scaling":
-                sc = scenes[h]
-                s = sum(input_value(sc, x.split(":", 1)[-1]) * v for x, v in dx.items()
-                        if x.split(":", 1)[-1].split(".")[0] in ("length", "anchor", "attachment"))
-                md = modes[h].modes[int(matches[h][pb.mode_index[k]])]
-                if md.dominant < 3:
-                    s += law.amplitude * law.slope()
-                dx[key] = s / (2.0 * sc.mass)
+        md = modes[h].modes[j]
+        derive_factor_routes(dx, derived, scenes[h], pb.models[h].R,
+                             f"{pb.models[h].hanging.name}:" if multi else "",
+                             law.amplitude * law.slope() if md.dominant < 3 else 0.0)
         law.dr_dx = dx

@@ -67,7 +67,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable
+from ..errors import BifilarError, ConvergenceError, InputError, NotApplicable, SlackWireError
 from .budget import (DEFAULT_AMPLITUDE_RANGE_DEG, _budget, amplitude_systematic, clip_interval, interval_95,
                      second_order, stated_amplitude_period_std)
 from .ladder import METHOD_TITLES, THESIS_COORDS, THESIS_TABLE_7_1_1, ThesisModel, _scalar_rung  # noqa: F401
@@ -83,12 +83,14 @@ from .montecarlo import (  # noqa: F401
     solve_draws_loop,
 )
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
-from .problem import admissible, admissible_interval, problem_at, refuse_unmeasured, start_guesses
+from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
+                      start_guesses)
 from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
 from .roots import Root, find_roots
 from .roots import separating_measurement
 from .signal_alias import check_signal_aliases
-from .solve import amplitude_factor, gauss_newton, solve_linear, solve_nonlinear, solve_scalar  # noqa: F401
+from .solve import (GAIN_RANGE, amplitude_factor, factor_gains, gauss_newton,  # noqa: F401
+                    solve_linear, solve_nonlinear, solve_scalar)
 from .solve import measured_factor
 from .uncertainty import LinearBudget, MonteCarloSummary, default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
@@ -295,9 +297,15 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         w = implausible_period(m.period, m.label, m.field, m.details.get("cycles") if m.source == "timed" else None)
         if w:
             warnings.append(w)
-    ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
+    try:
+        ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
+        pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
+    except SlackWireError as e:  # a measured config that does not hang: is it the measurement's doing?
+        from .slack_cause import explain_slack, uncertainty_source
+
+        raise explain_slack(e, [h.scene for h in ms.hangings], unc_all,
+                            uncertainty_source(unc or {}, ms.uncertainty)) from None
     notes += start_notes
-    pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
     warnings += check_signal_aliases(pb)  # a recording sampled too slowly for its mode (refused if only an alias fits)
     if solve_for or ms.solve_for:  # chosen by the user, not picked per period: each must be measured
         refuse_unmeasured(pb)
@@ -305,6 +313,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     K, P = len(pb.measurements), len(pb.unknowns)
     scalar = K == 1 and P == 1
     has_amp = any(m.amplitude for m in pb.measurements)
+    if has_amp:  # the rigid-wire model's nonlinear run of a mode dependent wires cannot follow says nothing
+        refuse_stretching_amplitudes(pb)
     best = "nonlinear" if has_amp else "linear"
     if method == "auto":
         method = best
@@ -371,6 +381,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             if s is not None:
                 warnings.extend(f"nonlinear simulation: {w}" for w in s.warnings)
         warnings += irregular_warnings(pb, est_nl)
+        warnings += monotonic_warnings(pb, est_nl)
     ladder_rows = []
     if scalar and (ladder or method in ("small-angle", "thesis")):
         for name in ("small-angle", "thesis"):
@@ -562,6 +573,34 @@ def irregular_warnings(pb: Problem, est) -> list[str]:
                    f"to {law.irregular:.1g} s (below a tenth of the period's std {m.std:.1g} s); the nonlinear "
                    f"estimate's std includes it (the budget's integration term), and other starts as close may move it "
                    "further: time fewer cycles or release at a smaller amplitude to make it regular")
+    return out
+
+
+def monotonic_warnings(pb: Problem, est) -> list[str]:
+    """Warnings where the nonlinear model's period need not be monotonic in
+    the one unknown near the estimate ``est`` (its gain ``g``,
+    :func:`~bifilar.estimation.solve.factor_gains`, outside
+    :data:`~bifilar.estimation.solve.GAIN_RANGE`), and the other values the
+    scan of the full model found (``est.other_roots``) where the fixed point
+    did not settle."""
+    out = []
+    name = pb.unknowns[0] if len(pb.unknowns) == 1 else None
+    for k, g in enumerate(factor_gains(pb, est)):
+        if g is None or GAIN_RANGE[0] < g < GAIN_RANGE[1]:
+            continue
+        m = pb.measurements[k]
+        how = ("falls as it grows" if g <= 0 else "barely follows it" if g < GAIN_RANGE[0]
+               else f"changes {g:.2g} times as fast as the linear model's")
+        out.append(f"mode '{m.label}' at amplitude {m.amplitude:g}: at the estimate the nonlinear model's period "
+                   f"{how} in {name} (d(T_lin r)/d{name} = {g:.2g} r dT_lin/d{name}: the amplitude factor moves "
+                   "with the body, near an internal resonance where the mode beats with another), so that period "
+                   f"need not be monotonic in {name} and other values of {name} may reproduce the measured one; "
+                   "release at a smaller amplitude")
+    if est.other_roots:
+        vals = ", ".join(f"{x:.6g}" for x in est.other_roots)
+        out.append(f"the nonlinear model reproduces the measured period also at {name} = {vals} (found between the "
+                   "runs of the fixed point T = T_lin r, which did not settle; there may be more): the period cannot "
+                   "tell them apart at this amplitude; release at a smaller amplitude")
     return out
 
 

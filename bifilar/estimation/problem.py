@@ -445,6 +445,34 @@ def refuse_unmeasured(pb: Problem) -> None:
                                         f"(they change by less than {INSENSITIVE:g} over its physical range); {how}")
 
 
+def refuse_stretching_amplitudes(pb: Problem) -> None:
+    """Raise an :class:`InputError` (the amplitude's field) for a measured
+    period stated at an amplitude (the nonlinear method's input) of a mode
+    that the rig's dependent wires cannot follow rigidly
+    (:func:`~bifilar.analysis.equilibrium.stretching_modes`, at the prior):
+    the rigid-wire model's run of it is not physical at any amplitude (a
+    4-wire table on wires of unequal length: tensions of -734 N in a 98 N
+    body, or no two crossings, exit 1 before), while a real rig's wires
+    stretch and its small oscillations keep the linear periods, which the
+    advised ``--amplitude LABEL=0`` (the linear model) estimates from."""
+    from ..analysis.equilibrium import stretching_modes, stretching_reason
+
+    for k, m in enumerate(pb.measurements):
+        if not m.amplitude:
+            continue
+        hm = pb.models[m.hanging]
+        mode = hm.modes0.modes[pb.mode_index[k]]
+        if not stretching_modes(hm.scene0, hm.rest0, [mode]):
+            continue
+        fld = "--amplitude" if m.field.startswith("--") else m.field.rsplit(".", 1)[0] + ".amplitude"
+        where = f" (hanging '{hm.hanging.name}')" if len(pb.models) > 1 else ""
+        raise InputError(fld, f"mode '{m.label}'{where} at amplitude {m.amplitude:.3g}: "
+                              f"{stretching_reason(hm.scene0, [mode.label])}, so the nonlinear model's period is not "
+                              "physical at any amplitude; a real rig's wires stretch and its small oscillations keep "
+                              f"the linear period: time it at a small amplitude and give --amplitude {m.label}=0 "
+                              "(the linear model)")
+
+
 def relative_sensitivities(pb: Problem, k: int) -> dict:
     """{component: |dT/dI_c| s_c / T} for measurement ``k`` at the prior;
     ``s_c`` = I_cc for moments, sqrt(I_ii I_jj) for products."""

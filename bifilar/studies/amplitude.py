@@ -10,7 +10,13 @@ nothing about the amplitude, ``invert`` budgets a release anywhere in 0 to
 :data:`~bifilar.estimation.budget.DEFAULT_AMPLITUDE_RANGE_DEG` degrees
 (a systematic term of its own) and prints a larger std: that std is
 computed here, at the point's truth, for the advice (the Solar Boat's
-Izz: 5.7 times the sigma).  Units SI.
+Izz: 5.7 times the sigma).  That budget covers releases up to the range's
+end only: where the planned amplitude lies beyond it (a rotation above 10
+degrees), the period the body shows there is inverted as ``invert`` would
+without ``--amplitude``, and the advice says how far that estimate is from
+the truth and whether its 95 % interval holds it (a trifilar's torsion at
+0.3 rad: 3 of its stds off, outside; docs/design.md, "Closed-loop audit of
+the planner, session 11").  Units SI.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ from __future__ import annotations
 import math
 
 from ..errors import BifilarError
-from ..estimation.budget import DEFAULT_AMPLITUDE_RANGE_DEG
+from ..estimation.budget import DEFAULT_AMPLITUDE_RANGE_DEG, default_amplitude_range
 from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
 
 
@@ -32,7 +38,9 @@ def amplitude_advice(base_cfg: dict, source: str, point: dict, settings) -> dict
     period to expect at that amplitude (s), the ``invert`` options that
     reproduce the sigma, the sigma (kg m^2) and ``std_unstated``, the std
     invert prints without ``--amplitude`` (kg m^2; None with
-    ``unstated_note`` where it cannot be computed), with their ratio; and
+    ``unstated_note`` where it cannot be computed), with their ratio;
+    ``unstated_beyond_range`` where the amplitude lies beyond the release
+    range that std assumes (:func:`unstated_beyond_range`), else None; and
     ``text``, one plain sentence for the table."""
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
@@ -59,6 +67,8 @@ def amplitude_advice(base_cfg: dict, source: str, point: dict, settings) -> dict
                 rest = rest_pose(scene)
             sd = honest_stds(scene, [(c, e["mode"])], unc, unc["timing"], amplitude=None, rest=rest)[0]
             row.update(std_unstated=sd, ratio_unstated=sd / e["sigma"] if e["sigma"] else None)
+            row["unstated_beyond_range"] = (unstated_beyond_range(scene, rest, c, e["mode"], e["value"], A, T, unc)
+                                            if budgeted else None)
         except BifilarError as exc:
             row["unstated_note"] = f"not computed: {exc}"
         out["components"][c] = row
@@ -73,5 +83,46 @@ def amplitude_advice(base_cfg: dict, source: str, point: dict, settings) -> dict
         lo, hi = f"{min(ratios):.2g}", f"{max(ratios):.2g}"
         what += (f"; without --amplitude invert assumes a release anywhere in 0-{DEFAULT_AMPLITUDE_RANGE_DEG:g} "
                  f"degrees and its std is {lo if lo == hi else lo + '-' + hi} times the sigma")
+    beyond = {c: r["unstated_beyond_range"] for c, r in out["components"].items() if r.get("unstated_beyond_range")}
+    if beyond:
+        what += (f"; but a release at {A:g} lies beyond that range, and without --amplitude invert's estimate is off by "
+                 + ", ".join(f"{c} {100 * b['error_rel']:+.2g} % ({b['error_in_std']:+.2g} of its std"
+                             + ("" if b["interval_holds_truth"] else ", outside its 95 % interval") + ")"
+                             for c, b in beyond.items())
+                 + ": state the amplitude")
     out["text"] = what
     return out
+
+
+def unstated_beyond_range(scene, rest, comp: str, mode: str, value: float, A: float, period: float,
+                          unc: dict) -> dict | None:
+    """What ``invert`` without ``--amplitude`` gives for ``comp`` (kg m^2)
+    of ``scene`` when the period is timed at the amplitude ``A`` (the unit
+    of ``--amplitude``), where ``A`` lies beyond the release range its
+    unstated budget assumes (:func:`~bifilar.estimation.budget.default_amplitude_range`;
+    None within it): ``period`` (s) is the one the body shows at ``A``,
+    inverted with the truth's inputs and ``unc``.  Returns ``range_max``
+    (the range's end), ``estimate``, ``std`` (kg m^2), ``error`` (estimate
+    minus ``value``, kg m^2), ``error_rel`` (of ``value``),
+    ``error_in_std`` and ``interval_holds_truth`` (``value`` inside the
+    printed 95 % interval)."""
+    import numpy as np
+
+    from ..analysis.modes import linear_modes
+    from ..estimation.invert import invert
+    from ..estimation.measurements import Hanging, Measurement, MeasurementSet
+
+    md = linear_modes(scene, rest).get(mode)
+    A_max = default_amplitude_range(scene, md)
+    if not abs(A) > A_max:
+        return None
+    ms = MeasurementSet([Hanging("reference", scene, np.eye(3))],
+                        [Measurement(mode, float(period), float(unc["timing"]), "period", "--period")])
+    ms.uncertainty = dict(unc)
+    res = invert(ms, solve_for=[comp], ladder=False)
+    est, sd = res.value(comp), res.sigma(comp)
+    lo, hi = (float(x) for x in res.interval[0])
+    err = est - float(value)
+    return {"range_max": float(A_max), "estimate": float(est), "std": float(sd), "error": float(err),
+            "error_rel": float(err / value) if value else None,
+            "error_in_std": float(err / sd) if sd > 0 else None, "interval_holds_truth": bool(lo <= value <= hi)}

@@ -94,8 +94,8 @@ class PlanResult:
         ``"planned_hanging"`` (the timed modes of the planned point's own
         hanging) or ``"multi_hanging"`` (left to the multi-hanging plan's
         timed modes, :func:`plan` with ``hangings``).
-    hangings_objective : with ``separation_guard`` ``"multi_hanging"``, the
-        objective of the optimum's multi-hanging plan (small amplitude), by
+    hangings_objective : with ``hangings`` (:func:`plan`), the
+        objective of the optimum's multi-hanging plan (its joint sigma), by
         which the points were ranked (``best["objective"]`` stays the
         planned hanging's own).
     """
@@ -192,18 +192,32 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     trifilar), the search is run again without that guard
     (``separation_guard`` ``"multi_hanging"``): the hangings plan at the
     optimum must then time only separated modes
-    (:func:`bifilar.studies.hangings.check_separated`).  Where a point meets
-    it the answer is the one without ``hangings``.
+    (:func:`bifilar.studies.hangings.check_separated`).  Where points meet
+    it, the search is steered by the points' own figures, and the point it
+    evaluated whose multi-hanging plan is the most accurate is the answer
+    (``hangings_objective``; the guard left to that plan, as above, where
+    the point's own hanging does not meet it), as a sweep with
+    ``--hangings`` ranks them (:func:`bifilar.studies.ranking.assess`).
 
     Raises :class:`InputError` naming the binding constraint's flag (e.g.
     ``--max-tension``) when no evaluated configuration is feasible.
     """
     kw = dict(workers=workers, progress=progress, max_local=max_local, zip_=zip_)
     try:
-        return _plan(base_cfg, source, bounds, settings, constraints, target, **kw)
+        res = _plan(base_cfg, source, bounds, settings, constraints, target, **kw)
     except InputError as exc:
         if not (hangings and exc.field == "--min-separation"):
             raise
+    else:
+        if not hangings:
+            return res
+        relaxed = replace(constraints, min_separation=None)
+        best, hob = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
+        if best is None:
+            return res
+        guard = "multi_hanging" if violations(best, constraints, res.target) else "planned_hanging"
+        return replace(res, best=best, separation_guard=guard, active=_active(best, relaxed, bounds),
+                       hangings_objective=hob)
     relaxed = replace(constraints, min_separation=None)
     res = _plan(base_cfg, source, bounds, settings, relaxed, target, **kw)
     best, hob = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)

@@ -562,6 +562,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at, budgets=budgets)
     if st.tensions:
         pre.runs = sorted(set(chosen.values()))
+        _stretching(res, scene, rest, [ms.modes[k] for k in pre.runs])
         from ..analysis.simulate import checked_start_poses
 
         # the refusal `simulate` gives (InputError) rather than a run from an unreachable start; the start poses
@@ -642,6 +643,19 @@ def run_health(run) -> dict:
             "energy_drift": f(run.energy_drift), **health_json(run)}
 
 
+def _stretching(res: dict, scene, rest, modes) -> None:
+    """Mark the point ``res`` whose dependent wires cannot follow the modes
+    its nonlinear runs excite (:func:`~bifilar.analysis.equilibrium.stretching_modes`):
+    ``stretching_modes`` (their labels) and the warning `modes` gives; the
+    runs' tensions, slack and amplitude terms are then not physical."""
+    from ..analysis.equilibrium import stretching_modes, stretching_text
+
+    hits = [lb for lb, _ in stretching_modes(scene, rest, modes)]
+    if hits:
+        res["stretching_modes"] = hits
+        res["warnings"].append(stretching_text(scene, hits))
+
+
 def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bool) -> dict:
     """The point's figures from its nonlinear runs ``sims`` {mode index: run} on."""
     scene, rest, ms, labels, periods, sens, chosen = (pre.scene, pre.rest, pre.ms, pre.labels, pre.periods,
@@ -663,7 +677,7 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
                           "slack_wires": [], "by_mode": {}}
         res["depth"] = {"rest": rest.depth, "max": None}
         res["runs"] = {}
-    _stated_amplitude(res, pre, sims, st)
+    _stated_amplitude(res, pre, sims, st, screen)
     if screen:
         return res
     # biases at the prescribed amplitude

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 
 def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: float | None = None,
-                            dr_dI: float = 0.0):
+                            dr_dI: float = 0.0, inputs: dict | None = None):
     """The budget ``invert --period MODE=T --amplitude A`` prints (one
     period, one unknown, the nonlinear rung) from the small-amplitude one
     (``--amplitude 0``) of the same component and mode: ``budget`` (a
@@ -47,13 +47,14 @@ def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: f
     timing's contribution ``s_T / (g dT/dI)`` is the small-amplitude one
     divided by ``g``, the stated amplitude's own uncertainty ``s_A = rel A``
     adds ``T_lin (dr/dA) s_A / (g dT/dI)`` = ``|slope rel T_lin dI/dT /
-    g|``, and an input's contribution is unchanged: the factor is taken to
-    depend on the inputs as on the unknown.  ``invert`` does not take that:
-    it measures ``dr/dx`` by one run per input and puts each input through
-    the full gain (``budget._with_factor_gain``); those terms are not in
-    this std (``amplitude_budget.input_factor_terms: false``; the Solar
-    Boat's Izz at spacing 1, length 2: invert's std 1.12 of it at 0.3 rad,
-    docs/design.md, "The stated amplitude").
+    g|``, and an input's contribution is unchanged (the factor taken to
+    depend on the inputs as on the unknown) except those of ``inputs``
+    {input: its contribution, kg m^2}, which replace theirs: ``invert``
+    measures ``dr/dx`` by one run per input and puts each input through
+    the full gain (``budget._with_factor_gain``; the sweep's
+    :func:`~bifilar.studies.point_inputs.input_factor_terms`, the Solar
+    Boat's Izz at spacing 1, length 2, 0.3 rad: without them invert's std
+    is 1.12 of this one, docs/design.md, "The stated amplitude").
     The second-order terms (re-solved sigma points) are those of the
     small-amplitude budget (the factor cancels in them), so the same change
     applies to the honest std.  Returns (std, timing contribution, amplitude
@@ -65,6 +66,9 @@ def stated_amplitude_budget(budget, T_lin: float, r: float, rel: float, slope: f
     sd = float(budget.value_sigma)
     var = sd * sd - c_t * c_t * (1.0 - 1.0 / (g * g)) + c_a * c_a
     lin = {k: float(c) for k, c in budget.contributions.items()}
+    for key, c in (inputs or {}).items():
+        var += c * c - lin[key] * lin[key]
+        lin[key] = abs(float(c))
     lin["timing"] = c_t / g
     lin["amplitude"] = c_a
     tot = sum(c * c for c in lin.values())
@@ -194,18 +198,27 @@ def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
     return first + call(law.scenes, law.labels, law.amplitudes, law.rests, law.mode_sets, law.starts, False)
 
 
-def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings) -> None:
+def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings, screen: bool = False) -> None:
     """Each component's sigma for the amplitude stated to ``invert`` (the
     point's nonlinear run gives the amplitude factor, :func:`_amplitude_laws`
     its slope and its derivative in the component;
     :func:`stated_amplitude_budget`), the small-amplitude figure kept in
     ``amplitude_budget``; without a run (``--no-tensions``, a planner's
     screen without runs) the sigma stays the small-amplitude one and
-    ``amplitude_budget.budgeted`` is false."""
+    ``amplitude_budget.budgeted`` is false.  The inputs' terms take the
+    factor's measured ``dr/dx`` (:mod:`bifilar.studies.point_inputs`: the
+    runs of every timed mode that needs them in one call;
+    ``input_factor_terms`` true) where they could change a sigma by more
+    than :data:`~bifilar.studies.point_inputs.FACTOR_INPUT_ENOUGH` of it
+    (``input_factor_bound``, relative, bounds what is left out); a screen
+    (``screen``) does not run them."""
     from ..estimation.sensitivity import Budget, grouped_shares
     from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+    from .point_inputs import FACTOR_INPUT_ENOUGH, input_factor_bound, input_factor_terms, measure_factor_inputs
 
     laws = _amplitude_laws(pre, sims, st)
+    unc = res["uncertainty"]
+    todo = {}
     for comp, k in pre.chosen.items():
         e = res["components"][comp]
         b = pre.budgets[comp]
@@ -225,11 +238,30 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings
                             "(invert --amplitude 0)")
             continue
         slope, dr_dI = laws[comp]
-        sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI)
-        # input_factor_terms: invert also measures dr/dx (one run per input) and puts each input
-        # through the full gain; the sweep's sigma leaves those terms out (docs/design.md)
-        info.update(budgeted=True, contribution=c_a, slope=slope, quadratic_slope=2.0 * (r - 1.0),
-                    factor_gain=r + T_lin * dr_dI * float(b.dI_dT), input_factor_terms=False)
+        g = r + T_lin * dr_dI * float(b.dI_dT)
+        sd = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI)[0]
+        bound = input_factor_bound(pre, comp, k, unc, T_lin, g)
+        todo[comp] = (k, T_lin, r, g, slope, dr_dI, bound, bound > FACTOR_INPUT_ENOUGH * sd)
+    need = {k: slope for k, _, _, _, slope, _, _, more in todo.values() if more}
+    try:
+        measured = measure_factor_inputs(pre, need, unc, st) if need and not screen else {}
+    except BifilarError:  # the stepped runs could not be made: the terms stay out, their bound says how much
+        measured = {}
+    for comp, (k, T_lin, r, g, slope, dr_dI, bound, _) in todo.items():
+        e = res["components"][comp]
+        b = pre.budgets[comp]
+        info = e["amplitude_budget"]
+        terms = None
+        if k in measured:
+            dx, failed = measured[k]
+            terms = input_factor_terms(pre, comp, k, unc, T_lin, r, g, dx, failed)
+        sd, c_t, c_a, shares = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI, terms)
+        info.update(budgeted=True, contribution=c_a, slope=slope, quadratic_slope=2.0 * (r - 1.0), factor_gain=g,
+                    input_factor_terms=terms is not None,
+                    input_factor_bound=0.0 if terms is not None and not measured[k][1] else bound / sd)
+        if terms is not None and measured[k][1]:
+            info["note"] = ("no dr/dx measured for " + ", ".join(measured[k][1]) + ": their terms take the factor "
+                            "to depend on them as on the unknown")
         scale = component_scale(pre.scene.inertia, comp)
         e.update(sigma=sd, rel_sigma=sd / scale if scale else math.inf,
                  shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))

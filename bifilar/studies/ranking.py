@@ -244,28 +244,44 @@ def assess(points: list[dict], constraints: Constraints, target: str | None, han
     ``hangings``: the experiment times the multi-hanging plan, which applies
     ``min_separation`` to each mode it times; ``hangings(point)`` is that
     plan's objective at a point (:func:`bifilar.studies.hangings.hangings_objective`).
-    When no point's own hanging meets ``min_separation``, the points are
-    assessed again without that guard (``separation_guard``
-    ``"multi_hanging"``; else ``"planned_hanging"``) and ranked by
-    ``hangings(point)`` (each feasible point's ``hangings_objective``); the
-    hangings plan at the recommended point must time only separated modes
-    (:func:`bifilar.studies.hangings.check_separated`).
+    The feasible points are ranked by it (each one's ``hangings_objective``;
+    by their own figures only where no multi-hanging plan gives a sigma): the
+    point whose own hanging is best can be far from the best for the
+    hangings (a trifilar's Ixx from a swing, 35 %, at the point whose
+    hangings give 2.3 % where another's give 0.45 %; docs/design.md,
+    "Closed-loop audit of the planner, session 11").
+    The guard is then the multi-hanging plan's, applied to each mode it
+    times, and the points are assessed without it on their own hanging
+    (``separation_guard`` ``"multi_hanging"`` where the recommended point's
+    own hanging does not meet ``min_separation``, ``"planned_hanging"``
+    where it does); the hangings plan at the recommended point must time
+    only separated modes (:func:`bifilar.studies.hangings.check_separated`).
     """
     doc = _assess(points, constraints, target)
     doc["separation_guard"] = "planned_hanging"
-    if hangings is not None and doc.get("binding") == CONSTRAINT_FLAGS["min_separation"]:
-        doc = _assess(points, replace(constraints, min_separation=None), target, hangings)
-        doc.update(constraints=constraints.describe(), separation_guard="multi_hanging")
-        if doc.get("best") is not None:
-            doc["why"].insert(0, f"ranked by the multi-hanging plan (no point's own hanging meets --min-separation "
-                                 f"{constraints.min_separation:g}): its {'target' if target else 'worst component'} "
-                                 f"+- {100 * doc['hangings_objective']:.3g} % (small amplitude); the point's own "
-                                 "figures follow")
-        elif doc["n_feasible"]:
+    if hangings is None:
+        return doc
+    own = doc
+    doc = _assess(points, replace(constraints, min_separation=None), target, hangings)
+    doc["constraints"] = constraints.describe()
+    if doc.get("best") is not None:
+        separated = not violations(points[doc["best"]], constraints, target)
+        doc["separation_guard"] = "planned_hanging" if separated else "multi_hanging"
+        why = ("--hangings" if separated else
+               f"--hangings; its own hanging does not meet --min-separation {constraints.min_separation:g}")
+        doc["why"].insert(0, f"ranked by the multi-hanging plan ({why}): its "
+                             f"{'target' if target else 'worst component'} +- "
+                             f"{100 * doc['hangings_objective']:.3g} %; the point's own figures follow")
+    elif own.get("binding") == CONSTRAINT_FLAGS["min_separation"]:
+        doc["separation_guard"] = "multi_hanging"
+        if doc["n_feasible"]:
             doc.update(binding=CONSTRAINT_FLAGS["min_separation"], reason=(
                 f"no configuration meets --min-separation {constraints.min_separation:g} with the hangings either: "
                 "no point's multi-hanging plan identifies every component from modes that far from the other "
                 "modes of their hanging"))
+    else:  # no multi-hanging plan gives a sigma: the points' own ranking
+        doc = _assess(points, constraints, target)
+        doc["separation_guard"] = "planned_hanging"
     return doc
 
 

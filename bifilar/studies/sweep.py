@@ -90,9 +90,10 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        resolve_uncertainty)
 from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 6  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
+JOURNAL_VERSION = 7  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
 # 4: the sigma budgets the stated amplitude (amplitude_budget); 5: the amplitude law and the factor's derivative (session 8);
-# 6: points carry their runs' health (runs: period_error, energy_drift_resolution, ...)
+# 6: points carry their runs' health (runs: period_error, energy_drift_resolution, ...); 7: the inputs' factor terms
+# (dr/dx) where they can matter, input_factor_bound (session 11)
 
 
 # --------------------------------------------------------------------------
@@ -122,6 +123,24 @@ def point_warnings(base_cfg: dict, source: str, params: dict) -> list[str]:
     base = set(plausibility_warnings(scene_from_dict(base_cfg, source, warn=False)))
     cfg, _ = apply_params(base_cfg, params, source)
     return [w for w in plausibility_warnings(scene_from_dict(cfg, source, warn=False)) if w not in base]
+
+
+def stretching_summary(points: list[dict]) -> str | None:
+    """One warning for the points of a sweep or plan whose rig's dependent
+    wires cannot follow a mode they run (``stretching_modes``, set by
+    :func:`~bifilar.studies.point.evaluate_point`; each point's own warning
+    says why), or None: their tensions, slack and amplitude terms come
+    from rigid-wire runs that are not physical at any amplitude."""
+    hit = [p for p in points if p.get("stretching_modes")]
+    if not hit:
+        return None
+    labels = sorted({lb for p in hit for lb in p["stretching_modes"]})
+    first = ", ".join(f"{k}={v:g}" for k, v in hit[0]["params"].items())
+    return (f"at {len(hit)} of {len(points)} points ({first}{', ...' if len(hit) > 1 else ''}) the rig's dependent "
+            f"wires cannot follow mode{'s' if len(labels) > 1 else ''} {', '.join(repr(lb) for lb in labels)} "
+            "rigidly (each point's warnings say why): the nonlinear runs' tensions, slack wires and amplitude "
+            "terms there are not physical at any amplitude; a real rig's wires stretch and keep the linear "
+            "periods: leave the runs out (--no-tensions) and time at a small amplitude (invert --amplitude 0)")
 
 
 def point_key(params: dict) -> str:
