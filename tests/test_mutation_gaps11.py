@@ -91,10 +91,10 @@ def _law_point(monkeypatch, law_runs=None, budget=None):
         n = len(runs) - len(law.scenes)
         return runs[:n] + (law_runs(runs[n:]) if law_runs else runs[n:])
 
-    def stated(res, pre, sims, st):
+    def stated(res, pre, sims, st, *args, **kw):
         if budget:
             pre.budgets = {c: budget(b) for c, b in pre.budgets.items()}
-        return real_stated(res, pre, sims, st)
+        return real_stated(res, pre, sims, st, *args, **kw)
 
     monkeypatch.setattr(point, "_runs_at", runs_at)
     monkeypatch.setattr(pa, "_runs_at", runs_at)
@@ -419,7 +419,7 @@ def test_dr_dx_of_a_factor_linear_in_the_inputs(monkeypatch, dominant, own_fails
     failed = f"{pre}attachment.1.y"
     th = 0.4
     R = np.array([[math.cos(th), -math.sin(th), 0.0], [math.sin(th), math.cos(th), 0.0], [0.0, 0.0, 1.0]])
-    base = NS(mass=m_body)
+    base = NS(mass=m_body, n_wires=nw)
 
     monkeypatch.setattr(un, "_step", lambda scene, name, rel: step[name])
     monkeypatch.setattr(fi, "_perturbed_scene", lambda pb, h, scene, moves: NS(moved=moves[0]))
