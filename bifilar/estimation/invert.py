@@ -326,7 +326,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             break
 
     # -- every admissible solution; the measured modes decided at each ----
-    targets0 = None
+    targets0 = amp_var0 = None
     if has_amp:
         # the linear model must reproduce T / r: start from the amplitude
         # factors at the (physical) starting tensor; the fixed point below
@@ -336,8 +336,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             if m.amplitude:
                 r0[k] = measured_factor(pb, k, pb.prior, rtol)[0]  # checked: an irregular one refused
         targets0 = np.array([m.period for m in pb.measurements]) / r0
+        amp_var0 = lambda: _target_amplitude_variance(pb, pb.prior, r0, rtol, unc_all)  # noqa: E731
     if physical_only:
-        roots = find_roots(pb, targets0)
+        roots = find_roots(pb, targets0, amp_var0)
     else:
         roots = [Root(solve_linear(pb, targets0))]
     root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
@@ -673,6 +674,26 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False, laws=None) ->
         raise ConvergenceError(f"the {method} estimate does not reproduce the measurements (normalised residuals "
                                f"{zs} sigma; required {test}): no answer is given")
     return out
+
+
+def _target_amplitude_variance(pb: Problem, p, r, rtol: float, unc: dict) -> np.ndarray:
+    """(K,) variance (s^2) of each root-finding target ``T / r`` from its
+    stated amplitude's uncertainty, at the unknowns ``p`` whose amplitude
+    factors are ``r``: the budget's amplitude term
+    (:func:`~bifilar.estimation.budget.stated_amplitude_period_std`, the
+    law's slope from one more run at :data:`~bifilar.estimation.solve.STATED_LAW_RATIO`
+    of the amplitude) over ``r``.  Used only where a target is out of the
+    physical range by timing alone (:func:`~bifilar.estimation.roots.find_roots`)."""
+    from .solve import STATED_LAW_RATIO, amplitude_law
+
+    laws = []
+    for k, m in enumerate(pb.measurements):
+        if not m.amplitude:
+            laws.append(None)
+            continue
+        r_lam = measured_factor(pb, k, p, rtol, STATED_LAW_RATIO * m.amplitude)[0]
+        laws.append(amplitude_law(m.amplitude, float(r[k]), STATED_LAW_RATIO, r_lam))
+    return (stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) / np.asarray(r, float)) ** 2
 
 
 def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndarray | None:
