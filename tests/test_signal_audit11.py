@@ -136,3 +136,46 @@ def test_a_noisy_chirps_amplitude_law_is_judged_by_its_frequency_shift():
         assert fit.std < 0.2 * law["without_law"]["std"], (seed, fit.std, law["without_law"]["std"])
         zs.append((fit.period - truth(fit.modes[0]["reference_amplitude"])) / fit.std)
     assert np.max(np.abs(zs)) < 3, zs
+
+
+# --------------------------------------------------------------------------- a record in degrees
+
+
+def test_a_record_in_degrees_read_as_radians_is_refused(tmp_path):
+    """The drone's torsion released at 1.5 degrees, recorded in degrees, and
+    given with ``--signal-quantity angle`` but no ``--signal-scale``: the
+    fitted amplitude, 1.5 "rad", made the amplitude factor ~3300 times too
+    large (the audit's quadcopter at 1.7 degrees: Izz 0.0171 +- 0.0009 for
+    0.022, exit 0).  The record's halves differ by what its true amplitude
+    allows (here nothing: a linear decay), the model at 1.5 rad would change
+    the period by a tenth of a second between them: refused, exit 2, one
+    line naming --signal and --signal-scale.  With the scale the same
+    record is answered within its std of the truth."""
+    from click.testing import CliRunner
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.cli import main
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    cfg = CONFIGS / "drone_parallel.yaml"
+    s = load_scene(cfg, warn=False)
+    T = linear_modes(s, rest_pose(s)).get("torsion").period
+    t = np.arange(0.0, 30 * T, 1 / 60.0)
+    sg = (2 * math.pi / T) / 400.0  # Q = 200
+    deg = 1.5 * np.exp(-sg * t) * np.cos(2 * math.pi * t / T) \
+        + 1e-3 * 1.5 * np.random.default_rng(3).standard_normal(t.size)
+    rec = tmp_path / "torsion_deg.csv"
+    np.savetxt(rec, np.c_[t, deg], delimiter=",", header="t,angle_deg", comments="", fmt="%.10g")
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--signal-quantity", "angle",
+                                  "--json"])
+    assert r.exit_code == 2, r.output
+    assert r.stdout == "" and "--signal" in r.output and "--signal-scale" in r.output, r.output
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--signal-quantity", "angle",
+                                  "--signal-scale", "0.0174533", "--json"])
+    assert r.exit_code == 0, r.output
+    izz = json.loads(r.stdout)["inertia"]["Izz"]
+    truth = float(np.asarray(s.inertia)[2, 2])
+    assert abs(izz["value"] - truth) < 3 * izz["std"], (izz, truth)
