@@ -179,3 +179,31 @@ def test_a_record_in_degrees_read_as_radians_is_refused(tmp_path):
     izz = json.loads(r.stdout)["inertia"]["Izz"]
     truth = float(np.asarray(s.inertia)[2, 2])
     assert abs(izz["value"] - truth) < 3 * izz["std"], (izz, truth)
+
+
+def test_a_time_column_in_ms_named_plain_time_is_refused_naming_the_unit(tmp_path):
+    """A CSV whose time column is named ``time`` but holds ms: ``period``
+    warns of a unit slip, ``invert --signal`` refused it as an alias at a
+    sample rate of 0.06 Hz ("record at 2.5 x 0.978 = 2.45 Hz or faster"),
+    the wrong cause.  Now: exit 2, one line naming the ms reading and the
+    mode it then matches."""
+    from click.testing import CliRunner
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.cli import main
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    cfg = CONFIGS / "drone_parallel.yaml"
+    s = load_scene(cfg, warn=False)
+    T = linear_modes(s, rest_pose(s)).get("torsion").period
+    t = np.arange(0.0, 30 * T, 1 / 60.0)
+    y = 0.05 * np.cos(2 * math.pi * t / T) + 1e-4 * np.random.default_rng(1).standard_normal(t.size)
+    rec = tmp_path / "torsion.csv"
+    np.savetxt(rec, np.c_[1000 * t, y], delimiter=",", header="time,angle", comments="", fmt="%.10g")
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--json"])
+    assert r.exit_code == 2 and r.stdout == "", r.output
+    line = r.output.strip()
+    assert "\n" not in line and "read in ms" in line and "'torsion'" in line and "t_ms" in line, line
