@@ -68,7 +68,7 @@ def test_refusal_names_a_mode_without_a_period_at_the_best_fit(monkeypatch):
     meas = [Measurement(lab, 1.0, 1e-3, "period", "--period") for lab in ("torsion", "pitch", "swing-y")]
     pb = build_problem(MeasurementSet([Hanging("ref", scene, np.eye(3))], meas), ["Iyy", "Izz", "com.z"])
     best = {"p": pb.prior, "z": np.array([6.42, np.nan, 0.00156]), "chi2": np.inf, "test": "|residual| <= 0.1 sigma"}
-    monkeypatch.setattr(roots, "multi_roots", lambda pb, targets=None: ([], best))
+    monkeypatch.setattr(roots, "multi_roots", lambda pb, targets=None, extra_var=None: ([], best))
     try:
         roots.find_roots(pb)
     except InputError as exc:

@@ -62,7 +62,7 @@ def test_a_refusal_names_the_barely_determined_com_first(trifilar, monkeypatch):
     truth, labels, T = trifilar
     pb = build_problem(_measured(truth, labels, T, 1), ["Izz", "com.x", "com.y"], UNC)
     best = {"z": np.array([0.853, -0.69, 0.137]), "p": np.array([0.0912, 0.045, 0.0518]), "test": "|residual| <= 0.1"}
-    monkeypatch.setattr(roots, "multi_roots", lambda pb_, targets=None: ([], best))
+    monkeypatch.setattr(roots, "multi_roots", lambda pb_, targets=None, extra_var=None: ([], best))
     with pytest.raises(InputError) as exc:
         roots.find_roots(pb)
     msg = exc.value.message

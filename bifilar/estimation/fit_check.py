@@ -244,9 +244,12 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
         chi2_fit = float(e @ e)
     ok = bool(chi2_fit <= lim_fit and dist <= lim_p)  # False for NaN
     if ok and K <= P:
-        # no other tensor is fitted: the inputs alone must bridge the residual, checked with the full model
-        other = sig ** 2 + amp_var + (0.0 if extra_var is None else np.asarray(extra_var, float))
-        ok = inputs_explain(pb, p, -res, other, lim_p)
+        # no other tensor is fitted: the stated amplitudes' uncertainty (extra_var) with timing, or the inputs,
+        # must bridge the residual, the inputs checked with the full model
+        stated = sig ** 2 + (0.0 if extra_var is None else np.asarray(extra_var, float))
+        other = stated + amp_var
+        ok = bool(extra_var is not None and np.sum(res ** 2 / stated) <= lim_p) \
+            or inputs_explain(pb, p, -res, other, lim_p)
     return ok, chi2_fit, dist, test
 
 

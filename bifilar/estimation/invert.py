@@ -336,7 +336,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             break
 
     # -- every admissible solution; the measured modes decided at each ----
-    targets0 = None
+    targets0 = amp_var0 = None
     if has_amp:
         # the linear model must reproduce T / r: start from the amplitude
         # factors at the (physical) starting tensor; the fixed point below
@@ -346,8 +346,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             if m.amplitude:
                 r0[k] = measured_factor(pb, k, pb.prior, rtol)[0]  # checked: an irregular one refused
         targets0 = np.array([m.period for m in pb.measurements]) / r0
+        amp_var0 = lambda: _target_amplitude_variance(pb, pb.prior, r0, rtol, unc_all)  # noqa: E731
     if physical_only:
-        roots = find_roots(pb, targets0)
+        roots = find_roots(pb, targets0, amp_var0)
     else:
         roots = [Root(solve_linear(pb, targets0))]
     root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
@@ -382,6 +383,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                 warnings.extend(f"nonlinear simulation: {w}" for w in s.warnings)
         warnings += irregular_warnings(pb, est_nl)
         warnings += monotonic_warnings(pb, est_nl)
+        refuse_amplitude_the_record_contradicts(pb, est_nl)
     ladder_rows = []
     if scalar and (ladder or method in ("small-angle", "thesis")):
         for name in ("small-angle", "thesis"):
@@ -558,6 +560,80 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     return res
 
 
+#: a record contradicts its amplitude when the model's period change between its halves differs from the
+#: record's own by more than this many of the halves' stds ...
+AMPLITUDE_CONTRADICTION_Z = 5.0
+#: ... and is more than this many times the record's change and its std together (a unit slip is 57x in a
+#: degree's amplitude, ~3300x in the factor; a drone's linear record fitted at its true 0.026 rad misses the
+#: model's 2.5e-5 s by 7 of its stds but only 2.6x its change and std)
+AMPLITUDE_CONTRADICTION_RATIO = 20.0
+
+
+def _half_amplitudes(fit) -> tuple[float, float] | None:
+    """The envelope of ``fit`` (signal units) at the middles of the fit
+    window's halves, where the split check's two periods refer; None for a
+    fit without a decay rate."""
+    d = fit.damping or {}
+    sg = d.get("sigma")
+    if sg is None or not np.isfinite(sg) or not np.isfinite(fit.amplitude):
+        return None
+    kap = d.get("kappa") or 0.0
+    T_rec = float(fit.t1 - fit.t0)
+
+    def env(tau):
+        E = tau if abs(sg * tau) < 1e-12 else -math.expm1(-sg * tau) / sg
+        return abs(fit.amplitude) * math.exp(-sg * tau) / (1.0 + kap * E)
+
+    return env(0.25 * T_rec), env(0.75 * T_rec)
+
+
+def refuse_amplitude_the_record_contradicts(pb: Problem, est) -> None:
+    """Raise InputError on a recording whose amplitude (stated, or the fit's
+    with ``--signal-quantity``) the record's own period change contradicts.
+
+    A pendulum's period follows its amplitude, so as a record decays its
+    halves' periods differ by ``T_lin (r(A_1) - r(A_2))`` (the mode's
+    amplitude law at the estimate, ``est.laws``; ``A_1``, ``A_2`` the
+    envelope at the halves' middles in the model's unit).  A record in
+    degrees read as radians (``--signal-quantity angle`` without
+    ``--signal-scale``) puts the amplitude 57 times too high and the
+    amplitude factor (~A^2) 3300 times: the quadcopter's torsion released
+    at 1.7 degrees gave Izz 0.0171 +- 0.0009 kg m^2 for 0.022, exit 0.
+    Refused when the model's change exceeds the record's (the viscous fit's
+    halves, before any amplitude law) by more than
+    :data:`AMPLITUDE_CONTRADICTION_Z` of the halves' stds and
+    :data:`AMPLITUDE_CONTRADICTION_RATIO` times the record's change plus
+    its std: the record shows the period far steadier than its amplitude
+    allows.  An
+    amplitude too small, or a record that also drifts, is not caught."""
+    T_lin = None
+    for k, m in enumerate(pb.measurements):
+        law = est.laws[k] if k < len(est.laws) else None
+        fit = m.fit
+        if law is None or fit is None or not m.amplitude or not (fit.amplitude_period > 0):
+            continue
+        al = fit.amplitude_law or {}
+        halves = (al.get("without_law") or {}).get("half_periods") if al.get("used") else fit.half_periods
+        amps = _half_amplitudes(fit)
+        if not halves or len(halves) != 2 or amps is None:
+            continue
+        (T1, s1), (T2, s2) = halves
+        scale = abs(m.amplitude) / fit.amplitude_period  # signal unit -> the mode's (rad or m)
+        A1, A2 = amps[0] * scale, amps[1] * scale
+        if T_lin is None:
+            T_lin = pb.linear_periods(est.p)
+        pred = float(T_lin[k] * (law.factor(A1) - law.factor(A2)))
+        seen, s = float(T1 - T2), math.hypot(s1, s2)
+        if (abs(pred - seen) > AMPLITUDE_CONTRADICTION_Z * s
+                and abs(pred) > AMPLITUDE_CONTRADICTION_RATIO * (abs(seen) + s)):
+            raise InputError(m.field, f"the amplitude of '{m.label}' ({abs(m.amplitude):.4g} in the model's unit, "
+                                      f"rad or m) contradicts the record: decaying from {A1:.4g} to {A2:.4g} it "
+                                      f"would change the period by {pred:.3g} s between the record's halves, which "
+                                      f"differ by {seen:.3g} +- {s:.2g} s; is the signal in degrees or mm (give "
+                                      "--signal-scale, e.g. 0.0174533 for degrees) or the amplitude stated in "
+                                      "another unit?")
+
+
 def irregular_warnings(pb: Problem, est) -> list[str]:
     """One warning per measurement whose amplitude runs at the nonlinear
     estimate ``est`` are not a regular motion (``law.irregular`` > 0, s: below
@@ -712,6 +788,26 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False, laws=None) ->
         raise ConvergenceError(f"the {method} estimate does not reproduce the measurements (normalised residuals "
                                f"{zs} sigma; required {test}): no answer is given")
     return out
+
+
+def _target_amplitude_variance(pb: Problem, p, r, rtol: float, unc: dict) -> np.ndarray:
+    """(K,) variance (s^2) of each root-finding target ``T / r`` from its
+    stated amplitude's uncertainty, at the unknowns ``p`` whose amplitude
+    factors are ``r``: the budget's amplitude term
+    (:func:`~bifilar.estimation.budget.stated_amplitude_period_std`, the
+    law's slope from one more run at :data:`~bifilar.estimation.solve.STATED_LAW_RATIO`
+    of the amplitude) over ``r``.  Used only where a target is out of the
+    physical range by timing alone (:func:`~bifilar.estimation.roots.find_roots`)."""
+    from .solve import STATED_LAW_RATIO, amplitude_law
+
+    laws = []
+    for k, m in enumerate(pb.measurements):
+        if not m.amplitude:
+            laws.append(None)
+            continue
+        r_lam = measured_factor(pb, k, p, rtol, STATED_LAW_RATIO * m.amplitude)[0]
+        laws.append(amplitude_law(m.amplitude, float(r[k]), STATED_LAW_RATIO, r_lam))
+    return (stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) / np.asarray(r, float)) ** 2
 
 
 def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndarray | None:

@@ -222,13 +222,20 @@ class ScalarScan:
         return float(brentq(lambda x: self.period(x, k) - target, a, b, xtol=1e-15 * scale,
                             rtol=4 * np.finfo(float).eps, maxiter=200))
 
-    def edge_root(self, target: float, sigma: float) -> float | None:
+    def edge_root(self, target: float, sigma: float, extra_var=None) -> float | None:
         """A closed end of the interval (triangle limit) where the labelled
         mode's period is within ``EDGE_Z`` sigma of ``target``, or, failing
         that, within the period's uncertainty with the measured inputs'
         counted (:func:`input_fit_check`: at most the 99.9 % quantile of
         chi-square with 1 degree of freedom, an input error that explains
-        it checked with the full model), else None.  A body on the limit (a
+        it checked with the full model), else None.  ``extra_var``: a
+        callable giving the (1,) variance (s^2) of ``target`` from the
+        stated amplitude's own uncertainty (the nonlinear method's target is
+        the period over its amplitude factor), called only when timing
+        alone does not reach the end; it widens ``sigma`` of both tests (a
+        slender boom's torsion released at 0.2 rad: the amplitude's 10 %
+        is 20 times a camera record's timing std, and honest experiments
+        whose release was 1-2 of its stds off were refused).  A body on the limit (a
         thin disc, ``Izz = Ixx + Iyy``) has its measured period beyond the
         limit's in about half of all experiments; the inputs' errors (1 mm
         of a trifilar's 0.15 m radius: 0.7 % of the period) put it many
@@ -244,8 +251,14 @@ class ScalarScan:
                 continue
             ends.append(((s.modes[i].period - target) / sigma, x))
         best = min(((abs(z), x) for z, x in ends if abs(z) <= EDGE_Z), default=None)
+        ev = None
+        if best is None and ends and extra_var is not None:
+            ev = np.asarray(extra_var(), float)
+            wide = math.sqrt(1.0 + float(ev[0]) / sigma ** 2)
+            best = min(((abs(z) / wide, x) for z, x in ends if abs(z) / wide <= EDGE_Z), default=None)
         if best is None:
-            best = min(((abs(z), x) for z, x in ends if input_fit_check(self.pb, np.array([x]), [z])[0]), default=None)
+            best = min(((abs(z), x) for z, x in ends if input_fit_check(self.pb, np.array([x]), [z],
+                                                                         extra_var=ev)[0]), default=None)
         return None if best is None else best[1]
 
     # -- the attainable range ---------------------------------------------
@@ -311,17 +324,17 @@ class ScalarScan:
         return msg + f" with {where}"
 
 
-def scalar_roots(pb: Problem, target: float | None = None) -> list[Root]:
+def scalar_roots(pb: Problem, target: float | None = None, extra_var=None) -> list[Root]:
     """Roots of one inertia unknown from one period (module docstring).
     Raises InputError naming the period's field, with the attainable range,
-    when there is none."""
+    when there is none.  ``extra_var``: as for :meth:`ScalarScan.edge_root`."""
     m = pb.measurements[0]
     target = m.period if target is None else float(target)
     scan = ScalarScan(pb)
     xs = scan.roots(target)
     if xs:
         return [Root(np.array([x])) for x in xs]
-    x = scan.edge_root(target, m.std)
+    x = scan.edge_root(target, m.std, extra_var)
     if x is not None:
         return [Root(np.array([x]), edge=True)]
     raise InputError(m.field, scan.range_message(target) + _triangle_hint(scan, target)
@@ -577,10 +590,13 @@ def _sampled_slip(pb: Problem, k: int) -> str:
     return slip_hint(T, [(float(col.min()), float(col.max()))])
 
 
-def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Root], dict]:
+def multi_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) -> tuple[list[Root], dict]:
     """Distinct admissible least-squares solutions that pass the fit check,
     from every start of :func:`start_design`; also the best failed fit
-    (dict with ``p``, ``z``, ``chi2``, ``test``) for the refusal message."""
+    (dict with ``p``, ``z``, ``chi2``, ``test``) for the refusal message.
+    ``extra_var``: a callable giving the (K,) variance (s^2) of the targets
+    from the stated amplitudes (:meth:`ScalarScan.edge_root`), counted in
+    the misfits' check with the inputs."""
     from .solve import gauss_newton
 
     targets = np.array([m.period for m in pb.measurements]) if targets is None else np.asarray(targets, float)
@@ -615,7 +631,7 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
     from .solve import EDGE_MARGIN, admissible_margin
 
     K = len(sig)
-    amp_var = None  # one set of simulations for every misfit
+    amp_var = ev = None  # one set of simulations for every misfit
     for q in misfits:
         if any(np.max(np.abs(q["p"] - f) / sc) < 1e-6 for f in found):
             continue
@@ -623,7 +639,9 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
         # inside fits exactly); it must still be within their uncertainty with the inputs'
         if (K > P or admissible_margin(pb, q["p"]) < EDGE_MARGIN) and np.all(np.isfinite(q["z"])):
             amp_var = unstated_amplitude_variance(pb, q["p"]) if amp_var is None else amp_var
-            ok, q["chi2"], _, q["test"] = input_fit_check(pb, q["p"], q["z"], amp_var=amp_var)
+            if ev is None and extra_var is not None:
+                ev = np.asarray(extra_var(), float)
+            ok, q["chi2"], _, q["test"] = input_fit_check(pb, q["p"], q["z"], amp_var=amp_var, extra_var=ev)
             if ok:
                 found.append(q["p"])
                 continue
@@ -637,18 +655,20 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None) -> tuple[list[Ro
     return [Root(q, edge=admissible_margin(pb, q) < EDGE_MARGIN) for q in found], best
 
 
-def find_roots(pb: Problem, targets: np.ndarray | None = None) -> list[Root]:
+def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) -> list[Root]:
     """Every admissible solution of the linear model for the measured
     periods (module docstring), ascending; raises InputError (no admissible
     tensor reproduces the periods: the message names the attainable range
     or the best fit) or ConvergenceError (the solver failed).  ``targets``:
     the periods (s) the linear model must reproduce (default: the measured
     ones; the measured ones divided by the amplitude factors for the
-    nonlinear method)."""
+    nonlinear method).  ``extra_var``: a callable giving the (K,) variance
+    (s^2) of the targets from the stated amplitudes' uncertainty, counted
+    where a misfit or an edge is checked (:meth:`ScalarScan.edge_root`)."""
     K, P = len(pb.measurements), len(pb.unknowns)
     if K == 1 and P == 1 and pb.unknowns[0] in _IDX:
-        return scalar_roots(pb, None if targets is None else float(targets[0]))
-    roots, best = multi_roots(pb, targets)
+        return scalar_roots(pb, None if targets is None else float(targets[0]), extra_var)
+    roots, best = multi_roots(pb, targets, extra_var)
     if roots:
         return roots
     if not best:

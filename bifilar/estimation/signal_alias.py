@@ -49,6 +49,31 @@ def _predicted(model) -> list[tuple[str, float]]:
     return out
 
 
+#: a recording's period this many times a predicted mode's, within MS_MATCH, reads its time column in ms
+MS_FACTOR, MS_MATCH = 1000.0, 0.1
+
+
+def _refuse_time_in_ms(m, T_obs: float, modes) -> None:
+    """Raise InputError when a recording's period (s) is implausibly long
+    (:func:`~bifilar.estimation.period_specs.implausible_period`) and a
+    thousandth of it lies within :data:`MS_MATCH` of a predicted mode's
+    period: its time column, named plain ``t`` or ``time``, holds ms
+    (a column named ``time [ms]`` or ``t_ms`` is converted).  Before, such
+    a record was refused as an alias at a sample rate of 0.06 Hz."""
+    from .period_specs import implausible_period
+
+    if implausible_period(T_obs, None, m.field) is None:
+        return
+    T_ms = T_obs / MS_FACTOR
+    lab, f = min(modes, key=lambda lf: abs(T_ms * lf[1] - 1.0))
+    if abs(T_ms * f - 1.0) <= MS_MATCH:
+        col = ((m.details or {}).get("signal") or {}).get("time_source") or "the time column"
+        raise InputError(m.field, f"the recording of '{m.label}' has a period of {T_obs:.6g} s, which no pendulum "
+                                  f"rig plausibly shows; read in ms ({col}) it is {T_ms:.6g} s, near mode '{lab}' "
+                                  f"({1 / f:.4g} s predicted): name the time column 'time [ms]' or 't_ms' (or "
+                                  "convert it to s)")
+
+
 def check_signal_aliases(pb) -> list[str]:
     """Check every recorded measurement of the problem ``pb``
     (:class:`~bifilar.estimation.problem.Problem`) against its hanging's
@@ -72,6 +97,7 @@ def check_signal_aliases(pb) -> list[str]:
             continue
         md = model.modes0.modes[pb.mode_index[k]]
         f_pred = 1.0 / md.period if md.period and math.isfinite(md.period) and md.period > 0 else 0.0
+        _refuse_time_in_ms(m, T_obs, modes)
         f_hi = max(f_pred, f_fit)
         if fs >= ALIAS_MARGIN * f_hi:
             continue  # the measured mode is well resolved; a faster mode's alias nearby is a coincidence

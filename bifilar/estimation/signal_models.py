@@ -429,24 +429,31 @@ def _fit_two_mode(t, y, t0, tm, visc: _Raw, drift):
     return _canonical(raw, t)
 
 
-def _mode_rank(omega: float, amplitude: float, T_rec: float) -> tuple:
+def _mode_rank(omega: float, amplitude: float, T_rec: float, sigma: float = 0.0) -> tuple:
     """Sort key of a fitted mode (``omega`` rad/s, ``amplitude`` [y] at
-    ``t0``, record ``T_rec`` s): modes with at least ``MIN_CYCLES`` cycles in
-    the record first, then by amplitude.  A slow swell fitted as a "mode"
-    (a baseline wandering through part of a cycle) can outweigh the
-    oscillation but cannot be its period."""
+    ``t0``, decay rate ``sigma`` 1/s, record ``T_rec`` s): modes with at
+    least ``MIN_CYCLES`` cycles in the record first, then by their RMS
+    amplitude over the record, ``amplitude sqrt((1 - e^{-2 sigma T_rec}) /
+    (2 sigma T_rec))``.  A slow swell fitted as a "mode" (a baseline
+    wandering through part of a cycle) can outweigh the oscillation but
+    cannot be its period; a transient at the record's start fitted as a
+    heavily damped "mode" (the hand that twisted the body before the
+    release: damping ratio ~0.6, gone within a cycle) can be larger at
+    ``t0`` than the oscillation but carries little of the record."""
     from .signal_checks import MIN_CYCLES  # signal_checks imports this module
 
-    return (abs(omega) * T_rec / (2 * math.pi) < MIN_CYCLES, -amplitude)
+    x = 2.0 * sigma * T_rec
+    share = 1.0 if abs(x) < 1e-12 else -math.expm1(-x) / x  # mean of e^{-2 sigma tau} over the record
+    return (abs(omega) * T_rec / (2 * math.pi) < MIN_CYCLES, -amplitude * math.sqrt(max(share, 0.0)))
 
 
 def _canonical(raw: _Raw, t) -> _Raw:
     """Modes of a multi-mode fit in canonical order (:func:`_mode_rank`):
-    by amplitude at ``t0`` among the modes with two or more cycles in the
+    by RMS amplitude over the record among the modes with two or more cycles in the
     record, the dominant (the reported period) first."""
     starts = list(range(2, raw.p.size, 4))
     order = sorted(starts, key=lambda i: _mode_rank(raw.p[i + 2], math.hypot(raw.p[i], raw.p[i + 1]),
-                                                   float(t[-1] - t[0])))
+                                                   float(t[-1] - t[0]), raw.p[i + 3]))
     if order != starts:
         perm = np.r_[0, 1, [i + k for i in order for k in range(4)]]
         raw.p = raw.p[perm]

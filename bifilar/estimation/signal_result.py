@@ -389,7 +389,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
     elif multi:
         modes = [mode(i, i + 1, i + 2, i + 3) for i in range(2, p.size, 4)]
         T_rec = float(t[-1] - t[0])
-        modes.sort(key=lambda d: _mode_rank(d["omega"], d["amplitude"], T_rec))
+        modes.sort(key=lambda d: _mode_rank(d["omega"], d["amplitude"], T_rec, d["sigma"]))
         m = modes[0]
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"], "zeta": m["damping_ratio"],
                    "zeta_std": m["damping_ratio_std"], "second_sigma": modes[1]["sigma"],
