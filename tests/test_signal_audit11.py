@@ -207,3 +207,42 @@ def test_a_time_column_in_ms_named_plain_time_is_refused_naming_the_unit(tmp_pat
     assert r.exit_code == 2 and r.stdout == "", r.output
     line = r.output.strip()
     assert "\n" not in line and "read in ms" in line and "'torsion'" in line and "t_ms" in line, line
+
+
+# --------------------------------------------------------------------------- a record in deg/s
+
+
+@pytest.mark.parametrize("quantity", ["rate", "angle"])
+def test_a_record_beyond_any_reachable_start_is_refused_naming_the_signal(tmp_path, quantity):
+    """The drone's torsion released at 5 degrees, recorded in degrees (or
+    deg/s) and read as rad (rad/s): the fitted amplitude, 5 deg * 0.81 (the
+    decay to the fitted period's reference) = 4.05 "rad", is beyond pi, which
+    no start of a rotation reaches.  The start check refused it naming
+    ``--amplitude``, an option the user never gave (auditsig11, found not
+    fixed); the refusal names ``--signal`` and ``--signal-scale``, in one
+    line, exit 2, nothing on stdout."""
+    from click.testing import CliRunner
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.cli import main
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    cfg = CONFIGS / "drone_parallel.yaml"
+    s = load_scene(cfg, warn=False)
+    T = linear_modes(s, rest_pose(s)).get("torsion").period
+    t = np.arange(0.0, 30 * T, 1 / 60.0)
+    w, sg = 2 * math.pi / T, (2 * math.pi / T) / 400.0  # Q = 200
+    env = 5.0 * np.exp(-sg * t)
+    y = env * np.cos(w * t) if quantity == "angle" else -w * env * np.sin(w * t)
+    rec = tmp_path / f"torsion_{quantity}_deg.csv"
+    np.savetxt(rec, np.c_[t, y], delimiter=",", header="t,value", comments="", fmt="%.10g")
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--signal-quantity", quantity,
+                                  "--json"])
+    assert r.exit_code == 2, r.output
+    lines = [ln for ln in r.output.splitlines() if ln.startswith("error:")]
+    assert len(lines) == 1 and lines[0].startswith("error: --signal:"), r.output
+    assert "--signal-scale" in lines[0] and "--amplitude" not in lines[0], r.output
+

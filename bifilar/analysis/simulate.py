@@ -193,6 +193,16 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
     return mx.pack(sp.com[0], sp.q[0])
 
 
+def reachable_amplitude(scene: Scene, mode: Mode) -> tuple[float, str]:
+    """(limit, unit): the largest amplitude any start of ``mode`` can have
+    in its dominant coordinate, pi rad for a rotation, twice the longest
+    wire (m) for a translation; a larger one is refused before any pose is
+    solved (:func:`checked_start_poses`)."""
+    if mode.dominant >= 3:
+        return float(np.pi), "rad"
+    return 2.0 * float(np.max(scene.lengths)), "m"
+
+
 def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitude: float,
                         more=None) -> StartPoses:
     """Start poses of one scene displaced along each of ``modes`` (solved
@@ -210,9 +220,8 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
         raise InputError("--amplitude", f"must be finite, got {amplitude}")
     beyond = None
     for j, mode in enumerate(modes):
-        limit = np.pi if mode.dominant >= 3 else 2.0 * float(np.max(scene.lengths))
+        limit, unit = reachable_amplitude(scene, mode)
         if abs(amplitude) > limit:
-            unit = "rad" if mode.dominant >= 3 else "m"
             beyond = InputError("--amplitude", f"{amplitude:g} {unit} is beyond any reachable start of the "
                                                f"{mode.label} mode (|amplitude| <= {limit:.4g} {unit})")
             modes = modes[:j]  # the modes before it are checked first, as one by one

@@ -341,6 +341,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         # the linear model must reproduce T / r: start from the amplitude
         # factors at the (physical) starting tensor; the fixed point below
         # re-simulates them at the estimate
+        refuse_unreachable_record_amplitudes(pb)  # a record in degrees or mm read as rad or m
         r0 = np.ones(K)
         for k, m in enumerate(pb.measurements):
             if m.amplitude:
@@ -585,6 +586,31 @@ def _half_amplitudes(fit) -> tuple[float, float] | None:
         return abs(fit.amplitude) * math.exp(-sg * tau) / (1.0 + kap * E)
 
     return env(0.25 * T_rec), env(0.75 * T_rec)
+
+
+def refuse_unreachable_record_amplitudes(pb: Problem) -> None:
+    """Raise InputError naming the recording where a recording's amplitude
+    (the fit's, with ``--signal-quantity``, or as stated) is beyond any
+    reachable start of its mode (:func:`~bifilar.analysis.simulate.reachable_amplitude`:
+    pi rad, twice the longest wire).  A rate record in deg/s, or an angle
+    record in degrees above ~3 degrees, read as rad(/s) gives such an
+    amplitude (the drone's torsion at 5 degrees: 4.05 "rad"); the start
+    check refused it as ``--amplitude`` although no amplitude was given,
+    so the one line named an option the user never typed and not the
+    likely unit slip."""
+    from ..analysis.simulate import reachable_amplitude
+
+    for k, m in enumerate(pb.measurements):
+        if m.source != "signal" or not m.amplitude:
+            continue
+        hm = pb.models[m.hanging]
+        limit, unit = reachable_amplitude(hm.scene0, hm.modes0.modes[pb.mode_index[k]])
+        if abs(m.amplitude) > limit:
+            src = "as stated" if (m.details.get("amplitude_source") or "").startswith("given") else "from its fit"
+            raise InputError(m.field, f"the recording of '{m.label}' gives an amplitude of {abs(m.amplitude):.4g} "
+                                      f"{unit} ({src}), beyond any reachable start of the mode (<= {limit:.4g} "
+                                      f"{unit}): is the signal in degrees, deg/s or mm? give --signal-scale "
+                                      "(e.g. 0.0174533 for degrees)")
 
 
 def refuse_amplitude_the_record_contradicts(pb: Problem, est) -> None:
