@@ -449,6 +449,45 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components
     return out
 
 
+def _periods_over_cycles(plan: HangingPlan) -> list:
+    """The period (s) of each of ``plan.measurements`` as ``invert`` models
+    a period stated with an amplitude: the mean period of a nonlinear run
+    over :data:`~bifilar.estimation.measurements.DEFAULT_CYCLES` cycles at
+    invert's default rtol 1e-10 (the planned ``period_at_amplitude`` is the
+    plan's 3-period run, ``settings.periods``, which for a mode that beats
+    at a large amplitude differs by up to a timing std: the audit's
+    trifilar at 0.2 wrote a torsion 0.98 ms off, and its own file, inverted
+    unchanged, gave Ixx 0.22 std from the truth).  One batched call; a
+    small-amplitude plan (``amplitude`` 0) or a failed run keeps the
+    planned period."""
+    from ..analysis.batch import simulate_batch
+    from ..estimation.measurements import DEFAULT_CYCLES
+
+    out = [float(m["period_at_amplitude"]) for m in plan.measurements]
+    by_name = {h.name: h for h in plan.hangings}
+    todo = []
+    for q, m in enumerate(plan.measurements):
+        h = by_name.get(m["hanging"])
+        if not m.get("amplitude") or h is None:
+            continue
+        labels = [md.label for md in h.sens.modes.modes]
+        if m["mode"] in labels:
+            todo.append((q, h, labels.index(m["mode"])))
+    if not todo:
+        return out
+    try:
+        runs = simulate_batch([h.scene for _, h, _ in todo], mode=[k + 1 for _, _, k in todo],
+                              amplitude=[float(plan.measurements[q]["amplitude"]) for q, _, _ in todo],
+                              periods=DEFAULT_CYCLES, rtol=1e-10, rests=[h.sens.rest for _, h, _ in todo],
+                              modes=[h.sens.modes for _, h, _ in todo])
+    except BifilarError:
+        return out
+    for (q, _, _), run in zip(todo, runs):
+        if run.period:
+            out[q] = float(run.period)
+    return out
+
+
 def measurements_document(plan: HangingPlan, reaction: float | None = None) -> dict:
     """The plan as a ``bifilar invert --measurements`` file (docs/invert.md):
     one hanging per entry with its inline config and rotation, one
@@ -462,12 +501,13 @@ def measurements_document(plan: HangingPlan, reaction: float | None = None) -> d
     leaves out."""
     from ..jsonable import to_jsonable
 
+    periods = _periods_over_cycles(plan)
     hangs = []
     for h in plan.hangings:
         # the plan's sigma assumes the amplitude is stated (its 10 % budgeted); the periods are the
-        # ones the body shows at it (invert then corrects for it)
-        ms = [{"mode": m["mode"], "period": f"{m['period_at_amplitude']:.9g} +- {m['period_sigma']:.3g}",
-               "amplitude": m["amplitude"]} for m in plan.measurements if m["hanging"] == h.name]
+        # ones the body shows at it over the cycles invert models (invert then corrects for it)
+        ms = [{"mode": m["mode"], "period": f"{periods[q]:.9g} +- {m['period_sigma']:.3g}",
+               "amplitude": m["amplitude"]} for q, m in enumerate(plan.measurements) if m["hanging"] == h.name]
         entry = {"name": h.name, "config": to_jsonable(h.config),
                  "rotation": "identity" if not any(h.rotvec_deg) else {"rotvec_deg": list(h.rotvec_deg)},
                  "measurements": ms}
