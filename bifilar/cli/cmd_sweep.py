@@ -182,10 +182,14 @@ def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, con
     if wm_p:
         sep = ([f"time these modes only: each is at least {100 * cons.min_separation:g} % (--min-separation) from "
                 "every other mode of its hanging"] if cons.min_separation else [])
-        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}", *sep,
-                                                     "the periods are the PLANNED ones (the config's inertia): "
-                                                     "replace them with the measured periods",
-                                                     f"then: bifilar invert --measurements {wm_p.name}"])
+        notes: list = []  # periods that could not be run over invert's cycles: said, and kept in the file
+        mdoc = measurements_document(hp, notes=notes)
+        for w in notes:
+            click.echo(f"warning: {w}", err=True)
+        warnings += notes
+        write_yaml(wm_p, mdoc, [f"measurements planned by {who} for {config}", *sep,
+                                "the periods are the PLANNED ones (the config's inertia): replace them with the "
+                                "measured periods", *notes, f"then: bifilar invert --measurements {wm_p.name}"])
         doc["measurements_written"] = str(wm_p)
     return warnings
 
