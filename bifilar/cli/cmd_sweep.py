@@ -122,17 +122,22 @@ def point_config(base_cfg: dict, source: str, point: dict) -> dict:
     return cfg
 
 
-def point_warnings(cfg: dict, source: str, point: dict, what: str) -> list[str]:
+def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None) -> list[str]:
     """The config plausibility warnings of a recommended or planned point
-    (:func:`bifilar.studies.sweep.point_warnings`) and its components'
+    (:func:`bifilar.studies.sweep.point_warnings`), its components'
     ``physical_limit`` (an estimate often outside what a real body can
-    have), each logged to stderr now (``warning: WHAT: ...``) and returned
-    for the JSON document."""
+    have) and, under the constraints ``cons``, its dependent wires' range
+    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`),
+    each logged to stderr now (``warning: WHAT: ...``) and returned for the
+    JSON document."""
+    from ..studies.ranking import tension_range_caution
     from ..studies.sweep import point_warnings as check
 
     out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
     out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
             if e.get("physical_limit")]
+    if cons is not None and (w := tension_range_caution(point, cons)) is not None:
+        out.append(f"{what}: {w}")
     for w in out:
         click.echo(f"warning: {w}", err=True)
     return out
@@ -363,7 +368,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         mh_warnings = multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                                     hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
                                     best if deferred else None)
-        warnings += point_warnings(cfg, config, best, "the recommended point") + mh_warnings
+        warnings += point_warnings(cfg, config, best, "the recommended point", cons) + mh_warnings
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:
