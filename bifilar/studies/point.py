@@ -485,6 +485,23 @@ def evaluate_points(base_cfg: dict, source: str, grid: list[dict], settings: Swe
     return out
 
 
+def _slack_cause(err: SlackWireError, scene, cfg: dict, st: SweepSettings, params: dict) -> SlackWireError:
+    """A point's slack-wire refusal ``err`` with the words ``invert`` gives
+    when the slack lies within what the measured inputs' uncertainties give
+    it (:func:`~bifilar.estimation.slack_cause.within_uncertainty`, with the
+    point's uncertainties: the config's block, ``--sigma`` and
+    ``uncertainty.KEY`` parameters), where the point's config (``cfg``)
+    states a geometry uncertainty; ``err`` itself otherwise (a rig as
+    designed: its slack is its own).  Only invalid points pay for it (one
+    rest pose per measured input, ~30 for four wires)."""
+    from ..estimation.slack_cause import states_geometry, within_uncertainty
+
+    if not states_geometry(cfg.get("uncertainty")):
+        return err
+    return within_uncertainty(err, scene, point_uncertainty(st, params),
+                              "the point's uncertainties: the config's block and any --sigma")
+
+
 def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False):
     """(the point's figures up to its nonlinear runs, :class:`_Prepared`); raises for a bad point."""
     from ..analysis.equilibrium import rest_pose
@@ -496,7 +513,10 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     if not amplitude > 0:
         raise InputError("amplitude", f"must be positive, got {amplitude:g}")
     scene = scene_from_dict(cfg, source, warn=False)  # the base config's warnings were shown once
-    rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
+    try:
+        rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
+    except SlackWireError as e:
+        raise _slack_cause(e, scene, cfg, st, params) from None
     unc = point_uncertainty(st, params)
     names = list(st.components) + measured_inputs(scene)
     if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known), as invert's budget
