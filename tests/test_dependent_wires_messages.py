@@ -291,3 +291,48 @@ def test_tensions_warns_as_simulate_does(tmp_path):
         res = run("tensions", path, "--periods", "0.05", "--amplitude", "1e-5", "--json")
         assert res.exit_code == 0
         assert ("mode 'torsion' would stretch them at second order" in res.stderr) is warned
+
+
+# -- the same words beyond invert (session 12, splitfix) ---------------------------------------------------
+
+SHIFTED_STATED = SHIFTED.replace("LAST", "1.1628") + "uncertainty: {length: 0.001, position: 0.001, com: 0.002}\n"
+
+
+@pytest.mark.parametrize("command", [["simulate"], ["tensions"], ["modes"]])
+def test_commands_without_an_inversion_say_when_the_configs_slack_is_within_its_stated_uncertainty(tmp_path,
+                                                                                                 command):
+    # simulate, tensions and modes refused the config that does not hang with the shortening advice only,
+    # as invert did before session 10; its uncertainty block states the measured inputs' stds (those
+    # invert's test above takes as defaults: slack 1.13 mm against a std of 3.4 mm), so they now say what
+    # invert says, naming the block as the source
+    p = tmp_path / "lean.yaml"
+    p.write_text(SHIFTED_STATED)
+    line = one_error_line(run(*command, p), "rig.lengths")
+    assert "wire 4 is slack at rest by" in line and "shorten it by" in line
+    assert "within 3 standard uncertainties" in line
+    assert "the lengths' 1 mm, the points' 1 mm and the CoM's 2 mm: the config's uncertainty block" in line
+
+
+@pytest.mark.parametrize("block", ["", "uncertainty: {length: 1.0e-5, position: 1.0e-5, com: 1.0e-5}\n",
+                                   "uncertainty: {timing: 0.001}\n"])
+def test_no_such_words_without_a_stated_geometry_uncertainty_that_covers_the_slack(tmp_path, block):
+    # no block (a rig as designed: its slack is its own), one stating the geometry finely (1.13 mm is then
+    # far beyond 3 sigma), one stating only the timing (no claim on the geometry): the refusal as before
+    p = tmp_path / "lean.yaml"
+    p.write_text(SHIFTED.replace("LAST", "1.1628") + block)
+    line = one_error_line(run("simulate", p), "rig.lengths")
+    assert "wire 4 is slack at rest by" in line and "within" not in line
+
+
+@pytest.mark.parametrize("block, within", [(True, True), (False, False)])
+def test_sweep_refusal_of_a_config_that_cannot_hang_says_the_same(tmp_path, block, within):
+    # every point of the sweep hangs wire 4 slack (the mass moves no wire): the refusal quotes a point's
+    # reason, which now says what invert says when the config states its geometry's uncertainty (with the
+    # point's uncertainties: the block and any --sigma); plan quotes the same reason (binding_constraint)
+    p = tmp_path / "lean.yaml"
+    p.write_text(SHIFTED_STATED if block else SHIFTED.replace("LAST", "1.1628"))
+    line = one_error_line(run("sweep", p, "--param", "body.mass=10", "--component", "Izz"), "--param")
+    assert "no point of the sweep is valid" in line and "wire 4 is slack at rest by" in line
+    assert ("within 3 standard uncertainties" in line) is within
+    if within:
+        assert "the CoM's 2 mm: the point's uncertainties: the config's block and any --sigma" in line

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, console, emit_json, esc, fmt, handle_errors, write_csv
+from .common import check_output_path, config_rest_pose, console, emit_json, esc, fmt, handle_errors, write_csv
 
 
 def modes_document(scene, rest, ms) -> dict:
@@ -50,13 +50,12 @@ def body_document(scene) -> dict:
 @handle_errors
 def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     """Rest pose and every linear mode (period, shape, label) of CONFIG."""
-    from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import COMPONENTS, linear_modes
     from ..config import load_scene
 
     out_p = check_output_path(out, force, [config], "--out")
     scene = load_scene(config)
-    rest = rest_pose(scene)
+    rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
     from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 

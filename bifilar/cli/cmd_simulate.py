@@ -6,7 +6,7 @@ import math
 
 import click
 
-from .common import check_output_path, console, emit_json, esc, fmt, handle_errors, progress_bar
+from .common import check_output_path, config_rest_pose, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 
 @click.command("simulate")
@@ -47,7 +47,6 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     chk.done()
     out_p = check_output_path(out, force, [config], "--out")
     plot_p = check_output_path(plot, force, [config, out], "--plot")
-    from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..analysis.simulate import simulate as run
     from ..config import read_yaml, scene_from_dict
@@ -56,7 +55,7 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     cfg = read_yaml(config)
     scene = scene_from_dict(cfg, source=str(config))
     timing = stated_timing(cfg)  # the period's numerical error is held against a tenth of it
-    rest = rest_pose(scene)
+    rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
     from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 

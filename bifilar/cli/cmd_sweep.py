@@ -122,17 +122,22 @@ def point_config(base_cfg: dict, source: str, point: dict) -> dict:
     return cfg
 
 
-def point_warnings(cfg: dict, source: str, point: dict, what: str) -> list[str]:
+def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None) -> list[str]:
     """The config plausibility warnings of a recommended or planned point
-    (:func:`bifilar.studies.sweep.point_warnings`) and its components'
+    (:func:`bifilar.studies.sweep.point_warnings`), its components'
     ``physical_limit`` (an estimate often outside what a real body can
-    have), each logged to stderr now (``warning: WHAT: ...``) and returned
-    for the JSON document."""
+    have) and, under the constraints ``cons``, its dependent wires' range
+    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`),
+    each logged to stderr now (``warning: WHAT: ...``) and returned for the
+    JSON document."""
+    from ..studies.ranking import tension_range_caution
     from ..studies.sweep import point_warnings as check
 
     out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
     out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
             if e.get("physical_limit")]
+    if cons is not None and (w := tension_range_caution(point, cons)) is not None:
+        out.append(f"{what}: {w}")
     for w in out:
         click.echo(f"warning: {w}", err=True)
     return out
@@ -182,10 +187,14 @@ def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, con
     if wm_p:
         sep = ([f"time these modes only: each is at least {100 * cons.min_separation:g} % (--min-separation) from "
                 "every other mode of its hanging"] if cons.min_separation else [])
-        write_yaml(wm_p, measurements_document(hp), [f"measurements planned by {who} for {config}", *sep,
-                                                     "the periods are the PLANNED ones (the config's inertia): "
-                                                     "replace them with the measured periods",
-                                                     f"then: bifilar invert --measurements {wm_p.name}"])
+        notes: list = []  # periods that could not be run over invert's cycles: said, and kept in the file
+        mdoc = measurements_document(hp, notes=notes)
+        for w in notes:
+            click.echo(f"warning: {w}", err=True)
+        warnings += notes
+        write_yaml(wm_p, mdoc, [f"measurements planned by {who} for {config}", *sep,
+                                "the periods are the PLANNED ones (the config's inertia): replace them with the "
+                                "measured periods", *notes, f"then: bifilar invert --measurements {wm_p.name}"])
         doc["measurements_written"] = str(wm_p)
     return warnings
 
@@ -359,7 +368,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         mh_warnings = multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                                     hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
                                     best if deferred else None)
-        warnings += point_warnings(cfg, config, best, "the recommended point") + mh_warnings
+        warnings += point_warnings(cfg, config, best, "the recommended point", cons) + mh_warnings
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:

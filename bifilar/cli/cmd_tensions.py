@@ -7,7 +7,8 @@ import math
 
 import click
 
-from .common import check_output_path, console, emit_json, esc, handle_errors, progress_bar, write_csv
+from .common import (check_output_path, config_rest_pose, console, emit_json, esc, handle_errors, progress_bar,
+                     write_csv)
 
 
 @click.command("tensions")
@@ -31,7 +32,6 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     method), and the inertia estimated from those tensions."""
     import numpy as np
 
-    from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import linear_modes
     from ..analysis.simulate import simulate
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
@@ -51,7 +51,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     scene = load_scene(config)
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
     if motion is None:
-        rest = rest_pose(scene)
+        rest = config_rest_pose(scene, config)
         from ..analysis.equilibrium import indeterminate_warning, stretching_warning
 
         if (w := indeterminate_warning(scene, rest)) is not None:  # the model's tensions are one split of many

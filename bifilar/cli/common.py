@@ -289,6 +289,23 @@ class OptionChecker:
             raise ConfigErrors(self.errors)
 
 
+def config_rest_pose(scene, config):
+    """The rest pose of ``scene`` (the config at path ``config``), for the
+    commands without an inversion (``simulate``, ``tensions``, ``modes``):
+    a slack wire's refusal says, as ``invert``'s does, when the config's
+    ``uncertainty:`` block puts the slack within what its measured inputs
+    give it (:func:`bifilar.estimation.slack_cause.explain_config_slack`)."""
+    from ..analysis.equilibrium import rest_pose
+    from ..errors import SlackWireError
+
+    try:
+        return rest_pose(scene)
+    except SlackWireError as e:
+        from ..estimation.slack_cause import explain_config_slack
+
+        raise explain_config_slack(e, scene, config) from None
+
+
 def emit_json(doc: Any) -> None:
     """Print exactly one JSON document on stdout (NaN/inf become null)."""
     from ..jsonable import to_jsonable

@@ -132,3 +132,35 @@ def explain_slack(err: SlackWireError, scenes, unc: dict, where: str) -> SlackWi
             _NO_ADVICE.reset(token)
     return err
 
+
+#: the geometry's keys of an ``uncertainty:`` block (the slack depends on no other input)
+GEOMETRY_KEYS = ("length", "position", "com")
+
+
+def states_geometry(block) -> bool:
+    """Whether an ``uncertainty:`` block (a mapping, else False) states a
+    geometry uncertainty (:data:`GEOMETRY_KEYS`): a config that does claims
+    measured inputs, whose errors can decide a slack wire."""
+    return isinstance(block, dict) and any(k in block for k in GEOMETRY_KEYS)
+
+
+def explain_config_slack(err: SlackWireError, scene: Scene, path) -> SlackWireError:
+    """:func:`within_uncertainty` for the config at ``path`` (its scene
+    ``scene``) that a command without an inversion (``simulate``,
+    ``tensions``, ``modes``) refuses for a slack wire at rest, from the
+    config's own ``uncertainty:`` block where it states the geometry's
+    (:data:`GEOMETRY_KEYS`; the others at their defaults, as ``invert``
+    takes them): the same words as ``invert``'s refusal.  ``err`` itself
+    where the block states none of them (the config then claims no
+    measurement: a rig as designed, whose slack is its own) or does not
+    parse (its checks belong to the commands that budget it)."""
+    from .measurements import config_uncertainty
+    from .uncertainty import default_uncertainty
+
+    try:
+        stated = config_uncertainty(path)
+    except BifilarError:
+        return err
+    if not states_geometry(stated):
+        return err
+    return within_uncertainty(err, scene, default_uncertainty(stated), "the config's uncertainty block")

@@ -449,7 +449,7 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components
     return out
 
 
-def _periods_over_cycles(plan: HangingPlan) -> list:
+def _periods_over_cycles(plan: HangingPlan, notes: list | None = None) -> list:
     """The period (s) of each of ``plan.measurements`` as ``invert`` models
     a period stated with an amplitude: the mean period of a nonlinear run
     over :data:`~bifilar.estimation.measurements.DEFAULT_CYCLES` cycles at
@@ -457,9 +457,11 @@ def _periods_over_cycles(plan: HangingPlan) -> list:
     plan's 3-period run, ``settings.periods``, which for a mode that beats
     at a large amplitude differs by up to a timing std: the audit's
     trifilar at 0.2 wrote a torsion 0.98 ms off, and its own file, inverted
-    unchanged, gave Ixx 0.22 std from the truth).  One batched call; a
-    small-amplitude plan (``amplitude`` 0) or a failed run keeps the
-    planned period."""
+    unchanged, gave Ixx 0.22 std from the truth).  One batched call, each
+    scene's failure its own (``errors="return"``); a small-amplitude plan
+    (``amplitude`` 0) keeps the planned period.  A failed run keeps the
+    planned period too, and says so: one line per measurement appended to
+    ``notes`` (:func:`_fallback_note`), naming the hanging, the mode and why."""
     from ..analysis.batch import simulate_batch
     from ..estimation.measurements import DEFAULT_CYCLES
 
@@ -479,16 +481,30 @@ def _periods_over_cycles(plan: HangingPlan) -> list:
         runs = simulate_batch([h.scene for _, h, _ in todo], mode=[k + 1 for _, _, k in todo],
                               amplitude=[float(plan.measurements[q]["amplitude"]) for q, _, _ in todo],
                               periods=DEFAULT_CYCLES, rtol=1e-10, rests=[h.sens.rest for _, h, _ in todo],
-                              modes=[h.sens.modes for _, h, _ in todo])
-    except BifilarError:
-        return out
-    for (q, _, _), run in zip(todo, runs):
-        if run.period:
+                              modes=[h.sens.modes for _, h, _ in todo], errors="return")
+        whys = [None if run.period else (run.error or "fewer than two upward crossings") for run in runs]
+    except BifilarError as exc:  # the batch as a whole (an integration that failed): every row keeps its own
+        runs, whys = [None] * len(todo), [str(exc)] * len(todo)
+    for (q, _, _), run, why in zip(todo, runs, whys):
+        if why is None:
             out[q] = float(run.period)
+        elif notes is not None:
+            notes.append(_fallback_note(plan.measurements[q], DEFAULT_CYCLES, why))
     return out
 
 
-def measurements_document(plan: HangingPlan, reaction: float | None = None) -> dict:
+def _fallback_note(m: dict, cycles: float, why: str) -> str:
+    """The warning of measurement ``m`` (a dict of ``plan.measurements``)
+    whose run over ``cycles`` cycles failed for the reason ``why``: the
+    measurements file's period for it is the plan's own shorter run's."""
+    why = " ".join(str(why).split())  # one line (a file comment too)
+    return (f"--write-measurements: hanging '{m['hanging']}', mode '{m['mode']}' at amplitude {m['amplitude']:g}: the "
+            f"run over {cycles:g} cycles that invert models for a stated amplitude failed ({why}), so the file's "
+            "period for it is the plan's own shorter run's (--periods), which where the mode beats can differ from "
+            "invert's model by up to a timing std; invert may refuse it for the same reason")
+
+
+def measurements_document(plan: HangingPlan, reaction: float | None = None, notes: list | None = None) -> dict:
     """The plan as a ``bifilar invert --measurements`` file (docs/invert.md):
     one hanging per entry with its inline config and rotation, one
     measurement per timed mode.  The periods are the *planned* ones (the
@@ -498,10 +514,11 @@ def measurements_document(plan: HangingPlan, reaction: float | None = None) -> d
     with the measured values (or ``cycles``/``times``) and the amplitude
     with the one released after the experiment; without an amplitude,
     invert budgets an assumed 0-10 degree release range, which the plan
-    leaves out."""
+    leaves out.  ``notes``: a list the warnings of periods that could not
+    be run over invert's cycles are appended to (:func:`_periods_over_cycles`)."""
     from ..jsonable import to_jsonable
 
-    periods = _periods_over_cycles(plan)
+    periods = _periods_over_cycles(plan, notes)
     hangs = []
     for h in plan.hangings:
         # the plan's sigma assumes the amplitude is stated (its 10 % budgeted); the periods are the

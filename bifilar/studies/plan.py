@@ -68,7 +68,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import identifiability, measurable_components, point_separation, rank_order, rel_sigma
+from .ranking import (identifiability, measurable_components, point_separation, rank_order, rel_sigma,
+                      tension_range_caution)
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -126,6 +127,7 @@ class PlanResult:
             "optimum": {"params": b["params"], "objective": b["objective"], "accuracy": self.accuracy(),
                         "tension": b["tension"], "depth": b["depth"], "periods": b["periods"],
                         "rig": b.get("rig"), "separation": point_separation(b),
+                        "tension_range_caution": tension_range_caution(b, self.constraints),
                         "active_constraints": self.active, "hangings_objective": self.hangings_objective},
             "target": self.target or "worst relative of " + ", ".join(self.among),
             "identifiability": self.identifiability(),

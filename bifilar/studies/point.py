@@ -485,6 +485,23 @@ def evaluate_points(base_cfg: dict, source: str, grid: list[dict], settings: Swe
     return out
 
 
+def _slack_cause(err: SlackWireError, scene, cfg: dict, st: SweepSettings, params: dict) -> SlackWireError:
+    """A point's slack-wire refusal ``err`` with the words ``invert`` gives
+    when the slack lies within what the measured inputs' uncertainties give
+    it (:func:`~bifilar.estimation.slack_cause.within_uncertainty`, with the
+    point's uncertainties: the config's block, ``--sigma`` and
+    ``uncertainty.KEY`` parameters), where the point's config (``cfg``)
+    states a geometry uncertainty; ``err`` itself otherwise (a rig as
+    designed: its slack is its own).  Only invalid points pay for it (one
+    rest pose per measured input, ~30 for four wires)."""
+    from ..estimation.slack_cause import states_geometry, within_uncertainty
+
+    if not states_geometry(cfg.get("uncertainty")):
+        return err
+    return within_uncertainty(err, scene, point_uncertainty(st, params),
+                              "the point's uncertainties: the config's block and any --sigma")
+
+
 def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, screen: bool = False):
     """(the point's figures up to its nonlinear runs, :class:`_Prepared`); raises for a bad point."""
     from ..analysis.equilibrium import rest_pose
@@ -496,7 +513,10 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     if not amplitude > 0:
         raise InputError("amplitude", f"must be positive, got {amplitude:g}")
     scene = scene_from_dict(cfg, source, warn=False)  # the base config's warnings were shown once
-    rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
+    try:
+        rest0 = rest_pose(scene)  # invalid points (slack, unstable) fail here with their reason
+    except SlackWireError as e:
+        raise _slack_cause(e, scene, cfg, st, params) from None
     unc = point_uncertainty(st, params)
     names = list(st.components) + measured_inputs(scene)
     if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known), as invert's budget
@@ -656,6 +676,41 @@ def _stretching(res: dict, scene, rest, modes) -> None:
         res["warnings"].append(stretching_text(scene, hits))
 
 
+def statics_range(scene, rest, tmax) -> dict:
+    """What statics leaves open of a point's wire tensions (N) where its
+    wires are dependent at rest (4 or 5 wires, :func:`~bifilar.analysis.equilibrium.tensions_determined`
+    false), whose reported tensions are only the model's split:
+    ``range`` (n, 2) the least and greatest tension each wire can carry at
+    rest (:func:`~bifilar.analysis.equilibrium.tension_range`), and
+    ``range_peak`` the greatest a wire can reach in the runs, at wire
+    ``range_peak_wire`` (1-based): each wire's top at rest times the
+    ratio of its peak in the runs (``tmax``, the model's split) to its rest
+    tension, at least 1 (the body hangs at rest before release).  The
+    scaling holds where the runs' load on the wires is the weight's times a
+    load factor (the vertical and centripetal accelerations): on a table of
+    four equal vertical wires in torsion and both swings at 0.2-0.3 rad
+    (CoM centred; and 0.1 m off-centre, its swings: its torsion stretches
+    the wires) it lies 0-6e-4 above the greatest tension a linear programme
+    over the splits of every sample of the run gives, where the rest top
+    plus the model's increment lies 2-5 % below it
+    (tests/test_tension_range_limit.py).  A
+    wire whose rest tension in the split is below 1e-6 of the weight takes
+    the largest ratio of the others.  All None for determined tensions."""
+    from ..analysis.equilibrium import tension_range, tensions_determined
+
+    if tensions_determined(scene, rest):
+        return {"range": None, "range_peak": None, "range_peak_wire": None}
+    rng = tension_range(scene, rest)
+    T0 = np.asarray(rest.tensions, float)
+    big = T0 > 1e-6 * scene.mass * scene.gravity
+    ratio = np.ones(len(T0))
+    ratio[big] = np.asarray(tmax, float)[big] / T0[big]
+    ratio[~big] = np.max(ratio[big], initial=1.0)
+    top = rng[:, 1] * np.maximum(ratio, 1.0)
+    i = int(np.argmax(top))
+    return {"range": rng, "range_peak": float(top[i]), "range_peak_wire": i + 1}
+
+
 def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bool) -> dict:
     """The point's figures from its nonlinear runs ``sims`` {mode index: run} on."""
     scene, rest, ms, labels, periods, sens, chosen = (pre.scene, pre.rest, pre.ms, pre.labels, pre.periods,
@@ -666,7 +721,8 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
         slack = sorted({w for s in sims.values() for w, _ in s.slack})
         res["tension"] = {"rest": rest.tensions, "max": tmax, "min": tmin, "peak": float(np.max(tmax)),
                           "slack": bool(slack), "slack_wires": slack, "by_mode": {
-                              labels[k]: {"max": s.tension_max, "min": s.tension_min} for k, s in sims.items()}}
+                              labels[k]: {"max": s.tension_max, "min": s.tension_min} for k, s in sims.items()},
+                          **statics_range(scene, rest, tmax)}
         depth_max = max([rest.depth] + [s.depth_max for s in sims.values()])
         res["depth"] = {"rest": rest.depth, "max": depth_max}
         res["runs"] = {labels[k]: run_health(s) for k, s in sims.items()}
@@ -674,7 +730,7 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
             res["warnings"] += [f"{s.mode}: {w}" for w in s.warnings]
     else:
         res["tension"] = {"rest": rest.tensions, "max": None, "min": None, "peak": None, "slack": None,
-                          "slack_wires": [], "by_mode": {}}
+                          "slack_wires": [], "by_mode": {}, "range": None, "range_peak": None, "range_peak_wire": None}
         res["depth"] = {"rest": rest.depth, "max": None}
         res["runs"] = {}
     _stated_amplitude(res, pre, sims, st, screen)

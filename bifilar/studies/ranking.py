@@ -150,6 +150,26 @@ def violations(point: dict, c: Constraints, target: str | None = None) -> list[t
     return out
 
 
+def tension_range_caution(point: dict, c: Constraints) -> str | None:
+    """The caution of a point that meets ``--max-tension`` on the model's
+    split of dependent wires (4 or 5 wires at rest whose tensions statics
+    cannot fix) while statics lets a wire of a real rig reach more
+    (``tension.range_peak``, :func:`~bifilar.studies.point.statics_range`):
+    the point stays feasible (the model's split is one admissible split,
+    the symmetric one on a symmetric rig), and the line says what a wire
+    may carry; None where the limit is not set, the point breaks it
+    anyway, or every split stays within it."""
+    t = point.get("tension") or {}
+    top, peak = t.get("range_peak"), t.get("peak")
+    if c.max_tension is None or top is None or peak is None or peak > c.max_tension or top <= c.max_tension:
+        return None
+    lo, hi = t["range"][t["range_peak_wire"] - 1]
+    return (f"--max-tension {c.max_tension:g} N holds for the model's split of the dependent wires (peak "
+            f"{peak:.4g} N), but statics does not fix that split: wire {t['range_peak_wire']} may carry "
+            f"{lo:.4g} .. {hi:.4g} N at rest and up to {top:.4g} N in the runs, above the limit; the real split "
+            "is set by the wires' stretch and their lengths' tolerances: measure the tensions or match the wires")
+
+
 CONSTRAINT_FLAGS = {"max_tension": "--max-tension", "max_depth": "--max-depth",
                     "lengths_available": "--lengths-available", "min_separation": "--min-separation",
                     "slack": "--amplitude", "valid": "--param"}
@@ -302,6 +322,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
+        p["tension_range_caution"] = tension_range_caution(p, constraints)
     ok = [i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None]
     key = lambda p: p["objective"]  # noqa: E731
     if hangings is not None:
@@ -372,7 +393,9 @@ def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str
                      + (f", >= {100 * c.min_separation:g} % required" if c.min_separation is not None else ""))
     t = p["tension"]
     if t.get("peak") is not None:
-        lines.append(f"peak wire tension {t['peak']:.4g} N" + (f" (<= {c.max_tension:g} N)" if c.max_tension else ""))
+        lines.append(f"peak wire tension {t['peak']:.4g} N" + (f" (<= {c.max_tension:g} N)" if c.max_tension else "")
+                     + (f"; the model's split of dependent wires: statics lets a wire reach {t['range_peak']:.4g} N"
+                        if t.get("range_peak") is not None and t["range_peak"] > t["peak"] else ""))
     if p["depth"].get("max") is not None:
         lines.append(f"needs {p['depth']['max']:.4g} m below the ceiling" + (f" (<= {c.max_depth:g} m)" if c.max_depth else ""))
     return lines
