@@ -37,7 +37,9 @@ class Scene:
         ``support(d) -> h``: for unit direction(s) ``d`` (k, 3) in body axes,
         the largest ``x . d`` over all points ``x`` of the body (body frame,
         m).  Used for the clearance (lowest point of the body).  ``None``
-        means only the attachment points are known.
+        means only the attachment points and the CoM are known (the CoM
+        lies in the convex hull of the body's mass, so the body reaches at
+        least as far as it in every direction).
     support_source : str
         Where ``support`` comes from: ``parts``, ``bounding_box`` or ``attachments``.
     config : dict
@@ -74,10 +76,13 @@ class Scene:
     def body_support(self, directions: np.ndarray) -> np.ndarray:
         """Support function of the body in body axes, m (see class docstring).
 
-        Falls back to the attachment points when no shape is known.
+        At least the attachment points and the CoM (the body frame's origin,
+        inside the convex hull of the body's mass: a body whose CoM hangs
+        below its attachments reaches at least that low); those alone when
+        no shape is known.
         """
         d = np.atleast_2d(np.asarray(directions, dtype=float))
-        h_att = np.max(d @ self.attachments.T, axis=-1)
+        h_att = np.maximum(np.max(d @ self.attachments.T, axis=-1), 0.0)
         if self.support is None:
             return h_att
         return np.maximum(np.asarray(self.support(d), dtype=float), h_att)

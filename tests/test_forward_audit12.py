@@ -1,0 +1,98 @@
+"""Forward-model and CLI audit, session 12 (docs/design.md, "Forward-model and
+CLI audit, session 12"): modes, simulate and tensions on scenes none of the
+shipped configs resembles, each against a formulation of its own, and the
+command line on broken inputs."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from bifilar.analysis.equilibrium import rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.analysis.simulate import simulate
+from bifilar.cli import main
+from bifilar.config import scene_from_dict
+from bifilar.models.reduced import TorsionParams, torsion_period
+from conftest import one_error_line
+
+G = 9.81
+
+
+def bifilar(mass, principal, anchor_half, att_half, att_z, length, anchor_z=0.0):
+    """Two wires in the x-z plane: anchors at (+-anchor_half, 0, anchor_z),
+    attachments at (+-att_half, 0, att_z) in body axes (CoM origin)."""
+    return scene_from_dict({
+        "gravity": G,
+        "body": {"mass": mass, "inertia": {"principal": list(principal)}},
+        "rig": {"anchors": [[-anchor_half, 0, anchor_z], [anchor_half, 0, anchor_z]],
+                "attachments": [[-att_half, 0, att_z], [att_half, 0, att_z]],
+                "lengths": [length, length]},
+    }, warn=False)
+
+
+def trifilar(mass, principal, r, length, att_z=0.0, anchor_z=0.0):
+    ang = np.deg2rad([0.0, 120.0, 240.0])
+    pts = np.c_[r * np.cos(ang), r * np.sin(ang), np.zeros(3)]
+    return scene_from_dict({
+        "gravity": G,
+        "body": {"mass": mass, "inertia": {"principal": list(principal)}},
+        "rig": {"anchors": (pts + [0, 0, anchor_z]).tolist(), "attachments": (pts + [0, 0, att_z]).tolist(),
+                "lengths": [length] * 3},
+    }, warn=False)
+
+
+def modes_of(scene):
+    rest = rest_pose(scene)
+    return rest, linear_modes(scene, rest)
+
+
+# ---------------------------------------------------------------------------
+# clearance: the CoM is part of the body
+# ---------------------------------------------------------------------------
+
+def test_clearance_without_a_shape_reaches_the_centre_of_mass():
+    """A body given by mass and inertia only, its CoM 1.5 m below its two
+    attachments: the lowest point was the attachments' (z = 0, depth 1 m)
+    while the CoM, which lies inside the convex hull of the body's mass,
+    hangs at z = -1.5; `sweep --max-depth` held that 1 m against its limit.
+    The lowest point is now at most the CoM's height, at rest and over a
+    run (both engines)."""
+    sc = bifilar(2.0, [0.5, 0.52, 0.05], 0.2, 0.2, 1.5, 1.0, anchor_z=1.0)
+    rest = rest_pose(sc)
+    assert rest.com[2] == pytest.approx(-1.5, abs=1e-12)
+    assert rest.lowest_z <= rest.com[2] + 1e-12
+    assert rest.depth >= sc.ceiling_z - rest.com[2] - 1e-12
+    for method in ("auto", "DOP853"):
+        r = simulate(sc, "swing-y", 0.05, 2, method=method)
+        assert r.lowest_z_min <= float(np.min(r.y[:, 2])) + 1e-12, method
+
+
+def test_clearance_of_a_heavy_body_below_its_attachment_plane_in_the_json():
+    """300 kg on three vertical 2.5 m wires, attachments 0.1 m above the CoM:
+    `modes --json` put the lowest point at the attachments (0.5 m) above the
+    CoM (0.4 m)."""
+    res = CliRunner().invoke(main, ["modes", _write_heavy(), "--json"])
+    assert res.exit_code == 0, res.stderr
+    eq = json.loads(res.stdout)["equilibrium"]
+    assert eq["lowest_point_z"] <= eq["com"][2] + 1e-12
+    assert eq["depth_below_ceiling"] == pytest.approx(3.0 - eq["com"][2], abs=1e-12)
+
+
+def _write_heavy(tmp=[]):
+    import tempfile
+
+    if not tmp:
+        f = tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False)
+        ang = np.deg2rad([0.0, 120.0, 240.0])
+        pts = np.c_[0.6 * np.cos(ang), 0.6 * np.sin(ang), np.zeros(3)]
+        f.write(json.dumps({"body": {"mass": 300.0, "inertia": {"principal": [40.0, 40.0, 75.0]}},
+                            "rig": {"anchors": (pts + [0, 0, 3.0]).tolist(),
+                                    "attachments": (pts + [0, 0, 0.1]).tolist(), "lengths": [2.5] * 3}}))
+        f.close()
+        tmp.append(f.name)
+    return tmp[0]
