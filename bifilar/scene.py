@@ -121,12 +121,23 @@ def lowest_point_z(scene: Scene, com: np.ndarray, R: np.ndarray) -> np.ndarray:
     com : (..., 3) CoM position(s), world frame, m.
     R : (..., 3, 3) rotation(s) body -> world.
     """
+    return _reach_z(scene, com, R, -1.0)
+
+
+def highest_point_z(scene: Scene, com: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """World z of the highest point of the body, m (arguments as
+    :func:`lowest_point_z`)."""
+    return _reach_z(scene, com, R, 1.0)
+
+
+def _reach_z(scene: Scene, com, R, sign: float) -> np.ndarray:
+    """World z of the body's farthest point along ``sign`` x world z, m."""
     com = np.asarray(com, float)
     R = np.asarray(R, float)
-    down_body = -R[..., 2, :]  # world -z expressed in body axes (rows of R^T)
-    flat = down_body.reshape(-1, 3)
-    h = scene.body_support(flat).reshape(down_body.shape[:-1])
-    return com[..., 2] - h
+    along = sign * R[..., 2, :]  # world (sign) z expressed in body axes (rows of R^T)
+    flat = along.reshape(-1, 3)
+    h = scene.body_support(flat).reshape(along.shape[:-1])
+    return com[..., 2] + sign * h
 
 
 #: Relative allowance of the triangle inequality of the principal moments,

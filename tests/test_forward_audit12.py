@@ -149,3 +149,38 @@ def test_period_error_covers_crossings_between_samples():
     assert ref.period_error < 0.01 * run.period_error
     assert true <= run.period_error, (true, run.period_error)
     assert run.to_json()["period_error_crossings"] == run.period_error_crossings >= 0
+
+
+# ---------------------------------------------------------------------------
+# a body that reaches through the ceiling
+# ---------------------------------------------------------------------------
+
+THROUGH_CEILING = {
+    "body": {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]},
+             "bounding_box": {"min": [-0.3, -0.1, -0.1], "max": [0.3, 0.1, 0.9]}},
+    "rig": {"anchors": [[-0.2, 0, 0.5], [0.2, 0, 0.5]], "attachments": [[-0.2, 0, 0.05], [0.2, 0, 0.05]],
+            "lengths": [0.5, 0.5]},
+}
+
+
+@pytest.mark.parametrize("command", [["modes"], ["simulate", "--periods", "1", "--amplitude", "0.01"],
+                                     ["tensions", "--periods", "1", "--amplitude", "0.01"]])
+def test_a_body_through_the_ceiling_is_reported(tmp_path, command):
+    """The CoM hangs at z = -0.05 and the box reaches 0.9 m above it, 0.35 m
+    through the ceiling (the anchors at z = 0.5): every command ran silently
+    (exit 0, no word); now one warning line naming body.bounding_box, and the
+    JSON document as before."""
+    f = tmp_path / "c.yaml"
+    f.write_text(json.dumps(THROUGH_CEILING))
+    res = CliRunner().invoke(main, [command[0], str(f), "--json", *command[1:]])
+    assert res.exit_code == 0, res.stderr
+    json.loads(res.stdout)
+    lines = [ln for ln in res.stderr.splitlines() if "ceiling" in ln]
+    assert len(lines) == 1 and lines[0].startswith("warning: body: ") and "body.bounding_box" in lines[0]
+    assert "0.35 m above" in lines[0]
+    # the same box 0.5 m lower stays below the ceiling: no warning
+    low = json.loads(json.dumps(THROUGH_CEILING))
+    low["body"]["bounding_box"]["max"][2] = 0.4
+    f.write_text(json.dumps(low))
+    res = CliRunner().invoke(main, [command[0], str(f), "--json", *command[1:]])
+    assert res.exit_code == 0 and "ceiling" not in res.stderr, res.stderr
