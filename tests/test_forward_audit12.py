@@ -184,3 +184,234 @@ def test_a_body_through_the_ceiling_is_reported(tmp_path, command):
     f.write_text(json.dumps(low))
     res = CliRunner().invoke(main, [command[0], str(f), "--json", *command[1:]])
     assert res.exit_code == 0 and "ceiling" not in res.stderr, res.stderr
+
+
+# ---------------------------------------------------------------------------
+# modes against closed forms
+# ---------------------------------------------------------------------------
+#
+# Torsion of a rig with n equal wires whose anchors and attachments lie on
+# rays from the vertical axis through the CoM (anchor radius a, attachment
+# radius p, vertical drop h = sqrt(L^2 - (a - p)^2)): a twist theta about
+# that axis leaves the rig's symmetry, so the body only rises; the horizontal
+# anchor-attachment distance is rho^2 = (a - p)^2 + 2 a p (1 - cos theta), so
+# the drop is sqrt(L^2 - rho^2) and the CoM rises by a p theta^2 / (2 h) to
+# second order.  V = m g a p theta^2 / (2 h) gives
+#     T = 2 pi sqrt(I_zz h / (m g a p)),
+# which is the textbook bifilar/trifilar formula 2 pi sqrt(I L / (m g r^2))
+# for vertical wires (a = p = r, h = L; thesis 5.2.17, du Bois et al. 2009,
+# "Error analysis in trifilar inertia measurements", Exp. Tech. 35) and the
+# trapezoidal bifilar's z''(0) = b b' / (4 H0) (bifilar.models.reduced).
+# The modes are eigenvalues of the analytic Hessian on the wires: agreement
+# to rounding is expected, 1e-10 relative leaves room for the rest pose's
+# 1e-15 residual amplified by the eigen-solve.
+
+def torsion_closed_form(mass, Izz, a, p, L):
+    h = math.sqrt(L**2 - (a - p) ** 2)
+    return 2 * math.pi * math.sqrt(Izz * h / (mass * G * a * p))
+
+
+@pytest.mark.parametrize("anchor_half, att_half", [(0.5, 0.2), (0.1, 0.3), (0.25, 0.25)],
+                         ids=["leaning-out", "leaning-in", "parallel"])
+def test_torsion_of_a_leaning_bifilar_against_the_closed_form(anchor_half, att_half):
+    sc = bifilar(3.0, [0.02, 0.3, 0.3], anchor_half, att_half, 0.05, 1.2)
+    _, ms = modes_of(sc)
+    T = ms.get("torsion").period
+    assert T == pytest.approx(torsion_closed_form(3.0, 0.3, anchor_half, att_half, 1.2), rel=1e-10)
+    # the exact one-degree-of-freedom model of the same rig (reduced.py) at amplitude 0
+    tp = TorsionParams(m=3.0, Izz=0.3, l=1.2, b=2 * anchor_half, bp=2 * att_half)
+    assert T == pytest.approx(torsion_period(tp, 0.0), rel=1e-10)
+
+
+@pytest.mark.parametrize("mass, principal, r, L", [(0.05, [2e-5, 2e-5, 4e-5], 0.03, 0.5),
+                                                    (300.0, [40.0, 40.0, 75.0], 0.6, 2.5)],
+                         ids=["50 g", "300 kg"])
+def test_light_and_heavy_trifilar_against_the_closed_forms(mass, principal, r, L):
+    """Vertical wires: torsion as above, the two swings a simple pendulum of
+    length L (the body translates), each wire m g / 3 at rest."""
+    sc = trifilar(mass, principal, r, L, att_z=0.1 * L, anchor_z=1.1 * L)
+    rest, ms = modes_of(sc)
+    assert rest.tensions == pytest.approx([mass * G / 3] * 3, rel=1e-12)
+    assert ms.get("torsion").period == pytest.approx(torsion_closed_form(mass, principal[2], r, r, L), rel=1e-10)
+    for lab in ("swing-x", "swing-y"):
+        assert ms.get(lab).period == pytest.approx(2 * math.pi * math.sqrt(L / G), rel=1e-10)
+
+
+def test_a_deep_centre_of_mass_is_a_double_pendulum():
+    """CoM c = 1.5 m below two vertical wires of L = 1 m, b = 0.2 m either side:
+    swing-x is the parallelogram (a simple pendulum of length L), torsion the
+    closed form above, and swing-y with the roll about the attachment line
+    the double pendulum M q'' + K q = 0, q = (wire angle, body angle),
+    M = [[m L^2, m L c], [m L c, m c^2 + Ixx]], K = diag(m g L, m g c)."""
+    from scipy.linalg import eigh
+
+    m, L, c, Ixx = 2.0, 1.0, 1.5, 0.5
+    _, ms = modes_of(deep_com_bifilar())
+    w2 = eigh(np.diag([m * G * L, m * G * c]), np.array([[m * L * L, m * L * c], [m * L * c, m * c * c + Ixx]]),
+              eigvals_only=True)
+    slow, fast = 2 * np.pi / np.sqrt(w2)
+    assert ms.get("swing-y").period == pytest.approx(slow, rel=1e-10)
+    assert ms.get("roll").period == pytest.approx(fast, rel=1e-10)
+    assert ms.get("swing-x").period == pytest.approx(2 * math.pi * math.sqrt(L / G), rel=1e-10)
+    assert ms.get("torsion").period == pytest.approx(torsion_closed_form(m, 0.05, 0.2, 0.2, L), rel=1e-10)
+
+
+# ---------------------------------------------------------------------------
+# rest tensions against hand statics
+# ---------------------------------------------------------------------------
+
+TRI_ASYM = {
+    "body": {"mass": 5.0, "inertia": {"tensor": [[0.2, 0.01, 0.0], [0.01, 0.25, 0.02], [0.0, 0.02, 0.4]]}},
+    "rig": {"anchors": [[0.35, 0.05, 0], [-0.2, 0.3, 0.02], [-0.1, -0.33, -0.01]],
+            "attachments": [[0.3, 0.0, 0.02], [-0.15, 0.25, 0.02], [-0.12, -0.3, 0.02]],
+            "lengths": [1.0, 1.1, 0.9]},
+}
+RECT4 = {  # a 4-wire rectangle with unequal, leaning wires (lengths from the slack advice)
+    "body": {"mass": 10.0, "inertia": {"principal": [0.3, 0.5, 0.7]}},
+    "rig": {"anchors": [[0.55, 0.40, 0.0], [-0.50, 0.35, 0.1], [-0.45, -0.42, 0.0], [0.60, -0.30, 0.05]],
+            "attachments": [[0.35, 0.25, 0.05], [-0.35, 0.25, 0.05], [-0.35, -0.25, 0.05], [0.35, -0.25, 0.05]],
+            "lengths": [1.3, 1.2712, 1.1, 1.2726]},
+}
+
+
+@pytest.mark.parametrize("cfg", [TRI_ASYM, RECT4], ids=["trifilar, no symmetry", "4 wires, unequal"])
+def test_rest_tensions_balance_gravity(cfg):
+    """At the program's rest pose the wires' pull T_i u_i (u_i unit, attachment
+    to anchor) and its moment about the CoM must cancel m g and have no
+    moment: solved by our own least squares of the six equations (n unknowns),
+    every wire at its length, every tension positive and equal to the
+    program's within 1e-9 of m g (the rest pose's Newton ends at ~1e-15)."""
+    sc = scene_from_dict(cfg, warn=False)
+    rest = rest_pose(sc)
+    P = rest.com + sc.attachments @ rest.R.T  # attachments, world
+    d = sc.anchors - P
+    assert np.linalg.norm(d, axis=1) == pytest.approx(sc.lengths, abs=1e-12)
+    u = d / np.linalg.norm(d, axis=1)[:, None]
+    A = np.vstack([u.T, np.cross(P - rest.com, u).T])  # (6, n)
+    b = np.array([0, 0, sc.mass * G, 0, 0, 0])
+    T, *_ = np.linalg.lstsq(A, b, rcond=None)
+    assert np.linalg.norm(A @ T - b) < 1e-10 * sc.mass * G
+    assert np.linalg.matrix_rank(A) == sc.n_wires  # determined: the statics fix every tension
+    assert np.all(T > 0)
+    assert rest.tensions == pytest.approx(T, abs=1e-9 * sc.mass * G)
+
+
+# ---------------------------------------------------------------------------
+# nonlinear runs against independent results
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("anchor_half, att_half, amp", [(0.5, 0.2, 1.0), (0.1, 0.3, 0.3)],
+                         ids=["leaning-out 1 rad", "leaning-in 0.3 rad"])
+def test_large_torsion_of_a_leaning_bifilar_against_the_exact_quadrature(anchor_half, att_half, amp):
+    """A symmetric two-wire rig's torsion is exactly one degree of freedom
+    (the twist, the height slaved to it): its period at 1 rad is the energy
+    integral's (reduced.torsion_period, quadrature to 1e-13), 6.8 % above
+    the linear one; the default run must meet it within its stated
+    period_error, keep the wires within 1e-9 m and drift below 1e-7."""
+    sc = bifilar(3.0, [0.02, 0.3, 0.3], anchor_half, att_half, 0.05, 1.2)
+    exact = torsion_period(TorsionParams(m=3.0, Izz=0.3, l=1.2, b=2 * anchor_half, bp=2 * att_half), amp)
+    r = simulate(sc, "torsion", amp, 4, method="auto")
+    assert abs(r.period - exact) <= r.period_error, (r.period, exact, r.period_error)
+    assert r.max_constraint_violation < 1e-9 and r.energy_drift < 1e-7 and not r.slack
+    assert r.period / r.linear_period - 1 > (0.06 if amp == 1.0 else 0.005)  # a nonlinear check, not a linear one
+
+
+def test_kane_and_maximal_agree_on_a_leaning_bifilar():
+    """The thesis's five-angle Kane model and the maximal-coordinate model
+    are independent formulations (different coordinates, equations and
+    integrator settings): on the inward-leaning rig their periods at 0.05
+    agree within the sum of their stated errors, for the roll and the swing."""
+    sc = bifilar(3.0, [0.02, 0.3, 0.3], 0.1, 0.3, 0.05, 1.2)
+    from bifilar.analysis.kane_run import simulate_kane
+
+    rest, ms = modes_of(sc)
+    for mode in ("roll", "swing-y"):
+        a = simulate(sc, mode, 0.05, 3, rest=rest, modes=ms, method="auto")
+        k = simulate_kane(sc, rest, ms, mode=mode, amplitude=0.05, periods=3)
+        assert abs(a.period - k.period) <= a.period_error + k.period_error, (mode, a.period, k.period)
+        assert abs(a.period / a.linear_period - 1) > 1e-4  # nonlinear enough to tell models apart
+
+
+def test_torsion_degenerate_with_the_swing_stays_a_torsion():
+    """Two wires 0.49 m apart at the radius of gyration sqrt(Izz / m): the
+    torsion and the parallelogram swing have the same linear period (5 cm
+    wires, 0.4486 s).  The degenerate pair must come out as a pure torsion
+    and a pure swing, and the torsion run (its subspace is invariant under
+    the rig's half-turn symmetry) must time the exact one-degree-of-freedom
+    period at 0.2 rad (13 % above the linear one) within its error."""
+    b = math.sqrt(0.12 / 2.0)
+    sc = bifilar(2.0, [0.04, 0.1, 0.12], b, b, 0.02, 0.05)
+    rest, ms = modes_of(sc)
+    tor, sw = ms.get("torsion"), ms.get("swing-x")
+    assert tor.period == pytest.approx(sw.period, rel=1e-10)
+    assert abs(tor.shape[5]) == 1 and np.max(np.abs(np.delete(tor.shape, 5))) < 1e-9
+    assert abs(sw.shape[0]) == 1 and np.max(np.abs(np.delete(sw.shape, 0))) < 1e-9
+    exact = torsion_period(TorsionParams(m=2.0, Izz=0.12, l=0.05, b=2 * b, bp=2 * b), 0.2)
+    r = simulate(sc, "torsion", 0.2, 4, rest=rest, modes=ms, method="auto")
+    assert abs(r.period - exact) <= r.period_error and r.period / r.linear_period > 1.12
+
+
+# ---------------------------------------------------------------------------
+# bad input through every command
+# ---------------------------------------------------------------------------
+
+GOOD = {"name": "fz", "gravity": 9.81,
+        "body": {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]}},
+        "rig": {"anchors": [[-0.2, 0, 1.0], [0.2, 0, 1.0]], "attachments": [[-0.2, 0, 0.05], [0.2, 0, 0.05]],
+                "lengths": [1.0, 1.0]}}
+
+
+def _edit(path, value):
+    cfg = json.loads(json.dumps(GOOD))
+    d = cfg
+    for k in path[:-1]:
+        d = d[k]
+    if value is KeyError:
+        del d[path[-1]]
+    else:
+        d[path[-1]] = value
+    return cfg
+
+
+# (config or raw text, the field the error line must name)
+BAD_CONFIGS = [
+    (_edit(("body", "mass"), -1.0), "body.mass"),
+    (_edit(("body", "mass"), float("nan")), "body.mass"),
+    (_edit(("body", "mass"), "heavy"), "body.mass"),
+    (_edit(("body", "mass"), KeyError), "body.mass"),
+    (_edit(("gravity",), float("inf")), "gravity"),
+    (_edit(("gravity",), [9.81]), "gravity"),
+    (_edit(("body", "inertia", "principal", 1), 0.0), "body.inertia.principal.1"),
+    (_edit(("body", "inertia"), {"tensor": [[1, 2, 0], [2, 1, 0], [0, 0, 1]]}), "body.inertia.tensor"),
+    (_edit(("rig", "lengths", 0), -1.0), "rig.lengths.0"),
+    (_edit(("rig", "lengths"), [1.0]), "rig"),
+    (_edit(("rig", "anchors", 1, 2), "up"), "rig.anchors.1.2"),
+    (_edit(("rig", "attachments", 0), [0.1, 0.2]), "rig.attachments.0"),
+    (_edit(("rig", "bogus"), 1), "rig.bogus"),
+    # cannot hang, wire 1 slack (sweep and plan explore other lengths: their `length` keeps the
+    # wires' differences, so every point has a negative wire, which they say naming --param)
+    (_edit(("rig", "lengths"), [3.0, 1.0]), ("rig.lengths", "--param")),
+    (_edit(("rig", "anchors"), [[0.2, 0, 1.0], [-0.2, 0, 1.0]]), ("rig.attachments", "--param")),  # crossed
+    ("", "config"),
+    ("{{{: ][", "line 1, column 4"),
+    ("!!python/object/apply:os.system ['echo hi']\n", "config"),
+    ("- 1\n- 2\n", "config"),
+]
+COMMANDS = [["modes"], ["simulate", "--periods", "1"], ["tensions", "--periods", "1"],
+            ["sweep", "--param", "length=0.8:1.0:2"], ["plan", "--param", "length=0.8:1.0"],
+            ["invert", "--period", "torsion=1.0"]]
+
+
+@pytest.mark.parametrize("command", COMMANDS, ids=lambda c: c[0])
+def test_broken_configs_give_one_line_naming_the_field(tmp_path, command):
+    """Every command on each broken config: exit 2, one `error: FIELD:` line
+    on stderr, nothing on stdout, no traceback (checked session 12 over 16
+    fields x 11 bad values x 6 commands, 1266 runs; this is the table's
+    cheap core)."""
+    f = tmp_path / "c.yaml"
+    for cfg, field in BAD_CONFIGS:
+        f.write_text(cfg if isinstance(cfg, str) else json.dumps(cfg))
+        res = CliRunner().invoke(main, [command[0], str(f), "--json", *command[1:]])
+        if isinstance(field, tuple):
+            field = field[1] if command[0] in ("sweep", "plan") else field[0]
+        one_error_line(res, field)
