@@ -467,3 +467,17 @@ def test_crossing_wires_are_reported(tmp_path, cfg, command):
     lines = [ln for ln in res.stderr.splitlines() if ln.startswith("warning: rig: ")]
     assert len(lines) == 1 and "wires 1 and 2 (" in lines[0] and " cross: " in lines[0], res.stderr
     assert "wires 3" not in lines[0] and "and 3" not in lines[0] and "and 4" not in lines[0]
+
+
+@pytest.mark.parametrize("cfg, what", [(THROUGH_CEILING, "above the highest anchor"), (CROSS3, "wires 1 and 2 (")],
+                         ids=["ceiling", "crossing"])
+def test_sweep_and_plan_check_their_point_at_rest(cfg, what):
+    """sweep's recommended and plan's planned point get the same checks
+    (`studies.sweep.point_warnings`, which both call with the point's
+    parameters): a point through the ceiling or with crossing wires was
+    recommended without a word."""
+    from bifilar.studies.sweep import point_warnings
+
+    got = [w for w in point_warnings(cfg, "c.yaml", {}) if what in w]
+    assert len(got) == 1, point_warnings(cfg, "c.yaml", {})
+    assert point_warnings(GOOD, "c.yaml", {}) == []

@@ -69,3 +69,18 @@ def crossing_warning(scene: Scene, rest: RestPose) -> str | None:
         return None
     return (f"rig: at rest {'; '.join(hits)} cross: real wires would touch and rub there, which the model does not "
             "see; check the order of rig.anchors against rig.attachments")
+
+
+def clearance_warnings(scene: Scene, rest: RestPose | None = None) -> list[str]:
+    """:func:`ceiling_warning` and :func:`crossing_warning` of ``scene`` at
+    rest (``rest``, or its rest pose; none where no rest pose is found: a
+    rig that cannot hang is refused, or its failure reported, elsewhere)."""
+    from ..errors import BifilarError
+    from .equilibrium import rest_pose
+
+    if rest is None:
+        try:
+            rest = rest_pose(scene)
+        except BifilarError:
+            return []
+    return [w for w in (ceiling_warning(scene, rest), crossing_warning(scene, rest)) if w is not None]

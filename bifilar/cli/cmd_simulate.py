@@ -64,11 +64,10 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
         click.echo(f"warning: {w}", err=True)
     if (w := stretching_warning(scene, rest, ms.modes, only=ms.pick(mode).label)) is not None:
         click.echo(f"warning: {w}", err=True)
-    from ..analysis.clearance import ceiling_warning, crossing_warning
+    from ..analysis.clearance import clearance_warnings
 
-    for w in (ceiling_warning(scene, rest), crossing_warning(scene, rest)):
-        if w is not None:
-            click.echo(f"warning: {w}", err=True)
+    for w in clearance_warnings(scene, rest):
+        click.echo(f"warning: {w}", err=True)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
 
