@@ -37,7 +37,9 @@ class Scene:
         ``support(d) -> h``: for unit direction(s) ``d`` (k, 3) in body axes,
         the largest ``x . d`` over all points ``x`` of the body (body frame,
         m).  Used for the clearance (lowest point of the body).  ``None``
-        means only the attachment points are known.
+        means only the attachment points and the CoM are known (the CoM
+        lies in the convex hull of the body's mass, so the body reaches at
+        least as far as it in every direction).
     support_source : str
         Where ``support`` comes from: ``parts``, ``bounding_box`` or ``attachments``.
     config : dict
@@ -74,10 +76,13 @@ class Scene:
     def body_support(self, directions: np.ndarray) -> np.ndarray:
         """Support function of the body in body axes, m (see class docstring).
 
-        Falls back to the attachment points when no shape is known.
+        At least the attachment points and the CoM (the body frame's origin,
+        inside the convex hull of the body's mass: a body whose CoM hangs
+        below its attachments reaches at least that low); those alone when
+        no shape is known.
         """
         d = np.atleast_2d(np.asarray(directions, dtype=float))
-        h_att = np.max(d @ self.attachments.T, axis=-1)
+        h_att = np.maximum(np.max(d @ self.attachments.T, axis=-1), 0.0)
         if self.support is None:
             return h_att
         return np.maximum(np.asarray(self.support(d), dtype=float), h_att)
@@ -116,12 +121,23 @@ def lowest_point_z(scene: Scene, com: np.ndarray, R: np.ndarray) -> np.ndarray:
     com : (..., 3) CoM position(s), world frame, m.
     R : (..., 3, 3) rotation(s) body -> world.
     """
+    return _reach_z(scene, com, R, -1.0)
+
+
+def highest_point_z(scene: Scene, com: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """World z of the highest point of the body, m (arguments as
+    :func:`lowest_point_z`)."""
+    return _reach_z(scene, com, R, 1.0)
+
+
+def _reach_z(scene: Scene, com, R, sign: float) -> np.ndarray:
+    """World z of the body's farthest point along ``sign`` x world z, m."""
     com = np.asarray(com, float)
     R = np.asarray(R, float)
-    down_body = -R[..., 2, :]  # world -z expressed in body axes (rows of R^T)
-    flat = down_body.reshape(-1, 3)
-    h = scene.body_support(flat).reshape(down_body.shape[:-1])
-    return com[..., 2] - h
+    along = sign * R[..., 2, :]  # world (sign) z expressed in body axes (rows of R^T)
+    flat = along.reshape(-1, 3)
+    h = scene.body_support(flat).reshape(along.shape[:-1])
+    return com[..., 2] + sign * h
 
 
 #: Relative allowance of the triangle inequality of the principal moments,

@@ -77,7 +77,8 @@ class LowestPoint:
         down = -np.stack([2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)], -1)
         one = len(self.scenes) == 1  # one scene: its attachments broadcast, every row in its group (no gathers)
         att = np.broadcast_to(self.att[0], (len(idx),) + self.att.shape[1:]) if one else self.att[idx]
-        h = np.max(np.einsum("rnk,rk->rn", att, down), axis=1)  # attachment points
+        # attachment points and the CoM (origin; in the hull of the mass: Scene.body_support)
+        h = np.maximum(np.max(np.einsum("rnk,rk->rn", att, down), axis=1), 0.0)
         for f, bs in self.groups:
             if one:
                 h = np.maximum(h, np.asarray(f(down), float))

@@ -193,7 +193,7 @@ def _timing_stated(timing: float | None) -> bool:
 def period_accuracy(period: float | None, method: str, rtol: float, amplitude: float | None = None,
                     dominant: int = 3, Lmax: float = 1.0, model: str = "maximal",
                     timing: float | None = None, linear_period: float | None = None,
-                    drift: float = float("nan")) -> tuple[float, str | None]:
+                    drift: float = float("nan"), crossing: float = 0.0) -> tuple[float, str | None]:
     """(error, warning) of a run's measured ``period`` (s): a bound on its
     numerical error, s (nan without a period), and a warning when the bound
     exceeds :func:`period_warn_threshold` (a tenth of ``timing``, s, the
@@ -208,7 +208,9 @@ def period_accuracy(period: float | None, method: str, rtol: float, amplitude: f
     small to time (``amplitude``, ``dominant``, ``Lmax`` as
     :func:`small_amplitude_period`), whose period is the linear one, the wire
     angle squared.  A method without a measured bound (a name not in the
-    table) gets the largest one."""
+    table) gets the largest one.  ``crossing`` (s): the part the crossings'
+    interpolation between samples adds (:func:`crossing_period_error`, the
+    ``auto`` engine's; NaN counts as 0)."""
     if period is None:
         return float("nan"), None
     small = _small_amplitude(amplitude, dominant, Lmax)
@@ -219,7 +221,8 @@ def period_accuracy(period: float | None, method: str, rtol: float, amplitude: f
     c = table.get(method, max(table.values()))
     err_int = max(c * rtol, PERIOD_ERROR_FLOOR) * period
     err_drift = drift_period_error(period, linear_period, drift)
-    err = err_int + err_drift
+    crossing = float(crossing) if np.isfinite(crossing) else 0.0
+    err = err_int + err_drift + crossing
     limit = period_warn_threshold(period, timing)
     if err <= limit:
         return err, None
@@ -230,6 +233,11 @@ def period_accuracy(period: float | None, method: str, rtol: float, amplitude: f
     reach = max(c * need, PERIOD_ERROR_FLOOR) * period + err_drift * need / rtol
     cure = (f"--rtol {need:g} brings it below" if reach <= limit else
             f"no --rtol brings it below (the floor is {PERIOD_ERROR_FLOOR:g} of the period)")
+    if crossing > err_int and crossing > err_drift:
+        return err, (f"the period's error may reach {err:.1g} s ({err / period:.1g} relative), most of it "
+                     f"({crossing:.1g} s) from locating the crossings between the samples: the motion has "
+                     f"harmonics too fast for them even at {MAX_SAMPLES_PER_PERIOD} samples per linear period; "
+                     f"above {what}; --method DOP853 locates them on its own steps")
     if err_drift > err_int:
         return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative), most of "
                      f"it from the energy drift: {drift:.1e} of the oscillation energy moves the amplitude, and "
@@ -237,6 +245,49 @@ def period_accuracy(period: float | None, method: str, rtol: float, amplitude: f
                      f"to {err_drift:.1g} s, beside {c:g} x rtol {rtol:g} for {method}; above {what}; {cure}")
     return err, (f"the period's integration error may reach {err:.1g} s ({err / period:.1g} relative: {c:g} x rtol "
                  f"{rtol:g} for {method}), above {what}; {cure}")
+
+
+CROSSING_SHARE = 0.1
+"""Share of the error model's bound (:func:`period_accuracy`) the crossings'
+interpolation between samples may reach (:func:`crossing_period_error`) before
+the ``auto`` engine's run is taken again with :data:`SAMPLES_STEP` times the
+samples per period."""
+
+SAMPLES_STEP = 4
+"""Factor on the samples per period of a run taken again for its crossings."""
+
+MAX_SAMPLES_PER_PERIOD = 1024
+"""Most samples per linear period a run is taken again with (the degree-7
+interpolation's error falls as the 8th power of the spacing: from 64 to 1024
+by 16^8 ~ 4e9)."""
+
+
+def crossing_period_error(t: np.ndarray, c: np.ndarray, crossings) -> float:
+    """The part of a mean period's error (s) that locating its crossings
+    between uniform samples makes: the mean period is (last - first crossing)
+    over the cycles between them, so its error is at most the two crossings'
+    interpolation errors (:func:`~bifilar.integrators.crossing_interpolation_error`,
+    on the samples ``t`` (s) of the timed coordinate ``c``) over the number of
+    cycles.  0 with fewer than two crossings; NaN where either could not be
+    estimated (too few samples, a crossing the samples do not show)."""
+    from .. import integrators as itg
+
+    tc = np.asarray(crossings, float)
+    t = np.asarray(t, float)
+    if len(tc) < 2:
+        return 0.0
+    if len(t) < 9:
+        return float("nan")
+    dt = float(t[1] - t[0])
+    ks = []
+    for tx in (tc[0], tc[-1]):
+        k0 = int(np.floor((tx - t[0]) / dt))
+        near = [k for k in (k0, k0 - 1, k0 + 1) if 0 <= k < len(c) - 1 and c[k] < 0 <= c[k + 1]]
+        if not near:
+            return float("nan")
+        ks.append(near[0])
+    e = itg.crossing_interpolation_error(c, np.array(ks), dt)
+    return float(np.sum(e) / (len(tc) - 1))
 
 
 def drift_period_error(period: float | None, linear_period: float | None, drift: float) -> float:

@@ -36,12 +36,15 @@ from .run_accuracy import (  # noqa: F401 (the names callers import from here)
     check_period,
     check_rtol,
     CHECK_RTOL_RATIO,
+    crossing_period_error,
+    CROSSING_SHARE,
     drift_floor,
     DRIFT_FLOOR_ULPS,
     drift_period_error,
     drift_resolution,
     IRREGULAR_FACTOR,
     IRREGULAR_SPREAD,
+    MAX_SAMPLES_PER_PERIOD,
     MIN_RTOL,
     MIN_TIMED_ANGLE,
     needs_check,
@@ -51,6 +54,7 @@ from .run_accuracy import (  # noqa: F401 (the names callers import from here)
     PERIOD_ERROR_PER_RTOL_KANE,
     PERIOD_ERROR_WARN,
     period_warn_threshold,
+    SAMPLES_STEP,
     small_amplitude_period,
     TIMING_SHARE,
     untimed,
@@ -119,6 +123,10 @@ class SimulationResult(RunSummary):
     period_error: float = float("nan")
     """Bound on the numerical error of :attr:`period`, s (:func:`period_accuracy`; nan without a period;
     where the motion is not clean, at least the difference from a check run, :func:`check_period`)."""
+    period_error_crossings: float = 0.0
+    """The part of :attr:`period_error` that locating the crossings between samples adds, s
+    (:func:`crossing_period_error`; the ``auto`` engine's runs only, 0 for the others, whose
+    crossings are roots of the integrator's own continuous solution)."""
     period_check: dict | None = None
     """The check run of a motion that is not clean (:func:`check_period`): ``method``, ``rtol``, its
     ``period`` (s), the ``difference`` from :attr:`period` (s) and the error model's ``model_bound`` (s);
@@ -141,17 +149,21 @@ class SimulationResult(RunSummary):
 def health_json(r) -> dict:
     """The health keys a run adds to interface.md's (JSON null where undefined):
     ``energy_drift_resolution``, ``energy_drift_below_resolution``, ``period_error``
-    (s) and ``period_error_drift`` (s, the energy drift's part of it), from a run
+    (s), ``period_error_drift`` (s, the energy drift's part of it) and, for a
+    :class:`SimulationResult`, ``period_error_crossings`` (s, the crossings' interpolation part), from a run
     with the fields of :class:`~bifilar.analysis.batch.SceneRun` (or a :class:`SimulationResult`)."""
     def f(x):
         return float(x) if x is not None and np.isfinite(x) else None
 
     perr = f(r.period_error)
-    return {"energy_drift_resolution": f(r.energy_drift_resolution),
-            "energy_drift_below_resolution": below_resolution(r.energy_drift, r.energy_drift_resolution),
-            "period_error": perr,
-            "period_error_drift": None if perr is None else drift_period_error(r.period, r.linear_period,
-                                                                                r.energy_drift)}
+    doc = {"energy_drift_resolution": f(r.energy_drift_resolution),
+           "energy_drift_below_resolution": below_resolution(r.energy_drift, r.energy_drift_resolution),
+           "period_error": perr,
+           "period_error_drift": None if perr is None else drift_period_error(r.period, r.linear_period,
+                                                                               r.energy_drift)}
+    if hasattr(r, "period_error_crossings"):  # a SimulationResult (the batch's runs do not estimate it)
+        doc["period_error_crossings"] = None if perr is None else f(r.period_error_crossings)
+    return doc
 
 
 def run_json(r, integrator: dict) -> dict:
@@ -559,21 +571,35 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     initial_state(scene, rest, m, amplitude)  # the input checks (InputError for an amplitude no pose can take)
     t_end = periods * m.period
     prog = None if progress is None else (lambda done, total: progress(done / total * t_end, t_end))
+    Lmax = float(np.max(scene.lengths))
     t0 = time.perf_counter()
-    run = run_one(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period=samples_per_period,
-                  method="lsoda", on_slack=on_slack, progress=prog)
+    spp = int(samples_per_period)
+    while True:
+        run = run_one(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period=spp,
+                      method="lsoda", on_slack=on_slack, progress=prog)
+        failed = [w for w in run.warnings if w.startswith("integration failed")]
+        if failed:
+            reason = failed[0].split(": ", 1)[-1]  # "LSODA: <why>"
+            raise IntegrationError("integrator " + reason.replace(": ", " failed: ", 1))
+        c = relative_pose(run.y, rest, m.dominant)
+        model_err, _ = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, Lmax,
+                                       linear_period=m.period, drift=run.energy_drift)
+        # the crossings lie between samples: a motion with fast harmonics (a large swing of a double
+        # pendulum) can put them off by more than the integration (session 12: 1e-7 s at 64 per period)
+        cross = (0.0 if run.period is None or untimed(amplitude, m.dominant, Lmax)
+                 or small_amplitude_period(amplitude, m.dominant, Lmax, m.period) is not None
+                 else crossing_period_error(run.t, c, run.crossings))
+        if not cross > CROSSING_SHARE * model_err or spp * SAMPLES_STEP > MAX_SAMPLES_PER_PERIOD:
+            break
+        spp *= SAMPLES_STEP
     runtime = time.perf_counter() - t0
-    failed = [w for w in run.warnings if w.startswith("integration failed")]
-    if failed:
-        reason = failed[0].split(": ", 1)[-1]  # "LSODA: <why>"
-        raise IntegrationError("integrator " + reason.replace(": ", " failed: ", 1))
     # the tensions at the samples: computed with the run's health (the same kernel pass) where it kept them
     T = run.tensions if run.tensions is not None else mx.tensions(run.y, mx.params_from_scenes(scene))
-    c = relative_pose(run.y, rest, m.dominant)
-    scale = state_scale(amplitude, m.dominant, float(np.max(scene.lengths)), 2 * np.pi / m.period)
+    scale = state_scale(amplitude, m.dominant, Lmax, 2 * np.pi / m.period)
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
-    perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, float(np.max(scene.lengths)),
-                              timing=timing, linear_period=m.period, drift=run.energy_drift)
+    perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, Lmax,
+                              timing=timing, linear_period=m.period, drift=run.energy_drift,
+                              crossing=cross if np.isfinite(cross) else 0.0)
     warnings = list(run.warnings) + ([w] if w else [])
     return SimulationResult(
         t=run.t, y=run.y, coordinate=c, coordinate_name=run.coordinate_name, tensions=T,
@@ -584,7 +610,7 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
         nfev=int(run.nfev), runtime=runtime, warnings=warnings,
         energy_drift_resolution=drift_resolution(scene, rest, run.y[0]) if np.isfinite(run.energy_drift) else np.nan,
-        period_error=perr,
+        period_error=perr, period_error_crossings=cross if np.isfinite(cross) and run.period is not None else 0.0,
     )
 
 

@@ -63,6 +63,10 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
         click.echo(f"warning: {w}", err=True)
     if (w := stretching_warning(scene, rest, ms.modes)) is not None:
         click.echo(f"warning: {w}", err=True)
+    from ..analysis.clearance import clearance_warnings
+
+    for w in clearance_warnings(scene, rest):
+        click.echo(f"warning: {w}", err=True)
     if out_p:
         rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]
         write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)

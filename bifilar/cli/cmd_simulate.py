@@ -63,6 +63,10 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
         click.echo(f"warning: {w}", err=True)
     if (w := stretching_warning(scene, rest, ms.modes, only=ms.pick(mode).label)) is not None:
         click.echo(f"warning: {w}", err=True)
+    from ..analysis.clearance import clearance_warnings
+
+    for w in clearance_warnings(scene, rest):
+        click.echo(f"warning: {w}", err=True)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
 

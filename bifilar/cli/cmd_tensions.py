@@ -60,6 +60,10 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         mode = ms.pick(mode).label
         if (w := stretching_warning(scene, rest, ms.modes, only=mode)) is not None:  # as simulate's run
             click.echo(f"warning: {w}", err=True)
+        from ..analysis.clearance import clearance_warnings
+
+        for w in clearance_warnings(scene, rest):
+            click.echo(f"warning: {w}", err=True)
         with progress_bar("simulating", enabled=True) as upd:
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=SIM_RTOL,
                            samples_per_period=200, progress=upd)

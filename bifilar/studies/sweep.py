@@ -116,13 +116,18 @@ def point_warnings(base_cfg: dict, source: str, params: dict) -> list[str]:
     ``params`` of ``base_cfg``, for a recommended or planned point: the
     studies build their scenes with ``warn=False``, so a point the base
     config's checks never saw is checked here.  Those the base config
-    gives word for word are left out (already said when it was loaded)."""
+    gives word for word are left out (already said when it was loaded).
+    Then the point's rig at rest (:func:`bifilar.analysis.clearance.clearance_warnings`:
+    the body through the ceiling, crossing wires), which no command has
+    checked for a point the config did not describe."""
+    from ..analysis.clearance import clearance_warnings
     from ..config import plausibility_warnings, scene_from_dict
     from .shorthands import apply_params
 
     base = set(plausibility_warnings(scene_from_dict(base_cfg, source, warn=False)))
     cfg, _ = apply_params(base_cfg, params, source)
-    return [w for w in plausibility_warnings(scene_from_dict(cfg, source, warn=False)) if w not in base]
+    scene = scene_from_dict(cfg, source, warn=False)
+    return [w for w in plausibility_warnings(scene) if w not in base] + clearance_warnings(scene)
 
 
 def stretching_summary(points: list[dict]) -> str | None:
