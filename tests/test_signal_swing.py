@@ -115,3 +115,42 @@ def test_a_torsion_released_with_a_swing_is_answered_within_its_std(tmp_path):
     assert sec["mode"] == "swing-y"
     assert abs(sec["amplitude"] - 0.03) < 3 * sec["amplitude_std"], sec
     assert "second_mode" in d["budget"]["Izz"]["groups"]
+
+
+def test_a_swing_too_large_for_the_model_is_refused_naming_the_signal(tmp_path, monkeypatch):
+    """Where the swing the record shows is beyond what the model's release
+    can answer for (MAX_ANGLE of the longest wire; lowered here to 1 % so
+    that the 3 cm swing of the test above crosses it, one inference run
+    set), ``invert`` refuses: exit 2, one line naming --signal and what to
+    do (release more cleanly), nothing on stdout."""
+    from bifilar.estimation import signal_swing
+
+    monkeypatch.setattr(signal_swing, "MAX_ANGLE", 0.01)
+    cfg, s, rest, ms = _scene(tmp_path)
+    r = _invert(cfg, _record(tmp_path, s, rest, ms, 0.1, 0.03, seed=1))
+    assert r.exit_code == 2 and r.stdout == "", r.output
+    lines = [ln for ln in r.output.splitlines() if ln.startswith("error:")]
+    assert len(lines) == 1 and lines[0].startswith("error: --signal:") and "release more cleanly" in lines[0], r.output
+
+
+def test_an_oscillation_no_mode_makes_is_warned(tmp_path):
+    """A record of the torsion released alone with an oscillation added that
+    no mode of the rig makes (3.3 s, 0.5 % of the torsion: a camera on a
+    swaying mount): the model cannot say what it does to the period, so
+    ``invert`` warns naming the oscillation and the cause (exit 0: the
+    answer is the one without it)."""
+    cfg, s, rest, ms = _scene(tmp_path)
+    tor = ms.get("torsion")
+    T = tor.period
+    run = simulate(s, "torsion", 0.1, 30, rest=rest, modes=ms, rtol=1e-10, samples_per_period=int(round(60 * T)),
+                   check=False)
+    y = relative_pose(run.y, rest, tor.dominant) + 5e-4 * np.sin(2 * math.pi * run.t / 3.3 + 0.4)
+    y = y + 1e-4 * np.random.default_rng(2).standard_normal(y.size)
+    rec = tmp_path / "torsion_mount.csv"
+    np.savetxt(rec, np.c_[run.t, y], delimiter=",", header="t,angle", comments="", fmt="%.12g")
+    r = _invert(cfg, rec)
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    assert d["measurements"][0].get("secondary") is None
+    w = [x for x in d["warnings"] if "no other mode released with it makes" in x]
+    assert len(w) == 1 and "3.3 s" in w[0] and "release more cleanly" in w[0], d["warnings"]

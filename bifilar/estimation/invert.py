@@ -724,10 +724,12 @@ def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndar
     """(K,) variance (s^2) of each model period from its stated amplitude's
     uncertainty under the nonlinear method (as the budget's amplitude term,
     :func:`~bifilar.estimation.budget.stated_amplitude_period_std`: the
-    slope of the mode's amplitude law ``laws[k]``), or None for the other methods."""
+    slope of the mode's amplitude law ``laws[k]``) and from a recording's second mode
+    (``law.secondary_std``), or None for the other methods."""
     if method != "nonlinear":
         return None
-    return stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) ** 2
+    second = np.array([law.secondary_std if law is not None else 0.0 for law in laws or [None] * len(pb.measurements)])
+    return stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) ** 2 + second ** 2
 
 
 def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float,

@@ -59,6 +59,10 @@ TRIAL_ANGLE = 0.02
 #: a third mode started with them): measured on releases other than the model's own
 #: (docs/design.md, session 12)
 CALIBRATION_SHARE = 0.1
+#: a record's oscillation the timed mode's release alone makes in the model within this share (or
+#: :data:`TONE_Z` of its std) is the model's own, no sign of a second mode: the damped trifilar's swings at
+#: 0.48 Hz, 0.16 % of its torsion (tests/test_chirp_coupled_swing.py), were taken for a 0.35 mm swing-x
+EXPLAINED_SHARE = 0.3
 #: integrator tolerance of the tone runs (at most)
 TONE_RTOL = 1e-8
 #: an inferred second mode beyond this (rad, or times the longest wire in m) is refused: the
@@ -117,7 +121,7 @@ def record_tones(m) -> list[dict]:
 
 
 def _run_tones(hm, values, k: int, j: int, amplitude: float, a_j: float, cycles: float, rtol: float):
-    """The other oscillations (``three_mode`` fit) of the timed coordinate of a
+    """The other oscillations (``three_mode`` fit, else ``two_mode``) of the timed coordinate of a
     model run with base mode ``k`` released at ``amplitude`` and base mode
     ``j`` started at ``a_j``: list of (frequency Hz, ratio to the dominant)."""
     from ..analysis.simulate import relative_pose, simulate, two_mode_state
@@ -133,6 +137,10 @@ def _run_tones(hm, values, k: int, j: int, amplitude: float, a_j: float, cycles:
                    rtol=max(rtol, TONE_RTOL), check=False, samples_per_period=32)
     y = relative_pose(sim.y, rest, mk.dominant)
     fit = fit_period(sim.t, y, "three_mode", crossing_check=False, split_check=False)
+    if len(fit.modes) < 2:  # a noise-free run's third oscillation may not be resolved from the first two
+        fit = fit_period(sim.t, y, "two_mode", crossing_check=False, split_check=False)
+    if len(fit.modes) < 2 or not float(fit.modes[0]["amplitude"]) > 0:  # no multi-mode fit (its fallback)
+        return []
     a0 = float(fit.modes[0]["amplitude"])
     return [(abs(float(d["omega"])) / (2 * math.pi), float(d["amplitude"]) / a0) for d in fit.modes[1:]]
 
@@ -162,24 +170,39 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
     hm = pb.models[m.hanging]
     values = pb.values(p)
     k0 = pb.mode_index[k]
+    # the record's tones are its fit's amplitudes at the window's start: the model runs from the amplitude there
+    # (a decaying record's fitted period refers to a smaller one, ``decay`` times it)
+    decay = m.details.get("decay") if isinstance(m.details, dict) else None
+    A = m.amplitude / decay if decay and 0 < decay <= 1 else m.amplitude
     Lmax = float(np.max(hm.scene(values).lengths))
+    try:  # the timed mode's release alone makes some other oscillations too (the model has those already)
+        c0 = _match(_run_tones(hm, values, k0, k0, A, 0.0, m.cycles, rtol), f_rec, tol)
+    except BifilarError:
+        c0 = None
+    if c0 is not None and abs(tone["ratio"] - c0) <= max(TONE_Z * tone["ratio_std"], EXPLAINED_SHARE * tone["ratio"]):
+        return None
     best = None
     for j, mj in enumerate(hm.modes0.modes):
         if j == k0 or not mj.period:
             continue
         a_t = TRIAL_ANGLE * (1.0 if mj.dominant >= 3 else Lmax)
         try:
-            c1 = _match(_run_tones(hm, values, k0, j, m.amplitude, a_t, m.cycles, rtol), f_rec, tol)
+            c1 = _match(_run_tones(hm, values, k0, j, A, a_t, m.cycles, rtol), f_rec, tol)
             if c1 is None:
                 continue
-            c2 = _match(_run_tones(hm, values, k0, j, m.amplitude, 0.5 * a_t, m.cycles, rtol), f_rec, tol)
+            c2 = _match(_run_tones(hm, values, k0, j, A, 0.5 * a_t, m.cycles, rtol), f_rec, tol)
         except BifilarError:
+            continue
+        # the part the second mode adds to what the timed mode's release alone makes (amplitudes, not phasors:
+        # the two differ in frequency only by the run's nonlinear shift, so they add nearly in phase)
+        c1, c2, cr = c1 - (c0 or 0.0), (c2 - (c0 or 0.0)) if c2 else None, tone["ratio"] - (c0 or 0.0)
+        if not (c1 > 0 and cr > 0):
             continue
         n = math.log2(c1 / c2) if c2 and c2 > 0 else 2.0
         if not 0.5 <= n <= 4.0:  # not a tone of this mode (the timed mode's own, or noise in the run's fit)
             continue
-        a = a_t * (tone["ratio"] / c1) ** (1.0 / n)
-        rel = math.hypot(tone["ratio_std"] / tone["ratio"] / n, CALIBRATION_SHARE)
+        a = a_t * (cr / c1) ** (1.0 / n)
+        rel = math.hypot(tone["ratio_std"] / cr / n, CALIBRATION_SHARE)
         cand = Secondary(mj.label, j, float(a), float(rel * a), tone["period"], tone["ratio"], float(n))
         if best is None or abs(cand.amplitude) / (1.0 if mj.dominant >= 3 else Lmax) < \
                 abs(best.amplitude) / (1.0 if hm.modes0.modes[best.index].dominant >= 3 else Lmax):
