@@ -99,9 +99,10 @@ def test_a_torsion_released_with_a_swing_is_answered_within_its_std(tmp_path):
     of 4 releases: mean -5.2, sd 1.4; docs/design.md), exit 0.  Now the
     record's other oscillation (2.57 s, 0.3 % of the torsion) gives the
     swing's amplitude, the model is released with it, and its uncertainty
-    is budgeted (``second_mode``).  Over 20 draws the fixed path gave z
-    mean ~0, sd < 0.5 (design.md's table); one draw outside 3 std would be
-    a 0.3 % event if the std were right, and the old code's -5.7 fails it.
+    is budgeted (``second_mode``).  Over the same 20 draws the fixed path
+    gave z mean -0.02, sd 0.05 (design.md's table); one draw outside 3 std
+    would be a 0.3 % event even if the std were exactly right (it is
+    conservative), and the old code's -5.7 fails it.
     The swing found must match the truth within 3 of its std."""
     cfg, s, rest, ms = _scene(tmp_path)
     rec = _record(tmp_path, s, rest, ms, 0.1, 0.03, seed=0)
