@@ -205,6 +205,38 @@ def initial_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float) ->
     return mx.pack(sp.com[0], sp.q[0])
 
 
+def two_mode_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float, second: Mode,
+                   second_amplitude: float) -> np.ndarray:
+    """State (13,) of a release that starts two modes, as a hand release
+    does: displaced along ``mode`` by ``amplitude`` (:func:`initial_state`,
+    held and released at rest) and moving along ``second`` with the linear
+    velocity of an oscillation of amplitude ``second_amplitude`` (units of
+    its normalised shape, rad or m) passing its rest (``v = amplitude x
+    omega x shape``, world frame), that velocity made tangent to the wires
+    (the least kinetic-energy change that keeps every wire's length rate
+    zero, so the run starts on the constraints).  The second mode then
+    oscillates a quarter period out of phase with the first; its effect on
+    the first mode's period is second order in its amplitude and, away from
+    an internal resonance, independent of that phase."""
+    y0 = initial_state(scene, rest, mode, amplitude)
+    if not second_amplitude or not second.period:
+        return y0
+    omega = 2 * np.pi / second.period
+    vel = second_amplitude * omega * np.asarray(second.shape, float)  # [v (3), w_world (3)]
+    P = mx.params_from_scenes(scene)
+    kin = mx.kinematics(y0, P)
+    d, Rp, R = kin["d"], kin["Rp"], kin["R"]
+    G = np.concatenate([d, np.cross(Rp, d)], axis=1)  # phidot_i = G_i . [v, w_world]
+    Wi = np.diag(np.r_[np.full(3, 1.0 / scene.mass), 1.0 / np.linalg.eigvalsh(np.asarray(scene.inertia)).mean()
+                      * np.ones(3)])
+    S = G @ Wi @ G.T
+    vel = vel - Wi @ G.T @ np.linalg.lstsq(S, G @ vel, rcond=None)[0]
+    y0 = y0.copy()
+    y0[7:10] = vel[:3]
+    y0[10:13] = R.T @ vel[3:]  # body axes
+    return y0
+
+
 def reachable_amplitude(scene: Scene, mode: Mode) -> tuple[float, str]:
     """(limit, unit): the largest amplitude any start of ``mode`` can have
     in its dominant coordinate, pi rad for a rotation, twice the longest

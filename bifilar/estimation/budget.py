@@ -678,6 +678,9 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
             if laws[k] is not None and laws[k].irregular > 0:
                 # a motion that is not regular: its model period known only to the check run's difference
                 contrib[f"integration[{lab}]"] = Gf[:, k] * laws[k].irregular
+            if laws[k] is not None and laws[k].secondary_std > 0:
+                # the second mode the record's release started: its amplitude known to its std
+                contrib[f"second_mode[{lab}]"] = Gf[:, k] * laws[k].secondary_std
     cov = np.zeros_like(budget.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)

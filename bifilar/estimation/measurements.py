@@ -117,6 +117,9 @@ class Measurement:
     details: dict = field(default_factory=dict)
     fit: Any = field(default=None, repr=False)
     signal: Any = field(default=None, repr=False)  # (t, y) of a recording, for plots
+    #: a recording's second mode, started by its release, that the nonlinear model is released with
+    #: (:class:`~bifilar.estimation.signal_swing.Secondary`; set by invert), or None
+    secondary: Any = field(default=None, repr=False)
 
     @property
     def dof(self) -> float:
@@ -167,6 +170,8 @@ class Measurement:
         if self.damping_ratio is not None:
             d["damping_ratio"] = self.damping_ratio
         d.update(self.details)
+        if self.secondary is not None:
+            d["secondary"] = self.secondary.to_json()
         return d
 
 
@@ -213,7 +218,7 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
                                     "damping_ratio": fit.damping_ratio, "r_squared": fit.r_squared,
                                     "window": [fit.t0, fit.t1], "notes": list(fit.notes)},
            "amplitude_source": "fit (the amplitude the fitted period refers to)" if r["amplitude"] is not None else None,
-           "decay": r["decay"]}
+           "decay": r["decay"], "quantity": kw.get("quantity", "other")}
     std = r["std"]
     if r.get("dof") is not None:
         det["dof"] = r["dof"]

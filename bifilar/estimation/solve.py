@@ -332,7 +332,7 @@ def _check_identifiable(pb: Problem, Js: np.ndarray) -> None:
 
 def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
                      rtol: float = 1e-10, timing: float | None = None,
-                     fundamental: bool = False):
+                     fundamental: bool = False, second: tuple | None = None):
     """r = T_sim / T_lin of base mode ``mode_index`` at ``values``, simulated
     from rest displaced by ``amplitude`` x the mode shape for ``cycles``
     linear periods.  Returns (r, SimulationResult).
@@ -360,18 +360,27 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
     released at ``amplitude`` and ``r`` carried from its fundamental's
     amplitude ``a`` to ``amplitude`` by the quadratic rule ``dr/dA = 2 (r -
     1) / a`` (the step is ~3e-4 of the amplitude: a quartic law's slope,
-    up to 10 % off that rule, moves ``r`` by ~1e-8 of itself)."""
+    up to 10 % off that rule, moves ``r`` by ~1e-8 of itself).
+
+    ``second``: (base mode index, amplitude) of a second mode the release
+    started (a recording's, :class:`~bifilar.estimation.signal_swing.Secondary`):
+    the run starts with it moving too
+    (:func:`~bifilar.analysis.simulate.two_mode_state`), as the record's body did."""
     from ..analysis.fundamental import mode_fundamental
     from ..analysis.run_accuracy import check_matters, check_period
-    from ..analysis.simulate import simulate
+    from ..analysis.simulate import simulate, two_mode_state
 
     scene = hm.scene(values)
     rest, ms, match = hm.locate(scene)
     k = int(match[mode_index])
+    y0 = t_end = None
+    if second is not None and second[1]:
+        y0 = two_mode_state(scene, rest, ms.modes[k], amplitude, ms.modes[int(match[second[0]])], second[1])
+        t_end = cycles * ms.modes[k].period
 
     def run(method: str = "DOP853", rtol: float = rtol, atol=None):
         return simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, method=method, rtol=rtol, atol=atol,
-                        check=False)
+                        check=False, y0=y0, t_end=t_end)
 
     sim = run()
     if sim.period is None:
@@ -403,8 +412,10 @@ def measured_factor(pb: Problem, k: int, p, rtol: float = 1e-10, amplitude: floa
     regular (:func:`irregular_difference`; 0 otherwise)."""
     m = pb.measurements[k]
     A = m.amplitude if amplitude is None else amplitude
+    sec = getattr(m, "secondary", None)
     r, sim = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], A, m.cycles, rtol,
-                              timing=m.std, fundamental=m.fundamental)
+                              timing=m.std, fundamental=m.fundamental,
+                              second=None if sec is None else (sec.index, sec.amplitude))
     return r, sim, irregular_difference(pb, k, p, sim)
 
 
@@ -489,6 +500,9 @@ class AmplitudeLaw:
     #: {input key: the exact route that gave its ``dr/dx`` without a run} (``gravity``, ``translation``,
     #: ``com``, ``scaling``: :func:`~bifilar.estimation.factor_inputs._factor_routes`)
     dr_dx_derived: dict = field(default_factory=dict)
+    #: s: the model period's std from the uncertainty of the second mode a recording's release started
+    #: (:attr:`Measurement.secondary`: the shift it makes, which goes as its amplitude squared); 0 without one
+    secondary_std: float = 0.0
 
     def factor(self, A) -> np.ndarray | float:
         """r(A) (dimensionless; array in, array out)."""
@@ -583,6 +597,14 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
         irregular = max(irregular, d)
     law.dr_dp = dr
     law.irregular = irregular
+    sec = getattr(m, "secondary", None)
+    if sec is not None:
+        # the second mode's part of the model period, and its std from the amplitude's (the shift ~ a^2)
+        r_alone, _ = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles,
+                                      rtol, fundamental=m.fundamental)
+        sec.shift = float(pb.linear_periods(p)[k] * (r_A - r_alone))
+        sec.shift_std = 2.0 * abs(sec.shift) * sec.amplitude_std / abs(sec.amplitude)
+        law.secondary_std = sec.shift_std
     return law
 
 

@@ -1,0 +1,223 @@
+"""A recording whose release also started another mode (a hand release: the
+torsion with a swing), and the second mode's amplitude the nonlinear model
+must then be released with.
+
+Why: a second mode running with the timed one shifts the timed mode's
+period at second order in its amplitude (docs/design.md, "Torsion released
+with a swing, session 12": a quadcopter-like body's 2.026 s torsion at 0.1
+rad with a 3 cm swing-y runs 1.45 ms short, 500 times a camera record's
+std), and ``invert``'s nonlinear model released the timed mode alone.
+
+What the record shows: on a two-wire rig the swings are not in the
+torsion's coordinate at first order (their shapes have no yaw), so a record
+of the torsion angle does not show the swing's own frequency; it shows the
+nonlinear motion's other oscillations (tones at combination frequencies,
+``f_pitch - f_swing``, ``2 f_swing - f_torsion``), which a multi-mode fit
+(``two_mode``, ``three_mode``, ``auto``) resolves beside the dominant mode.
+Their size grows with the second mode's amplitude (as its square for a
+swing whose tones are combinations: measured, not assumed).
+
+How the amplitude is found (:func:`infer_secondary`): each other mode of the
+hanging is released in the model with the timed one (the timed mode
+displaced as the record's fitted amplitude says, the other one moving
+through its rest with the velocity of a trial amplitude,
+:func:`~bifilar.analysis.simulate.two_mode_state`), the run's timed
+coordinate fitted as the record was (``three_mode``), and the record's
+strongest other oscillation looked for among the run's (its frequency within
+:data:`FREQ_TOL`); a second run at half the trial amplitude gives the tone's
+power law ``c ~ a^n``, and the record's tone (relative to the dominant
+mode's amplitude) then gives ``a``.  Its std is the tone amplitude's
+(white noise: ``noise sqrt(2 / N)``, times the fit's serial inflation) over
+``n``, with :data:`CALIBRATION_SHARE` of ``a`` for what the release's other
+details (the phase between the modes, a third mode started with them) do to
+that calibration.
+
+Units: periods s; amplitudes in the unit of each mode's normalised shape
+(rad for a rotation-dominated mode, m for a translation-dominated one);
+tones relative to the dominant mode's amplitude (unit-free; a rate record's
+converted to angles by its frequencies).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BifilarError
+
+#: a record's other oscillation counts when its amplitude exceeds this many of its std
+TONE_Z = 5.0
+#: a model tone matches the record's when their frequencies differ by at most this share
+#: (or 5 of the record tone's frequency std, if larger): the model runs at the start point,
+#: whose timed mode may be ~1 % off the record's
+FREQ_TOL = 0.01
+#: the trial amplitude of a candidate mode: rad, or this times the longest wire (m)
+TRIAL_ANGLE = 0.02
+#: the calibration's own relative uncertainty (the phase between the modes at the release,
+#: a third mode started with them): measured on releases other than the model's own
+#: (docs/design.md, session 12)
+CALIBRATION_SHARE = 0.1
+#: a record's oscillation the timed mode's release alone makes in the model within this share (or
+#: :data:`TONE_Z` of its std) is the model's own, no sign of a second mode: the damped trifilar's swings at
+#: 0.48 Hz, 0.16 % of its torsion (tests/test_chirp_coupled_swing.py), were taken for a 0.35 mm swing-x
+EXPLAINED_SHARE = 0.3
+#: integrator tolerance of the tone runs (at most)
+TONE_RTOL = 1e-8
+#: an inferred second mode beyond this (rad, or times the longest wire in m) is refused: the
+#: period's shift then is no small correction and the model's release no record of the hand's
+MAX_ANGLE = 0.15
+
+
+@dataclass
+class Secondary:
+    """The second mode a recording's release started, as the model is released with it."""
+
+    label: str  #: the mode's label
+    index: int  #: its index among the hanging's modes at the prior (``HangingModel.modes0``)
+    amplitude: float  #: rad or m (its normalised shape)
+    amplitude_std: float  #: same unit
+    tone_period: float  #: s, the record's oscillation that gave it
+    tone_ratio: float  #: that oscillation's amplitude over the dominant mode's (angle-equivalent)
+    exponent: float  #: the tone's power law in the amplitude, measured
+    #: s: the model period's shift from the second mode at the estimate and its std (set by the law)
+    shift: float | None = None
+    shift_std: float | None = None
+
+    def to_json(self) -> dict:
+        return {"mode": self.label, "amplitude": self.amplitude, "amplitude_std": self.amplitude_std,
+                "tone_period": self.tone_period, "tone_ratio": self.tone_ratio, "tone_exponent": self.exponent,
+                "period_shift": self.shift, "period_shift_std": self.shift_std}
+
+
+def record_tones(m) -> list[dict]:
+    """The resolved other oscillations of measurement ``m``'s fitted record
+    (its fit's modes after the dominant one), strongest first: ``period``
+    (s), ``ratio`` (amplitude over the dominant mode's, angle-equivalent:
+    a rate record's times ``omega_0 / omega_j``), ``ratio_std``, ``period_std``.
+    Kept where the amplitude exceeds :data:`TONE_Z` of its std and the
+    oscillation has two cycles in the record."""
+    fit = getattr(m, "fit", None)
+    if fit is None or len(getattr(fit, "modes", []) or []) < 2:
+        return []
+    m0 = fit.modes[0]
+    a0, w0 = float(m0["amplitude"]), float(m0["omega"])
+    if not a0 > 0:
+        return []
+    n = max(int(fit.n_samples), 1)
+    s_amp = float(fit.noise_std) * math.sqrt(2.0 / n) * max(float(fit.std_inflation or 1.0), 1.0)
+    T_rec = float(fit.t1 - fit.t0)
+    rate = m.details.get("quantity") == "rate"
+    out = []
+    for md in fit.modes[1:]:
+        a, w = float(md["amplitude"]), abs(float(md["omega"]))
+        if not (w > 0 and a > TONE_Z * s_amp and w * T_rec >= 4 * math.pi):
+            continue
+        conv = (w0 / w) if rate else 1.0
+        out.append({"period": 2 * math.pi / w, "period_std": float(md.get("std", 0.0) or 0.0),
+                    "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv})
+    return sorted(out, key=lambda d: -d["ratio"])
+
+
+def _run_tones(hm, values, k: int, j: int, amplitude: float, a_j: float, cycles: float, rtol: float):
+    """The other oscillations (``three_mode`` fit, else ``two_mode``) of the timed coordinate of a
+    model run with base mode ``k`` released at ``amplitude`` and base mode
+    ``j`` started at ``a_j``: list of (frequency Hz, ratio to the dominant)."""
+    from ..analysis.simulate import relative_pose, simulate, two_mode_state
+    from .signal import fit_period
+
+    scene = hm.scene(values)
+    rest, ms, match = hm.locate(scene)
+    kk, jj = int(match[k]), int(match[j])
+    mk, mj = ms.modes[kk], ms.modes[jj]
+    y0 = two_mode_state(scene, rest, mk, amplitude, mj, a_j)
+    # a tone's amplitude to ~1e-4 of itself needs no more than rtol 1e-8 (the factor's runs use 1e-10)
+    sim = simulate(scene, kk + 1, amplitude, cycles, rest=rest, modes=ms, y0=y0, t_end=cycles * mk.period,
+                   rtol=max(rtol, TONE_RTOL), check=False, samples_per_period=32)
+    y = relative_pose(sim.y, rest, mk.dominant)
+    fit = fit_period(sim.t, y, "three_mode", crossing_check=False, split_check=False)
+    if len(fit.modes) < 2:  # a noise-free run's third oscillation may not be resolved from the first two
+        fit = fit_period(sim.t, y, "two_mode", crossing_check=False, split_check=False)
+    if len(fit.modes) < 2 or not float(fit.modes[0]["amplitude"]) > 0:  # no multi-mode fit (its fallback)
+        return []
+    a0 = float(fit.modes[0]["amplitude"])
+    return [(abs(float(d["omega"])) / (2 * math.pi), float(d["amplitude"]) / a0) for d in fit.modes[1:]]
+
+
+def _match(tones, f: float, tol: float):
+    hits = [(abs(fs - f), r) for fs, r in tones if abs(fs - f) <= tol]
+    return min(hits)[1] if hits else None
+
+
+def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
+    """The second mode measurement ``k``'s record shows its release started
+    (module docstring), at the unknowns ``p``: a :class:`Secondary`, None
+    where the record resolves no other oscillation, or the string of a
+    warning where it does but no other mode released with the timed one
+    makes it (the record then holds a motion the model does not).  Raises
+    :class:`~bifilar.errors.InputError` naming the measurement's field where
+    the inferred mode is beyond :data:`MAX_ANGLE`."""
+    from ..errors import InputError
+
+    m = pb.measurements[k]
+    tones = record_tones(m)
+    if not tones or not m.amplitude:
+        return None
+    tone = tones[0]
+    f_rec = 1.0 / tone["period"]
+    tol = max(FREQ_TOL * f_rec, 5 * tone["period_std"] / tone["period"] ** 2)
+    hm = pb.models[m.hanging]
+    values = pb.values(p)
+    k0 = pb.mode_index[k]
+    # the record's tones are its fit's amplitudes at the window's start: the model runs from the amplitude there
+    # (a decaying record's fitted period refers to a smaller one, ``decay`` times it)
+    decay = m.details.get("decay") if isinstance(m.details, dict) else None
+    A = m.amplitude / decay if decay and 0 < decay <= 1 else m.amplitude
+    Lmax = float(np.max(hm.scene(values).lengths))
+    try:  # the timed mode's release alone makes some other oscillations too (the model has those already)
+        c0 = _match(_run_tones(hm, values, k0, k0, A, 0.0, m.cycles, rtol), f_rec, tol)
+    except BifilarError:
+        c0 = None
+    if c0 is not None and abs(tone["ratio"] - c0) <= max(TONE_Z * tone["ratio_std"], EXPLAINED_SHARE * tone["ratio"]):
+        return None
+    best = None
+    for j, mj in enumerate(hm.modes0.modes):
+        if j == k0 or not mj.period:
+            continue
+        a_t = TRIAL_ANGLE * (1.0 if mj.dominant >= 3 else Lmax)
+        try:
+            c1 = _match(_run_tones(hm, values, k0, j, A, a_t, m.cycles, rtol), f_rec, tol)
+            if c1 is None:
+                continue
+            c2 = _match(_run_tones(hm, values, k0, j, A, 0.5 * a_t, m.cycles, rtol), f_rec, tol)
+        except BifilarError:
+            continue
+        # the part the second mode adds to what the timed mode's release alone makes (amplitudes, not phasors:
+        # the two differ in frequency only by the run's nonlinear shift, so they add nearly in phase)
+        c1, c2, cr = c1 - (c0 or 0.0), (c2 - (c0 or 0.0)) if c2 else None, tone["ratio"] - (c0 or 0.0)
+        if not (c1 > 0 and cr > 0):
+            continue
+        n = math.log2(c1 / c2) if c2 and c2 > 0 else 2.0
+        if not 0.5 <= n <= 4.0:  # not a tone of this mode (the timed mode's own, or noise in the run's fit)
+            continue
+        a = a_t * (cr / c1) ** (1.0 / n)
+        rel = math.hypot(tone["ratio_std"] / cr / n, CALIBRATION_SHARE)
+        cand = Secondary(mj.label, j, float(a), float(rel * a), tone["period"], tone["ratio"], float(n))
+        if best is None or abs(cand.amplitude) / (1.0 if mj.dominant >= 3 else Lmax) < \
+                abs(best.amplitude) / (1.0 if hm.modes0.modes[best.index].dominant >= 3 else Lmax):
+            best = cand  # several explain it: the smallest motion that does
+    lab = m.label
+    if best is None:
+        return (f"mode '{lab}': the record holds an oscillation at {tone['period']:.4g} s ({tone['ratio']:.2g} of "
+                f"the {lab}'s amplitude, {tone['ratio'] / tone['ratio_std']:.0f} of its std) that no other mode "
+                "released with it makes in the model: another motion ran with the timed one and may shift its "
+                "period beyond the stated std; release more cleanly (let go without a push or a swing)")
+    limit = MAX_ANGLE * (1.0 if hm.modes0.modes[best.index].dominant >= 3 else Lmax)
+    if abs(best.amplitude) > limit:
+        raise InputError(m.field, (
+            f"mode '{lab}': the record's oscillation at {tone['period']:.4g} s says the release also started the "
+            f"{best.label} mode at about {best.amplitude:.3g} (beyond {limit:.3g}): a second motion that large "
+            f"shifts the {lab}'s period by more than the model of its release can answer for; release more "
+            "cleanly (let go without a push or a swing) and record again"))
+    return best
