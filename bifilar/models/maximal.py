@@ -41,6 +41,7 @@ array code (not in the hot loop).
 
 from __future__ import annotations
 
+import re
 import struct
 from dataclasses import dataclass
 from typing import Sequence
@@ -562,21 +563,91 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         if physical:
             out += [f"mass*muu{i}" for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
+    lines, out = _inline_single_use(C.lines, out)
     if signature == "odeint":
         # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
-        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call
+        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
+        # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
+        # without the closure's cell indirection (~1-2 % of a call)
         head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
                 f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
-                f"    def f(y, t):\n        {', '.join(_STATE_NAMES)} = y.tolist()\n")
+                f"    def f(y, t, {', '.join(f'{p}={p}' for p in _read(params, lines + out))}, _pack=_pack, _buf=_buf, "
+                f"_out=_out):\n"
+                f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
         tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
     elif signature == "args":
         head = f"    def f({', '.join(_STATE_NAMES)}):\n"
         tail = f"        return ({', '.join(out)},)\n"
     else:
         raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
-    body = "\n".join("        " + ln for ln in C.lines)
+    body = "\n".join("        " + ln for ln in lines)
     src = f"def make({', '.join(params)}):\n{head}{body}\n{tail}    return f\n"
     return src, params
+
+
+_TOKEN = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
+_ASSIGN = re.compile(r"^([A-Za-z_][A-Za-z_0-9]*) = (.+)$")
+
+
+def _read(names: list, code: list) -> list:
+    """The names of ``names`` that the statements ``code`` read."""
+    seen = {t for ln in code for t in _TOKEN.findall(ln)}
+    return [p for p in names if p in seen]
+
+
+def _inline_single_use(lines: list, out: list) -> tuple[list, list]:
+    """The kernel's statements ``lines`` and output expressions ``out``
+    with every temporary that is assigned once and read once written into
+    the expression that reads it (in parentheses), and every alias ``a =
+    b`` replaced by ``b``: the same floating-point operations in the same
+    order (bit-identical results), minus a store and a load of a local
+    per temporary (~6 % of a two-wire call on Python floats,
+    docs/performance.md, session 12).  A temporary is left alone where a
+    name it reads is assigned again between its statement and its use
+    (the elimination's updates)."""
+    stmts = []  # [target or None, expression]
+    for ln in lines:
+        m = _ASSIGN.match(ln)
+        stmts.append([m.group(1), m.group(2)] if m else [None, ln])
+    stmts += [[None, e] for e in out]
+    defs: dict = {}
+    for i, (tgt, expr) in enumerate(stmts):
+        for name in ([tgt] if tgt else [t for t in _TOKEN.findall(expr.split(" = ")[0]) if " = " in expr]):
+            defs.setdefault(name, []).append(i)
+    uses: dict = {}
+    for j, (_, expr) in enumerate(stmts):
+        rhs = expr.split(" = ", 1)[1] if stmts[j][0] is None and " = " in expr else expr
+        for t in _TOKEN.findall(rhs):
+            uses.setdefault(t, []).append(j)
+
+    def untouched(names, i, j) -> bool:  # no name of ``names`` assigned in statements i+1 .. j-1
+        return not any(i < k < j for nm in names for k in defs.get(nm, ()))
+
+    for i, (tgt, expr) in enumerate(stmts):
+        if tgt is None or len(defs[tgt]) != 1:
+            continue
+        at = uses.get(tgt, [])
+        alias = _TOKEN.fullmatch(expr) is not None
+        if not at or min(at) <= i or not (alias or len(at) == 1) or not untouched(_TOKEN.findall(expr), i,
+                                                                                 max(at) + 1):
+            continue
+        sub = expr if alias else "(" + expr + ")"
+        pat = re.compile(r"\b" + tgt + r"\b")
+        for j in sorted(set(at)):
+            t2, e2 = stmts[j]
+            if t2 is None and " = " in e2:  # a tuple assignment: replace on its right-hand side only
+                left, right = e2.split(" = ", 1)
+                stmts[j][1] = left + " = " + pat.sub(sub, right)
+            else:
+                stmts[j][1] = pat.sub(sub, e2)
+        toks = _TOKEN.findall(expr)
+        for t in toks:  # the expression's names are now read where it went, not at i
+            uses[t].remove(i)
+            uses[t] += at
+        stmts[i] = None
+    kept = [s for s in stmts if s is not None]
+    body = [f"{t} = {e}" if t else e for t, e in kept[:len(kept) - len(out)]]
+    return body, [e for _, e in kept[len(kept) - len(out):]]
 
 
 MAX_ELIMINATION_WIRES = 3
