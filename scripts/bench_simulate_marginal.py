@@ -10,6 +10,10 @@ is then (time of a 210-period run - time of a 10-period run) / 200, CPU time
 * ``simulate`` with ``method="auto"`` (the CLI's default since issue 14:
   LSODA through odeint on the compiled model, via the batched engine's
   one-scene path);
+* the same with a progress callback, as ``bifilar simulate`` calls it
+  (a bar on a terminal, the stop check elsewhere: the callback the CLI
+  passes when stderr is not a terminal); since session 12 the kernel ticks
+  itself, before it was wrapped;
 * ``simulate`` with ``method="DOP853"`` (solve_ivp, the default before);
 * ``naive``: the per-wire numpy right-hand side of
   ``bench_work_precision.naive_rhs_factory`` in a plain solve_ivp DOP853
@@ -40,6 +44,7 @@ from bifilar.analysis.equilibrium import rest_pose  # noqa: E402
 from bifilar.analysis.modes import linear_modes  # noqa: E402
 from bifilar.analysis.simulate import simulate  # noqa: E402
 from bifilar.config import load_scene  # noqa: E402
+from bifilar.interrupts import raise_if_stop_requested  # noqa: E402
 
 TOLS = [1e-8, 3e-9, 1e-9, 3e-10, 1e-10, 3e-11, 1e-11]
 TARGET = 1e-9
@@ -51,6 +56,9 @@ def _contenders(scene, rest, ms):
     return {
         "simulate (auto: odeint LSODA)": lambda n, rt: simulate(scene, "torsion", AMP, n, rest=rest, modes=ms,
                                                                  rtol=rt, method="auto").period,
+        "simulate, CLI path (auto, progress callback)": lambda n, rt: simulate(
+            scene, "torsion", AMP, n, rest=rest, modes=ms, rtol=rt, method="auto",
+            progress=lambda done, total: raise_if_stop_requested()).period,
         "simulate (solve_ivp DOP853)": lambda n, rt: simulate(scene, "torsion", AMP, n, rest=rest, modes=ms,
                                                                rtol=rt, method="DOP853").period,
         "naive (per-wire numpy, solve_ivp DOP853)": lambda n, rt: scipy_run(scene, rest, md, AMP, n, "DOP853", rt,
