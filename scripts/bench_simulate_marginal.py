@@ -22,7 +22,13 @@ is then (time of a 210-period run - time of a 10-period run) / 200, CPU time
 Issue 14's target: simulate at least 100x cheaper per period than the naive
 baseline.
 
-Usage: python scripts/bench_simulate_marginal.py [--quick] [--json]
+``--scan``: instead, the period error (signed, against the converged run)
+and right-hand-side calls a period of ``simulate`` (auto) over a grid of
+rtol and amplitudes around the benchmark's: LSODA's error is not monotonic
+in rtol (it settles on order 7 or 8), which decides the rtol the
+benchmark's rule picks (docs/design.md, "Session 12, perf14").
+
+Usage: python scripts/bench_simulate_marginal.py [--quick] [--json] [--scan]
 """
 
 from __future__ import annotations
@@ -103,11 +109,38 @@ def measure(quick: bool = False) -> dict:
     return out
 
 
+SCAN_RTOLS = [3e-9, 2e-9, 1.5e-9, 1.2e-9, 1e-9, 8e-10, 6e-10, 4e-10, 3e-10]
+SCAN_AMPS = [0.045, 0.05, 0.055]
+
+
+def scan() -> dict:
+    """{amplitude: [(rtol, signed period error, calls a period)]} of the
+    210-period ``simulate`` (auto) run (``--scan``)."""
+    scene = load_scene(ROOT / "configs" / "thesis_plate_rest.yaml")
+    rest = rest_pose(scene)
+    ms = linear_modes(scene, rest)
+    out = {}
+    for amp in SCAN_AMPS:
+        ref = bt.run_one(scene, rest, ms.get("torsion"), amp, 210, 1e-13, method="dop853").period
+        out[amp] = [(rt, r.period / ref - 1, r.nfev / 210) for rt in SCAN_RTOLS
+                    for r in [simulate(scene, "torsion", amp, 210, rest=rest, modes=ms, rtol=rt, method="auto")]]
+    return out
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--scan", action="store_true", help="period error and calls a period over rtol and amplitude")
     a = ap.parse_args(argv)
+    if a.scan:
+        res = scan()
+        if a.json:
+            print(json.dumps({str(k): v for k, v in res.items()}))
+        else:
+            for amp, rows in res.items():
+                print(f"amplitude {amp}: " + "  ".join(f"{rt:.1e}: {e:+.1e}/{n:.0f}" for rt, e, n in rows))
+        return res
     res = measure(a.quick)
     if a.json:
         print(json.dumps(res))
