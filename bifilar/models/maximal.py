@@ -572,10 +572,11 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
         # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
         # without the closure's cell indirection (~1-2 % of a call)
+        local = [f"{p}={p}" for p in _read(params, lines + out) + ["_pack", "_buf", "_out"]
+                 + (["_at", "_tick"] if ticks else [])]
         head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
                 f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
-                f"    def f(y, t, {', '.join(f'{p}={p}' for p in _read(params, lines + out))}, _pack=_pack, _buf=_buf, "
-                f"_out=_out{', _at=_at, _tick=_tick' if ticks else ''}):\n"
+                f"    def f(y, t, {', '.join(local)}):\n"
                 + ("        if t >= _at[0]:\n            _tick(t)\n" if ticks else "")
                 + f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
         tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
