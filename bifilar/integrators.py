@@ -577,25 +577,41 @@ def _ext(out, m: int, k: int) -> np.ndarray:
     return np.array(np.broadcast_arrays(*out[m:], np.empty(k))[:-1]).reshape(len(out) - m, k)
 
 
+def ticker(t_end: float, progress, step: float = 0.005):
+    """``(at, tick)``: the schedule of a long run's progress ticks.  Whoever
+    sees the integrator's time ``t`` calls ``tick(t)`` once ``t >= at[0]``;
+    ``tick`` moves ``at[0]`` to ``t + step * t_end`` and calls
+    ``progress(t, t_end)`` (which may raise to stop the run).  Used by
+    :func:`with_progress` and, without a wrapper's extra Python call a
+    right-hand side, by the compiled kernel itself
+    (:func:`~bifilar.models.maximal.compiled_kernel`'s ``ticks``)."""
+    at = [0.0]
+    dt = step * t_end
+
+    def tick(t):
+        at[0] = t + dt
+        progress(t, t_end)
+
+    return at, tick
+
+
 def with_progress(f, t_end: float, progress, step: float = 0.005, time_first: bool = True):
     """``f`` (``f(t, y)``, or ``f(y, t)`` as odeint calls it with
     ``time_first=False``) that also calls ``progress(t, t_end)`` each time the
     integrator's time ``t`` advances by ``step * t_end`` (a long run's progress
-    bar moves; ``progress`` may raise to stop the run).  It only forwards the
-    call: the numbers do not depend on whether progress is asked for."""
-    nxt = [0.0]
-    dt = step * t_end
+    bar moves; ``progress`` may raise to stop the run; :func:`ticker`).  It
+    only forwards the call: the numbers do not depend on whether progress is
+    asked for."""
+    at, tick = ticker(t_end, progress, step)
 
     def g_ty(t, y):
-        if t >= nxt[0]:
-            nxt[0] = t + dt
-            progress(t, t_end)
+        if t >= at[0]:
+            tick(t)
         return f(t, y)
 
     def g_yt(y, t):
-        if t >= nxt[0]:
-            nxt[0] = t + dt
-            progress(t, t_end)
+        if t >= at[0]:
+            tick(t)
         return f(y, t)
 
     return g_ty if time_first else g_yt

@@ -74,8 +74,13 @@ def _lsoda(P: mx.RigParams, ys0, T_ref, pers, rtol: float, at, spp: int, obs: He
     tau_end, K_total, taus = _sample_grid(pers, spp)
     if progress is not None:
         # a one-scene window holds ~4800 periods: without ticks from the right-hand side a `simulate`
-        # progress bar sat at 0 % for a whole typical run
-        f = itg.with_progress(f, tau_end * tscale, progress, step=0.01, time_first=False)
+        # progress bar sat at 0 % for a whole typical run; one scene's kernel ticks itself (a wrapper's
+        # extra Python call per right-hand side cost 3.6 % of a run, docs/performance.md, session 12)
+        if Bn == 1:
+            f = mx.compiled_kernel(P.take(0) if P1 is None else P1, signature="odeint",
+                                   ticks=itg.ticker(tau_end * tscale, progress, step=0.01))
+        else:
+            f = itg.with_progress(f, tau_end * tscale, progress, step=0.01, time_first=False)
     stop_tau = pers.astype(float).copy()  # per-scene end (earlier if a wire goes slack and on_slack == "stop")
     chunk = _window_samples(spp, Bn)
     y = ys0.ravel().copy()

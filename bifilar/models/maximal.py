@@ -41,6 +41,7 @@ array code (not in the hot loop).
 
 from __future__ import annotations
 
+import re
 import struct
 from dataclasses import dataclass
 from typing import Sequence
@@ -416,7 +417,7 @@ the ``"args"`` form)."""
 
 def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
                    signature: str = "args", physical: bool = False,
-                   derivatives: bool = True) -> tuple[str, list[str]]:
+                   derivatives: bool = True, ticks: bool = False) -> tuple[str, list[str]]:
     """Source of a factory ``make(<params>) -> f(<13 state components>)``.
 
     ``f`` returns the 13 derivative components, followed (``extras``) by the
@@ -428,6 +429,9 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
     one pass over a record gives the health's multipliers and the
     physical tensions.  ``derivatives=False`` (with ``extras``): the 13
     derivative components are None, not computed (the extras the same).
+    ``ticks`` (``signature="odeint"``): the factory takes two more
+    arguments ``_at, _tick`` and ``f`` calls ``_tick(t)`` first whenever
+    ``t >= _at[0]`` (:func:`~bifilar.integrators.ticker`).
 
     The multiplier system is solved for ``mu = lam / m`` (m/s^2 per m of
     wire): ``(m J M^-1 J^T) mu = rb`` has the rows ``d_i . d_j + J_i . (m
@@ -562,21 +566,95 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
         if physical:
             out += [f"mass*muu{i}" for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
+    lines, out = _inline_single_use(C.lines, out)
     if signature == "odeint":
         # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
-        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call
+        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
+        # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
+        # without the closure's cell indirection (~1-2 % of a call)
+        local = [f"{p}={p}" for p in _read(params, lines + out) + ["_pack", "_buf", "_out"]
+                 + (["_at", "_tick"] if ticks else [])]
         head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
                 f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
-                f"    def f(y, t):\n        {', '.join(_STATE_NAMES)} = y.tolist()\n")
+                f"    def f(y, t, {', '.join(local)}):\n"
+                + ("        if t >= _at[0]:\n            _tick(t)\n" if ticks else "")
+                + f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
         tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
+    elif ticks:
+        raise ValueError("ticks are for the 'odeint' signature")
     elif signature == "args":
         head = f"    def f({', '.join(_STATE_NAMES)}):\n"
         tail = f"        return ({', '.join(out)},)\n"
     else:
         raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
-    body = "\n".join("        " + ln for ln in C.lines)
-    src = f"def make({', '.join(params)}):\n{head}{body}\n{tail}    return f\n"
+    body = "\n".join("        " + ln for ln in lines)
+    src = f"def make({', '.join(params + (['_at', '_tick'] if ticks else []))}):\n{head}{body}\n{tail}    return f\n"
     return src, params
+
+
+_TOKEN = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
+_ASSIGN = re.compile(r"^([A-Za-z_][A-Za-z_0-9]*) = (.+)$")
+
+
+def _read(names: list, code: list) -> list:
+    """The names of ``names`` that the statements ``code`` read."""
+    seen = {t for ln in code for t in _TOKEN.findall(ln)}
+    return [p for p in names if p in seen]
+
+
+def _inline_single_use(lines: list, out: list) -> tuple[list, list]:
+    """The kernel's statements ``lines`` and output expressions ``out``
+    with every temporary that is assigned once and read once written into
+    the expression that reads it (in parentheses), and every alias ``a =
+    b`` replaced by ``b``: the same floating-point operations in the same
+    order (bit-identical results), minus a store and a load of a local
+    per temporary (~6 % of a two-wire call on Python floats,
+    docs/performance.md, session 12).  A temporary is left alone where a
+    name it reads is assigned again between its statement and its use
+    (the elimination's updates)."""
+    stmts = []  # [target or None, expression]
+    for ln in lines:
+        m = _ASSIGN.match(ln)
+        stmts.append([m.group(1), m.group(2)] if m else [None, ln])
+    stmts += [[None, e] for e in out]
+    defs: dict = {}
+    for i, (tgt, expr) in enumerate(stmts):
+        for name in ([tgt] if tgt else [t for t in _TOKEN.findall(expr.split(" = ")[0]) if " = " in expr]):
+            defs.setdefault(name, []).append(i)
+    uses: dict = {}
+    for j, (_, expr) in enumerate(stmts):
+        rhs = expr.split(" = ", 1)[1] if stmts[j][0] is None and " = " in expr else expr
+        for t in _TOKEN.findall(rhs):
+            uses.setdefault(t, []).append(j)
+
+    def untouched(names, i, j) -> bool:  # no name of ``names`` assigned in statements i+1 .. j-1
+        return not any(i < k < j for nm in names for k in defs.get(nm, ()))
+
+    for i, (tgt, expr) in enumerate(stmts):
+        if tgt is None or len(defs[tgt]) != 1:
+            continue
+        at = uses.get(tgt, [])
+        alias = _TOKEN.fullmatch(expr) is not None
+        if not at or min(at) <= i or not (alias or len(at) == 1) or not untouched(_TOKEN.findall(expr), i,
+                                                                                 max(at) + 1):
+            continue
+        sub = expr if alias else "(" + expr + ")"
+        pat = re.compile(r"\b" + tgt + r"\b")
+        for j in sorted(set(at)):
+            t2, e2 = stmts[j]
+            if t2 is None and " = " in e2:  # a tuple assignment: replace on its right-hand side only
+                left, right = e2.split(" = ", 1)
+                stmts[j][1] = left + " = " + pat.sub(sub, right)
+            else:
+                stmts[j][1] = pat.sub(sub, e2)
+        toks = _TOKEN.findall(expr)
+        for t in toks:  # the expression's names are now read where it went, not at i
+            uses[t].remove(i)
+            uses[t] += at
+        stmts[i] = None
+    kept = [s for s in stmts if s is not None]
+    body = [f"{t} = {e}" if t else e for t, e in kept[:len(kept) - len(out)]]
+    return body, [e for _, e in kept[len(kept) - len(out):]]
 
 
 MAX_ELIMINATION_WIRES = 3
@@ -638,7 +716,7 @@ def _zero_set(vals: dict) -> frozenset:
 
 
 def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
-                    physical: bool = False, derivatives: bool = True):
+                    physical: bool = False, derivatives: bool = True, ticks: tuple | None = None):
     """The model's right-hand side compiled for the parameters ``P``.
 
     Returns ``f(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz) -> tuple``
@@ -657,7 +735,14 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     ``derivatives=False`` (with ``extras``, ``signature="args"``): the 13
     derivative components are returned as None, not computed (~20 % fewer
     operations; the extras are the same bits).  Cached on ``P``.
+    ``ticks`` (``signature="odeint"``): ``(at, tick)`` of
+    :func:`~bifilar.integrators.ticker`, called from inside the kernel
+    (a progress bar's ticks without a wrapper's extra Python call per
+    right-hand side: +3.6 % of a run's time with the wrapper, ~+0.5 %
+    this way); the same numbers; a new function each call, not cached.
     """
+    if ticks is not None and signature != "odeint":
+        raise ValueError("ticks are for the 'odeint' signature")
     if signature == "odeint" and P.batch_shape != ():
         raise ValueError("signature='odeint' is for one scene (parameters of batch shape ())")
     if physical and not (stabilise and extras):
@@ -669,8 +754,8 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
         cache = {}
         object.__setattr__(P, "_kernels", cache)
     key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ()) + \
-        (() if derivatives else ("no derivatives",))
-    if key not in cache:
+        (() if derivatives else ("no derivatives",)) + (() if ticks is None else ("ticks",))
+    if key not in cache or ticks is not None:
         if "values" not in cache:  # the parameters' values and zero set, once for every kernel of P
             vals = _param_values(P)
             cache["values"] = (vals, _zero_set(vals))
@@ -678,11 +763,14 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
         n = int(P.lengths.shape[-1])
         fkey = (n, zero) + key
         if fkey not in _FACTORY_CACHE:
-            src, params = _kernel_source(n, zero, stabilise, extras, signature, physical, derivatives)
+            src, params = _kernel_source(n, zero, stabilise, extras, signature, physical, derivatives,
+                                         ticks is not None)
             ns: dict = {"_min_norm": _min_norm, "_np": np, "_struct": struct}
             exec(compile(src, f"<bifilar.maximal kernel n={n}>", "exec"), ns)  # noqa: S102 - generated here
             _FACTORY_CACHE[fkey] = (ns["make"], params)
         make, params = _FACTORY_CACHE[fkey]
+        if ticks is not None:  # the tick schedule is the caller's run's: a kernel of its own
+            return make(*[vals[p] for p in params], *ticks)
         cache[key] = make(*[vals[p] for p in params])
     return cache[key]
 
