@@ -380,7 +380,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         raise InputError("--method", f"linear does not apply: {rungs['linear']['na']}")
     est_nl = None
     if has_amp and (method == "nonlinear" or ladder or method != best):
-        warnings += _second_modes(pb, p_start, rtol, notes)
+        from .signal_swing import attach_second_modes  # only a nonlinear answer needs it
+
+        warnings += attach_second_modes(pb, p_start, rtol, notes)
         est_nl = solve_nonlinear(pb, p_start, rtol=rtol, progress=progress)
         rungs["nonlinear"] = {"p": est_nl.p, "r": est_nl.r, "iterations": est_nl.iterations}
         for s in est_nl.sims:
@@ -563,31 +565,6 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                             "the model is not linear over the input uncertainties; quote the Monte Carlo interval")
     res.runtime = time.perf_counter() - t0
     return res
-
-
-def _second_modes(pb: Problem, p, rtol: float, notes: list) -> list:
-    """Each fitted recording's second mode, started by its release
-    (:func:`~bifilar.estimation.signal_swing.infer_secondary` at the unknowns
-    ``p``), set on its measurement so that the nonlinear runs release it too;
-    a note says so.  Returns the warnings of records holding an oscillation
-    no other mode explains."""
-    from .signal_swing import infer_secondary
-
-    warnings = []
-    for k, m in enumerate(pb.measurements):
-        m.secondary = None
-        if not (m.amplitude and m.fundamental):
-            continue
-        sec = infer_secondary(pb, k, p, rtol)
-        if isinstance(sec, str):
-            warnings.append(sec)
-        elif sec is not None:
-            m.secondary = sec
-            notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
-                         f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
-                         f"mode, at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}; the nonlinear model is released "
-                         "with both, and the budget carries that amplitude's uncertainty (second_mode)")
-    return warnings
 
 
 def _with_start_guesses(ms: MeasurementSet, solve_for) -> tuple[MeasurementSet, list]:

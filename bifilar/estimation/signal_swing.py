@@ -221,3 +221,26 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
             f"shifts the {lab}'s period by more than the model of its release can answer for; release more "
             "cleanly (let go without a push or a swing) and record again"))
     return best
+
+
+def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
+    """Each fitted recording's second mode, started by its release
+    (:func:`infer_secondary` at the unknowns ``p``, SI), set on its
+    measurement (``m.secondary``) so that ``invert``'s nonlinear runs release
+    it too; a line appended to ``notes`` says so.  Returns the warnings of
+    records holding an oscillation no other mode explains."""
+    warnings = []
+    for k, m in enumerate(pb.measurements):
+        m.secondary = None
+        if not (m.amplitude and m.fundamental):
+            continue
+        sec = infer_secondary(pb, k, p, rtol)
+        if isinstance(sec, str):
+            warnings.append(sec)
+        elif sec is not None:
+            m.secondary = sec
+            notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
+                         f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
+                         f"mode, at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}; the nonlinear model is released "
+                         "with both, and the budget carries that amplitude's uncertainty (second_mode)")
+    return warnings
