@@ -337,10 +337,10 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         sw.write_points_csv(out_p, points, names, list(settings.components))
         journal.unlink(missing_ok=True)
 
-    from ..studies.hangings import hangings_objective
+    from ..studies.hangings import hangings_objectives
 
-    rec = sw.assess(points, cons, target, hangings=(lambda p: hangings_objective(
-        cfg, config, p["params"], settings, cons.min_separation, target)) if hangings else None)
+    rec = sw.assess(points, cons, target, hangings=(lambda ps: hangings_objectives(
+        cfg, config, [p["params"] for p in ps], settings, cons.min_separation, target)) if hangings else None)
     if not rec["n_valid"]:
         # nothing to rank, draw or recommend: refuse as `plan` does; the CSV keeps every point's reason
         if out_p:

@@ -239,10 +239,10 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     target, among = res.target, res.among
     cands = [p for p in res.evaluated if p.get("valid") and not violations(p, relaxed, target)
              and math.isfinite(objective(p, target, among))]
-    from .hangings import hangings_objective
+    from .hangings import hangings_objectives
 
-    score = {id(p): hangings_objective(base_cfg, source, p["params"], settings, min_separation, target)
-             for p in cands}
+    score = dict(zip([id(p) for p in cands], hangings_objectives(base_cfg, source, [p["params"] for p in cands],
+                                                                 settings, min_separation, target)))
     keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
     for i in rank_order(cands, keep, lambda p: score[id(p)]):
         p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
