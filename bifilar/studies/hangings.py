@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import BifilarError, InputError
 from ..estimation.invert import std_unavailable_text
 from ..estimation.sensitivity import input_sigma
-from .limits import component_scale
+from .limits import component_scale, physical_limits
 from .point import IDENTIFIABLE_MIN, point_uncertainty
 from .remedy import HANGINGS, hanging_config, hanging_sensitivity, reference_column, rotation
 from .settings import _IDX, SweepSettings
@@ -105,11 +105,23 @@ class HangingPlan:
     refine: object = field(default=None, repr=False, compare=False)
     #: with ``refine``: each component's sigma without any input term, relative (the least it can be)
     floor: dict | None = None
+    #: the body's inertia tensor in reference body axes (kg m^2), for the components' physical limits
+    inertia: np.ndarray | None = None
 
     def accuracy(self) -> dict:
+        """Per component: value, sigma (kg m^2), rel_sigma, and where the
+        estimate may leave what a real body can have with this joint sigma
+        (:func:`~bifilar.studies.limits.physical_limits`: ``physical_interval``,
+        ``p_unphysical``, ``p_refused``, ``physical_limit`` when warned)."""
+        from types import SimpleNamespace
+
         sd = np.sqrt(np.clip(np.diag(self.covariance), 0, None)) if len(self.covariance) else []
-        return {c: {"value": self.values[c], "sigma": float(s), "rel_sigma": float(s) / self.scales[c]}
-                for c, s in zip(self.components, sd)}
+        out = {}
+        for c, s in zip(self.components, sd):
+            out[c] = {"value": self.values[c], "sigma": float(s), "rel_sigma": float(s) / self.scales[c]}
+            if self.inertia is not None:
+                out[c].update(physical_limits(self.inertia, c, SimpleNamespace(value_sigma=float(s))))
+        return out
 
     def correlation(self) -> list:
         sd = np.sqrt(np.diag(self.covariance))
@@ -400,7 +412,7 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
             factor["input_factor_note"] = note
         return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing,
                            undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing],
-                           settings.rig, factor)
+                           settings.rig, factor, inertia=np.array(ref.inertia, float))
 
     if not (amp and rank == len(components)):
         return finish(None, None, None)
@@ -447,10 +459,10 @@ def _objective(hp: HangingPlan, settings: SweepSettings, target: str | None) -> 
     at least its timing's and amplitude's part, ``hp.floor``)."""
     if hp.missing:
         return math.inf, math.inf
-    acc = hp.accuracy()
     comps = [target] if target else list(settings.components)
     bound = hp.factor.get("input_factor_bound") or {}
-    vals = [acc[c]["rel_sigma"] for c in comps]
+    sd = dict(zip(hp.components, np.sqrt(np.clip(np.diag(hp.covariance), 0, None))))
+    vals = [float(sd[c]) / hp.scales[c] for c in comps]
     if not all(math.isfinite(v) for v in vals):
         return math.inf, math.inf
     left = [0.0 if c not in bound else 1.0 if bound[c] is None else bound[c] for c in comps]  # None: no bound
