@@ -100,6 +100,7 @@ def _render(cfg, res, settings, doc) -> None:
             else "")
         con.print(f"  predicted relative uncertainty of {what}: {_pct(res.hangings_objective)} % by the multi-hanging "
                   f"plan below ({why}); the planned hanging alone: {_pct(b['objective'])} %")
+        con.print(f"  ({esc(res.hangings_note())})")
     else:
         con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:
