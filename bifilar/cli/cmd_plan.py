@@ -62,7 +62,8 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
     mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
                                 hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
-    doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point", cons) + mh_warnings
+    joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
+    doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point", cons, joint) + mh_warnings
     from ..studies.sweep import stretching_summary
 
     if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow
@@ -99,6 +100,7 @@ def _render(cfg, res, settings, doc) -> None:
             else "")
         con.print(f"  predicted relative uncertainty of {what}: {_pct(res.hangings_objective)} % by the multi-hanging "
                   f"plan below ({why}); the planned hanging alone: {_pct(b['objective'])} %")
+        con.print(f"  ({esc(res.hangings_note())})")
     else:
         con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:

@@ -122,19 +122,27 @@ def point_config(base_cfg: dict, source: str, point: dict) -> dict:
     return cfg
 
 
-def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None) -> list[str]:
+def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None,
+                   joint: dict | None = None) -> list[str]:
     """The config plausibility warnings of a recommended or planned point
     (:func:`bifilar.studies.sweep.point_warnings`), its components'
     ``physical_limit`` (an estimate often outside what a real body can
     have) and, under the constraints ``cons``, its dependent wires' range
     above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`),
     each logged to stderr now (``warning: WHAT: ...``) and returned for the
-    JSON document."""
+    JSON document.  ``joint``: the multi-hanging plan's
+    ``accuracy`` when that plan is the experiment (``--hangings``): its
+    components' limits are those of the joint sigma, not of the point's
+    own hanging (whose Ixx from a swing, a 300 % sigma, warned of 68 % of
+    experiments where the plan's 0.44 % puts the limit 94 sigmas away)."""
     from ..studies.ranking import tension_range_caution
     from ..studies.sweep import point_warnings as check
 
     out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
+    joint = joint or {}
     out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
+            if c not in joint and e.get("physical_limit")]
+    out += [f"{what}: {c} by the multi-hanging plan: {e['physical_limit']}" for c, e in joint.items()
             if e.get("physical_limit")]
     if cons is not None and (w := tension_range_caution(point, cons)) is not None:
         out.append(f"{what}: {w}")
@@ -346,10 +354,10 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         sw.write_points_csv(out_p, points, names, list(settings.components))
         journal.unlink(missing_ok=True)
 
-    from ..studies.hangings import hangings_objective
+    from ..studies.hangings import hangings_objectives
 
-    rec = sw.assess(points, cons, target, hangings=(lambda p: hangings_objective(
-        cfg, config, p["params"], settings, cons.min_separation, target)) if hangings else None)
+    rec = sw.assess(points, cons, target, hangings=(lambda ps: hangings_objectives(
+        cfg, config, [p["params"] for p in ps], settings, cons.min_separation, target)) if hangings else None)
     if not rec["n_valid"]:
         # nothing to rank, draw or recommend: refuse as `plan` does; the CSV keeps every point's reason
         if out_p:
@@ -368,7 +376,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         mh_warnings = multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
                                     hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
                                     best if deferred else None)
-        warnings += point_warnings(cfg, config, best, "the recommended point", cons) + mh_warnings
+        joint = rec["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in rec else None
+        warnings += point_warnings(cfg, config, best, "the recommended point", cons, joint) + mh_warnings
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:

@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import BifilarError, InputError
 from ..estimation.invert import std_unavailable_text
 from ..estimation.sensitivity import input_sigma
-from .limits import component_scale
+from .limits import component_scale, physical_limits
 from .point import IDENTIFIABLE_MIN, point_uncertainty
 from .remedy import HANGINGS, hanging_config, hanging_sensitivity, reference_column, rotation
 from .settings import _IDX, SweepSettings
@@ -95,11 +95,33 @@ class HangingPlan:
     separation_blocked: list = field(default_factory=list)
     #: the rig model the covariance assumes (:mod:`bifilar.estimation.rig`)
     rig: str = "shared"
+    #: the amplitude factor's dr/dx in the inputs' terms (:mod:`bifilar.studies.hangings_inputs`):
+    #: ``input_factor_terms`` (measured and in the covariance), ``input_factor_bound`` {component: the
+    #: bound on what they change its sigma, relative; 0 where measured, None where none holds: a swing
+    #: timed} or None (no stated amplitude),
+    #: optionally ``input_factor_note``
+    factor: dict = field(default_factory=lambda: {"input_factor_terms": False, "input_factor_bound": None})
+    #: a plan made without the dr/dx runs its bound says matter (``factor_runs`` False): the plan with them
+    refine: object = field(default=None, repr=False, compare=False)
+    #: with ``refine``: each component's sigma without any input term, relative (the least it can be)
+    floor: dict | None = None
+    #: the body's inertia tensor in reference body axes (kg m^2), for the components' physical limits
+    inertia: np.ndarray | None = None
 
     def accuracy(self) -> dict:
+        """Per component: value, sigma (kg m^2), rel_sigma, and where the
+        estimate may leave what a real body can have with this joint sigma
+        (:func:`~bifilar.studies.limits.physical_limits`: ``physical_interval``,
+        ``p_unphysical``, ``p_refused``, ``physical_limit`` when warned)."""
+        from types import SimpleNamespace
+
         sd = np.sqrt(np.clip(np.diag(self.covariance), 0, None)) if len(self.covariance) else []
-        return {c: {"value": self.values[c], "sigma": float(s), "rel_sigma": float(s) / self.scales[c]}
-                for c, s in zip(self.components, sd)}
+        out = {}
+        for c, s in zip(self.components, sd):
+            out[c] = {"value": self.values[c], "sigma": float(s), "rel_sigma": float(s) / self.scales[c]}
+            if self.inertia is not None:
+                out[c].update(physical_limits(self.inertia, c, SimpleNamespace(value_sigma=float(s))))
+        return out
 
     def correlation(self) -> list:
         sd = np.sqrt(np.diag(self.covariance))
@@ -110,7 +132,7 @@ class HangingPlan:
                 "hangings": [{"name": h.name, "rotation_deg": list(h.rotvec_deg), "notes": h.notes}
                              for h in self.hangings],
                 "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing,
-                "min_separation": self.min_separation, "rig": self.rig,
+                "min_separation": self.min_separation, "rig": self.rig, **self.factor,
                 "sigma_unavailable": (std_unavailable_text(self.undefined, "--sigma KEY=VALUE")
                                       if self.undefined else None)}
 
@@ -157,37 +179,59 @@ def _rows(h: Hanging, comps: list[str], unc: dict, rig: tuple | None = None):
     several hangings.  ``rig``: (:class:`~bifilar.estimation.rig.RigLinks`
     of the candidate hangings, this hanging's index in them, the shared
     keys in column order); None: every rig input measured for this hanging
-    (``separate``)."""
+    (``separate``).  The input columns are :func:`_input_map`'s."""
     J = np.column_stack([reference_column(h.sens, h.R, c) for c in comps])
+    raw, M_own, M_sh = _input_map(h, unc, rig)
+    jac = np.nan_to_num(np.column_stack([h.sens.column(n) for n in raw]), nan=0.0) if raw else np.zeros((len(J), 0))
+    Jx, Js = jac @ M_own, jac @ M_sh
+    # per mode: the inputs without a derivative (a knife edge) and a nonzero sigma: no std can be given
+    # from that period (as invert gives none)
+    stated = [(n, h.sens.column(n)) for n in raw if input_sigma(h.scene, n, unc) > 0]
+    undefined = [[n for n, c in stated if not np.isfinite(c[k])] for k in range(len(J))]
+    return J, Jx @ Jx.T, Js, undefined
+
+
+def _input_map(h: Hanging, unc: dict, rig: tuple | None = None) -> tuple[list, np.ndarray, np.ndarray]:
+    """How the inputs of hanging ``h`` enter the joint fit: (``raw``, the
+    names of ``h.sens`` it measures: its rig inputs and attachments, then
+    those of :data:`SHARED_INPUTS` it has; ``M_own`` (R, O) and ``M_sh`` (R,
+    4 + S), each input's standard uncertainty times its share in a column:
+    the ``O`` inputs measured for this hanging alone, and the shared ones of
+    :func:`_rows`).  A derivative of the periods (or of anything else,
+    e.g. the amplitude factor) in the raw inputs, (K, R) per SI unit, times
+    ``M_own`` / ``M_sh`` gives its columns in seconds per standard
+    uncertainty; an input stated exact (sigma 0) has a zero row (its
+    derivative, even a missing one, contributes nothing)."""
     names = h.sens.names
-    xs = [j for j, n in enumerate(names) if n not in _IDX and n not in SHARED_INPUTS]
-    sx = np.array([input_sigma(h.scene, names[j], unc) for j in xs])
-    Jx = _stated(h.sens.jacobian[:, xs], sx)
-    Jrig = np.zeros((len(J), 0))
-    if rig is not None:  # each input's effect carried to its key: one of this hanging's, or a shared column
+    xs = [n for n in names if n not in _IDX and n not in SHARED_INPUTS]
+    sx = np.array([input_sigma(h.scene, n, unc) for n in xs])
+    if rig is None:
+        M_own, M_rig = np.diag(sx), np.zeros((len(xs), 0))
+    else:  # each input's effect carried to its key: one of this hanging's, or a shared column
         links, hi, shared = rig
         own: dict = {}
-        A_own, A_sh = [], np.zeros((len(xs), len(shared)))
-        for q, j in enumerate(xs):
-            for key, c in links.of(hi, names[j]):
+        A_own, M_rig = [], np.zeros((len(xs), len(shared)))
+        for q, n in enumerate(xs):
+            for key, c in links.of(hi, n):
                 if key in shared:
-                    A_sh[q, shared.index(key)] += c
+                    M_rig[q, shared.index(key)] += c * sx[q]
                 else:
                     if key not in own:
                         own[key] = len(own)
                         A_own.append(np.zeros(len(xs)))
-                    A_own[own[key]][q] += c
-        Jx, Jrig = Jx @ np.array(A_own).reshape(-1, len(xs)).T, Jx @ A_sh
-    col = {n: (h.sens.column(n) if n in names else np.zeros(len(J))) for n in SHARED_INPUTS}
-    s_com = input_sigma(h.scene, "com.x", unc)
-    Jcom = _stated(np.column_stack([col["com.x"], col["com.y"], col["com.z"]]), np.full(3, s_com)) @ h.R
-    Js = np.column_stack([_stated(col["mass"][:, None], np.array([input_sigma(h.scene, "mass", unc)])), Jcom, Jrig])
-    # per mode: the inputs without a derivative (a knife edge) and a nonzero sigma: no std can be given
-    # from that period (as invert gives none)
-    stated = [(names[j], h.sens.jacobian[:, j]) for j, s in zip(xs, sx) if s > 0]
-    stated += [(n, col[n]) for n in SHARED_INPUTS if n in names and input_sigma(h.scene, n, unc) > 0]
-    undefined = [[n for n, c in stated if not np.isfinite(c[k])] for k in range(len(J))]
-    return J, Jx @ Jx.T, Js, undefined
+                    A_own[own[key]][q] += c * sx[q]
+        M_own = np.array(A_own).reshape(-1, len(xs)).T
+    body = [n for n in SHARED_INPUTS if n in names]
+    M_body = np.zeros((len(body), 4))
+    for q, n in enumerate(body):
+        s = input_sigma(h.scene, n, unc)
+        if n == "mass":
+            M_body[q, 0] = s
+        else:  # the CoM in reference body axes: d_h = R d_ref, column a gets R[ax, a]
+            M_body[q, 1:] = s * h.R["xyz".index(n[-1])]
+    M_own = np.vstack([M_own, np.zeros((len(body), M_own.shape[1]))])
+    M_sh = np.vstack([np.hstack([np.zeros((len(xs), 4)), M_rig]), np.hstack([M_body, np.zeros((len(body), M_rig.shape[1]))])])
+    return xs + body, M_own, M_sh
 
 
 def rig_split(hs: list, model: str) -> list:
@@ -202,16 +246,7 @@ def rig_split(hs: list, model: str) -> list:
     return [(links, hi, shared) for hi in range(len(hs))]
 
 
-def _stated(jac: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-    """dT/dx times sigma_x (s), column by column; an input stated exact
-    (sigma 0) contributes nothing, even without a derivative (NaN column),
-    and a NaN column with a nonzero sigma counts 0 here (the hanging
-    selection needs numbers; :func:`_rows` lists it and the plan's sigmas
-    are then null)."""
-    return np.where(sigma > 0, np.nan_to_num(jac, nan=0.0), 0.0) * sigma
-
-
-def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True):
+def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True, inputs: np.ndarray | None = None):
     """(C, rank, unresolved) of the joint fit over hangings; S = timing^2 I
     + the input covariance of each hanging's chosen modes (block diagonal)
     + the shared inputs' ``Js Js^T`` across hangings (the body's, and the
@@ -226,7 +261,12 @@ def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True)
     (J^T J)^-1; else the best one, weighted by S^-1, C = (J^T S^-1 J)^-1
     (the selection's criterion).  C is inf when J^T J is singular,
     ``unresolved`` then a boolean per unknown: it has weight in the null
-    space."""
+    space.  ``inputs`` (with a stated amplitude and ``as_invert``): the
+    inputs' columns over the periods with the amplitude factor's measured
+    ``dr/dx``, ``r dT_lin/dx s_x + T_lin dr/dx s_x`` (s;
+    :func:`~bifilar.studies.hangings_inputs.joint_factor_inputs`): the
+    inputs then go through the full rows' gain as well, as invert puts
+    them (their ``Js Js^T`` and blocks are then not used for C)."""
     n = blocks[0][0].shape[1] if blocks else 0
     F = np.zeros((n, n))
     full = bool(blocks) and all(len(b) > 3 for b in blocks)
@@ -256,16 +296,24 @@ def joint_covariance(blocks: list[tuple], timing: float, as_invert: bool = True)
     if full:  # the timing and amplitude terms through the model's full derivative (budget._with_factor_gain)
         Jf = np.vstack([b[3] for b in blocks])
         Gf = np.linalg.solve(Jf.T @ Jf, Jf.T)
+        if inputs is not None:  # and the inputs with their factor terms
+            C, St = np.zeros_like(C), St + inputs @ inputs.T
         C = C + Gf @ St @ Gf.T
     return C, rank, np.zeros(n, bool)
 
 
 def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSettings, components: list[str],
-                  min_separation: float | None = None, reaction: float | None = None, sensor=None) -> HangingPlan:
+                  min_separation: float | None = None, reaction: float | None = None, sensor=None,
+                  factor_runs: bool = True) -> HangingPlan:
     """Choose hangings and modes that identify ``components`` (see the
     module docstring) at the point ``params``; each measurement carries how
     to time it (:func:`bifilar.studies.timing.advice`, stopwatch sigma
-    ``reaction`` s per trial, optional ``sensor``)."""
+    ``reaction`` s per trial, optional ``sensor``).  With a stated
+    amplitude the inputs' terms take the amplitude factor's ``dr/dx``
+    where its bound says they can change a sigma
+    (:mod:`bifilar.studies.hangings_inputs`); ``factor_runs`` False: never
+    measured (a ranking's screen, :func:`hangings_objectives`), the bound
+    stated."""
     from .timing import DEFAULT_REACTION, advice
 
     unc = point_uncertainty(settings, params)
@@ -276,7 +324,8 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     ref = hs[0].scene
     scales = {c: component_scale(ref.inertia, c) for c in components}
     values = {c: float(ref.inertia[_IDX[c]]) for c in components}
-    data = [_rows(h, components, unc, r) for h, r in zip(hs, rig_split(hs, settings.rig))]
+    split = rig_split(hs, settings.rig)
+    data = [_rows(h, components, unc, r) for h, r in zip(hs, split)]
     cands = []
     close = np.zeros(len(components), bool)  # some mode too close to another depends on the component
     for hi, h in enumerate(hs):
@@ -291,7 +340,7 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                 cands.append((hi, k))
     chosen: list[tuple[int, int]] = []
 
-    def evaluate(sel, as_invert=False, amp=None):
+    def evaluate(sel, as_invert=False, amp=None, inputs=None):
         blocks = []
         for hi in sorted({a for a, _ in sel}):
             ks = [k for a, k in sel if a == hi]
@@ -308,9 +357,9 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
                 dr = np.array([amp[(hi, k)][2] for k in ks])
                 block += ((J[ks] * r[:, None] + T_lin[:, None] * dr) * scale, va)
             blocks.append(block)  # in units of each component's scale
-        C, rank, unresolved = joint_covariance(blocks, timing, as_invert)
+        C, rank, unresolved = joint_covariance(blocks, timing, as_invert, inputs)
         worst = float(np.sqrt(np.max(np.diag(C)))) if rank == len(components) else math.inf
-        return rank, worst, C, unresolved
+        return rank, worst, C, unresolved, blocks
 
     rank, worst = 0, math.inf
     while cands:
@@ -319,7 +368,7 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
         for m in cands:
             if m in chosen:
                 continue
-            r, w, _, _ = evaluate(chosen + [m])
+            r, w, _, _, _ = evaluate(chosen + [m])
             eff = w / NEW_HANGING_GAIN if (m[0] not in used and used) else w
             key = (-r, eff)
             if best is None or key < best[0]:
@@ -337,10 +386,9 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
     # chosen for the best fit (small amplitude); reported for the fit invert makes of them, the
     # planned amplitude stated for each period
     amp = _amplitude_terms(hs, chosen, settings, components) if chosen else None
-    rank, worst, C, unresolved = evaluate(chosen, as_invert=True, amp=amp) if chosen else (
-        0, math.inf, np.full((len(components),) * 2, np.inf), np.ones(len(components), bool))
+    rank, worst, C0, unresolved, blocks = evaluate(chosen, as_invert=True, amp=amp) if chosen else (
+        0, math.inf, np.full((len(components),) * 2, np.inf), np.ones(len(components), bool), [])
     sc = np.array([scales[c] for c in components])
-    C = C * np.outer(sc, sc)
     used_idx = sorted({a for a, _ in chosen})
     meas = [{"hanging": hs[a].name, "mode": hs[a].sens.modes.modes[k].label, "period_sigma": timing,
              **advice(float(hs[a].sens.periods[k]), float(hs[a].separation[k]), timing,
@@ -350,11 +398,43 @@ def plan_hangings(base_cfg: dict, source: str, params: dict, settings: SweepSett
             for a in used_idx for (b, k) in sorted(chosen) if b == a]
     missing = [c for c, u in zip(components, unresolved) if u]
     undefined = sorted({n for a, k in chosen for n in data[a][3][k]})
-    if undefined:  # the selection left them out; the prediction cannot (invert gives no std either)
-        C = np.full_like(C, np.nan)
-    return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing,
-                       undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing],
-                       settings.rig)
+
+    def finish(X, rel, note) -> HangingPlan:
+        """The plan with the inputs' columns ``X`` (None: without dr/dx) and the bound ``rel`` (relative)."""
+        C = C0 if X is None else evaluate(chosen, as_invert=True, amp=amp, inputs=X)[2]
+        C = C * np.outer(sc, sc)
+        if undefined:  # the selection left them out; the prediction cannot (invert gives no std either)
+            C = np.full_like(C, np.nan)
+        factor = {"input_factor_terms": X is not None,  # a bound of None: none holds (a swing timed)
+                  "input_factor_bound": None if rel is None else {
+                      c: (float(v) if math.isfinite(v) else None) for c, v in zip(components, rel)}}
+        if note:
+            factor["input_factor_note"] = note
+        return HangingPlan(list(components), [hs[a] for a in used_idx], meas, C, values, scales, unc, missing,
+                           undefined, min_separation, [c for c, b in zip(components, close) if b and c in missing],
+                           settings.rig, factor, inertia=np.array(ref.inertia, float))
+
+    if not (amp and rank == len(components)):
+        return finish(None, None, None)
+    # the inputs' dr/dx where they can change a sigma (hangings_inputs)
+    from .hangings_inputs import joint_factor_inputs
+    from .point_inputs import FACTOR_INPUT_ENOUGH
+
+    maps = [_input_map(h, unc, r) for h, r in zip(hs, split)]
+
+    def factor_terms(runs):
+        return joint_factor_inputs(hs, maps, chosen, amp, unc, settings, np.vstack([b[0] for b in blocks]),
+                                   np.vstack([b[3] for b in blocks]), np.sqrt(np.diag(C0)), runs)
+
+    X, rel, note = factor_terms(factor_runs)
+    plan = finish(X, rel, note)
+    if not factor_runs and not all(v <= FACTOR_INPUT_ENOUGH for v in rel):  # the runs can change it
+        plan.refine = lambda: finish(*factor_terms(True))
+        # whatever the inputs' terms, each sigma is at least its timing's and amplitude's part
+        none = np.zeros((sum(len(b[0]) for b in blocks), 0))
+        floor = np.sqrt(np.clip(np.diag(evaluate(chosen, as_invert=True, amp=amp, inputs=none)[2]), 0, None))
+        plan.floor = {c: float(f) for c, f in zip(components, floor)}
+    return plan
 
 
 def hangings_objective(base_cfg: dict, source: str, params: dict, settings: SweepSettings,
@@ -368,12 +448,53 @@ def hangings_objective(base_cfg: dict, source: str, params: dict, settings: Swee
     at 0.2 rad gives 0.69 %), each timed mode at least ``min_separation``
     from the other modes of its hanging; inf when that plan leaves a
     component unidentified or without a sigma."""
-    hp = plan_hangings(base_cfg, source, params, settings, list(settings.components), min_separation)
+    return _objective(plan_hangings(base_cfg, source, params, settings, list(settings.components), min_separation),
+                      settings, target)[0]
+
+
+def _objective(hp: HangingPlan, settings: SweepSettings, target: str | None) -> tuple[float, float]:
+    """(:func:`hangings_objective` of the plan ``hp``, the least it can be
+    once the inputs' ``dr/dx`` terms its bound leaves out are measured:
+    each component's relative sigma less its ``input_factor_bound``, and
+    at least its timing's and amplitude's part, ``hp.floor``)."""
     if hp.missing:
-        return math.inf
-    acc = hp.accuracy()
-    vals = [acc[c]["rel_sigma"] for c in ([target] if target else settings.components)]
-    return float(max(vals)) if all(math.isfinite(v) for v in vals) else math.inf
+        return math.inf, math.inf
+    comps = [target] if target else list(settings.components)
+    bound = hp.factor.get("input_factor_bound") or {}
+    sd = dict(zip(hp.components, np.sqrt(np.clip(np.diag(hp.covariance), 0, None))))
+    vals = [float(sd[c]) / hp.scales[c] for c in comps]
+    if not all(math.isfinite(v) for v in vals):
+        return math.inf, math.inf
+    left = [0.0 if c not in bound else 1.0 if bound[c] is None else bound[c] for c in comps]  # None: no bound
+    floor = [(hp.floor or {}).get(c, 0.0) for c in comps]
+    return float(max(vals)), float(max(max(v * (1.0 - b), f) for v, b, f in zip(vals, left, floor)))
+
+
+def hangings_objectives(base_cfg: dict, source: str, points: list, settings: SweepSettings,
+                        min_separation: float | None, target: str | None) -> list:
+    """:func:`hangings_objective` of each of ``points`` (parameter dicts),
+    the dr/dx runs only where they can decide the best: every plan first
+    without them (``factor_runs`` False: each sigma with the bound on what
+    they change), then, by the least each can be, in order, each plan whose
+    bound says they matter again with them while that least is below the
+    best figure so far (a branch and bound: the best is the best with
+    them, as the plan at the recommended point reports it).  A point left
+    out keeps the figure without them (the bound shows it cannot be the
+    best).  The runs cost about what the rest of a plan does (the KTH
+    trifilar at 0.3 rad: 0.15 s of 0.29 s, docs/design.md, "Joint sigma,
+    session 12")."""
+    comps = list(settings.components)
+    plans = [plan_hangings(base_cfg, source, p, settings, comps, min_separation, factor_runs=False) for p in points]
+    first = [_objective(hp, settings, target) for hp in plans]
+    out = [v for v, _ in first]
+    best = math.inf
+    for i in sorted(range(len(points)), key=lambda i: first[i][1]):
+        if not first[i][1] <= best:
+            break
+        if plans[i].refine is not None:
+            out[i] = _objective(plans[i].refine(), settings, target)[0]
+        best = min(best, out[i])
+    return out
 
 
 def check_separated(plan: HangingPlan) -> None:
@@ -392,7 +513,7 @@ def check_separated(plan: HangingPlan) -> None:
 
 
 def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components: list) -> dict | None:
-    """{(hanging index, mode index): (r, s^2, dr/dI)} of the chosen measurements at
+    """{(hanging index, mode index): (r, s^2, dr/dI, A dr/dA)} of the chosen measurements at
     the planned amplitude ``A``: the amplitude factor ``r = T(A) / T_lin`` by
     the nonlinear model (``settings.periods`` periods at ``settings.rtol``,
     as a sweep point's run) and the variance its stated uncertainty
@@ -403,7 +524,9 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components
     factor's derivative in each of ``components`` (reference body axes, 1 /
     kg m^2; a run with the component stepped by
     :data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest moment, as
-    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`); None
+    invert's :func:`~bifilar.estimation.solve.stated_amplitude_law`), and
+    ``A dr/dA`` of the law (the mass's exact route to ``dr/dx``,
+    :func:`~bifilar.estimation.factor_inputs.factor_routes`); None
     without the nonlinear runs (``--no-tensions``: the plan is then for a
     small amplitude, ``amplitude: 0``) or when a run gives no period."""
     from dataclasses import replace
@@ -445,7 +568,7 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components
         r = run.period / T_lin
         law = amplitude_law(A, r, STATED_LAW_RATIO, low.period / T_lin)
         dr = np.array([(s.period / s.linear_period - r) / h for s in steps])
-        out[(a, k)] = (r, (T_lin * A * law.slope() * DEFAULT_AMPLITUDE_REL) ** 2, dr)
+        out[(a, k)] = (r, (T_lin * A * law.slope() * DEFAULT_AMPLITUDE_REL) ** 2, dr, A * law.slope())
     return out
 
 

@@ -99,6 +99,9 @@ class PlanResult:
         objective of the optimum's multi-hanging plan (its joint sigma), by
         which the points were ranked (``best["objective"]`` stays the
         planned hanging's own).
+    hangings_ranked : with ``hangings``, how many feasible points were
+        ranked by their multi-hanging plan (the points the search
+        evaluated; :meth:`hangings_note`).
     """
 
     best: dict
@@ -111,6 +114,22 @@ class PlanResult:
     zip: bool = False
     separation_guard: str = "planned_hanging"
     hangings_objective: float | None = None
+    hangings_ranked: int | None = None
+
+    def hangings_note(self) -> str | None:
+        """With ``hangings``: what the answer's multi-hanging figure is the
+        best of.  The search is steered by each point's own hanging, and
+        the multi-hanging objective is rugged (the chosen hangings and modes
+        change between neighbouring points: 0.45 % beside 1.6 % on the
+        session-11 audit's trifilar), so a point it never evaluated can do
+        better: a direct search of that objective there found 0.4420 %
+        against the plan's 0.4424 % (docs/design.md, "Joint sigma, session
+        12"; it would cost about 20 more hangings plans)."""
+        if self.hangings_objective is None:
+            return None
+        return (f"the best multi-hanging plan of the {self.hangings_ranked} feasible points the search evaluated "
+                "(steered by each point's own hanging); the multi-hanging figure itself was not searched, so a "
+                "point between them may do slightly better")
 
     def accuracy(self) -> dict:
         """Predicted accuracy per component at the optimum (kg m^2, relative, mode, period s)."""
@@ -128,7 +147,8 @@ class PlanResult:
                         "tension": b["tension"], "depth": b["depth"], "periods": b["periods"],
                         "rig": b.get("rig"), "separation": point_separation(b),
                         "tension_range_caution": tension_range_caution(b, self.constraints),
-                        "active_constraints": self.active, "hangings_objective": self.hangings_objective},
+                        "active_constraints": self.active, "hangings_objective": self.hangings_objective,
+                        "hangings_ranked": self.hangings_ranked, "hangings_note": self.hangings_note()},
             "target": self.target or "worst relative of " + ", ".join(self.among),
             "identifiability": self.identifiability(),
             "constraints": self.constraints.describe(),
@@ -214,43 +234,44 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
         if not hangings:
             return res
         relaxed = replace(constraints, min_separation=None)
-        best, hob = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
+        best, hob, n = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
         if best is None:
             return res
         guard = "multi_hanging" if violations(best, constraints, res.target) else "planned_hanging"
         return replace(res, best=best, separation_guard=guard, active=_active(best, relaxed, bounds),
-                       hangings_objective=hob)
+                       hangings_objective=hob, hangings_ranked=n)
     relaxed = replace(constraints, min_separation=None)
     res = _plan(base_cfg, source, bounds, settings, relaxed, target, **kw)
-    best, hob = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
+    best, hob, n = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
     best = best or res.best
     return replace(res, best=best, constraints=constraints, separation_guard="multi_hanging",
-                   active=_active(best, relaxed, bounds), hangings_objective=hob)
+                   active=_active(best, relaxed, bounds), hangings_objective=hob, hangings_ranked=n)
 
 
 def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: SweepSettings,
-                       relaxed: Constraints, min_separation: float | None) -> tuple[dict | None, float | None]:
+                       relaxed: Constraints, min_separation: float | None) -> tuple[dict | None, float | None, int]:
     """Of the points the search without the separation guard evaluated
     (``relaxed``: feasible otherwise), the one whose multi-hanging plan
     (:func:`~bifilar.studies.hangings.hangings_objective`, ``min_separation`` applied to its timed
     modes) is the most accurate, evaluated in full (its ``objective`` the
     planned hanging's own, as without hangings), and that plan's
-    objective; (None, None) when no plan identifies every component
+    objective, and how many points were ranked; (None, None, n) when no
+    plan identifies every component
     (:func:`bifilar.studies.hangings.check_separated` then says why at
     ``res.best``)."""
     target, among = res.target, res.among
     cands = [p for p in res.evaluated if p.get("valid") and not violations(p, relaxed, target)
              and math.isfinite(objective(p, target, among))]
-    from .hangings import hangings_objective
+    from .hangings import hangings_objectives
 
-    score = {id(p): hangings_objective(base_cfg, source, p["params"], settings, min_separation, target)
-             for p in cands}
+    score = dict(zip([id(p) for p in cands], hangings_objectives(base_cfg, source, [p["params"] for p in cands],
+                                                                 settings, min_separation, target)))
     keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
     for i in rank_order(cands, keep, lambda p: score[id(p)]):
         p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
         if p.get("valid") and not violations(p, relaxed, target) and math.isfinite(objective(p, target, among)):
-            return {**p, "objective": objective(p, target, among)}, score[id(cands[i])]
-    return None, None
+            return {**p, "objective": objective(p, target, among)}, score[id(cands[i])], len(cands)
+    return None, None, len(cands)
 
 
 def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,

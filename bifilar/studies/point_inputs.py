@@ -104,32 +104,46 @@ def measure_factor_inputs(pre, modes: dict, unc: dict, st) -> dict:
     point's periods and rtol), the rest derived exactly.  Returns {mode
     index: ({input: dr/dx}, [inputs without a derivative])}; a mode whose
     own run fails: every input without one."""
+    return measure_factor_inputs_many([(pre, modes)], unc, st)[0]
+
+
+def measure_factor_inputs_many(items: list, unc: dict, st) -> list:
+    """:func:`measure_factor_inputs` of several scenes ``items`` [(pre,
+    modes)] (``pre``: ``scene``, ``sens`` (its ``names``), ``rest``,
+    ``ms``, ``amplitude``), every scene's runs in one batched call; one
+    result per item.  The scene's inputs are its own (body frame of the
+    scene: a CoM shift in its axes)."""
     from ..estimation.factor_inputs import SteppedFactors, derive_factor_routes, factor_routes, stepped_factor_runs
     from ..estimation.sensitivity import input_sigma, perturb
     from ..estimation.solve import FACTOR_STEP
     from ..estimation.uncertainty import _step
 
-    scene = pre.scene
-    names = [n for n in pre.sens.names if n not in _IDX and input_sigma(scene, n, unc) > 0]
-    run, derived = factor_routes(scene.n_wires, names)
-    steps = []
-    for name in run:
-        d = _step(scene, name, FACTOR_STEP)
-        steps.append((name, d, perturb(scene, name, d)))
-    idx = sorted(modes)
-    grp = SteppedFactors(scene, pre.rest, pre.ms, idx, pre.amplitude, st.periods, steps)
-    stepped_factor_runs([grp], st.rtol)
-    out = {}
-    for k in idx:
-        if k not in grp.r0:
-            out[k] = ({}, list(names))
-            continue
-        failed = list(grp.failed[k])
-        dx = dict(grp.dr_dx[k])
-        if failed:  # an exact route would use a missing derivative: those keep the small-amplitude term
-            failed += list(derived)
-        else:
-            trans = modes[k] if pre.ms.modes[k].dominant < 3 else 0.0
-            derive_factor_routes(dx, derived, scene, np.eye(3), "", trans)
-        out[k] = (dx, failed)
-    return out
+    groups = []
+    for pre, modes in items:
+        scene = pre.scene
+        names = [n for n in pre.sens.names if n not in _IDX and input_sigma(scene, n, unc) > 0]
+        run, derived = factor_routes(scene.n_wires, names)
+        steps = []
+        for name in run:
+            d = _step(scene, name, FACTOR_STEP)
+            steps.append((name, d, perturb(scene, name, d)))
+        groups.append((names, derived, SteppedFactors(scene, pre.rest, pre.ms, sorted(modes), pre.amplitude,
+                                                      st.periods, steps)))
+    stepped_factor_runs([g for _, _, g in groups], st.rtol)
+    results = []
+    for (pre, modes), (names, derived, grp) in zip(items, groups):
+        out = {}
+        for k in grp.idx:
+            if k not in grp.r0:
+                out[k] = ({}, list(names))
+                continue
+            failed = list(grp.failed[k])
+            dx = dict(grp.dr_dx[k])
+            if failed:  # an exact route would use a missing derivative: those keep the small-amplitude term
+                failed += list(derived)
+            else:
+                trans = modes[k] if pre.ms.modes[k].dominant < 3 else 0.0
+                derive_factor_routes(dx, derived, pre.scene, np.eye(3), "", trans)
+            out[k] = (dx, failed)
+        results.append(out)
+    return results

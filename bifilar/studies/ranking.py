@@ -262,8 +262,9 @@ def assess(points: list[dict], constraints: Constraints, target: str | None, han
     (in place) and return the recommendation document.
 
     ``hangings``: the experiment times the multi-hanging plan, which applies
-    ``min_separation`` to each mode it times; ``hangings(point)`` is that
-    plan's objective at a point (:func:`bifilar.studies.hangings.hangings_objective`).
+    ``min_separation`` to each mode it times; ``hangings(points)`` is that
+    plan's objective at each of a list of points
+    (:func:`bifilar.studies.hangings.hangings_objectives`).
     The feasible points are ranked by it (each one's ``hangings_objective``;
     by their own figures only where no multi-hanging plan gives a sigma): the
     point whose own hanging is best can be far from the best for the
@@ -326,8 +327,8 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     ok = [i for i, p in enumerate(points) if p["feasible"] and p["objective"] is not None]
     key = lambda p: p["objective"]  # noqa: E731
     if hangings is not None:
-        for i in ok:
-            points[i]["hangings_objective"] = _plain(hangings(points[i]))
+        for i, v in zip(ok, hangings([points[i] for i in ok])):
+            points[i]["hangings_objective"] = _plain(v)
         ok = [i for i in ok if points[i]["hangings_objective"] is not None]
         key = lambda p: p["hangings_objective"]  # noqa: E731
     ranked = rank_order(points, ok, key)
