@@ -22,6 +22,7 @@ from click.testing import CliRunner
 from bifilar.cli import main
 from bifilar.studies.settings import Constraints
 
+from conftest import CONFIGS
 from test_dependent_wires_messages import CORNERS, scene_of, vertical
 
 MG = 10.0 * 9.81  # the table's weight, N (mass 10 kg)
@@ -121,3 +122,27 @@ def test_range_peak_against_the_splits_of_every_sample_of_a_swing():
     est = statics_range(sc, rest, sim.tension_max)["range_peak"]
     assert exact > 1.05 * MG / 2  # the swing loads the wires: the rest top alone would be 5 % low
     assert 0.0 <= est / exact - 1 < 1e-3, (est, exact)
+
+
+def test_the_sweep_csv_carries_the_range_peak(tmp_path):
+    # the CSV (--out) had the model's split only: the caution's figure is now a column, empty where the
+    # tensions are determined (a bifilar's two wires: statics fixes them)
+    import csv
+
+    cfg = tmp_path / "table.yaml"
+    cfg.write_text(TABLE)
+    out = tmp_path / "points.csv"
+    r = CliRunner().invoke(main, ["sweep", str(cfg), "--param", "length=1.0", "--component", "Izz", "--sigma",
+                                  "length=0", "--sigma", "position=0", "--out", str(out), "--json"])
+    assert r.exit_code == 0, r.stderr
+    row = next(csv.DictReader(out.open()))
+    t = json.loads(r.stdout)["points"][0]["tension"]
+    assert float(row["tension_range_peak"]) == pytest.approx(t["range_peak"], rel=1e-9)
+    assert float(row["tension_range_peak"]) > MG / 2  # the top at rest, m g / 2, times the runs' load factor
+    assert int(row["tension_range_peak_wire"]) == t["range_peak_wire"]
+    bif = tmp_path / "bifilar.csv"
+    r = CliRunner().invoke(main, ["sweep", str(CONFIGS / "thesis_plate_rest.yaml"), "--param", "spacing=3",
+                                  "--out", str(bif), "--json"])
+    assert r.exit_code == 0, r.stderr
+    row = next(csv.DictReader(bif.open()))
+    assert row["tension_range_peak"] == "" and row["tension_range_peak_wire"] == ""

@@ -90,10 +90,11 @@ from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Const
                        resolve_uncertainty)
 from .sweep_output import csv_rows, write_points_csv  # noqa: F401
 
-JOURNAL_VERSION = 7  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
+JOURNAL_VERSION = 8  # 2: points carry rig, separation, uncertainty, from_modes; 3: physical limits, no sigma at a knife edge;
 # 4: the sigma budgets the stated amplitude (amplitude_budget); 5: the amplitude law and the factor's derivative (session 8);
 # 6: points carry their runs' health (runs: period_error, energy_drift_resolution, ...); 7: the inputs' factor terms
-# (dr/dx) where they can matter, input_factor_bound (session 11)
+# (dr/dx) where they can matter, input_factor_bound (session 11); 8: the depth counts a shapeless body's CoM, points
+# carry the dependent wires' tension range (tension.range, range_peak) and tension_range_caution (session 12)
 
 
 # --------------------------------------------------------------------------

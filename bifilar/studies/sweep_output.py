@@ -14,7 +14,10 @@ from .shorthands import ParamSpec
 
 
 def csv_rows(points: list[dict], param_names: list[str], components: list[str]) -> tuple[list[str], list[list]]:
-    """Flat table: one row per point (header, rows); strings for labels and reasons."""
+    """Flat table: one row per point (header, rows); strings for labels and reasons.
+    ``tension_range_peak`` (N) and its wire: the most a wire of 4-5
+    dependent wires may carry in the runs under statics (empty where the
+    tensions are determined), the figure ``--max-tension``'s caution uses."""
     n_w = max((len(p["tension"]["rest"]) for p in points if p.get("valid")), default=0)
     header = list(param_names) + ["valid", "feasible", "rank", "objective"]
     for c in components:
@@ -22,7 +25,8 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
                    f"{c}_separation", f"{c}_bias_small_angle", f"{c}_bias_thesis", f"{c}_bias_linear",
                    f"{c}_nonlinear_period_s"]
     header += [f"tension_rest_{i + 1}" for i in range(n_w)] + [f"tension_max_{i + 1}" for i in range(n_w)]
-    header += [f"tension_min_{i + 1}" for i in range(n_w)] + ["slack", "depth_rest_m", "depth_max_m", "separation",
+    header += [f"tension_min_{i + 1}" for i in range(n_w)] + ["slack", "tension_range_peak", "tension_range_peak_wire",
+                                                               "depth_rest_m", "depth_max_m", "separation",
                                                                "periods", "error"]
     rows = []
     for p in points:
@@ -40,7 +44,7 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
         for key in ("rest", "max", "min"):
             vals = t.get(key) or [None] * n_w
             row += list(vals) + [None] * (n_w - len(vals))
-        row += [t.get("slack"), p["depth"]["rest"], p["depth"]["max"], point_separation(p),
+        row += [t.get("slack"), t.get("range_peak"), t.get("range_peak_wire"), p["depth"]["rest"], p["depth"]["max"], point_separation(p),
                 ";".join(f"{k}={v:.10g}" if v is not None else f"{k}=" for k, v in p["periods"].items()),
                 "; ".join(p.get("violations", []))]
         rows.append(row)
