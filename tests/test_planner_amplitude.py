@@ -215,3 +215,24 @@ def test_plan_at_a_large_amplitude_searches_the_sigma_with_the_amplitude():
     assert res.best["objective"] < 0.95 * sw.objective(small_opt, None, None)
     # and its answer is a full point: the sigma with the amplitude's term, the small-amplitude one beside it
     assert all(e["amplitude_budget"]["budgeted"] for e in res.best["components"].values())
+
+
+def test_multi_hanging_plan_counts_a_stated_gravity_uncertainty_as_invert_does(tmp_path):
+    # `--sigma gravity=0.003` (relative): the multi-hanging plan's joint sigma left g out (its inputs are the
+    # rig's and the body's), while invert --measurements of the file it writes (which states the 0.003)
+    # budgets it: invert's std was 1.26-1.30x the plan's on the session-11 audit's unequal trifilar.  g
+    # enters every period exactly as g^-1/2 (t' = sqrt(g) t removes it from the equations of motion), one
+    # column shared by all hangings; now within 1e-4 (the same 1-2e-4 the file's other inputs leave,
+    # test above), a band of 1 %, 26x below the old gap
+    from test_closed_loop_audit11 import TRIFILAR_UNEQUAL
+
+    cfg, out = tmp_path / "tri.yaml", tmp_path / "M.yaml"
+    cfg.write_text(TRIFILAR_UNEQUAL)
+    doc = _cli("sweep", cfg, "--param", "spacing=0.48", "--param", "length=1.2", "--component", "Izz", "--component",
+               "Ixx", "--component", "Iyy", "--hangings", "--sigma", "gravity=0.003", "--write-measurements", out,
+               "--json")
+    mh = doc["recommendation"]["multi_hanging"]
+    assert read_yaml(out)["uncertainty"]["gravity"] == 0.003
+    inv = _cli("invert", "--measurements", out, "--json")
+    for comp, a in mh["accuracy"].items():
+        assert inv["inertia"][comp]["std"] == pytest.approx(a["sigma"], rel=1e-2), comp

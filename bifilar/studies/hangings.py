@@ -172,23 +172,40 @@ one CoM: reference body axes), as ``bifilar invert --measurements`` has them."""
 def _rows(h: Hanging, comps: list[str], unc: dict, rig: tuple | None = None):
     """Per mode of a hanging: dT/dtheta (K, C), the part of the periods'
     covariance (K, K, s^2) from the inputs measured for this hanging alone
-    (wire lengths, anchors, attachments), and dT/dx times sigma_x (K, 4 + S,
-    s) for the inputs every hanging shares: the body's own
+    (wire lengths, anchors, attachments), and dT/dx times sigma_x (K, 4 + S
+    [+ 1], s) for the inputs every hanging shares: the body's own
     (:data:`SHARED_INPUTS`; the CoM in reference body axes, ``d_h = R
     d_ref``), then the ``S`` rig inputs and body points measured once for
-    several hangings.  ``rig``: (:class:`~bifilar.estimation.rig.RigLinks`
+    several hangings, then g where its uncertainty is stated
+    (:func:`gravity_column`).  ``rig``: (:class:`~bifilar.estimation.rig.RigLinks`
     of the candidate hangings, this hanging's index in them, the shared
     keys in column order); None: every rig input measured for this hanging
     (``separate``).  The input columns are :func:`_input_map`'s."""
     J = np.column_stack([reference_column(h.sens, h.R, c) for c in comps])
     raw, M_own, M_sh = _input_map(h, unc, rig)
     jac = np.nan_to_num(np.column_stack([h.sens.column(n) for n in raw]), nan=0.0) if raw else np.zeros((len(J), 0))
-    Jx, Js = jac @ M_own, jac @ M_sh
+    Jx, Js = jac @ M_own, np.hstack([jac @ M_sh, gravity_column(h, unc)])
     # per mode: the inputs without a derivative (a knife edge) and a nonzero sigma: no std can be given
     # from that period (as invert gives none)
     stated = [(n, h.sens.column(n)) for n in raw if input_sigma(h.scene, n, unc) > 0]
     undefined = [[n for n, c in stated if not np.isfinite(c[k])] for k in range(len(J))]
     return J, Jx @ Jx.T, Js, undefined
+
+
+def gravity_column(h: Hanging, unc: dict) -> np.ndarray:
+    """(K, 1) dT_k/dg times g's standard uncertainty (s) for each mode of
+    hanging ``h`` when ``unc`` states one (relative, ``--sigma gravity``),
+    else (K, 0): one shared column, the same g in every hanging, as
+    ``invert --measurements`` budgets it.  Exact, no run: with the body and
+    the rig fixed, ``t' = sqrt(g) t`` takes g out of the equations of motion
+    (kinetic energy free of g, potential linear in it), so every period,
+    linear or at any amplitude, scales as ``g^-1/2``: ``dT/dg = -T / (2 g)``,
+    and the amplitude factor ``r`` (a ratio of periods) does not depend on g."""
+    T = np.asarray(h.sens.periods, float)
+    s = input_sigma(h.scene, "gravity", unc)  # m/s^2 (the stated relative std times g)
+    if s <= 0:
+        return np.zeros((len(T), 0))
+    return (-0.5 * T / float(h.scene.gravity) * s)[:, None]
 
 
 def _input_map(h: Hanging, unc: dict, rig: tuple | None = None) -> tuple[list, np.ndarray, np.ndarray]:

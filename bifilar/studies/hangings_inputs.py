@@ -124,6 +124,11 @@ def joint_factor_inputs(hs: list, maps: list, chosen: list, amp: dict, unc: dict
         np.array([hs[hi].sens.column(n)[k] for n in maps[hi][0]]), nan=0.0) * r[(hi, k)]))
     Eb = keyed(maps, rows, per_hanging(lambda hi, k: T[(hi, k)] * FACTOR_INPUT_K * A * A * np.array(
         [_bound_scale(hs[hi].scene, n) for n in maps[hi][0]])), absolute=True)
+    from .hangings import gravity_column
+
+    # g's shared column (stated only): r dT_lin/dg s_g, its dr/dg exactly 0 (no bound, no run)
+    Xg = np.array([gravity_column(hs[hi], unc)[k] * r[(hi, k)] for hi, k in rows]).reshape(len(rows), -1)
+    X, Eb = np.hstack([X, Xg]), np.hstack([Eb, np.zeros_like(Xg)])
     bound = factor_bound(Jp, Jf, X, Eb)
     rel = np.where(sigma > 0, bound / np.where(sigma > 0, sigma, 1.0), math.inf)
     if any(is_swing(hs[hi].sens.modes.modes[k]) for hi, k in rows):
@@ -142,4 +147,5 @@ def joint_factor_inputs(hs: list, maps: list, chosen: list, amp: dict, unc: dict
                            "to depend on them as on the unknowns")
     F = keyed(maps, rows, per_hanging(lambda hi, k: T[(hi, k)] * np.array(
         [measured[hi][k][0].get(n, 0.0) for n in maps[hi][0]])))
+    F = np.hstack([F, np.zeros_like(Xg)])
     return X + F, np.zeros_like(rel), None
