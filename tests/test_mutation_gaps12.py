@@ -92,8 +92,8 @@ def test_a_wire_without_a_positive_slack_is_never_put_down_to_the_inputs(gaps):
 # ---------------------------------------------------------------------------
 
 
-def _boat_problem(n: int, A: float = 1.0):
-    """The Solar Boat's swing-y timed ``n`` times at amplitude ``A`` (m), Ixx unknown."""
+def _boat_problem(n: int, A: float = 1.0, T: float = 3.0):
+    """The Solar Boat's swing-y timed ``n`` times (``T`` s +- 1 ms) at amplitude ``A`` (m), Ixx unknown."""
     from bifilar.config import load_scene
     from bifilar.estimation import measurements as mm
     from bifilar.estimation.problem import build_problem
@@ -102,7 +102,7 @@ def _boat_problem(n: int, A: float = 1.0):
 
     cfg = CONFIGS / "solar_boat.yaml"
     sc = load_scene(cfg, unknown=("Ixx",))
-    ms = [mm.Measurement("swing-y", 3.0, 1e-3, "period", "--period", cycles=10, amplitude=A, std_given=True)
+    ms = [mm.Measurement("swing-y", T, 1e-3, "period", "--period", cycles=10, amplitude=A, std_given=True)
           for _ in range(n)]
     return build_problem(mm.MeasurementSet([mm.Hanging("ref", sc, np.eye(3), str(cfg))], ms), ["Ixx"])
 
@@ -165,3 +165,112 @@ def test_the_gain_warning_starts_where_the_fixed_point_stops_contracting(g, warn
     assert bool(w) is warned, (g, w)
     if warned and g <= 0:
         assert "falls as it grows" in w[0]
+
+
+# ---------------------------------------------------------------------------
+# studies/point_inputs.py: gravity's dr/dx bound
+# ---------------------------------------------------------------------------
+
+
+def test_gravity_adds_nothing_to_the_factor_inputs_bound():
+    """The amplitude factor is a ratio of periods of one rigid pendulum, all
+    of which scale as 1/sqrt(g): ``r`` does not depend on gravity (checked
+    here: the boat's torsion at 0.3 rad, r at g and 1.2 g agree to 1e-9,
+    the runs' own error ~1e-11), so a stated gravity uncertainty must add
+    nothing to the point's bound on the inputs' factor terms (``_bound_scale``'s
+    gravity 0.0 -> 1 was never run: no test stated one)."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.analysis.simulate import simulate
+    from bifilar.scene import scene_with
+
+    from test_sweep_factor_inputs import SOLAR, _point
+
+    bounds = []
+    for sig in ({}, {"gravity": 1e-3}):
+        _, scene, p = _point(SOLAR, {"spacing": 1.0, "length": 2.0}, components=["Izz"], sigma=sig)
+        e = p["components"]["Izz"]
+        bounds.append(e["amplitude_budget"]["input_factor_bound"] * e["sigma"])  # kg m^2 (stated relative)
+    r = []
+    for g in (scene.gravity, 1.2 * scene.gravity):
+        s = scene_with(scene, gravity=g)
+        r.append(simulate(s, "torsion", 0.3, 10, rtol=1e-10).period / linear_modes(s, rest_pose(s)).get("torsion").period)
+    assert abs(r[0] - r[1]) < 1e-9 and abs(r[0] - 1) > 1e-3, r
+    assert bounds[0] > 0 and bounds[1] == pytest.approx(bounds[0], rel=1e-9), bounds
+
+
+def _full_scalar(monkeypatch, factor, xs=(80.0, 100.0, 110.0)):
+    """``_solve_full_scalar`` on the boat's swing-y (Ixx, 1 ms timing) with the amplitude factor replaced by
+    ``factor(x, T_lin(x))`` (regular runs without a period error, as a run whose error is unknown), the fixed
+    point's iterates at ``xs``."""
+    from types import SimpleNamespace
+
+    from bifilar.estimation import solve
+
+    pb = _boat_problem(1, T=2.97)
+
+    def fake(pb_, k, p, rtol=1e-10, amplitude=None):
+        x = float(p[0])
+        return factor(x, float(pb_.linear_periods([x])[0])), SimpleNamespace(period_error=math.nan), 0.0
+
+    monkeypatch.setattr(solve, "measured_factor", fake)
+    runs = {x: fake(pb, 0, np.array([x])) for x in xs}
+    return pb, solve._solve_full_scalar(pb, np.array([xs[-1]]), 1e-10, runs)
+
+
+def test_the_full_models_root_is_where_its_period_is_the_measured_one(monkeypatch):
+    """A factor linear in Ixx chosen so that ``T_lin r`` equals the measured
+    period at Ixx = 95 exactly: the root is 95 to Brent's 1e-9 of the scale."""
+    T_meas, x_star = 2.97, 95.0
+    pb = _boat_problem(1, T=T_meas)
+    r_star = T_meas / float(pb.linear_periods([x_star])[0])
+    _, out = _full_scalar(monkeypatch, lambda x, T_lin: r_star * (1 + 1e-3 * (x - x_star) / x_star))
+    assert len(out) == 1 and abs(float(out[0][0][0]) - x_star) < 1e-6 * x_star, out
+    assert out[0][1] == pytest.approx(r_star, rel=1e-9)
+
+
+def test_a_period_that_jumps_across_the_measured_one_is_no_root(monkeypatch):
+    """A factor whose ``T_lin r`` jumps from 1 % below the measured period
+    to 1 % above it at Ixx = 95 (the timed coordinate of a beating mode
+    passing from one mode to another): a sign change with no root, which
+    must be refused naming the jump, not answered.  The tolerance on the
+    full model's period is 1e-3 of its 1 ms std (``FULL_MAP_SHARE / std``
+    -> 1 s, and ``max(errs, default=1)`` -> 10 s where no run has a period
+    error, passed: no test had a jump)."""
+    from bifilar.errors import InputError
+
+    with pytest.raises(InputError) as ei:
+        _full_scalar(monkeypatch, lambda x, T_lin: 2.97 / T_lin * (1 + 0.01 * math.copysign(1, x - 95.0)))
+    assert ei.value.field == "--period" and "jumps across the measured one at Ixx = 95" in str(ei.value)
+
+
+# ---------------------------------------------------------------------------
+# analysis/equilibrium.py: tension_range on inclined dependent wires
+# ---------------------------------------------------------------------------
+
+
+def test_range_on_four_inclined_wires_through_one_point():
+    """Four wires from attachments (+-0.3, +-0.2, 0) to anchors (+-0.15,
+    +-0.1, 1) all point at (0, 0, 2), above the CoM: their moments about it
+    vanish, so only the three force equations bind (dependent, rank 3).  By
+    hand: x and y balance give T1 = T3, T2 = T4, z gives T1 + T2 = W |d| /
+    2 with ``d = (0.15, 0.1, 1)`` per unit height, so each wire carries 0 ..
+    W |d| / 2 = 49.84 N.  The session's tests had vertical wires only, whose
+    horizontal force rows are zero (the rank reduction drops them): the
+    weight's right-hand side with an x component (``b[0]`` 0 -> 1) passed."""
+    from bifilar.analysis.equilibrium import rest_pose, tension_range, tensions_determined
+    from bifilar.config import scene_from_dict
+
+    corners = [(1, 1), (-1, 1), (-1, -1), (1, -1)]
+    anch = [[0.15 * x, 0.10 * y, 1.0] for x, y in corners]
+    att = [[0.30 * x, 0.20 * y, 0.0] for x, y in corners]
+    L = [float(np.linalg.norm(np.subtract(a, p))) for a, p in zip(anch, att)]
+    cfg = {"name": "inclined", "body": {"mass": 10.0, "inertia": {"principal": [0.3, 0.5, 0.7]}},
+           "rig": {"anchors": anch, "attachments": att, "lengths": L}}
+    scene = scene_from_dict(cfg, "x", warn=False)
+    rest = rest_pose(scene)
+    assert not tensions_determined(scene, rest)
+    W = scene.mass * scene.gravity
+    hi = W * math.sqrt(0.15 ** 2 + 0.1 ** 2 + 1.0) / 2
+    # the LP's feasibility tolerance ~1e-9 of W
+    assert np.allclose(tension_range(scene, rest), [[0.0, hi]] * 4, rtol=0, atol=1e-7 * W)
