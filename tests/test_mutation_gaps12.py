@@ -274,3 +274,38 @@ def test_range_on_four_inclined_wires_through_one_point():
     hi = W * math.sqrt(0.15 ** 2 + 0.1 ** 2 + 1.0) / 2
     # the LP's feasibility tolerance ~1e-9 of W
     assert np.allclose(tension_range(scene, rest), [[0.0, hi]] * 4, rtol=0, atol=1e-7 * W)
+
+
+
+# ---------------------------------------------------------------------------
+# analysis/simulate.py: reachable_amplitude
+# ---------------------------------------------------------------------------
+
+
+def test_every_rotation_is_limited_to_half_a_turn_and_every_translation_in_metres():
+    """The limit is pi rad for a mode whose dominant coordinate is a
+    rotation (roll, pitch, torsion: no start is more than half a turn from
+    rest) and a length (m) for a translation (swing, bounce), read here
+    from the mode's label, not its index: the Solar Boat's roll is the
+    first rotation (index 3), which ``>= 3 -> > 3`` and ``3 -> 4`` put among
+    the translations (its limit 6 'm') and passed: the tests' rotations were
+    torsions."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.analysis.simulate import reachable_amplitude
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    seen = set()
+    for cfg in ("solar_boat.yaml", "thesis_lin2_pitch.yaml"):
+        s = load_scene(CONFIGS / cfg, warn=False)
+        for m in linear_modes(s, rest_pose(s)).modes:
+            kind = m.label.split("-")[0]
+            seen.add(kind)
+            limit, unit = reachable_amplitude(s, m)
+            if kind in ("roll", "pitch", "torsion"):
+                assert (limit, unit) == (math.pi, "rad"), (cfg, m.label, limit, unit)
+            else:
+                assert kind in ("swing", "bounce") and unit == "m" and limit >= float(np.max(s.lengths)), (cfg, m.label)
+    assert {"roll", "pitch", "torsion", "swing"} <= seen
