@@ -344,3 +344,26 @@ def test_a_modes_rank_is_its_rms_amplitude_over_the_record(sigma):
     few, key = _mode_rank(w, A, T_rec, sigma)
     assert few is False
     assert -key == pytest.approx(rms, rel=1e-7)
+
+
+@pytest.mark.parametrize("left, settled", [(0.05, True), (0.2, False)])
+def test_a_contracting_fixed_point_is_taken_when_what_is_left_is_under_a_tenth_of_the_std(left, settled):
+    """Iterates ``x_n = x* + e c^n`` (c = 0.5) of a contraction: after
+    ``x_2`` the error left is exactly the last step times ``c / (1 - c)``
+    (the geometric series), here set to move the period by ``left`` of its
+    1 ms std (``T_lin`` near-linear over the 1e-4 span: its curvature
+    changes that by ~1e-4 relative).  Taken within a tenth of the std
+    (``IRREGULAR_REFUSE_SHARE``), not beyond; a growing step is never
+    taken.  (``len(pb.unknowns) != 1 -> == 1`` passed: the full model then
+    solved each such case again, to the same answer.)"""
+    from bifilar.estimation.solve import IRREGULAR_REFUSE_SHARE, _contracted
+
+    assert IRREGULAR_REFUSE_SHARE == 0.1
+    pb = _boat_problem(1)
+    r, x_star, c = np.array([1.02]), 90.0, 0.5
+    h = 1e-3 * x_star
+    dT = float(pb.linear_periods([x_star + h])[0] - pb.linear_periods([x_star - h])[0]) / (2 * h)
+    e = left * 1e-3 / (abs(dT) * r[0] * c ** 2)
+    x = [np.array([x_star + e * c ** n]) for n in range(3)]
+    assert _contracted(pb, [(x[0], x[1]), (x[1], x[2])], r) is settled
+    assert _contracted(pb, [(x[2], x[1]), (x[1], x[0])], r) is False  # the steps grow
