@@ -367,3 +367,16 @@ def test_a_contracting_fixed_point_is_taken_when_what_is_left_is_under_a_tenth_o
     x = [np.array([x_star + e * c ** n]) for n in range(3)]
     assert _contracted(pb, [(x[0], x[1]), (x[1], x[2])], r) is settled
     assert _contracted(pb, [(x[2], x[1]), (x[1], x[0])], r) is False  # the steps grow
+
+
+@pytest.mark.parametrize("cycles, few", [(1.5, True), (2.5, False), (40.0, False)])
+def test_a_mode_with_fewer_than_two_cycles_in_the_record_ranks_last(cycles, few):
+    """The first element of the key: fewer than ``MIN_CYCLES`` = 2 cycles
+    of ``omega`` within the record (a slow swell fitted as a "mode"); the
+    count is ``omega T_rec / 2 pi`` (``2 pi -> 3 pi`` and ``* -> /`` in it
+    passed, the tests' modes having tens of cycles or under one)."""
+    from bifilar.estimation.signal_models import _mode_rank
+
+    T_rec = 30.0
+    w = 2 * math.pi * cycles / T_rec
+    assert _mode_rank(w, 0.1, T_rec, 0.01)[0] is few
