@@ -137,6 +137,10 @@ def test_factor_gains_are_the_full_models_slope_over_the_linear_ones():
     est = Estimate(np.array([BOAT_IXX]), "nonlinear", np.array([1.0, 1.0, r0]), laws=[None, _law(None), _law(dr)])
     g = factor_gains(pb, est)
     assert g[0] is None and g[1] is None
+    from types import SimpleNamespace
+
+    two = SimpleNamespace(unknowns=["Ixx", "Izz"], measurements=pb.measurements)  # several unknowns: no gain
+    assert factor_gains(two, est) == [None] * 3
     ref = _full_slope_gain(pb, 2, BOAT_IXX, r0, dr)
     assert abs(ref - 1) > 0.1  # the factor's term is no rounding
     assert g[2] == pytest.approx(ref, rel=1e-4)  # pb.jacobian's own central step (1e-6): ~1e-6 relative
@@ -367,6 +371,7 @@ def test_a_contracting_fixed_point_is_taken_when_what_is_left_is_under_a_tenth_o
     x = [np.array([x_star + e * c ** n]) for n in range(3)]
     assert _contracted(pb, [(x[0], x[1]), (x[1], x[2])], r) is settled
     assert _contracted(pb, [(x[2], x[1]), (x[1], x[0])], r) is False  # the steps grow
+    assert _contracted(pb, [(x[0], x[1])], r) is False  # one step: no contraction measured
 
 
 @pytest.mark.parametrize("cycles, few", [(1.5, True), (2.5, False), (40.0, False)])
