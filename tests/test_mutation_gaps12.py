@@ -412,3 +412,34 @@ def test_the_halves_amplitudes_follow_the_fitted_decay_law(sigma, kappa):
                     t_eval=[T / 4, 3 * T / 4], rtol=1e-12, atol=1e-15)
     got = _half_amplitudes(fit)
     assert got is not None and np.allclose(got, sol.y[0], rtol=1e-9, atol=0), (got, sol.y[0])
+
+
+def test_a_record_in_degrees_under_one_unit_is_refused_too(tmp_path):
+    """The drone's torsion released at 0.9 degrees, recorded in degrees and
+    read as rad (``--signal-quantity angle`` without ``--signal-scale``):
+    its fitted amplitude is 0.9 'rad', below one signal unit, and must be
+    checked as the 1.5-degree record of test_signal_audit11 is (the check
+    runs for any positive amplitude; ``amplitude_period > 0 -> > 1``
+    passed).  Exit 2 naming --signal-scale."""
+    from click.testing import CliRunner
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.cli import main
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    cfg = CONFIGS / "drone_parallel.yaml"
+    s = load_scene(cfg, warn=False)
+    T = linear_modes(s, rest_pose(s)).get("torsion").period
+    t = np.arange(0.0, 30 * T, 1 / 60.0)
+    sg = (2 * math.pi / T) / 400.0  # Q = 200
+    deg = 0.9 * np.exp(-sg * t) * np.cos(2 * math.pi * t / T) \
+        + 1e-3 * 0.9 * np.random.default_rng(3).standard_normal(t.size)
+    rec = tmp_path / "torsion_deg.csv"
+    np.savetxt(rec, np.c_[t, deg], delimiter=",", header="t,angle_deg", comments="", fmt="%.10g")
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--signal-quantity", "angle",
+                                  "--json"])
+    assert r.exit_code == 2 and r.stdout == "", r.output
+    assert "--signal-scale" in r.output and "contradicts the record" in r.output, r.output
