@@ -423,22 +423,11 @@ def test_a_record_in_degrees_under_one_unit_is_refused_too(tmp_path):
     passed).  Exit 2 naming --signal-scale."""
     from click.testing import CliRunner
 
-    from bifilar.analysis.equilibrium import rest_pose
-    from bifilar.analysis.modes import linear_modes
     from bifilar.cli import main
-    from bifilar.config import load_scene
 
-    from conftest import CONFIGS
+    from test_signal_audit11 import drone_torsion_in_degrees
 
-    cfg = CONFIGS / "drone_parallel.yaml"
-    s = load_scene(cfg, warn=False)
-    T = linear_modes(s, rest_pose(s)).get("torsion").period
-    t = np.arange(0.0, 30 * T, 1 / 60.0)
-    sg = (2 * math.pi / T) / 400.0  # Q = 200
-    deg = 0.9 * np.exp(-sg * t) * np.cos(2 * math.pi * t / T) \
-        + 1e-3 * 0.9 * np.random.default_rng(3).standard_normal(t.size)
-    rec = tmp_path / "torsion_deg.csv"
-    np.savetxt(rec, np.c_[t, deg], delimiter=",", header="t,angle_deg", comments="", fmt="%.10g")
+    cfg, _, rec = drone_torsion_in_degrees(tmp_path, 0.9)
     r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--signal-quantity", "angle",
                                   "--json"])
     assert r.exit_code == 2 and r.stdout == "", r.output
