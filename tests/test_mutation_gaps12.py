@@ -217,7 +217,10 @@ def _full_scalar(monkeypatch, factor, xs=(80.0, 100.0, 110.0)):
         x = float(p[0])
         return factor(x, float(pb_.linear_periods([x])[0])), SimpleNamespace(period_error=math.nan), 0.0
 
-    monkeypatch.setattr(solve, "measured_factor", fake)
+    import sys
+
+    # where _solve_full_scalar lives (solve.py, or the module it may move to, which re-exports it in solve)
+    monkeypatch.setattr(sys.modules[solve._solve_full_scalar.__module__], "measured_factor", fake)
     runs = {x: fake(pb, 0, np.array([x])) for x in xs}
     return pb, solve._solve_full_scalar(pb, np.array([xs[-1]]), 1e-10, runs)
 
