@@ -141,6 +141,28 @@ def test_a_noisy_chirps_amplitude_law_is_judged_by_its_frequency_shift():
 # --------------------------------------------------------------------------- a record in degrees
 
 
+def drone_torsion_in_degrees(tmp_path, amplitude_deg: float):
+    """(config path, scene, record path): the drone's torsion released at
+    ``amplitude_deg`` degrees and recorded in degrees (Q = 200, 30 linear
+    periods at 60 Hz, noise 1e-3 of the amplitude, seed 3)."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    cfg = CONFIGS / "drone_parallel.yaml"
+    s = load_scene(cfg, warn=False)
+    T = linear_modes(s, rest_pose(s)).get("torsion").period
+    t = np.arange(0.0, 30 * T, 1 / 60.0)
+    sg = (2 * math.pi / T) / 400.0  # Q = 200
+    deg = amplitude_deg * np.exp(-sg * t) * np.cos(2 * math.pi * t / T) \
+        + 1e-3 * amplitude_deg * np.random.default_rng(3).standard_normal(t.size)
+    rec = tmp_path / "torsion_deg.csv"
+    np.savetxt(rec, np.c_[t, deg], delimiter=",", header="t,angle_deg", comments="", fmt="%.10g")
+    return cfg, s, rec
+
+
 def test_a_record_in_degrees_read_as_radians_is_refused(tmp_path):
     """The drone's torsion released at 1.5 degrees, recorded in degrees, and
     given with ``--signal-quantity angle`` but no ``--signal-scale``: the
@@ -153,22 +175,9 @@ def test_a_record_in_degrees_read_as_radians_is_refused(tmp_path):
     record is answered within its std of the truth."""
     from click.testing import CliRunner
 
-    from bifilar.analysis.equilibrium import rest_pose
-    from bifilar.analysis.modes import linear_modes
     from bifilar.cli import main
-    from bifilar.config import load_scene
 
-    from conftest import CONFIGS
-
-    cfg = CONFIGS / "drone_parallel.yaml"
-    s = load_scene(cfg, warn=False)
-    T = linear_modes(s, rest_pose(s)).get("torsion").period
-    t = np.arange(0.0, 30 * T, 1 / 60.0)
-    sg = (2 * math.pi / T) / 400.0  # Q = 200
-    deg = 1.5 * np.exp(-sg * t) * np.cos(2 * math.pi * t / T) \
-        + 1e-3 * 1.5 * np.random.default_rng(3).standard_normal(t.size)
-    rec = tmp_path / "torsion_deg.csv"
-    np.savetxt(rec, np.c_[t, deg], delimiter=",", header="t,angle_deg", comments="", fmt="%.10g")
+    cfg, s, rec = drone_torsion_in_degrees(tmp_path, 1.5)
     r = CliRunner().invoke(main, ["invert", str(cfg), "--signal", f"torsion={rec}", "--signal-quantity", "angle",
                                   "--json"])
     assert r.exit_code == 2, r.output
