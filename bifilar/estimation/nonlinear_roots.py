@@ -175,7 +175,9 @@ def _solve_full_scalar(pb: Problem, p, rtol: float, runs: dict):
             # iterate, which invert moves back to the edge and checks there
             return None
         if x is None or abs(F(x)) > tol():
-            jumped = f" (its period jumps across the measured one at {name} = {', '.join(f'{j:.6g}' for j in jumps + ([x] if x is not None else []))})" if jumps or x is not None else ""
+            at = sorted(jumps + ([x] if x is not None else []))
+            at = [a for i, a in enumerate(at) if i == 0 or abs(a - at[i - 1]) > 1e-6 * sc]  # the search re-finds one
+            jumped = f" (its period jumps across the measured one at {name} = {', '.join(f'{j:.6g}' for j in at)})" if at else ""
             raise InputError(m.field, (
                 f"mode '{m.label}' released at {m.amplitude:g}: the fixed point T = T_lin r did not settle and "
                 f"the search on the full nonlinear model found no {name} that reproduces the period "
