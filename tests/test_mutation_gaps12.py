@@ -435,3 +435,35 @@ def test_a_record_in_degrees_under_one_unit_is_refused_too(tmp_path):
                                   "--json"])
     assert r.exit_code == 2 and r.stdout == "", r.output
     assert "--signal-scale" in r.output and "contradicts the record" in r.output, r.output
+
+
+def test_an_unsettled_fixed_point_with_regular_runs_is_refused_only_beyond_its_share():
+    """mut12's gap: ``_refuse_unsettled``'s branch for regular runs (no check
+    difference, ``seen`` 0) was reached by no test.  Its last step moved the
+    model period by ``|T_lin(p) - T_lin(p_at)| r``; the refusal must come
+    exactly when that exceeds ``IRREGULAR_REFUSE_SHARE`` of the period's
+    std, name the measurement's field and say why (the factor changes with
+    the unknowns as fast as the linear period: a resonance), and a step
+    inside the share must pass.  ``T_lin`` is the boat's own (its linear
+    periods at two Ixx), so the step size in Ixx is set from its slope
+    ``dT_lin/dIxx`` by central differences."""
+    from bifilar.errors import InputError
+    from bifilar.estimation import solve
+
+    pb = _boat_problem(1, T=2.97)
+    m = pb.measurements[0]
+    p0 = np.array([BOAT_IXX])
+    h = 1e-3 * BOAT_IXX
+    slope = float((pb.linear_periods(p0 + h)[0] - pb.linear_periods(p0 - h)[0]) / (2 * h))  # s per kg m^2
+    r = np.array([1.0])
+    step = solve.IRREGULAR_REFUSE_SHARE * m.std / abs(slope)  # the Ixx step that moves T_lin by the share
+    solve._refuse_unsettled(pb, p0 + 0.9 * step, p0, r, [0.0], 6)  # inside: no refusal
+    with pytest.raises(InputError) as ei:
+        solve._refuse_unsettled(pb, p0 + 1.1 * step, p0, r, [0.0], 6)
+    msg = str(ei.value)
+    assert ei.value.field == "--period", ei.value.field
+    assert "did not settle in 6 simulations" in msg and "release at a smaller amplitude" in msg, msg
+    assert "changes with the unknowns about as fast as the linear period" in msg, msg
+    # the step moved the period by 1.1 shares: the message's figure is that, to its one digit
+    moved = 1.1 * solve.IRREGULAR_REFUSE_SHARE * m.std
+    assert f"by {moved:.1g} s" in msg, msg
