@@ -467,3 +467,34 @@ def test_an_unsettled_fixed_point_with_regular_runs_is_refused_only_beyond_its_s
     # the step moved the period by 1.1 shares: the message's figure is that, to its one digit
     moved = 1.1 * solve.IRREGULAR_REFUSE_SHARE * m.std
     assert f"by {moved:.1g} s" in msg, msg
+
+
+@pytest.mark.parametrize("irregular", [0.0, 1e-7])
+def test_the_secant_abandons_a_step_whose_run_is_irregular(monkeypatch, irregular):
+    """mut12's gap: no test made a secant step's run irregular (``irr > 0 ->
+    > 1`` passed).  Two periods of the boat's swing-y, one unknown, the
+    factor replaced by a constant 1 (so the fixed point's map is the linear
+    solution ``x_lin`` whatever ``x``: the secant from two iterates lands on
+    it in one step and the model periods then agree exactly).  A regular run
+    settles there; a run with any check difference (1e-7 s, 1e-4 of the
+    period's 1 ms std) is no smooth factor, and the secant must give up
+    (None: refused by ``_refuse_unsettled``), not return that iterate."""
+    from types import SimpleNamespace
+
+    from bifilar.estimation import solve
+
+    T = float(_boat_problem(1).linear_periods(np.array([BOAT_IXX]))[0])  # the boat's own linear period
+    pb = _boat_problem(2, T=T)
+
+    def fake(pb_, k, p, rtol=1e-10, amplitude=None):
+        return 1.0, SimpleNamespace(period_error=0.0), irregular
+
+    monkeypatch.setattr(solve, "measured_factor", fake)
+    x_lin = float(solve.solve_linear(pb, solve._targets(pb, np.ones(2)), p0=np.array([BOAT_IXX]))[0])
+    assert abs(x_lin - BOAT_IXX) < 1e-6 * BOAT_IXX  # the linear model's own answer
+    steps = [(np.array([x_lin - 2.0]), np.array([x_lin])), (np.array([x_lin + 1.0]), np.array([x_lin]))]
+    out = solve._settle_by_secant(pb, steps, 1e-10)
+    if irregular:
+        assert out is None
+    else:
+        assert out is not None and abs(float(out[0][0]) - x_lin) <= 1e-9 * x_lin, (out, x_lin)
