@@ -227,8 +227,9 @@ def two_mode_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float, s
     kin = mx.kinematics(y0, P)
     d, Rp, R = kin["d"], kin["Rp"], kin["R"]
     G = np.concatenate([d, np.cross(Rp, d)], axis=1)  # phidot_i = G_i . [v, w_world]
-    Wi = np.diag(np.r_[np.full(3, 1.0 / scene.mass), 1.0 / np.linalg.eigvalsh(np.asarray(scene.inertia)).mean()
-                      * np.ones(3)])
+    Wi = np.zeros((6, 6))  # the inverse of the kinetic-energy metric of [v, w_world]: 1/m, R I^-1 R^T
+    Wi[:3, :3] = np.eye(3) / scene.mass
+    Wi[3:, 3:] = R @ np.linalg.inv(np.asarray(scene.inertia, float)) @ R.T
     S = G @ Wi @ G.T
     vel = vel - Wi @ G.T @ np.linalg.lstsq(S, G @ vel, rcond=None)[0]
     y0 = y0.copy()
