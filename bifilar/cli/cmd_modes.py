@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import click
 
-from .common import check_output_path, config_rest_pose, console, emit_json, esc, fmt, handle_errors, write_csv
+from .common import (check_output_path, config_rest_pose, console, emit_json, esc, fmt, handle_errors, warn_at_rest,
+                     write_csv)
 
 
 def modes_document(scene, rest, ms) -> dict:
@@ -57,16 +58,7 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     scene = load_scene(config)
     rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
-    from ..analysis.equilibrium import indeterminate_warning, stretching_warning
-
-    if (w := indeterminate_warning(scene, rest)) is not None:
-        click.echo(f"warning: {w}", err=True)
-    if (w := stretching_warning(scene, rest, ms.modes)) is not None:
-        click.echo(f"warning: {w}", err=True)
-    from ..analysis.clearance import clearance_warnings
-
-    for w in clearance_warnings(scene, rest):
-        click.echo(f"warning: {w}", err=True)
+    warn_at_rest(scene, rest, ms.modes)
     if out_p:
         rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]
         write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)

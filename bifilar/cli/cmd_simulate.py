@@ -6,7 +6,8 @@ import math
 
 import click
 
-from .common import check_output_path, config_rest_pose, console, emit_json, esc, fmt, handle_errors, progress_bar
+from .common import (check_output_path, config_rest_pose, console, emit_json, esc, fmt, handle_errors, progress_bar,
+                     warn_at_rest)
 
 
 @click.command("simulate")
@@ -57,16 +58,7 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     timing = stated_timing(cfg)  # the period's numerical error is held against a tenth of it
     rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
-    from ..analysis.equilibrium import indeterminate_warning, stretching_warning
-
-    if (w := indeterminate_warning(scene, rest)) is not None:  # the tension figures are one split of many
-        click.echo(f"warning: {w}", err=True)
-    if (w := stretching_warning(scene, rest, ms.modes, only=ms.pick(mode).label)) is not None:
-        click.echo(f"warning: {w}", err=True)
-    from ..analysis.clearance import clearance_warnings
-
-    for w in clearance_warnings(scene, rest):
-        click.echo(f"warning: {w}", err=True)
+    warn_at_rest(scene, rest, ms.modes, only=ms.pick(mode).label)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
 

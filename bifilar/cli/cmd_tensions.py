@@ -8,7 +8,7 @@ import math
 import click
 
 from .common import (check_output_path, config_rest_pose, console, emit_json, esc, handle_errors, progress_bar,
-                     write_csv)
+                     warn_at_rest, write_csv)
 
 
 @click.command("tensions")
@@ -52,18 +52,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
     if motion is None:
         rest = config_rest_pose(scene, config)
-        from ..analysis.equilibrium import indeterminate_warning, stretching_warning
-
-        if (w := indeterminate_warning(scene, rest)) is not None:  # the model's tensions are one split of many
-            click.echo(f"warning: {w}", err=True)
         ms = linear_modes(scene, rest)
         mode = ms.pick(mode).label
-        if (w := stretching_warning(scene, rest, ms.modes, only=mode)) is not None:  # as simulate's run
-            click.echo(f"warning: {w}", err=True)
-        from ..analysis.clearance import clearance_warnings
-
-        for w in clearance_warnings(scene, rest):
-            click.echo(f"warning: {w}", err=True)
+        warn_at_rest(scene, rest, ms.modes, only=mode)  # as simulate's run
         with progress_bar("simulating", enabled=True) as upd:
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=SIM_RTOL,
                            samples_per_period=200, progress=upd)
