@@ -13,7 +13,9 @@ is then (time of a 210-period run - time of a 10-period run) / 200, CPU time
 * the same with a progress callback, as ``bifilar simulate`` calls it
   (a bar on a terminal, the stop check elsewhere: the callback the CLI
   passes when stderr is not a terminal); since session 12 the kernel ticks
-  itself, before it was wrapped;
+  itself, before it was wrapped; since session 13 without the timed
+  coordinate at every sample (``coordinate=False``: the CLI without
+  ``--plot``);
 * ``simulate`` with ``method="DOP853"`` (solve_ivp, the default before);
 * ``naive``: the per-wire numpy right-hand side of
   ``bench_work_precision.naive_rhs_factory`` in a plain solve_ivp DOP853
@@ -64,7 +66,7 @@ def _contenders(scene, rest, ms):
                                                                  rtol=rt, method="auto").period,
         "simulate, CLI path (auto, progress callback)": lambda n, rt: simulate(
             scene, "torsion", AMP, n, rest=rest, modes=ms, rtol=rt, method="auto",
-            progress=lambda done, total: raise_if_stop_requested()).period,
+            progress=lambda done, total: raise_if_stop_requested(), coordinate=False).period,
         "simulate (solve_ivp DOP853)": lambda n, rt: simulate(scene, "torsion", AMP, n, rest=rest, modes=ms,
                                                                rtol=rt, method="DOP853").period,
         "naive (per-wire numpy, solve_ivp DOP853)": lambda n, rt: scipy_run(scene, rest, md, AMP, n, "DOP853", rt,

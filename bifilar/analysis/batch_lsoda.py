@@ -173,7 +173,9 @@ def _window(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first, 
         for b in range(Ys.shape[1]):
             sel = tt <= stop_tau[b] + 1e-12
             if np.any(sel):
-                obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :].copy()))  # com0 added at the end
+                # a boolean index already copies (a second copy of a 210-period record cost ~1 % of a period);
+                # com0 is added at the end, in place (SceneRun.y)
+                obs.samples[b].append((tt[sel] * T_ref[b], Ys[sel, b, :]))
                 if Tp is not None:
                     obs.sample_tensions[b].append(Tp[:, sel, b].T)
     return cc[-7:]

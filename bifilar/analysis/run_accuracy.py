@@ -262,6 +262,34 @@ interpolation's error falls as the 8th power of the spacing: from 64 to 1024
 by 16^8 ~ 4e9)."""
 
 
+CROSSING_ROWS = 12
+"""Rows either side of a crossing's sample that :func:`crossing_period_error`
+may read: it reads the crossing's pair one sample either way and the three
+degree-7 stencils about it, at most 6 rows either side in the record's
+middle and 8 at its ends, where the stencils are shifted inside the record
+(tests/test_simulate_summary.py: 7 rows change the error there)."""
+
+
+def crossing_rows(t: np.ndarray, crossings) -> list:
+    """The slices of the samples ``t`` (s) that :func:`crossing_period_error`
+    reads of the timed coordinate for these ``crossings`` (s): the first and
+    the last crossing's, :data:`CROSSING_ROWS` either side (none where it
+    reads none).  A caller that has not computed the coordinate at every
+    sample computes it on these rows only (NaN elsewhere) and gets the same
+    error, bit for bit (tests/test_simulate_summary.py)."""
+    tc = np.asarray(crossings, float)
+    t = np.asarray(t, float)
+    if len(tc) < 2 or len(t) < 9:
+        return []
+    dt = float(t[1] - t[0])
+    K = len(t)
+    out = []
+    for tx in (tc[0], tc[-1]):
+        k0 = int(np.floor((tx - t[0]) / dt))
+        out.append(slice(min(max(k0 - CROSSING_ROWS, 0), K), min(max(k0 + CROSSING_ROWS + 1, 0), K)))
+    return out
+
+
 def crossing_period_error(t: np.ndarray, c: np.ndarray, crossings) -> float:
     """The part of a mean period's error (s) that locating its crossings
     between uniform samples makes: the mean period is (last - first crossing)

@@ -37,6 +37,7 @@ from .run_accuracy import (  # noqa: F401 (the names callers import from here)
     check_rtol,
     CHECK_RTOL_RATIO,
     crossing_period_error,
+    crossing_rows,
     CROSSING_SHARE,
     drift_floor,
     DRIFT_FLOOR_ULPS,
@@ -105,7 +106,8 @@ class SimulationResult(RunSummary):
 
     t, y : dense samples (k,), (k, 13) of the state (positions absolute).
     coordinate : (k,) the timed coordinate (dominant component of the mode
-        shape, relative to rest; m or rad).
+        shape, relative to rest; m or rad); None from ``simulate(...,
+        coordinate=False)``.
     tensions : (k, n) N at the samples.
     """
 
@@ -368,6 +370,7 @@ def simulate(
     max_evaluations: float = 1e6,
     timing: float | None = None,
     check: bool = True,
+    coordinate: bool = True,
 ) -> SimulationResult:
     """Integrate the nonlinear motion started from ``amplitude`` x a mode shape.
 
@@ -407,10 +410,18 @@ def simulate(
         :data:`IRREGULAR_SPREAD` of the period, run again from the same start
         at a tighter tolerance and take the difference into ``period_error``
         (:func:`check_period`; False: the error model alone, one run).
+    coordinate : False: ``method="auto"``'s result leaves out the timed
+        coordinate at the samples (:attr:`SimulationResult.coordinate` None;
+        every other field the same, bit for bit), for a caller that reads
+        only the summary figures (``bifilar simulate`` without ``--plot``):
+        it is then computed only where the crossings' check reads it
+        (:func:`~bifilar.analysis.run_accuracy.crossing_rows`), ~1.5 % of a
+        run (docs/performance.md, session 13).  Other methods compute it
+        anyway.
     """
     kw = dict(rest=rest, modes=modes, y0=y0, t_end=t_end, method=method, rtol=rtol, atol=atol,
               samples_per_period=samples_per_period, on_slack=on_slack, max_evaluations=max_evaluations,
-              timing=timing)
+              timing=timing, coordinate=coordinate)
     res = _simulate_once(scene, mode, amplitude, periods, progress=progress, **kw)
     if check and needs_check(res):
 
@@ -424,7 +435,7 @@ def simulate(
 
 def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest, modes, y0, t_end, method: str,
                    rtol: float, atol, samples_per_period: int, on_slack: str, progress, max_evaluations: float,
-                   timing: float | None) -> SimulationResult:
+                   timing: float | None, coordinate: bool = True) -> SimulationResult:
     """One run of :func:`simulate` (its arguments), without the check of an irregular motion."""
     if on_slack not in ("continue", "stop"):
         raise InputError("--on-slack", "must be 'continue' or 'stop'")
@@ -444,7 +455,7 @@ def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest
             raise InputError("--mode", f"mode '{m.label}' has no restoring stiffness (no period); pick another")
         if method == "auto":
             return _simulate_engine(scene, rest, m, amplitude, periods, rtol, atol, samples_per_period, on_slack,
-                                    progress, timing)
+                                    progress, timing, coordinate)
         y0 = initial_state(scene, rest, m, amplitude)
     T_ref = (m.period if m is not None else None) or min((x.period for x in modes.modes if x.period), default=1.0)
     if t_end is None:
@@ -595,10 +606,12 @@ def _with_budget(f, t_end: float, max_evaluations: float):
 
 
 def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, periods: float, rtol: float, atol,
-                     samples_per_period: int, on_slack: str, progress, timing: float | None = None) -> SimulationResult:
+                     samples_per_period: int, on_slack: str, progress, timing: float | None = None,
+                     coordinate: bool = True) -> SimulationResult:
     """``simulate(method="auto")``: the batched engine's one-scene LSODA path,
-    its samples turned into a :class:`SimulationResult` (tensions and the
-    timed coordinate at the samples; period, crossings and health from the run)."""
+    its samples turned into a :class:`SimulationResult` (tensions and, with
+    ``coordinate``, the timed coordinate at the samples; period, crossings
+    and health from the run)."""
     from .batch import run_one
 
     initial_state(scene, rest, m, amplitude)  # the input checks (InputError for an amplitude no pose can take)
@@ -614,7 +627,12 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         if failed:
             reason = failed[0].split(": ", 1)[-1]  # "LSODA: <why>"
             raise IntegrationError("integrator " + reason.replace(": ", " failed: ", 1))
-        c = relative_pose(run.y, rest, m.dominant)
+        if coordinate:
+            c = relative_pose(run.y, rest, m.dominant)
+        else:  # only the rows the crossings' check reads (each row's value is the same computed alone)
+            c = np.full(len(run.y), np.nan)
+            for rows in crossing_rows(run.t, run.crossings):
+                c[rows] = relative_pose(run.y[rows], rest, m.dominant)
         model_err, _ = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, Lmax,
                                        linear_period=m.period, drift=run.energy_drift)
         # the crossings lie between samples: a motion with fast harmonics (a large swing of a double
@@ -635,7 +653,7 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
                               crossing=cross if np.isfinite(cross) else 0.0)
     warnings = list(run.warnings) + ([w] if w else [])
     return SimulationResult(
-        t=run.t, y=run.y, coordinate=c, coordinate_name=run.coordinate_name, tensions=T,
+        t=run.t, y=run.y, coordinate=c if coordinate else None, coordinate_name=run.coordinate_name, tensions=T,
         period=run.period, period_std=run.period_std, crossings=run.crossings, linear_period=m.period,
         max_constraint_violation=run.max_constraint_violation, energy_drift=run.energy_drift,
         tension_min=np.minimum(run.tension_min, T.min(axis=0)), tension_max=np.maximum(run.tension_max, T.max(axis=0)),

@@ -76,8 +76,9 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     else:
         mode = ms.pick(mode).label
         with progress_bar("simulating", enabled=True) as upd:
+            # the timed coordinate at every sample only for --plot (--out writes the poses from y)
             res = run(scene, mode, amplitude, periods, rest=rest, modes=ms, method=method, rtol=rtol,
-                      on_slack=on_slack, progress=upd, timing=timing)
+                      on_slack=on_slack, progress=upd, timing=timing, coordinate=plot_p is not None)
     if out_p:
         from ..report import write_timeseries_csv
 
