@@ -126,7 +126,8 @@ class SimulationResult(RunSummary):
     period_error_crossings: float = 0.0
     """The part of :attr:`period_error` that locating the crossings between samples adds, s
     (:func:`crossing_period_error`; the ``auto`` engine's runs only, 0 for the others, whose
-    crossings are roots of the integrator's own continuous solution)."""
+    crossings are roots of the integrator's own continuous solution; NaN where it could not be estimated,
+    and then :attr:`period_error` is NaN too, not established)."""
     period_check: dict | None = None
     """The check run of a motion that is not clean (:func:`check_period`): ``method``, ``rtol``, its
     ``period`` (s), the ``difference`` from :attr:`period` (s) and the error model's ``model_bound`` (s);
@@ -622,7 +623,8 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         cross = (0.0 if run.period is None or untimed(amplitude, m.dominant, Lmax)
                  or small_amplitude_period(amplitude, m.dominant, Lmax, m.period) is not None
                  else crossing_period_error(run.t, c, run.crossings))
-        if not cross > CROSSING_SHARE * model_err or spp * SAMPLES_STEP > MAX_SAMPLES_PER_PERIOD:
+        # NaN (the estimate failed: too few samples) is taken again too; still NaN, the error is not established
+        if (np.isfinite(cross) and not cross > CROSSING_SHARE * model_err) or spp * SAMPLES_STEP > MAX_SAMPLES_PER_PERIOD:
             break
         spp *= SAMPLES_STEP
     runtime = time.perf_counter() - t0
@@ -632,7 +634,7 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
     perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, Lmax,
                               timing=timing, linear_period=m.period, drift=run.energy_drift,
-                              crossing=cross if np.isfinite(cross) else 0.0)
+                              crossing=cross)
     warnings = list(run.warnings) + ([w] if w else [])
     return SimulationResult(
         t=run.t, y=run.y, coordinate=c, coordinate_name=run.coordinate_name, tensions=T,
@@ -643,7 +645,7 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
         nfev=int(run.nfev), runtime=runtime, warnings=warnings,
         energy_drift_resolution=drift_resolution(scene, rest, run.y[0]) if np.isfinite(run.energy_drift) else np.nan,
-        period_error=perr, period_error_crossings=cross if np.isfinite(cross) and run.period is not None else 0.0,
+        period_error=perr, period_error_crossings=cross if run.period is not None else 0.0,
     )
 
 

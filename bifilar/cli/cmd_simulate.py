@@ -132,6 +132,8 @@ def _period_text(period, error) -> str:
     one at the error's leading decade, at most 12), with that error."""
     if period is None:
         return fmt(None)
+    if error is None or math.isnan(error):
+        return f"{period:.10g} (numerical error not established)"
     if not (error is not None and math.isfinite(error) and error > 0):
         return fmt(period, 10)
     digits = min(max(math.floor(math.log10(abs(period))) - math.floor(math.log10(error)) + 1, 1), 12)
