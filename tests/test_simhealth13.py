@@ -59,3 +59,60 @@ def test_the_auto_engine_reports_an_unestimated_period_error_as_null(monkeypatch
     assert doc["period_error"] is None and doc["period_error_crossings"] is None
     assert sum("not established" in w and "--periods" in w for w in r.warnings) == 1
     assert len(calls) == 3 and calls[-1] > 15 * calls[0]  # 64 -> 256 -> 1024 samples a period
+
+
+# ---------------------------------------------------------------------------
+# 3. a start exactly at the end of a mode's reach
+# ---------------------------------------------------------------------------
+
+SHORT_WIRES = {  # 1 kg on two vertical 5 cm wires 0.2 m apart: a swing of 5 cm puts both wires horizontal
+    "body": {"mass": 1.0, "inertia": {"principal": [0.01, 0.01, 0.01]}},
+    "rig": {"anchors": [[-0.1, 0, 0.05], [0.1, 0, 0.05]], "attachments": [[-0.1, 0, 0], [0.1, 0, 0]],
+            "lengths": [0.05, 0.05]},
+}
+PLATE_REACH = float(np.arccos(0.25))  # thesis plate's torsion: wires horizontal at cos A = 1/4 (test_start_pose.py)
+
+
+@pytest.mark.parametrize("command", [["simulate", "--mode", "swing-x"], ["simulate", "--mode", "swing-y"],
+                                     ["tensions", "--mode", "swing-x"]])
+def test_a_start_at_the_end_of_the_reach_is_refused(tmp_path, command):
+    """Swung by exactly its wire length the body hangs on horizontal wires:
+    the multipliers are singular (+-1.6e7 N on a 1 kg body for swing-x) and
+    simulate reported 'WIRE 2 GOES SLACK at t = 0' with exit 0 and a period.
+    Now exit 2 naming --amplitude and where the reach ends; 1e-9 m short of
+    it (2e-8 of the wire) still runs."""
+    f = tmp_path / "short.yaml"
+    f.write_text(json.dumps(SHORT_WIRES))
+    args = [command[0], str(f), *command[1:], "--periods", "1", "--json"]
+    line = one_error_line(CliRunner().invoke(main, [*args, "--amplitude", "0.05"]), "--amplitude")
+    assert "end of its reach" in line and "0.05 m" in line
+    res = CliRunner().invoke(main, [*args, "--amplitude", "0.049999999"])
+    assert res.exit_code == 0, res.stderr
+    json.loads(res.stdout)
+
+
+def test_the_plate_twisted_to_its_analytic_reach_is_refused_in_invert(tmp_path):
+    """invert at a stated amplitude runs the same start: the thesis plate's
+    torsion released at arccos(1/4) (its wires horizontal) is refused before
+    any simulation; 1e-8 rad short of it the start pose is feasible (the
+    ratio of test reach.py: 8e-5 > EDGE_TOL 4.5e-5)."""
+    from bifilar.analysis import start_pose as spm
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.config import load_scene
+    from conftest import CONFIGS
+
+    scene = load_scene(CONFIGS / "thesis_lin2_pitch.yaml", warn=False)
+    rest = rest_pose(scene)
+    md = linear_modes(scene, rest).get("torsion")
+    sp = spm.start_poses([scene] * 3, [rest] * 3, [md] * 3, [PLATE_REACH, PLATE_REACH - 1e-8, 1.0])
+    assert list(sp.feasible) == [False, True, True] and sp.gap[0] == 0.0
+    meas = tmp_path / "m.yaml"
+    meas.write_text(json.dumps({"config": str(CONFIGS / "thesis_lin2_pitch.yaml"), "solve_for": ["Izz"],
+                                "measurements": [{"mode": "torsion", "period": "3.2 +- 0.001",
+                                                  "amplitude": PLATE_REACH}]}))
+    res = CliRunner().invoke(main, ["invert", "--measurements", str(meas), "--json"])
+    err = [ln for ln in res.stderr.splitlines() if ln.startswith("error:")]
+    assert res.exit_code == 2 and len(err) == 1 and "end of its reach" in err[0], res.stderr
+    assert "Traceback" not in res.stderr and res.stdout == ""
+
