@@ -116,3 +116,26 @@ def test_the_plate_twisted_to_its_analytic_reach_is_refused_in_invert(tmp_path):
     assert res.exit_code == 2 and len(err) == 1 and "end of its reach" in err[0], res.stderr
     assert "Traceback" not in res.stderr and res.stdout == ""
 
+
+
+def test_dependent_wires_are_not_at_the_end_of_their_reach():
+    """Four parallel vertical wires on a rectangle are dependent: at rest the
+    wires' gradients with the held coordinate have rank 4 of 5 (the fifth
+    singular value 1e-17), so the ratio of the smallest ones was rounding
+    over rounding (0.07-16 for these starts, one below EDGE_TOL would refuse
+    a good start).  The ratio is now taken at the rest rank: every start of
+    swing-x, swing-y and torsion up to 0.2 stays within 5 % of 1 (the pose
+    barely changes the gradients' span)."""
+    from bifilar.analysis import start_pose as spm
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+
+    P = [[-0.3, -0.2, 0.0], [0.3, -0.2, 0.0], [0.3, 0.2, 0.0], [-0.3, 0.2, 0.0]]
+    sc = scene_from_dict({"body": {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]}},
+                          "rig": {"anchors": [[x, y, 1.0] for x, y, _ in P], "attachments": P,
+                                  "lengths": [1.0] * 4}}, warn=False)
+    rest = rest_pose(sc)
+    for md in (m for m in linear_modes(sc, rest).modes if m.period):
+        sp = spm.start_poses([sc] * 3, [rest] * 3, [md] * 3, [0.001, 0.05, 0.2])
+        assert np.all(sp.feasible) and np.all(np.abs(sp.edge - 1) < 0.05), (md.label, sp.edge)
+

@@ -479,26 +479,36 @@ at 1e-8 rad short of it, 1.6e-4 at 1e-9 m short of the 5 cm swing's."""
 
 def edge_ratio(rig: "_Rig", x: np.ndarray, hold: np.ndarray) -> np.ndarray:
     """(B,) how far starts x (B, 6, chart) are from the end of their reach: the
-    smallest singular value of the wires' unit constraint gradients together
+    r-th singular value of the wires' unit constraint gradients together
     with the held coordinate's (rows [d_i / |d_i|, (w_i x d_i) / (|d_i| l)],
     l the farthest attachment from the CoM, and e_hold) at the start over the
-    same at rest.  The held coordinate cannot move further where that matrix
+    same at rest, r the matrix's rank at rest (:data:`RANK_TOL`; n + 1 but
+    for dependent wires).  The held coordinate cannot move further where that matrix
     is singular: the wires are horizontal (a swing on parallel wires) or the
     held direction lies in the wires' span, and the start's tensions are not
     determined (the multipliers' matrix is singular)."""
     B = len(x)
     lever = np.maximum(np.max(np.linalg.norm(rig.p, axis=2), axis=1), 1e-300)  # (B,)
 
-    def smallest(xx):
+    def singular(xx):
         d, w, _ = rig.wires(xx)
         G = rig.jacobian(xx, d, w) / np.linalg.norm(d, axis=2)[:, :, None]
         G[:, :, 3:] /= lever[:, None, None]
         e = np.zeros((B, 1, 6))
         e[np.arange(B), 0, hold] = 1.0
-        return np.linalg.svd(np.concatenate([G, e], axis=1), compute_uv=False)[:, -1]
+        return np.linalg.svd(np.concatenate([G, e], axis=1), compute_uv=False)
 
-    at_rest = smallest(np.zeros_like(x))
-    return smallest(x) / np.where(at_rest > 0, at_rest, 1.0)
+    at_rest = singular(np.zeros_like(x))
+    # the rank at rest: dependent wires (four parallel ones) leave one singular value at rounding there
+    r = np.sum(at_rest > RANK_TOL * at_rest[:, :1], axis=1)
+    k = np.arange(B), r - 1
+    return singular(x)[k] / at_rest[k]
+
+
+RANK_TOL = 1e-8
+"""Singular values of the rest matrix of :func:`edge_ratio` below this share of
+its largest are rounding: a rig of four or five dependent wires (parallel
+vertical wires of a rectangle: 1e-17) has that rank and no more."""
 
 
 def refusal(scene: Scene, mode, amplitude: float, gap: float, which: str = "") -> InputError:
