@@ -170,3 +170,106 @@ def test_tensions_gives_no_inertia_from_a_motion_with_a_slack_wire(tmp_path):
     izz = json.loads(res.stdout)["inertia_from_tensions"]["Izz"]
     assert izz["value"] is not None and "reason" not in izz
     assert abs(izz["value"] - izz["config"]) <= 4 * izz["std"] + 1e-12 * izz["config"]
+
+
+# ---------------------------------------------------------------------------
+# 5. the ceiling and crossing-wire checks along the run
+# ---------------------------------------------------------------------------
+
+TALL = {  # a box reaching 0.9 m above its CoM on two vertical 1 m wires: 0.1 m below the anchors at rest
+    "body": {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]},
+             "bounding_box": {"min": [-0.1, -0.3, -0.1], "max": [0.1, 0.3, 0.9]}},
+    "rig": {"anchors": [[0, -0.2, 1.0], [0, 0.2, 1.0]], "attachments": [[0, -0.2, 0], [0, 0.2, 0]],
+            "lengths": [1.0, 1.0]},
+}
+
+
+@pytest.mark.parametrize("method", ["auto", "DOP853"])
+def test_a_body_that_rises_through_the_ceiling_during_the_run(method):
+    """The TALL box clears the ceiling at rest by 0.1 m (no rest warning).
+    Its swing-x keeps it level on the parallelogram of wires and lifts it
+    by L - sqrt(L^2 - A^2): 0.0835 m at A = 0.4 m, 0.134 m at 0.5 m, so its
+    top reaches 0.9835 and 1.0340 m, the second 3.4 cm through the
+    ceiling.  The run said nothing; now highest_point_z matches the closed
+    form (1e-9 m: the start pose's tolerance, 1e-9 of the wire) and the
+    second run warns once, naming --amplitude."""
+    from bifilar.analysis.clearance import clearance_warnings
+    from bifilar.analysis.equilibrium import rest_pose
+
+    sc = scene_from_dict(TALL, warn=False)
+    assert clearance_warnings(sc, rest_pose(sc)) == []
+    for A, warns in ((0.4, False), (0.5, True)):
+        r = sm.simulate(sc, "swing-x", A, 2, method=method)
+        want = 0.9 + 1.0 - math.sqrt(1.0 - A * A)
+        assert r.clearance["highest_point_z"] == pytest.approx(want, abs=1e-9)
+        assert r.clearance["height_below_ceiling_min"] == pytest.approx(1.0 - want, abs=1e-9)
+        lines = [w for w in r.warnings if w.startswith("body: during the run")]
+        assert len(lines) == (1 if warns else 0), r.warnings
+        if warns:
+            assert "above the highest anchor" in lines[0] and "--amplitude" in lines[0]
+    doc = r.to_json()
+    assert doc["highest_point_z"] == pytest.approx(0.9 + 1.0 - math.sqrt(0.75), abs=1e-9)
+    assert doc["min_wire_distance"] == pytest.approx(0.4, abs=1e-9) and doc["min_wire_distance_wires"] == [1, 2]
+
+
+CROSSABLE = {  # a trifilar whose wires 1 and 2 swap anchors, 36 mm apart at rest: a torsion moves them through
+    "body": {"mass": 5.0, "inertia": {"principal": [0.2, 0.2, 0.35]}},
+    "rig": {"anchors": [[-0.15, 0.26, 1.01], [0.3, 0, 1.0], [-0.15, -0.26, 1.0]],
+            "attachments": [[0.3, 0, 0.0], [-0.15, 0.26, 0.0], [-0.15, -0.26, 0.0]],
+            "lengths": [1.2, 1.2, 1.0]},
+}
+
+
+def test_wires_that_pass_through_each_other_during_the_run():
+    """CROSSABLE's wires 1 and 2 are 36 mm apart at rest (no rest warning).
+    A torsion of 0.1 rad brings them to 9.8 mm; one of 0.2 rad moves them
+    through each other (the volume their segments span changes sign with
+    the closest points inside both), which no check saw.  Both engines
+    (LSODA's samples, DOP853's own) now agree: 0.1 rad, no warning and the
+    same smallest distance (to 1e-6 m: different samples of the same
+    motion, ~1e-7 m apart at its minimum); 0.2 rad, one warning each
+    naming wires 1 and 2, the intervals overlapping."""
+    from bifilar.analysis.clearance import clearance_warnings
+    from bifilar.analysis.equilibrium import rest_pose
+
+    sc = scene_from_dict(CROSSABLE, warn=False)
+    assert clearance_warnings(sc, rest_pose(sc)) == []
+    quiet = [sm.simulate(sc, "torsion", 0.1, 1, method=m, check=False) for m in ("auto", "DOP853")]
+    for r in quiet:
+        assert not [w for w in r.warnings if w.startswith("rig:")], r.warnings
+        assert r.clearance["min_wire_distance_wires"] == [1, 2]
+    assert quiet[0].clearance["min_wire_distance"] == pytest.approx(quiet[1].clearance["min_wire_distance"], abs=1e-6)
+    assert 0.005 < quiet[0].clearance["min_wire_distance"] < 0.015
+    spans = []
+    for m in ("auto", "DOP853"):
+        r = sm.simulate(sc, "torsion", 0.2, 1, method=m, check=False)
+        lines = [w for w in r.warnings if w.startswith("rig: during the run")]
+        assert len(lines) == 1 and "wires 1 and 2 pass through each other between t = " in lines[0], r.warnings
+        assert "--amplitude" in lines[0]
+        lo, hi = (float(x) for x in lines[0].split("between t = ")[1].split(" s")[0].split(" and "))
+        spans.append((lo, hi))
+    assert max(spans[0][0], spans[1][0]) <= min(spans[0][1], spans[1][1])  # the same crossing
+
+
+def test_the_run_wire_distances_against_the_closed_form():
+    """The by-component distances of the run check against
+    clearance.segment_distance (the vector closed form the rest check uses,
+    itself tested against brute-force sampling) at every sample of a short
+    run of the trifilar: within 1e-12 m."""
+    from bifilar.analysis import clearance as cl
+    from bifilar.analysis.equilibrium import rest_pose
+
+    sc = scene_from_dict(CROSSABLE, warn=False)
+    rest = rest_pose(sc)
+    r = sm.simulate(sc, "torsion", 0.15, 0.5, rest=rest, method="DOP853", check=False)
+    Z = np.ascontiguousarray(r.y[:, :7].T)
+    c, R = cl._rotation(Z)
+    A, P = sc.anchors, sc.attachments
+    d = [[c[k] + R[k][0] * P[i, 0] + R[k][1] * P[i, 1] + R[k][2] * P[i, 2] - A[i, k] for k in range(3)]
+         for i in range(3)]
+    L2 = sc.lengths**2
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        dist = cl._wire_pair(d[i], d[j], A[i] - A[j], L2[i], L2[j])[0]
+        ref = [cl.segment_distance(A[i], A[i] + np.array([x[q] for x in d[i]]), A[j],
+                                   A[j] + np.array([x[q] for x in d[j]]))[0] for q in range(len(r.t))]
+        np.testing.assert_allclose(dist, ref, rtol=0, atol=1e-12)
