@@ -118,8 +118,9 @@ def run_clearance(scene: Scene, rest: RestPose, t: np.ndarray, Y: np.ndarray) ->
     the body's support function only where a bound does not rule the
     sample out (:func:`_highest`)."""
     rest_row = np.r_[rest.com, rest.q][:, None]  # (7, 1)
-    top, k_top = _highest(scene, *_rotation(np.ascontiguousarray(Y[:, :7].T)))
-    top_rest, _ = _highest(scene, *_rotation(rest_row))
+    cR, cR_rest = _rotation(np.ascontiguousarray(Y[:, :7].T)), _rotation(rest_row)
+    top, k_top = _highest(scene, *cR)
+    top_rest, _ = _highest(scene, *cR_rest)
     ceiling = float(scene.ceiling_z)
     doc = {"highest_point_z": top, "height_below_ceiling_min": ceiling - top,
            "min_wire_distance": None, "min_wire_distance_wires": None}
@@ -134,7 +135,7 @@ def run_clearance(scene: Scene, rest: RestPose, t: np.ndarray, Y: np.ndarray) ->
                         "reduce --amplitude")
     if scene.n_wires < 2:
         return doc, warnings
-    best, hits = _closest_wires(scene, np.ascontiguousarray(Y[:, :7].T), rest_row, t)
+    best, hits = _closest_wires(scene, cR, cR_rest, t)
     doc["min_wire_distance"], doc["min_wire_distance_wires"] = best
     if hits:
         warnings.append(f"rig: during the run {'; '.join(hits)}: real wires would touch and rub there, which the "
@@ -181,16 +182,16 @@ def _highest(scene: Scene, c, R) -> tuple[float, int]:
     return (float(tops[j]), int(cand[j])) if tops[j] > top0 else (top0, k0)
 
 
-def _closest_wires(scene: Scene, Z: np.ndarray, rest_row: np.ndarray, t: np.ndarray):
-    """((smallest distance between two wires over the samples ``Z`` (7, k), m;
-    the pair, 1-based), the crossing descriptions) for :func:`run_clearance`
-    (``rest_row`` (7, 1) the rest pose, whose crossings are not repeated)."""
+def _closest_wires(scene: Scene, cR, cR_rest, t: np.ndarray):
+    """((smallest distance between two wires over the samples, m; the pair,
+    1-based), the crossing descriptions) for :func:`run_clearance`: ``cR``
+    the samples' CoM and rotation rows (:func:`_rotation`), ``cR_rest`` the
+    rest pose's, whose crossings are not repeated."""
     n = scene.n_wires
     A = np.asarray(scene.anchors, float)
     Pb = np.asarray(scene.attachments, float)
 
-    def wires(ZZ):  # each wire's vector from its anchor to its attachment, by component (zero terms skipped)
-        c, R = _rotation(ZZ)
+    def wires(c, R):  # each wire's vector from its anchor to its attachment, by component (zero terms skipped)
         out = []
         for i in range(n):
             d = []
@@ -203,7 +204,7 @@ def _closest_wires(scene: Scene, Z: np.ndarray, rest_row: np.ndarray, t: np.ndar
             out.append(d)
         return out
 
-    D, D0 = wires(Z), wires(rest_row)
+    D, D0 = wires(*cR), wires(*cR_rest)
     L2 = np.asarray(scene.lengths, float) ** 2
     best, hits = (np.inf, None), []
     for i in range(n):

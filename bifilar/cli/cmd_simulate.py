@@ -112,6 +112,11 @@ def _render(scene, res) -> None:
         t.add_row(f"tension wire {i + 1} min / max (N)", f"{res.tension_min[i]:.6g} / {res.tension_max[i]:.6g}")
     t.add_row("lowest point z (m)", f"{res.lowest_z_min:.6g}")
     t.add_row("depth below ceiling (m)", f"{res.depth_max:.6g}")
+    if res.clearance is not None:  # the rest pose's checks over the run's samples
+        t.add_row("highest point z (m)", f"{res.clearance['highest_point_z']:.6g}")
+        if res.clearance["min_wire_distance"] is not None:
+            i, j = res.clearance["min_wire_distance_wires"]
+            t.add_row(f"closest wires {i} and {j} (m)", f"{res.clearance['min_wire_distance']:.4g}")
     t.add_row("integrator", f"{res.method} rtol={res.rtol:g}, {res.nfev} evaluations, {res.runtime:.3g} s")
     con.print(t)
     for w in res.warnings:
