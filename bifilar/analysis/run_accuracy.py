@@ -210,18 +210,26 @@ def period_accuracy(period: float | None, method: str, rtol: float, amplitude: f
     angle squared.  A method without a measured bound (a name not in the
     table) gets the largest one.  ``crossing`` (s): the part the crossings'
     interpolation between samples adds (:func:`crossing_period_error`, the
-    ``auto`` engine's; NaN counts as 0)."""
+    ``auto`` engine's).  Where that part could not be estimated (``crossing``
+    NaN: too few samples or crossings, :func:`crossing_period_error`) the
+    error is not established: NaN (JSON null) and a warning naming
+    ``--periods``, not the other parts alone."""
     if period is None:
         return float("nan"), None
     small = _small_amplitude(amplitude, dominant, Lmax)
     if small is not None:
         angle = abs(amplitude) / (1.0 if dominant >= 3 else Lmax)
         return max(angle**2, PERIOD_ERROR_FLOOR) * period, None
+    if not np.isfinite(crossing):
+        return float("nan"), ("the period's numerical error is not established: the error of locating its crossings "
+                              "between the samples could not be estimated (fewer than 9 samples, or a crossing the "
+                              "samples do not show); integrate more --periods, or --method DOP853 locates them on "
+                              "its own steps")
     table = PERIOD_ERROR_PER_RTOL_KANE if model == "kane" else PERIOD_ERROR_PER_RTOL
     c = table.get(method, max(table.values()))
     err_int = max(c * rtol, PERIOD_ERROR_FLOOR) * period
     err_drift = drift_period_error(period, linear_period, drift)
-    crossing = float(crossing) if np.isfinite(crossing) else 0.0
+    crossing = float(crossing)
     err = err_int + err_drift + crossing
     limit = period_warn_threshold(period, timing)
     if err <= limit:
@@ -422,6 +430,8 @@ def check_period(r, again, method: str, atol, timing: float | None = None) -> No
     starts as close move the mean period by as much or more.  A check run that
     fails leaves the model's bound and says it could not be checked."""
     model = float(r.period_error)
+    if not np.isfinite(model):  # not established (period_accuracy said why): no bound to check
+        return
     tight = r.rtol / CHECK_RTOL_RATIO
     if tight >= MIN_RTOL:
         how, args = f"rtol {tight:g}", (method, tight, None if atol is None else np.asarray(atol) / CHECK_RTOL_RATIO)

@@ -26,6 +26,7 @@ from ..errors import IntegrationError, InputError
 from ..models import maximal as mx
 from ..rotations import quat_multiply, quat_to_rotvec
 from ..scene import Scene, lowest_point_z
+from .clearance import run_clearance
 from .equilibrium import RestPose, rest_pose
 from .modes import COMPONENTS, Mode, ModeSet, linear_modes
 from .run_accuracy import (  # noqa: F401 (the names callers import from here)
@@ -128,7 +129,13 @@ class SimulationResult(RunSummary):
     period_error_crossings: float = 0.0
     """The part of :attr:`period_error` that locating the crossings between samples adds, s
     (:func:`crossing_period_error`; the ``auto`` engine's runs only, 0 for the others, whose
-    crossings are roots of the integrator's own continuous solution)."""
+    crossings are roots of the integrator's own continuous solution; NaN where it could not be estimated,
+    and then :attr:`period_error` is NaN too, not established)."""
+    clearance: dict | None = None
+    """The ceiling and crossing-wire checks over the run's samples
+    (:func:`~bifilar.analysis.clearance.run_clearance`): ``highest_point_z``,
+    ``height_below_ceiling_min``, ``min_wire_distance`` (m) and
+    ``min_wire_distance_wires`` (1-based)."""
     period_check: dict | None = None
     """The check run of a motion that is not clean (:func:`check_period`): ``method``, ``rtol``, its
     ``period`` (s), the ``difference`` from :attr:`period` (s) and the error model's ``model_bound`` (s);
@@ -165,6 +172,8 @@ def health_json(r) -> dict:
                                                                                r.energy_drift)}
     if hasattr(r, "period_error_crossings"):  # a SimulationResult (the batch's runs do not estimate it)
         doc["period_error_crossings"] = None if perr is None else f(r.period_error_crossings)
+    if getattr(r, "clearance", None) is not None:  # a SimulationResult's checks along the run
+        doc.update(r.clearance)
     return doc
 
 
@@ -640,7 +649,8 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         cross = (0.0 if run.period is None or untimed(amplitude, m.dominant, Lmax)
                  or small_amplitude_period(amplitude, m.dominant, Lmax, m.period) is not None
                  else crossing_period_error(run.t, c, run.crossings))
-        if not cross > CROSSING_SHARE * model_err or spp * SAMPLES_STEP > MAX_SAMPLES_PER_PERIOD:
+        # NaN (the estimate failed: too few samples) is taken again too; still NaN, the error is not established
+        if (np.isfinite(cross) and not cross > CROSSING_SHARE * model_err) or spp * SAMPLES_STEP > MAX_SAMPLES_PER_PERIOD:
             break
         spp *= SAMPLES_STEP
     runtime = time.perf_counter() - t0
@@ -650,8 +660,9 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
     atol_min = float(np.min(atol)) if atol is not None else rtol * float(np.min(scale))
     perr, w = period_accuracy(run.period, "auto", rtol, amplitude, m.dominant, Lmax,
                               timing=timing, linear_period=m.period, drift=run.energy_drift,
-                              crossing=cross if np.isfinite(cross) else 0.0)
-    warnings = list(run.warnings) + ([w] if w else [])
+                              crossing=cross)
+    clear, clear_w = run_clearance(scene, rest, run.t, run.y)
+    warnings = list(run.warnings) + ([w] if w else []) + clear_w
     return SimulationResult(
         t=run.t, y=run.y, coordinate=c if coordinate else None, coordinate_name=run.coordinate_name, tensions=T,
         period=run.period, period_std=run.period_std, crossings=run.crossings, linear_period=m.period,
@@ -661,7 +672,7 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
         amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
         nfev=int(run.nfev), runtime=runtime, warnings=warnings,
         energy_drift_resolution=drift_resolution(scene, rest, run.y[0]) if np.isfinite(run.energy_drift) else np.nan,
-        period_error=perr, period_error_crossings=cross if np.isfinite(cross) and run.period is not None else 0.0,
+        period_error=perr, period_error_crossings=cross if run.period is not None else 0.0, clearance=clear,
     )
 
 
@@ -719,6 +730,8 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
             warnings.append(f"WIRE {i + 1} GOES SLACK at t = {stopped_slack[1]:.4g} s (its tension reaches 0 N "
                             "there): the motion after that is not physical; reduce the amplitude")
     lz = lowest_point_z(scene, Y[:, 0:3], mx.quat_to_matrix(Y[:, 3:7]))
+    clear, clear_w = run_clearance(scene, rest, ts, Y)
+    warnings.extend(clear_w)
     if viol > 1e-6 * Lmax:
         warnings.append(f"constraint violation {viol:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
     if period is None:
@@ -737,6 +750,6 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
         mode=m.label if m is not None else None, amplitude=float(amplitude), model=model, method=method,
         rtol=float(rtol), atol=float(atol), nfev=int(nfev), runtime=runtime, warnings=warnings,
         energy_drift_resolution=drift_resolution(scene, rest, Y[0]) if np.isfinite(drift) else np.nan,
-        period_error=perr,
+        period_error=perr, clearance=clear,
     )
 

@@ -92,6 +92,9 @@ class StartPoses:
     feasible: np.ndarray
     gap: np.ndarray
     amplitude: np.ndarray
+    edge: np.ndarray
+    """(B,) :func:`edge_ratio` of each start (1 at rest; below :data:`EDGE_TOL` the
+    start is at the end of its reach and infeasible, with gap 0)."""
 
     def take(self, ii) -> "StartPoses":
         """The start poses of scenes ``ii`` (indices), in that order."""
@@ -454,11 +457,58 @@ def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, ampli
     x0 = amp[:, None] * S
     x0[np.arange(B), hold] = amp * S[np.arange(B), hold]  # the held value, exactly amplitude x shape
     x, res, gap = solve_start_poses(rig, x0, hold)
+    edge = edge_ratio(rig, x, hold)
     com, R = rig.pose(x)
     q = quat_multiply(rotvec_to_quat(x[:, 3:]), rig.q0)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
-    return StartPoses(com=com, R=R, q=q, x=x, residual=res, feasible=gap == 0.0, gap=gap, amplitude=amp)
+    return StartPoses(com=com, R=R, q=q, x=x, residual=res, feasible=(gap == 0.0) & ~(edge < EDGE_TOL), gap=gap,
+                      amplitude=amp, edge=edge)
+
+
+EDGE_TOL = float(np.sqrt(2.0 * FEASIBLE_TOL))
+"""Smallest :func:`edge_ratio` of a start that is not at the end of its reach
+(4.5e-5).  At the end the wires that stop the mode are horizontal (their
+vertical drop z = 0); with lengths met to FEASIBLE_TOL x L, a drop below
+sqrt(2 FEASIBLE_TOL) L cannot be told from none (z^2 = L^2 - h^2 moves by
+2 L dL), and the ratio is about that drop over L: 2e-8 for 5 cm wires swung
+by exactly 5 cm (the multipliers then singular: +-1.6e7 N for a 1 kg body),
+5e-6 for the thesis plate twisted to its analytic reach arccos(1/4), 8e-5
+at 1e-8 rad short of it, 1.6e-4 at 1e-9 m short of the 5 cm swing's."""
+
+
+def edge_ratio(rig: "_Rig", x: np.ndarray, hold: np.ndarray) -> np.ndarray:
+    """(B,) how far starts x (B, 6, chart) are from the end of their reach: the
+    r-th singular value of the wires' unit constraint gradients together
+    with the held coordinate's (rows [d_i / |d_i|, (w_i x d_i) / (|d_i| l)],
+    l the farthest attachment from the CoM, and e_hold) at the start over the
+    same at rest, r the matrix's rank at rest (:data:`RANK_TOL`; n + 1 but
+    for dependent wires).  The held coordinate cannot move further where that matrix
+    is singular: the wires are horizontal (a swing on parallel wires) or the
+    held direction lies in the wires' span, and the start's tensions are not
+    determined (the multipliers' matrix is singular)."""
+    B = len(x)
+    lever = np.maximum(np.max(np.linalg.norm(rig.p, axis=2), axis=1), 1e-300)  # (B,)
+
+    def singular(xx):
+        d, w, _ = rig.wires(xx)
+        G = rig.jacobian(xx, d, w) / np.linalg.norm(d, axis=2)[:, :, None]
+        G[:, :, 3:] /= lever[:, None, None]
+        e = np.zeros((B, 1, 6))
+        e[np.arange(B), 0, hold] = 1.0
+        return np.linalg.svd(np.concatenate([G, e], axis=1), compute_uv=False)
+
+    at_rest = singular(np.zeros_like(x))
+    # the rank at rest: dependent wires (four parallel ones) leave one singular value at rounding there
+    r = np.sum(at_rest > RANK_TOL * at_rest[:, :1], axis=1)
+    k = np.arange(B), r - 1
+    return singular(x)[k] / at_rest[k]
+
+
+RANK_TOL = 1e-8
+"""Singular values of the rest matrix of :func:`edge_ratio` below this share of
+its largest are rounding: a rig of four or five dependent wires (parallel
+vertical wires of a rectangle: 1e-17) has that rank and no more."""
 
 
 def refusal(scene: Scene, mode, amplitude: float, gap: float, which: str = "") -> InputError:
@@ -467,6 +517,12 @@ def refusal(scene: Scene, mode, amplitude: float, gap: float, which: str = "") -
     names the scene in a batch (e.g. "scene 3 ('name')")."""
     unit = "rad" if mode.dominant >= 3 else "m"
     where = f" for {which}" if which else ""
+    if gap == 0.0:  # on the wires, at the end of the reach (EDGE_TOL)
+        return InputError("--amplitude", f"{amplitude:g} {unit} of the {mode.label} mode is at the end of its reach"
+                                         f"{where}: the wires that stop it are horizontal there (within the start "
+                                         f"solver's {FEASIBLE_TOL:g} of the longest wire) and their tensions are not "
+                                         f"determined; the reachable starts end at |amplitude| = {abs(amplitude):.6g} "
+                                         f"{unit}: use a smaller amplitude")
     return InputError("--amplitude", f"{amplitude:g} {unit} of the {mode.label} mode is too large{where}: no pose with "
                                      f"the {COMPONENTS[mode.dominant]} coordinate held there keeps every wire at its "
                                      f"length (the closest start is {gap:.3g} m off the wires, more than "

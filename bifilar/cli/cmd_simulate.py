@@ -113,6 +113,11 @@ def _render(scene, res) -> None:
         t.add_row(f"tension wire {i + 1} min / max (N)", f"{res.tension_min[i]:.6g} / {res.tension_max[i]:.6g}")
     t.add_row("lowest point z (m)", f"{res.lowest_z_min:.6g}")
     t.add_row("depth below ceiling (m)", f"{res.depth_max:.6g}")
+    if res.clearance is not None:  # the rest pose's checks over the run's samples
+        t.add_row("highest point z (m)", f"{res.clearance['highest_point_z']:.6g}")
+        if res.clearance["min_wire_distance"] is not None:
+            i, j = res.clearance["min_wire_distance_wires"]
+            t.add_row(f"closest wires {i} and {j} (m)", f"{res.clearance['min_wire_distance']:.4g}")
     t.add_row("integrator", f"{res.method} rtol={res.rtol:g}, {res.nfev} evaluations, {res.runtime:.3g} s")
     con.print(t)
     for w in res.warnings:
@@ -133,6 +138,8 @@ def _period_text(period, error) -> str:
     one at the error's leading decade, at most 12), with that error."""
     if period is None:
         return fmt(None)
+    if error is None or math.isnan(error):
+        return f"{period:.10g} (numerical error not established)"
     if not (error is not None and math.isfinite(error) and error > 0):
         return fmt(period, 10)
     digits = min(max(math.floor(math.log10(abs(period))) - math.floor(math.log10(error)) + 1, 1), 12)

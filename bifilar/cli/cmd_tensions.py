@@ -130,6 +130,13 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     if std_inputs is not None:  # the config geometry's share of std (record_std)
         for c in comps:
             doc["inertia_from_tensions"][c]["std_geometry"] = std_inputs.get(c) if c not in undetermined else None
+    # a simulated motion in which a wire went slack is off the model after that (the bilateral model pulls on
+    # the slack wire): an inertia fitted to it is not the body's, so none is given (session 13)
+    slack = slack_reason(res.slack) if motion is None and res.slack else None
+    if slack:
+        for c in comps:
+            doc["inertia_from_tensions"][c].update({"value": None, "std": None, "dof": None, "interval_95": None,
+                                                    "reason": slack})
     # the estimator's rule (relative std above 1 %) applied to the std with the differentiation term
     poor = list(est.poorly_excited) + [c for c in comps if c not in est.poorly_excited
                                        and not std[c] <= 0.01 * abs(est.values[c])]
@@ -162,6 +169,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     for c in ("component", "estimate (kg m^2)", "std", "95 % (t, dof)", "config value", "excited?"):
         it.add_column(c, justify="right")
     for c in comps:
+        if slack:
+            it.add_row(c, "not estimated (a wire went slack)", "n/a", "n/a", f"{scene.inertia[_idx(c)]:.8g}", "-")
+            continue
         lo, hi = interval[c] if interval else est.interval95(c, std[c])
         nu = dof.get(c)
         span = f"{lo:.6g} .. {hi:.6g} ({nu:.2g})" if c not in undetermined else "n/a"
@@ -171,6 +181,17 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                    f"{std[c]:.2g}" if c not in undetermined else "n/a", span,
                    f"{scene.inertia[_idx(c)]:.8g}", "POORLY" if c in poor else "yes")
     con.print(it)
+    if slack:
+        con.print(f"inertia from tensions: {esc(slack)}")
+
+
+def slack_reason(slack: list) -> str:
+    """Why no inertia is estimated from a simulated motion in which wires went
+    slack (``slack``: (wire, 1-based, t in s) as :class:`SimulationResult` lists them)."""
+    first = min(slack, key=lambda wt: wt[1])
+    return (f"not estimated: wire {first[0]} goes slack at t = {first[1]:.4g} s of the simulated motion, which is "
+            "not physical after that (the model keeps pulling on a slack wire), so an inertia fitted to it is not "
+            "the body's; reduce --amplitude until no wire goes slack")
 
 
 NOT_DETERMINED = ("not determined: the motion hardly excites this component (its torque is at rounding level "
