@@ -79,8 +79,8 @@ UNCERTAINTY_KEYS = {
     "timing": "s (one period given without +-SIGMA)",
     "amplitude": "relative (fraction of the amplitude)",
     "trial_time": "s (reaction-time floor of one hand-timed trial's total time)",
-    "release": "m (the largest second mode a recording's release started unseen: a swing's travel; an angle mode's "
-               "this over the longest wire, rad)",
+    "release": "m (invert with a recording: the largest second mode its release started unseen, a swing's travel; "
+               "an angle mode's this over the longest wire, rad)",
 }
 
 #: budget groups, in display order
