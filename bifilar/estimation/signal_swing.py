@@ -32,6 +32,14 @@ mode's amplitude) then gives ``a``.  Its std is the tone amplitude's
 details (the phase between the modes, a third mode started with them) do to
 that calibration.
 
+What the record cannot show (:func:`hidden_modes`, session 13): every other
+mode, up to a stated bound on what the release started unseen
+(``--uncertainty release``, m of a swing's travel, :data:`DEFAULT_RELEASE`;
+over the longest wire, rad, for an angle mode), is released with the timed
+one in one run at that bound, and its period shift enters the budget
+(``hidden_second_mode``) as a shift anywhere between 0 and it
+(:func:`hidden_shift_std`).
+
 Units: periods s; amplitudes in the unit of each mode's normalised shape
 (rad for a rotation-dominated mode, m for a translation-dominated one);
 tones relative to the dominant mode's amplitude (unit-free; a rate record's
