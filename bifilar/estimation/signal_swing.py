@@ -294,10 +294,11 @@ def hidden_modes(pb, k: int, p, found: int | None = None) -> list[Hidden]:
     Lmax = float(np.max(hm.scene(pb.values(p)).lengths))
     if bound > MAX_ANGLE * Lmax:
         raise InputError("--uncertainty", (
-            f"release {bound:g} m is beyond {MAX_ANGLE:g} of the longest wire ({MAX_ANGLE * Lmax:.3g} m): a second "
+            f"release {bound:g} m is beyond {MAX_ANGLE:g} of the longest wire ({MAX_ANGLE * Lmax:.3g} m; the key "
+            "release, of --uncertainty or a file's uncertainty block): a second "
             "motion that large shifts the period by more than the model of the release can answer for; release more "
             "cleanly and state a smaller bound"))
-    source = "stated bound (--uncertainty release)" if given else f"default bound ({DEFAULT_RELEASE:g} m)"
+    source = "stated bound (uncertainty key release)" if given else f"default bound ({DEFAULT_RELEASE:g} m)"
     k0 = pb.mode_index[k]
     out = []
     for j, mj in enumerate(hm.modes0.modes):
