@@ -681,6 +681,9 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
             if laws[k] is not None and laws[k].secondary_std > 0:
                 # the second mode the record's release started: its amplitude known to its std
                 contrib[f"second_mode[{lab}]"] = Gf[:, k] * laws[k].secondary_std
+            if laws[k] is not None and laws[k].hidden_std > 0:
+                # the modes the record's release may have started unseen, up to the stated bound
+                contrib[f"hidden_second_mode[{lab}]"] = Gf[:, k] * laws[k].hidden_std
     cov = np.zeros_like(budget.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)

@@ -380,7 +380,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         raise InputError("--method", f"linear does not apply: {rungs['linear']['na']}")
     est_nl = None
     if has_amp and (method == "nonlinear" or ladder or method != best):
-        from .signal_swing import attach_second_modes  # only a nonlinear answer needs it
+        from .signal_swing import attach_second_modes, hidden_warnings  # only a nonlinear answer needs it
 
         warnings += attach_second_modes(pb, p_start, rtol, notes)
         est_nl = solve_nonlinear(pb, p_start, rtol=rtol, progress=progress)
@@ -389,7 +389,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             if s is not None:
                 warnings.extend(f"nonlinear simulation: {w}" for w in s.warnings)
         warnings += irregular_warnings(pb, est_nl)
-        warnings += monotonic_warnings(pb, est_nl)
+        warnings += monotonic_warnings(pb, est_nl) + hidden_warnings(pb)
         refuse_amplitude_the_record_contradicts(pb, est_nl)
     ladder_rows = []
     if scalar and (ladder or method in ("small-angle", "thesis")):
@@ -702,10 +702,11 @@ def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndar
     uncertainty under the nonlinear method (as the budget's amplitude term,
     :func:`~bifilar.estimation.budget.stated_amplitude_period_std`: the
     slope of the mode's amplitude law ``laws[k]``) and from a recording's second mode
-    (``law.secondary_std``), or None for the other methods."""
+    (``law.secondary_std``) and from the modes it may hide (``law.hidden_std``), or None for the other methods."""
     if method != "nonlinear":
         return None
-    second = np.array([law.secondary_std if law is not None else 0.0 for law in laws or [None] * len(pb.measurements)])
+    second = np.array([math.hypot(law.secondary_std, law.hidden_std) if law is not None else 0.0
+                       for law in laws or [None] * len(pb.measurements)])
     return stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) ** 2 + second ** 2
 
 

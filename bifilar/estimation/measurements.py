@@ -120,6 +120,9 @@ class Measurement:
     #: a recording's second mode, started by its release, that the nonlinear model is released with
     #: (:class:`~bifilar.estimation.signal_swing.Secondary`; set by invert), or None
     secondary: Any = field(default=None, repr=False)
+    #: the other modes a recording's release may have started unseen, each at the stated bound
+    #: (:class:`~bifilar.estimation.signal_swing.Hidden`, their shifts set by the nonlinear solve; set by invert)
+    hidden: list = field(default_factory=list, repr=False)
 
     @property
     def dof(self) -> float:
@@ -172,6 +175,8 @@ class Measurement:
         d.update(self.details)
         if self.secondary is not None:
             d["secondary"] = self.secondary.to_json()
+        if self.hidden:
+            d["hidden_second_modes"] = [h.to_json() for h in self.hidden]
         return d
 
 

@@ -54,7 +54,7 @@ DEFAULT_UNCERTAINTY = {
 #: ``invert`` ended in exit 1 (an internal error) and ``sweep`` printed
 #: overflow warnings
 MAX_UNCERTAINTY = {"length": 1e5, "position": 1e5, "com": 1e5, "mass": 1.0, "gravity": 1.0, "amplitude": 1.0,
-                   "timing": 1e5, "trial_time": 1e5}
+                   "timing": 1e5, "trial_time": 1e5, "release": 1e5}
 
 
 def uncertainty_too_large(key: str, value: float) -> str | None:

@@ -32,6 +32,14 @@ mode's amplitude) then gives ``a``.  Its std is the tone amplitude's
 details (the phase between the modes, a third mode started with them) do to
 that calibration.
 
+What the record cannot show (:func:`hidden_modes`, session 13): every other
+mode, up to a stated bound on what the release started unseen
+(``--uncertainty release``, m of a swing's travel, :data:`DEFAULT_RELEASE`;
+over the longest wire, rad, for an angle mode), is released with the timed
+one in one run at that bound, and its period shift enters the budget
+(``hidden_second_mode``) as a shift anywhere between 0 and it
+(:func:`hidden_shift_std`).
+
 Units: periods s; amplitudes in the unit of each mode's normalised shape
 (rad for a rotation-dominated mode, m for a translation-dominated one);
 tones relative to the dominant mode's amplitude (unit-free; a rate record's
@@ -223,6 +231,97 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
     return best
 
 
+#: m: the default bound on a second mode a release starts unseen (``--uncertainty release``): the travel of the
+#: CoM (a swing) an experimenter can see by eye on a ~1 m rig; a stated default, not a measurement
+DEFAULT_RELEASE = 0.01
+#: the first two moments of ``u = shift / s_max``, a hidden mode's period shift as a share of its shift at the bound,
+#: taken uniform in ``[0, 1]`` (GUM's rectangular distribution of a bounded quantity): mean 1/2, mean square 1/3, so
+#: one mode's zero-centred std is ``s_max / sqrt(3)`` and the 95 % interval (1.13 ``s_max``) holds a second mode at
+#: the bound itself.  The amplitude uniform in ``[0, a_max]`` instead (the shift ~ a^2: ``u = (a / a_max)^2``,
+#: moments 1/3 and 1/5, std ``s_max / sqrt(5)``) left a 1 cm swing at the 1 cm bound outside it: quadcopter z -1.8
+#: to -2.1, drone config +2.1 to +2.2 (docs/design.md, "Hidden second modes, session 13")
+HIDDEN_U_MEAN, HIDDEN_U_SQUARE = 1.0 / 2.0, 1.0 / 3.0
+
+
+@dataclass
+class Hidden:
+    """A mode a recording's release may have started unseen: the largest
+    amplitude the record cannot exclude by the stated bound, and the timed
+    mode's period shift it would make."""
+
+    label: str  #: the mode's label
+    index: int  #: its index among the hanging's modes at the prior (``HangingModel.modes0``)
+    amplitude: float  #: a_max, rad or m (its normalised shape): ``release`` m, over the longest wire (m) for an angle
+    source: str  #: where ``amplitude`` comes from (the stated bound, or its default)
+    release: float  #: m, that bound (``--uncertainty release``)
+    #: s: the timed mode's period shift at ``amplitude`` (simulated at the estimate; None if that run failed)
+    shift: float | None = None
+
+    def to_json(self) -> dict:
+        return {"mode": self.label, "amplitude_max": self.amplitude, "source": self.source,
+                "release": self.release, "period_shift_max": self.shift}
+
+
+def hidden_modes(pb, k: int, p, found: int | None = None) -> list[Hidden]:
+    """The modes measurement ``k``'s recording may hide (every mode of its
+    hanging but the timed one and ``found``, the second mode the record
+    showed; neutral ones left out), at the unknowns ``p``, each at the
+    largest amplitude the stated bound allows: ``release`` (m, the problem's
+    uncertainty key, default :data:`DEFAULT_RELEASE`) for a
+    translation-dominated mode, ``release`` over the longest wire (rad) for a
+    rotation-dominated one.  Empty where ``release`` is 0.  Raises
+    :class:`~bifilar.errors.InputError` naming ``--uncertainty`` where the
+    bound exceeds :data:`MAX_ANGLE` (of the longest wire): the model's
+    release with it could not answer for the period.
+
+    Why: a second mode whose tones stay below the record's noise still
+    shifts the timed period at second order in its amplitude; unbudgeted, a
+    tightly stated amplitude made ``invert`` confidently wrong (the
+    quadcopter-like body, 1 % camera noise, a hidden 1 cm swing-y,
+    ``--uncertainty amplitude=0.01``: Izz z -5.6 to -6.6; docs/design.md,
+    "Hidden second modes, session 13").  The record's own detection limit
+    is not used: at 1 % noise it cannot exclude a swing-y of 1.8 cm nor a
+    pitch of 0.14 rad (session 12), both beyond the default bound."""
+    from ..errors import InputError
+
+    m = pb.measurements[k]
+    unc = getattr(pb, "unc", None) or {}
+    given = "release" in unc
+    bound = float(unc["release"]) if given else DEFAULT_RELEASE
+    if not bound > 0:
+        return []
+    hm = pb.models[m.hanging]
+    Lmax = float(np.max(hm.scene(pb.values(p)).lengths))
+    if bound > MAX_ANGLE * Lmax:
+        raise InputError("--uncertainty", (
+            f"release {bound:g} m is beyond {MAX_ANGLE:g} of the longest wire ({MAX_ANGLE * Lmax:.3g} m; the key "
+            "release, of --uncertainty or a file's uncertainty block): a second "
+            "motion that large shifts the period by more than the model of the release can answer for; release more "
+            "cleanly and state a smaller bound"))
+    source = "stated bound (uncertainty key release)" if given else f"default bound ({DEFAULT_RELEASE:g} m)"
+    k0 = pb.mode_index[k]
+    out = []
+    for j, mj in enumerate(hm.modes0.modes):
+        if j in (k0, found) or not mj.period:
+            continue
+        out.append(Hidden(mj.label, j, bound / Lmax if mj.dominant >= 3 else bound, source, bound))
+    return out
+
+
+def hidden_shift_std(hidden) -> float:
+    """s: the RMS of the total period shift of the hidden modes ``hidden``
+    (:class:`Hidden` with their shifts ``s_j`` at ``a_max``), each shift
+    independent and uniform in ``[0, s_j]``: ``E[(sum s_j u_j)^2] =
+    (sum s_j)^2 m1^2 + sum s_j^2 (m2 - m1^2)`` with ``m1``, ``m2`` the
+    moments of ``u`` (:data:`HIDDEN_U_MEAN`, :data:`HIDDEN_U_SQUARE`); one
+    mode: ``|s_max| / sqrt(3)``.  Zero-centred in the budget: a clean
+    release, no shift, is the likeliest."""
+    s = np.array([h.shift for h in hidden if h.shift is not None], float)
+    if not s.size:
+        return 0.0
+    return float(math.sqrt(s.sum() ** 2 * HIDDEN_U_MEAN ** 2 + np.sum(s * s) * (HIDDEN_U_SQUARE - HIDDEN_U_MEAN ** 2)))
+
+
 def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
     """Each fitted recording's second mode, started by its release
     (:func:`infer_secondary` at the unknowns ``p``, SI), set on its
@@ -232,6 +331,7 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
     warnings = []
     for k, m in enumerate(pb.measurements):
         m.secondary = None
+        m.hidden = []
         if not (m.amplitude and m.fundamental):
             continue
         sec = infer_secondary(pb, k, p, rtol)
@@ -243,4 +343,27 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}; the nonlinear model is released "
                          "with both, and the budget carries that amplitude's uncertainty (second_mode)")
+        m.hidden = hidden_modes(pb, k, p, None if m.secondary is None else m.secondary.index)
+        if m.hidden:
+            h0 = m.hidden[0]
+            how = "the stated bound" if h0.source.startswith("stated") else \
+                "the default bound; state yours with --uncertainty release"
+            notes.append(f"mode '{m.label}': a second mode its release may have started unseen is budgeted by the "
+                         f"period shift it would make (hidden_second_mode): "
+                         f"{', '.join(f'{h.label} up to {h.amplitude:.3g}' for h in m.hidden)} ({how}: "
+                         f"{h0.release:g} m of travel, over the longest wire in rad for an angle mode)")
     return warnings
+
+
+def hidden_warnings(pb) -> list[str]:
+    """One warning per measurement whose run at a hidden mode's bound
+    failed (:attr:`Hidden.shift` None after the nonlinear solve): that
+    mode's shift is not in the budget."""
+    out = []
+    for m in pb.measurements:
+        failed = [h.label for h in getattr(m, "hidden", None) or [] if h.shift is None]
+        if failed:
+            out.append(f"mode '{m.label}': the run released with {', '.join(failed)} at the release bound failed: the "
+                       "period shift a second mode hidden below the record's noise would make is not in the std for "
+                       "it; state a smaller --uncertainty release")
+    return out

@@ -503,6 +503,9 @@ class AmplitudeLaw:
     #: s: the model period's std from the uncertainty of the second mode a recording's release started
     #: (:attr:`Measurement.secondary`: the shift it makes, which goes as its amplitude squared); 0 without one
     secondary_std: float = 0.0
+    #: s: the model period's std from the modes a recording's release may have started unseen
+    #: (:attr:`Measurement.hidden`, :func:`~bifilar.estimation.signal_swing.hidden_shift_std`); 0 without them
+    hidden_std: float = 0.0
 
     def factor(self, A) -> np.ndarray | float:
         """r(A) (dimensionless; array in, array out)."""
@@ -605,7 +608,35 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
         sec.shift = float(pb.linear_periods(p)[k] * (r_A - r_alone))
         sec.shift_std = 2.0 * abs(sec.shift) * sec.amplitude_std / abs(sec.amplitude)
         law.secondary_std = sec.shift_std
+    else:
+        r_alone = r_A
+    if getattr(m, "hidden", None):
+        law.hidden_std = _hidden_shifts(pb, p, k, r_alone, rtol)
     return law
+
+
+def _hidden_shifts(pb: Problem, p, k: int, r_alone: float, rtol: float) -> float:
+    """Set the period shift (s) of each mode measurement ``k``'s recording
+    may hide (:attr:`Measurement.hidden`) at the unknowns ``p``: one run of
+    the timed mode released with it at its bound (:func:`amplitude_factor`,
+    as the measurement's own runs, ``rtol``), less the timed mode's release
+    alone (factor ``r_alone``); a run that fails leaves that shift None.
+    Returns the shifts' budgeted std, s
+    (:func:`~bifilar.estimation.signal_swing.hidden_shift_std`).  The second
+    mode the record showed, if any, is left out of these runs: each hidden
+    mode's shift adds to its at fourth order in the amplitudes."""
+    from .signal_swing import hidden_shift_std
+
+    m = pb.measurements[k]
+    T_lin = float(pb.linear_periods(p)[k])
+    for h in m.hidden:
+        try:
+            r_h, _ = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles,
+                                      rtol, fundamental=m.fundamental, second=(h.index, h.amplitude))
+            h.shift = float(T_lin * (r_h - r_alone))
+        except BifilarError:
+            h.shift = None
+    return hidden_shift_std(m.hidden)
 
 
 def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: float = 1e-9,

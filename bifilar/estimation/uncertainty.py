@@ -79,11 +79,13 @@ UNCERTAINTY_KEYS = {
     "timing": "s (one period given without +-SIGMA)",
     "amplitude": "relative (fraction of the amplitude)",
     "trial_time": "s (reaction-time floor of one hand-timed trial's total time)",
+    "release": "m (invert with a recording: the largest second mode its release started unseen, a swing's travel; "
+               "an angle mode's this over the longest wire, rad)",
 }
 
 #: budget groups, in display order
-GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "second_mode", "integration",
-          "model bias", "offset", "degenerate")
+GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "second_mode", "hidden_second_mode",
+          "integration", "model bias", "offset", "degenerate")
 
 
 def default_uncertainty(overrides: dict | None = None) -> dict:
@@ -99,7 +101,8 @@ def group_of(name: str) -> str:
     """Budget group of an input name: ``timing``, ``lengths``, ``spacings``
     (anchor and attachment coordinates), ``mass``, ``com``, ``gravity``,
     ``amplitude``, ``second_mode`` (the amplitude of a second mode a recording's release
-    started, :mod:`~bifilar.estimation.signal_swing`), ``integration`` (a nonlinear run that is not a regular
+    started, :mod:`~bifilar.estimation.signal_swing`), ``hidden_second_mode`` (the modes it may have started
+    unseen, up to the stated ``release`` bound), ``integration`` (a nonlinear run that is not a regular
     motion: its check run's difference) or ``model bias``; ``offset`` (the mean offset of a
     second-order or amplitude term) and ``degenerate`` (the targeted Monte
     Carlo) otherwise.  Inputs may carry a hanging prefix
@@ -108,7 +111,7 @@ def group_of(name: str) -> str:
     (``timing[<hanging>:torsion]``)."""
     name = name.removesuffix(" (2nd order)")
     head = name.split("[", 1)[0]
-    if head in ("timing", "amplitude", "second_mode", "integration", "model bias"):
+    if head in ("timing", "amplitude", "second_mode", "hidden_second_mode", "integration", "model bias"):
         return head
     head = name.split(":", 1)[-1].split(".")[0]
     return {"length": "lengths", "anchor": "spacings", "attachment": "spacings"}.get(head, head)
