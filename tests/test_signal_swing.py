@@ -281,3 +281,7 @@ def test_a_periods_only_inversion_is_not_given_the_bound(tmp_path):
         docs.append(json.loads(r.stdout))
     assert docs[0]["inertia"]["Izz"] == docs[1]["inertia"]["Izz"]
     assert "hidden_second_mode" not in docs[1]["budget"]["Izz"]["groups"]
+    # ... and says so where the bound was stated, instead of taking it silently
+    said = [w for w in docs[1]["warnings"] if "release" in w]
+    assert len(said) == 1 and "--signal" in said[0], docs[1]["warnings"]
+    assert not [w for w in docs[0]["warnings"] if "release is budgeted" in w]

@@ -300,6 +300,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         w = implausible_period(m.period, m.label, m.field, m.details.get("cycles") if m.source == "timed" else None)
         if w:
             warnings.append(w)
+    if "release" in {**ms.uncertainty, **(unc or {})} and not any(m.source == "signal" for m in ms.measurements):
+        warnings.append("uncertainty release is budgeted for recordings (--signal) only: a period's "
+                        "second modes are not modelled, so the stated bound is not in this answer's std")
     try:
         ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
         pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
