@@ -1,0 +1,86 @@
+"""Estimation audit, session 13 (docs/design.md, "Estimation audit, session
+13"): cases nobody here wrote, found answered outside their stated
+uncertainty or refused although honest.  Cheap by construction: the audit's
+closed loops (damped full-model runs, ``invert`` with its swing inference)
+take tens of seconds each and stay in its throw-away harness; these tests
+pin the mechanism each fix changed with the audit's own numbers."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from bifilar.errors import InputError
+from bifilar.estimation.answer_checks import refuse_amplitude_the_record_contradicts
+from bifilar.estimation.signal_swing import Secondary
+from bifilar.estimation.solve import AmplitudeLaw
+
+# The audit's draw (quadcopter-like body of tests/test_signal_swing.py, torsion released at 0.1132 rad with a
+# swing-y of 3.12 cm, mass-proportional viscous damping Q = 200 on both, 30 torsion cycles at 60 fps, noise 0.1 %
+# of the release; `invert --signal torsion=REC --signal-quantity angle`): the fit's envelope at the halves'
+# middles 0.1004 and 0.07936 rad over a 60.7 s window, the halves' periods 1.64e-5 +- 1.2e-5 s apart, the law at
+# the estimate predicting 5.96e-4 s between them, the swing found 0.0307 +- 0.0031 m shifting the period by
+# -1.52e-3 s at its start amplitude.
+T_LIN = 2.0246  # s, the torsion's linear period
+T_REC = 60.7  # s, the fit window
+A1, A2 = 0.1004, 0.07936  # rad, the envelope at the halves' middles
+PRED = 5.96e-4  # s, T_lin (r(A1) - r(A2))
+SEEN, SEEN_STD = 1.64e-5, 1.2e-5  # s, the record's halves (first minus second) and their combined std
+SHIFT = -1.52e-3  # s, the swing's period shift at its start amplitude
+
+
+def _case(secondary: bool, unit: float = 1.0):
+    """(pb, est) stand-ins holding exactly what the check reads; ``unit``:
+    the record's unit in rad (57.3: a record in degrees read as radians)."""
+    sigma = math.log(A1 / A2) / (0.5 * T_REC)  # 1/s, the envelope's decay through A1 and A2
+    a0 = A1 * math.exp(sigma * 0.25 * T_REC)  # the envelope at the window's start
+    s_half = SEEN_STD / math.sqrt(2)
+    fit = SimpleNamespace(damping={"sigma": sigma}, amplitude=a0 * unit, t0=0.0, t1=T_REC,
+                          amplitude_period=0.0916 * unit, amplitude_law=None,
+                          half_periods=((T_LIN + SEEN, s_half), (T_LIN, s_half)))
+    # the measurement's amplitude is the fit's, read as rad: ``unit`` times the true one for a slip
+    m = SimpleNamespace(fit=fit, amplitude=0.0916 * unit, label="torsion", field="--signal", secondary=None)
+    if secondary:
+        m.secondary = Secondary("swing-y", 1, 0.0307, 0.0031, 2.571, 0.00326, 1.98, shift=SHIFT,
+                                shift_std=2 * abs(SHIFT) * 0.1)
+    a = PRED / (T_LIN * (A1 ** 2 - A2 ** 2))  # a quadratic law through the audit's prediction
+    law = AmplitudeLaw(0.0916, a, 0.0)
+    pb = SimpleNamespace(measurements=[m], linear_periods=lambda p: np.array([T_LIN]))
+    return pb, SimpleNamespace(laws=[law], p=np.array([0.022]))
+
+
+def test_a_damped_swing_that_cancels_the_chirp_is_not_taken_for_a_unit_slip():
+    """A torsion released with a swing and damped: the swing's decay
+    lengthens the period over the record as the torsion's own decay
+    shortens it, and here they cancel (the halves 1.6e-5 s apart where the
+    torsion's law alone predicts 5.96e-4 s, 36 times more).  The unit-slip
+    check refused this honest record ('is the signal in degrees or mm?'),
+    exit 2, in 1 of 8 audit draws; the swing's part of the halves'
+    difference is anything up to its whole shift (1.52e-3 s), which the
+    check now allows.  The same record refused on the old code (the first
+    call raised); the audit's draw is now answered, Izz z +1.20 (the other
+    draws of its row +1.2 to +1.3)."""
+    pb, est = _case(secondary=True)
+    refuse_amplitude_the_record_contradicts(pb, est)  # no InputError
+
+
+def test_without_a_second_mode_the_unit_slip_rule_is_unchanged():
+    """The same halves with no second mode in the model: nothing explains a
+    period 36 times steadier than the torsion's law allows, refused as
+    before (the thresholds: 5 stds and 20 times the change and its std)."""
+    pb, est = _case(secondary=False)
+    with pytest.raises(InputError, match="degrees or mm"):
+        refuse_amplitude_the_record_contradicts(pb, est)
+
+
+def test_a_record_in_degrees_is_still_refused_with_a_second_mode():
+    """The allowance is the swing's shift, not a licence: the same record in
+    degrees read as radians predicts 57.3^2 times the change (1.96 s), far
+    beyond the 1.5e-3 s the swing could hide; still refused naming the
+    unit slip."""
+    pb, est = _case(secondary=True, unit=math.degrees(1.0))
+    with pytest.raises(InputError, match="degrees or mm"):
+        refuse_amplitude_the_record_contradicts(pb, est)
