@@ -84,3 +84,58 @@ def test_a_record_in_degrees_is_still_refused_with_a_second_mode():
     pb, est = _case(secondary=True, unit=math.degrees(1.0))
     with pytest.raises(InputError, match="degrees or mm"):
         refuse_amplitude_the_record_contradicts(pb, est)
+
+
+# A 40 kg plate (0.8 x 0.6 x 0.02 m) on a trifilar whose anchor circle is tilted 0.3 rad: torsion and both swings
+# timed (the audit's draw 1: three trials of 10 cycles, 0.05 s each, releases drawn 10 % about 0.1 rad and 5 cm);
+# cycles 3 here so that the nonlinear runs are cheap (the periods are the draw's)
+PLATE = """solve_for: [Ixx, Iyy, Izz]
+uncertainty: {length: 0, position: 0, mass: 0, com: 0}
+hangings:
+- name: level
+  config:
+    name: 40 kg plate, anchor circle tilted 0.3 rad
+    body: {mass: 40.0, inertia: {principal: [1.201333, 2.134667, 3.333333]}}
+    rig:
+      anchors: [[0.0, 0.334368, 1.603432], [-0.303109, -0.167184, 1.448284], [0.303109, -0.167184, 1.448284]]
+      attachments: [[0.0, 0.28, 0.01], [-0.242487, -0.14, 0.01], [0.242487, -0.14, 0.01]]
+      lengths: [1.4, 1.4, 1.4]
+  measurements:
+  - {mode: torsion, period: 2.1858267, std: 0.0058, amplitude: 0.1, cycles: 3}
+  - {mode: swing-x, period: 2.3644467, std: 0.0058, amplitude: 0.05, cycles: 3}
+  - {mode: swing-y, period: 2.3644200, std: 0.0058, amplitude: 0.05, cycles: 3}
+"""
+PLATE_TRUTH = {"Ixx": 1.22, "Iyy": 2.10, "Izz": 3.30}  # kg m^2, principal axes = body axes
+
+
+def test_an_edge_root_of_several_unknowns_keeps_the_nonlinear_answer_physical(tmp_path):
+    """Ixx, Iyy and Izz from the three periods of one trifilar hanging: the
+    swings barely determine Ixx and Iyy (std ~4 kg m^2), so no physical
+    tensor reproduces the three periods and the linear root lies on the
+    triangle edge.  The nonlinear fixed point then solved without that
+    constraint from the edge: in 4 of 7 audit draws Gauss-Newton found no
+    positive definite step that lowered the misfit and ``invert`` exited 1
+    ('ConvergenceError'), in the others it stepped past the edge and warned
+    that its own answer violates the triangle inequality.  Its linear
+    solves now keep to physical tensors as the root finder did: answered
+    on the edge, the periods reproduced within the edge's 2 timing sigma,
+    and the truth within 2 stds of every component (audit: z +0.24..+0.28,
+    7 of 7 draws answered).  On the old code this raises ConvergenceError."""
+    from bifilar.estimation import measurements as mm
+    from bifilar.estimation.invert import invert
+    from bifilar.estimation.problem import admissible
+
+    path = tmp_path / "plate.yaml"
+    path.write_text(PLATE)
+    res = invert(mm.load_measurements(path), ladder=False)
+    assert res.method == "nonlinear"
+    assert res.fit["passed"], res.fit
+    p = dict(zip(res.names, res.values))
+    std = dict(zip(res.names, res.budget.std))
+    ev = np.linalg.eigvalsh(np.diag([p["Ixx"], p["Iyy"], p["Izz"]]))
+    # on the edge (I1 + I2 = I3 within the edge search's margin, 1e-4 of I3 here; the old code's draws that
+    # answered stepped 3e-3 past it) and physical within the config loader's allowance for rounded values
+    assert abs(ev[0] + ev[1] - ev[2]) < 1e-3 * ev[2] and admissible(np.diag(ev)), ev
+    for n, v in PLATE_TRUTH.items():
+        assert abs(p[n] - v) < 2 * std[n], (n, p[n], std[n])
+    assert not any("violates the triangle inequality" in w for w in res.warnings), res.warnings
