@@ -347,7 +347,7 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
     result's ``period_check`` says what it found).  A beating run whose
     span is below that pays nothing (the example measurements: no second
     run; checking every beating run cost them 19 % more CPU for nothing).
-    None: the period alone (the 3-cycle law runs of an unstated amplitude).
+    None: the period alone (the law runs of an unstated amplitude).
 
     ``fundamental`` (a fitted record's period, :attr:`Measurement.fundamental`):
     ``T_sim`` is the period of the mode's fundamental and ``amplitude`` the
