@@ -150,8 +150,9 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarr
     amplitudes uniform in 0 .. A_max, ``T = T_lin (1 + (r_max - 1) w)``,
     ``w`` the mode's amplitude law's release weight, ``E[w^2] = 1/5`` for a
     quadratic law): ``(T_lin (r_max - 1))^2 E[w^2]``.
-    Different modes are released independently.  Two short simulations per
-    such measurement at ``p`` (the law's, at A_max and A_max / 2)."""
+    Different modes are released independently.  Two simulations per such
+    measurement at ``p`` (the law's, at A_max and A_max / 2, over its
+    ``cycles``, as the budget's)."""
     from .budget import default_amplitude_range
     from .solve import RELEASE_LAW_RATIO, amplitude_law_at
 
@@ -167,7 +168,7 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10) -> np.ndarr
             continue
         A = default_amplitude_range(hm.scene(vals), mode)
         try:
-            law = amplitude_law_at(hm, vals, pb.mode_index[k], A, 3, rtol, lam=RELEASE_LAW_RATIO)
+            law = amplitude_law_at(hm, vals, pb.mode_index[k], A, m.cycles, rtol, lam=RELEASE_LAW_RATIO)
         except BifilarError:
             continue
         mean_w, std_w = law.release_moments()

@@ -386,7 +386,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         from .signal_swing import attach_second_modes, hidden_warnings  # only a nonlinear answer needs it
 
         warnings += attach_second_modes(pb, p_start, rtol, notes)
-        est_nl = solve_nonlinear(pb, p_start, rtol=rtol, progress=progress)
+        est_nl = solve_nonlinear(pb, p_start, rtol=rtol, progress=progress, physical=bool(roots[0].edge))
         rungs["nonlinear"] = {"p": est_nl.p, "r": est_nl.r, "iterations": est_nl.iterations}
         for s in est_nl.sims:
             if s is not None:
@@ -760,7 +760,7 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
     K = len(pb.measurements)
     p, r = np.asarray(root.p, float), np.ones(K)
     if method == "nonlinear":
-        est = solve_nonlinear(pb, p, rtol=rtol)
+        est = solve_nonlinear(pb, p, rtol=rtol, physical=bool(root.edge))
         p, r = est.p, est.r
     m = method if method in ("linear", "nonlinear") else "linear"
     budget = full_budget(pb, p, r, m, {m: {"p": p, "r": r}}, m, unc, rtol,

@@ -123,10 +123,12 @@ def _targets(pb: Problem, r: np.ndarray) -> np.ndarray:
     return np.array([m.period for m in pb.measurements]) / r
 
 
-def solve_linear(pb: Problem, targets: np.ndarray | None = None, p0=None) -> np.ndarray:
+def solve_linear(pb: Problem, targets: np.ndarray | None = None, p0=None, physical: bool = False) -> np.ndarray:
     """Unknowns for which the linear periods equal ``targets`` (default: the
     measured periods): scalar root finding for one unknown and one period,
-    else Gauss-Newton least squares."""
+    else Gauss-Newton least squares (``physical``: among physical tensors
+    only, continued along the edge of that set where it stops there, as
+    :func:`~bifilar.estimation.roots.find_roots` finds an edge root)."""
     targets = np.array([m.period for m in pb.measurements]) if targets is None else targets
     p0 = pb.prior if p0 is None else np.asarray(p0, float)
     sc = pb.scales()
@@ -140,7 +142,7 @@ def solve_linear(pb: Problem, targets: np.ndarray | None = None, p0=None) -> np.
         x = solve_scalar(lambda x: pb.linear_periods([x])[0], float(targets[0]), float(p0[0]), lo, hi,
                          float(sc[0]), m.field, name)
         return np.array([x])
-    return gauss_newton(pb, targets, p0)
+    return gauss_newton(pb, targets, p0, admissible_only=physical)
 
 
 def gauss_newton(pb: Problem, targets: np.ndarray, p0: np.ndarray, max_iter: int = 40, *,
@@ -345,7 +347,7 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
     result's ``period_check`` says what it found).  A beating run whose
     span is below that pays nothing (the example measurements: no second
     run; checking every beating run cost them 19 % more CPU for nothing).
-    None: the period alone (the 3-cycle law runs of an unstated amplitude).
+    None: the period alone (the law runs of an unstated amplitude).
 
     ``fundamental`` (a fitted record's period, :attr:`Measurement.fundamental`):
     ``T_sim`` is the period of the mode's fundamental and ``amplitude`` the
@@ -640,7 +642,7 @@ def _hidden_shifts(pb: Problem, p, k: int, r_alone: float, rtol: float) -> float
 
 
 def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: float = 1e-9,
-                    max_sims: int = 6, progress=None) -> Estimate:
+                    max_sims: int = 6, progress=None, physical: bool = False) -> Estimate:
     """Fixed point ``p = solve_linear(T_meas / r(p))`` with the amplitude
     factors ``r`` simulated at each iterate (measurements without an
     amplitude keep r = 1); then the amplitude law of each measurement with
@@ -652,7 +654,11 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
     does not settle where its runs were not regular is refused
     (:func:`_refuse_unsettled`).  Where the runs were regular, one unknown
     from one period is then solved on the full model
-    (:func:`_solve_full_scalar`), several are refused the same way."""
+    (:func:`_solve_full_scalar`), several are refused the same way.
+    ``physical``: the linear solves keep to physical tensors (the linear
+    root ``p_lin`` lies on the edge of the physical set: no physical tensor
+    reproduces the periods, and an unconstrained step from the edge may find
+    no lower misfit where the tensor stays positive definite)."""
     K = len(pb.measurements)
     r = np.ones(K)
     p = np.asarray(p_lin, float)
@@ -678,7 +684,7 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
             if progress:
                 progress(it - 1 + (k + 1) / K, 3)
         try:
-            pn = solve_linear(pb, _targets(pb, r), p0=p)
+            pn = solve_linear(pb, _targets(pb, r), p0=p, physical=physical)
         except BifilarError as exc:
             if not np.any(seen > 0):
                 if scalar:
@@ -714,7 +720,7 @@ def solve_nonlinear(pb: Problem, p_lin: np.ndarray, rtol: float = 1e-10, tol: fl
         other = [float(q[0][0]) for j, q in enumerate(found) if j != i]
         seen[0] = max(seen[0], irregular[0])
         # the linear solve with the root's factor, as the fixed point ends (within the run's noise of the root)
-        p = solve_linear(pb, _targets(pb, r), p0=p_at)
+        p = solve_linear(pb, _targets(pb, r), p0=p_at, physical=physical)
     elif not done and not scalar:
         _refuse_unsettled(pb, p, p_at, r, seen, max_sims)
     laws = [stated_amplitude_law(pb, p_at, k, r[k], rtol, irregular[k]) if m.amplitude else None
