@@ -1,0 +1,164 @@
+"""Mutation round 13 (docs/mutation.md, "Round 13"): tests that fail on a
+mutant of session 12's code that the suite let through.  Each states the
+truth it checks (an analytic result, an independent formulation, or the
+documented rule on an input built for it); none reads its expected value
+off the code under test.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+# ---------------------------------------------------------------------------
+# models/maximal.py: _inline_single_use
+# ---------------------------------------------------------------------------
+
+
+def test_a_temporary_is_inlined_when_its_operand_is_reassigned_only_after_its_use():
+    """``a = x*y`` read once by ``b``, and ``x`` assigned again in the
+    statement right after ``b``: ``x*y`` moved into ``b`` still reads the
+    old ``x``, as the source did, so the pass moves it (``untouched``'s
+    ``i < k < j`` with ``j`` one past the last use; ``k <= j`` kept it, a
+    lost inlining the bit-identity tests cannot see).  ``b`` then reads
+    ``x`` and the output reads ``b`` after ``x = 1.0``: ``b`` stays
+    (the expected source written by hand)."""
+    from bifilar.models import maximal as mx
+
+    body, out = mx._inline_single_use(["a = x*y", "b = a*2.0", "x = 1.0"], ["b", "x"])
+    assert body == ["b = (x*y)*2.0", "x = 1.0"] and out == ["b", "x"]
+
+
+# ---------------------------------------------------------------------------
+# estimation/signal_swing.py: record_tones
+# ---------------------------------------------------------------------------
+
+
+def _fit(amps, omegas, stds=None, n=1000, noise=1e-4, inflation=1.5, span=30.0):
+    modes = [{"amplitude": a, "omega": w, **({} if stds is None else {"std": s})}
+             for a, w, s in zip(amps, omegas, stds or [None] * len(amps))]
+    return SimpleNamespace(modes=modes, n_samples=n, noise_std=noise, std_inflation=inflation, t0=1.0, t1=1.0 + span)
+
+
+def test_a_records_tones_are_angle_ratios_above_five_stds_with_two_cycles():
+    """``record_tones`` by hand on a fit built for it: the std of a fitted
+    sinusoid's amplitude in white noise is ``noise sqrt(2 / N)`` (least
+    squares of a sine on N samples), times the fit's serial inflation
+    (1.5 here); a tone is kept above 5 of those and with two cycles in the
+    30 s record (``omega T >= 4 pi``), strongest first.  A rate record of
+    the same motion (theta = sum a_i sin(w_i t): the rate's amplitudes are
+    a_i w_i) gives the same angle-equivalent ratios a_i / a0, its std
+    scaled alike; read as an angle record it would be w_i / w0 off."""
+    from bifilar.estimation.signal_swing import record_tones
+
+    a = [0.1, 3e-3, 6e-4, 1e-5, 5e-3]  # rad: the dominant, two tones, one under 5 std, one too slow
+    w = [3.1, 2.45, -4.0, 2.0, 0.3]  # rad/s (a fit may return a negative omega); 0.3 x 30 s < 4 pi
+    s_amp = 1e-4 * math.sqrt(2.0 / 1000) * 1.5  # 6.7e-6: the 1e-5 tone is 1.5 of it
+    want = [{"period": 2 * math.pi / 2.45, "ratio": 3e-3 / 0.1}, {"period": 2 * math.pi / 4.0, "ratio": 6e-4 / 0.1}]
+    angle = SimpleNamespace(fit=_fit(a, w, stds=[0.0, 2e-3, 4e-3, 0.0, 0.0]), details={"quantity": "angle"})
+    rate = SimpleNamespace(fit=_fit([ai * abs(wi) for ai, wi in zip(a, w)], w), details={"quantity": "rate"})
+    got_a, got_r = record_tones(angle), record_tones(rate)
+    assert len(got_a) == len(got_r) == 2
+    for g, wt in zip(got_a, want):
+        assert g["period"] == pytest.approx(wt["period"], rel=1e-14)
+        assert g["ratio"] == pytest.approx(wt["ratio"], rel=1e-14)
+        assert g["ratio_std"] == pytest.approx(s_amp / 0.1, rel=1e-14)
+    assert [g["period_std"] for g in got_a] == [2e-3, 4e-3]
+    for g, wt, wi in zip(got_r, want, (2.45, 4.0)):
+        assert g["ratio"] == pytest.approx(wt["ratio"], rel=1e-14)  # angle-equivalent
+        assert g["ratio_std"] == pytest.approx(1e-4 * math.sqrt(2.0 / 1000) * 1.5 / (0.1 * 3.1) * 3.1 / wi, rel=1e-14)
+    # an unstated serial factor counts as 1; no fit, or a fit of one mode, has no tones
+    one = SimpleNamespace(fit=_fit(a, w, inflation=None), details={})
+    assert record_tones(one)[0]["ratio_std"] == pytest.approx(1e-4 * math.sqrt(2.0 / 1000) / 0.1, rel=1e-14)
+    assert record_tones(SimpleNamespace(fit=None, details={})) == []
+    assert record_tones(SimpleNamespace(fit=SimpleNamespace(modes=None), details={})) == []
+
+
+# ---------------------------------------------------------------------------
+# analysis/clearance.py
+# ---------------------------------------------------------------------------
+
+
+def _rig(anchors, attachments, lengths, box_top=None):
+    from bifilar.config import scene_from_dict
+
+    body = {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]}}
+    if box_top is not None:
+        body["bounding_box"] = {"min": [-0.1, -0.1, -0.1], "max": [0.1, 0.1, box_top]}
+    return scene_from_dict({"gravity": 9.81, "body": body,
+                            "rig": {"anchors": anchors, "attachments": attachments, "lengths": lengths}}, warn=False)
+
+
+@pytest.mark.parametrize("L", [0.5, 2.0])
+def test_the_ceiling_tolerance_is_a_share_of_the_longest_wire(L):
+    """The documented rule: the body at rest may reach ``CEILING_TOL`` times
+    the longest wire above the highest anchor (the rest pose's rounding)
+    before the warning.  A box whose top lies 0.5 and 1.5 of that above
+    the ceiling (the pose given: the CoM on the ceiling's level minus the
+    box's reach, level), on wires of 0.5 and 2 m: silent, then warned
+    (``+ -> -`` on the ceiling warned a box that only touches it; ``* -> /``
+    put the 2 m rig's allowance at a quarter of the stated one, 0.5 m's at
+    four times)."""
+    from bifilar.analysis.clearance import CEILING_TOL, ceiling_warning
+
+    sc = _rig([[-0.2, 0, L], [0.2, 0, L]], [[-0.2, 0, 0.0], [0.2, 0, 0.0]], [L, L], box_top=0.25)
+    tol = CEILING_TOL * L
+    for share, warned in ((0.0, False), (0.5, False), (1.5, True)):
+        rest = SimpleNamespace(com=np.array([0.0, 0.0, L - 0.25 + share * tol]), R=np.eye(3))
+        w = ceiling_warning(sc, rest)
+        assert (w is not None) == warned, (share, w)
+
+
+def _x_rig(a=0.3, b=0.2, H=1.0, L=1.0, dy=0.0, shared=None):
+    """Four wires of length L: on each side y = +-b two wires from x = -+a at
+    the ceiling (z = H) to x = +-a on the body, crossing in an X; wire 2
+    moved by ``dy`` in y at both ends (parallel planes ``dy`` apart).  The
+    pose is given: level, the CoM under the centre at the wires' drop
+    h = sqrt(L^2 - 4 a^2) (each spans 2a).  ``shared``: wire 2 vertical, 0.5 mm
+    outside wire 1's anchor (``"anchor"``) or attachment (``"attachment"``)
+    (a common end is refused by the config), so the two come closest at
+    that end and spread from it."""
+    anchors = [[-a, b, H], [a, b + dy, H], [-a, -b, H], [a, -b, H]]
+    att = [[a, b, 0.0], [-a, b + dy, 0.0], [a, -b, 0.0], [-a, -b, 0.0]]
+    h = math.sqrt(L * L - 4 * a * a)
+    if shared == "anchor":
+        anchors[1] = [-a - 5e-4, b, H]
+        att[1] = [-a - 5e-4, b, 0.0]
+    elif shared == "attachment":
+        att[1] = [a + 5e-4, b, 0.0]
+        anchors[1] = [a + 5e-4, b, H]
+    lengths = [L] * 4
+    if shared:  # wire 2 vertical
+        lengths[1] = h
+    return _rig(anchors, att, lengths), SimpleNamespace(com=np.array([0.0, 0.0, H - h]), R=np.eye(3)), H - h / 2
+
+
+def test_crossing_wires_are_named_with_where_they_meet():
+    """Two X's of wires (1-2 and 3-4), each pair meeting at the middle of
+    its wires by symmetry, z = H - h/2 = 0.6 m (h = 0.8 m): both pairs
+    named, 'meeting' (closer than 1e-6 m), at that height.  Wire 2 moved
+    0.5 mm sideways (parallel planes): '0.5 mm apart' at the same height;
+    1.5 mm: beyond the 1 mm contact distance, only 3-4 named.  Wires that
+    come closest at an end (anchors or attachment points 0.5 mm apart, the
+    wires spreading from there: s = 0 or 1) are not a crossing: not named."""
+    from bifilar.analysis.clearance import crossing_warning
+
+    sc, rest, zc = _x_rig()
+    assert zc == pytest.approx(0.6, abs=1e-15)
+    w = crossing_warning(sc, rest)
+    assert w is not None and "wires 1 and 2 (meeting at z = 0.6 m)" in w and "wires 3 and 4 (meeting at z = 0.6 m)" in w
+    assert len(re.findall(r"wires \d and \d", w)) == 2, w
+    sc, rest, _ = _x_rig(dy=5e-4)
+    w = crossing_warning(sc, rest)
+    assert "wires 1 and 2 (0.5 mm apart at z = 0.6 m)" in w and "wires 3 and 4 (meeting" in w, w
+    sc, rest, _ = _x_rig(dy=1.5e-3)
+    w = crossing_warning(sc, rest)
+    assert "wires 1 and 2" not in w and "wires 3 and 4 (meeting" in w, w
+    for end in ("anchor", "attachment"):
+        sc, rest, _ = _x_rig(shared=end)
+        w = crossing_warning(sc, rest)
+        assert "wires 1 and 2" not in w and "wires 3 and 4 (meeting" in w, (end, w)
