@@ -162,3 +162,27 @@ def test_crossing_wires_are_named_with_where_they_meet():
         sc, rest, _ = _x_rig(shared=end)
         w = crossing_warning(sc, rest)
         assert "wires 1 and 2" not in w and "wires 3 and 4 (meeting" in w, (end, w)
+
+
+def test_wires_side_by_side_along_their_length_are_named():
+    """A fourth wire hung 0.5 mm beside wire 1, parallel (a doubled wire),
+    and once attached 0.1 mm higher on the body (1e-4 shorter: the ends' gaps are
+    0.5 mm and ~0.51 mm at the rest pose, the segments skew): the two touch
+    along their whole length (the distance between points at the same
+    share of each is linear in the share, so at most its ends' 0.5 mm).
+    Their closest points lay at an end (s = 0 for exactly parallel
+    segments, clipped to an end for the skew pair) and the check, which
+    leaves out wires closest at an end, said nothing; now named, with the
+    distance.  The pair at 1.5 mm stays silent."""
+    from bifilar.analysis.clearance import clearance_warnings
+
+    a, b = 0.3, 0.2
+    for dx, dz, named in ((5e-4, 0.0, True), (5e-4, 1e-4, True), (1.5e-3, 0.0, False)):
+        sc = _rig([[-a, b, 1.0], [a, b, 1.0], [0.0, -b, 1.0], [-a + dx, b, 1.0]],
+                  [[-a, b, 0.0], [a, b, 0.0], [0.0, -b, 0.0], [-a + dx, b, dz]], [1.0, 1.0, 1.0, 1.0 - dz])
+        w = clearance_warnings(sc)
+        if named:
+            assert len(w) == 1 and re.search(r"wires 1 and 4 \(side by side, at most 0\.5\d? mm apart along their whole "
+                                            r"length\)", w[0]) and " touch or cross: " in w[0], w
+        else:
+            assert w == [], w
