@@ -186,3 +186,55 @@ def test_wires_side_by_side_along_their_length_are_named():
                                             r"length\)", w[0]) and " touch or cross: " in w[0], w
         else:
             assert w == [], w
+
+
+def test_segment_distance_of_parallel_segments_and_beyond_an_end():
+    """Two cases the random draws of test_forward_audit12 did not reach:
+    exactly parallel segments (a e - b^2 = 0 in floating point: two
+    vertical 1 m segments 1 m apart, distance 1; ``den >= ...`` divided 0
+    by 0 and gave NaN), and lines whose closest points lie beyond the first
+    segment's end (the x axis' 0 .. 1 against a segment along y at x = 2,
+    z = 1: the lines meet their closest at s = 2; the segments' closest
+    points are p1 = (1, 0, 0) and (2, 0, 1), sqrt 2 apart; an unclipped
+    s = 2 gave 1)."""
+    from bifilar.analysis.clearance import segment_distance
+
+    d, s, t = segment_distance([0, 0, 0], [0, 0, 1], [1, 0, 0], [1, 0, 1])
+    assert d == pytest.approx(1.0, abs=1e-15) and 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0
+    d, s, t = segment_distance([0, 0, 0], [1, 0, 0], [2, -1, 1], [2, 1, 1])
+    assert d == pytest.approx(math.sqrt(2.0), abs=1e-15) and s == 1.0 and t == pytest.approx(0.5, abs=1e-15)
+
+
+# ---------------------------------------------------------------------------
+# studies/point.py: statics_range
+# ---------------------------------------------------------------------------
+
+
+def test_a_wire_without_rest_tension_takes_the_largest_ratio_of_the_others():
+    """The documented rule on a split built for it: the table of four equal
+    vertical wires (each 0 .. m g / 2 at rest by statics, test_tension_range_limit)
+    with the model's split set to m g / 4 on wires 1-3 and 1e-7 m g on wire
+    4 (below 1e-6 of the weight: no tension to scale), the runs' peaks 1.1,
+    1.2, 1.05 times the rest on wires 1-3 and 50 times wire 4's nothing.
+    Wire 4's top then scales by the others' largest ratio, 1.2, not by its
+    own 50: the range's peak is m g / 2 x 1.2 (wire 2, the first of the
+    two), where a threshold read as 1e-6 m / g or 1e-6 g / m (the weight
+    mistyped) counted wire 4's 50 (25 m g).  With every wire below it
+    each ratio is 1 (the rest's top)."""
+    import dataclasses
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.studies.point import statics_range
+
+    from test_dependent_wires_messages import CORNERS, scene_of, vertical
+
+    sc = scene_of(vertical(CORNERS, [1.0] * 4))
+    mg = sc.mass * sc.gravity
+    rest = rest_pose(sc)
+    T0 = np.array([mg / 4] * 3 + [1e-7 * mg])
+    got = statics_range(sc, dataclasses.replace(rest, tensions=T0), T0 * [1.1, 1.2, 1.05, 50.0])
+    assert np.allclose(got["range"], [[0.0, mg / 2]] * 4, rtol=1e-9, atol=1e-9 * mg)
+    assert got["range_peak"] == pytest.approx(mg / 2 * 1.2, rel=1e-9) and got["range_peak_wire"] == 2
+    tiny = np.full(4, 1e-7 * mg)
+    got = statics_range(sc, dataclasses.replace(rest, tensions=tiny), tiny * 3.0)
+    assert got["range_peak"] == pytest.approx(mg / 2, rel=1e-9)
