@@ -196,13 +196,16 @@ def test_segment_distance_of_parallel_segments_and_beyond_an_end():
     segment's end (the x axis' 0 .. 1 against a segment along y at x = 2,
     z = 1: the lines meet their closest at s = 2; the segments' closest
     points are p1 = (1, 0, 0) and (2, 0, 1), sqrt 2 apart; an unclipped
-    s = 2 gave 1)."""
+    s = 2 gave 1; in the other order t = 2, and an unclipped t gave 1)."""
     from bifilar.analysis.clearance import segment_distance
 
     d, s, t = segment_distance([0, 0, 0], [0, 0, 1], [1, 0, 0], [1, 0, 1])
     assert d == pytest.approx(1.0, abs=1e-15) and 0.0 <= s <= 1.0 and 0.0 <= t <= 1.0
     d, s, t = segment_distance([0, 0, 0], [1, 0, 0], [2, -1, 1], [2, 1, 1])
     assert d == pytest.approx(math.sqrt(2.0), abs=1e-15) and s == 1.0 and t == pytest.approx(0.5, abs=1e-15)
+    # the same pair in the other order: now the second line's closest point lies beyond its end (t = 2)
+    d, s, t = segment_distance([2, -1, 1], [2, 1, 1], [0, 0, 0], [1, 0, 0])
+    assert d == pytest.approx(math.sqrt(2.0), abs=1e-15) and t == 1.0 and s == pytest.approx(0.5, abs=1e-15)
 
 
 # ---------------------------------------------------------------------------
@@ -238,3 +241,76 @@ def test_a_wire_without_rest_tension_takes_the_largest_ratio_of_the_others():
     tiny = np.full(4, 1e-7 * mg)
     got = statics_range(sc, dataclasses.replace(rest, tensions=tiny), tiny * 3.0)
     assert got["range_peak"] == pytest.approx(mg / 2, rel=1e-9)
+
+
+# ---------------------------------------------------------------------------
+# analysis/simulate.py: two_mode_state
+# ---------------------------------------------------------------------------
+
+
+def test_a_second_mode_without_stiffness_or_amplitude_starts_nothing():
+    """A neutral mode (``period`` None: zero stiffness) has no oscillation
+    whose velocity at rest the release could give, and an amplitude 0
+    gives none: the start is :func:`initial_state`'s, the first mode held
+    at its amplitude with zero velocity (``or -> and`` divided by the
+    neutral mode's missing period)."""
+    import dataclasses
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.analysis.simulate import initial_state, two_mode_state
+
+    from test_forward_audit12 import bifilar
+
+    sc = bifilar(1.2, [0.012, 0.013, 0.022], 0.15, 0.15, 0.03, 1.2, anchor_z=1.23)
+    rest = rest_pose(sc)
+    ms = linear_modes(sc, rest)
+    tor, sw = ms.get("torsion"), ms.get("swing-y")
+    y_ref = initial_state(sc, rest, tor, 0.1)
+    assert np.array_equal(two_mode_state(sc, rest, tor, 0.1, dataclasses.replace(sw, period=None), 0.03), y_ref)
+    assert np.array_equal(two_mode_state(sc, rest, tor, 0.1, sw, 0.0), y_ref)
+    assert not np.array_equal(two_mode_state(sc, rest, tor, 0.1, sw, 0.03), y_ref)
+
+
+# ---------------------------------------------------------------------------
+# analysis/run_accuracy.py: the crossings' part of period_accuracy
+# ---------------------------------------------------------------------------
+
+
+def test_a_crossing_error_that_could_not_be_estimated_counts_as_nothing():
+    """``crossing`` NaN (too few samples, a crossing the samples do not
+    show: crossing_period_error) counts as 0, as documented: the bound is
+    the one without it, and a finite crossing part adds to it as is (1e-9
+    s on top of the 1e-8-relative run's bound; ``else 0.0 -> 1`` put a
+    whole second on every NaN)."""
+    from bifilar.analysis.run_accuracy import period_accuracy
+
+    base, _ = period_accuracy(2.0, "LSODA", 1e-9)
+    assert period_accuracy(2.0, "LSODA", 1e-9, crossing=float("nan"))[0] == base
+    assert period_accuracy(2.0, "LSODA", 1e-9, crossing=1e-9)[0] == pytest.approx(base + 1e-9, rel=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# studies/hangings_inputs.py: is_swing
+# ---------------------------------------------------------------------------
+
+
+def test_a_swing_is_told_by_its_kinetic_energy_not_by_its_largest_entry():
+    """The quadcopter-like bifilar (CoM 3 cm below the wires' attachment
+    line): its swing-y's largest shape entry is the roll (a rotation, the
+    amplitude's unit rad) while its kinetic energy is mostly y translation,
+    a swing; its roll's is mostly rotation about x (index 3), no swing
+    (``< 3 -> <= 3`` took the roll for a swing, whose dr/dx then has no
+    bound)."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.studies.hangings_inputs import is_swing
+
+    from test_forward_audit12 import bifilar
+
+    sc = bifilar(1.2, [0.012, 0.013, 0.022], 0.15, 0.15, 0.03, 1.2, anchor_z=1.23)
+    ms = linear_modes(sc, rest_pose(sc))
+    got = {m.label: is_swing(m) for m in ms.modes}
+    assert got == {"swing-x": True, "swing-y": True, "torsion": False, "roll": False}
+    sy = ms.get("swing-y")
+    assert sy.dominant >= 3 and float(np.sum(sy.energy_share[:3])) > 0.5  # the case the rule is for
