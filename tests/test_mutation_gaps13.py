@@ -314,3 +314,47 @@ def test_a_swing_is_told_by_its_kinetic_energy_not_by_its_largest_entry():
     assert got == {"swing-x": True, "swing-y": True, "torsion": False, "roll": False}
     sy = ms.get("swing-y")
     assert sy.dominant >= 3 and float(np.sum(sy.energy_share[:3])) > 0.5  # the case the rule is for
+
+
+def test_the_joint_fits_input_columns_are_each_hangings_own_block_then_the_shared_ones():
+    """``keyed`` on maps built for it: hangings 0 and 2 of three candidates
+    used (rows (0, 0), (0, 1), (2, 0)), each with its own inputs (2 and 1
+    columns) and 2 shared ones.  The layout written by hand: a
+    block-diagonal of ``raw @ M_own`` per hanging, the shared columns
+    ``raw @ M_sh`` summed in the last two, and with ``absolute`` the maps'
+    absolute values (a bound).  A block shifted by a row or a column (the
+    offsets' ``0 -> 1``) moves an input's term onto another period or input."""
+    from bifilar.studies.hangings_inputs import keyed
+
+    rng = np.random.default_rng(13)
+    maps = [(["a", "b", "c"], rng.normal(size=(3, 2)), rng.normal(size=(3, 2))),
+            (["a"], rng.normal(size=(1, 4)), rng.normal(size=(1, 2))),
+            (["a", "d"], rng.normal(size=(2, 1)), rng.normal(size=(2, 2)))]
+    raw = {0: rng.normal(size=(2, 3)), 2: rng.normal(size=(1, 2))}
+    rows = [(0, 0), (0, 1), (2, 0)]
+    for absolute, f in ((False, lambda M: M), (True, np.abs)):
+        want = np.block([[raw[0] @ f(maps[0][1]), np.zeros((2, 1)), raw[0] @ f(maps[0][2])],
+                         [np.zeros((1, 2)), raw[2] @ f(maps[2][1]), raw[2] @ f(maps[2][2])]])
+        got = keyed(maps, rows, raw, absolute=absolute)
+        assert got.shape == (3, 5) and np.allclose(got, want, rtol=1e-14, atol=1e-14), (absolute, got - want)
+
+
+# ---------------------------------------------------------------------------
+# studies/ranking.py: tension_range_caution
+# ---------------------------------------------------------------------------
+
+
+def test_the_caution_quotes_the_range_of_the_wire_that_reaches_the_top():
+    """A point built for it: four dependent wires with distinct statics
+    ranges at rest (0 .. 10, 1 .. 20, 2 .. 30, 3 .. 40 N), the model's
+    split peaking at 30 N, the range's peak 45 N on wire 2 in the runs,
+    the limit 35 N between them: the caution names wire 2 and its own rest
+    range, 1 .. 20 N (the symmetric table of test_tension_range_limit has
+    one range for every wire, so a neighbour's was quoted unseen)."""
+    from bifilar.studies.ranking import tension_range_caution
+    from bifilar.studies.settings import Constraints
+
+    point = {"tension": {"peak": 30.0, "range_peak": 45.0, "range_peak_wire": 2,
+                         "range": np.array([[0.0, 10.0], [1.0, 20.0], [2.0, 30.0], [3.0, 40.0]])}}
+    w = tension_range_caution(point, Constraints(max_tension=35.0))
+    assert "wire 2 may carry 1 .. 20 N at rest and up to 45 N in the runs" in w, w
