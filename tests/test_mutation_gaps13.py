@@ -358,3 +358,48 @@ def test_the_caution_quotes_the_range_of_the_wire_that_reaches_the_top():
                          "range": np.array([[0.0, 10.0], [1.0, 20.0], [2.0, 30.0], [3.0, 40.0]])}}
     w = tension_range_caution(point, Constraints(max_tension=35.0))
     assert "wire 2 may carry 1 .. 20 N at rest and up to 45 N in the runs" in w, w
+
+
+def _harmonic_record():
+    """sin t + 0.2 sin(7 t + 0.3) on 23.7 samples per fundamental period
+    (~3.4 per cycle of the harmonic), its upward crossings located on the
+    samples, and the true ones by brentq on the function itself."""
+    from scipy.optimize import brentq
+
+    from bifilar import integrators as itg
+
+    def sig(t):
+        return np.sin(t) + 0.2 * np.sin(7 * t + 0.3)
+
+    dt = 2 * np.pi / 23.7  # not a whole number per period: the crossings' errors differ (they would cancel)
+    t = np.arange(0, 40, dt)
+    c = sig(t)
+    _, tx, k = itg.sampled_crossings(c[:, None], dt)
+    true = np.array([brentq(sig, t[j], t[j + 1], xtol=1e-15) for j in k])
+    return t, c, tx, true
+
+
+def test_the_mean_periods_crossing_error_covers_the_true_one():
+    """crossing_period_error against the analytic signal: the mean period
+    (last - first crossing over the cycles between) from the sampled
+    crossings is off the true crossings' by at most the two end crossings'
+    errors over the cycles; the estimate covers that and is no looser than
+    50x the end crossings' true errors (each estimate is 2-4x its own
+    error, test_forward_audit12).  Fewer than two crossings: 0 (no mean
+    period); fewer than 9 samples: NaN (no stencil); a crossing the samples
+    do not show (placed where the signal falls): NaN."""
+    from bifilar.analysis.run_accuracy import crossing_period_error
+
+    t, c, tx, true = _harmonic_record()
+    n = len(tx) - 1
+    err_mean = abs((tx[-1] - tx[0]) - (true[-1] - true[0])) / n
+    ends = (abs(tx[0] - true[0]) + abs(tx[-1] - true[-1])) / n
+    est = crossing_period_error(t, c, tx)
+    assert n >= 5 and 0 < ends and err_mean <= est <= 50 * ends + 1e-13, (err_mean, ends, est)
+    # the estimate is per cycle: the same end crossings over fewer cycles between them
+    sub = np.r_[tx[0], tx[1:-1][:1], tx[-1]]
+    assert crossing_period_error(t, c, sub) == pytest.approx(est * n / 2, rel=1e-12)
+    assert crossing_period_error(t, c, tx[:1]) == 0.0
+    assert math.isnan(crossing_period_error(t[:8], c[:8], tx[:2]))
+    down = t[int(np.argmax(np.diff(np.sign(c)) < 0))]  # a sample just before a downward crossing
+    assert math.isnan(crossing_period_error(t, c, np.r_[tx[0], down]))
