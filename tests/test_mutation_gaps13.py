@@ -372,9 +372,10 @@ def _harmonic_record():
         return np.sin(t) + 0.2 * np.sin(7 * t + 0.3)
 
     dt = 2 * np.pi / 23.7  # not a whole number per period: the crossings' errors differ (they would cancel)
-    t = np.arange(0, 40, dt)
+    t = 0.7 + np.arange(0, 40, dt)  # not from 0: the spacing is t[1] - t[0]
     c = sig(t)
     _, tx, k = itg.sampled_crossings(c[:, None], dt)
+    tx = tx + t[0]  # (times from the first sample)
     true = np.array([brentq(sig, t[j], t[j + 1], xtol=1e-15) for j in k])
     return t, c, tx, true
 
@@ -399,7 +400,45 @@ def test_the_mean_periods_crossing_error_covers_the_true_one():
     # the estimate is per cycle: the same end crossings over fewer cycles between them
     sub = np.r_[tx[0], tx[1:-1][:1], tx[-1]]
     assert crossing_period_error(t, c, sub) == pytest.approx(est * n / 2, rel=1e-12)
+    assert crossing_period_error(t, c, tx[[0, -1]]) == pytest.approx(est * n, rel=1e-12)  # two: one period
     assert crossing_period_error(t, c, tx[:1]) == 0.0
+    # 9 samples are the fewest with a stencil of 8 and one shifted: a value (two crossings of a sine at 4.4
+    # samples a period); 8: NaN
+    from bifilar import integrators as itg
+
+    t9 = 3.0 + np.arange(9.0)
+    c9 = np.sin(2 * np.pi * (t9 - 3.3) / 4.4)
+    _, x9, k9 = itg.sampled_crossings(c9[:, None], 1.0)
+    assert len(x9) == 2 and k9[0] == 0  # the first crossing between samples 0 and 1: its stencils shift right only
+    assert np.all(np.isfinite(itg.crossing_interpolation_error(c9, k9, 1.0)))
+    assert np.isfinite(crossing_period_error(t9, c9, x9 + t9[0]))
     assert math.isnan(crossing_period_error(t[:8], c[:8], tx[:2]))
     down = t[int(np.argmax(np.diff(np.sign(c)) < 0))]  # a sample just before a downward crossing
     assert math.isnan(crossing_period_error(t, c, np.r_[tx[0], down]))
+
+
+# ---------------------------------------------------------------------------
+# scene.py: the body's lowest and highest points
+# ---------------------------------------------------------------------------
+
+
+def test_lowest_and_highest_points_of_a_box_by_hand():
+    """A box from (-0.1, -0.1, -0.1) to (0.1, 0.1, 0.25) m in body axes with
+    its CoM at z = 0.5 m: level, it reaches from 0.4 to 0.75 m; turned by 90
+    degrees about x (body y up), from 0.4 to 0.6 m.  Without a shape the
+    body reaches at least its CoM and its attachments (z 0 in body axes):
+    both at 0.5 m level.  (The tests before checked inequalities only:
+    ``lowest_point_z``'s sign scaled to -2 put the lowest point 4 h below
+    the CoM, the support function being positively homogeneous.)"""
+    from bifilar.scene import highest_point_z, lowest_point_z
+
+    sc = _rig([[-0.2, 0, 1.0], [0.2, 0, 1.0]], [[-0.2, 0, 0.0], [0.2, 0, 0.0]], [0.5, 0.5], box_top=0.25)
+    com = np.array([0.0, 0.0, 0.5])
+    Rx = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # body y -> world z
+    assert float(lowest_point_z(sc, com, np.eye(3))) == pytest.approx(0.4, abs=1e-15)
+    assert float(highest_point_z(sc, com, np.eye(3))) == pytest.approx(0.75, abs=1e-15)
+    assert float(lowest_point_z(sc, com, Rx)) == pytest.approx(0.4, abs=1e-15)
+    assert float(highest_point_z(sc, com, Rx)) == pytest.approx(0.6, abs=1e-15)
+    bare = _rig([[-0.2, 0, 1.0], [0.2, 0, 1.0]], [[-0.2, 0, 0.0], [0.2, 0, 0.0]], [0.5, 0.5])
+    assert float(lowest_point_z(bare, com, np.eye(3))) == pytest.approx(0.5, abs=1e-15)
+    assert float(highest_point_z(bare, com, np.eye(3))) == pytest.approx(0.5, abs=1e-15)
