@@ -151,7 +151,7 @@ def test_crossing_wires_are_named_with_where_they_meet():
     assert zc == pytest.approx(0.6, abs=1e-15)
     w = crossing_warning(sc, rest)
     assert w is not None and "wires 1 and 2 (meeting at z = 0.6 m)" in w and "wires 3 and 4 (meeting at z = 0.6 m)" in w
-    assert len(re.findall(r"wires \d and \d", w)) == 2, w
+    assert len(re.findall(r"wires \d and \d", w)) == 2 and "(meeting at z = 0.6 m) cross: " in w, w
     sc, rest, _ = _x_rig(dy=5e-4)
     w = crossing_warning(sc, rest)
     assert "wires 1 and 2 (0.5 mm apart at z = 0.6 m)" in w and "wires 3 and 4 (meeting" in w, w
