@@ -7,6 +7,7 @@ off the code under test.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from types import SimpleNamespace
@@ -442,3 +443,34 @@ def test_lowest_and_highest_points_of_a_box_by_hand():
     bare = _rig([[-0.2, 0, 1.0], [0.2, 0, 1.0]], [[-0.2, 0, 0.0], [0.2, 0, 0.0]], [0.5, 0.5])
     assert float(lowest_point_z(bare, com, np.eye(3))) == pytest.approx(0.5, abs=1e-15)
     assert float(highest_point_z(bare, com, np.eye(3))) == pytest.approx(0.5, abs=1e-15)
+
+
+# ---------------------------------------------------------------------------
+# studies/hangings.py: gravity_column
+# ---------------------------------------------------------------------------
+
+
+def test_gs_column_is_the_periods_derivative_in_g_times_its_std():
+    """g's column against central differences of the linear periods over g
+    (the rest pose and modes of the same rig at g (1 +- 1e-5)): each period
+    falls as g^-1/2, so dT/dg s_g < 0 (the column's sign dropped passed:
+    one column's sign does not change a sigma, but it is the derivative's);
+    none stated (``--sigma gravity=0``): no column."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.studies.hangings import gravity_column
+
+    def periods(g):
+        sc = _rig([[-0.2, 0, 1.0], [0.2, 0, 1.0]], [[-0.15, 0, 0.05], [0.15, 0, 0.05]], [1.0, 1.0])
+        sc = dataclasses.replace(sc, gravity=g)
+        return sc, np.array([m.period for m in linear_modes(sc, rest_pose(sc)).modes])
+
+    g, eps = 9.81, 1e-5
+    sc, T = periods(g)
+    dT = (periods(g * (1 + eps))[1] - periods(g * (1 - eps))[1]) / (2 * eps * g)
+    h = SimpleNamespace(scene=sc, sens=SimpleNamespace(periods=T))
+    col = gravity_column(h, {"gravity": 0.003})
+    assert col.shape == (len(T), 1) and np.all(col < 0)
+    # central differences: truncation ~eps^2, rounding ~1e-16 / eps of T: 1e-9 relative is ample
+    assert np.allclose(col[:, 0], dT * 0.003 * g, rtol=1e-8, atol=0)
+    assert gravity_column(h, {"gravity": 0.0}).shape == (len(T), 0)
