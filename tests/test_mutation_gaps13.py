@@ -192,8 +192,8 @@ def test_wires_side_by_side_along_their_length_are_named():
 def test_segment_distance_of_parallel_segments_and_beyond_an_end():
     """Two cases the random draws of test_forward_audit12 did not reach:
     exactly parallel segments (a e - b^2 = 0 in floating point: two
-    vertical 1 m segments 1 m apart, distance 1; ``den >= ...`` divided 0
-    by 0 and gave NaN), and lines whose closest points lie beyond the first
+    vertical 1 m segments 1 m apart, distance 1: the branch that starts
+    from an end), and lines whose closest points lie beyond the first
     segment's end (the x axis' 0 .. 1 against a segment along y at x = 2,
     z = 1: the lines meet their closest at s = 2; the segments' closest
     points are p1 = (1, 0, 0) and (2, 0, 1), sqrt 2 apart; an unclipped
