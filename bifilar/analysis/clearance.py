@@ -64,21 +64,35 @@ def segment_distances(p0, p1, q0, q1) -> tuple[np.ndarray, np.ndarray, np.ndarra
 def crossing_warning(scene: Scene, rest: RestPose) -> str | None:
     """One line naming every pair of wires (1-based, as in ``rig.lengths``)
     whose segments at rest come closer than :data:`WIRE_CONTACT` (crossing
-    or touching wires), else None."""
+    or touching wires) away from their ends, or that run side by side
+    within it along their whole length (both pairs of ends within it),
+    else None."""
+    import numpy as np
+
     P = rest.com + scene.attachments @ rest.R.T
     A = scene.anchors
-    hits = []
+    hits, along = [], False
     for i in range(scene.n_wires):
         for j in range(i + 1, scene.n_wires):
             dist, s, _ = segment_distance(A[i], P[i], A[j], P[j])
-            if dist < WIRE_CONTACT and 0.0 < s < 1.0:  # (wires that only share an end point are a config error)
+            if dist >= WIRE_CONTACT:
+                continue
+            # side by side: both pairs of ends closer than the contact distance, so every pair of points at the
+            # same share of the two wires is (the difference is linear in the share): they touch all along.
+            # Closest at one end only (0.5 mm apart at the ceiling, spreading from there) is no contact reported
+            ends = max(np.linalg.norm(A[i] - A[j]), np.linalg.norm(P[i] - P[j]))
+            if ends < WIRE_CONTACT:
+                along = True
+                hits.append(f"wires {i + 1} and {j + 1} (side by side, at most {ends * 1e3:.2g} mm apart along "
+                            "their whole length)")
+            elif 0.0 < s < 1.0:
                 z = float(A[i][2] + s * (P[i][2] - A[i][2]))
                 gap = f"{dist * 1e3:.2g} mm apart" if dist >= 1e-6 else "meeting"
                 hits.append(f"wires {i + 1} and {j + 1} ({gap} at z = {z:.4g} m)")
     if not hits:
         return None
-    return (f"rig: at rest {'; '.join(hits)} cross: real wires would touch and rub there, which the model does not "
-            "see; check the order of rig.anchors against rig.attachments")
+    return (f"rig: at rest {'; '.join(hits)} {'touch or cross' if along else 'cross'}: real wires would touch and "
+            "rub there, which the model does not see; check the order of rig.anchors against rig.attachments")
 
 
 def clearance_warnings(scene: Scene, rest: RestPose | None = None) -> list[str]:
