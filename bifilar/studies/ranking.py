@@ -20,6 +20,7 @@ import re
 from functools import cmp_to_key
 from dataclasses import replace
 
+from ..estimation.budget import LINEAR_ENOUGH
 from ..jsonable import to_jsonable as _plain
 from .settings import Constraints
 
@@ -59,7 +60,15 @@ def objective(point: dict, target: str | None, among=None, small_amplitude: bool
 TIE_REL = 1e-9
 
 
-def rank_order(points: list[dict], idx, key) -> list[int]:
+#: objectives within this relative difference are not told apart by the sweep's own figures: a point's
+#: sigma is its linear budget wherever the second-order std (the one invert prints) lies within
+#: :data:`~bifilar.estimation.budget.LINEAR_ENOUGH` (2 %) of it, so two points that close in the objective may
+#: swap under invert's figure (the audits' invert std / sigma: 1.0006-1.017, docs/design.md, sessions 10 and
+#: 11).  Within it a point without a caution (:func:`tension_range_caution`) ranks before one with
+EQUAL_REL = LINEAR_ENOUGH
+
+
+def rank_order(points: list[dict], idx, key, caution=None) -> list[int]:
     """The indices ``idx`` of ``points`` by increasing ``key(point)``
     (finite), ties broken by the other components, then the parameters,
     not by the grid order or rounding: the points whose key is within
@@ -68,19 +77,58 @@ def rank_order(points: list[dict], idx, key) -> list[int]:
     :data:`TIE_REL` (:func:`_tie_order`), then by their parameter values
     (as given, in the sweep's parameter order); then the next group.
 
+    ``caution(point)`` (optional, true for a point carrying a caution: its
+    dependent wires may carry more than ``--max-tension``) puts a point
+    without one first where the figures cannot tell them apart: when the
+    smallest remaining key is a cautioned point's, the best point without a
+    caution whose key lies within :data:`EQUAL_REL` of it (and its tie
+    group) comes next instead; within a tie group those without a caution
+    come first.
+
     The components come first because the worst one alone can tie where
     the others differ: a thin rod's Ixx (its roll, 10.9 %, set by the CoM's
     2 mm whatever the spacing) tied at spacing 0.7 and 0.9, and the smaller
     spacing was recommended with its Izz at 0.30 % against 0.27 %."""
+    flagged = (lambda i: bool(caution(points[i]))) if caution is not None else (lambda i: False)  # noqa: E731
     order = sorted(idx, key=lambda i: key(points[i]))
     out: list[int] = []
     while order:
         head = key(points[order[0]])
+        if flagged(order[0]):
+            near = [i for i in order if key(points[i]) <= head + EQUAL_REL * abs(head) and not flagged(i)]
+            if near:
+                head = key(points[near[0]])
+                order = near + [i for i in order if i not in near]
         group = [i for i in order if key(points[i]) <= head + TIE_REL * abs(head)]
-        group.sort(key=cmp_to_key(lambda i, j: _tie_order(points[i], points[j])))
+        group.sort(key=cmp_to_key(lambda i, j: (flagged(i) - flagged(j)) or _tie_order(points[i], points[j])))
         out += group
         order = [i for i in order if i not in group]
     return out
+
+
+def passed_over(points: list[dict], ranked: list[int], key, caution) -> list[int]:
+    """The cautioned points (``caution(point)`` true) that :func:`rank_order`
+    put after the first of ``ranked`` although their ``key`` is lower
+    (within :data:`EQUAL_REL` of it): those the first was preferred to."""
+    if not ranked:
+        return []
+    k0 = key(points[ranked[0]])
+    return [i for i in ranked[1:] if key(points[i]) < k0 and caution(points[i])]
+
+
+def preference_text(points: list[dict], over: list[int], key, best: int, what: str = "point") -> str | None:
+    """The recommendation's line saying why ``best`` was preferred to the
+    cautioned points ``over`` (:func:`passed_over`), or None."""
+    if not over:
+        return None
+    k0 = key(points[best])
+    i = over[0]
+    gap = 1.0 - key(points[i]) / k0 if k0 else 0.0
+    who = ", ".join(f"{k} = {v:.6g}" for k, v in points[i].get("params", {}).items()) or f"{what} {i}"
+    more = f" (and {len(over) - 1} other(s))" if len(over) > 1 else ""
+    return (f"preferred to {who}{more}, whose predicted uncertainty is {100 * gap:.2g} % lower (within the "
+            f"{100 * EQUAL_REL:g} % the sweep's sigma resolves) but whose dependent wires may carry more than "
+            "--max-tension (its tension_range_caution)")
 
 
 def _tie_order(a: dict, b: dict) -> int:
@@ -331,7 +379,8 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
             points[i]["hangings_objective"] = _plain(v)
         ok = [i for i in ok if points[i]["hangings_objective"] is not None]
         key = lambda p: p["hangings_objective"]  # noqa: E731
-    ranked = rank_order(points, ok, key)
+    cautioned = lambda p: p.get("tension_range_caution") is not None  # noqa: E731
+    ranked = rank_order(points, ok, key, cautioned)
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
@@ -350,9 +399,14 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         i = ranked[0]
         if hangings is not None:
             doc["hangings_objective"] = points[i]["hangings_objective"]
+        over = passed_over(points, ranked, key, cautioned)
         doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
                    why=explain(points[i], constraints, target, among), ranking=ranked[:10],
-                   rig=points[i].get("rig"), separation=point_separation(points[i]))
+                   rig=points[i].get("rig"), separation=point_separation(points[i]),
+                   preferred_over=[{"index": j, "params": points[j]["params"], "objective": key(points[j])}
+                                   for j in over])
+        if (line := preference_text(points, over, key, i)) is not None:
+            doc["why"].insert(1, line)
     ref = points[doc["best"]] if doc.get("best") is not None else None
     doc["identifiability"] = {c: identifiability(c, ref, c in among) for c in comps}
     return doc
