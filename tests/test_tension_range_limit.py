@@ -233,7 +233,8 @@ def test_plans_optimum_prefers_an_uncautioned_point_the_figures_cannot_tell_apar
     best, over, why = _choose(full, Constraints(max_tension=40.0), "Izz", ["Izz"])
     assert best["params"] == {"length": 1.1} and best["objective"] == pytest.approx(
         1.01 * p["components"]["Izz"]["rel_sigma"])
-    assert over == [{"params": p["params"], "objective": pytest.approx(p["components"]["Izz"]["rel_sigma"])}]
+    assert over == [{"params": p["params"], "objective": pytest.approx(p["components"]["Izz"]["rel_sigma"]),
+                     "reason": "tension_range_caution"}]
     assert why is not None and "tension_range_caution" in why
     best, over, why = _choose(full, Constraints(max_tension=60.0), "Izz", ["Izz"])  # above every range: no caution
     assert best["params"] == p["params"] and over == [] and why is None

@@ -68,8 +68,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (EQUAL_REL, identifiability, measurable_components, passed_over, point_separation,
-                      preference_text, rank_order, rel_sigma, tension_range_caution)
+from .ranking import (clashes, identifiability, measurable_components, point_separation, preferences, rank_order,
+                      rel_sigma, tension_range_caution)
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -103,10 +103,13 @@ class PlanResult:
         ranked by their multi-hanging plan (the points the search
         evaluated; :meth:`hangings_note`).
     preferred_over : evaluated points ranked after the optimum although
-        their objective is lower (within :data:`~bifilar.studies.ranking.EQUAL_REL`),
-        because their dependent wires may carry more than ``--max-tension``
-        (:func:`~bifilar.studies.ranking.rank_order`): [{params, objective}];
-        ``preference`` the line saying so (None: none).
+        their objective is lower: [{params, objective, reason}], ``reason``
+        ``tension_range_caution`` (their dependent wires may carry more than
+        ``--max-tension``; within :data:`~bifilar.studies.ranking.EQUAL_REL`),
+        ``ceiling_clash`` or ``wires_cross`` (their body reaches above the
+        ceiling or their wires cross at rest: after every clean point;
+        :func:`~bifilar.studies.ranking.rank_order`); ``preference`` the
+        lines saying so, joined by "; " (None: none).
     """
 
     best: dict
@@ -275,7 +278,7 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     score = dict(zip([id(p) for p in cands], hangings_objectives(base_cfg, source, [p["params"] for p in cands],
                                                                  settings, min_separation, target)))
     keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
-    ranked = rank_order(cands, keep, lambda p: score[id(p)], _cautioned(res.constraints))
+    ranked = rank_order(cands, keep, lambda p: score[id(p)], _cautioned(res.constraints), clashes)
     for r, i in enumerate(ranked):
         p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
         if p.get("valid") and not violations(p, relaxed, target) and math.isfinite(objective(p, target, among)):
@@ -289,10 +292,12 @@ def _choose(full: list[dict], constraints: Constraints, target: str | None, amon
     """The optimum of the fully evaluated feasible points ``full``, ranked as
     the sweep ranks them (:func:`~bifilar.studies.ranking.rank_order`: a
     point whose dependent wires may carry more than ``--max-tension`` after
-    one without that the figures cannot tell apart), with its
+    one without that the figures cannot tell apart, a point whose body
+    reaches the ceiling or whose wires cross at rest after every clean
+    one), with its
     ``objective``, and (``preferred_over``, ``preference``)."""
     key = lambda p: objective(p, target, among)  # noqa: E731
-    ranked = rank_order(full, range(len(full)), key, _cautioned(constraints))
+    ranked = rank_order(full, range(len(full)), key, _cautioned(constraints), clashes)
     best = dict(full[ranked[0]])
     best["objective"] = key(best)
     return (best, *_preference(full, ranked, key, constraints))
@@ -306,9 +311,8 @@ def _cautioned(constraints: Constraints):
 
 def _preference(points: list[dict], ranked: list[int], key, constraints: Constraints) -> tuple[list, str | None]:
     """(``preferred_over``, ``preference``) of :class:`PlanResult` for the optimum ``points[ranked[0]]``."""
-    over = passed_over(points, ranked, key, _cautioned(constraints))
-    return ([{"params": points[j]["params"], "objective": key(points[j])} for j in over],
-            preference_text(points, over, key, ranked[0]) if ranked else None)
+    over, lines = preferences(points, ranked, key, _cautioned(constraints))
+    return [{k: v for k, v in o.items() if k != "index"} for o in over], "; ".join(lines) or None
 
 
 def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
@@ -419,12 +423,12 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
                        and math.isfinite(objective(p, target, among))),
                       key=lambda p: objective(p, target, among, small))
-    confirm = feasible[:CONFIRM]
-    cautioned = _cautioned(constraints)
-    if feasible and any(cautioned(p) for p in confirm):  # the best uncautioned point the figures cannot tell apart
-        head = objective(feasible[0], target, among, small)
-        confirm += [p for p in feasible[CONFIRM:] if not cautioned(p)
-                    and objective(p, target, among, small) <= head + EQUAL_REL * abs(head)][:1]
+    # ranked as the answer will be (a cautioned point after an uncautioned one within EQUAL_REL, points whose
+    # body reaches the ceiling or whose wires cross after every clean one), so that those confirmed include the
+    # answer's candidates
+    confirm = [feasible[i] for i in rank_order(feasible, range(len(feasible)),
+                                               lambda p: objective(p, target, among, small),
+                                               _cautioned(constraints), clashes)[:CONFIRM]]
     for p in confirm:
         full = evaluate_point(base_cfg, source, p["params"], settings)
         cache[key_of(p["params"])] = full

@@ -537,6 +537,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         "notes": notes,
         "warnings": [],
     }
+    _clearance(res, scene, rest)
     chosen: dict[str, int] = {}
     for comp in st.components:
         I = float(scene.inertia[_IDX[comp]])
@@ -597,6 +598,22 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             n = len(pre.runs)
             pre.starts, law.starts = sp.take(np.arange(n)), sp.take(np.arange(n, len(sp.feasible)))
     return res, pre
+
+
+def _clearance(res: dict, scene, rest) -> None:
+    """Mark the point ``res`` whose body at rest reaches above the ceiling
+    (``ceiling_clash``) or whose wires cross at rest (``wires_cross``),
+    with the warnings `modes` gives (:mod:`bifilar.analysis.clearance`;
+    geometry of the rest pose, ~0.1 ms): the model sees neither, so its
+    figures hold for a rig that cannot be built as described; the ranking
+    puts such points after every clean one (:func:`~bifilar.studies.ranking.rank_order`)."""
+    from ..analysis.clearance import ceiling_warning, crossing_warning
+
+    for flag, check in (("ceiling_clash", ceiling_warning), ("wires_cross", crossing_warning)):
+        w = check(scene, rest)
+        res[flag] = w is not None
+        if w is not None:
+            res["warnings"].append(w)
 
 
 def _stiffness(scene, rest):

@@ -68,7 +68,13 @@ TIE_REL = 1e-9
 EQUAL_REL = LINEAR_ENOUGH
 
 
-def rank_order(points: list[dict], idx, key, caution=None) -> list[int]:
+def clashes(point: dict) -> bool:
+    """The point's body reaches above the ceiling at rest or its wires cross
+    there (``ceiling_clash``, ``wires_cross``: :func:`bifilar.studies.point.evaluate_point`)."""
+    return bool(point.get("ceiling_clash") or point.get("wires_cross"))
+
+
+def rank_order(points: list[dict], idx, key, caution=None, last=None) -> list[int]:
     """The indices ``idx`` of ``points`` by increasing ``key(point)``
     (finite), ties broken by the other components, then the parameters,
     not by the grid order or rounding: the points whose key is within
@@ -83,12 +89,17 @@ def rank_order(points: list[dict], idx, key, caution=None) -> list[int]:
     smallest remaining key is a cautioned point's, the best point without a
     caution whose key lies within :data:`EQUAL_REL` of it (and its tie
     group) comes next instead; within a tie group those without a caution
-    come first.
+    come first.  ``last(point)`` (optional, e.g. :func:`clashes`): those
+    points after all the others, each part ranked as above.
 
     The components come first because the worst one alone can tie where
     the others differ: a thin rod's Ixx (its roll, 10.9 %, set by the CoM's
     2 mm whatever the spacing) tied at spacing 0.7 and 0.9, and the smaller
     spacing was recommended with its Izz at 0.30 % against 0.27 %."""
+    if last is not None:
+        idx = list(idx)
+        return (rank_order(points, [i for i in idx if not last(points[i])], key, caution)
+                + rank_order(points, [i for i in idx if last(points[i])], key, caution))
     flagged = (lambda i: bool(caution(points[i]))) if caution is not None else (lambda i: False)  # noqa: E731
     order = sorted(idx, key=lambda i: key(points[i]))
     out: list[int] = []
@@ -106,29 +117,38 @@ def rank_order(points: list[dict], idx, key, caution=None) -> list[int]:
     return out
 
 
-def passed_over(points: list[dict], ranked: list[int], key, caution) -> list[int]:
-    """The cautioned points (``caution(point)`` true) that :func:`rank_order`
-    put after the first of ``ranked`` although their ``key`` is lower
-    (within :data:`EQUAL_REL` of it): those the first was preferred to."""
+#: why a point was passed over (:func:`preferences`): its flag and the end of the line saying so
+PASSED_OVER = {
+    "ceiling_clash": "but whose body reaches above the ceiling at rest (ceiling_clash; clean points rank first)",
+    "wires_cross": "but whose wires cross at rest (wires_cross; clean points rank first)",
+    "tension_range_caution": (f"(within the {100 * EQUAL_REL:g} % the sweep's sigma resolves) but whose dependent "
+                              "wires may carry more than --max-tension (its tension_range_caution)"),
+}
+
+
+def preferences(points: list[dict], ranked: list[int], key, caution) -> tuple[list[dict], list[str]]:
+    """The points :func:`rank_order` (with ``caution`` and ``last`` =
+    :func:`clashes`) put after the first of ``ranked`` although their
+    ``key`` is lower: ([{index, params, objective, reason}], one line per
+    reason naming the best of them), ``reason`` a key of :data:`PASSED_OVER`."""
     if not ranked:
-        return []
+        return [], []
     k0 = key(points[ranked[0]])
-    return [i for i in ranked[1:] if key(points[i]) < k0 and caution(points[i])]
-
-
-def preference_text(points: list[dict], over: list[int], key, best: int, what: str = "point") -> str | None:
-    """The recommendation's line saying why ``best`` was preferred to the
-    cautioned points ``over`` (:func:`passed_over`), or None."""
-    if not over:
-        return None
-    k0 = key(points[best])
-    i = over[0]
-    gap = 1.0 - key(points[i]) / k0 if k0 else 0.0
-    who = ", ".join(f"{k} = {v:.6g}" for k, v in points[i].get("params", {}).items()) or f"{what} {i}"
-    more = f" (and {len(over) - 1} other(s))" if len(over) > 1 else ""
-    return (f"preferred to {who}{more}, whose predicted uncertainty is {100 * gap:.2g} % lower (within the "
-            f"{100 * EQUAL_REL:g} % the sweep's sigma resolves) but whose dependent wires may carry more than "
-            "--max-tension (its tension_range_caution)")
+    over: list[dict] = []
+    for i in ranked[1:]:
+        p = points[i]
+        why = [r for r in ("ceiling_clash", "wires_cross") if p.get(r)] or (["tension_range_caution"] if caution(p) else [])
+        if key(p) < k0 and why:
+            over.append({"index": i, "params": p.get("params", {}), "objective": key(p), "reason": why[0]})
+    lines = []
+    for reason, end in PASSED_OVER.items():
+        hit = [o for o in over if o["reason"] == reason]
+        if hit:
+            gap = 1.0 - hit[0]["objective"] / k0 if k0 else 0.0
+            who = ", ".join(f"{k} = {v:.6g}" for k, v in hit[0]["params"].items()) or f"point {hit[0]['index']}"
+            more = f" (and {len(hit) - 1} other(s))" if len(hit) > 1 else ""
+            lines.append(f"preferred to {who}{more}, whose predicted uncertainty is {100 * gap:.2g} % lower {end}")
+    return over, lines
 
 
 def _tie_order(a: dict, b: dict) -> int:
@@ -380,7 +400,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         ok = [i for i in ok if points[i]["hangings_objective"] is not None]
         key = lambda p: p["hangings_objective"]  # noqa: E731
     cautioned = lambda p: p.get("tension_range_caution") is not None  # noqa: E731
-    ranked = rank_order(points, ok, key, cautioned)
+    ranked = rank_order(points, ok, key, cautioned, clashes)
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
@@ -399,14 +419,11 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         i = ranked[0]
         if hangings is not None:
             doc["hangings_objective"] = points[i]["hangings_objective"]
-        over = passed_over(points, ranked, key, cautioned)
+        over, lines = preferences(points, ranked, key, cautioned)
         doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
                    why=explain(points[i], constraints, target, among), ranking=ranked[:10],
-                   rig=points[i].get("rig"), separation=point_separation(points[i]),
-                   preferred_over=[{"index": j, "params": points[j]["params"], "objective": key(points[j])}
-                                   for j in over])
-        if (line := preference_text(points, over, key, i)) is not None:
-            doc["why"].insert(1, line)
+                   rig=points[i].get("rig"), separation=point_separation(points[i]), preferred_over=over)
+        doc["why"][1:1] = lines
     ref = points[doc["best"]] if doc.get("best") is not None else None
     doc["identifiability"] = {c: identifiability(c, ref, c in among) for c in comps}
     return doc
