@@ -109,3 +109,18 @@ def test_plans_optimum_ranks_a_clashing_point_after_a_clean_one(swept):
     assert best["params"] == {"height": 0.2}
     assert over == [{"params": {"height": 0.05}, "objective": clash["objective"], "reason": "ceiling_clash"}]
     assert why is not None and "ceiling_clash" in why
+
+
+def test_plan_finds_the_best_clean_point_at_the_ceiling(tmp_path):
+    # the roll's sigma grows with the attachments' height, so the clean optimum is where the body's top meets
+    # the ceiling (height 0.1292 m, from the rest pose alone).  Session 12's plan answered 0.05 (its top 7.9 cm
+    # through the ceiling, warned); ranking clashing points last alone gave 0.14375, the best clean grid point
+    # (its top 1.5 cm below: the local search still ran to 0.05); the search's penalty now counts a clash as
+    # a limit broken by 100 %, and it ends within 0.1 mm of the ceiling
+    cfg = tmp_path / "tall.yaml"
+    cfg.write_text(TALL)
+    r = CliRunner().invoke(main, ["plan", str(cfg), "--param", "height=0.05:0.3", "--component", "Ixx",
+                                  "--min-separation", "0", "--json"])
+    assert r.exit_code == 0, r.stderr
+    h = json.loads(r.stdout)["optimum"]["params"]["height"]
+    assert -0.003 < _top_z(h) < 0.0, h  # clean, and within 3 mm of the ceiling (Brent's bracket on the jump)

@@ -182,7 +182,9 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
     """Exterior penalty, continuous at the edge of the feasible set:
     feasible -> the relative uncertainty; infeasible -> that times
     (1 + 100 x the relative excess over each limit); invalid or not
-    identifiable -> 1e6 (the optimum itself is always a feasible point).
+    identifiable -> 1e6 (the optimum itself is always a feasible point);
+    a point whose body reaches the ceiling or whose wires cross at rest
+    (:func:`~bifilar.studies.ranking.clashes`) as one that breaks a limit by 100 %.
     ``small_amplitude``: of the small-amplitude sigmas (:func:`~bifilar.studies.ranking.rel_sigma`)."""
     if not p.get("valid"):
         return 1e6
@@ -194,7 +196,8 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
         rel = np.array([rel_sigma(p["components"][k], small_amplitude) for k in sel], float)
         ob = float(np.sum(rel**16) ** (1 / 16))
     v = dict(violations(p, c, target))
-    if not v:
+    clash = clashes(p)  # ranked after every clean point (ranking.rank_order): the search is steered off it too
+    if not v and not clash:
         return ob
     excess = 0.0
     if "max_tension" in v and p["tension"].get("peak") is not None:
@@ -203,7 +206,7 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
         excess += p["depth"]["max"] / c.max_depth - 1
     if "min_separation" in v and c.min_separation:
         excess += 1 - point_separation(p) / c.min_separation
-    excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v)
+    excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v) + 1.0 * clash
     return ob * (1 + 100 * max(excess, 1e-6))
 
 
