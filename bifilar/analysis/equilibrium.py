@@ -326,24 +326,11 @@ def tension_range(scene: Scene, rest: RestPose) -> np.ndarray:
     T0 = np.asarray(rest.tensions, float)
     if tensions_determined(scene, rest):
         return np.column_stack([T0, T0])
-    from scipy.optimize import linprog  # only for dependent wires
+    from .wire_statics import reduced_statics, split_bounds
 
-    d, _, G = constraint_jacobian(scene, rest.com, rest.R)
     W = scene.mass * scene.gravity
-    A = (G / np.linalg.norm(d, axis=1)[:, None]).T  # (6, n): A T = -grad V, the rows force, moment
-    b = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 0.0])  # per unit weight
-    U, sv, _ = np.linalg.svd(A)
-    rank = int(np.sum(sv > 1e-12 * sv[0]))
-    Ar, br = U[:, :rank].T @ A, U[:, :rank].T @ b
-    n = scene.n_wires
-    out = np.column_stack([T0, T0])
-    for i in range(n):
-        for col, sign in ((0, 1.0), (1, -1.0)):
-            c = np.zeros(n)
-            c[i] = sign
-            res = linprog(c, A_eq=Ar, b_eq=br, bounds=(0, None), method="highs")
-            if res.status == 0:  # else (never met: the rest tensions are a feasible point) keep them
-                out[i, col] = W * float(res.x[i])
+    A, P = reduced_statics(scene, rest)
+    out = W * split_bounds(A, P, np.array([0.0, 0.0, -1.0, 0.0, 0.0, 0.0]), T0 / W)  # per unit weight
     return np.where(out < 1e-9 * W, 0.0, out)  # a bound at zero, not the solver's rounding about it
 
 

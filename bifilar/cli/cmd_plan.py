@@ -105,6 +105,8 @@ def _render(cfg, res, settings, doc) -> None:
         con.print(f"  predicted relative uncertainty of {what}: {_pct(b['objective'])} %")
     if res.active:
         con.print("  limited by: " + esc("; ".join(res.active)))
+    if res.preference:
+        con.print("  " + esc(res.preference))
     t = Table(title="expected accuracy of each inertia component",
               caption="sigma: " + (f"the amplitude stated to invert (--amplitude {settings.amplitude:g}, +-10 %)"
                                    if settings.tensions else "for a small amplitude (--amplitude 0)"))

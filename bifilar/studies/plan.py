@@ -68,8 +68,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (identifiability, measurable_components, point_separation, rank_order, rel_sigma,
-                      tension_range_caution)
+from .ranking import (clashes, identifiability, measurable_components, point_separation, preferences, rank_order,
+                      rel_sigma, tension_range_caution)
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -102,6 +102,14 @@ class PlanResult:
     hangings_ranked : with ``hangings``, how many feasible points were
         ranked by their multi-hanging plan (the points the search
         evaluated; :meth:`hangings_note`).
+    preferred_over : evaluated points ranked after the optimum although
+        their objective is lower: [{params, objective, reason}], ``reason``
+        ``tension_range_caution`` (their dependent wires may carry more than
+        ``--max-tension``; within :data:`~bifilar.studies.ranking.EQUAL_REL`),
+        ``ceiling_clash`` or ``wires_cross`` (their body reaches above the
+        ceiling or their wires cross at rest: after every clean point;
+        :func:`~bifilar.studies.ranking.rank_order`); ``preference`` the
+        lines saying so, joined by "; " (None: none).
     """
 
     best: dict
@@ -115,6 +123,8 @@ class PlanResult:
     separation_guard: str = "planned_hanging"
     hangings_objective: float | None = None
     hangings_ranked: int | None = None
+    preferred_over: list[dict] = field(default_factory=list)
+    preference: str | None = None
 
     def hangings_note(self) -> str | None:
         """With ``hangings``: what the answer's multi-hanging figure is the
@@ -148,7 +158,8 @@ class PlanResult:
                         "rig": b.get("rig"), "separation": point_separation(b),
                         "tension_range_caution": tension_range_caution(b, self.constraints),
                         "active_constraints": self.active, "hangings_objective": self.hangings_objective,
-                        "hangings_ranked": self.hangings_ranked, "hangings_note": self.hangings_note()},
+                        "hangings_ranked": self.hangings_ranked, "hangings_note": self.hangings_note(),
+                        "preferred_over": self.preferred_over, "preference": self.preference},
             "target": self.target or "worst relative of " + ", ".join(self.among),
             "identifiability": self.identifiability(),
             "constraints": self.constraints.describe(),
@@ -171,7 +182,9 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
     """Exterior penalty, continuous at the edge of the feasible set:
     feasible -> the relative uncertainty; infeasible -> that times
     (1 + 100 x the relative excess over each limit); invalid or not
-    identifiable -> 1e6 (the optimum itself is always a feasible point).
+    identifiable -> 1e6 (the optimum itself is always a feasible point);
+    a point whose body reaches the ceiling or whose wires cross at rest
+    (:func:`~bifilar.studies.ranking.clashes`) as one that breaks a limit by 100 %.
     ``small_amplitude``: of the small-amplitude sigmas (:func:`~bifilar.studies.ranking.rel_sigma`)."""
     if not p.get("valid"):
         return 1e6
@@ -183,7 +196,8 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
         rel = np.array([rel_sigma(p["components"][k], small_amplitude) for k in sel], float)
         ob = float(np.sum(rel**16) ** (1 / 16))
     v = dict(violations(p, c, target))
-    if not v:
+    clash = clashes(p)  # ranked after every clean point (ranking.rank_order): the search is steered off it too
+    if not v and not clash:
         return ob
     excess = 0.0
     if "max_tension" in v and p["tension"].get("peak") is not None:
@@ -192,7 +206,7 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
         excess += p["depth"]["max"] / c.max_depth - 1
     if "min_separation" in v and c.min_separation:
         excess += 1 - point_separation(p) / c.min_separation
-    excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v)
+    excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v) + 1.0 * clash
     return ob * (1 + 100 * max(excess, 1e-6))
 
 
@@ -267,11 +281,41 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     score = dict(zip([id(p) for p in cands], hangings_objectives(base_cfg, source, [p["params"] for p in cands],
                                                                  settings, min_separation, target)))
     keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
-    for i in rank_order(cands, keep, lambda p: score[id(p)]):
+    ranked = rank_order(cands, keep, lambda p: score[id(p)], _cautioned(res.constraints), clashes)
+    for r, i in enumerate(ranked):
         p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
         if p.get("valid") and not violations(p, relaxed, target) and math.isfinite(objective(p, target, among)):
+            res.preferred_over, res.preference = _preference(cands, ranked[r:], lambda q: score[id(q)],
+                                                             res.constraints)
             return {**p, "objective": objective(p, target, among)}, score[id(cands[i])], len(cands)
     return None, None, len(cands)
+
+
+def _choose(full: list[dict], constraints: Constraints, target: str | None, among) -> tuple[dict, list, str | None]:
+    """The optimum of the fully evaluated feasible points ``full``, ranked as
+    the sweep ranks them (:func:`~bifilar.studies.ranking.rank_order`: a
+    point whose dependent wires may carry more than ``--max-tension`` after
+    one without that the figures cannot tell apart, a point whose body
+    reaches the ceiling or whose wires cross at rest after every clean
+    one), with its
+    ``objective``, and (``preferred_over``, ``preference``)."""
+    key = lambda p: objective(p, target, among)  # noqa: E731
+    ranked = rank_order(full, range(len(full)), key, _cautioned(constraints), clashes)
+    best = dict(full[ranked[0]])
+    best["objective"] = key(best)
+    return (best, *_preference(full, ranked, key, constraints))
+
+
+def _cautioned(constraints: Constraints):
+    """A point's test for :func:`~bifilar.studies.ranking.rank_order`: its dependent wires may carry more
+    than ``--max-tension`` (:func:`~bifilar.studies.ranking.tension_range_caution`)."""
+    return lambda p: tension_range_caution(p, constraints) is not None
+
+
+def _preference(points: list[dict], ranked: list[int], key, constraints: Constraints) -> tuple[list, str | None]:
+    """(``preferred_over``, ``preference``) of :class:`PlanResult` for the optimum ``points[ranked[0]]``."""
+    over, lines = preferences(points, ranked, key, _cautioned(constraints))
+    return [{k: v for k, v in o.items() if k != "index"} for o in over], "; ".join(lines) or None
 
 
 def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
@@ -382,7 +426,13 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
                        and math.isfinite(objective(p, target, among))),
                       key=lambda p: objective(p, target, among, small))
-    for p in feasible[:CONFIRM]:
+    # ranked as the answer will be (a cautioned point after an uncautioned one within EQUAL_REL, points whose
+    # body reaches the ceiling or whose wires cross after every clean one), so that those confirmed include the
+    # answer's candidates
+    confirm = [feasible[i] for i in rank_order(feasible, range(len(feasible)),
+                                               lambda p: objective(p, target, among, small),
+                                               _cautioned(constraints), clashes)[:CONFIRM]]
+    for p in confirm:
         full = evaluate_point(base_cfg, source, p["params"], settings)
         cache[key_of(p["params"])] = full
         if not (full.get("valid") and objective(full, target, among, small_amplitude=True)
@@ -396,11 +446,9 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     if not feasible:
         flag, msg = binding_constraint(evaluated, constraints, target, among)
         raise InputError(flag, msg)
-    full = [p for p in feasible if not p.get("screen")]
-    best = dict(full[rank_order(full, range(len(full)), lambda p: objective(p, target, among))[0]])
-    best["objective"] = objective(best, target, among)
+    best, over, why = _choose([p for p in feasible if not p.get("screen")], constraints, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
-                      among, zip_)
+                      among, zip_, preferred_over=over, preference=why)
 
 
 #: the local search may run without nonlinear runs (and so rank the small-amplitude sigmas) only when on

@@ -537,6 +537,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         "notes": notes,
         "warnings": [],
     }
+    _clearance(res, scene, rest)
     chosen: dict[str, int] = {}
     for comp in st.components:
         I = float(scene.inertia[_IDX[comp]])
@@ -597,6 +598,22 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             n = len(pre.runs)
             pre.starts, law.starts = sp.take(np.arange(n)), sp.take(np.arange(n, len(sp.feasible)))
     return res, pre
+
+
+def _clearance(res: dict, scene, rest) -> None:
+    """Mark the point ``res`` whose body at rest reaches above the ceiling
+    (``ceiling_clash``) or whose wires cross at rest (``wires_cross``),
+    with the warnings `modes` gives (:mod:`bifilar.analysis.clearance`;
+    geometry of the rest pose, ~0.1 ms): the model sees neither, so its
+    figures hold for a rig that cannot be built as described; the ranking
+    puts such points after every clean one (:func:`~bifilar.studies.ranking.rank_order`)."""
+    from ..analysis.clearance import ceiling_warning, crossing_warning
+
+    for flag, check in (("ceiling_clash", ceiling_warning), ("wires_cross", crossing_warning)):
+        w = check(scene, rest)
+        res[flag] = w is not None
+        if w is not None:
+            res["warnings"].append(w)
 
 
 def _stiffness(scene, rest):
@@ -683,30 +700,36 @@ def statics_range(scene, rest, tmax) -> dict:
     ``range`` (n, 2) the least and greatest tension each wire can carry at
     rest (:func:`~bifilar.analysis.equilibrium.tension_range`), and
     ``range_peak`` the greatest a wire can reach in the runs, at wire
-    ``range_peak_wire`` (1-based): each wire's top at rest times the
-    ratio of its peak in the runs (``tmax``, the model's split) to its rest
-    tension, at least 1 (the body hangs at rest before release).  The
-    scaling holds where the runs' load on the wires is the weight's times a
-    load factor (the vertical and centripetal accelerations): on a table of
-    four equal vertical wires in torsion and both swings at 0.2-0.3 rad
-    (CoM centred; and 0.1 m off-centre, its swings: its torsion stretches
-    the wires) it lies 0-6e-4 above the greatest tension a linear programme
-    over the splits of every sample of the run gives, where the rest top
-    plus the model's increment lies 2-5 % below it
-    (tests/test_tension_range_limit.py).  A
-    wire whose rest tension in the split is below 1e-6 of the weight takes
-    the largest ratio of the others.  All None for determined tensions."""
+    ``range_peak_wire`` (1-based): the greatest share of one wire in a
+    split, at the rest geometry, of the wrench the wires exert with each
+    wire at its peak in the runs (``tmax``, the model's split; at least its
+    rest tension, the body hanging before release), one linear programme
+    per wire (:func:`~bifilar.analysis.wire_statics.split_bounds`).
+
+    Why it bounds the runs: at fixed geometry a wire's greatest share of
+    the wrench of tensions ``T`` grows with every ``T_j`` (a larger ``T``
+    only widens the splits ``T + N s >= 0`` along the self-stresses ``N``),
+    so no sample's tensions, each at most ``tmax``, give more; what the
+    geometry's change in the runs adds is small: against a linear
+    programme over the splits of every sample of a run (its own geometry)
+    this lies 0-2.1e-4 above on vertical 4- and 5-wire rigs, CoM centred
+    or 5-10 cm off, torsion 0.1-0.3 rad and both swings 0.1-0.3 m, and
+    2-20 % above on a 4-wire rig whose wires splay out 30 % (its swings
+    tilt the wires' lines apart; torsion exact).  Session 12's rule, each
+    wire's top at rest times its own peak-to-rest ratio, lay up to 5.0e-4
+    below on those off-centre rigs (a torsion loads the wires unevenly) and
+    up to 40 % above on the splayed one (docs/design.md, "rankfix,
+    session 13"; tests/test_tension_range_limit.py).  All None for
+    determined tensions."""
     from ..analysis.equilibrium import tension_range, tensions_determined
+    from ..analysis.wire_statics import reduced_statics, split_bounds
 
     if tensions_determined(scene, rest):
         return {"range": None, "range_peak": None, "range_peak_wire": None}
     rng = tension_range(scene, rest)
-    T0 = np.asarray(rest.tensions, float)
-    big = T0 > 1e-6 * scene.mass * scene.gravity
-    ratio = np.ones(len(T0))
-    ratio[big] = np.asarray(tmax, float)[big] / T0[big]
-    ratio[~big] = np.max(ratio[big], initial=1.0)
-    top = rng[:, 1] * np.maximum(ratio, 1.0)
+    A, P = reduced_statics(scene, rest)
+    peak = np.maximum(np.asarray(tmax, float), np.asarray(rest.tensions, float))
+    top = np.maximum(split_bounds(A, P, A @ peak, peak, lower=False)[:, 1], rng[:, 1])
     i = int(np.argmax(top))
     return {"range": rng, "range_peak": float(top[i]), "range_peak_wire": i + 1}
 

@@ -20,6 +20,7 @@ import re
 from functools import cmp_to_key
 from dataclasses import replace
 
+from ..estimation.budget import LINEAR_ENOUGH
 from ..jsonable import to_jsonable as _plain
 from .settings import Constraints
 
@@ -59,7 +60,21 @@ def objective(point: dict, target: str | None, among=None, small_amplitude: bool
 TIE_REL = 1e-9
 
 
-def rank_order(points: list[dict], idx, key) -> list[int]:
+#: objectives within this relative difference are not told apart by the sweep's own figures: a point's
+#: sigma is its linear budget wherever the second-order std (the one invert prints) lies within
+#: :data:`~bifilar.estimation.budget.LINEAR_ENOUGH` (2 %) of it, so two points that close in the objective may
+#: swap under invert's figure (the audits' invert std / sigma: 1.0006-1.017, docs/design.md, sessions 10 and
+#: 11).  Within it a point without a caution (:func:`tension_range_caution`) ranks before one with
+EQUAL_REL = LINEAR_ENOUGH
+
+
+def clashes(point: dict) -> bool:
+    """The point's body reaches above the ceiling at rest or its wires cross
+    there (``ceiling_clash``, ``wires_cross``: :func:`bifilar.studies.point.evaluate_point`)."""
+    return bool(point.get("ceiling_clash") or point.get("wires_cross"))
+
+
+def rank_order(points: list[dict], idx, key, caution=None, last=None) -> list[int]:
     """The indices ``idx`` of ``points`` by increasing ``key(point)``
     (finite), ties broken by the other components, then the parameters,
     not by the grid order or rounding: the points whose key is within
@@ -68,19 +83,72 @@ def rank_order(points: list[dict], idx, key) -> list[int]:
     :data:`TIE_REL` (:func:`_tie_order`), then by their parameter values
     (as given, in the sweep's parameter order); then the next group.
 
+    ``caution(point)`` (optional, true for a point carrying a caution: its
+    dependent wires may carry more than ``--max-tension``) puts a point
+    without one first where the figures cannot tell them apart: when the
+    smallest remaining key is a cautioned point's, the best point without a
+    caution whose key lies within :data:`EQUAL_REL` of it (and its tie
+    group) comes next instead; within a tie group those without a caution
+    come first.  ``last(point)`` (optional, e.g. :func:`clashes`): those
+    points after all the others, each part ranked as above.
+
     The components come first because the worst one alone can tie where
     the others differ: a thin rod's Ixx (its roll, 10.9 %, set by the CoM's
     2 mm whatever the spacing) tied at spacing 0.7 and 0.9, and the smaller
     spacing was recommended with its Izz at 0.30 % against 0.27 %."""
+    if last is not None:
+        idx = list(idx)
+        return (rank_order(points, [i for i in idx if not last(points[i])], key, caution)
+                + rank_order(points, [i for i in idx if last(points[i])], key, caution))
+    flagged = (lambda i: bool(caution(points[i]))) if caution is not None else (lambda i: False)  # noqa: E731
     order = sorted(idx, key=lambda i: key(points[i]))
     out: list[int] = []
     while order:
         head = key(points[order[0]])
+        if flagged(order[0]):
+            near = [i for i in order if key(points[i]) <= head + EQUAL_REL * abs(head) and not flagged(i)]
+            if near:
+                head = key(points[near[0]])
+                order = near + [i for i in order if i not in near]
         group = [i for i in order if key(points[i]) <= head + TIE_REL * abs(head)]
-        group.sort(key=cmp_to_key(lambda i, j: _tie_order(points[i], points[j])))
+        group.sort(key=cmp_to_key(lambda i, j: (flagged(i) - flagged(j)) or _tie_order(points[i], points[j])))
         out += group
         order = [i for i in order if i not in group]
     return out
+
+
+#: why a point was passed over (:func:`preferences`): its flag and the end of the line saying so
+PASSED_OVER = {
+    "ceiling_clash": "but whose body reaches above the ceiling at rest (ceiling_clash; clean points rank first)",
+    "wires_cross": "but whose wires cross at rest (wires_cross; clean points rank first)",
+    "tension_range_caution": (f"(within the {100 * EQUAL_REL:g} % the sweep's sigma resolves) but whose dependent "
+                              "wires may carry more than --max-tension (its tension_range_caution)"),
+}
+
+
+def preferences(points: list[dict], ranked: list[int], key, caution) -> tuple[list[dict], list[str]]:
+    """The points :func:`rank_order` (with ``caution`` and ``last`` =
+    :func:`clashes`) put after the first of ``ranked`` although their
+    ``key`` is lower: ([{index, params, objective, reason}], one line per
+    reason naming the best of them), ``reason`` a key of :data:`PASSED_OVER`."""
+    if not ranked:
+        return [], []
+    k0 = key(points[ranked[0]])
+    over: list[dict] = []
+    for i in ranked[1:]:
+        p = points[i]
+        why = [r for r in ("ceiling_clash", "wires_cross") if p.get(r)] or (["tension_range_caution"] if caution(p) else [])
+        if key(p) < k0 and why:
+            over.append({"index": i, "params": p.get("params", {}), "objective": key(p), "reason": why[0]})
+    lines = []
+    for reason, end in PASSED_OVER.items():
+        hit = [o for o in over if o["reason"] == reason]
+        if hit:
+            gap = 1.0 - hit[0]["objective"] / k0 if k0 else 0.0
+            who = ", ".join(f"{k} = {v:.6g}" for k, v in hit[0]["params"].items()) or f"point {hit[0]['index']}"
+            more = f" (and {len(hit) - 1} other(s))" if len(hit) > 1 else ""
+            lines.append(f"preferred to {who}{more}, whose predicted uncertainty is {100 * gap:.2g} % lower {end}")
+    return over, lines
 
 
 def _tie_order(a: dict, b: dict) -> int:
@@ -331,7 +399,8 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
             points[i]["hangings_objective"] = _plain(v)
         ok = [i for i in ok if points[i]["hangings_objective"] is not None]
         key = lambda p: p["hangings_objective"]  # noqa: E731
-    ranked = rank_order(points, ok, key)
+    cautioned = lambda p: p.get("tension_range_caution") is not None  # noqa: E731
+    ranked = rank_order(points, ok, key, cautioned, clashes)
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
@@ -350,9 +419,11 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         i = ranked[0]
         if hangings is not None:
             doc["hangings_objective"] = points[i]["hangings_objective"]
+        over, lines = preferences(points, ranked, key, cautioned)
         doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
                    why=explain(points[i], constraints, target, among), ranking=ranked[:10],
-                   rig=points[i].get("rig"), separation=point_separation(points[i]))
+                   rig=points[i].get("rig"), separation=point_separation(points[i]), preferred_over=over)
+        doc["why"][1:1] = lines
     ref = points[doc["best"]] if doc.get("best") is not None else None
     doc["identifiability"] = {c: identifiability(c, ref, c in among) for c in comps}
     return doc

@@ -17,7 +17,9 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
     """Flat table: one row per point (header, rows); strings for labels and reasons.
     ``tension_range_peak`` (N) and its wire: the most a wire of 4-5
     dependent wires may carry in the runs under statics (empty where the
-    tensions are determined), the figure ``--max-tension``'s caution uses."""
+    tensions are determined), the figure ``--max-tension``'s caution uses;
+    ``ceiling_clash`` and ``wires_cross``: the body reaches above the
+    ceiling, the wires cross, at rest (such points rank after every clean one)."""
     n_w = max((len(p["tension"]["rest"]) for p in points if p.get("valid")), default=0)
     header = list(param_names) + ["valid", "feasible", "rank", "objective"]
     for c in components:
@@ -26,6 +28,7 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
                    f"{c}_nonlinear_period_s"]
     header += [f"tension_rest_{i + 1}" for i in range(n_w)] + [f"tension_max_{i + 1}" for i in range(n_w)]
     header += [f"tension_min_{i + 1}" for i in range(n_w)] + ["slack", "tension_range_peak", "tension_range_peak_wire",
+                                                               "ceiling_clash", "wires_cross",
                                                                "depth_rest_m", "depth_max_m", "separation",
                                                                "periods", "error"]
     rows = []
@@ -44,7 +47,8 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
         for key in ("rest", "max", "min"):
             vals = t.get(key) or [None] * n_w
             row += list(vals) + [None] * (n_w - len(vals))
-        row += [t.get("slack"), t.get("range_peak"), t.get("range_peak_wire"), p["depth"]["rest"], p["depth"]["max"], point_separation(p),
+        row += [t.get("slack"), t.get("range_peak"), t.get("range_peak_wire"), p.get("ceiling_clash"),
+                p.get("wires_cross"), p["depth"]["rest"], p["depth"]["max"], point_separation(p),
                 ";".join(f"{k}={v:.10g}" if v is not None else f"{k}=" for k, v in p["periods"].items()),
                 "; ".join(p.get("violations", []))]
         rows.append(row)
