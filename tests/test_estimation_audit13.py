@@ -205,3 +205,61 @@ def test_an_unstated_amplitudes_law_is_taken_over_the_timed_cycles():
     G = inputs["timing[roll]"]["std"] / 1e-3  # kg m^2 per s, |dIxx/dT|
     want = G * T * d1 / (1 + d1) * math.sqrt(m2 - m1 ** 2)
     assert abs(inputs["amplitude[roll]"]["std"] / want - 1) < 1e-4, (inputs["amplitude[roll]"], want)
+
+
+# The audit's plate (PLATE above) at the corner its 8th draw's linear root reached: Ixx vanishing, Iyy = Izz
+# (kg m^2, the triangle inequality met with equality); there one 10-cycle torsion run took 18 s and swing-x's
+# ran past 2 min before anything was said.
+CORNER = (2.63e-8, 3.1109, 3.1109 + 2.63e-8)
+
+
+def _plate_scene(principal):
+    import yaml
+
+    from bifilar.config import scene_from_dict
+
+    cfg = yaml.safe_load(PLATE)["hangings"][0]["config"]
+    cfg["body"]["inertia"] = {"principal": list(principal)}
+    return scene_from_dict(cfg, warn=False)
+
+
+def test_a_body_with_a_vanishing_moment_is_stiff_though_its_modes_are_not():
+    """Why invert's runs need their own bound: the corner body's three linear
+    modes span only 1.09 in period (simulate's stiffness probe, a period
+    ratio over 1e3, never fires), yet its constrained equations take
+    thousands of times more evaluations a cycle than the true plate's
+    (~300 a cycle at rtol 1e-10, measured on the shipped configs: 250-450).
+    With ``bound`` the run stops at its budget with simulate's stiff-body
+    refusal; the true plate runs under the same budget."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.analysis.simulate import _period_ratio, simulate
+
+    corner = _plate_scene(CORNER)
+    assert _period_ratio(linear_modes(corner, rest_pose(corner))) < 1.2
+    with pytest.raises(InputError) as e:
+        simulate(corner, "torsion", 0.1, 1, method="DOP853", check=False, bound=True, max_evaluations=2e4)
+    assert e.value.field == "--periods" and "stiff body" in str(e.value)
+    true = simulate(_plate_scene((1.22, 2.10, 3.30)), "torsion", 0.1, 2, method="DOP853", check=False,
+                    bound=True, max_evaluations=2e4)
+    assert true.period is not None and true.nfev < 2000, true.nfev
+
+
+def test_invert_refuses_an_amplitude_run_beyond_its_budget_naming_the_components(tmp_path, monkeypatch):
+    """An amplitude run of ``invert`` over its budget (2e4 evaluations a cycle:
+    the corner above) is refused, exit 2 naming ``--solve-for`` and the
+    body's principal moments, instead of running for minutes; the budget is
+    lowered here so that the true plate's first run exceeds it (the corner's
+    own refusal costs ~4 s, the audit's harness ran it).  On the old code
+    the runs were unbounded and the inversion answered."""
+    from bifilar.estimation import measurements as mm
+    from bifilar.estimation import solve
+    from bifilar.estimation.invert import invert
+
+    path = tmp_path / "plate.yaml"
+    path.write_text(PLATE)
+    monkeypatch.setattr(solve, "RUN_EVALUATIONS_PER_CYCLE", 20.0, raising=False)
+    with pytest.raises(InputError) as e:
+        invert(mm.load_measurements(path), ladder=False)
+    assert e.value.field == "--solve-for"
+    assert "principal moments" in str(e.value) and "solve for fewer components" in str(e.value)

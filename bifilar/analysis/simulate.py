@@ -380,6 +380,7 @@ def simulate(
     timing: float | None = None,
     check: bool = True,
     coordinate: bool = True,
+    bound: bool = False,
 ) -> SimulationResult:
     """Integrate the nonlinear motion started from ``amplitude`` x a mode shape.
 
@@ -411,6 +412,11 @@ def simulate(
         projected beyond it is refused before integrating
         (:func:`_stiffness_check`), and one that exceeds it is stopped
         (:func:`_with_budget`), both with :class:`InputError` on ``--periods``.
+    bound : bound every run of the DOP853 path by ``max_evaluations``, not only a
+        stiff body's (``invert``'s amplitude runs: a body near a vanishing
+        principal moment can make the constrained equations stiff while its
+        linear modes span little in period, docs/design.md "Estimation audit,
+        session 13").
     timing : the standard uncertainty of one measured period the user can reach,
         s (the config's ``uncertainty.timing``; None: not stated): the run warns
         where its period's numerical error exceeds a tenth of it
@@ -430,7 +436,7 @@ def simulate(
     """
     kw = dict(rest=rest, modes=modes, y0=y0, t_end=t_end, method=method, rtol=rtol, atol=atol,
               samples_per_period=samples_per_period, on_slack=on_slack, max_evaluations=max_evaluations,
-              timing=timing, coordinate=coordinate)
+              timing=timing, coordinate=coordinate, bound=bound)
     res = _simulate_once(scene, mode, amplitude, periods, progress=progress, **kw)
     if check and needs_check(res):
 
@@ -444,7 +450,7 @@ def simulate(
 
 def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest, modes, y0, t_end, method: str,
                    rtol: float, atol, samples_per_period: int, on_slack: str, progress, max_evaluations: float,
-                   timing: float | None, coordinate: bool = True) -> SimulationResult:
+                   timing: float | None, coordinate: bool = True, bound: bool = False) -> SimulationResult:
     """One run of :func:`simulate` (its arguments), without the check of an irregular motion."""
     if on_slack not in ("continue", "stop"):
         raise InputError("--on-slack", "must be 'continue' or 'stop'")
@@ -490,6 +496,7 @@ def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest
     stiff = _stiffness_check(f, modes, ys0, t_end, method, rtol, atol_v, max_evaluations)
     if stiff:
         warnings.append(stiff)
+    if stiff or bound:
         f = _with_budget(f, t_end, max_evaluations)
     if progress is not None:
         f = itg.with_progress(f, t_end, progress)

@@ -332,6 +332,29 @@ def _check_identifiable(pb: Problem, Js: np.ndarray) -> None:
                                         "modes or hangings that tell them apart, or solve for fewer components")
 
 
+#: budget of right-hand-side evaluations a simulated cycle of one amplitude
+#: run (:func:`bifilar.analysis.simulate.simulate`'s ``max_evaluations``,
+#: times the cycles, at least 10): the shipped configs' DOP853 runs take
+#: 250-450 a cycle at rtol 1e-10 and 420-670 at the check's 1e-12 (plate,
+#: Solar Boat, KTH trifilar, 6.4 cylinder), so 2e4 is 30x the costliest;
+#: beyond it the body has a vanishing principal moment (the audit's plate at
+#: the corner Ixx = 2.6e-8 of a barely determined fit: one 10-cycle run took
+#: 18 s, the next over 2 min; docs/design.md "Estimation audit, session 13")
+RUN_EVALUATIONS_PER_CYCLE = 2e4
+
+
+def _stiff_message(scene, label: str) -> str:
+    """The refusal of an amplitude run too stiff to make (a principal moment
+    that vanishes against the others; units kg m^2)."""
+    ev = np.linalg.eigvalsh(np.asarray(scene.inertia, float))
+    return (f"the nonlinear model of mode '{label}' would run a body whose principal moments are "
+            f"{', '.join(f'{v:.3g}' for v in ev)} kg m^2: a moment that vanishes against the others makes its "
+            f"equations stiff beyond {RUN_EVALUATIONS_PER_CYCLE:.0e} evaluations a cycle, so the amplitude's effect cannot be "
+            "simulated there; where the fit put it (the estimate at a corner of the physical set) the periods barely "
+            "determine the components: add modes or hangings that time them, solve for fewer components, or "
+            "give the amplitude as 0 to answer with the linear model")
+
+
 def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
                      rtol: float = 1e-10, timing: float | None = None,
                      fundamental: bool = False, second: tuple | None = None):
@@ -382,9 +405,15 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
 
     def run(method: str = "DOP853", rtol: float = rtol, atol=None):
         return simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, method=method, rtol=rtol, atol=atol,
-                        check=False, y0=y0, t_end=t_end)
+                        check=False, y0=y0, t_end=t_end, bound=True,
+                        max_evaluations=RUN_EVALUATIONS_PER_CYCLE * max(cycles, 10.0))
 
-    sim = run()
+    try:
+        sim = run()
+    except InputError as e:
+        if e.field != "--periods" or "stiff body" not in str(e):
+            raise
+        raise InputError("--solve-for", _stiff_message(scene, ms.modes[k].label)) from None
     if sim.period is None:
         raise ConvergenceError(f"the simulated {ms.modes[k].label} motion showed fewer than two crossings")
     if timing is not None and check_matters(sim, timing):
