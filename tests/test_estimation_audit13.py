@@ -263,3 +263,24 @@ def test_invert_refuses_an_amplitude_run_beyond_its_budget_naming_the_components
         invert(mm.load_measurements(path), ladder=False)
     assert e.value.field == "--solve-for"
     assert "principal moments" in str(e.value) and "solve for fewer components" in str(e.value)
+
+
+def test_a_stopwatch_over_more_cycles_than_simulated_says_both_counts():
+    """Fifty timed cycles are simulated over 20 (``MAX_SIM_CYCLES``; a
+    regular mode's 20- and 50-cycle periods agree to 2e-8 of the period,
+    audit case 3); the JSON's ``cycles`` said 50, the trials' count written
+    over the cycles the model ran.  Now ``cycles`` is what the answer rests
+    on and ``cycles_timed`` what the stopwatch spanned."""
+    import json
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+    from bifilar.estimation.measurements import MAX_SIM_CYCLES
+    from conftest import CONFIGS
+
+    r = CliRunner().invoke(main, ["invert", str(CONFIGS / "thesis_plate_rest.yaml"), "--timed",
+                                  "torsion=50:94.24,94.27,94.21", "--amplitude", "0", "--json"])
+    assert r.exit_code == 0, r.output
+    m = json.loads(r.stdout)["measurements"][0]
+    assert m["cycles"] == MAX_SIM_CYCLES == 20 and m["cycles_timed"] == 50, m

@@ -173,6 +173,8 @@ class Measurement:
         if self.damping_ratio is not None:
             d["damping_ratio"] = self.damping_ratio
         d.update(self.details)
+        if self.source == "timed" and d["cycles"] != self.cycles:  # a stopwatch's trials span more cycles than the model simulates
+            d["cycles_timed"], d["cycles"] = d["cycles"], self.cycles
         if self.secondary is not None:
             d["secondary"] = self.secondary.to_json()
         if self.hidden:
