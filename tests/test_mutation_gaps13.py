@@ -214,17 +214,18 @@ def test_segment_distance_of_parallel_segments_and_beyond_an_end():
 # ---------------------------------------------------------------------------
 
 
-def test_a_wire_without_rest_tension_takes_the_largest_ratio_of_the_others():
-    """The documented rule on a split built for it: the table of four equal
-    vertical wires (each 0 .. m g / 2 at rest by statics, test_tension_range_limit)
-    with the model's split set to m g / 4 on wires 1-3 and 1e-7 m g on wire
-    4 (below 1e-6 of the weight: no tension to scale), the runs' peaks 1.1,
-    1.2, 1.05 times the rest on wires 1-3 and 50 times wire 4's nothing.
-    Wire 4's top then scales by the others' largest ratio, 1.2, not by its
-    own 50: the range's peak is m g / 2 x 1.2 (wire 2, the first of the
-    two), where a threshold read as 1e-6 m / g or 1e-6 g / m (the weight
-    mistyped) counted wire 4's 50 (25 m g).  With every wire below it
-    each ratio is 1 (the rest's top)."""
+def test_the_range_peak_is_each_wires_greatest_share_of_the_peak_wrench_by_hand():
+    """rankfix's rule (session 13; it replaced the per-wire ratio this test
+    first pinned) on a split built for it: the table of four equal vertical
+    wires at the rectangle's corners (each 0 .. m g / 2 at rest by statics,
+    test_tension_range_limit), the model's split m g / 4 on wires 1-3 and
+    1e-7 m g on wire 4, the runs' peaks 1.1, 1.2, 1.05 and 50 times those.
+    By hand: the corners' one self-stress is N = (1, -1, 1, -1) (sum,
+    x- and y-moments zero), so a split of the peaks' wrench is T + t N with
+    every entry >= 0, and wire k's greatest share is T_k plus the least
+    peak among the two wires of the other sign: wire 2's 0.3 + 0.2625 =
+    0.5625 m g is the largest (above the rest's m g / 2).  With every peak
+    tiny each share is tiny and the rest's top m g / 2 stands."""
     import dataclasses
 
     from bifilar.analysis.equilibrium import rest_pose
@@ -236,9 +237,13 @@ def test_a_wire_without_rest_tension_takes_the_largest_ratio_of_the_others():
     mg = sc.mass * sc.gravity
     rest = rest_pose(sc)
     T0 = np.array([mg / 4] * 3 + [1e-7 * mg])
-    got = statics_range(sc, dataclasses.replace(rest, tensions=T0), T0 * [1.1, 1.2, 1.05, 50.0])
+    peak = T0 * [1.1, 1.2, 1.05, 50.0]
+    got = statics_range(sc, dataclasses.replace(rest, tensions=T0), peak)
     assert np.allclose(got["range"], [[0.0, mg / 2]] * 4, rtol=1e-9, atol=1e-9 * mg)
-    assert got["range_peak"] == pytest.approx(mg / 2 * 1.2, rel=1e-9) and got["range_peak_wire"] == 2
+    N = np.array([1, -1, 1, -1])
+    by_hand = [peak[k] + min(peak[j] for j in range(4) if N[j] == -N[k]) for k in range(4)]
+    assert by_hand[1] == pytest.approx(0.5625 * mg)
+    assert got["range_peak"] == pytest.approx(max(max(by_hand), mg / 2), rel=1e-9) and got["range_peak_wire"] == 2
     tiny = np.full(4, 1e-7 * mg)
     got = statics_range(sc, dataclasses.replace(rest, tensions=tiny), tiny * 3.0)
     assert got["range_peak"] == pytest.approx(mg / 2, rel=1e-9)
