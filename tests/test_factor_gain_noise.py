@@ -86,3 +86,27 @@ def test_cylinder_ixx_gain_and_sigma_agree_between_sweep_invert_and_converged(co
     # was 313.7 against 223.7, +40 %), and of the small-amplitude sigma at g = 1.0004
     assert e["sigma"] == pytest.approx(res.sigma("Ixx"), rel=0.02)
     assert e["sigma"] == pytest.approx(ab["sigma_small_amplitude"], rel=0.02)
+
+
+def test_invert_law_takes_dr_dp_from_the_tighter_pair_only_where_the_rule_asks(monkeypatch):
+    # stated_amplitude_law with the runs replaced: unknown 0's period hardly moves (dT/dp 1e-6 s per unit:
+    # bound 2 rtol / (1e-4 x 1e-6) = 2e2 at rtol 1e-10), unknown 1's does (1 s per unit: 2e-6); only
+    # unknown 0's dr/dp comes from the pair rerun at factor_step_rtol's rtol
+    from types import SimpleNamespace as NS
+
+    import bifilar.estimation.solve as so
+
+    calls = iter([1.00162, 1.0021, 1.0019])  # the 0.9 A run, then one per unknown stepped
+    monkeypatch.setattr(so, "measured_factor", lambda pb, k, p, rtol=1e-10, amplitude=None: (next(calls), None, 0.0))
+    tight = []
+
+    def unchecked(pb, k, p, rtol):
+        tight.append(rtol)
+        return 1.002 + 3e-9 * float(p[0] - 1.0) / so.FACTOR_STEP  # r at p, and at p[0] + h: +3e-9
+
+    monkeypatch.setattr(so, "_unchecked_factor", unchecked)
+    pb = NS(measurements=[NS(amplitude=0.3)], scales=lambda: np.ones(2), linear_periods=lambda p: np.array([2.0]),
+            jacobian=lambda p: np.array([[1e-6, 1.0]]))
+    law = so.stated_amplitude_law(pb, np.array([1.0, 2.0]), 0, 1.002)
+    assert law.dr_dp == pytest.approx([3e-9 / so.FACTOR_STEP, (1.0019 - 1.002) / so.FACTOR_STEP], rel=1e-6)
+    assert tight == [pytest.approx(so.factor_step_rtol(1e-10, 2.0, 1e-6, so.FACTOR_STEP))] * 2
