@@ -383,7 +383,9 @@ def test_a_laws_irregularity_is_the_largest_of_its_runs(monkeypatch, given, diff
         return r, None, d
 
     monkeypatch.setattr(so, "measured_factor", measured)
-    pb = NS(measurements=[NS(amplitude=0.3)], scales=lambda: np.ones(2))
+    # a period of 2 s moving 1 s per unit of each unknown: factor_step_rtol's bound 2e-6, no rerun
+    pb = NS(measurements=[NS(amplitude=0.3)], scales=lambda: np.ones(2), linear_periods=lambda p: np.array([2.0]),
+            jacobian=lambda p: np.ones((1, 2)))
     law = so.stated_amplitude_law(pb, np.array([1.0, 2.0]), 0, 1.002, irregular=given)
     assert law.irregular == largest
     assert law.dr_dp == pytest.approx([(1.0021 - 1.002) / so.FACTOR_STEP, (1.0019 - 1.002) / so.FACTOR_STEP], rel=1e-6)

@@ -450,6 +450,18 @@ def measured_factor(pb: Problem, k: int, p, rtol: float = 1e-10, amplitude: floa
     return r, sim, irregular_difference(pb, k, p, sim)
 
 
+def _unchecked_factor(pb: Problem, k: int, p, rtol: float) -> float:
+    """Measurement ``k``'s amplitude factor at the unknowns ``p`` at
+    ``rtol``, as :func:`measured_factor` simulates it but without its check
+    run (a tighter rerun of runs :func:`measured_factor` has checked:
+    :func:`factor_step_rtol`)."""
+    m = pb.measurements[k]
+    sec = getattr(m, "secondary", None)
+    return amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles, rtol,
+                            fundamental=m.fundamental,
+                            second=None if sec is None else (sec.index, sec.amplitude))[0]
+
+
 def irregular_difference(pb: Problem, k: int, p, sim) -> float:
     """The difference (s) between measurement ``k``'s amplitude run ``sim``
     (at the unknowns ``p``) and its check run where the check shows a motion
@@ -491,6 +503,38 @@ STATED_LAW_RATIO = 0.9
 RELEASE_LAW_RATIO = 0.5
 #: relative step (of the unknown's scale) of the amplitude factor's derivative in the unknowns
 FACTOR_STEP = 1e-4
+#: the largest noise the runs' period error may put into the full model period's derivative ``r dT_lin/dp +
+#: T_lin dr/dp``, as a share of ``|dT_lin/dp|`` (:func:`factor_step_rtol`): 1 % of the factor gain
+FACTOR_GAIN_NOISE = 1e-2
+#: the tightest rtol :func:`factor_step_rtol` asks for (below it the runs' periods stop converging: the
+#: 6.4 cylinder's swing-y at 1e-12 still differs from its converged factor by ~1e-12)
+FACTOR_RTOL_FLOOR = 1e-12
+
+
+def factor_step_rtol(rtol: float, T_lin: float, dT_dp: float, h: float) -> float | None:
+    """The rtol at which the forward difference ``dr/dp = (r(p + h) - r(p))
+    / h`` of two amplitude runs is good enough for the factor gain, or None
+    where ``rtol`` already is.  ``T_lin`` the mode's linear period (s),
+    ``dT_dp`` its derivative in the unknown (s per unit of ``p``, the
+    largest over the measurements that share the unknown), ``h`` the step
+    (unit of ``p``).
+
+    A run's relative period error is taken as at most its ``rtol``
+    (measured 0.02-0.13 x rtol for LSODA at 1e-8, docs/design.md "drdi,
+    session 13"), so the difference carries up to ``T_lin rtol / h`` of
+    noise into ``T_lin dr/dp``; where that exceeds
+    :data:`FACTOR_GAIN_NOISE` of ``|dT_dp|`` the two runs are made again at
+    the rtol that brings it there (not below :data:`FACTOR_RTOL_FLOOR`).
+    The 6.4 cylinder's Ixx (swing-y, ``Ixx`` barely moves the period): the
+    sweep's runs (3 periods, rtol 1e-8) gave ``dr/dIxx`` = -1.7e-7, the
+    converged value is 2.6e-10, and the factor gain 0.713 instead of
+    1.0004 (sigma 313.7 kg m^2 against 223.7)."""
+    if not dT_dp or not h:
+        return None
+    noise = T_lin * rtol / (h * abs(dT_dp))
+    if not math.isfinite(noise) or noise <= FACTOR_GAIN_NOISE:
+        return None
+    return max(rtol * FACTOR_GAIN_NOISE / noise, FACTOR_RTOL_FLOOR)
 
 
 @dataclass
@@ -622,6 +666,7 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
     irregular = max(irregular, d)
     sc = pb.scales()
     dr = np.zeros(len(p))
+    T_lin, dT = pb.linear_periods(p)[k], np.max(np.abs(pb.jacobian(p)), axis=0)
     for j in range(len(p)):
         q = np.array(p, float)
         h = FACTOR_STEP * sc[j]
@@ -629,6 +674,9 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
         r_q, _, d = measured_factor(pb, k, q, rtol)
         dr[j] = (r_q - r_A) / h
         irregular = max(irregular, d)
+        tight = factor_step_rtol(rtol, T_lin, dT[j], h)
+        if tight is not None:  # the runs' period error would show in the gain: both again at a tighter rtol
+            dr[j] = (_unchecked_factor(pb, k, q, tight) - _unchecked_factor(pb, k, p, tight)) / h
     law.dr_dp = dr
     law.irregular = irregular
     sec = getattr(m, "secondary", None)

@@ -586,7 +586,45 @@ def _amplitude_terms(hs: list, chosen: list, settings: SweepSettings, components
         law = amplitude_law(A, r, STATED_LAW_RATIO, low.period / T_lin)
         dr = np.array([(s.period / s.linear_period - r) / h for s in steps])
         out[(a, k)] = (r, (T_lin * A * law.slope() * DEFAULT_AMPLITUDE_REL) ** 2, dr, A * law.slope())
+    _refine_steps(out, hs, chosen, settings, components, stepped, h)
     return out
+
+
+def _refine_steps(out: dict, hs: list, chosen: list, settings: SweepSettings, components: list, stepped: list,
+                  h: float) -> None:
+    """Replace in ``out`` (:func:`_amplitude_terms`) each ``dr/dI`` whose
+    runs' period error could move the factor gain by more than
+    :data:`~bifilar.estimation.solve.FACTOR_GAIN_NOISE`, as invert of the
+    written file does (:func:`~bifilar.estimation.solve.factor_step_rtol`
+    with the largest ``|dT/dI|`` of the chosen measurements): the chosen
+    mode's run and the stepped scene's again at the rtol it asks for (one
+    batched call at the tightest); a failed pair keeps its first value."""
+    from ..analysis.batch import simulate_batch
+    from ..estimation.solve import factor_step_rtol
+
+    cols = {c: np.max([abs(reference_column(hs[a].sens, hs[a].R, c)[k]) for a, k in chosen]) for c in components}
+    redo = []
+    for q, (a, k) in enumerate(chosen):
+        for i, c in enumerate(components):
+            tight = factor_step_rtol(settings.rtol, float(hs[a].sens.periods[k]), float(cols[c]), h)
+            if tight is not None:
+                redo.append((q, a, k, i, tight))
+    if not redo:
+        return
+    try:
+        runs = simulate_batch([x for q, a, _, i, _ in redo for x in (hs[a].scene, stepped[q * len(components) + i][0])],
+                              mode=[k + 1 for _, _, k, _, _ in redo for _ in (0, 1)], amplitude=settings.amplitude,
+                              periods=settings.periods, rtol=min(t for *_, t in redo),
+                              rests=[hs[a].sens.rest for _, a, _, _, _ in redo for _ in (0, 1)],
+                              modes=[x for q, a, _, i, _ in redo
+                                     for x in (hs[a].sens.modes, stepped[q * len(components) + i][1])],
+                              errors="return", health=False)
+    except BifilarError:
+        return
+    for n, (_, a, k, i, _) in enumerate(redo):
+        own, step = runs[2 * n], runs[2 * n + 1]
+        if not own.error and not step.error and own.period and step.period:
+            out[(a, k)][2][i] = (step.period / step.linear_period - own.period / own.linear_period) / h
 
 
 def _periods_over_cycles(plan: HangingPlan, notes: list | None = None) -> list:

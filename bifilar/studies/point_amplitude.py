@@ -167,7 +167,47 @@ def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
         r = sims[k].period / float(pre.periods[k])
         fit = amplitude_law(pre.amplitude, r, STATED_LAW_RATIO, half.period / float(pre.periods[k]))
         out[c] = (pre.amplitude * fit.slope(), (step.period / step.linear_period - r) / law.h)
+    _refine_dr_dI(out, pre, law, comps, st)
     return out
+
+
+def _refine_dr_dI(out: dict, pre: "_Prepared", law: _LawRuns, comps: list, st: SweepSettings) -> None:
+    """Replace in ``out`` {component: (A dr/dA, dr/dI)} the ``dr/dI`` whose
+    runs' period error could move the factor gain by more than
+    :data:`~bifilar.estimation.solve.FACTOR_GAIN_NOISE`
+    (:func:`~bifilar.estimation.solve.factor_step_rtol`, as invert's
+    :func:`~bifilar.estimation.solve.stated_amplitude_law`) by the same
+    forward difference of the mode's run and the stepped scene's, both run
+    again at the rtol it asks for (one batched call at the tightest of
+    them); a component whose runs fail keeps its first ``dr/dI``."""
+    from ..analysis.batch import simulate_batch
+    from ..estimation.solve import factor_step_rtol
+
+    redo = []
+    for n, c, k in comps:
+        dI_dT = float(pre.budgets[c].dI_dT) if c in out else 0.0
+        tight = factor_step_rtol(st.rtol, float(pre.periods[k]), 1.0 / dI_dT if dI_dT else 0.0, law.h)
+        if tight is not None:
+            redo.append((n, c, k, tight))
+    if not redo:
+        return
+    scenes, labels, mss = [], [], []
+    for n, _, k, _ in redo:
+        scenes += [pre.scene, law.scenes[len(law.modes) + n]]
+        labels += [pre.labels[k]] * 2
+        mss += [pre.ms, law.mode_sets[len(law.modes) + n]]
+    try:
+        runs = simulate_batch(scenes, mode=labels, amplitude=pre.amplitude, periods=st.periods,
+                              rtol=min(t for *_, t in redo), rests=[pre.rest] * len(scenes), modes=mss,
+                              errors="return", health=False)
+    except BifilarError:
+        return
+    for i, (_, c, _, _) in enumerate(redo):
+        own, step = runs[2 * i], runs[2 * i + 1]
+        if own.error or step.error or not own.period or not step.period:
+            continue
+        dr = (step.period / step.linear_period - own.period / own.linear_period) / law.h
+        out[c] = (out[c][0], dr)
 
 
 def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
