@@ -252,13 +252,13 @@ def test_invert_refuses_an_amplitude_run_beyond_its_budget_naming_the_components
     lowered here so that the true plate's first run exceeds it (the corner's
     own refusal costs ~4 s, the audit's harness ran it).  On the old code
     the runs were unbounded and the inversion answered."""
+    from bifilar.estimation import amplitude_runs
     from bifilar.estimation import measurements as mm
-    from bifilar.estimation import solve
     from bifilar.estimation.invert import invert
 
     path = tmp_path / "plate.yaml"
     path.write_text(PLATE)
-    monkeypatch.setattr(solve, "RUN_EVALUATIONS_PER_CYCLE", 20.0, raising=False)
+    monkeypatch.setattr(amplitude_runs, "RUN_EVALUATIONS_PER_CYCLE", 20.0, raising=False)
     with pytest.raises(InputError) as e:
         invert(mm.load_measurements(path), ladder=False)
     assert e.value.field == "--solve-for"

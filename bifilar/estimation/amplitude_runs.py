@@ -1,0 +1,181 @@
+"""The amplitude runs of the nonlinear inversion: the full model released
+at a measurement's amplitude and simulated over its cycles, giving the
+amplitude factor ``r = T_sim / T_lin`` of its mode
+(:func:`amplitude_factor`, :func:`measured_factor`), with their guards: a
+motion that is not regular (:func:`irregular_difference`) and a run whose
+equations are too stiff to make (:data:`RUN_EVALUATIONS_PER_CYCLE`).
+Moved out of :mod:`bifilar.estimation.solve` (which re-exports every name)
+when it passed 800 lines; the laws and the fixed point stay there.
+Units: periods s, amplitudes in the mode's dominant coordinate (rad or m),
+inertia kg m^2."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..analysis.run_accuracy import TIMING_SHARE
+from ..errors import ConvergenceError, InputError
+from .problem import HangingModel, Problem
+
+
+#: budget of right-hand-side evaluations a simulated cycle of one amplitude
+#: run (:func:`bifilar.analysis.simulate.simulate`'s ``max_evaluations``,
+#: times the cycles, at least 10): the shipped configs' DOP853 runs take
+#: 250-450 a cycle at rtol 1e-10 and 420-670 at the check's 1e-12 (plate,
+#: Solar Boat, KTH trifilar, 6.4 cylinder), so 2e4 is 30x the costliest;
+#: beyond it the body has a vanishing principal moment (the audit's plate at
+#: the corner Ixx = 2.6e-8 of a barely determined fit: one 10-cycle run took
+#: 18 s, the next over 2 min; docs/design.md "Estimation audit, session 13")
+RUN_EVALUATIONS_PER_CYCLE = 2e4
+
+
+def _stiff_message(scene, label: str) -> str:
+    """The refusal of an amplitude run too stiff to make (a principal moment
+    that vanishes against the others; units kg m^2)."""
+    ev = np.linalg.eigvalsh(np.asarray(scene.inertia, float))
+    return (f"the nonlinear model of mode '{label}' would run a body whose principal moments are "
+            f"{', '.join(f'{v:.3g}' for v in ev)} kg m^2: a moment that vanishes against the others makes its "
+            f"equations stiff beyond {RUN_EVALUATIONS_PER_CYCLE:.0e} evaluations a cycle, so the amplitude's effect cannot be "
+            "simulated there; where the fit put it (the estimate at a corner of the physical set) the periods barely "
+            "determine the components: add modes or hangings that time them, solve for fewer components, or "
+            "give the amplitude as 0 to answer with the linear model")
+
+
+def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
+                     rtol: float = 1e-10, timing: float | None = None,
+                     fundamental: bool = False, second: tuple | None = None):
+    """r = T_sim / T_lin of base mode ``mode_index`` at ``values``, simulated
+    from rest displaced by ``amplitude`` x the mode shape for ``cycles``
+    linear periods.  Returns (r, SimulationResult).
+
+    ``timing``: the standard uncertainty (s) of the measured period the
+    factor serves.  Where given, a run whose single-cycle periods spread by
+    enough to matter against it (:func:`~bifilar.analysis.run_accuracy.check_matters`:
+    their span over a tenth of ``timing``) is run again from the same start
+    at rtol / 100 (:func:`~bifilar.analysis.run_accuracy.check_period`; the
+    result's ``period_check`` says what it found).  A beating run whose
+    span is below that pays nothing (the example measurements: no second
+    run; checking every beating run cost them 19 % more CPU for nothing).
+    None: the period alone (the law runs of an unstated amplitude).
+
+    ``fundamental`` (a fitted record's period, :attr:`Measurement.fundamental`):
+    ``T_sim`` is the period of the mode's fundamental and ``amplitude`` the
+    fundamental's amplitude, as the record's fit reports them
+    (:func:`~bifilar.analysis.fundamental.mode_fundamental`), not the mean
+    period between the run's first and last crossings at a release of
+    ``amplitude``: on the damped trifilar the other modes the release
+    excites put that one 3.6e-6 s (one std of the record) below the
+    fundamental's, and the release's fundamental is 1.0003 times it
+    (+8.6e-7 s); Izz's z had mean +0.59 over 12 noise draws, the record's
+    own -0.13 (docs/invert.md, "Signal audit, session 10").  The run is
+    released at ``amplitude`` and ``r`` carried from its fundamental's
+    amplitude ``a`` to ``amplitude`` by the quadratic rule ``dr/dA = 2 (r -
+    1) / a`` (the step is ~3e-4 of the amplitude: a quartic law's slope,
+    up to 10 % off that rule, moves ``r`` by ~1e-8 of itself).
+
+    ``second``: (base mode index, amplitude) of a second mode the release
+    started (a recording's, :class:`~bifilar.estimation.signal_swing.Secondary`):
+    the run starts with it moving too
+    (:func:`~bifilar.analysis.simulate.two_mode_state`), as the record's body did."""
+    from ..analysis.fundamental import mode_fundamental
+    from ..analysis.run_accuracy import check_matters, check_period
+    from ..analysis.simulate import simulate, two_mode_state
+
+    scene = hm.scene(values)
+    rest, ms, match = hm.locate(scene)
+    k = int(match[mode_index])
+    y0 = t_end = None
+    if second is not None and second[1]:
+        y0 = two_mode_state(scene, rest, ms.modes[k], amplitude, ms.modes[int(match[second[0]])], second[1])
+        t_end = cycles * ms.modes[k].period
+
+    def run(method: str = "DOP853", rtol: float = rtol, atol=None):
+        return simulate(scene, k + 1, amplitude, cycles, rest=rest, modes=ms, method=method, rtol=rtol, atol=atol,
+                        check=False, y0=y0, t_end=t_end, bound=True,
+                        max_evaluations=RUN_EVALUATIONS_PER_CYCLE * max(cycles, 10.0))
+
+    try:
+        sim = run()
+    except InputError as e:
+        if e.field != "--periods" or "stiff body" not in str(e):
+            raise
+        raise InputError("--solve-for", _stiff_message(scene, ms.modes[k].label)) from None
+    if sim.period is None:
+        raise ConvergenceError(f"the simulated {ms.modes[k].label} motion showed fewer than two crossings")
+    if timing is not None and check_matters(sim, timing):
+        check_period(sim, run, sim.method, None, timing)
+        # invert says it once per measurement (irregular_difference), in its own terms
+        sim.warnings = [w for w in sim.warnings if not w.startswith("the motion is not regular")]
+    T_lin = ms.modes[k].period
+    if not fundamental:
+        return sim.period / T_lin, sim
+    T_f, a_f = mode_fundamental(sim.t, sim.y, rest, ms, k, sim.period)
+    r = T_f / T_lin
+    return r + 2.0 * (r - 1.0) / a_f * (abs(amplitude) - a_f), sim
+
+
+#: an amplitude run whose motion is not regular is refused where its check
+#: run's difference exceeds this share of the measured period's std (below
+#: it the difference joins the budget as ``integration[mode]``): the share
+#: below which simulate's period error need not warn either
+IRREGULAR_REFUSE_SHARE = TIMING_SHARE
+
+
+def measured_factor(pb: Problem, k: int, p, rtol: float = 1e-10, amplitude: float | None = None):
+    """(r, SimulationResult, d) of measurement ``k``'s mode at the unknowns
+    ``p``: :func:`amplitude_factor` at the measured amplitude (or
+    ``amplitude``) over the measured cycles, checked against the period's
+    std, and ``d`` (s) the check run's difference where the motion is not
+    regular (:func:`irregular_difference`; 0 otherwise)."""
+    m = pb.measurements[k]
+    A = m.amplitude if amplitude is None else amplitude
+    sec = getattr(m, "secondary", None)
+    r, sim = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], A, m.cycles, rtol,
+                              timing=m.std, fundamental=m.fundamental,
+                              second=None if sec is None else (sec.index, sec.amplitude))
+    return r, sim, irregular_difference(pb, k, p, sim)
+
+
+def _unchecked_factor(pb: Problem, k: int, p, rtol: float) -> float:
+    """Measurement ``k``'s amplitude factor at the unknowns ``p`` at
+    ``rtol``, as :func:`measured_factor` simulates it but without its check
+    run (a tighter rerun of runs :func:`measured_factor` has checked:
+    :func:`factor_step_rtol`)."""
+    m = pb.measurements[k]
+    sec = getattr(m, "secondary", None)
+    return amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles, rtol,
+                            fundamental=m.fundamental,
+                            second=None if sec is None else (sec.index, sec.amplitude))[0]
+
+
+def irregular_difference(pb: Problem, k: int, p, sim) -> float:
+    """The difference (s) between measurement ``k``'s amplitude run ``sim``
+    (at the unknowns ``p``) and its check run where the check shows a motion
+    that is not regular (:func:`~bifilar.analysis.run_accuracy.not_regular`,
+    against the measured period's std); 0 for a regular or unchecked run.
+
+    Raises :class:`InputError` on the measurement's field where that
+    difference exceeds :data:`IRREGULAR_REFUSE_SHARE` of the period's std:
+    the simulated mean period then depends on the integrator's rounding at a
+    level the measurement resolves, the difference is only an estimate of
+    that dependence (other starts as close move it further:
+    docs/design.md, "A motion that is not regular"), and the amplitude law's
+    slope and the factor's derivative in the unknowns are differences of
+    the same irregular function, so neither the estimate nor its std can be
+    given."""
+    from ..analysis.run_accuracy import not_regular
+
+    m = pb.measurements[k]
+    if not not_regular(sim.period_check, sim.period, m.std):
+        return 0.0
+    d = float(sim.period_check["difference"])
+    if d > IRREGULAR_REFUSE_SHARE * m.std:
+        at = ", ".join(f"{n} = {v:.6g}" for n, v in zip(pb.unknowns, np.asarray(p, float)))
+        raise InputError(m.field, (
+            f"mode '{m.label}' released at {sim.amplitude:g} and simulated over {m.cycles:g} cycles ({at}) is not a "
+            f"regular motion: its single-cycle periods spread by {sim.period_std:.1g} s and a second run from the "
+            f"same start at rtol {sim.period_check['rtol']:g} differs by {d:.1g} s, more than "
+            f"{IRREGULAR_REFUSE_SHARE:g} of the period's std {m.std:.1g} s, so the nonlinear model's period (and the "
+            "estimate) depends on the integrator's rounding and cannot be given to the measurement's accuracy; "
+            "time fewer cycles (--cycles with --period) or release at a smaller amplitude"))
+    return d
