@@ -15,7 +15,10 @@ nonlinear motion's other oscillations (tones at combination frequencies,
 ``f_pitch - f_swing``, ``2 f_swing - f_torsion``), which a multi-mode fit
 (``two_mode``, ``three_mode``, ``auto``) resolves beside the dominant mode.
 Their size grows with the second mode's amplitude (as its square for a
-swing whose tones are combinations: measured, not assumed).
+swing whose tones are combinations: measured, not assumed).  Where the chosen model
+is single-mode (a damped record's chirp can make every multi-mode fit
+inadmissible), the tones are looked for in its residuals
+(:func:`residual_tones`).
 
 How the amplitude is found (:func:`infer_secondary`): each other mode of the
 hanging is released in the model with the timed one (the timed mode
