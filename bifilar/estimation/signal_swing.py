@@ -15,7 +15,10 @@ nonlinear motion's other oscillations (tones at combination frequencies,
 ``f_pitch - f_swing``, ``2 f_swing - f_torsion``), which a multi-mode fit
 (``two_mode``, ``three_mode``, ``auto``) resolves beside the dominant mode.
 Their size grows with the second mode's amplitude (as its square for a
-swing whose tones are combinations: measured, not assumed).
+swing whose tones are combinations: measured, not assumed).  Where the chosen model
+is single-mode (a damped record's chirp can make every multi-mode fit
+inadmissible), the tones are looked for in its residuals
+(:func:`residual_tones`).
 
 How the amplitude is found (:func:`infer_secondary`): each other mode of the
 hanging is released in the model with the timed one (the timed mode
@@ -107,8 +110,10 @@ def record_tones(m) -> list[dict]:
     Kept where the amplitude exceeds :data:`TONE_Z` of its std and the
     oscillation has two cycles in the record."""
     fit = getattr(m, "fit", None)
-    if fit is None or len(getattr(fit, "modes", []) or []) < 2:
+    if fit is None or not (getattr(fit, "modes", None) or []):
         return []
+    if len(fit.modes) < 2:
+        return residual_tones(m)
     m0 = fit.modes[0]
     a0, w0 = float(m0["amplitude"]), float(m0["omega"])
     if not a0 > 0:
@@ -125,6 +130,85 @@ def record_tones(m) -> list[dict]:
         conv = (w0 / w) if rate else 1.0
         out.append({"period": 2 * math.pi / w, "period_std": float(md.get("std", 0.0) or 0.0),
                     "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv})
+    return sorted(out, key=lambda d: -d["ratio"])
+
+
+def residual_tones(m) -> list[dict]:
+    """The other oscillations left in the residuals of measurement ``m``'s
+    single-mode fit (``viscous``, ``quadratic``, ...), in
+    :func:`record_tones`' form with ``source`` ``"residual"``: each
+    significant periodogram peak (:func:`~bifilar.estimation.signal_checks.residual_peaks`)
+    that is no harmonic and lies more than 2 / T_record from the
+    fundamental, fitted there as one damped cosine (least squares on the
+    residuals: frequency, decay rate, amplitude at the window's start, its
+    std from the fit's covariance times the fit's serial inflation); kept
+    where the amplitude exceeds :data:`TONE_Z` of its std and the
+    oscillation has two cycles in the record.
+
+    Why: a damped record's chirp can make every multi-mode fit inadmissible
+    (a spurious oscillation beside the dominant one), so ``auto`` chooses a
+    single-mode model whose fit holds no other mode, and a swing the record
+    shows was never looked for (docs/design.md, "dampswing, session 13":
+    the quadcopter's 2.566 s tone at 3e-3 of the torsion, Izz z -3.7)."""
+    from scipy.optimize import least_squares
+
+    from .signal_checks import residual_peaks
+
+    fit = m.fit
+    t, r = getattr(fit, "t_used", None), getattr(fit, "residuals", None)
+    m0 = fit.modes[0]
+    a0, w0 = float(m0["amplitude"]), float(m0["omega"])
+    if t is None or r is None or len(t) < 16 or not a0 > 0:
+        return []
+    t, r = np.asarray(t, float), np.asarray(r, float)
+    T_rec = float(t[-1] - t[0])
+    f0 = w0 / (2 * math.pi)
+    try:
+        peaks = residual_peaks(t, r, f0)
+    except (ValueError, np.linalg.LinAlgError):
+        return []
+    rate = m.details.get("quantity") == "rate" if isinstance(m.details, dict) else False
+    infl = max(float(fit.std_inflation or 1.0), 1.0)
+    tau = t - t[0]
+    sg0 = float(m0.get("sigma", 0.0) or 0.0)
+    out = []
+    for pk in peaks:
+        f = float(pk["frequency"])
+        if pk["harmonic"] is not None or abs(f - f0) <= 2.0 / T_rec or f * T_rec < 2.0:
+            continue
+
+        def res(q):
+            e = np.exp(-q[1] * tau)
+            return e * (q[2] * np.cos(q[0] * tau) + q[3] * np.sin(q[0] * tau)) - r
+
+        w = 2 * math.pi * f
+        c, s_ = np.cos(w * tau), np.sin(w * tau)
+        ab = np.linalg.lstsq(np.c_[c, s_], r, rcond=None)[0]
+        try:
+            sol = least_squares(res, [w, sg0, ab[0], ab[1]], x_scale="jac")
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        q = sol.x
+        if not (sol.success and abs(q[0] - w) <= 2 * math.pi / T_rec and q[0] * T_rec >= 4 * math.pi):
+            continue
+        dof = max(t.size - 4, 1)
+        s2 = float(np.sum(sol.fun ** 2)) / dof
+        try:
+            cov = s2 * np.linalg.inv(sol.jac.T @ sol.jac)
+        except np.linalg.LinAlgError:
+            continue
+        a = math.hypot(q[2], q[3])
+        if not a > 0:
+            continue
+        g = np.array([q[2], q[3]]) / a
+        s_amp = math.sqrt(max(float(g @ cov[2:4, 2:4] @ g), 0.0)) * infl
+        sd_w = math.sqrt(max(float(cov[0, 0]), 0.0)) * infl
+        if not (s_amp > 0 and a > TONE_Z * s_amp):
+            continue
+        conv = (w0 / q[0]) if rate else 1.0
+        T = 2 * math.pi / q[0]
+        out.append({"period": T, "period_std": T / q[0] * sd_w, "ratio": a / a0 * conv,
+                    "ratio_std": s_amp / a0 * conv, "source": "residual"})
     return sorted(out, key=lambda d: -d["ratio"])
 
 
