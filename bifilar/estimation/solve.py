@@ -557,7 +557,7 @@ def factor_step(rtol: float, T_lin: float, dT_dp: float, h: float) -> tuple[floa
     above it (a period that hardly moves with the unknown: invert accepts
     an unknown whose periods change by 1e-6 over its physical range, up to
     1.8 of its scale from the estimate, so the bound at the floor reaches
-    ~2e-2 for a moment and 5e-2 for a CoM shift), the step is widened to
+    ~2e-2 for a moment and 4e-2 for a CoM shift), the step is widened to
     bring it :data:`FACTOR_FLOOR_MARGIN` times under it, at most
     ``FACTOR_STEP_MAX / FACTOR_STEP`` times ``h``
     (beyond that, a raw bound above 1 at the floor, the gain keeps up to
