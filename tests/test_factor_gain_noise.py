@@ -110,3 +110,101 @@ def test_invert_law_takes_dr_dp_from_the_tighter_pair_only_where_the_rule_asks(m
     law = so.stated_amplitude_law(pb, np.array([1.0, 2.0]), 0, 1.002)
     assert law.dr_dp == pytest.approx([3e-9 / so.FACTOR_STEP, (1.0019 - 1.002) / so.FACTOR_STEP], rel=1e-6)
     assert tight == [pytest.approx(so.factor_step_rtol(1e-10, 2.0, 1e-6, so.FACTOR_STEP))] * 2
+
+
+# ---- gainnoise, session 13: where even the floor's rtol cannot bound the noise, a wider step does ----
+
+def _window_cylinder(tmp_path):
+    """The 6.4 cylinder with Ixx = 3 kg m^2 (its admissible range 2.0 .. 26.1) and the short wire 18.5 m
+    (was 17.658): swing-y's T_lin dI/dT = 1.68e7 kg m^2, so d ln T / d ln(Ixx / Imax) = 8.3e-7 -- under
+    the sweep's identifiability (1e-6) but invert accepts Ixx (its period changes by more than 1e-6 over
+    the range, whose far end is 1.6 Imax away) -- and the bound at the floor's rtol over FACTOR_STEP is
+    1.2e-2, above FACTOR_GAIN_NOISE."""
+    text = CYL.read_text().replace("lengths:     [19.62, 17.658]", "lengths:     [19.62, 18.5]").replace(
+        "principal: [14.03443125, 14.03443125, 12.0295125]", "principal: [3.0, 14.03443125, 12.0295125]")
+    assert "18.5]" in text and "[3.0," in text
+    path = tmp_path / "cylinder_window.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_the_floor_widens_the_step_where_rtol_alone_cannot_bound_the_noise():
+    from bifilar.estimation.solve import (FACTOR_FLOOR_MARGIN, FACTOR_RTOL_FLOOR, FACTOR_STEP, FACTOR_STEP_MAX,
+                                          factor_step)
+
+    h = FACTOR_STEP * 14.03  # the cylinder's step, kg m^2
+    # reachable by rtol alone (the cylinder's own Ixx, T_lin dI/dT 1.65e6): the step stays
+    assert factor_step(1e-8, 8.55, 8.55 / 1.65e6, h) == (factor_step_rtol(1e-8, 8.55, 8.55 / 1.65e6, h), h)
+    assert factor_step(1e-8, 2.0, 2.0 / 3.7e2, h) is None
+    # the window case (T_lin dI/dT 1.68e7): at the floor over h the bound is 1.2e-2; the wider step brings
+    # it FACTOR_FLOOR_MARGIN under FACTOR_GAIN_NOISE
+    rtol, step = factor_step(1e-10, 8.77, 8.77 / 1.68e7, h)
+    assert rtol == FACTOR_RTOL_FLOOR
+    assert 8.77 * rtol / (step * 8.77 / 1.68e7) == pytest.approx(FACTOR_GAIN_NOISE / FACTOR_FLOOR_MARGIN, rel=1e-9)
+    # a period that all but ignores the unknown: the step stops at FACTOR_STEP_MAX of the scale
+    assert factor_step(1e-10, 8.77, 8.77 / 1.68e12, h)[1] == pytest.approx(h * FACTOR_STEP_MAX / FACTOR_STEP)
+
+
+def test_the_sweeps_identifiable_components_never_need_the_wider_step():
+    # the sweep refuses a component with |d ln T / d ln I| < IDENTIFIABLE_MIN at its scale (<= the largest
+    # moment, the step's scale), so its bound at the floor is at most FLOOR / (FACTOR_STEP IDENTIFIABLE_MIN):
+    # no wider than FACTOR_GAIN_NOISE while these constants keep this relation (they meet exactly now)
+    from bifilar.estimation.solve import FACTOR_RTOL_FLOOR, FACTOR_STEP
+    from bifilar.studies.point import IDENTIFIABLE_MIN
+
+    assert FACTOR_RTOL_FLOOR / (FACTOR_STEP * IDENTIFIABLE_MIN) <= FACTOR_GAIN_NOISE * (1 + 1e-9)
+
+
+def test_invert_law_takes_the_floor_pair_over_the_wider_step(monkeypatch):
+    # as test_invert_law_takes_dr_dp_from_the_tighter_pair_only_where_the_rule_asks, but unknown 0's period
+    # moves so little (dT/dp 1e-7 s per unit: bound 0.2 at the floor over FACTOR_STEP) that the pair is run
+    # at the floor over the step factor_step widens it to (main took it over FACTOR_STEP: bound 0.2)
+    from types import SimpleNamespace as NS
+
+    import bifilar.estimation.solve as so
+
+    calls = iter([1.00162, 1.0021, 1.0019])
+    monkeypatch.setattr(so, "measured_factor", lambda pb, k, p, rtol=1e-10, amplitude=None: (next(calls), None, 0.0))
+    pairs = []
+
+    def unchecked(pb, k, p, rtol):
+        pairs.append((rtol, float(p[0])))
+        return 1.002 + 3e-5 * float(p[0] - 1.0)  # dr/dp0 = 3e-5 exactly, whatever the step
+
+    monkeypatch.setattr(so, "_unchecked_factor", unchecked)
+    pb = NS(measurements=[NS(amplitude=0.3)], scales=lambda: np.ones(2), linear_periods=lambda p: np.array([2.0]),
+            jacobian=lambda p: np.array([[1e-7, 1.0]]))
+    law = so.stated_amplitude_law(pb, np.array([1.0, 2.0]), 0, 1.002)
+    rtol, step = so.factor_step(1e-10, 2.0, 1e-7, so.FACTOR_STEP)
+    assert step > 10 * so.FACTOR_STEP
+    assert pairs == [(rtol, pytest.approx(1.0 + step, rel=1e-12)), (rtol, 1.0)]
+    assert 2.0 * rtol / (step * 1e-7) <= FACTOR_GAIN_NOISE
+    assert law.dr_dp[0] == pytest.approx(3e-5, rel=1e-6)
+
+
+def test_wider_step_gain_agrees_with_the_converged_one(tmp_path):
+    # the window cylinder: the forward difference at factor_step's (rtol, step) against central differences
+    # at rtol 1e-12 over 3e-3 of the largest moment (converged: 1.00112, 1.00101 .. 1.00115 over steps 1e-3 ..
+    # 1e-2 and 3 or 10 periods); measured 1.00170 (step 1.2e-3 of the moment), within the stated 1e-2
+    from bifilar.estimation.solve import FACTOR_STEP, factor_step
+
+    scene = load_scene(_window_cylinder(tmp_path))
+    Imax = float(np.max(np.linalg.eigvalsh(scene.inertia)))
+
+    def stepped(d):
+        inertia = np.array(scene.inertia, float)
+        inertia[0, 0] += d
+        return replace(scene, inertia=inertia)
+
+    hc = 3e-3 * Imax
+    ref = simulate_batch([stepped(-hc), scene, stepped(hc)], mode="swing-y", amplitude=A, periods=3, rtol=1e-12,
+                         health=False)
+    r = [x.period / x.linear_period for x in ref]
+    T_lin = ref[1].linear_period
+    dT_dI = (ref[2].linear_period - ref[0].linear_period) / (2 * hc)
+    g_conv = r[1] + T_lin / dT_dI * (r[2] - r[0]) / (2 * hc)
+    rtol, step = factor_step(1e-10, T_lin, dT_dI, FACTOR_STEP * Imax)
+    assert step > FACTOR_STEP * Imax  # the floor alone would not do
+    own, up = simulate_batch([scene, stepped(step)], mode="swing-y", amplitude=A, periods=3, rtol=rtol, health=False)
+    dr = (up.period / up.linear_period - own.period / own.linear_period) / step
+    assert r[1] + T_lin / dT_dI * dr == pytest.approx(g_conv, abs=FACTOR_GAIN_NOISE)

@@ -377,6 +377,41 @@ def factor_step_rtol(rtol: float, T_lin: float, dT_dp: float, h: float) -> float
     return max(rtol * FACTOR_GAIN_NOISE / noise, FACTOR_RTOL_FLOOR)
 
 
+#: the largest step (of the unknown's scale) :func:`factor_step` widens ``dr/dp``'s difference to, 100 x
+#: :data:`FACTOR_STEP` (the 6.4 cylinder's ``dr/dIxx`` is the same, 2.6e-10, over 1e-3 and 1e-2 of the
+#: largest moment: docs/design.md "gainnoise, session 13")
+FACTOR_STEP_MAX = 1e-2
+#: a widened step brings the bound at :data:`FACTOR_RTOL_FLOOR` this many times under
+#: :data:`FACTOR_GAIN_NOISE`: at the floor a run's relative period error is up to ~rtol itself, not the
+#: 0.02-0.13 x rtol of 1e-8 (a cylinder's Ixx at bound 1e-2 erred by 1.8e-2 in the gain; at 1e-3 by 6e-4)
+FACTOR_FLOOR_MARGIN = 10.0
+
+
+def factor_step(rtol: float, T_lin: float, dT_dp: float, h: float) -> tuple[float, float] | None:
+    """(rtol, step) of the rerun pair whose forward difference gives
+    ``dr/dp`` to :data:`FACTOR_GAIN_NOISE` of the factor gain, or None where
+    the first runs (``rtol``, step ``h``) already do
+    (:func:`factor_step_rtol`; ``T_lin`` s, ``dT_dp`` s per unit of ``p``,
+    ``h`` and the step in the unit of ``p``).  Where even
+    :data:`FACTOR_RTOL_FLOOR` leaves the bound ``T_lin rtol / (h |dT_dp|)``
+    above it (a period that hardly moves with the unknown: invert accepts
+    an unknown whose periods change by 1e-6 over its physical range, up to
+    1.8 of its scale from the estimate, so the bound at the floor reaches
+    ~2e-2 for a moment and 4e-2 for a CoM shift), the step is widened to
+    bring it :data:`FACTOR_FLOOR_MARGIN` times under it, at most
+    ``FACTOR_STEP_MAX / FACTOR_STEP`` times ``h``
+    (beyond that, a raw bound above 1 at the floor, the gain keeps up to
+    that noise: docs/design.md "gainnoise, session 13")."""
+    tight = factor_step_rtol(rtol, T_lin, dT_dp, h)
+    if tight is None:
+        return None
+    if tight > FACTOR_RTOL_FLOOR:
+        return tight, h
+    wide = FACTOR_FLOOR_MARGIN * T_lin * tight / (FACTOR_GAIN_NOISE * abs(dT_dp))
+    return tight, min(max(h, wide), h * FACTOR_STEP_MAX / FACTOR_STEP)
+
+
+
 @dataclass
 class AmplitudeLaw:
     """The amplitude law of one mode, ``r(A) = T(A) / T_lin = 1 + a A^2 + b
@@ -514,9 +549,11 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
         r_q, _, d = measured_factor(pb, k, q, rtol)
         dr[j] = (r_q - r_A) / h
         irregular = max(irregular, d)
-        tight = factor_step_rtol(rtol, T_lin, dT[j], h)
-        if tight is not None:  # the runs' period error would show in the gain: both again at a tighter rtol
-            dr[j] = (_unchecked_factor(pb, k, q, tight) - _unchecked_factor(pb, k, p, tight)) / h
+        redo = factor_step(rtol, T_lin, dT[j], h)
+        if redo is not None:  # the runs' period error would show in the gain: both again at a tighter rtol
+            tight, wide = redo  # (and over a wider step where the floor's rtol alone cannot bound it)
+            q[j] = p[j] + wide
+            dr[j] = (_unchecked_factor(pb, k, q, tight) - _unchecked_factor(pb, k, p, tight)) / wide
     law.dr_dp = dr
     law.irregular = irregular
     sec = getattr(m, "secondary", None)
