@@ -35,8 +35,8 @@ def _stiff_message(scene, label: str) -> str:
     ev = np.linalg.eigvalsh(np.asarray(scene.inertia, float))
     return (f"the nonlinear model of mode '{label}' would run a body whose principal moments are "
             f"{', '.join(f'{v:.3g}' for v in ev)} kg m^2: a moment that vanishes against the others makes its "
-            f"equations stiff beyond {RUN_EVALUATIONS_PER_CYCLE:.0e} evaluations a cycle, so the amplitude's effect cannot be "
-            "simulated there; where the fit put it (the estimate at a corner of the physical set) the periods barely "
+            f"equations stiff beyond {RUN_EVALUATIONS_PER_CYCLE:.0e} evaluations a cycle, so the amplitude's effect "
+            "cannot be simulated there; where the fit put it (the estimate at a corner of the physical set) the periods barely "
             "determine the components: add modes or hangings that time them, solve for fewer components, or "
             "give the amplitude as 0 to answer with the linear model")
 
@@ -121,18 +121,33 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
 IRREGULAR_REFUSE_SHARE = TIMING_SHARE
 
 
+def measurement_run(pb: Problem, k: int, p, rtol: float, amplitude: float | None = None, timing: float | None = None,
+                    second: tuple | None | str = "recorded"):
+    """(r, SimulationResult): :func:`amplitude_factor` of measurement ``k``'s
+    mode at the unknowns ``p``, released at the measured amplitude (or
+    ``amplitude``) over the measured cycles, read as the measurement is
+    (its fundamental for a recording), with the second mode its release
+    started (``m.secondary``; ``second="recorded"``), another (``second`` =
+    (base mode index, amplitude)) or none (``second=None``); ``timing`` (s)
+    as :func:`amplitude_factor` takes it (None: no check run).  The one place a measurement becomes a run:
+    :func:`measured_factor`, :func:`_unchecked_factor` and the hidden modes'
+    runs (:func:`bifilar.estimation.solve._hidden_shifts`) go through it."""
+    m = pb.measurements[k]
+    if isinstance(second, str):
+        sec = getattr(m, "secondary", None)
+        second = None if sec is None else (sec.index, sec.amplitude)
+    return amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k],
+                            m.amplitude if amplitude is None else amplitude, m.cycles, rtol, timing=timing,
+                            fundamental=m.fundamental, second=second)
+
+
 def measured_factor(pb: Problem, k: int, p, rtol: float = 1e-10, amplitude: float | None = None):
     """(r, SimulationResult, d) of measurement ``k``'s mode at the unknowns
     ``p``: :func:`amplitude_factor` at the measured amplitude (or
     ``amplitude``) over the measured cycles, checked against the period's
     std, and ``d`` (s) the check run's difference where the motion is not
     regular (:func:`irregular_difference`; 0 otherwise)."""
-    m = pb.measurements[k]
-    A = m.amplitude if amplitude is None else amplitude
-    sec = getattr(m, "secondary", None)
-    r, sim = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], A, m.cycles, rtol,
-                              timing=m.std, fundamental=m.fundamental,
-                              second=None if sec is None else (sec.index, sec.amplitude))
+    r, sim = measurement_run(pb, k, p, rtol, amplitude, timing=pb.measurements[k].std)
     return r, sim, irregular_difference(pb, k, p, sim)
 
 
@@ -141,11 +156,7 @@ def _unchecked_factor(pb: Problem, k: int, p, rtol: float) -> float:
     ``rtol``, as :func:`measured_factor` simulates it but without its check
     run (a tighter rerun of runs :func:`measured_factor` has checked:
     :func:`factor_step_rtol`)."""
-    m = pb.measurements[k]
-    sec = getattr(m, "secondary", None)
-    return amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles, rtol,
-                            fundamental=m.fundamental,
-                            second=None if sec is None else (sec.index, sec.amplitude))[0]
+    return measurement_run(pb, k, p, rtol)[0]
 
 
 def irregular_difference(pb: Problem, k: int, p, sim) -> float:

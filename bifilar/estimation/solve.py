@@ -18,7 +18,8 @@ from ..errors import BifilarError, ConvergenceError, InputError
 from .problem import _IDX, HangingModel, Problem, admissible, physical_interval
 # the amplitude runs (moved to their own module, re-exported here)
 from .amplitude_runs import (IRREGULAR_REFUSE_SHARE, RUN_EVALUATIONS_PER_CYCLE, _stiff_message,  # noqa: F401
-                             _unchecked_factor, amplitude_factor, irregular_difference, measured_factor)
+                             _unchecked_factor, amplitude_factor, irregular_difference, measured_factor,
+                             measurement_run)
 # the roots where the fixed point does not settle (moved to their own module, re-exported here)
 from .nonlinear_roots import (FULL_MAP_ERRORS, FULL_MAP_SHARE, GAIN_RANGE, _contracted,  # noqa: F401
                               _model_tol, _refuse_unsettled, _settle_by_secant, _solve_full_scalar,
@@ -559,8 +560,7 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
     sec = getattr(m, "secondary", None)
     if sec is not None:
         # the second mode's part of the model period, and its std from the amplitude's (the shift ~ a^2)
-        r_alone, _ = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles,
-                                      rtol, fundamental=m.fundamental)
+        r_alone, _ = measurement_run(pb, k, p, rtol, second=None)
         sec.shift = float(pb.linear_periods(p)[k] * (r_A - r_alone))
         sec.shift_std = 2.0 * abs(sec.shift) * sec.amplitude_std / abs(sec.amplitude)
         law.secondary_std = sec.shift_std
@@ -587,8 +587,7 @@ def _hidden_shifts(pb: Problem, p, k: int, r_alone: float, rtol: float) -> float
     T_lin = float(pb.linear_periods(p)[k])
     for h in m.hidden:
         try:
-            r_h, _ = amplitude_factor(pb.models[m.hanging], pb.values(p), pb.mode_index[k], m.amplitude, m.cycles,
-                                      rtol, fundamental=m.fundamental, second=(h.index, h.amplitude))
+            r_h, _ = measurement_run(pb, k, p, rtol, second=(h.index, h.amplitude))
             h.shift = float(T_lin * (r_h - r_alone))
         except BifilarError:
             h.shift = None
