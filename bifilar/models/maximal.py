@@ -700,7 +700,9 @@ def _min_norm(upper: tuple, rb: tuple) -> tuple:
         A = np.empty((n, n))
         A[_TRIU[n]] = upper
         w, V = np.linalg.eigh(A, UPLO="U")
-        return tuple((V @ ((V.T @ rb) * _filtered_inverse(w, w[-1]))).tolist())
+        e = MIN_NORM_RCOND * float(w[-1])  # _filtered_inverse written out (the cheapest numpy calls)
+        w3 = np.maximum(w, 0.0) ** 3
+        return tuple((V @ ((V.T @ rb) * w3 / (w3 * w + e * e * e * e))).tolist())
     shape = np.broadcast_shapes(*(np.shape(x) for x in upper + rb))
     A = np.empty(shape + (n, n))
     b = np.stack([np.broadcast_to(x, shape) for x in rb], axis=-1)
