@@ -667,7 +667,7 @@ a smooth cut-off, see there).  The ratio is ~ s^2 / 4, s the wire
 directions' smallest singular value relative to their largest (per unit
 displacement of the body, the wires' lengths change by s): a direction with
 s ~ 1e-3 is held by the wires' stretch with a stiffness EA s^2 / L, below the
-pendulum's m g / (n L) for any wire whose strain at its load exceeds ~1e-6
+pendulum's m g / (n L) for any wire whose strain at its load exceeds ~4e-6
 (lab wires: 1e-5 .. 1e-3), so a real rig moves along it as along a dependent
 one (docs/design.md, "offcentre, session 14").  It was 1e-10: a table on four
 vertical wires twisted 0.15 rad (ratio 3e-10) then took the rigid
@@ -689,8 +689,8 @@ def _min_norm(upper: tuple, rb: tuple) -> tuple:
     eigenvalue: 1 to within 1e-8 for ``w_k > 100 e`` (the solution exact),
     1e-8 below ``e / 100`` (dropped, the pseudo-inverse), and smooth between,
     so a run whose wires pass through near-dependence (a twisted table on
-    vertical wires) meets no jump of the right-hand side.  When the wires are dependent the accelerations
-    ``M^-1 J^T lam`` are the same for every solution (the null space of A is
+    vertical wires) meets no jump of the right-hand side.  When the wires
+    are dependent the accelerations ``M^-1 J^T lam`` are the same for every solution (the null space of A is
     that of J^T); the minimum-norm multipliers are also the tensions the rest
     pose reports (``lstsq`` of the equilibrium equations).  Returns n floats
     or arrays.
