@@ -690,10 +690,10 @@ def _min_norm(upper: tuple, rb: tuple) -> tuple:
     1e-8 below ``e / 100`` (dropped, the pseudo-inverse), and smooth between,
     so a run whose wires pass through near-dependence (a twisted table on
     vertical wires) meets no jump of the right-hand side.  When the wires
-    are dependent the accelerations ``M^-1 J^T lam`` are the same for every solution (the null space of A is
-    that of J^T); the minimum-norm multipliers are also the tensions the rest
-    pose reports (``lstsq`` of the equilibrium equations).  Returns n floats
-    or arrays.
+    are dependent the accelerations ``M^-1 J^T lam`` are the same for every
+    solution (the null space of A is that of J^T); the minimum-norm
+    multipliers are also the tensions the rest pose reports (``lstsq`` of
+    the equilibrium equations).  Returns n floats or arrays.
     """
     n = len(rb)
     if all(isinstance(x, float) for x in upper + rb):  # one state: the cheapest numpy calls
