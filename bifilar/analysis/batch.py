@@ -67,7 +67,7 @@ from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
 from .simulate import (RunSummary, drift_floor, measured_period, no_period_warning, period_accuracy,
-                       small_amplitude_period, state_scale, timed_crossings, untimed)
+                       small_amplitude_period, state_scale, timed_crossings, untimed, violation_warning)
 from .start_pose import StartPoses, refusal, start_poses
 
 __all__ = [
@@ -606,8 +606,6 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             warnings.append(f"run stopped at t = {obs.t_final[b]:.4g} s because a wire went slack")
         if status[b] == -1:
             warnings.append(f"integration failed: {msgs.get(b, '')}")
-        if obs.viol[b] > 1e-6 * Lmax[b]:
-            warnings.append(f"constraint violation {obs.viol[b]:.2e} m exceeds 1e-6 of the wire length; tighten rtol")
         if period is None:
             warnings.append(no_period_warning(float(amps[b]), status[b] == 1))
         t_s = y_s = T_s = None
@@ -623,6 +621,9 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 if obs.sample_tensions is not None:
                     T_s = (np.ascontiguousarray(obs.sample_tensions[b][0]) if one
                            else np.concatenate(obs.sample_tensions[b]))
+        if obs.viol[b] > 1e-6 * Lmax[b]:  # looked at over the samples, or the last state where none were kept
+            seen = y_s if y_s is not None else (obs.y_final[b] + np.r_[com0[b], np.zeros(10)])[None]
+            warnings.insert(len(warnings) - (period is None), violation_warning(scenes[b], seen, float(obs.viol[b])))
         out.append(SceneRun(
             period=period, period_std=pstd, crossings=tc, linear_period=float(T_ref[b]),
             max_constraint_violation=float(obs.viol[b]), energy_drift=drift,

@@ -4,7 +4,9 @@ wrench that 4 or 5 wires statics cannot split (rank below n) leave open.
 :func:`~bifilar.analysis.equilibrium.tension_range` (each wire's least and
 greatest tension at rest) and :func:`~bifilar.studies.point.statics_range`
 (the greatest a wire can reach in the runs) use them; scipy's ``linprog``
-is imported only here.  SI units (N), world frame.
+is imported only here.  :func:`held_violation`: a run's length error in the
+directions the model holds (nearly dependent wires' self-stresses left
+free).  SI units (N, m), world frame.
 """
 
 from __future__ import annotations
@@ -47,3 +49,32 @@ def split_bounds(A: np.ndarray, P: np.ndarray, f: np.ndarray, fallback: np.ndarr
             if res.status == 0:
                 out[i, col] = float(res.x[i])
     return out
+
+
+def held_violation(scene: Scene, Y: np.ndarray) -> float:
+    """The largest error of the wires' lengths (m) over states ``Y`` (k, 13)
+    (world frame, the maximal model's layout) in the directions the model
+    holds: each state's constraint errors ``phi_i = (|d_i|^2 - L_i^2) / 2``
+    with their components along the eigen-directions of ``J M^-1 J^T`` below
+    :data:`~bifilar.models.maximal.MIN_NORM_RCOND` of the largest removed
+    (the nearly dependent wires' self-stresses, which
+    :func:`~bifilar.models.maximal._min_norm` leaves free: a real rig's wires
+    stretch there, docs/design.md "offcentre, session 14"), as lengths
+    (``phi_i / L_i``).  On rigs with independent wires, the whole error."""
+    from ..models.maximal import MIN_NORM_RCOND
+    from ..rotations import quat_to_matrix
+
+    Y = np.asarray(Y, float)
+    R = quat_to_matrix(Y[:, 3:7])  # (k, 3, 3)
+    w = np.einsum("kij,nj->kni", R, scene.attachments)  # lever arms, world (k, n, 3)
+    d = Y[:, None, :3] + w - scene.anchors  # (k, n, 3)
+    L = np.asarray(scene.lengths, float)
+    phi = 0.5 * (np.einsum("kni,kni->kn", d, d) - L ** 2)
+    G = np.concatenate([d, np.cross(w, d)], axis=2)  # d phi / d(dr, dtheta_world) (k, n, 6)
+    Iinv = np.einsum("kij,jl,kml->kim", R, np.linalg.inv(np.asarray(scene.inertia, float)), R)
+    A = np.einsum("kni,kmi->knm", G[..., :3], G[..., :3]) / scene.mass + np.einsum(
+        "kni,kij,kmj->knm", G[..., 3:], Iinv, G[..., 3:])
+    ev, V = np.linalg.eigh(A)
+    held = ev >= MIN_NORM_RCOND * ev[:, -1:]  # (k, n)
+    kept = np.einsum("knj,kj->kn", V, np.where(held, np.einsum("knj,kn->kj", V, phi), 0.0))
+    return float(np.max(np.abs(kept) / L))
