@@ -92,11 +92,8 @@ class BudgetContext:
     #: the input's linear term (nonlinear method; :func:`_with_factor_gain`), added to the sigma points'
     #: linear coefficient (re-solved with the factor held at the estimate's)
     factor_shift: dict = field(default_factory=dict)
-    #: (P, K) the gain of the periods' full derivative in the unknowns (nonlinear: with ``T_lin dr/dp``,
-    #: :func:`_with_factor_gain`; else ``G``): what moves the estimate when a model period moves
-    gain: np.ndarray | None = None
-    #: the components not solved for (:class:`~bifilar.estimation.prior_inertia.PriorInertia`), where computed
-    prior: object = None
+    gain: np.ndarray | None = None   # (P, K) the full derivative's gain (nonlinear: with T_lin dr/dp), else G
+    prior: object = None             # the components not solved for (prior_inertia.PriorInertia), if computed
 
 
 def scene_key(scene) -> tuple:
@@ -468,8 +465,7 @@ def clip_interval(interval, p_hat, names, I_hat, uncertain=()) -> tuple[np.ndarr
     "The 95 % interval").  Values and stds are not touched; an estimate
     outside the limits (a method that may leave the physical set, which
     then warns) keeps its interval.  ``uncertain``: components not solved
-    for whose prior has a stated uncertainty (``prior_inertia``), free as
-    the unknowns are (a limit they set is as uncertain as they are)."""
+    for with a stated uncertainty (``prior_inertia``), free as the unknowns."""
     out = np.array(interval, float)
     why: list = [None] * len(names)
     free = [n for n in list(names) + list(uncertain) if n in _IDX]

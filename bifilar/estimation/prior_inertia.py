@@ -131,17 +131,14 @@ def _factor_derivatives(pb: Problem, vals: dict, names: list, values, sigmas, la
     components whose stepped run failed): one forward-difference run per
     component (:data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest
     moment), all in one batch with each measurement's own run."""
-    from .factor_inputs import SteppedFactors, stepped_factor_runs
+    from .factor_inputs import SteppedFactors, stated_laws, stepped_factor_runs
     from .solve import FACTOR_STEP
 
     K, Q = len(pb.measurements), len(names)
     dr = np.zeros((K, Q))
     d = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(pb.I_ref0)))
     plans = {}
-    for k, m in enumerate(pb.measurements):
-        law = laws[k] if laws is not None else None
-        if law is None or law.dr_dp is None or not m.amplitude:
-            continue
+    for k, m, _ in stated_laws(pb, laws):
         h = m.hanging
         steps = [(c, d, pb.models[h].scene({**vals, c: values[q] + d})) for q, c in enumerate(names) if sigmas[q] > 0]
         if not steps:
