@@ -92,6 +92,8 @@ class BudgetContext:
     #: the input's linear term (nonlinear method; :func:`_with_factor_gain`), added to the sigma points'
     #: linear coefficient (re-solved with the factor held at the estimate's)
     factor_shift: dict = field(default_factory=dict)
+    gain: np.ndarray | None = None   # (P, K) the full derivative's gain (nonlinear: with T_lin dr/dp), else G
+    prior: object = None             # the components not solved for (prior_inertia.PriorInertia), if computed
 
 
 def scene_key(scene) -> tuple:
@@ -452,7 +454,7 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
     return np.column_stack([lo, hi])
 
 
-def clip_interval(interval, p_hat, names, I_hat) -> tuple[np.ndarray, list]:
+def clip_interval(interval, p_hat, names, I_hat, uncertain=()) -> tuple[np.ndarray, list]:
     """The 95 % intervals (P, 2) cut at the physical limits of the inertia
     components (kg m^2; :func:`~bifilar.estimation.problem.physical_limits`
     at the estimate ``I_hat``, reference body axes, with the other inertia
@@ -462,10 +464,11 @@ def clip_interval(interval, p_hat, names, I_hat) -> tuple[np.ndarray, list]:
     it exactly when the uncut one does, and is never wider (docs/invert.md,
     "The 95 % interval").  Values and stds are not touched; an estimate
     outside the limits (a method that may leave the physical set, which
-    then warns) keeps its interval."""
+    then warns) keeps its interval.  ``uncertain``: components not solved
+    for with a stated uncertainty (``prior_inertia``), free as the unknowns."""
     out = np.array(interval, float)
     why: list = [None] * len(names)
-    free = [n for n in names if n in _IDX]
+    free = [n for n in list(names) + list(uncertain) if n in _IDX]
     tol = 1e-9 * float(np.max(np.abs(np.linalg.eigvalsh(0.5 * (I_hat + I_hat.T)))))
     for i, n in enumerate(names):
         if n not in _IDX or not np.all(np.isfinite(out[i])):
@@ -655,11 +658,11 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
     dT_lin/dp``, right only where the factor depends on an input as on the
     unknowns: the Solar Boat at spacing 1, length 2, torsion at 0.3 rad,
     the wire lengths' and the anchors' and attachments' x terms 1.11-1.21
-    too small; docs/design.md, "The stated amplitude".)  Returns the budget
-    and {input key: its contribution's change} (what the factor's
+    too small; docs/design.md, "The stated amplitude".)  Returns the budget,
+    {input key: its contribution's change} (what the factor's
     dependences add to the linear term of an input, for
     :func:`second_order`'s sigma points, which re-solve with the factor
-    held).  A law
+    held) and the full gain (P, K).  A law
     whose runs are not a regular motion (``law.irregular``, s: the check
     run's difference) adds ``integration[mode]``, that difference in the
     model period through the same gain."""
@@ -691,7 +694,7 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
     cov = np.zeros_like(budget.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)
-    return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof)), shift
+    return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof)), shift, Gf
 
 
 def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None, laws=None,
@@ -728,7 +731,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
         tn.append(f"timing[{lab}]")
     budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn,
                        timing_dof=[m.dof for m in pb.measurements])
-    shift = {}
+    shift, gain = {}, G
     if method == "nonlinear" and laws is not None and any(law is not None for law in laws):
         if any(law is not None and law.dr_dp is not None and law.dr_dx is None for law in laws):
             from .factor_inputs import factor_input_derivatives
@@ -736,7 +739,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
             factor_input_derivatives(pb, laws, in_names, sigmas, scenes, rests, modes, matches, rtol)
         Jr = np.array([[(law.dr_dx or {}).get(n, 0.0) if law is not None else 0.0 for n in in_names]
                        for law in laws], float).reshape(K, len(in_names))
-        budget, shift = _with_factor_gain(budget, Jp, T_lin, laws, sig, s_amp, tn, pb, multi,
+        budget, shift, gain = _with_factor_gain(budget, Jp, T_lin, laws, sig, s_amp, tn, pb, multi,
                                           Jx + T_lin[:, None] * Jr, in_names, in_sig)
     # every input, degenerate ones too, with its standard uncertainty
     all_sig = dict(sigmas)
@@ -747,7 +750,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
             h = next(iter(_key_hanging(pb, d)))
             all_sig[d] = input_sigma(scenes[h], pb.links.moves(d, h)[0][0] if d not in ("mass", "gravity") else d, unc)
     ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
-                        list(degenerate), scenes, rests, modes, matches, cache=cache, factor_shift=shift)
+                        list(degenerate), scenes, rests, modes, matches, cache=cache, factor_shift=shift,
+                        gain=gain)
     return budget, degenerate, T_lin, ctx
 
 

@@ -158,6 +158,16 @@ def stepped_factor_runs(groups: list, rtol: float) -> None:
             g.failed[k].append(key)
 
 
+def stated_laws(pb: Problem, laws):
+    """(k, measurement, law) of each measurement of ``pb`` with a stated
+    amplitude whose law ``laws[k]`` has its ``dr_dp`` (the factor's
+    derivatives are measured for these)."""
+    for k, m in enumerate(pb.measurements):
+        law = laws[k] if laws is not None else None
+        if law is not None and law.dr_dp is not None and m.amplitude:
+            yield k, m, law
+
+
 def factor_input_derivatives(pb: Problem, laws, keys: list, sigmas: dict, scenes, rests, modes, matches,
                              rtol: float = 1e-10) -> None:
     """Set ``laws[k].dr_dx`` {input key: d r_k / d x, per SI unit} for each
@@ -182,10 +192,7 @@ def factor_input_derivatives(pb: Problem, laws, keys: list, sigmas: dict, scenes
 
     multi = len(pb.models) > 1
     plans = {}
-    for k, m in enumerate(pb.measurements):
-        law = laws[k] if laws is not None else None
-        if law is None or law.dr_dp is None or not m.amplitude:
-            continue
+    for k, m, _ in stated_laws(pb, laws):
         h = m.hanging
         mine = [key for key in keys if sigmas.get(key, 0) > 0 and h in _key_hanging(pb, key)]
         run, derived = _factor_routes(pb, h, mine)

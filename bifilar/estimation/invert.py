@@ -86,6 +86,7 @@ from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
 from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
+from .prior_inertia import prior_terms, prior_warning, with_prior
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
 from .roots import Root, find_roots
 from .roots import separating_measurement
@@ -146,6 +147,9 @@ class InversionResult:
     #: method: ``dr/dx`` and the full gain, :func:`~bifilar.estimation.budget._with_factor_gain`); the
     #: input's term without them, as the sweep and plan take it, is its contribution minus this
     input_factor_shift: dict = field(default_factory=dict, repr=False)
+    #: the components not solved for (:class:`~bifilar.estimation.prior_inertia.PriorInertia`): priors,
+    #: their stated uncertainty and the unknowns' sensitivity to them
+    prior_inertia: object = field(default=None, repr=False)
 
     @property
     def std(self) -> np.ndarray:
@@ -227,6 +231,7 @@ class InversionResult:
             "degenerate_inputs": self.degenerate_inputs,
             "monte_carlo": self.monte_carlo.to_json() if self.monte_carlo is not None else None,
             "std_unavailable": self.std_unavailable,
+            "prior_inertia": self.prior_inertia.to_json(self.std) if self.prior_inertia is not None else None,
             # which rig inputs the hangings share (one error for all of them) and under which model
             "rig": self.problem.links.to_json() if self.problem is not None else None,
             "warnings": list(self.warnings),
@@ -426,8 +431,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                                 "I1 + I2 = I3, a thin flat body)")
     # -- the budget -------------------------------------------------------
     laws = est_nl.laws if method == "nonlinear" else None
+    stated = "inertia" in {**ms.uncertainty, **(unc or {})}
     budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(pb, p_hat, r_hat, method, rungs, best,
-                                                                            unc_all, rtol, laws=laws)
+                                                                            unc_all, rtol, laws=laws,
+                                                                            prior_stated=stated)
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
         # the shift in % of |value| so that its sign is the shift's, as the std's is (a negative product
@@ -444,6 +451,12 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             warnings.append("the amplitude factor's derivative in " + ", ".join(law.dr_dx_failed) + " could not be "
                             "measured (the stepped scene's run failed): the budget takes the factor to depend on "
                             "them as on the unknowns")
+    if bctx.prior.dr_failed:
+        warnings.append("the amplitude factor's derivative in the prior " + ", ".join(bctx.prior.dr_failed) + " could "
+                        "not be measured (the stepped scene's run failed): left at 0 in prior_inertia")
+    w = prior_warning(bctx.prior, budget.std)  # a plausible error of the components not solved for, unstated
+    if w:
+        warnings.append(w)
     if bctx.nonlinear:
         warnings.append("the estimate is not linear in " + ", ".join(bctx.nonlinear) + " over their uncertainties "
                         "(curvature or a vanishing derivative): those inputs are propagated to second order "
@@ -501,6 +514,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           _assumed(unc_all), degenerate, warnings, notes, problem=pb,
                           sims=(est_nl.sims if est_nl is not None else []), amplitude_laws=list(laws or []))
     res.input_factor_shift = dict(bctx.factor_shift)
+    res.prior_inertia = bctx.prior
     if degenerate:
         # inputs with no derivative (a knife edge): within their stated
         # uncertainty the scene changes qualitatively, and a budget without
@@ -515,7 +529,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     # no inertia outside what a real body can have (the truth is one, so the cut keeps the coverage)
     I_hat = pb.models[0].inertia_ref(pb.values(p_hat))
     res.interval_unclipped = res.interval
-    res.interval, res.interval_clipped = clip_interval(res.interval, p_hat, pb.unknowns, I_hat)
+    loose = [c for c, sd in zip(bctx.prior.names, bctx.prior.sigmas) if sd > 0]  # priors with a stated error
+    res.interval, res.interval_clipped = clip_interval(res.interval, p_hat, pb.unknowns, I_hat, loose)
     for i, why in enumerate(res.interval_clipped):
         if why:
             lo, hi = res.interval_unclipped[i]
@@ -553,7 +568,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                                                 progress=progress)
         mc = res.monte_carlo
         if mc.n_ok > 1:  # its quantiles cut at the same limits (draws re-solved past them are no body either)
-            cut, _ = clip_interval(np.column_stack([mc.low, mc.high]), p_hat, pb.unknowns, I_hat)
+            cut, _ = clip_interval(np.column_stack([mc.low, mc.high]), p_hat, pb.unknowns, I_hat, loose)
             mc.low, mc.high = cut[:, 0], cut[:, 1]
         if res.budget.dof:
             # timed trials: their Student draws have heavy tails (no variance
@@ -715,7 +730,7 @@ def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndar
 
 
 def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float,
-                cache: dict | None = None, laws=None):
+                cache: dict | None = None, laws=None, prior_stated: bool | None = None):
     """The budget every answer (the chosen root and any further one) gets:
     the linear budget (:func:`~bifilar.estimation.budget._budget`), the
     systematic term of an unstated amplitude, and second-order propagation
@@ -723,8 +738,14 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
     Returns (budget, linear std, degenerate inputs, T_lin at ``p`` (s),
     budget context, {mode: (assumed max amplitude, its period factor)}).
     ``cache``: shared by budgets at the same scenes (``BudgetContext.cache``).
-    ``laws``: the amplitude laws of the nonlinear method (``Estimate.laws``)."""
+    ``laws``: the amplitude laws of the nonlinear method (``Estimate.laws``).
+    ``prior_stated``: not None, the components not solved for are budgeted
+    (``bctx.prior``, :mod:`~bifilar.estimation.prior_inertia`; whether the
+    user stated ``inertia``); None (a planner's std): left out."""
     budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws, rtol)
+    if prior_stated is not None:
+        bctx.prior = prior_terms(pb, p, r, T_lin, bctx, unc, prior_stated, laws, rtol)
+        budget = with_prior(budget, bctx.prior)
     std_lin = budget.std
     amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
     if any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):
@@ -765,7 +786,7 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
         p, r = est.p, est.r
     m = method if method in ("linear", "nonlinear") else "linear"
     budget = full_budget(pb, p, r, m, {m: {"p": p, "r": r}}, m, unc, rtol,
-                         laws=est.laws if method == "nonlinear" else None)[0]
+                         laws=est.laws if method == "nonlinear" else None, prior_stated=True)[0]
     T, z = _residuals(pb, p, r)
     ok, chi2, test = fit_statistics(z, len(pb.unknowns))
     return _root_entry(pb, p, r, budget, root.edge, {"chi2": chi2})

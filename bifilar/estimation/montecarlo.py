@@ -98,7 +98,10 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
     (:attr:`FactorDraw.offset`; gravity's is 0 exactly, it only scales
     time); other draws are plain linear-model problems.  Every input is perturbed,
     degenerate ones (no derivative) too: their finite-size effect is what the
-    linear budget cannot see.  A draw that cannot even be built
+    linear budget cannot see.  The components not solved for are drawn
+    about their priors where their uncertainty is stated (``--uncertainty
+    inertia=``, :mod:`~bifilar.estimation.prior_inertia`; the factor
+    following them through its ``dr/dI_c``).  A draw that cannot even be built
     is ``None``.  Reproducible for a given generator state."""
     pb = res.problem
     unc = pb.unc
@@ -124,6 +127,7 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                     e += c * drawn[key]
                 return e
 
+            dI, eI = _prior_errors(res, rng)
             for h, hm in enumerate(pb.models):
                 s = hm.hanging.scene
                 att = s.attachments - (hm.R @ dcom)[None, :]
@@ -135,7 +139,7 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                         an[i, a] += error(h, f"anchor.{i + 1}.{'xyz'[a]}", unc["position"])
                         att[i, a] += error(h, f"attachment.{i + 1}.{'xyz'[a]}", unc["position"])
                 s2 = replace(s, mass=s.mass * (1 + dm), gravity=s.gravity * (1 + dg), lengths=L, anchors=an,
-                             attachments=att)
+                             attachments=att, inertia=s.inertia + hm.R @ dI @ hm.R.T)
                 hangs.append(replace(hm.hanging, scene=s2))
             # each input's error under its budget key (input_columns's keys: a shared rig input's once), for the
             # factor's dr/dx
@@ -158,6 +162,8 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                         w = law.release_weight((A / law.amplitude) ** 2)
                         slope[k] = w * law.dr_dp / r
                         offset[k] = w * sum(v * dx.get(key, 0.0) for key, v in (law.dr_dx or {}).items()) / r
+                        if eI is not None:  # the factor's change with the drawn priors (prior_inertia's dr/dI_c)
+                            offset[k] += w * float(res.prior_inertia.dr[k] @ eI) / r
                 meas.append(replace(m, period=T / r))
             if np.any(slope):
                 measured = all(law is None or law.dr_dp is None or law.dr_dx is not None for law in res.amplitude_laws)
@@ -169,6 +175,32 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
         except BifilarError:
             draws.append(None)
     return draws
+
+
+def _prior_errors(res: InversionResult, rng: np.random.Generator):
+    """One draw of the errors of the components not solved for with a
+    stated uncertainty (``res.prior_inertia``, reference frame): (3, 3)
+    symmetric tensor error (kg m^2) and (Q,) the errors per component, or
+    (zeros, None) where none is stated (no random number drawn: the draws
+    of a run without it are as before)."""
+    pri = getattr(res, "prior_inertia", None)
+    dI = np.zeros((3, 3))
+    if pri is None or not np.any(pri.sigmas > 0):
+        return dI, None
+    e = np.array([rng.normal(0.0, sd) if sd > 0 else 0.0 for sd in pri.sigmas])
+    for q, c in enumerate(pri.names):
+        i, j = _IDX[c]
+        dI[i, j] += e[q]
+        if i != j:
+            dI[j, i] += e[q]
+    return dI, e
+
+
+def _batch(res: InversionResult) -> bool:
+    """:func:`batched_applies`, and no prior drawn (the batched solver holds
+    the components not solved for at the estimate's priors)."""
+    pri = getattr(res, "prior_inertia", None)
+    return batched_applies(res.problem) and (pri is None or not np.any(pri.sigmas > 0))
 
 
 def batched_applies(pb: Problem) -> bool:
@@ -486,7 +518,7 @@ def monte_carlo_journaled(res: InversionResult, n: int, journal, *, seed: int | 
             if stop_after is not None and ran >= stop_after:
                 break
             draws = draw_monte_carlo(res, size, np.random.default_rng(children[c]))
-            use_batch = batched_applies(res.problem)
+            use_batch = _batch(res)
             est = solve_draws_batched(res, draws, None) if use_batch else solve_draws_loop(res, draws, None)
             done[c] = est
             writer.add({"chunk": c, "samples": [[None if not np.isfinite(v) else float(v) for v in row] for row in est]})
@@ -528,7 +560,7 @@ def monte_carlo_check(res: InversionResult, n: int, rng: np.random.Generator, pr
                     rest_pose(h.scene, guess=hm.rest0, local_only=True)
             except BifilarError:
                 draws[q] = None
-    use_batch = batched_applies(res.problem) if batched is None else bool(batched)
+    use_batch = _batch(res) if batched is None else bool(batched)
     est = solve_draws_batched(res, draws, progress) if use_batch else solve_draws_loop(res, draws, progress)
     good = np.all(np.isfinite(est), axis=1)
     return summarise(list(res.problem.unknowns), est[good], res.std, n)

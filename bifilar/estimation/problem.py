@@ -320,7 +320,12 @@ class Problem:
 
     def linear_periods(self, p) -> np.ndarray:
         """(K,) linear periods of the measured modes at unknowns ``p``, s."""
-        vals = self.values(p)
+        return self.periods_at(self.values(p))
+
+    def periods_at(self, vals: dict) -> np.ndarray:
+        """(K,) linear periods of the measured modes at ``vals`` {component or
+        CoM unknown: value} (reference body frame, SI; a component not in it
+        keeps the prior), s."""
         out = np.empty(len(self.measurements))
         cache = {}
         for k, m in enumerate(self.measurements):

@@ -54,7 +54,7 @@ DEFAULT_UNCERTAINTY = {
 #: ``invert`` ended in exit 1 (an internal error) and ``sweep`` printed
 #: overflow warnings
 MAX_UNCERTAINTY = {"length": 1e5, "position": 1e5, "com": 1e5, "mass": 1.0, "gravity": 1.0, "amplitude": 1.0,
-                   "timing": 1e5, "trial_time": 1e5, "release": 1e5}
+                   "timing": 1e5, "trial_time": 1e5, "release": 1e5, "inertia": 1.0}
 
 
 def uncertainty_too_large(key: str, value: float) -> str | None:
@@ -63,7 +63,7 @@ def uncertainty_too_large(key: str, value: float) -> str | None:
     hi = MAX_UNCERTAINTY.get(key)
     if hi is None or value <= hi:
         return None
-    unit = {"mass": "relative", "gravity": "relative", "amplitude": "relative",
+    unit = {"mass": "relative", "gravity": "relative", "amplitude": "relative", "inertia": "relative",
             "timing": "s", "trial_time": "s"}.get(key, "m")
     what = "(100 % of the quantity)" if unit == "relative" else "(beyond it a budget says nothing)"
     return f"{key} must be at most {hi:g} {unit} {what}, got {value:g}"

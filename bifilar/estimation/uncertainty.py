@@ -81,11 +81,13 @@ UNCERTAINTY_KEYS = {
     "trial_time": "s (reaction-time floor of one hand-timed trial's total time)",
     "release": "m (invert with a recording: the largest second mode its release started unseen, a swing's travel; "
                "an angle mode's this over the longest wire, rad)",
+    "inertia": "relative (invert: each inertia component not solved for, the config's value its prior, known to "
+               "this fraction of itself; 0: taken as exact)",
 }
 
 #: budget groups, in display order
 GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "second_mode", "hidden_second_mode",
-          "integration", "model bias", "offset", "degenerate")
+          "prior_inertia", "integration", "model bias", "offset", "degenerate")
 
 
 def default_uncertainty(overrides: dict | None = None) -> dict:
@@ -93,6 +95,7 @@ def default_uncertainty(overrides: dict | None = None) -> dict:
     u = dict(DEFAULT_UNCERTAINTY)
     u.setdefault("amplitude", DEFAULT_AMPLITUDE_REL)
     u.setdefault("trial_time", DEFAULT_TRIAL_TIME_SIGMA)
+    u.setdefault("inertia", 0.0)  # the components not solved for: exact unless stated (invert warns; prior_inertia.py)
     u.update(overrides or {})
     return u
 
@@ -102,7 +105,8 @@ def group_of(name: str) -> str:
     (anchor and attachment coordinates), ``mass``, ``com``, ``gravity``,
     ``amplitude``, ``second_mode`` (the amplitude of a second mode a recording's release
     started, :mod:`~bifilar.estimation.signal_swing`), ``hidden_second_mode`` (the modes it may have started
-    unseen, up to the stated ``release`` bound), ``integration`` (a nonlinear run that is not a regular
+    unseen, up to the stated ``release`` bound), ``prior_inertia`` (an inertia component not solved for,
+    ``prior_inertia[Ixx]``: its prior's stated error), ``integration`` (a nonlinear run that is not a regular
     motion: its check run's difference) or ``model bias``; ``offset`` (the mean offset of a
     second-order or amplitude term) and ``degenerate`` (the targeted Monte
     Carlo) otherwise.  Inputs may carry a hanging prefix
@@ -111,7 +115,8 @@ def group_of(name: str) -> str:
     (``timing[<hanging>:torsion]``)."""
     name = name.removesuffix(" (2nd order)")
     head = name.split("[", 1)[0]
-    if head in ("timing", "amplitude", "second_mode", "hidden_second_mode", "integration", "model bias"):
+    if head in ("timing", "amplitude", "second_mode", "hidden_second_mode", "prior_inertia", "integration",
+                "model bias"):
         return head
     head = name.split(":", 1)[-1].split(".")[0]
     return {"length": "lengths", "anchor": "spacings", "attachment": "spacings"}.get(head, head)

@@ -1,0 +1,228 @@
+"""The inertia components not solved for: their priors' effect on the answer.
+
+``invert`` solves for some components of the inertia tensor (reference body
+frame, kg m^2); the others keep the config's values, the *prior* (usually a
+CAD estimate or a guess).  Where the rig couples them into a measured mode
+(a tilted rig, an off-centre CoM, a trifilar with tilted anchors) the
+answer depends on them: the estimate ``p`` solves ``T(p, I_c) = T_meas``,
+so to first order
+
+    dp / dI_c = -G_full dT/dI_c,    dT_k/dI_c = r_k dT_lin,k/dI_c + T_lin,k dr_k/dI_c,
+
+with ``G_full`` the gain of the periods' full derivative in the unknowns
+(:attr:`~bifilar.estimation.budget.BudgetContext.gain`, the same that moves
+the estimate for a timing or input error) and ``r`` the amplitude factor
+(1 for the linear method).  ``dT_lin/dI_c`` by central differences of the
+linear periods (the unknowns' own step, 1e-6 of the largest moment, the
+measured modes tracked by MAC: :meth:`~bifilar.estimation.problem.Problem.periods_at`);
+``dr/dI_c`` (nonlinear method with a stated amplitude) by one forward-
+difference run per component with a non-zero uncertainty, as the inputs'
+``dr/dx`` (:func:`~bifilar.estimation.factor_inputs.stepped_factor_runs`).
+
+The priors' uncertainty is stated with ``--uncertainty inertia=REL``: each
+component not solved for has the standard uncertainty ``REL |I_c|`` (a
+product of inertia the config gives as 0, a symmetry, stays exact), and
+enters the budget as ``prior_inertia[I_c]`` (group ``prior_inertia``).  The
+default is 0 (the answer as before: the config's values are taken as exact),
+and where a plausible prior error, :data:`PLAUSIBLE_PRIOR_ERROR` of each
+component, would move a solved component by more than
+:data:`WARN_SHIFT` of its std, ``invert`` warns (:func:`prior_warning`),
+naming ``--uncertainty inertia=`` and ``--solve-for``.  Why not a default
+of 10 %: the prior's error is what the user knows of the body, not a
+measurement the tool can bound, and a default would change every coupled
+answer and the std ``sweep`` and ``plan`` predict (docs/design.md,
+"priorunc, session 14").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import BifilarError
+from .problem import _IDX, Problem
+from .sensitivity import INERTIA_COMPONENTS
+
+#: a plausible relative error of a prior a user did not state (a CAD model's mass distribution, a guess)
+PLAUSIBLE_PRIOR_ERROR = 0.10
+#: warn where that error would move a solved component by more than this fraction of its std
+WARN_SHIFT = 1.0 / 3.0
+#: central-difference step of dT_lin / dI_c, relative to the largest principal moment (Problem.jacobian's)
+PRIOR_STEP = 1e-6
+
+
+@dataclass
+class PriorInertia:
+    """The components not solved for at an estimate (reference body frame).
+
+    names : the components (``Ixx`` ...), values : their priors (kg m^2),
+    sigmas : their standard uncertainties (kg m^2, ``rel |value|``),
+    rel : the stated relative uncertainty, stated : whether the user stated
+    it, unknowns : the solved names, sensitivity : (P, Q) ``dp_i / dI_c``
+    (kg m^2 per kg m^2, or m per kg m^2 for a CoM unknown; NaN where the
+    periods could not be evaluated on either side), dr : (K, Q) ``dr_k /
+    dI_c`` per kg m^2 (0 where not measured), dr_failed : components whose
+    stepped run failed (their ``dr`` left at 0)."""
+
+    names: list
+    values: np.ndarray
+    sigmas: np.ndarray
+    rel: float
+    stated: bool
+    unknowns: list
+    sensitivity: np.ndarray
+    dr: np.ndarray
+    dr_failed: list = field(default_factory=list)
+
+    def contributions(self) -> dict:
+        """{``prior_inertia[c]``: (P,) signed standard contribution} of the
+        components with a non-zero uncertainty and a derivative."""
+        return {f"prior_inertia[{c}]": self.sensitivity[:, q] * self.sigmas[q] for q, c in enumerate(self.names)
+                if self.sigmas[q] > 0 and np.all(np.isfinite(self.sensitivity[:, q]))}
+
+    def shift(self, rel: float) -> np.ndarray:
+        """(P,) the std each unknown would gain from independent errors of
+        ``rel`` times each prior (SI)."""
+        S = np.nan_to_num(self.sensitivity) * (rel * np.abs(self.values))[None, :]
+        return np.sqrt(np.sum(S ** 2, axis=1)) if S.size else np.zeros(len(self.unknowns))
+
+    def to_json(self, std) -> dict:
+        """The JSON's ``prior_inertia``: per component its prior, std and
+        sensitivity of every unknown; per unknown the std a
+        :data:`PLAUSIBLE_PRIOR_ERROR` error of every prior would add and
+        its ratio to the answer's std."""
+        comps = {}
+        for q, c in enumerate(self.names):
+            comps[c] = {"prior": float(self.values[q]), "std": float(self.sigmas[q]), "unit": "kg m^2",
+                        "sensitivity": {n: (float(self.sensitivity[i, q]) if np.isfinite(self.sensitivity[i, q])
+                                            else None) for i, n in enumerate(self.unknowns)}}
+        sh = self.shift(PLAUSIBLE_PRIOR_ERROR)
+        return {"relative_std": float(self.rel), "stated": bool(self.stated), "components": comps,
+                "plausible_error": PLAUSIBLE_PRIOR_ERROR,
+                "plausible_shift": {n: {"std": float(sh[i]),
+                                        "in_std": (float(sh[i] / std[i]) if np.isfinite(std[i]) and std[i] > 0
+                                                   else None)}
+                                    for i, n in enumerate(self.unknowns)}}
+
+
+def _dT_lin(pb: Problem, vals: dict, c: str, v0: float, h: float) -> np.ndarray:
+    """(K,) d T_lin / d I_c at ``vals`` with ``I_c`` at ``v0``: central
+    differences, one-sided where a side cannot be evaluated, NaN where
+    neither can."""
+    side = {}
+    for s in (1, -1):
+        try:
+            side[s] = pb.periods_at({**vals, c: v0 + s * h})
+        except (BifilarError, np.linalg.LinAlgError):
+            side[s] = None
+    if side[1] is not None and side[-1] is not None:
+        return (side[1] - side[-1]) / (2 * h)
+    T0 = pb.periods_at(vals)
+    for s in (1, -1):
+        if side[s] is not None:
+            return s * (side[s] - T0) / h
+    return np.full(len(pb.measurements), np.nan)
+
+
+def _factor_derivatives(pb: Problem, vals: dict, names: list, values, sigmas, laws, ctx, rtol: float):
+    """((K, Q) ``dr_k / dI_c`` per kg m^2 for each measurement with a stated
+    amplitude's law and each component with a non-zero uncertainty, the
+    components whose stepped run failed): one forward-difference run per
+    component (:data:`~bifilar.estimation.solve.FACTOR_STEP` of the largest
+    moment), all in one batch with each measurement's own run."""
+    from .factor_inputs import SteppedFactors, stated_laws, stepped_factor_runs
+    from .solve import FACTOR_STEP
+
+    K, Q = len(pb.measurements), len(names)
+    dr = np.zeros((K, Q))
+    d = FACTOR_STEP * float(np.max(np.linalg.eigvalsh(pb.I_ref0)))
+    plans = {}
+    for k, m, _ in stated_laws(pb, laws):
+        h = m.hanging
+        steps = [(c, d, pb.models[h].scene({**vals, c: values[q] + d})) for q, c in enumerate(names) if sigmas[q] > 0]
+        if not steps:
+            continue
+        j = int(ctx.match[h][pb.mode_index[k]])
+        plans[k] = (j, SteppedFactors(ctx.scenes[h], ctx.rests[h], ctx.modes[h], [j], m.amplitude, m.cycles, steps))
+    if not plans:
+        return dr, []
+    stepped_factor_runs([g for _, g in plans.values()], rtol)
+    failed = []
+    for k, (j, g) in plans.items():
+        for q, c in enumerate(names):
+            if c in g.dr_dx.get(j, {}):
+                dr[k, q] = g.dr_dx[j][c]
+            elif sigmas[q] > 0:
+                failed.append(c)
+    return dr, list(dict.fromkeys(failed))
+
+
+def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, laws=None,
+                rtol: float = 1e-10) -> PriorInertia:
+    """The components of the tensor not solved for at the estimate ``p_hat``
+    (module docstring): their priors (``pb.I_ref0``: ``pb`` built about the
+    estimate, :func:`~bifilar.estimation.problem.problem_at`), standard
+    uncertainties ``unc["inertia"] |I_c|``, the unknowns' sensitivity to
+    each and (nonlinear, a non-zero uncertainty) the amplitude factor's
+    derivative in them.  ``r_hat`` (K,) the amplitude factors, ``T_lin``
+    (K,) the linear periods at ``p_hat`` (s), ``ctx`` the budget's
+    :class:`~bifilar.estimation.budget.BudgetContext` (its ``gain``,
+    scenes, rest poses, modes), ``stated``: whether the user stated
+    ``inertia``."""
+    names = [c for c in INERTIA_COMPONENTS if c not in pb.unknowns]
+    K, P, Q = len(pb.measurements), len(pb.unknowns), len(names)
+    rel = float(unc.get("inertia", 0.0) or 0.0)
+    values = np.array([pb.I_ref0[_IDX[c]] for c in names], float)
+    sigmas = rel * np.abs(values)
+    vals = pb.values(p_hat)
+    h = PRIOR_STEP * float(np.max(np.linalg.eigvalsh(pb.I_ref0)))
+    J = np.column_stack([_dT_lin(pb, vals, c, values[q], h) for q, c in enumerate(names)]) if Q else np.zeros((K, 0))
+    J = J * np.asarray(r_hat, float)[:, None]
+    dr, failed = np.zeros((K, Q)), []
+    if np.any(sigmas > 0) and laws is not None and any(law is not None for law in laws):
+        dr, failed = _factor_derivatives(pb, vals, names, values, sigmas, laws, ctx, rtol)
+        J = J + np.asarray(T_lin, float)[:, None] * dr
+    G = ctx.gain if ctx.gain is not None else ctx.G
+    S = -(np.asarray(G, float) @ J) if Q else np.zeros((P, 0))
+    return PriorInertia(names, values, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed)
+
+
+def with_prior(budget, pri: PriorInertia):
+    """``budget`` (:class:`~bifilar.estimation.uncertainty.LinearBudget`)
+    with the priors' terms added (itself where there are none)."""
+    from .uncertainty import LinearBudget
+
+    extra = pri.contributions()
+    if not extra:
+        return budget
+    contrib = {**budget.contributions, **extra}
+    cov = np.zeros_like(budget.covariance)
+    for c in contrib.values():
+        cov += np.outer(c, c)
+    sig = {**budget.sigmas, **{f"prior_inertia[{c}]": float(pri.sigmas[q]) for q, c in enumerate(pri.names)
+                               if f"prior_inertia[{c}]" in extra}}
+    return LinearBudget(list(budget.names), cov, contrib, sig, dict(budget.dof))
+
+
+def prior_warning(pri: PriorInertia, std) -> str | None:
+    """One line where the user did not state the priors' uncertainty and a
+    :data:`PLAUSIBLE_PRIOR_ERROR` error of each would move a solved
+    component by more than :data:`WARN_SHIFT` of its std (``std`` (P,),
+    SI), else None."""
+    if pri.stated or not pri.names:
+        return None
+    sh = pri.shift(PLAUSIBLE_PRIOR_ERROR)
+    std = np.asarray(std, float)
+    hit = [i for i in range(len(pri.unknowns)) if np.isfinite(std[i]) and std[i] > 0 and sh[i] > WARN_SHIFT * std[i]]
+    if not hit:
+        return None
+    i0 = max(hit, key=lambda i: sh[i] / std[i])
+    contrib = np.abs(np.nan_to_num(pri.sensitivity[i0]) * PLAUSIBLE_PRIOR_ERROR * np.abs(pri.values))
+    movers = [pri.names[q] for q in np.argsort(-contrib) if contrib[q] > 0.1 * sh[i0]]
+    moved = ", ".join(f"{pri.unknowns[i]} by {sh[i] / std[i]:.2g} of its std" for i in hit)
+    return (f"the config's {', '.join(movers)} (not solved for) {'is' if len(movers) == 1 else 'are'} taken as "
+            "exact, but the measured period(s) "
+            f"depend on them: a {100 * PLAUSIBLE_PRIOR_ERROR:g} % error in them would move {moved}; state how well "
+            "they are known with --uncertainty inertia=REL (relative; budgeted as prior_inertia) or solve for them "
+            "(--solve-for)")
