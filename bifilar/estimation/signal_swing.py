@@ -496,8 +496,8 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
         elif sec is not None:
             m.secondary = sec
             at = f"at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}" if sec.decay == 1.0 else (
-                f"at {sec.amplitude_start:.3g} at the record's start, decaying with it to {sec.amplitude:.3g} +- "
-                f"{sec.amplitude_std:.2g} where its period refers to (the decay's rate taken as the {m.label}'s)")
+                f"at {sec.amplitude_start:.3g} at the record's start and {sec.amplitude:.3g} +- {sec.amplitude_std:.2g} "
+                f"over it, the amplitude its period refers to (decaying as the {m.label} does)")
             notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, {at}; the nonlinear model is released "
