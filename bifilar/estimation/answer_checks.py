@@ -110,12 +110,14 @@ def refuse_amplitude_the_record_contradicts(pb: Problem, est) -> None:
             T_lin = pb.linear_periods(est.p)
         pred = float(T_lin[k] * (law.factor(A1) - law.factor(A2)))
         seen, s = float(T1 - T2), math.hypot(s1, s2)
-        # a second mode the release started (m.secondary) shifts the period too, and the model keeps it at its
-        # start amplitude while the record's decays with it: its part of the halves' difference is anything up
-        # to its whole shift (a damped swing's decay cancelled the torsion's own chirp: 5.96e-4 s predicted,
-        # 1.6e-5 s seen, an honest record refused as a unit slip; docs/design.md, session 13)
+        # a second mode the release started (m.secondary) shifts the period too, and the record's decays with
+        # it: its part of the halves' difference is anything up to its whole shift at its start amplitude (the
+        # model's shift is at the amplitude the period refers to, ``decay`` times it; the shift ~ a^2) (a damped
+        # swing's decay cancelled the torsion's own chirp: 5.96e-4 s predicted, 1.6e-5 s seen, an honest
+        # record refused as a unit slip; docs/design.md, session 13)
         sec = getattr(m, "secondary", None)
-        free = abs(sec.shift) if sec is not None and sec.shift is not None and math.isfinite(sec.shift) else 0.0
+        free = abs(sec.shift) / sec.decay ** 2 if sec is not None and sec.shift is not None and \
+            math.isfinite(sec.shift) else 0.0
         if (abs(pred - seen) - free > AMPLITUDE_CONTRADICTION_Z * s
                 and abs(pred) > AMPLITUDE_CONTRADICTION_RATIO * (abs(seen) + free + s)):
             raise InputError(m.field, f"the amplitude of '{m.label}' ({abs(m.amplitude):.4g} in the model's unit, "

@@ -457,9 +457,21 @@ def period_amplitude(t: np.ndarray, env: np.ndarray) -> float:
     sw = float(np.sum(w))
     if not sw > 0:
         return 0.0
-    tw = float(np.sum(w * t) / sw)
-    dt = np.diff(t, prepend=t[0] - float(np.median(np.diff(t))))
-    K = dt * np.cumsum((w * (t - tw))[::-1])[::-1]
-    K = np.maximum(K, 0.0)  # non-negative in exact arithmetic; rounding at the ends
+    K = period_kernel(t, w)
     sk = float(np.sum(K))
     return float(np.sqrt(np.sum(K * w) / sk)) if sk > 0 else float(np.sqrt(sw / env.size))
+
+
+def period_kernel(t: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The weights ``K(t_i)`` (s [y]^2, non-negative) with which a
+    least-squares fit's frequency averages the instantaneous frequency of a
+    record sampled at ``t`` (s, at least 2 samples) whose squared envelope
+    is ``w`` ([y]^2, positive sum): ``K(t_i) = dt_i sum_{j >= i} w_j (t_j -
+    t_w)``, ``t_w`` the ``w``-weighted mean time (:func:`period_amplitude`).
+    Any other quantity the frequency follows (a second mode's squared
+    amplitude, :func:`~bifilar.estimation.signal_swing.swing_decay`) is
+    averaged by the same kernel."""
+    tw = float(np.sum(w * t) / float(np.sum(w)))
+    dt = np.diff(t, prepend=t[0] - float(np.median(np.diff(t))))
+    K = dt * np.cumsum((w * (t - tw))[::-1])[::-1]
+    return np.maximum(K, 0.0)  # non-negative in exact arithmetic; rounding at the ends

@@ -74,6 +74,15 @@ CALIBRATION_SHARE = 0.1
 #: :data:`TONE_Z` of its std) is the model's own, no sign of a second mode: the damped trifilar's swings at
 #: 0.48 Hz, 0.16 % of its torsion (tests/test_chirp_coupled_swing.py), were taken for a 0.35 mm swing-x
 EXPLAINED_SHARE = 0.3
+#: the relative std of a found second mode's decay rate, taken as the timed mode's (the record's envelope): a
+#: stated share, not a measurement.  The record cannot tell it: the quadcopter's tones decay as the swing and
+#: the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
+#: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
+#: (docs/design.md, "dampdecay, session 14")
+DECAY_SHARE = 0.5
+#: a record's envelope decays measurably (and a found second mode is taken to decay with it) where its damping
+#: ratio exceeds this many of its std (the amplitude law's criterion, :mod:`.signal_law`)
+DECAY_Z = 3.0
 #: integrator tolerance of the tone runs (at most)
 TONE_RTOL = 1e-8
 #: an inferred second mode beyond this (rad, or times the longest wire in m) is refused: the
@@ -95,9 +104,15 @@ class Secondary:
     #: s: the model period's shift from the second mode at the estimate and its std (set by the law)
     shift: float | None = None
     shift_std: float | None = None
+    #: rad or m: the amplitude at the record's start that the tone gives (``amplitude`` is the one the record's
+    #: period refers to, ``decay`` times it, :func:`swing_decay`); None: the same as ``amplitude``
+    amplitude_start: float | None = None
+    decay: float = 1.0  #: ``amplitude`` over ``amplitude_start`` (1: the record does not decay measurably)
 
     def to_json(self) -> dict:
+        start = self.amplitude if self.amplitude_start is None else self.amplitude_start
         return {"mode": self.label, "amplitude": self.amplitude, "amplitude_std": self.amplitude_std,
+                "amplitude_start": start, "decay": self.decay,
                 "tone_period": self.tone_period, "tone_ratio": self.tone_ratio, "tone_exponent": self.exponent,
                 "period_shift": self.shift, "period_shift_std": self.shift_std}
 
@@ -312,7 +327,64 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
             f"{best.label} mode at about {best.amplitude:.3g} (beyond {limit:.3g}): a second motion that large "
             f"shifts the {lab}'s period by more than the model of its release can answer for; release more "
             "cleanly (let go without a push or a swing) and record again"))
+    best.amplitude_start = best.amplitude
+    g, g_rel = swing_decay(m)
+    if g != 1.0:  # the amplitude the record's period refers to (the model runs undamped at it)
+        rel = math.hypot(best.amplitude_std / abs(best.amplitude), g_rel)
+        best.amplitude, best.decay = best.amplitude * g, g
+        best.amplitude_std = rel * abs(best.amplitude)
     return best
+
+
+def swing_decay(m) -> tuple[float, float]:
+    """(g, s): a second mode's amplitude that measurement ``m``'s fitted
+    period refers to over its amplitude at the fit window's start
+    (unit-free, <= 1 for a decaying record), and the relative std of that
+    amplitude from ``g``'s uncertainty.  (1, 0) where the record does not
+    decay measurably (damping ratio within :data:`DECAY_Z` of its std) or
+    holds no fit with an envelope.
+
+    The second mode is taken to decay as the timed mode does (its envelope
+    ``u = env / env(t0)`` to the power ``lam``, ``lam`` = 1 with the
+    relative std :data:`DECAY_SHARE` and the record's damping ratio's),
+    and its period shift to go as its amplitude squared, averaged over the
+    window as the fitted frequency averages the instantaneous one
+    (:func:`~bifilar.estimation.signal_result.period_kernel`, weights from
+    the timed mode's envelope): ``g = sqrt(sum K u^(2 lam) / sum K)``, at
+    ``lam`` = 1 the timed mode's own ``decay``; ``d ln g / d lam = sum K
+    u^2 ln u / sum K u^2``.
+
+    Why: the model runs undamped; released with the swing at its start
+    amplitude it put the swing's whole start shift in a record whose swing
+    decays with it (the quadcopter, torsion 0.118 rad and swing-y 3 cm at
+    Q 200 / 100 over 30 cycles: Izz z +0.6..+1.3 / +1.2..+2.2).  Measured
+    on those records (the fitted period with the swing less without it,
+    against the undamped model's shift ~ a^2): the amplitude it refers to
+    is 0.812-0.816 / 0.692-0.697 of the start, this rule 0.811 / 0.690,
+    the plain RMS of the envelope 0.805 / 0.671 (docs/design.md,
+    "dampdecay, session 14")."""
+    from .signal_result import period_kernel
+
+    fit = getattr(m, "fit", None)
+    t = getattr(fit, "t_used", None)
+    if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
+        return 1.0, 0.0
+    zeta = float(fit.damping_ratio)
+    z_std = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
+    if not (math.isfinite(zeta) and math.isfinite(z_std) and zeta > DECAY_Z * z_std):
+        return 1.0, 0.0
+    t = np.asarray(t, float)
+    env = np.abs(np.asarray(fit.envelope(t), float))
+    if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
+        return 1.0, 0.0
+    u2 = (env / env[0]) ** 2
+    K = period_kernel(t, u2)
+    sk, sku = float(np.sum(K)), float(np.sum(K * u2))
+    if not (sk > 0 and sku > 0):
+        return 1.0, 0.0
+    g = math.sqrt(sku / sk)
+    dlng = float(np.sum(K * u2 * 0.5 * np.log(u2))) / sku
+    return g, abs(dlng) * math.hypot(DECAY_SHARE, z_std / zeta)
 
 
 #: m: the default bound on a second mode a release starts unseen (``--uncertainty release``): the travel of the
@@ -423,9 +495,12 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
             warnings.append(sec)
         elif sec is not None:
             m.secondary = sec
+            at = f"at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}" if sec.decay == 1.0 else (
+                f"at {sec.amplitude_start:.3g} at the record's start and {sec.amplitude:.3g} +- {sec.amplitude_std:.2g} "
+                f"over it, the amplitude its period refers to (decaying as the {m.label} does)")
             notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
-                         f"mode, at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}; the nonlinear model is released "
+                         f"mode, {at}; the nonlinear model is released "
                          "with both, and the budget carries that amplitude's uncertainty (second_mode)")
         m.hidden = hidden_modes(pb, k, p, None if m.secondary is None else m.secondary.index)
         if m.hidden:
