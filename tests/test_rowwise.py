@@ -71,3 +71,26 @@ def test_lowest_point_and_energy_are_the_replaced_expressions(name, scene):
         old = (0.5 * obs.mass * np.sum(v * v, -1) + 0.5 * np.sum(w * np.einsum("bij,kbj->kbi", inertia, w), -1)
                + obs.mass * obs.grav * Yb[:, :, 2])
         assert np.array_equal(bh._sample_energy(obs, Yb, comps), old)
+
+
+def test_refine_at_local_extrema_is_the_whole_refinement():
+    """A long record's tension extremes refined from the parabolas of its
+    local extrema only: the values of the parabolas through every sample
+    (NaN-masked samples and flat stretches among them; the refined minimum's
+    time where there is one)."""
+    rng = np.random.default_rng(2)
+    for trial in range(40):
+        K, n, B = int(rng.integers(bh.REFINE_SUBSET, 2000)), int(rng.integers(1, 4)), int(rng.integers(1, 3))
+        t = np.cumsum(rng.random((K, B)) + 0.01, axis=0)
+        T = np.sin(t[None] * rng.random((n, 1, B)) * 3) + 0.01 * rng.normal(size=(n, K, B))
+        if trial % 3 == 0:
+            T[:, rng.integers(0, K, 20), :] = np.nan
+        if trial % 5 == 0:
+            T[:, 100:110] = 1.0
+        fast = bh.refine_extremes(t, T)
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(bh, "REFINE_SUBSET", 10**9)  # every sample's parabola, as before
+            every = bh.refine_extremes(t, T)
+        assert np.array_equal(fast[0], every[0]) and np.array_equal(fast[2], every[2])
+        found = np.isfinite(fast[0])
+        assert np.array_equal(fast[1][found], every[1][found])
