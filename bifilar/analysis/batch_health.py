@@ -143,16 +143,7 @@ def refine_extremes(t: np.ndarray, T: np.ndarray):
     f0, f1, f2 = T[:, :-2], T[:, 1:-1], T[:, 2:]
     if T.shape[1] >= REFINE_SUBSET:
         return _refine_at_extrema(t0, t1, t2, f0, f1, f2)
-    with np.errstate(all="ignore"):
-        d0 = (f1 - f0) / (t1 - t0)
-        d1 = (f2 - f1) / (t2 - t1)
-        a = (d1 - d0) / (t2 - t0)
-        b = d0 + a * (t1 - t0)
-        tv = t1 - b / (2 * a)
-        fv = f1 - b * b / (4 * a)
-    inside = (tv >= t0) & (tv <= t2) & np.isfinite(fv)
-    lo = (f1 <= f0) & (f1 <= f2) & inside & (fv <= f1)
-    hi = (f1 >= f0) & (f1 >= f2) & inside & (fv >= f1)
+    tv, fv, lo, hi = _vertices(t0, t1, t2, f0, f1, f2)
     vmin = np.where(lo, fv, np.inf)
     k = np.argmin(vmin, axis=1)  # (n, B)
     Tmin = np.take_along_axis(vmin, k[:, None, :], 1)[:, 0]
@@ -168,6 +159,25 @@ the samples that are a local extremum (a few a period: the same values,
 three steps, take every sample, which costs fewer numpy calls)."""
 
 
+def _vertices(t0, t1, t2, f0, f1, f2):
+    """(tv, fv, lo, hi): the vertex (time, value) of the parabola through
+    (t0, f0), (t1, f1), (t2, f2), element by element, and whether it refines
+    a local minimum (``lo``) or maximum (``hi``) at the middle sample: the
+    middle one is the extreme of the three and the vertex lies between the
+    outer two, beyond the middle value."""
+    with np.errstate(all="ignore"):
+        d0 = (f1 - f0) / (t1 - t0)
+        d1 = (f2 - f1) / (t2 - t1)
+        a = (d1 - d0) / (t2 - t0)
+        b = d0 + a * (t1 - t0)
+        tv = t1 - b / (2 * a)
+        fv = f1 - b * b / (4 * a)
+    inside = (tv >= t0) & (tv <= t2) & np.isfinite(fv)
+    lo = (f1 <= f0) & (f1 <= f2) & inside & (fv <= f1)
+    hi = (f1 >= f0) & (f1 >= f2) & inside & (fv >= f1)
+    return tv, fv, lo, hi
+
+
 def _refine_at_extrema(t0, t1, t2, f0, f1, f2):
     """:func:`refine_extremes`' result from the parabolas of the local extrema
     only (each vertex by the same expressions, element by element; ``tmin``
@@ -175,18 +185,7 @@ def _refine_at_extrema(t0, t1, t2, f0, f1, f2):
     caller reads it there)."""
     ext = ((f1 <= f0) & (f1 <= f2)) | ((f1 >= f0) & (f1 >= f2))
     i, k, b = np.nonzero(ext)
-    T0, T1, T2 = t0[k, b], t1[k, b], t2[k, b]
-    F0, F1, F2 = f0[i, k, b], f1[i, k, b], f2[i, k, b]
-    with np.errstate(all="ignore"):
-        d0 = (F1 - F0) / (T1 - T0)
-        d1 = (F2 - F1) / (T2 - T1)
-        a = (d1 - d0) / (T2 - T0)
-        bb = d0 + a * (T1 - T0)
-        tv = T1 - bb / (2 * a)
-        fv = F1 - bb * bb / (4 * a)
-    inside = (tv >= T0) & (tv <= T2) & np.isfinite(fv)
-    lo = (F1 <= F0) & (F1 <= F2) & inside & (fv <= F1)
-    hi = (F1 >= F0) & (F1 >= F2) & inside & (fv >= F1)
+    tv, fv, lo, hi = _vertices(t0[k, b], t1[k, b], t2[k, b], f0[i, k, b], f1[i, k, b], f2[i, k, b])
     vmin = np.full(f1.shape, np.inf)
     vmin[i[lo], k[lo], b[lo]] = fv[lo]
     tvs = np.full(f1.shape, np.nan)
