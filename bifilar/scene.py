@@ -13,6 +13,8 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
+from .rowwise import row_max
+
 
 @dataclass(frozen=True)
 class Scene:
@@ -82,7 +84,7 @@ class Scene:
         no shape is known.
         """
         d = np.atleast_2d(np.asarray(directions, dtype=float))
-        h_att = np.maximum(np.max(d @ self.attachments.T, axis=-1), 0.0)
+        h_att = np.maximum(row_max(d @ self.attachments.T), 0.0)
         if self.support is None:
             return h_att
         return np.maximum(np.asarray(self.support(d), dtype=float), h_att)

@@ -14,6 +14,7 @@ from typing import Sequence
 import numpy as np
 
 from .. import integrators as itg
+from ..rowwise import row_max, row_sum
 from ..scene import Scene
 
 
@@ -71,14 +72,17 @@ class LowestPoint:
             idx = np.concatenate([p[0] for p in buf])
             z = np.concatenate([p[1] for p in buf])
             q = np.concatenate([p[2] for p in buf])
-        q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+        # q / |q| by columns: the values of q / np.linalg.norm(q, axis=-1, keepdims=True), without numpy's
+        # reduction over a 4-long axis row by row (bifilar/rowwise.py)
         qw, qx, qy, qz = q.T
+        nrm = np.sqrt(row_sum([qw * qw, qx * qx, qy * qy, qz * qz]))
+        qw, qx, qy, qz = qw / nrm, qx / nrm, qy / nrm, qz / nrm
         # world -z in body axes: minus the third row of R (body -> world)
         down = -np.stack([2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)], -1)
         one = len(self.scenes) == 1  # one scene: its attachments broadcast, every row in its group (no gathers)
         att = np.broadcast_to(self.att[0], (len(idx),) + self.att.shape[1:]) if one else self.att[idx]
         # attachment points and the CoM (origin; in the hull of the mass: Scene.body_support)
-        h = np.maximum(np.max(np.einsum("rnk,rk->rn", att, down), axis=1), 0.0)
+        h = np.maximum(row_max(np.einsum("rnk,rk->rn", att, down)), 0.0)
         for f, bs in self.groups:
             if one:
                 h = np.maximum(h, np.asarray(f(down), float))
@@ -137,6 +141,30 @@ def refine_extremes(t: np.ndarray, T: np.ndarray):
         return np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, -np.inf)
     t0, t1, t2 = t[:-2], t[1:-1], t[2:]
     f0, f1, f2 = T[:, :-2], T[:, 1:-1], T[:, 2:]
+    if T.shape[1] >= REFINE_SUBSET:
+        return _refine_at_extrema(t0, t1, t2, f0, f1, f2)
+    tv, fv, lo, hi = _vertices(t0, t1, t2, f0, f1, f2)
+    vmin = np.where(lo, fv, np.inf)
+    k = np.argmin(vmin, axis=1)  # (n, B)
+    Tmin = np.take_along_axis(vmin, k[:, None, :], 1)[:, 0]
+    tmin = np.take_along_axis(np.broadcast_to(tv, vmin.shape), k[:, None, :], 1)[:, 0]
+    Tmax = np.max(np.where(hi, fv, -np.inf), axis=1)
+    return Tmin, tmin, Tmax
+
+
+REFINE_SUBSET = 256
+"""From this many samples :func:`refine_extremes` fits its parabolas only at
+the samples that are a local extremum (a few a period: the same values,
+~1/3 of the cost on a long record; shorter ones, e.g. the DOP853 engine's
+three steps, take every sample, which costs fewer numpy calls)."""
+
+
+def _vertices(t0, t1, t2, f0, f1, f2):
+    """(tv, fv, lo, hi): the vertex (time, value) of the parabola through
+    (t0, f0), (t1, f1), (t2, f2), element by element, and whether it refines
+    a local minimum (``lo``) or maximum (``hi``) at the middle sample: the
+    middle one is the extreme of the three and the vertex lies between the
+    outer two, beyond the middle value."""
     with np.errstate(all="ignore"):
         d0 = (f1 - f0) / (t1 - t0)
         d1 = (f2 - f1) / (t2 - t1)
@@ -147,12 +175,27 @@ def refine_extremes(t: np.ndarray, T: np.ndarray):
     inside = (tv >= t0) & (tv <= t2) & np.isfinite(fv)
     lo = (f1 <= f0) & (f1 <= f2) & inside & (fv <= f1)
     hi = (f1 >= f0) & (f1 >= f2) & inside & (fv >= f1)
-    vmin = np.where(lo, fv, np.inf)
-    k = np.argmin(vmin, axis=1)  # (n, B)
-    Tmin = np.take_along_axis(vmin, k[:, None, :], 1)[:, 0]
-    tmin = np.take_along_axis(np.broadcast_to(tv, vmin.shape), k[:, None, :], 1)[:, 0]
-    Tmax = np.max(np.where(hi, fv, -np.inf), axis=1)
-    return Tmin, tmin, Tmax
+    return tv, fv, lo, hi
+
+
+def _refine_at_extrema(t0, t1, t2, f0, f1, f2):
+    """:func:`refine_extremes`' result from the parabolas of the local extrema
+    only (each vertex by the same expressions, element by element; ``tmin``
+    is NaN, not a vertex time, where a wire has no refined minimum: no
+    caller reads it there)."""
+    ext = ((f1 <= f0) & (f1 <= f2)) | ((f1 >= f0) & (f1 >= f2))
+    i, k, b = np.nonzero(ext)
+    tv, fv, lo, hi = _vertices(t0[k, b], t1[k, b], t2[k, b], f0[i, k, b], f1[i, k, b], f2[i, k, b])
+    vmin = np.full(f1.shape, np.inf)
+    vmin[i[lo], k[lo], b[lo]] = fv[lo]
+    tvs = np.full(f1.shape, np.nan)
+    tvs[i[lo], k[lo], b[lo]] = tv[lo]
+    vmax = np.full(f1.shape, -np.inf)
+    vmax[i[hi], k[hi], b[hi]] = fv[hi]
+    kk = np.argmin(vmin, axis=1)  # (n, B)
+    Tmin = np.take_along_axis(vmin, kk[:, None, :], 1)[:, 0]
+    tmin = np.take_along_axis(tvs, kk[:, None, :], 1)[:, 0]
+    return Tmin, tmin, np.max(vmax, axis=1)
 
 
 def merge_refined(obs, idx, Tmin, tmin, Tmax, T_scale=1.0) -> None:
@@ -319,6 +362,31 @@ def _stacked(cols) -> np.ndarray:
     return np.array(np.broadcast_arrays(*cols))
 
 
+_OFF_DIAGONAL = ([0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1])
+
+
+def _sample_energy(obs: Health, Yb, comps) -> np.ndarray:
+    """Energy (kb, B), J, of states ``Yb`` (kb, B, 13) relative to the rest
+    CoM, from their contiguous component rows ``comps`` (13 arrays (kb,) for
+    one scene, else (kb, B)): the values of ``0.5 m |v|^2 + 0.5 w . (I w)
+    + m g z`` with ``I w`` by :func:`numpy.einsum` and the sums over the
+    3-long axis in numpy's order (bifilar/rowwise.py), without numpy's
+    row-by-row reductions over that axis (~40 % of the samples' health;
+    docs/design.md, "Session 14, perf16").  Principal body axes (every scene's
+    off-diagonal products exactly 0): ``I w`` by component (the einsum's
+    zero terms add nothing); else the einsum on the states."""
+    kb, Bn = Yb.shape[:2]
+    vx, vy, vz, wx, wy, wz = comps[7:13]
+    inertia = obs.inertia
+    if not np.any(inertia[:, _OFF_DIAGONAL[0], _OFF_DIAGONAL[1]]):
+        rot = row_sum([wx * (inertia[:, 0, 0] * wx), wy * (inertia[:, 1, 1] * wy), wz * (inertia[:, 2, 2] * wz)])
+    else:
+        w = Yb[:, :, 10:13]
+        rot = np.sum(w * np.einsum("bij,kbj->kbi", inertia, w), -1).reshape(np.shape(wx))
+    E = 0.5 * obs.mass * row_sum([vx * vx, vy * vy, vz * vz]) + 0.5 * rot + obs.mass * obs.grav * comps[2]
+    return E.reshape(kb, Bn)
+
+
 def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, first, physical: bool = False):
     """Health figures at the samples of one window of the LSODA engine
     (blocks of ~50k values): Ys (k, B, 13) states relative to the rest CoM
@@ -373,10 +441,7 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
             for i, kk, b in zip(*np.nonzero(neg)):
                 obs.slack_t[b, i] = np.fmin(obs.slack_t[b, i], tb[kk] * T_ref[b])
         # energy relative to the rest pose (positions are relative to the rest CoM)
-        v = Yb[:, :, 7:10]
-        w = Yb[:, :, 10:13]
-        Iw = np.einsum("bij,kbj->kbi", obs.inertia, w)
-        E = 0.5 * obs.mass * np.sum(v * v, -1) + 0.5 * np.sum(w * Iw, -1) + obs.mass * obs.grav * Yb[:, :, 2]
+        E = _sample_energy(obs, Yb, comps)
         if first and s0 == 0:
             obs.E0 = E[0].copy()
         dE = np.abs(E - obs.E0)

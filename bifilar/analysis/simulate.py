@@ -25,6 +25,7 @@ from .. import integrators as itg
 from ..errors import IntegrationError, InputError
 from ..models import maximal as mx
 from ..rotations import quat_multiply, quat_to_rotvec
+from ..rowwise import column_extremes
 from ..scene import Scene, lowest_point_z
 from .clearance import run_clearance
 from .equilibrium import RestPose, rest_pose
@@ -669,12 +670,13 @@ def _simulate_engine(scene: Scene, rest: RestPose, m: Mode, amplitude: float, pe
                               timing=timing, linear_period=m.period, drift=run.energy_drift,
                               crossing=cross)
     clear, clear_w = run_clearance(scene, rest, run.t, run.y)
+    Tlo, Thi = column_extremes(T)  # (T.min(axis=0), T.max(axis=0), by columns: bifilar/rowwise.py)
     warnings = list(run.warnings) + ([w] if w else []) + clear_w
     return SimulationResult(
         t=run.t, y=run.y, coordinate=c if coordinate else None, coordinate_name=run.coordinate_name, tensions=T,
         period=run.period, period_std=run.period_std, crossings=run.crossings, linear_period=m.period,
         max_constraint_violation=run.max_constraint_violation, energy_drift=run.energy_drift,
-        tension_min=np.minimum(run.tension_min, T.min(axis=0)), tension_max=np.maximum(run.tension_max, T.max(axis=0)),
+        tension_min=np.minimum(run.tension_min, Tlo), tension_max=np.maximum(run.tension_max, Thi),
         slack=run.slack, lowest_z_min=run.lowest_z_min, depth_max=run.depth_max, mode=m.label,
         amplitude=float(amplitude), model="maximal", method=run.method, rtol=float(rtol), atol=atol_min,
         nfev=int(run.nfev), runtime=runtime, warnings=warnings,
@@ -760,6 +762,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
             warnings.append(f"WIRE {i + 1} GOES SLACK at t = {stopped_slack[1]:.4g} s (its tension reaches 0 N "
                             "there): the motion after that is not physical; reduce the amplitude")
     lz = lowest_point_z(scene, Y[:, 0:3], mx.quat_to_matrix(Y[:, 3:7]))
+    Tlo, Thi = column_extremes(T)
     clear, clear_w = run_clearance(scene, rest, ts, Y)
     warnings.extend(clear_w)
     if viol > 1e-6 * Lmax:
@@ -775,7 +778,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
         t=ts, y=Y, coordinate=c, coordinate_name=COMPONENTS[dom], tensions=T,
         period=period, period_std=pstd, crossings=tc, linear_period=m.period if m is not None else None,
         max_constraint_violation=viol, energy_drift=drift,
-        tension_min=T.min(axis=0), tension_max=T.max(axis=0), slack=slack,
+        tension_min=Tlo, tension_max=Thi, slack=slack,
         lowest_z_min=float(lz.min()), depth_max=float(scene.ceiling_z - lz.min()),
         mode=m.label if m is not None else None, amplitude=float(amplitude), model=model, method=method,
         rtol=float(rtol), atol=float(atol), nfev=int(nfev), runtime=runtime, warnings=warnings,

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigErrors, InputError
+from ..rowwise import row_max
 from ..scene import Scene
 from .fields import BODY_KEYS, LIMITS, MAX_WIRES, RIG_KEYS, TOP_KEYS, _check_geometry, _Checker, _describe
 from .inertia import INERTIA_NAMES, _check_gyration, _inertia, check_inertia_tensor, null_components
@@ -266,7 +267,7 @@ def _points_support(points: np.ndarray):
     pts = np.asarray(points, float)
 
     def support(d: np.ndarray) -> np.ndarray:
-        return np.max(np.atleast_2d(d) @ pts.T, axis=-1)
+        return row_max(np.atleast_2d(d) @ pts.T)  # (np.max(..., axis=-1), by columns: bifilar/rowwise.py)
 
     return support
 
