@@ -180,39 +180,47 @@ def test_start_quaternions_are_unit_with_w_nonnegative_and_give_R():
 # analysis/clearance.py: run_clearance on trajectories written by hand
 # ---------------------------------------------------------------------------
 
-TALL = {  # tests/test_simhealth13.py's box: 0.9 m above its CoM (at z = 0 at rest), 0.1 m below the anchors
+TALL = {  # tests/test_simhealth13.py's box, 1.2 m wide: 0.9 m above its CoM (z = 0 at rest), 0.1 m below the anchors
     "body": {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]},
-             "bounding_box": {"min": [-0.1, -0.3, -0.1], "max": [0.1, 0.3, 0.9]}},
+             "bounding_box": {"min": [-0.1, -0.6, -0.1], "max": [0.1, 0.6, 0.9]}},
     "rig": {"anchors": [[0, -0.2, 1.0], [0, 0.2, 1.0]], "attachments": [[0, -0.2, 0], [0, 0.2, 0]],
             "lengths": [1.0, 1.0]},
 }
 
 
-def _box_top(com_z, theta, box=((-0.1, -0.3, -0.1), (0.1, 0.3, 0.9))):
-    """The box's highest corner, m, with the body rotated by theta about world x (brute force over 8 corners)."""
-    lo, hi = box
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-    return com_z + np.max(np.sin(theta)[:, None] * corners[None, :, 1] + np.cos(theta)[:, None] * corners[None, :, 2],
-                          axis=1)
+AXIS = np.array([math.cos(0.4), math.sin(0.4), 0.0])  # a horizontal tilt axis off the body's axes
 
 
 def _tilting(theta, com_z):
-    """States (k, 13) of a body rotated by theta (k,) about world x with its CoM at (0, 0, com_z)."""
+    """States (k, 13) of a body rotated by theta (k,) about AXIS with its CoM at (0, 0, com_z)."""
     Y = np.zeros((len(theta), 13))
     Y[:, 2] = com_z
-    Y[:, 3], Y[:, 4] = np.cos(theta / 2), np.sin(theta / 2)
+    Y[:, 3] = np.cos(theta / 2)
+    Y[:, 4:7] = np.sin(theta / 2)[:, None] * AXIS
     return Y
 
 
-@pytest.mark.parametrize("amp", [0.3, 0.6])
+def _box_top(Y, box=((-0.1, -0.6, -0.1), (0.1, 0.6, 0.9))):
+    """The box's highest corner, m, in each state of ``Y`` (brute force over its 8 corners, the rotation by
+    rotations.quat_to_matrix)."""
+    from bifilar.rotations import quat_to_matrix
+
+    lo, hi = box
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    R = quat_to_matrix(Y[:, 3:7])
+    return Y[:, 2] + np.max(np.einsum("kj,cj->kc", R[:, 2, :], corners), axis=1)
+
+
+@pytest.mark.parametrize("amp", [0.15, 0.6])
 def test_the_runs_highest_point_is_the_highest_box_corner_over_the_samples(amp):
-    """A box tilting about x by amp sin(t) while its CoM bobs 1 cm, highest
-    when level: its top, 0.9 cos(theta) + 0.3 |sin(theta)| above the CoM,
-    peaks away from the highest CoM (the support function's Lipschitz bound
-    must not rule the tilted samples out); the figure and the sample named
-    in the warning match the brute force over the box's corners; at 0.3
-    (top 0.947 m) the box stays 5 cm under the 1 m ceiling, at 0.6 (1.07 m)
-    it goes through: one warning at the time of its highest corner."""
+    """A box tilting about a horizontal axis 0.4 rad off x by amp sin(t)
+    while its CoM bobs 1 cm, highest when level: its top (0.9 m above the
+    CoM level, ~0.9 cos(theta) + 0.59 |sin(theta)| tilted) peaks away from
+    the highest CoM (the support function's Lipschitz bound must not rule
+    the tilted samples out); the figure and the sample named in the
+    warning match the brute force over the box's corners; at 0.15 (0.98 m)
+    the box stays under the 1 m ceiling, at 0.6 (1.08 m) it goes through:
+    one warning at the time of its highest corner."""
     from bifilar.analysis.clearance import run_clearance
     from bifilar.analysis.equilibrium import rest_pose
     from bifilar.config import scene_from_dict
@@ -222,9 +230,10 @@ def test_the_runs_highest_point_is_the_highest_box_corner_over_the_samples(amp):
     t = np.linspace(0.0, 2 * math.pi, 401)
     theta = amp * np.sin(t + 0.1)
     com_z = float(rest.com[2]) + 0.01 * np.cos(2 * (t + 0.1))
-    doc, warnings = run_clearance(sc, rest, t, _tilting(theta, com_z))
-    tops = _box_top(com_z, theta)
-    k = int(np.argmax(tops))
+    Y = _tilting(theta, com_z)
+    doc, warnings = run_clearance(sc, rest, t, Y)
+    tops = _box_top(Y)
+    assert (tops[k := int(np.argmax(tops))] < 1.0) == (amp == 0.15) and np.argmax(com_z) != k
     assert doc["highest_point_z"] == pytest.approx(tops[k], abs=1e-12)
     assert doc["height_below_ceiling_min"] == pytest.approx(1.0 - tops[k], abs=1e-12)
     lines = [w for w in warnings if w.startswith("body: during the run")]
@@ -236,21 +245,20 @@ def test_the_runs_highest_point_is_the_highest_box_corner_over_the_samples(amp):
 
 def test_a_body_above_the_ceiling_at_rest_is_not_warned_again_for_the_run():
     """A box reaching 1.05 m at rest (the rest check says so once) and
-    1.06 m in the run: no 'during the run' line; the figures still given."""
+    higher in the run: no 'during the run' line; the figures still given."""
     from bifilar.analysis.clearance import clearance_warnings, run_clearance
     from bifilar.analysis.equilibrium import rest_pose
     from bifilar.config import scene_from_dict
 
-    cfg = {**TALL, "body": {**TALL["body"], "bounding_box": {"min": [-0.1, -0.3, -0.1], "max": [0.1, 0.3, 1.05]}}}
+    cfg = {**TALL, "body": {**TALL["body"], "bounding_box": {"min": [-0.1, -0.6, -0.1], "max": [0.1, 0.6, 1.05]}}}
     sc = scene_from_dict(cfg, warn=False)
     rest = rest_pose(sc)
     assert len(clearance_warnings(sc, rest)) == 1
     t = np.linspace(0.0, 1.0, 51)
-    theta = 0.05 * np.sin(2 * math.pi * t)  # top 1.05 cos + 0.3 |sin|: up to 1.0637 m
-    doc, warnings = run_clearance(sc, rest, t, _tilting(theta, np.full(t.size, float(rest.com[2]))))
-    assert doc["highest_point_z"] == pytest.approx(np.max(_box_top(rest.com[2], theta, ((-0.1, -0.3, -0.1),
-                                                                                          (0.1, 0.3, 1.05)))),
-                                                   abs=1e-12)
+    Y = _tilting(0.05 * np.sin(2 * math.pi * t), np.full(t.size, float(rest.com[2])))
+    doc, warnings = run_clearance(sc, rest, t, Y)
+    top = np.max(_box_top(Y, ((-0.1, -0.6, -0.1), (0.1, 0.6, 1.05))))
+    assert top > 1.055 and doc["highest_point_z"] == pytest.approx(top, abs=1e-12)
     assert not [w for w in warnings if w.startswith("body:")], warnings
 
 
@@ -350,3 +358,40 @@ def test_the_crossing_part_adds_to_the_period_error(crossing):
     assert err == pytest.approx(base + crossing, rel=1e-12)
     assert (warn is None) == (crossing < 1e-6)
     assert warn is None or "from locating the crossings" in warn
+
+
+# ---------------------------------------------------------------------------
+# analysis/start_pose.py: edge_ratio
+# ---------------------------------------------------------------------------
+
+SHORT_WIRES = {  # tests/test_simhealth13.py's: two vertical 5 cm wires 0.2 m apart, attached at the CoM's level
+    "body": {"mass": 1.0, "inertia": {"principal": [0.01, 0.01, 0.01]}},
+    "rig": {"anchors": [[-0.1, 0, 0.05], [0.1, 0, 0.05]], "attachments": [[-0.1, 0, 0], [0.1, 0, 0]],
+            "lengths": [0.05, 0.05]},
+}
+
+
+@pytest.mark.parametrize("label", ["swing-x", "swing-y"])
+def test_the_edge_ratio_of_a_level_swing_by_hand(label):
+    """A swing on two parallel wires keeps the body level, each wire at
+    angle phi, sin phi = s = A / L.  The rows [u_i, (w_i x u_i) / l] (l =
+    0.1 m, the attachments' lever) and the held e_x (e_y) have the Gram
+    matrix [[1 + c^2, s^2, s], [s^2, 1 + c^2, s], [s, s, 1]] for swing-x
+    ([[2, 0, s], [0, 2, s], [s, s, 1]] for swing-y), whose smallest
+    eigenvalue is (3 - sqrt(1 + 8 s^2)) / 2 in both (by hand); at rest the
+    smallest singular value is 1 (e_x alone), so the edge ratio is
+    sqrt((3 - sqrt(1 + 8 s^2)) / 2): 0.16 at 1 mm short of the reach,
+    ~sqrt(2/3) cos(phi) near it.  Within 1e-9 (the start's tolerance)."""
+    from bifilar.analysis import start_pose as spm
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.config import scene_from_dict
+
+    sc = scene_from_dict(SHORT_WIRES, warn=False)
+    rest = rest_pose(sc)
+    md = linear_modes(sc, rest).get(label)
+    A = np.array([0.001, 0.02, 0.04, 0.049])
+    sp = spm.start_poses([sc] * 4, [rest] * 4, [md] * 4, A)
+    s = A / 0.05
+    np.testing.assert_allclose(sp.edge, np.sqrt((3 - np.sqrt(1 + 8 * s * s)) / 2), rtol=1e-9)
+    assert np.all(sp.feasible)
