@@ -360,6 +360,31 @@ def test_the_crossing_part_adds_to_the_period_error(crossing):
     assert warn is None or "from locating the crossings" in warn
 
 
+def test_wires_crossing_at_rest_are_not_warned_again_for_the_run():
+    """Two X's of wires (tests/test_mutation_gaps13.py's rig: 1-2 and 3-4
+    meet at z = 0.6 m, the pose given) held at rest over a run: the rest
+    check names both crossings, the run's check none (it says only what the
+    rest pose does not show), while its closest pair is 1-2, at 0 m."""
+    from bifilar.analysis.clearance import crossing_warning, run_clearance
+    from bifilar.config import scene_from_dict
+
+    a, b, H, L = 0.3, 0.2, 1.0, 1.0
+    h = math.sqrt(L * L - 4 * a * a)
+    sc = scene_from_dict({"gravity": 9.81, "body": {"mass": 2.0, "inertia": {"principal": [0.05, 0.06, 0.08]}},
+                          "rig": {"anchors": [[-a, b, H], [a, b, H], [-a, -b, H], [a, -b, H]],
+                                  "attachments": [[a, b, 0.0], [-a, b, 0.0], [a, -b, 0.0], [-a, -b, 0.0]],
+                                  "lengths": [L] * 4}}, warn=False)
+    rest = SimpleNamespace(com=np.array([0.0, 0.0, H - h]), R=np.eye(3), q=np.array([1.0, 0.0, 0.0, 0.0]))
+    w = crossing_warning(sc, rest)
+    assert w is not None and "wires 1 and 2 (meeting" in w and "wires 3 and 4 (meeting" in w
+    t = np.linspace(0.0, 1.0, 21)
+    Y = np.zeros((t.size, 13))
+    Y[:, :3], Y[:, 3:7] = rest.com, rest.q
+    doc, warnings = run_clearance(sc, rest, t, Y)
+    assert not [x for x in warnings if x.startswith("rig:")], warnings
+    assert doc["min_wire_distance"] == pytest.approx(0.0, abs=1e-12) and doc["min_wire_distance_wires"] == [1, 2]
+
+
 # ---------------------------------------------------------------------------
 # analysis/start_pose.py: edge_ratio
 # ---------------------------------------------------------------------------
