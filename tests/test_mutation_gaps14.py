@@ -360,6 +360,34 @@ def test_the_crossing_part_adds_to_the_period_error(crossing):
     assert warn is None or "from locating the crossings" in warn
 
 
+def test_a_bifilars_torsion_flips_the_wires_volume_without_bringing_them_together():
+    """TALL's two 1 m wires 0.4 m apart twisted by theta about z (the body
+    rising to keep them at length: CoM z = 1 - sqrt(1 - (0.4 sin(theta/2))^2)):
+    the volume (d1 x d2) . r = -0.16 h sin(theta) changes sign at every
+    pass through rest, with the closest points inside both wires (their
+    middles, by the half-turn symmetry), but the wires stay 0.4
+    cos(theta/2) apart (by hand: the waist of the hyperboloid they span).
+    No crossing may be reported (the sign flip counts only where the
+    distance is within twice the attachments' moves), and the smallest
+    distance is 0.4 cos(0.25) at the 0.5 rad turning points."""
+    from bifilar.analysis.clearance import run_clearance
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.config import scene_from_dict
+
+    sc = scene_from_dict(TALL, warn=False)
+    rest = rest_pose(sc)
+    assert np.allclose(rest.com, 0.0, atol=1e-9)
+    t = np.linspace(0.0, 4 * math.pi, 801)  # the turning points at t = pi/2 + k pi are samples
+    theta = 0.5 * np.sin(t)
+    Y = np.zeros((t.size, 13))
+    Y[:, 2] = 1.0 - np.sqrt(1.0 - (0.4 * np.sin(theta / 2)) ** 2)
+    Y[:, 3], Y[:, 6] = np.cos(theta / 2), np.sin(theta / 2)
+    doc, warnings = run_clearance(sc, rest, t, Y)
+    assert not [w for w in warnings if w.startswith("rig:")], warnings
+    assert doc["min_wire_distance"] == pytest.approx(0.4 * math.cos(0.25), abs=1e-9)
+    assert doc["min_wire_distance_wires"] == [1, 2]
+
+
 def test_wires_crossing_at_rest_are_not_warned_again_for_the_run():
     """Two X's of wires (tests/test_mutation_gaps13.py's rig: 1-2 and 3-4
     meet at z = 0.6 m, the pose given) held at rest over a run: the rest
