@@ -313,6 +313,27 @@ def test_a_residual_tones_stds_are_the_cramer_rao_bounds_times_the_fits_inflatio
     assert tone["source"] == "residual"
 
 
+def test_a_weak_tones_std_takes_the_fits_inflation_even_below_two():
+    """A tone of 2.5e-4 of the torsion (a quarter of the noise's std) over
+    60 periods at 120 Hz: the residuals are nearly white, the fit's serial
+    inflation ~1.5, and the tone's amplitude std is still 2 sqrt(2 / N)
+    sigma times that inflation (within 15 %: 0.95-1.05 over three seeds),
+    not times a floor of 2 (x1.4)."""
+    from bifilar.estimation.signal import fit_period
+    from bifilar.estimation.signal_swing import record_tones
+
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 60 * T0, 1 / 120.0)
+    sigma = 1e-3 * A0
+    y = A0 * np.cos(2 * math.pi * t / T0) + 2.5e-4 * A0 * np.cos(2 * math.pi * t / T1 + 0.7) \
+        + sigma * rng.standard_normal(t.size)
+    fit = fit_period(t, y, "viscous", crossing_check=False, split_check=False)
+    (tone,) = record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"}))
+    infl = float(fit.std_inflation)
+    assert 1.0 < infl < 1.8
+    assert tone["ratio_std"] == pytest.approx(infl * 2 * math.sqrt(2 / t.size) * sigma / A0, rel=0.15)
+
+
 def test_a_rate_records_residual_tone_is_read_as_an_angle_ratio():
     """A rate record's amplitudes are a_i w_i: its tone's ratio is
     converted by w0 / w1 (T1 / T0 = 1.27) back to the angles' RATIO, within
