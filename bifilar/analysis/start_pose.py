@@ -178,14 +178,15 @@ class _Rig:
 def _pinv_solve(S: np.ndarray, rhs: np.ndarray, worst: np.ndarray | None = None) -> np.ndarray:
     """mu (B, n) = S^+ rhs for symmetric positive semi-definite S (B, n, n):
     eigenvalues below 1e-15 of the largest dropped (dependent wires give a
-    singular S; the minimum-norm mu is then the one taken).  ``worst`` (B,),
-    if given, is lowered in place to the smallest kept eigenvalue over the
-    largest (the system's conditioning; dropped ones are dependent wires)."""
+    singular S; the minimum-norm mu is then the one taken).  ``worst`` (B, n),
+    if given, is lowered in place to the eigenvalues over the largest,
+    ascending (the system's conditioning, read past dependent wires'
+    eigenvalues by :func:`solve_start_poses`)."""
     ev, V = np.linalg.eigh(S)
     keep = ev > 1e-15 * np.maximum(ev[:, -1:], 1e-300)
     inv = np.where(keep, 1.0 / np.where(keep, ev, 1.0), 0.0)
     if worst is not None:
-        np.minimum(worst, np.min(np.where(keep, ev, np.inf), axis=1) / np.maximum(ev[:, -1], 1e-300), out=worst)
+        np.minimum(worst, ev / np.maximum(ev[:, -1:], 1e-300), out=worst)
     return np.einsum("bij,bj->bi", V, inv * np.einsum("bji,bj->bi", V, rhs))
 
 
@@ -202,7 +203,7 @@ def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int,
     until the wire residual |phi| / L_max^2 (2-norm, along which the step is
     a descent direction even where dependent wires make the linearised
     system inconsistent) falls (Armijo) and the pose stays inside the chart.
-    Returns (x, on the wires: max |phi| / L_max^2 < 1e-15); ``worst`` (B,),
+    Returns (x, on the wires: max |phi| / L_max^2 < 1e-15); ``worst`` (B, n),
     if given, is lowered in place to the worst conditioning of the steps'
     systems (:func:`_pinv_solve`)."""
     x = x.copy()
@@ -454,8 +455,14 @@ def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray) -> tuple[np.n
     B = len(x0)
     Winv = 1.0 / rig.W
     Winv[np.arange(B), hold] = 0.0
-    worst = np.ones(B)
+    worst = np.ones(rig.L.shape)
     x, conv, on = _solve(rig, x0, x0, Winv, worst)
+    # read past the eigenvalues of wires dependent at rest (four vertical ones: one at rounding there, ~1e-10 a
+    # little way off; RANK_TOL as in edge_ratio)
+    d, w, _ = rig.wires(np.zeros_like(x0))
+    G = rig.jacobian(np.zeros_like(x0), d, w)
+    ev = np.linalg.eigvalsh((G * Winv[:, None, :]) @ np.swapaxes(G, 1, 2))
+    worst = worst[np.arange(B), np.sum(ev <= RANK_TOL * ev[:, -1:], axis=1)]
     gap = np.zeros(B)
     # branch guard: a direct solve whose path onto the wires passed near a singular point (the end of the
     # reach) amplifies rounding there and may have left for another branch of poses; it is checked against
