@@ -141,3 +141,50 @@ def test_an_amplitude_beyond_the_reach_is_refused_with_the_distance(plate):
     assert 0.01 < gap < 1.0  # the branch ends with the attachments at the anchors' height: centimetres off
     runs = bt.simulate_batch([scene] * 2, "torsion", [1.0, 1.36], 1, errors="return")
     assert runs[0].error is None and "too large" in runs[1].error and "off the wires" in runs[1].error
+
+
+# The start exactly at a singular point (branchguard, session 14).  At the plate's reach the pure twist has
+# its wires horizontal: the start problem is singular there, and the branch of pure twists meets another, the
+# plate pitched by ~1 rad with its CoM 0.4 / 0.59 m aside (two mirror images: a tie rounding breaks).  The
+# continuation that takes over where the direct solve fails used to accept a step onto that branch: under
+# OPENBLAS_CORETYPE=Sandybridge the start at exactly arccos(1/4) was that pitched pose, called feasible (edge
+# ratio 0.24), under the default kernel the singular twist, refused; one ulp beyond the reach the default kernel
+# took the pitched pose too.  .ci/run runs this file under both kernels.
+def test_a_start_exactly_at_the_singular_reach_is_refused_on_every_kernel(plate):
+    """arccos(1/4) (the reach: the wires horizontal) and the doubles either
+    side of it (beyond it no pure twist keeps the wires at 5 m): each
+    refused, whatever the BLAS kernel, and each pose found a pure twist (the
+    lateral coordinates and the tilt zero to rounding: the pitched branch
+    has them at 0.4 / 0.59 m and 1 rad).  On the old code the default kernel
+    took the pitched pose one ulp above the reach, Sandybridge at it."""
+    scene, rest, md = plate
+    amps = [np.nextafter(REACH, 0.0), REACH, np.nextafter(REACH, 2.0)]
+    sp = spm.start_poses([scene] * 3, [rest] * 3, [md] * 3, amps)
+    assert not np.any(sp.feasible), (sp.edge, sp.x)
+    # the CoM lifted by the wires' drop at rest, sqrt(25 - 6.25) m (0 at the reach), to 1e-4 m: the refused
+    # poses stop where the drop cannot be told from 0 (EDGE_TOL: below sqrt(2e-9) x 5 m = 2.2e-4 m)
+    np.testing.assert_allclose(sp.x[:, 2], np.sqrt(18.75), atol=1e-4)
+    assert np.max(np.abs(sp.x[:, [0, 1, 3, 4]])) < 1e-4, sp.x
+    err = spm.refusal(scene, md, REACH, float(sp.gap[1]))
+    assert err.field == "--amplitude" and "end of its reach" in err.message and "1.31812 rad" in err.message
+
+
+def test_a_continuation_step_onto_another_branch_is_refused(plate, monkeypatch):
+    """The guard itself, without relying on a kernel's rounding: every
+    continuation step to exactly the reach is solved from the pitched
+    branch's pose there (where Sandybridge's rounding took the unguarded
+    step; the direct solve is left alone).  That step converges, 1 rad of
+    tilt from its prediction, and must be refused: the start is refused as
+    at the end of its reach, a pure twist, not the pitched pose."""
+    scene, rest, md = plate
+    pitched = np.array([0.3988, 0.5903, 3.3192, 0.0240, -1.0109, REACH])  # explored by hand: converges there
+    real = spm._solve
+
+    def solve(rig, x0, x, Winv, *rest_args):
+        if x is not x0:  # a continuation step (the direct solve starts from x0 itself)
+            x = np.where(np.abs(x0[:, 5:6] - REACH) < 1e-12, pitched, x)
+        return real(rig, x0, x, Winv, *rest_args)
+
+    monkeypatch.setattr(spm, "_solve", solve)
+    sp = spm.start_poses([scene], [rest], [md], REACH)
+    assert not sp.feasible[0] and abs(sp.x[0, 4]) < 1e-4, sp.x

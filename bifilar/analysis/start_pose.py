@@ -175,13 +175,18 @@ class _Rig:
         return np.abs(np.linalg.norm(d, axis=2) - self.L).max(axis=1) / self.Lmax
 
 
-def _pinv_solve(S: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+def _pinv_solve(S: np.ndarray, rhs: np.ndarray, worst: np.ndarray | None = None) -> np.ndarray:
     """mu (B, n) = S^+ rhs for symmetric positive semi-definite S (B, n, n):
     eigenvalues below 1e-15 of the largest dropped (dependent wires give a
-    singular S; the minimum-norm mu is then the one taken)."""
+    singular S; the minimum-norm mu is then the one taken).  ``worst`` (B, n),
+    if given, is lowered in place to the eigenvalues over the largest,
+    ascending (the system's conditioning, read past dependent wires'
+    eigenvalues by :func:`solve_start_poses`)."""
     ev, V = np.linalg.eigh(S)
     keep = ev > 1e-15 * np.maximum(ev[:, -1:], 1e-300)
     inv = np.where(keep, 1.0 / np.where(keep, ev, 1.0), 0.0)
+    if worst is not None:
+        np.minimum(worst, ev / np.maximum(ev[:, -1:], 1e-300), out=worst)
     return np.einsum("bij,bj->bi", V, inv * np.einsum("bji,bj->bi", V, rhs))
 
 
@@ -190,14 +195,17 @@ def _scale(rig: _Rig) -> np.ndarray:
     return np.concatenate([np.repeat(rig.Lmax[:, None], 3, 1), np.ones((len(rig.Lmax), 3))], axis=1)
 
 
-def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int) -> tuple[np.ndarray, np.ndarray]:
+def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int,
+              worst: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Newton onto the wires from poses x (B, 6): each step the
     minimum-W-norm correction of the linearised constraints (the held
     coordinate has Winv = 0, so it never moves), shortened by backtracking
     until the wire residual |phi| / L_max^2 (2-norm, along which the step is
     a descent direction even where dependent wires make the linearised
     system inconsistent) falls (Armijo) and the pose stays inside the chart.
-    Returns (x, on the wires: max |phi| / L_max^2 < 1e-15)."""
+    Returns (x, on the wires: max |phi| / L_max^2 < 1e-15); ``worst`` (B, n),
+    if given, is lowered in place to the worst conditioning of the steps'
+    systems (:func:`_pinv_solve`)."""
     x = x.copy()
     L2 = rig.Lmax**2
     d, w, phi = rig.wires(x)
@@ -212,7 +220,10 @@ def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int) -> tuple[n
         sub = rig.take(ii)
         G = sub.jacobian(x[ii], d[ii], w[ii])
         GW = G * Winv[ii][:, None, :]
-        dx = -np.einsum("bnj,bn->bj", GW, _pinv_solve(GW @ np.swapaxes(G, 1, 2), phi[ii]))
+        wi = None if worst is None else worst[ii]
+        dx = -np.einsum("bnj,bn->bj", GW, _pinv_solve(GW @ np.swapaxes(G, 1, 2), phi[ii], wi))
+        if worst is not None:
+            worst[ii] = wi
         alpha = np.ones(len(ii))
         todo = np.ones(len(ii), bool)
         before = merit[ii].copy()
@@ -329,13 +340,14 @@ def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: 
     return x, conv
 
 
-def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray):
+def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, worst: np.ndarray | None = None):
     """Closest poses to x0 on the wires, from x: onto the wires, then Newton.
     Returns (x, converged, on the wires within :data:`FEASIBLE_TOL`: where
     dependent wires make the constraints singular, Gauss-Newton can stop a
     hair off them, e.g. 2e-11 of the length for a four-wire rectangle
-    twisted by 0.01 rad)."""
-    x, on = _to_wires(rig, x, Winv, ITERATIONS)
+    twisted by 0.01 rad); ``worst`` as in :func:`_to_wires` (the path onto
+    the wires from x)."""
+    x, on = _to_wires(rig, x, Winv, ITERATIONS, worst)
     out = x.copy()
     conv = np.zeros(len(x), bool)
     ii = np.nonzero(on)[0]
@@ -343,6 +355,29 @@ def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray):
         xc, cc = _closest(rig.take(ii), x0[ii], x[ii], Winv[ii], ITERATIONS)
         out[ii], conv[ii] = xc, cc
     return out, conv, rig.residual(out) <= FEASIBLE_TOL
+
+
+_JUMP = 0.25
+"""A continuation step is refused (and halved) when its pose's free coordinates
+end further than this from the step's prediction (|dr| / L_max, |dtheta| rad).
+Along a branch the deviation falls with the step: as ds^2 where the branch is
+regular and as sqrt(ds) at a fold (the thesis plate's last step to its reach
+0.39 of L_max from 7/8 of it, 0.28 from 15/16, 0.14 from 63/64: steps are
+halved until it passes); a pose on another branch stays O(1) away however
+small the step (the plate's pitched branch: 1 rad of tilt at the reach)."""
+_ILL = 1e-6
+"""A direct start is checked against the branch from rest when a Gauss-Newton
+system on its path had a conditioning (smallest eigenvalue over largest) below
+this: ordinary starts 0.015-0.35 (the thesis plate's modes up to 1.3 rad or 2 m),
+~edge ratio^2 near the end of the reach (9e-9 at 1e-8 rad short of the plate's)."""
+_SAME = 1e-6
+"""A direct start and the branch's end are the same pose when their free
+coordinates agree to this (|dr| / L_max, rad): each converged to _STEP_DONE."""
+
+
+def _deviation(rig: _Rig, x: np.ndarray, ref: np.ndarray, Winv: np.ndarray) -> np.ndarray:
+    """(B,) max over the free coordinates of |x - ref| / scale (|dr| / L_max, |dtheta| rad)."""
+    return np.max(np.where(Winv > 0, np.abs(x - ref), 0.0) / _scale(rig), axis=1)
 
 
 def _least_squares(rig: _Rig, x0: np.ndarray, hold: int) -> tuple[np.ndarray, float]:
@@ -394,13 +429,18 @@ def _continuation(rig: _Rig, x0: np.ndarray, Winv: np.ndarray) -> tuple[np.ndarr
         if not len(ii):
             break
         t = np.minimum(1.0, s[ii] + ds[ii])
-        xt, ct, _ = _solve(rig.take(ii), t[:, None] * x0[ii], x[ii] + (t - s[ii])[:, None] * x0[ii], Winv[ii])
+        guess = x[ii] + (t - s[ii])[:, None] * x0[ii]
+        sub = rig.take(ii)
+        xt, ct, _ = _solve(sub, t[:, None] * x0[ii], guess, Winv[ii])
+        # a step that moves the free coordinates further than _JUMP from its prediction left the branch (or
+        # took too long a step across a fold): halved like a step that failed
+        ct = ct & (_deviation(sub, xt, guess, Winv[ii]) <= _JUMP)
         ok, kk = ct, ii[ct]
         s[kk], x[kk] = t[ok], xt[ok]
         ds[kk] = np.minimum(2.0 * ds[kk], 1.0 / CONTINUATION_STEPS)
         reached[kk[t[ok] >= 1.0]] = True
         kb = ii[~ct]
-        ds[kb] *= 0.5
+        ds[kb] = 0.5 * (t[~ct] - s[kb])  # half the step taken (shorter than ds where it ended at the amplitude)
         failed[kb[ds[kb] < 0.5**CONTINUATION_HALVINGS / CONTINUATION_STEPS]] = True
     held = Winv == 0.0
     x = np.where(held & ~reached[:, None], x + (1.0 - s)[:, None] * x0, x)
@@ -415,14 +455,27 @@ def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray) -> tuple[np.n
     B = len(x0)
     Winv = 1.0 / rig.W
     Winv[np.arange(B), hold] = 0.0
-    x, conv, on = _solve(rig, x0, x0, Winv)
+    worst = np.ones(rig.L.shape)
+    x, conv, on = _solve(rig, x0, x0, Winv, worst)
+    # read past the eigenvalues of wires dependent at rest (four vertical ones: one at rounding there, ~1e-10 a
+    # little way off; RANK_TOL as in edge_ratio)
+    d, w, _ = rig.wires(np.zeros_like(x0))
+    G = rig.jacobian(np.zeros_like(x0), d, w)
+    ev = np.linalg.eigvalsh((G * Winv[:, None, :]) @ np.swapaxes(G, 1, 2))
+    worst = worst[np.arange(B), np.sum(ev <= RANK_TOL * ev[:, -1:], axis=1)]
     gap = np.zeros(B)
-    ii = np.nonzero(~conv)[0]
+    # branch guard: a direct solve whose path onto the wires passed near a singular point (the end of the
+    # reach) amplifies rounding there and may have left for another branch of poses; it is checked against
+    # the branch followed from rest, and kept only where that branch ends at it
+    beyond = conv & (worst < _ILL)
+    ii = np.nonzero(~conv | beyond)[0]
     if len(ii):
         xc, reached = _continuation(rig.take(ii), x0[ii], Winv[ii])
+        same = beyond[ii] & reached & (_deviation(rig.take(ii), xc, x[ii], Winv[ii]) <= _SAME)
         # a start on the wires whose closest pose was not pinned down (neither directly nor along the branch)
-        # is kept as it is: the held coordinate is exact and every wire at its length
-        keep = on[ii] & ~reached
+        # is kept as it is: the held coordinate is exact and every wire at its length; a direct start the
+        # branch confirms is kept bit for bit
+        keep = (on[ii] & ~reached & ~beyond[ii]) | same
         x[ii[~keep]] = xc[~keep]
         far = ii[~reached & ~keep]
         if len(far):
