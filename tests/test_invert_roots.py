@@ -27,8 +27,9 @@ from conftest import PLATE_I, trapezoid
 _IDX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
 
 
-def one(scene, label, T, std=1e-4):
-    return MeasurementSet([Hanging("h", scene, np.eye(3))], [Measurement(label, float(T), std, "period", "--period")])
+def one(scene, label, T, std=1e-4, **kw):
+    return MeasurementSet([Hanging("h", scene, np.eye(3))],
+                          [Measurement(label, float(T), std, "period", "--period", **kw)])
 
 
 def with_component(scene, comp, x):
@@ -256,13 +257,16 @@ def _check_scene(rng, n_wires):
     assert res.ambiguous == (len(xs) > 1)
     # outside the attainable range (the dense scan's extremes, with margin): a right refusal when the
     # inputs are exact (with their default std an edge of the range may be within them: the pitch of
-    # [2-10], CoM 2 mm of its height uncertain, is 5 % beyond its shortest period at 2.5 sigma)
+    # [2-10], CoM 2 mm of its height uncertain, is 5 % beyond its shortest period at 2.5 sigma).  The range is
+    # the small-amplitude one, so the periods are stated timed at a small amplitude (`--amplitude 0`): an
+    # unstated one may be any release in 0 .. 10 degrees, which lengthens [4-10]'s swing-x by up to 98 %
+    # (session 14: such a release bridges an edge, as the budget's one-sided interval allows)
     att = [t for t, _ in scan[1] if np.isfinite(t)]
     exact = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0}
     for bad in (1.05 * max(att), 0.95 * min(att)):
         assert not crossings(scan, bad)  # independently: nothing attains it
         with pytest.raises(InputError) as ei:
-            invert(one(prior, mode.label, bad, std), solve_for=[comp], ladder=False, unc=exact)
+            invert(one(prior, mode.label, bad, std, amplitude=0.0), solve_for=[comp], ladder=False, unc=exact)
         assert ei.value.field == "--period"
 
 
@@ -331,10 +335,11 @@ def test_thin_plate_period_timed_just_beyond_the_edge_is_answered_at_the_edge():
     assert res.value("Izz") == pytest.approx(edge, rel=1e-9) and res.roots[0]["edge"]
     assert abs(res.roots[0]["residuals"][0]["normalised_residual"]) <= EDGE_Z
     assert any("edge of the physical set" in w for w in res.warnings)
-    # 3 sigma beyond: refused when the inputs are exact
+    # 3 sigma beyond: refused when the inputs are exact and the amplitude stated small (an unstated one's
+    # release range may bridge it, session 14)
     exact = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0}
     with pytest.raises(InputError):
-        invert(one(truth, "torsion", T + 3e-4, std=1e-4), solve_for=["Izz"], ladder=False, unc=exact)
+        invert(one(truth, "torsion", T + 3e-4, std=1e-4, amplitude=0.0), solve_for=["Izz"], ladder=False, unc=exact)
     # with the default input uncertainties (the period's std from them ~20 ms here) the edge is within
     # them (tests/test_audit6_invert.py), but not 0.15 s beyond
     res = invert(one(truth, "torsion", T + 3e-4, std=1e-4), solve_for=["Izz"], ladder=False)
