@@ -62,13 +62,19 @@ def test_hidden_modes_are_every_other_mode_at_the_bound_in_each_modes_unit():
 def test_hidden_shift_std_is_the_rms_of_independent_uniform_shifts():
     """E[(s1 u1 + s2 u2)^2] with u_i independent, uniform in [0, 1]:
     (s1^2 + s2^2) / 3 + 2 s1 s2 / 4 (by hand); one mode |s| / sqrt(3); a
-    failed run (shift None) left out; none at all: 0."""
+    failed run (shift None) left out; none at all: 0.  Shifts of both signs
+    (audit14, after this test was written): the largest of that RMS and
+    each sign's own (here the negative one's, |s1| / sqrt(3))."""
     from bifilar.estimation.signal_swing import hidden_shift_std
 
     H = lambda s: SimpleNamespace(shift=s)  # noqa: E731
     s1, s2 = -1.6e-4, 4.0e-5
+    both = math.sqrt((s1 * s1 + s2 * s2) / 3 + 2 * s1 * s2 / 4)
+    assert hidden_shift_std([H(s1), H(None), H(s2)]) == pytest.approx(max(both, abs(s1) / math.sqrt(3)), rel=1e-12)
+    s1 = 1.6e-4  # one sign: the sum's RMS
     assert hidden_shift_std([H(s1), H(None), H(s2)]) == pytest.approx(
         math.sqrt((s1 * s1 + s2 * s2) / 3 + 2 * s1 * s2 / 4), rel=1e-12)
+    s1 = -1.6e-4
     assert hidden_shift_std([H(s1)]) == pytest.approx(abs(s1) / math.sqrt(3), rel=1e-12)
     assert hidden_shift_std([H(None)]) == 0.0 and hidden_shift_std([]) == 0.0
 

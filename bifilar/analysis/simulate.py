@@ -230,11 +230,25 @@ def two_mode_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float, s
     oscillates a quarter period out of phase with the first; its effect on
     the first mode's period is second order in its amplitude and, away from
     an internal resonance, independent of that phase."""
+    return multi_mode_state(scene, rest, mode, amplitude, [(second, second_amplitude)])
+
+
+def multi_mode_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float, others) -> np.ndarray:
+    """State (13,) of a release that starts ``mode`` displaced by
+    ``amplitude`` and every ``(Mode, amplitude)`` of ``others`` moving
+    through its rest (:func:`two_mode_state`'s construction, the linear
+    velocities summed before they are made tangent to the wires; a signed
+    amplitude reverses that mode's velocity).  Units: each mode's normalised
+    shape (rad or m); velocities world frame, the state's angular rate body
+    axes."""
     y0 = initial_state(scene, rest, mode, amplitude)
-    if not second_amplitude or not second.period:
+    others = [(m, a) for m, a in others if a and m.period]
+    if not others:
         return y0
-    omega = 2 * np.pi / second.period
-    vel = second_amplitude * omega * np.asarray(second.shape, float)  # [v (3), w_world (3)]
+    vel = np.zeros(6)
+    for second, second_amplitude in others:
+        omega = 2 * np.pi / second.period
+        vel = vel + second_amplitude * omega * np.asarray(second.shape, float)  # [v (3), w_world (3)]
     P = mx.params_from_scenes(scene)
     kin = mx.kinematics(y0, P)
     d, Rp, R = kin["d"], kin["Rp"], kin["R"]

@@ -227,18 +227,23 @@ def residual_tones(m) -> list[dict]:
     return sorted(out, key=lambda d: -d["ratio"])
 
 
-def _run_tones(hm, values, k: int, j: int, amplitude: float, a_j: float, cycles: float, rtol: float):
+def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol: float):
     """The other oscillations (``three_mode`` fit, else ``two_mode``) of the timed coordinate of a
     model run with base mode ``k`` released at ``amplitude`` and base mode
-    ``j`` started at ``a_j``: list of (frequency Hz, ratio to the dominant)."""
-    from ..analysis.simulate import relative_pose, simulate, two_mode_state
+    ``j`` started at ``a_j`` (or, ``j`` and ``a_j`` tuples, each of those
+    modes at its signed amplitude at once, :func:`~bifilar.analysis.simulate.multi_mode_state`):
+    list of (frequency Hz, ratio to the dominant)."""
+    from ..analysis.simulate import multi_mode_state, relative_pose, simulate, two_mode_state
     from .signal import fit_period
 
     scene = hm.scene(values)
     rest, ms, match = hm.locate(scene)
-    kk, jj = int(match[k]), int(match[j])
-    mk, mj = ms.modes[kk], ms.modes[jj]
-    y0 = two_mode_state(scene, rest, mk, amplitude, mj, a_j)
+    kk = int(match[k])
+    mk = ms.modes[kk]
+    if isinstance(j, tuple):
+        y0 = multi_mode_state(scene, rest, mk, amplitude, [(ms.modes[int(match[i])], a) for i, a in zip(j, a_j)])
+    else:
+        y0 = two_mode_state(scene, rest, mk, amplitude, ms.modes[int(match[j])], a_j)
     # a tone's amplitude to ~1e-4 of itself needs no more than rtol 1e-8 (the factor's runs use 1e-10)
     sim = simulate(scene, kk + 1, amplitude, cycles, rest=rest, modes=ms, y0=y0, t_end=cycles * mk.period,
                    rtol=max(rtol, TONE_RTOL), check=False, samples_per_period=32)
@@ -327,6 +332,7 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
             f"{best.label} mode at about {best.amplitude:.3g} (beyond {limit:.3g}): a second motion that large "
             f"shifts the {lab}'s period by more than the model of its release can answer for; release more "
             "cleanly (let go without a push or a swing) and record again"))
+    _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, Lmax, rtol)
     best.amplitude_start = best.amplitude
     g, g_rel = swing_decay(m)
     if g != 1.0:  # the amplitude the record's period refers to (the model runs undamped at it)
@@ -334,6 +340,66 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
         best.amplitude, best.decay = best.amplitude * g, g
         best.amplitude_std = rel * abs(best.amplitude)
     return best
+
+
+def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, Lmax, rtol) -> None:
+    """Raises :class:`~bifilar.errors.InputError` naming measurement ``k``'s
+    field where the record's tone (``tone``, at ``f_rec`` Hz within ``tol``)
+    gives the second mode ``best`` beyond the release bound
+    (:func:`release_bound`) while every other mode of the hanging, released
+    with the timed one at once within that bound (each at it, every
+    combination of their velocities' signs: :data:`MAX_JOINT_RUNS` runs at
+    most), makes that tone at a scale of their amplitudes within 2 of its
+    std of the bound (or below it): the tone's law taken as ``best``'s
+    (``c ~ a^n``), the scale's relative std as ``best``'s amplitude's (the
+    tone's noise over ``n``, :data:`CALIBRATION_SHARE`).  The record then
+    cannot tell a second mode beyond the bound from several within it, and
+    their period shifts differ.  Nothing is run where ``best`` lies within
+    the bound or the hanging has one other mode.
+
+    Why: with every other mode of the drone config at its 1 cm bound (the
+    pitch at 0.0067 rad) the torsion's record held a tone at 1.64 s, 2.4e-3
+    of the torsion, that the swing-y alone makes only at 2.25 cm; read as
+    one swing-y, Izz z -3.0..-4.0 in 16 of 40 draws (docs/design.md,
+    "tonepair, session 14")."""
+    from ..errors import InputError
+
+    bound, _ = release_bound(pb)
+    own = bound / Lmax if hm.modes0.modes[best.index].dominant >= 3 else bound
+    if not (bound > 0 and abs(best.amplitude) > own):
+        return
+    js = [j for j, mj in enumerate(hm.modes0.modes) if j != k0 and mj.period]
+    if len(js) < 2:
+        return
+    amps = [bound / Lmax if hm.modes0.modes[j].dominant >= 3 else bound for j in js]
+    n_signs = min(len(js) - 1, int(math.log2(MAX_JOINT_RUNS)))
+    cmax = None
+    for code in range(2 ** n_signs):  # the first mode's sign fixed: reversing every velocity reverses time
+        sgn = [1.0] + [(-1.0 if code >> i & 1 else 1.0) for i in range(len(js) - 1)]
+        try:
+            c = _match(_run_tones(hm, values, k0, tuple(js), A, tuple(s * a for s, a in zip(sgn, amps)),
+                                  pb.measurements[k].cycles, rtol), f_rec, tol)
+        except BifilarError:
+            continue
+        if c is not None and (cmax is None or c > cmax):
+            cmax = c
+    cj, cr = (cmax or 0.0) - (c0 or 0.0), tone["ratio"] - (c0 or 0.0)
+    if not (cj > 0 and cr > 0):
+        return
+    # the scale of the joint release that makes the record's tone (its law the found mode's, ~ a^n), and its
+    # relative std as the found amplitude's (the tone's noise, CALIBRATION_SHARE for the modes' phases)
+    scale = (cr / cj) ** (1.0 / best.exponent)
+    if scale > 1.0 + 2.0 * math.hypot(tone["ratio_std"] / cr / best.exponent, CALIBRATION_SHARE):
+        return
+    m = pb.measurements[k]
+    labels = ", ".join(hm.modes0.modes[j].label for j in js)
+    raise InputError(m.field, (
+        f"mode '{m.label}': the record's oscillation at {tone['period']:.4g} s ({tone['ratio']:.2g} of its "
+        f"amplitude) is as the {best.label} mode alone makes it at {best.amplitude:.3g} (beyond the release bound "
+        f"{bound:g} m), and as the {labels} modes make it released together at {scale:.2g} times that bound (within "
+        "its uncertainty of it): the record cannot tell them apart and their period shifts differ; state the "
+        "release bound you can vouch for "
+        "(--uncertainty release, m of travel) or release more cleanly and record again"))
 
 
 def swing_decay(m) -> tuple[float, float]:
@@ -399,6 +465,18 @@ DEFAULT_RELEASE = 0.01
 HIDDEN_U_MEAN, HIDDEN_U_SQUARE = 1.0 / 2.0, 1.0 / 3.0
 
 
+#: the most runs :func:`_check_joint_release` makes (the combinations of the other modes' velocity signs)
+MAX_JOINT_RUNS = 8
+
+
+def release_bound(pb) -> tuple[float, bool]:
+    """(bound m, stated): problem ``pb``'s bound on a second mode a release
+    starts unseen (the uncertainty key ``release``, else :data:`DEFAULT_RELEASE`)."""
+    unc = getattr(pb, "unc", None) or {}
+    given = "release" in unc
+    return (float(unc["release"]) if given else DEFAULT_RELEASE), given
+
+
 @dataclass
 class Hidden:
     """A mode a recording's release may have started unseen: the largest
@@ -441,9 +519,7 @@ def hidden_modes(pb, k: int, p, found: int | None = None) -> list[Hidden]:
     from ..errors import InputError
 
     m = pb.measurements[k]
-    unc = getattr(pb, "unc", None) or {}
-    given = "release" in unc
-    bound = float(unc["release"]) if given else DEFAULT_RELEASE
+    bound, given = release_bound(pb)
     if not bound > 0:
         return []
     hm = pb.models[m.hanging]
