@@ -96,13 +96,16 @@ def constraint_hessians(d: np.ndarray, w: np.ndarray) -> np.ndarray:
     return H
 
 
-def multiplier_matrix(scene: Scene, R: np.ndarray, G: np.ndarray) -> np.ndarray:
-    """``G M^-1 G^T`` (n, n), (N/m per m^2 ... : 1/kg m^2 units of phi per
-    multiplier): the run's multiplier matrix ``J M^-1 J^T`` at the pose with
-    attitude ``R`` (body -> world), ``G`` the constraint Jacobian of
-    :func:`constraint_jacobian`, M the body's mass and world inertia."""
-    Iinv = R @ np.linalg.inv(np.asarray(scene.inertia, float)) @ R.T
-    return G[:, :3] @ G[:, :3].T / scene.mass + G[:, 3:] @ Iinv @ G[:, 3:].T
+def multiplier_matrix(mass, inertia, R: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """``G M^-1 G^T`` (..., n, n) (1/kg, phi per multiplier: m^2 per N/m): the
+    run's multiplier matrix ``J M^-1 J^T`` at poses with attitudes ``R``
+    (..., 3, 3) (body -> world), ``G`` (..., n, 6) the constraint Jacobian
+    of :func:`constraint_jacobian`, M the body's mass (kg, scalar or (...,))
+    and its inertia (kg m^2, body frame, (3, 3) or (..., 3, 3)) turned to
+    the world.  Vectorised over leading axes."""
+    Gt = np.swapaxes(G, -1, -2)
+    Iw = R @ np.linalg.inv(np.asarray(inertia, float)) @ np.swapaxes(R, -1, -2)
+    return G[..., :3] @ Gt[..., :3, :] / np.asarray(mass, float)[..., None, None] + G[..., 3:] @ Iw @ Gt[..., 3:, :]
 
 
 def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray | None = None) -> int:
@@ -116,7 +119,7 @@ def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray |
     splayed by less than a length tolerance) is dependent at rest as in the
     run (docs/design.md "restrank, session 14")."""
     if G.shape[0] > MAX_ELIMINATION_WIRES:
-        return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene, R, G)))))
+        return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene.mass, scene.inertia, R, G)))))
     if sv is None:
         sv = np.linalg.svd(G, compute_uv=False)
     return int(np.sum(sv > 1e-12 * sv[0]))
@@ -136,7 +139,7 @@ def rest_multipliers(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarr
     if scene.n_wires <= MAX_ELIMINATION_WIRES:
         return lam
     _, _, G = constraint_jacobian(scene, com, R)
-    A = multiplier_matrix(scene, R, G)
+    A = multiplier_matrix(scene.mass, scene.inertia, R, G)
     Minv_f = np.concatenate([np.zeros(2), [-scene.gravity], np.zeros(3)])  # M^-1 (-grad V): gravity's acceleration
     split = min_norm_multipliers(A, G @ Minv_f)
     if np.max(np.abs(split - lam)) <= 1e-12 * np.max(np.abs(lam)):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Scene
-from .equilibrium import RestPose, constraint_jacobian, constraint_rank
+from .equilibrium import RestPose, constraint_jacobian, constraint_rank, multiplier_matrix
 
 
 def reduced_statics(scene: Scene, rest: RestPose) -> tuple[np.ndarray, np.ndarray]:
@@ -72,10 +72,7 @@ def held_violation(scene: Scene, Y: np.ndarray) -> float:
     L = np.asarray(scene.lengths, float)
     phi = 0.5 * (np.einsum("kni,kni->kn", d, d) - L ** 2)
     G = np.concatenate([d, np.cross(w, d)], axis=2)  # d phi / d(dr, dtheta_world) (k, n, 6)
-    Iinv = np.einsum("kij,jl,kml->kim", R, np.linalg.inv(np.asarray(scene.inertia, float)), R)
-    A = np.einsum("kni,kmi->knm", G[..., :3], G[..., :3]) / scene.mass + np.einsum(
-        "kni,kij,kmj->knm", G[..., 3:], Iinv, G[..., 3:])
-    ev, V = np.linalg.eigh(A)
+    ev, V = np.linalg.eigh(multiplier_matrix(scene.mass, scene.inertia, R, G))
     held = held_directions(ev)  # (k, n)
     kept = np.einsum("knj,kj->kn", V, np.where(held, np.einsum("knj,kn->kj", V, phi), 0.0))
     return float(np.max(np.abs(kept) / L))

@@ -728,16 +728,18 @@ def _filtered_inverse(w: np.ndarray, top) -> np.ndarray:
     return w ** 3 / (w ** 4 + e4)
 
 
-def held_directions(w: np.ndarray) -> np.ndarray:
+def held_directions(w: np.ndarray, margin: float = 1.0) -> np.ndarray:
     """Which eigen-directions of the multiplier matrix ``J M^-1 J^T`` (its
     eigenvalues ``w`` (..., n), ascending) :func:`_min_norm` holds: those at
     or above :data:`MIN_NORM_RCOND` of the largest (the cut-off's weight
     1/2 and more); the others are the dependent or nearly dependent wires'
     self-stresses, left free.  The one rank rule of rigs of more than
     :data:`MAX_ELIMINATION_WIRES` wires: the run's, the rest pose's
-    (:mod:`bifilar.analysis.equilibrium`) and the held length error's."""
+    (:mod:`bifilar.analysis.equilibrium`) and the held length error's.
+    ``margin``: at or above ``margin`` times that (1e3: where the cut-off's
+    weight is 1 to within 1e-12, the multipliers the exact solution's)."""
     w = np.asarray(w, float)
-    return w >= MIN_NORM_RCOND * w[..., -1:]
+    return w >= margin * MIN_NORM_RCOND * w[..., -1:]
 
 
 def min_norm_multipliers(A: np.ndarray, b: np.ndarray) -> np.ndarray:
