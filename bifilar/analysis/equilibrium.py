@@ -97,7 +97,7 @@ def constraint_hessians(d: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 def multiplier_matrix(mass, inertia, R: np.ndarray, G: np.ndarray) -> np.ndarray:
-    """``G M^-1 G^T`` (..., n, n) (1/kg, phi per multiplier: m^2 per N/m): the
+    """``G M^-1 G^T`` (..., n, n) (m^2 / kg): the
     run's multiplier matrix ``J M^-1 J^T`` at poses with attitudes ``R``
     (..., 3, 3) (body -> world), ``G`` (..., n, 6) the constraint Jacobian
     of :func:`constraint_jacobian`, M the body's mass (kg, scalar or (...,))
