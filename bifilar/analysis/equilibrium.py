@@ -118,11 +118,26 @@ def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray |
     largest), so that a rig whose wires are only nearly dependent (anchors
     splayed by less than a length tolerance) is dependent at rest as in the
     run (docs/design.md "restrank, session 14")."""
-    if G.shape[0] > MAX_ELIMINATION_WIRES:
-        return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene.mass, scene.inertia, R, G)))))
     if sv is None:
         sv = np.linalg.svd(G, compute_uv=False)
+    if G.shape[0] > MAX_ELIMINATION_WIRES and near_dependent(sv):
+        return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene.mass, scene.inertia, R, G)))))
     return int(np.sum(sv > 1e-12 * sv[0]))
+
+
+#: wires whose Jacobian's smallest singular value is below this fraction of its largest (a splay of ~1e-5 of
+#: the wires' length: less than their stretch under load) take the run's rank rule at rest; above it the
+#: rank is geometric.  The run's rule weighs by the body's mass and inertia, so on its own it made the
+#: rest's rank jump with the inertia invert solves for (random 4-wire rigs with singular values 1e-4 .. 3e-3
+#: gained and lost a mode across the cut-off; docs/design.md "restrank, session 14")
+NEAR_DEPENDENT_SV = 1e-5
+
+
+def near_dependent(sv: np.ndarray) -> np.ndarray:
+    """Whether wires with constraint-Jacobian singular values ``sv`` (..., n),
+    descending, are within :data:`NEAR_DEPENDENT_SV` of dependent."""
+    sv = np.asarray(sv, float)
+    return sv[..., -1] < NEAR_DEPENDENT_SV * sv[..., 0]
 
 
 def rest_multipliers(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -139,6 +154,8 @@ def rest_multipliers(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarr
     if scene.n_wires <= MAX_ELIMINATION_WIRES:
         return lam
     _, _, G = constraint_jacobian(scene, com, R)
+    if not near_dependent(np.linalg.svd(G, compute_uv=False)):
+        return lam
     A = multiplier_matrix(scene.mass, scene.inertia, R, G)
     Minv_f = np.concatenate([np.zeros(2), [-scene.gravity], np.zeros(3)])  # M^-1 (-grad V): gravity's acceleration
     split = min_norm_multipliers(A, G @ Minv_f)
