@@ -28,10 +28,11 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import BifilarError
+from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions
 from ..rotations import cross, matrix_to_quat, rotvec_to_matrix, skew_of
 from ..scene import Scene, lowest_point_z
 from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, RestPose, canonical_attitude, knife_edge_axes,
-                          line_turns, rest_pose, start_coms)
+                          line_turns, multiplier_matrix, near_dependent, rest_pose, start_coms)
 from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry"]
@@ -154,12 +155,17 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
     return com, R, lam, res
 
 
-def _null_space(G: np.ndarray):
+def _null_space(G: np.ndarray, m: np.ndarray, I: np.ndarray, R: np.ndarray):
     """Orthonormal null-space bases (B, 6, 6-n) of full-rank G (B, n, 6) and
-    whether each G has full rank (tolerance of :func:`reduced_stiffness`)."""
+    whether each G has full rank (the rule of :func:`~bifilar.analysis.
+    equilibrium.constraint_rank`; masses m (B,), body inertias I and
+    attitudes R (B, 3, 3) for its multiplier matrix on 4 and 5 wires)."""
     _, s, vt = np.linalg.svd(G)
     n = G.shape[1]
     full = s[:, -1] > 1e-12 * s[:, 0]
+    if n > MAX_ELIMINATION_WIRES:
+        near = near_dependent(s)
+        full = np.where(near, np.all(held_directions(np.linalg.eigvalsh(multiplier_matrix(m, I, R, G))), axis=1), full)
     return np.swapaxes(vt[:, n:, :], 1, 2), full
 
 
@@ -221,8 +227,13 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     T = lam * dn
     ok = (kkt < 1e-9) & np.all(T > 1e-9 * (m * g)[:, None], axis=1)
     # stability: reduced stiffness positive semi-definite (as rest_pose checks)
-    N, full = _null_space(G)
+    N, full = _null_space(G, m, I, R)
     ok &= full
+    if G.shape[1] > MAX_ELIMINATION_WIRES:
+        # Newton's multipliers are the run's (rest_multipliers) only where its cut-off weighs every direction
+        # 1 to within 1e-12 (eigenvalue ratios above 1e3 x MIN_NORM_RCOND): the blend below goes to rest_pose
+        ok &= ~near_dependent(np.linalg.svd(G, compute_uv=False)) | np.all(
+            held_directions(np.linalg.eigvalsh(multiplier_matrix(m, I, R, G)), margin=1e3), axis=1)
     if N.shape[2]:
         Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
         ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
@@ -368,7 +379,7 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose], lazy: bool =
         R = np.array([r.R for r in rests])
         d, w, G = _jacobian(a, p, com, R)
         dn = np.linalg.norm(d, axis=2)
-        N, full = _null_space(G)
+        N, full = _null_space(G, m, I, R)
     lam = np.array([r.tensions for r in rests]) / dn
     M = _mass_matrix(m, I, R)
     Nt = np.swapaxes(N, 1, 2)

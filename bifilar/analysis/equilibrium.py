@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestError
 from ..rotations import cross, matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
+from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions, min_norm_multipliers
 from ..scene import Scene, lowest_point_z
 
 
@@ -93,6 +94,74 @@ def constraint_hessians(d: np.ndarray, w: np.ndarray) -> np.ndarray:
         H[i, 3:, :3] = W
         H[i, 3:, 3:] = -W @ W + 0.5 * (np.outer(d[i], w[i]) + np.outer(w[i], d[i])) - np.dot(d[i], w[i]) * eye
     return H
+
+
+def multiplier_matrix(mass, inertia, R: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """``G M^-1 G^T`` (..., n, n) (m^2 / kg): the
+    run's multiplier matrix ``J M^-1 J^T`` at poses with attitudes ``R``
+    (..., 3, 3) (body -> world), ``G`` (..., n, 6) the constraint Jacobian
+    of :func:`constraint_jacobian`, M the body's mass (kg, scalar or (...,))
+    and its inertia (kg m^2, body frame, (3, 3) or (..., 3, 3)) turned to
+    the world.  Vectorised over leading axes."""
+    Gt = np.swapaxes(G, -1, -2)
+    Iw = R @ np.linalg.inv(np.asarray(inertia, float)) @ np.swapaxes(R, -1, -2)
+    return G[..., :3] @ Gt[..., :3, :] / np.asarray(mass, float)[..., None, None] + G[..., 3:] @ Iw @ Gt[..., 3:, :]
+
+
+def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray | None = None) -> int:
+    """The number of wire constraints the model holds at a pose (attitude
+    ``R``, Jacobian ``G`` (n, 6); ``sv`` G's singular values if known).
+    Up to :data:`~bifilar.models.maximal.MAX_ELIMINATION_WIRES` wires (the
+    run's exact elimination): G's rank (singular values above 1e-12 of the
+    largest).  More wires: the run's rule (:func:`~bifilar.models.maximal.
+    held_directions`, eigenvalues of ``G M^-1 G^T`` at or above 1e-6 of the
+    largest), so that a rig whose wires are only nearly dependent (anchors
+    splayed by less than a length tolerance) is dependent at rest as in the
+    run (docs/design.md "restrank, session 14")."""
+    if sv is None:
+        sv = np.linalg.svd(G, compute_uv=False)
+    if G.shape[0] > MAX_ELIMINATION_WIRES and near_dependent(sv):
+        return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene.mass, scene.inertia, R, G)))))
+    return int(np.sum(sv > 1e-12 * sv[0]))
+
+
+#: wires whose Jacobian's smallest singular value is below this fraction of its largest (a splay of ~1e-5 of
+#: the wires' length: less than their stretch under load) take the run's rank rule at rest; above it the
+#: rank is geometric.  The run's rule weighs by the body's mass and inertia, so on its own it made the
+#: rest's rank jump with the inertia invert solves for (random 4-wire rigs with singular values 1e-4 .. 3e-3
+#: gained and lost a mode across the cut-off; docs/design.md "restrank, session 14")
+NEAR_DEPENDENT_SV = 1e-5
+
+
+def near_dependent(sv: np.ndarray) -> np.ndarray:
+    """Whether wires with constraint-Jacobian singular values ``sv`` (..., n),
+    descending, are within :data:`NEAR_DEPENDENT_SV` of dependent."""
+    sv = np.asarray(sv, float)
+    return sv[..., -1] < NEAR_DEPENDENT_SV * sv[..., 0]
+
+
+def rest_multipliers(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    """The multipliers (n,) N/m (``T_i / |d_i|``) the run takes at a rest
+    pose (com m, R body -> world) whose equilibrium equations Newton solved
+    with ``lam``: on more than :data:`~bifilar.models.maximal.
+    MAX_ELIMINATION_WIRES` wires the run's minimum-norm solution with its
+    cut-off (:func:`~bifilar.models.maximal.min_norm_multipliers` of
+    ``G M^-1 G^T lam = G M^-1 (-grad V)``), so nearly dependent wires get
+    the dependent-wire split at rest too; ``lam`` itself where that differs
+    from it by rounding only (1e-12 of the largest: independent and exactly
+    dependent rigs keep their poses' numbers bit for bit) and on fewer
+    wires."""
+    if scene.n_wires <= MAX_ELIMINATION_WIRES:
+        return lam
+    _, _, G = constraint_jacobian(scene, com, R)
+    if not near_dependent(np.linalg.svd(G, compute_uv=False)):
+        return lam
+    A = multiplier_matrix(scene.mass, scene.inertia, R, G)
+    Minv_f = np.concatenate([np.zeros(2), [-scene.gravity], np.zeros(3)])  # M^-1 (-grad V): gravity's acceleration
+    split = min_norm_multipliers(A, G @ Minv_f)
+    if np.max(np.abs(split - lam)) <= 1e-12 * np.max(np.abs(lam)):
+        return lam
+    return split
 
 
 def start_coms(anchors: np.ndarray, attachments: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -274,9 +343,9 @@ def _polish(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray | None
     (:func:`_hang_below_line`) and Newton again from there.  Same returns."""
     c, R, lam, kkt = _newton_kkt(scene, com, R, lam, iters=iters)
     turned = _hang_below_line(scene, c, R)
-    if turned is None:
-        return c, R, lam, kkt
-    return _newton_kkt(scene, *turned, iters=iters)
+    if turned is not None:
+        c, R, lam, kkt = _newton_kkt(scene, *turned, iters=iters)
+    return c, R, rest_multipliers(scene, c, R, lam), kkt
 
 
 def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray):
@@ -286,7 +355,7 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     d, w, G = constraint_jacobian(scene, com, R)
     K = np.einsum("i,ijk->jk", lam, constraint_hessians(d, w))
     _, s, vt = np.linalg.svd(G)
-    rank = int(np.sum(s > 1e-12 * s[0]))
+    rank = constraint_rank(scene, R, G, s)
     N = vt[rank:].T
     M = np.zeros((6, 6))
     M[:3, :3] = scene.mass * np.eye(3)
@@ -299,16 +368,15 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     directions' constraint Jacobian has full rank n (else 4 or 5 dependent
     wires, e.g. parallel vertical ones, admit a self-stress and the tensions
     printed are only one split (:func:`indeterminate_warning`); the real one depends on the
-    wires' stretch).  Same rank tolerance as :func:`reduced_stiffness`."""
+    wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`)."""
     return not _wires_dependent(scene, rest.com, rest.R)
 
 
 def _wires_dependent(scene: Scene, com: np.ndarray, R: np.ndarray) -> bool:
     """Whether the wire directions in the pose (com m, R body -> world) are
-    linearly dependent as constraints (rank of the constraint Jacobian below n)."""
+    linearly dependent as constraints (:func:`constraint_rank` below n)."""
     _, _, G = constraint_jacobian(scene, com, R)
-    s = np.linalg.svd(G, compute_uv=False)
-    return int(np.sum(s > 1e-12 * s[0])) < scene.n_wires
+    return constraint_rank(scene, R, G) < scene.n_wires
 
 
 def tension_range(scene: Scene, rest: RestPose) -> np.ndarray:
@@ -379,7 +447,7 @@ def stretching_modes(scene: Scene, rest: RestPose, modes) -> list[tuple[str, flo
     are independent."""
     d, w, G = constraint_jacobian(scene, rest.com, rest.R)
     U, sv, _ = np.linalg.svd(G)
-    rank = int(np.sum(sv > 1e-12 * sv[0]))
+    rank = constraint_rank(scene, rest.R, G, sv)
     if rank >= scene.n_wires:
         return []
     S = U[:, rank:]  # orthonormal self-stresses (n, n - rank)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Scene
-from .equilibrium import RestPose, constraint_jacobian
+from .equilibrium import RestPose, constraint_jacobian, constraint_rank, multiplier_matrix
 
 
 def reduced_statics(scene: Scene, rest: RestPose) -> tuple[np.ndarray, np.ndarray]:
@@ -22,11 +22,12 @@ def reduced_statics(scene: Scene, rest: RestPose) -> tuple[np.ndarray, np.ndarra
     (rows force, moment about the CoM; ``A T = -grad V`` at rest, world
     frame) and P (rank, 6) the projection on its range, so that ``P A T =
     P f`` are the equilibrium equations without their dependent rows
-    (rounding apart)."""
+    (rounding apart; nearly dependent ones too, by the run's rule,
+    :func:`~bifilar.analysis.equilibrium.constraint_rank`)."""
     d, _, G = constraint_jacobian(scene, rest.com, rest.R)
     A = (G / np.linalg.norm(d, axis=1)[:, None]).T
     U, sv, _ = np.linalg.svd(A)
-    return A, U[:, :int(np.sum(sv > 1e-12 * sv[0]))].T
+    return A, U[:, :constraint_rank(scene, rest.R, G, sv)].T
 
 
 def split_bounds(A: np.ndarray, P: np.ndarray, f: np.ndarray, fallback: np.ndarray, lower: bool = True) -> np.ndarray:
@@ -61,7 +62,7 @@ def held_violation(scene: Scene, Y: np.ndarray) -> float:
     :func:`~bifilar.models.maximal._min_norm` leaves free: a real rig's wires
     stretch there, docs/design.md "offcentre, session 14"), as lengths
     (``phi_i / L_i``).  On rigs with independent wires, the whole error."""
-    from ..models.maximal import MIN_NORM_RCOND
+    from ..models.maximal import held_directions
     from ..rotations import quat_to_matrix
 
     Y = np.asarray(Y, float)
@@ -71,10 +72,7 @@ def held_violation(scene: Scene, Y: np.ndarray) -> float:
     L = np.asarray(scene.lengths, float)
     phi = 0.5 * (np.einsum("kni,kni->kn", d, d) - L ** 2)
     G = np.concatenate([d, np.cross(w, d)], axis=2)  # d phi / d(dr, dtheta_world) (k, n, 6)
-    Iinv = np.einsum("kij,jl,kml->kim", R, np.linalg.inv(np.asarray(scene.inertia, float)), R)
-    A = np.einsum("kni,kmi->knm", G[..., :3], G[..., :3]) / scene.mass + np.einsum(
-        "kni,kij,kmj->knm", G[..., 3:], Iinv, G[..., 3:])
-    ev, V = np.linalg.eigh(A)
-    held = ev >= MIN_NORM_RCOND * ev[:, -1:]  # (k, n)
+    ev, V = np.linalg.eigh(multiplier_matrix(scene.mass, scene.inertia, R, G))
+    held = held_directions(ev)  # (k, n)
     kept = np.einsum("knj,kj->kn", V, np.where(held, np.einsum("knj,kn->kj", V, phi), 0.0))
     return float(np.max(np.abs(kept) / L))

@@ -728,6 +728,28 @@ def _filtered_inverse(w: np.ndarray, top) -> np.ndarray:
     return w ** 3 / (w ** 4 + e4)
 
 
+def held_directions(w: np.ndarray, margin: float = 1.0) -> np.ndarray:
+    """Which eigen-directions of the multiplier matrix ``J M^-1 J^T`` (its
+    eigenvalues ``w`` (..., n), ascending) :func:`_min_norm` holds: those at
+    or above :data:`MIN_NORM_RCOND` of the largest (the cut-off's weight
+    1/2 and more); the others are the dependent or nearly dependent wires'
+    self-stresses, left free.  The one rank rule of rigs of more than
+    :data:`MAX_ELIMINATION_WIRES` wires: the run's, the rest pose's
+    (:mod:`bifilar.analysis.equilibrium`) and the held length error's.
+    ``margin``: at or above ``margin`` times that (1e3: where the cut-off's
+    weight is 1 to within 1e-12, the multipliers the exact solution's)."""
+    w = np.asarray(w, float)
+    return w >= margin * MIN_NORM_RCOND * w[..., -1:]
+
+
+def min_norm_multipliers(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`_min_norm`'s solution of ``A lam = b`` for one symmetric
+    positive semi-definite ``A`` (n, n) (``J M^-1 J^T``) and ``b`` (n,),
+    as an array, the same cut-off (for the rest pose's multipliers)."""
+    w, V = np.linalg.eigh(np.asarray(A, float))
+    return V @ ((V.T @ np.asarray(b, float)) * _filtered_inverse(w, w[-1]))
+
+
 def _zero_set(vals: dict) -> frozenset:
     out = set()
     for k, v in vals.items():
