@@ -102,3 +102,45 @@ def test_the_fit_check_counts_the_stated_priors():
     assert abs(res.value("Izz") - 0.40) < 1.96 * res.sigma("Izz")
     with pytest.raises(InputError, match=r"counting the stated uncertainty .*inertia=0.01"):
         _two_hangings({"inertia": 0.01})
+
+
+def test_sweep_cautions_where_the_priors_move_the_planned_answer(tmp_path):
+    """``sweep``'s recommended point on the tilted plate: its Izz from the
+    torsion depends on the config's Iyz and Iyy, which the predicted sigma
+    takes as exact; a caution says by how much a 10 % error would move it.
+    The planner's shift (the timing gain alone, its own MAC-tracked
+    differences) against ``invert``'s ``plausible_shift`` for the period the
+    prior gives (the estimate then the prior itself, one period, one
+    unknown: the same first-order quantity by another path; 1e-3: the two
+    central differences' truncation, ~1e-6 relative, and the solver's stop
+    at 1e-9 of the largest moment).  The level bifilar of test_priorunc is
+    not cautioned.  Old code: no caution (and no ``planned_prior_shift``)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+    from bifilar.estimation.prior_inertia import planned_prior_shift
+
+    s = _plate()
+    rest = rest_pose(s)
+    T = linear_modes(s, rest).get("torsion").period
+    shift, movers = planned_prior_shift(s, rest, "Izz", "torsion")
+    ref = _invert(s, {}, period=T).to_json()["prior_inertia"]["plausible_shift"]["Izz"]["std"]
+    assert shift == pytest.approx(ref, rel=1e-3) and movers == ["Iyz", "Iyy"]
+    cfg = tmp_path / "plate.yaml"
+    from tests.test_priorunc import PLATE
+
+    cfg.write_text(yaml.safe_dump(PLATE))
+    r = CliRunner().invoke(main, ["sweep", str(cfg), "--param", "length=1.4:1.4:1", "--component", "Izz",
+                                  "--no-tensions", "--json"])
+    assert r.exit_code == 0, r.output
+    w = [x for x in json.loads(r.stdout)["warnings"] if "not solved for" in x]
+    assert len(w) == 1 and "Izz from its torsion" in w[0] and "--uncertainty inertia=REL" in w[0], w
+    level = {"gravity": 9.81, "body": {"mass": 2.0, "inertia": {"principal": [0.03, 0.05, 0.07]}},
+             "rig": {"anchors": [[-0.2, 0.0, 1.0], [0.2, 0.0, 1.0]], "attachments": [[-0.2, 0.0, 0.05], [0.2, 0.0, 0.05]],
+                     "lengths": [0.95, 0.95]}}
+    sl = scene_from_dict(level, warn=False)
+    # no first-order coupling: the central differences cancel to rounding (5.6e-13 kg m^2 measured; 1e-8 is
+    # 1e-6 of Izz, ~1e-4 of a 0.1 % sigma, and ~1e5 above the rounding, kernel-independent)
+    assert planned_prior_shift(sl, rest_pose(sl), "Izz", "torsion")[0] < 1e-8

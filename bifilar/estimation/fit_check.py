@@ -261,8 +261,8 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
         # must bridge the residual, the inputs checked with the full model
         stated = sig ** 2 + (0.0 if extra_var is None else np.asarray(extra_var, float))
         other = stated + amp_var
-        C_st = np.diag(stated) + C_pri
-        ok = bool((extra_var is not None or pri_names) and res @ np.linalg.solve(C_st, res) <= lim_p) \
+        q = float(res @ np.linalg.solve(np.diag(stated) + C_pri, res)) if pri_names else float(np.sum(res ** 2 / stated))
+        ok = bool((extra_var is not None or pri_names) and q <= lim_p) \
             or inputs_explain(pb, p, -res, other, lim_p)
     return ok, chi2_fit, dist, test
 

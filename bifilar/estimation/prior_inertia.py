@@ -274,3 +274,33 @@ def prior_warning(pri: PriorInertia, std) -> str | None:
             f"depend on them: a {100 * PLAUSIBLE_PRIOR_ERROR:g} % error in them would move {moved}; state how well "
             "they are known with --uncertainty inertia=REL (relative; budgeted as prior_inertia) or solve for them "
             "(--solve-for)")
+
+
+def planned_prior_shift(scene, rest, comp: str, label: str) -> tuple[float, list]:
+    """For a planned measurement (``sweep``/``plan``): the std (kg m^2, or
+    NaN where the period has no derivative) that a :data:`PLAUSIBLE_PRIOR_ERROR`
+    error of each other component's prior (its :func:`prior_scales`,
+    independent) would add to ``comp`` estimated from mode ``label``'s
+    linear period at ``scene``'s rest pose ``rest``, and the components
+    that carry it (largest first, those above a tenth of it).  ``invert``'s
+    sensitivity with the timing gain alone: ``dI_comp/dI_c = -(dT/dI_c) /
+    (dT/dI_comp)``, central differences (:data:`PRIOR_STEP` of the largest
+    moment) of the linear periods, the mode tracked by MAC."""
+    from ..analysis.modes import modes_of_inertia
+    from .sensitivity import matched_periods, perturb
+
+    at = modes_of_inertia(scene, rest)
+    base = at(scene.inertia)
+    k = next(i for i, m in enumerate(base.modes) if m.label == label)
+    h = PRIOR_STEP * float(np.max(np.linalg.eigvalsh(scene.inertia)))
+
+    def dT(c):
+        return float(matched_periods(base, at(perturb(scene, c, h).inertia))[k]
+                     - matched_periods(base, at(perturb(scene, c, -h).inertia))[k]) / (2 * h)
+
+    others = [c for c in INERTIA_COMPONENTS if c != comp]
+    d0 = dT(comp)
+    S = np.array([-dT(c) / d0 for c in others]) * PLAUSIBLE_PRIOR_ERROR * prior_scales(scene.inertia, others)
+    shift = float(np.sqrt(np.sum(S ** 2)))
+    movers = [others[q] for q in np.argsort(-np.abs(S)) if abs(S[q]) > 0.1 * shift] if shift > 0 else []
+    return shift, movers
