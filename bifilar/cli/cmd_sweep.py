@@ -137,8 +137,10 @@ def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None,
     experiments where the plan's 0.44 % puts the limit 94 sigmas away)."""
     from ..studies.ranking import tension_range_caution
     from ..studies.sweep import point_warnings as check
+    from ..studies.sweep import prior_cautions
 
     out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
+    out += [f"{what}: {w}" for w in prior_cautions(cfg, source, point)]
     joint = joint or {}
     out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
             if c not in joint and e.get("physical_limit")]

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import BifilarError
 from .problem import Problem
+from .prior_inertia import prior_period_columns
 
 #: largest normalised residual |T_model - T_meas| / sigma of an exactly determined fit
 FIT_Z = 0.1
@@ -185,8 +186,11 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
 
     The periods' covariance is ``C = diag(sigma_T^2) + C_x`` (timing plus
     :func:`input_period_covariance`, the spread of periods timed at an
-    unstated amplitude, :func:`unstated_amplitude_variance`, and
-    ``extra_var`` (K,) s^2 on the diagonal; ``amp_var``: the former when
+    unstated amplitude, :func:`unstated_amplitude_variance`, ``extra_var``
+    (K,) s^2 on the diagonal, and, where ``inertia`` is stated, the priors'
+    of the components not solved for,
+    :func:`~bifilar.estimation.prior_inertia.prior_period_columns`, the
+    description then naming them; ``amp_var``: the former when
     computed already, it hardly depends on ``p``).  With ``C = L L^T``, ``res = z
     sigma_T`` the residuals at ``p`` and ``J_p`` the periods' Jacobian in the
     unknowns:
@@ -244,6 +248,14 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
     C = np.diag(sig ** 2 + amp_var) + input_period_covariance(pb, p, r)
     if extra_var is not None:
         C += np.diag(np.asarray(extra_var, float))
+    # the components not solved for, where their uncertainty is stated (inertia=REL): their priors' errors
+    # shift the periods together, as an input's
+    pri_names, Jq, sq = prior_period_columns(pb, p, r)
+    C_pri = (Jq * sq ** 2) @ Jq.T
+    C += C_pri
+    if pri_names:
+        test += (f"; counting the stated uncertainty of the components not solved for (inertia="
+                 f"{float(pb.unc['inertia']):g}: {', '.join(pri_names)})")
     try:
         L = np.linalg.cholesky(C)
     except np.linalg.LinAlgError:  # sensitivities that overflow: no finite covariance to check against
@@ -263,7 +275,8 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
         # must bridge the residual, the inputs checked with the full model
         stated = sig ** 2 + (0.0 if extra_var is None else np.asarray(extra_var, float))
         other = stated + amp_var
-        ok = bool((extra_var is not None or released) and np.sum(res ** 2 / stated) <= lim_p) \
+        q = float(res @ np.linalg.solve(np.diag(stated) + C_pri, res)) if pri_names else float(np.sum(res ** 2 / stated))
+        ok = bool((extra_var is not None or released or pri_names) and q <= lim_p) \
             or inputs_explain(pb, p, -res, other, lim_p)
     return ok, chi2_fit, dist, test
 

@@ -20,9 +20,13 @@ difference run per component with a non-zero uncertainty, as the inputs'
 ``dr/dx`` (:func:`~bifilar.estimation.factor_inputs.stepped_factor_runs`).
 
 The priors' uncertainty is stated with ``--uncertainty inertia=REL``: each
-component not solved for has the standard uncertainty ``REL |I_c|`` (a
-product of inertia the config gives as 0, a symmetry, stays exact), and
-enters the budget as ``prior_inertia[I_c]`` (group ``prior_inertia``).  The
+component not solved for has the standard uncertainty ``REL`` times its
+scale (:func:`prior_scales`): a moment's own ``|I_cc|``, a product's
+``sqrt(I_ii I_jj)`` (the Cauchy-Schwarz bound on a product, so a product
+the config gives as 0 is not exact: a body "symmetric" to 1 % has products
+of ~1 % of it), and enters the budget as ``prior_inertia[I_c]`` (group
+``prior_inertia``).  The fit check counts the same variance
+(:func:`prior_period_columns`, ``fit_check.input_fit_check``).  The
 default is 0 (the answer as before: the config's values are taken as exact),
 and where a plausible prior error, :data:`PLAUSIBLE_PRIOR_ERROR` of each
 component, would move a solved component by more than
@@ -57,7 +61,8 @@ class PriorInertia:
     """The components not solved for at an estimate (reference body frame).
 
     names : the components (``Ixx`` ...), values : their priors (kg m^2),
-    sigmas : their standard uncertainties (kg m^2, ``rel |value|``),
+    scales : their uncertainties' scales (kg m^2, :func:`prior_scales`),
+    sigmas : their standard uncertainties (kg m^2, ``rel * scales``),
     rel : the stated relative uncertainty, stated : whether the user stated
     it, unknowns : the solved names, sensitivity : (P, Q) ``dp_i / dI_c``
     (kg m^2 per kg m^2, or m per kg m^2 for a CoM unknown; NaN where the
@@ -67,6 +72,7 @@ class PriorInertia:
 
     names: list
     values: np.ndarray
+    scales: np.ndarray
     sigmas: np.ndarray
     rel: float
     stated: bool
@@ -83,8 +89,8 @@ class PriorInertia:
 
     def shift(self, rel: float) -> np.ndarray:
         """(P,) the std each unknown would gain from independent errors of
-        ``rel`` times each prior (SI)."""
-        S = np.nan_to_num(self.sensitivity) * (rel * np.abs(self.values))[None, :]
+        ``rel`` times each prior's scale (SI)."""
+        S = np.nan_to_num(self.sensitivity) * (rel * self.scales)[None, :]
         return np.sqrt(np.sum(S ** 2, axis=1)) if S.size else np.zeros(len(self.unknowns))
 
     def to_json(self, std) -> dict:
@@ -94,7 +100,8 @@ class PriorInertia:
         its ratio to the answer's std."""
         comps = {}
         for q, c in enumerate(self.names):
-            comps[c] = {"prior": float(self.values[q]), "std": float(self.sigmas[q]), "unit": "kg m^2",
+            comps[c] = {"prior": float(self.values[q]), "std": float(self.sigmas[q]), "scale": float(self.scales[q]),
+                         "unit": "kg m^2",
                         "sensitivity": {n: (float(self.sensitivity[i, q]) if np.isfinite(self.sensitivity[i, q])
                                             else None) for i, n in enumerate(self.unknowns)}}
         sh = self.shift(PLAUSIBLE_PRIOR_ERROR)
@@ -104,6 +111,45 @@ class PriorInertia:
                                         "in_std": (float(sh[i] / std[i]) if np.isfinite(std[i]) and std[i] > 0
                                                    else None)}
                                     for i, n in enumerate(self.unknowns)}}
+
+
+def prior_scales(I, names) -> np.ndarray:
+    """(Q,) the scale of each component's prior uncertainty (kg m^2): a
+    moment's own ``|I_cc|``; a product ``I_ij``'s ``sqrt(|I_ii I_jj|)``,
+    the tensor ``I`` (3, 3) the one at the estimate (reference body frame).
+    A product is bounded by it (Cauchy-Schwarz on the second moments ``M =
+    tr(I)/2 - I``: ``|I_ij| = |M_ij| <= sqrt(M_ii M_jj) <= sqrt(I_ii I_jj)``),
+    so it is the product's natural unit; a product's own value (0 for a
+    symmetry) says nothing of how well it is known."""
+    I = np.asarray(I, float)
+    out = []
+    for c in names:
+        i, j = _IDX[c]
+        out.append(abs(I[i, i]) if i == j else float(np.sqrt(abs(I[i, i] * I[j, j]))))
+    return np.array(out, float)
+
+
+def prior_period_columns(pb: Problem, p, r=None) -> tuple[list, np.ndarray, np.ndarray]:
+    """(components, (K, Q) ``r_k dT_lin,k / dI_c`` (s per kg m^2, NaN set to
+    0), (Q,) their standard uncertainties ``unc["inertia"]`` times
+    :func:`prior_scales`, kg m^2) of the components not solved for, at the
+    unknowns ``p``, for the fit check; only the components with a non-zero
+    uncertainty (none where ``inertia`` is 0 or not stated).  Linear (the
+    amplitude factor's derivative, a small correction, left out)."""
+    rel = float((pb.unc or {}).get("inertia", 0.0) or 0.0)
+    K = len(pb.measurements)
+    names = [c for c in INERTIA_COMPONENTS if c not in pb.unknowns]
+    if rel <= 0 or not names:
+        return [], np.zeros((K, 0)), np.zeros(0)
+    vals = pb.values(p)
+    I = pb.models[0].inertia_ref(vals)
+    sig = rel * prior_scales(I, names)
+    keep = [q for q in range(len(names)) if sig[q] > 0]
+    names, sig = [names[q] for q in keep], sig[keep]
+    h = PRIOR_STEP * float(np.max(np.linalg.eigvalsh(I)))
+    r = np.ones(K) if r is None else np.asarray(r, float)
+    J = np.column_stack([_dT_lin(pb, vals, c, float(I[_IDX[c]]), h) for c in names]) if names else np.zeros((K, 0))
+    return names, np.nan_to_num(J) * r[:, None], sig
 
 
 def _dT_lin(pb: Problem, vals: dict, c: str, v0: float, h: float) -> np.ndarray:
@@ -163,7 +209,7 @@ def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, 
     """The components of the tensor not solved for at the estimate ``p_hat``
     (module docstring): their priors (``pb.I_ref0``: ``pb`` built about the
     estimate, :func:`~bifilar.estimation.problem.problem_at`), standard
-    uncertainties ``unc["inertia"] |I_c|``, the unknowns' sensitivity to
+    uncertainties ``unc["inertia"]`` times :func:`prior_scales`, the unknowns' sensitivity to
     each and (nonlinear, a non-zero uncertainty) the amplitude factor's
     derivative in them.  ``r_hat`` (K,) the amplitude factors, ``T_lin``
     (K,) the linear periods at ``p_hat`` (s), ``ctx`` the budget's
@@ -173,9 +219,11 @@ def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, 
     names = [c for c in INERTIA_COMPONENTS if c not in pb.unknowns]
     K, P, Q = len(pb.measurements), len(pb.unknowns), len(names)
     rel = float(unc.get("inertia", 0.0) or 0.0)
-    values = np.array([pb.I_ref0[_IDX[c]] for c in names], float)
-    sigmas = rel * np.abs(values)
     vals = pb.values(p_hat)
+    I = pb.models[0].inertia_ref(vals)
+    values = np.array([I[_IDX[c]] for c in names], float)
+    scales = prior_scales(I, names)
+    sigmas = rel * scales
     h = PRIOR_STEP * float(np.max(np.linalg.eigvalsh(pb.I_ref0)))
     J = np.column_stack([_dT_lin(pb, vals, c, values[q], h) for q, c in enumerate(names)]) if Q else np.zeros((K, 0))
     J = J * np.asarray(r_hat, float)[:, None]
@@ -185,7 +233,7 @@ def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, 
         J = J + np.asarray(T_lin, float)[:, None] * dr
     G = ctx.gain if ctx.gain is not None else ctx.G
     S = -(np.asarray(G, float) @ J) if Q else np.zeros((P, 0))
-    return PriorInertia(names, values, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed)
+    return PriorInertia(names, values, scales, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed)
 
 
 def with_prior(budget, pri: PriorInertia):
@@ -218,7 +266,7 @@ def prior_warning(pri: PriorInertia, std) -> str | None:
     if not hit:
         return None
     i0 = max(hit, key=lambda i: sh[i] / std[i])
-    contrib = np.abs(np.nan_to_num(pri.sensitivity[i0]) * PLAUSIBLE_PRIOR_ERROR * np.abs(pri.values))
+    contrib = np.abs(np.nan_to_num(pri.sensitivity[i0]) * PLAUSIBLE_PRIOR_ERROR * pri.scales)
     movers = [pri.names[q] for q in np.argsort(-contrib) if contrib[q] > 0.1 * sh[i0]]
     moved = ", ".join(f"{pri.unknowns[i]} by {sh[i] / std[i]:.2g} of its std" for i in hit)
     return (f"the config's {', '.join(movers)} (not solved for) {'is' if len(movers) == 1 else 'are'} taken as "
@@ -226,3 +274,33 @@ def prior_warning(pri: PriorInertia, std) -> str | None:
             f"depend on them: a {100 * PLAUSIBLE_PRIOR_ERROR:g} % error in them would move {moved}; state how well "
             "they are known with --uncertainty inertia=REL (relative; budgeted as prior_inertia) or solve for them "
             "(--solve-for)")
+
+
+def planned_prior_shift(scene, rest, comp: str, label: str) -> tuple[float, list]:
+    """For a planned measurement (``sweep``/``plan``): the std (kg m^2, or
+    NaN where the period has no derivative) that a :data:`PLAUSIBLE_PRIOR_ERROR`
+    error of each other component's prior (its :func:`prior_scales`,
+    independent) would add to ``comp`` estimated from mode ``label``'s
+    linear period at ``scene``'s rest pose ``rest``, and the components
+    that carry it (largest first, those above a tenth of it).  ``invert``'s
+    sensitivity with the timing gain alone: ``dI_comp/dI_c = -(dT/dI_c) /
+    (dT/dI_comp)``, central differences (:data:`PRIOR_STEP` of the largest
+    moment) of the linear periods, the mode tracked by MAC."""
+    from ..analysis.modes import modes_of_inertia
+    from .sensitivity import matched_periods, perturb
+
+    at = modes_of_inertia(scene, rest)
+    base = at(scene.inertia)
+    k = next(i for i, m in enumerate(base.modes) if m.label == label)
+    h = PRIOR_STEP * float(np.max(np.linalg.eigvalsh(scene.inertia)))
+
+    def dT(c):
+        return float(matched_periods(base, at(perturb(scene, c, h).inertia))[k]
+                     - matched_periods(base, at(perturb(scene, c, -h).inertia))[k]) / (2 * h)
+
+    others = [c for c in INERTIA_COMPONENTS if c != comp]
+    d0 = dT(comp)
+    S = np.array([-dT(c) / d0 for c in others]) * PLAUSIBLE_PRIOR_ERROR * prior_scales(scene.inertia, others)
+    shift = float(np.sqrt(np.sum(S ** 2)))
+    movers = [others[q] for q in np.argsort(-np.abs(S)) if abs(S[q]) > 0.1 * shift] if shift > 0 else []
+    return shift, movers

@@ -82,7 +82,7 @@ UNCERTAINTY_KEYS = {
     "release": "m (invert with a recording: the largest second mode its release started unseen, a swing's travel; "
                "an angle mode's this over the longest wire, rad)",
     "inertia": "relative (invert: each inertia component not solved for, the config's value its prior, known to "
-               "this fraction of itself; 0: taken as exact)",
+               "this fraction of itself, a product to this fraction of sqrt(I_ii I_jj); 0: taken as exact)",
 }
 
 #: budget groups, in display order

@@ -74,9 +74,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from pathlib import Path
 from typing import Callable
+
+import numpy as np
 
 from ..errors import InputError
 from .point import (IDENTIFIABLE_MIN, TURN_MAX, _Ladder, _nonlinear_runs, _one_line, _plain,  # noqa: F401
@@ -129,6 +132,46 @@ def point_warnings(base_cfg: dict, source: str, params: dict) -> list[str]:
     cfg, _ = apply_params(base_cfg, params, source)
     scene = scene_from_dict(cfg, source, warn=False)
     return [w for w in plausibility_warnings(scene) if w not in base] + clearance_warnings(scene)
+
+
+def prior_cautions(base_cfg: dict, source: str, point: dict) -> list[str]:
+    """One line per component of a recommended or planned point whose
+    estimate a :data:`~bifilar.estimation.prior_inertia.PLAUSIBLE_PRIOR_ERROR`
+    error of the other components' priors would move by more than
+    :data:`~bifilar.estimation.prior_inertia.WARN_SHIFT` of its predicted
+    sigma (:func:`~bifilar.estimation.prior_inertia.planned_prior_shift`;
+    a rig that couples them into the mode: tilted, off-centre), as
+    ``invert`` warns; the predicted sigma takes them as exact."""
+    from ..analysis.equilibrium import rest_pose
+    from ..config import scene_from_dict
+    from ..errors import BifilarError
+    from ..estimation.prior_inertia import PLAUSIBLE_PRIOR_ERROR, WARN_SHIFT, planned_prior_shift
+    from .shorthands import apply_params
+
+    todo = {c: e for c, e in point.get("components", {}).items()
+            if e.get("mode") and math.isfinite(e.get("sigma", math.inf)) and e.get("sigma", 0) > 0}
+    if not todo:
+        return []
+    cfg, _ = apply_params(base_cfg, point["params"], source)
+    scene = scene_from_dict(cfg, source, warn=False)
+    try:
+        rest = rest_pose(scene)
+    except BifilarError:
+        return []
+    out = []
+    for c, e in todo.items():
+        try:
+            shift, movers = planned_prior_shift(scene, rest, c, e["mode"])
+        except (BifilarError, StopIteration, np.linalg.LinAlgError):
+            continue
+        if shift > WARN_SHIFT * e["sigma"]:
+            it = "it" if len(movers) == 1 else "them"
+            out.append(f"{c} from its {e['mode']} depends on the config's {', '.join(movers)} (not solved for), which "
+                       f"invert takes as exact, as the predicted sigma does: a {100 * PLAUSIBLE_PRIOR_ERROR:g} % error "
+                       f"in {it} would move "
+                       f"{c} by {shift / e['sigma']:.2g} of its sigma; state how well they are known (invert's "
+                       "--uncertainty inertia=REL) or solve for them (--component)")
+    return out
 
 
 def stretching_summary(points: list[dict]) -> str | None:
