@@ -4,7 +4,7 @@
 * the indeterminate split was called "the least-squares split", but it is
   the least squares of the multipliers ``T_i / L_i``, not of the tensions;
   the warning now says so and gives the range statics leaves each wire
-  (``equilibrium.tension_range``), checked here against statics written out
+  (``wire_statics.tension_range``), checked here against statics written out
   by hand and a vertex enumeration;
 * a config whose measured lengths hang a wire slack by less than their
   uncertainty was refused by ``invert`` with advice to shorten a wire, as if
@@ -85,7 +85,8 @@ def test_range_and_split_of_a_table_on_unequal_vertical_wires():
     # sum T y = 0.  On a rectangle's corners T = W/4 + s (1, -1, 1, -1): each wire 0 .. W/2.  The model's
     # split is the least squares of the multipliers T_i / L_i (its rest pose and dynamics); the least
     # squares of the tensions would be W/4 each.  Before: the warning called it 'the least-squares split'.
-    from bifilar.analysis.equilibrium import indeterminate_warning, rest_pose, tension_range
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.wire_statics import indeterminate_warning, tension_range
 
     L = np.array([1.0, 1.2, 1.4, 1.6])
     scene = scene_of(vertical(CORNERS, L))
@@ -107,7 +108,8 @@ def test_range_and_split_of_a_table_on_unequal_vertical_wires():
 def test_range_on_five_vertical_wires_against_a_vertex_enumeration():
     # five vertical wires: rank 3, two self-stresses.  Each bound of a tension over the polygon {T >= 0,
     # B T = b} is at a vertex: two tensions zero, the other three from statics
-    from bifilar.analysis.equilibrium import rest_pose, tension_range, tensions_determined
+    from bifilar.analysis.equilibrium import rest_pose, tensions_determined
+    from bifilar.analysis.wire_statics import tension_range
 
     xy = [(0.40, 0.10), (0.05, 0.45), (-0.42, 0.20), (-0.30, -0.35), (0.25, -0.30)]
     L = [1.0, 1.3, 0.9, 1.15, 1.05]
@@ -133,7 +135,8 @@ def test_range_on_five_vertical_wires_against_a_vertex_enumeration():
 
 def test_range_of_determined_wires_is_their_tension(tmp_path):
     # the leaning table (rank 4): statics fixes the tensions, and modes says so without a range warning
-    from bifilar.analysis.equilibrium import rest_pose, tension_range
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.wire_statics import tension_range
 
     scene = scene_of(LEAN.replace("LAST", "1.1628"))
     rest = rest_pose(scene)

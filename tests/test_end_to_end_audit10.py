@@ -214,7 +214,8 @@ def test_stretching_share_of_a_twist_against_its_closed_form():
     # s_i ~ sigma_i / L_i with sigma = (+, -, +, -): the share is |sum sigma_i / L_i| / (2 sqrt(sum 1 / L_i^2))
     from types import SimpleNamespace
 
-    from bifilar.analysis.equilibrium import rest_pose, stretching_modes
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.wire_statics import stretching_modes
 
     twist = [SimpleNamespace(label="twist", shape=np.array([0, 0, 0, 0, 0, 1.0]))]
     for L in ([1.0, 1.2, 1.4, 1.6], [2.0, 1.0, 1.5, 1.2]):

@@ -265,7 +265,8 @@ def test_range_on_four_inclined_wires_through_one_point():
     W |d| / 2 = 49.84 N.  The session's tests had vertical wires only, whose
     horizontal force rows are zero (the rank reduction drops them): the
     weight's right-hand side with an x component (``b[0]`` 0 -> 1) passed."""
-    from bifilar.analysis.equilibrium import rest_pose, tension_range, tensions_determined
+    from bifilar.analysis.equilibrium import rest_pose, tensions_determined
+    from bifilar.analysis.wire_statics import tension_range
     from bifilar.config import scene_from_dict
 
     corners = [(1, 1), (-1, 1), (-1, -1), (1, -1)]

@@ -86,7 +86,8 @@ def test_a_nearly_dependent_table_rests_as_elastic_wires_hang_it_and_as_the_run_
     # (wire 2 at -23.5 N).  Elastic wires (EA 1e5) 24.525 N each within 2.1e-4 N up to 1e-4 m;
     # the model's split is the dependent one (24.525 N); 0.01 N is 4e-4 of the load, 50x that difference
     # and far below the 24.5 N the old splits were off by
-    from bifilar.analysis.equilibrium import rest_pose, tension_range, tensions_determined
+    from bifilar.analysis.equilibrium import rest_pose, tensions_determined
+    from bifilar.analysis.wire_statics import tension_range
     import bifilar.models.maximal as mx
 
     sc = _splayed(eps)

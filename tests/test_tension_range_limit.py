@@ -3,7 +3,7 @@
 Four or five wires whose tensions statics cannot split report the model's
 minimum-norm split; `sweep` and `plan` held only that split against
 `--max-tension`, while a real rig's wire can carry anything in its
-statics range (`equilibrium.tension_range`): on a level table of four
+statics range (`wire_statics.tension_range`): on a level table of four
 equal vertical wires, CoM centred, the split is m g / 4 per wire and the
 range 0 .. m g / 2.  With the limit between the two, the point stays
 feasible (the split is one admissible split) and is now flagged: each

@@ -367,8 +367,9 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     """Whether the wire tensions at rest follow from statics alone: the wire
     directions' constraint Jacobian has full rank n (else 4 or 5 dependent
     wires, e.g. parallel vertical ones, admit a self-stress and the tensions
-    printed are only one split (:func:`indeterminate_warning`); the real one depends on the
-    wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`)."""
+    printed are only one split
+    (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`); the real
+    one depends on the wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`)."""
     return not _wires_dependent(scene, rest.com, rest.R)
 
 
@@ -377,116 +378,6 @@ def _wires_dependent(scene: Scene, com: np.ndarray, R: np.ndarray) -> bool:
     linearly dependent as constraints (:func:`constraint_rank` below n)."""
     _, _, G = constraint_jacobian(scene, com, R)
     return constraint_rank(scene, R, G) < scene.n_wires
-
-
-def tension_range(scene: Scene, rest: RestPose) -> np.ndarray:
-    """The least and greatest tension (n, 2) N each wire can carry at the
-    rest pose ``rest`` with every wire pulling (``T >= 0``) and the body
-    balanced (``sum_i T_i u_i`` and its moment equal to the weight's, ``u_i``
-    the wire directions): what statics alone says of the split.  A rig whose
-    tensions are determined (:func:`tensions_determined`) has one split, its
-    rest tensions in both columns; on dependent wires (4 or 5, rank below n)
-    the tensions can move along the self-stresses until a wire goes slack:
-    a level table on four vertical wires at the corners of a rectangle,
-    CoM at its centre, allows 0 .. m g / 2 for every wire.  A linear
-    programme per bound (scipy's HiGHS, ~1 ms each), on the equilibrium
-    equations reduced to their rank (dependent rows are rounding apart)."""
-    T0 = np.asarray(rest.tensions, float)
-    if tensions_determined(scene, rest):
-        return np.column_stack([T0, T0])
-    from .wire_statics import reduced_statics, split_bounds
-
-    W = scene.mass * scene.gravity
-    A, P = reduced_statics(scene, rest)
-    out = W * split_bounds(A, P, np.array([0.0, 0.0, -1.0, 0.0, 0.0, 0.0]), T0 / W)  # per unit weight
-    return np.where(out < 1e-9 * W, 0.0, out)  # a bound at zero, not the solver's rounding about it
-
-
-def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
-    """The warning for a rig whose tensions statics cannot fix (see
-    :func:`tensions_determined`), or None.  It says which split the model
-    reports (the minimum-norm multipliers ``lambda_i = T_i / L_i``: least
-    squares of the tension per unit length, not of the tensions) and the
-    range statics leaves each wire (:func:`tension_range`)."""
-    if tensions_determined(scene, rest):
-        return None
-    rng = tension_range(scene, rest)
-    spans = ", ".join(f"wire {i + 1} {lo:.4g} .. {hi:.4g} N" for i, (lo, hi) in enumerate(rng))
-    return (f"rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically indeterminate: "
-            f"statics allows {spans} (any split in these ranges with the same resultant holds the body); those shown "
-            "are the model's split, the least-squares multipliers T_i / L_i (tension per metre of wire, not the "
-            "tensions themselves: on wires of unequal length it favours the longer ones, where equal elastic "
-            "wires favour the shorter); the real split is set by the wires' stretch and their lengths' tolerances")
-
-
-#: a mode of a dependent rig whose second-order change of the wires' lengths has a self-stress component
-#: above this fraction of its size cannot be followed with every wire at its length (see :func:`stretching_modes`);
-#: a symmetric rig's modes give rounding there (1e-16), a 4-wire table with wires of 1.0 .. 1.6 m 0.03 .. 0.06
-STRETCH_REL = 1e-6
-
-
-def stretching_modes(scene: Scene, rest: RestPose, modes) -> list[tuple[str, float]]:
-    """The linear modes of a rig with dependent wires (4 or 5 at rest,
-    :func:`tensions_determined` false) along which the wires cannot all keep
-    their lengths: (label, share) for each, ``share`` the part of the second-
-    order change of the constraints along the mode's shape ``v``
-    (``q_i = v^T H_i v``, :func:`constraint_hessians`) in the rig's
-    self-stress directions (the null space of ``G^T``), relative to ``|q|``.
-
-    Where it is zero (a symmetric rig: a twist lifts every corner of a
-    table on equal vertical wires alike) the body follows the mode on the
-    wires; where not (the same table on wires of unequal length: a twist
-    lifts each corner by ``r^2 theta^2 / 2 L_i``, which no rigid tilt fits),
-    rigid wires admit no motion along the mode alone: the model's body must
-    swing as well, at first order, and hold the wires by tensions that push
-    (measured on such a table: tensions of -734 N at 0.001 rad for a 98 N
-    body, a period 0.1 % off the linear one at 1e-5 rad).  A real rig's
-    wires stretch by that second-order amount instead, so its small
-    oscillations are the linear modes, and the rigid model's nonlinear runs
-    of such a mode are not physical at any amplitude.  [] when the wires
-    are independent."""
-    d, w, G = constraint_jacobian(scene, rest.com, rest.R)
-    U, sv, _ = np.linalg.svd(G)
-    rank = constraint_rank(scene, rest.R, G, sv)
-    if rank >= scene.n_wires:
-        return []
-    S = U[:, rank:]  # orthonormal self-stresses (n, n - rank)
-    H = constraint_hessians(d, w)
-    out = []
-    for m in modes:
-        v = np.asarray(m.shape, float)
-        q = np.einsum("i,nij,j->n", v, H, v)
-        nq = float(np.linalg.norm(q))
-        share = float(np.linalg.norm(S.T @ q)) / nq if nq > 0 else 0.0
-        if share > STRETCH_REL:
-            out.append((m.label, share))
-    return out
-
-
-def stretching_warning(scene: Scene, rest: RestPose, modes, only: str | None = None) -> str | None:
-    """The warning for the modes :func:`stretching_modes` finds (``only``: a
-    mode label, warned about alone), or None."""
-    hits = [lb for lb, s in stretching_modes(scene, rest, modes) if only is None or lb == only]
-    return stretching_text(scene, hits) if hits else None
-
-
-def stretching_text(scene: Scene, labels: list) -> str:
-    """The warning of :func:`stretching_warning` for modes ``labels``."""
-    return (f"rig: {stretching_reason(scene, labels)}, so its nonlinear runs of it (simulate, invert --amplitude, "
-            "tensions, sweep's and plan's tensions and amplitude terms) are not physical at any amplitude; a real "
-            "rig's wires stretch instead and its small oscillations keep the linear periods: time them at a small "
-            "amplitude and give invert --amplitude 0")
-
-
-def stretching_reason(scene: Scene, labels: list) -> str:
-    """Why the rigid-wire model cannot follow modes ``labels`` (found by
-    :func:`stretching_modes`) of ``scene``: the words every command's
-    warning or refusal of it shares."""
-    names = ", ".join(f"'{lb}'" for lb in labels)
-    return (f"the {scene.n_wires} wires are dependent at rest and mode{'s' if len(labels) > 1 else ''} {names} "
-            "would stretch them at second order (a twist or swing lifts their ends by unequal amounts that no tilt "
-            "of the body fits): the rigid-wire model follows such a motion only with the body swinging as well and "
-            "wires that push")
 
 
 def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = False,

@@ -12,7 +12,8 @@ def modes_document(scene, rest, ms) -> dict:
     """The JSON document of ``interface.md`` (plus extra fields); ``dof`` is
     the number of modes (6 minus the rank of the wires, not 6 - n when wires
     are dependent)."""
-    from ..analysis.equilibrium import tension_range, tensions_determined
+    from ..analysis.equilibrium import tensions_determined
+    from ..analysis.wire_statics import tension_range
 
     return {
         "equilibrium": {

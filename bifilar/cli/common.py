@@ -310,12 +310,12 @@ def warn_at_rest(scene, rest, modes, only: str | None = None) -> None:
     """Log the rest pose's warnings to stderr (``warning: ...``), as
     ``modes``, ``simulate`` and ``tensions`` give them: dependent wires'
     tensions only one split of many
-    (:func:`~bifilar.analysis.equilibrium.indeterminate_warning`), modes
-    that stretch the wires (:func:`~bifilar.analysis.equilibrium.stretching_warning`,
+    (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`), modes
+    that stretch the wires (:func:`~bifilar.analysis.wire_statics.stretching_warning`,
     of mode ``only`` or of all ``modes``), the body through the ceiling and
     crossing wires (:func:`~bifilar.analysis.clearance.clearance_warnings`)."""
     from ..analysis.clearance import clearance_warnings
-    from ..analysis.equilibrium import indeterminate_warning, stretching_warning
+    from ..analysis.wire_statics import indeterminate_warning, stretching_warning
 
     ws = [indeterminate_warning(scene, rest), stretching_warning(scene, rest, modes, only=only)]
     for w in [w for w in ws if w is not None] + clearance_warnings(scene, rest):

@@ -454,13 +454,13 @@ def refuse_stretching_amplitudes(pb: Problem) -> None:
     """Raise an :class:`InputError` (the amplitude's field) for a measured
     period stated at an amplitude (the nonlinear method's input) of a mode
     that the rig's dependent wires cannot follow rigidly
-    (:func:`~bifilar.analysis.equilibrium.stretching_modes`, at the prior):
+    (:func:`~bifilar.analysis.wire_statics.stretching_modes`, at the prior):
     the rigid-wire model's run of it is not physical at any amplitude (a
     4-wire table on wires of unequal length: tensions of -734 N in a 98 N
     body, or no two crossings, exit 1 before), while a real rig's wires
     stretch and its small oscillations keep the linear periods, which the
     advised ``--amplitude LABEL=0`` (the linear model) estimates from."""
-    from ..analysis.equilibrium import stretching_modes, stretching_reason
+    from ..analysis.wire_statics import stretching_modes, stretching_reason
 
     for k, m in enumerate(pb.measurements):
         if not m.amplitude:

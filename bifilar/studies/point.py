@@ -682,10 +682,10 @@ def run_health(run) -> dict:
 
 def _stretching(res: dict, scene, rest, modes) -> None:
     """Mark the point ``res`` whose dependent wires cannot follow the modes
-    its nonlinear runs excite (:func:`~bifilar.analysis.equilibrium.stretching_modes`):
+    its nonlinear runs excite (:func:`~bifilar.analysis.wire_statics.stretching_modes`):
     ``stretching_modes`` (their labels) and the warning `modes` gives; the
     runs' tensions, slack and amplitude terms are then not physical."""
-    from ..analysis.equilibrium import stretching_modes, stretching_text
+    from ..analysis.wire_statics import stretching_modes, stretching_text
 
     hits = [lb for lb, _ in stretching_modes(scene, rest, modes)]
     if hits:
@@ -698,7 +698,7 @@ def statics_range(scene, rest, tmax) -> dict:
     wires are dependent at rest (4 or 5 wires, :func:`~bifilar.analysis.equilibrium.tensions_determined`
     false), whose reported tensions are only the model's split:
     ``range`` (n, 2) the least and greatest tension each wire can carry at
-    rest (:func:`~bifilar.analysis.equilibrium.tension_range`), and
+    rest (:func:`~bifilar.analysis.wire_statics.tension_range`), and
     ``range_peak`` the greatest a wire can reach in the runs, at wire
     ``range_peak_wire`` (1-based): the greatest share of one wire in a
     split, at the rest geometry, of the wrench the wires exert with each
@@ -721,7 +721,8 @@ def statics_range(scene, rest, tmax) -> dict:
     up to 40 % above on the splayed one (docs/design.md, "rankfix,
     session 13"; tests/test_tension_range_limit.py).  All None for
     determined tensions."""
-    from ..analysis.equilibrium import tension_range, tensions_determined
+    from ..analysis.equilibrium import tensions_determined
+    from ..analysis.wire_statics import tension_range
     from ..analysis.wire_statics import reduced_statics, split_bounds
 
     if tensions_determined(scene, rest):
