@@ -175,3 +175,20 @@ def test_the_option_on_the_command_line_and_its_refusal(tmp_path):
     assert doc["budget"]["Izz"]["groups"]["prior_inertia"]["std"] > 0
     r = CliRunner().invoke(main, args + ["--uncertainty", "inertia=2"])
     assert r.exit_code == 2 and "inertia" in r.output and "Traceback" not in r.output, r.output
+
+
+@pytest.mark.parametrize("key", ["inertia", "release"])
+def test_sweep_names_invert_only_keys_as_invert_s(key):
+    # a config written for invert (its uncertainty block) or a --sigma with invert's keys: sweep and plan
+    # predict invert's sigma without them, and say whose key it is (it was "unknown uncertainty key")
+    from bifilar.errors import InputError
+    from bifilar.studies.settings import resolve_uncertainty
+
+    with pytest.raises(InputError) as e:
+        resolve_uncertainty({"uncertainty": {key: 0.01}})
+    assert e.value.field == f"uncertainty.{key}" and "invert's" in str(e.value) and "--uncertainty" in str(e.value)
+    with pytest.raises(InputError) as e:
+        resolve_uncertainty({}, {key: 0.01})
+    assert e.value.field == "--sigma" and "invert's" in str(e.value)
+    with pytest.raises(InputError, match="unknown uncertainty key"):
+        resolve_uncertainty({}, {"inertiaa": 0.01})

@@ -112,6 +112,13 @@ def check_component(name: str, field_: str) -> str:
     return name
 
 
+#: uncertainty keys only invert budgets (sweep's and plan's sigma is invert's without them): what each states
+INVERT_ONLY_UNCERTAINTY = {
+    "inertia": "the relative uncertainty of the inertia components not solved for, the config's priors",
+    "release": "the bound on a second mode a recording's release started unseen",
+}
+
+
 def resolve_uncertainty(cfg: dict, overrides: dict | None = None) -> dict:
     """Input uncertainties: defaults < the config's ``uncertainty:`` block < ``overrides`` (flags)."""
     out = dict(DEFAULT_UNCERTAINTY)
@@ -120,6 +127,11 @@ def resolve_uncertainty(cfg: dict, overrides: dict | None = None) -> dict:
         raise InputError("uncertainty", "must be a mapping like {timing: 0.001, length: 0.001}")
     for src, d in (("uncertainty", block or {}), ("--sigma", overrides or {})):
         for k, v in d.items():
+            if k in INVERT_ONLY_UNCERTAINTY:
+                raise InputError(f"{src}.{k}" if src == "uncertainty" else src,
+                                 f"{k!r} is invert's ({INVERT_ONLY_UNCERTAINTY[k]}); sweep and plan predict invert's "
+                                 "sigma without it: give it to invert's --uncertainty instead; keys here: "
+                                 f"{', '.join(DEFAULT_UNCERTAINTY)}")
             if k not in DEFAULT_UNCERTAINTY:
                 raise InputError(f"{src}.{k}" if src == "uncertainty" else src,
                                  f"unknown uncertainty key {k!r}; keys: {', '.join(DEFAULT_UNCERTAINTY)}")
