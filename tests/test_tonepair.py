@@ -101,3 +101,29 @@ def test_a_swing_the_bound_cannot_make_is_read_as_before(ratio, unc, monkeypatch
     assert sec.amplitude == pytest.approx(a, rel=1e-12)
     assert sec.amplitude_std == pytest.approx(a * math.hypot(tone["ratio_std"] / tone["ratio"] / 2, 0.1), rel=1e-12)
     assert any(isinstance(j, tuple) for j, _ in runs)  # the joint release was checked, and did not refuse
+
+
+def test_a_joint_check_whose_runs_fail_is_said_not_passed_silently(monkeypatch):
+    """Where the joint release's runs fail (each raises), the check cannot
+    tell one large swing from several small ones: the answer keeps the one
+    mode (as before the check) but counts the failed runs, and
+    attach_second_modes warns naming --uncertainty release (it used to
+    pass as if checked)."""
+    from bifilar.errors import BifilarError
+
+    laws = _tone_laws([])
+
+    def tones(hm, values, k, j, amplitude, a_j, cycles, rtol):
+        if isinstance(j, tuple):
+            raise BifilarError("the joint release's run failed")
+        return laws(hm, values, k, j, amplitude, a_j, cycles, rtol)
+
+    monkeypatch.setattr(signal_swing, "_run_tones", tones)
+    pb = _problem(_fit(2.36e-3))
+    sec = infer_secondary(pb, 0, np.zeros(1))
+    assert sec is not None and sec.label == "swing-y"
+    assert sec.joint_runs == min(4, MAX_JOINT_RUNS) and sec.joint_failed == sec.joint_runs
+    pb.measurements[0].fundamental = True
+    monkeypatch.setattr(signal_swing, "hidden_modes", lambda *a, **kw: [])
+    warnings = signal_swing.attach_second_modes(pb, np.zeros(1), 1e-10, [])
+    assert len(warnings) == 1 and "4 of the 4 runs" in warnings[0] and "--uncertainty release" in warnings[0]

@@ -108,6 +108,9 @@ class Secondary:
     #: period refers to, ``decay`` times it, :func:`swing_decay`); None: the same as ``amplitude``
     amplitude_start: float | None = None
     decay: float = 1.0  #: ``amplitude`` over ``amplitude_start`` (1: the record does not decay measurably)
+    #: runs of :func:`_check_joint_release` that failed (their sign combinations unchecked), out of ``joint_runs``
+    joint_failed: int = 0
+    joint_runs: int = 0
 
     def to_json(self) -> dict:
         start = self.amplitude if self.amplitude_start is None else self.amplitude_start
@@ -380,7 +383,10 @@ def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, L
             c = _match(_run_tones(hm, values, k0, tuple(js), A, tuple(s * a for s, a in zip(sgn, amps)),
                                   pb.measurements[k].cycles, rtol), f_rec, tol)
         except BifilarError:
+            best.joint_failed += 1
             continue
+        finally:
+            best.joint_runs += 1
         if c is not None and (cmax is None or c > cmax):
             cmax = c
     cj, cr = (cmax or 0.0) - (c0 or 0.0), tone["ratio"] - (c0 or 0.0)
@@ -593,6 +599,12 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, {at}; the nonlinear model is released "
                          "with both, and the budget carries that amplitude's uncertainty (second_mode)")
+            if sec.joint_failed:  # the check that smaller modes within the bound do not make the tone is partial
+                warnings.append(f"mode '{m.label}': the {sec.label} mode at {sec.amplitude:.3g} lies beyond the "
+                                f"release bound, and {sec.joint_failed} of the {sec.joint_runs} runs that check whether "
+                                "the other modes released together within it make the same oscillation failed: the "
+                                "second mode may be several smaller ones, which shift the period otherwise; state the "
+                                "release bound you can vouch for (--uncertainty release)")
         m.hidden = hidden_modes(pb, k, p, None if m.secondary is None else m.secondary.index)
         if m.hidden:
             h0 = m.hidden[0]
