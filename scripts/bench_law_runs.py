@@ -289,7 +289,7 @@ def _two_term_dr_dI(pre, comp: str, k: int, st, tight: float, fr, rel_step: floa
 
 
 def bench_two_term(tight: float = 1e-12) -> None:
-    from bifilar.estimation.solve import STATED_LAW_RATIO
+    from bifilar.estimation.solve import STATED_LAW_RATIO, amplitude_law
     from bifilar.estimation.uncertainty import DEFAULT_AMPLITUDE_REL
     from bifilar.studies.point_amplitude import stated_amplitude_budget
 
@@ -318,9 +318,7 @@ def bench_two_term(tight: float = 1e-12) -> None:
             a = d[0] / a1 - b * a1
             slope = ab["slope"]
             two_term = 4.0 * (ab["period_factor"] - 1.0) - 2.0 * a * A * A
-            lam2 = STATED_LAW_RATIO ** 2
-            bt_ = (d[2] - lam2 * d[3]) / (lam2 * (lam2 - 1.0) * A ** 4)  # the law through the tight runs at A, 0.9 A
-            slope_tight = 2.0 * (d[3] - bt_ * A ** 4) + 4.0 * bt_ * A ** 4
+            slope_tight = A * amplitude_law(A, 1.0 + d[3], STATED_LAW_RATIO, 1.0 + d[2]).slope()  # the tight runs' law
             share = (ab["contribution"] / e["sigma"]) ** 2
             delta = abs(two_term / slope - 1.0)
             drdI = _two_term_dr_dI(pre, comp, k, st, tight, fr[:2])
@@ -340,26 +338,14 @@ def bench_two_term(tight: float = 1e-12) -> None:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    flags = ("--h0", "--law-periods", "--rtol", "--post", "--point-batch", "--calls", "--two-term")
-    for flag in flags:
+    sections = {"--h0": bench_h0, "--law-periods": bench_law_periods, "--rtol": bench_rtol, "--post": bench_post,
+                "--point-batch": bench_point_batch, "--calls": bench_calls, "--two-term": bench_two_term}
+    for flag in sections:
         ap.add_argument(flag, action="store_true")
-    a = ap.parse_args(argv)
-    every = not any(getattr(a, f[2:].replace("-", "_")) for f in flags)
-    if a.h0 or every:
-        bench_h0()
-    if a.law_periods or every:
-        bench_law_periods()
-    if a.rtol or every:
-        bench_rtol()
-    if a.post or every:
-        bench_post()
-    if a.point_batch or every:
-        bench_point_batch()
-    if a.calls or every:
-        bench_calls()
-    if a.two_term or every:
-        bench_two_term()
-
+    a = vars(ap.parse_args(argv))
+    chosen = [fn for flag, fn in sections.items() if a[flag[2:].replace("-", "_")]]
+    for fn in chosen or sections.values():
+        fn()
 
 if __name__ == "__main__":
     main()
