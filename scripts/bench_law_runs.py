@@ -19,10 +19,29 @@
   coordinate; with ``coordinate=False`` beside it (the CLI without
   ``--plot``).
 
+What session 15 (perf17) measured, rerunnable:
+
+* ``--point-batch``: a point's runs (its own with their health, its laws'
+  without) as the point makes them (odeint's LSODA run by run) against all
+  in one call of the batched DOP853 engine (``independent=True``), CPU and
+  the largest relative period difference.
+* ``--calls``: right-hand-side calls of a point's own runs and its law
+  runs over 1, 2, 3 and 10 periods (LSODA's start against a period's
+  calls: what a one-period run, its period from a Poincare return, could
+  save).
+* ``--two-term``: idea A's premise without its normal form: were the
+  small-amplitude coefficient ``a`` of ``r = 1 + a A^2 + b A^4`` known
+  exactly (here: fitted through runs at 0.25 A and 0.5 A, the point's
+  periods, rtol 1e-12), the law's slope from the point's own run alone
+  would be ``4 (r - 1) - 2 a A^2``; printed per component: the relative
+  slope difference against the point's two-run slope and the sigma change
+  it makes, ``delta (c_a / sigma)^2``, against the 1e-6 asked.
+
 Each section monkeypatches the code it varies inside this process only.
 CPU medians (``time.process_time``); compare only figures of one run.
 
     python scripts/bench_law_runs.py [--h0] [--law-periods] [--rtol] [--post]
+                                     [--point-batch] [--calls] [--two-term]
 """
 
 from __future__ import annotations
@@ -48,6 +67,9 @@ POINTS = {"thesis plate": ("thesis_plate_rest.yaml", {"spacing": 3.0}),
           "trifilar (KTH)": ("trifilar_kth.yaml", {}),
           "6.4 cylinder": ("thesis_cylinder_6_4.yaml", {}),
           "thesis lin2": ("thesis_lin2_pitch.yaml", {})}
+#: every shipped single-hanging config (--two-term, --calls)
+EVERY = {**POINTS, "drone": ("drone_parallel.yaml", {}), "thesis lin1": ("thesis_lin1_torsion.yaml", {}),
+         "thesis lin3": ("thesis_lin3_roll.yaml", {})}
 
 
 def _cpu(fn, repeats: int = 5) -> float:
@@ -76,7 +98,7 @@ def _changes(f: dict, base: dict) -> str:
 
 
 def _point(name):
-    path, params = POINTS[name]
+    path, params = EVERY[name]
     cfg = read_yaml(CONFIGS / path)
     return cfg, str(CONFIGS / path), params
 
@@ -181,21 +203,149 @@ def bench_post(repeats: int = 21) -> None:
         si.odeint = real
 
 
+def _prepared(name):
+    """(settings, the point's _Prepared with its law's runs planned) of ``name``."""
+    from bifilar.studies import point as pt
+
+    cfg, path, params = _point(name)
+    st = sw.resolve_settings(cfg)
+    return st, pt._prepare(cfg, path, params, st)[1]
+
+
+def bench_point_batch(repeats: int = 5) -> None:
+    from bifilar.studies import point_amplitude as pa
+
+    for name in ("thesis plate", "Solar Boat", "trifilar (KTH)"):
+        st, pre = _prepared(name)
+        law, labels = pre.law, [pre.labels[k] for k in pre.runs]
+        n = len(labels)
+        own = (pre.scene, pre.rest, pre.ms, labels, pre.amplitude, pre.starts)
+
+        def batched(health):
+            return bt.simulate_batch([pre.scene] * n + law.scenes, mode=labels + law.labels,
+                                     amplitude=[pre.amplitude] * n + law.amplitudes, periods=st.periods,
+                                     rtol=st.rtol, rests=[pre.rest] * n + law.rests, modes=[pre.ms] * n + law.mode_sets,
+                                     errors="return", independent=True, health=health)
+
+        ref, dop = pa._runs_at(law, st, own=own), batched(True)
+        dT = max(abs(a.period / b.period - 1) for a, b in zip(dop, ref) if a.period and b.period)
+        print(f"{name}: its {n + len(law.scenes)} runs as the point makes them (LSODA run by run) "
+              f"{_cpu(lambda: pa._runs_at(law, st, own=own), repeats) * 1e3:.1f} ms CPU; batched DOP853 in one call "
+              f"{_cpu(lambda: batched(True), repeats) * 1e3:.1f} ms with the health, "
+              f"{_cpu(lambda: batched(False), repeats) * 1e3:.1f} without; periods {dT:.1e} apart (max relative)",
+              flush=True)
+
+
+def bench_calls(lengths=(1, 2, 3, 10)) -> None:
+    for name in ("thesis plate", "Solar Boat", "trifilar (KTH)"):
+        st, pre = _prepared(name)
+        law, n = pre.law, len(pre.runs)
+        row = []
+        for per in lengths:
+            runs = bt.simulate_batch([pre.scene] * n + law.scenes, mode=[pre.labels[k] for k in pre.runs] + law.labels,
+                                     amplitude=[pre.amplitude] * n + law.amplitudes, periods=per, rtol=st.rtol,
+                                     rests=[pre.rest] * n + law.rests, modes=[pre.ms] * n + law.mode_sets,
+                                     errors="return", health=False)
+            row.append(f"{per:g} periods {sum(int(r.nfev) for r in runs[:n])} + {sum(int(r.nfev) for r in runs[n:])}")
+        print(f"{name}: right-hand-side calls of its {n} own runs + its {len(law.scenes)} law runs: " + ", ".join(row),
+              flush=True)
+
+
+def _two_term_dr_dI(pre, comp: str, k: int, st, tight: float, fr, rel_step: float = 1e-2) -> tuple:
+    """(a' A^2, the converged dr/dI): ``a'`` the derivative of the
+    small-amplitude coefficient ``a`` in ``comp`` (central, over
+    ``rel_step`` of the largest moment; ``a`` through runs at ``fr`` x A),
+    against the central difference of the factor at A itself (rtol
+    ``tight``), 1 / kg m^2."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from bifilar.studies.settings import _IDX
+
+    A = pre.amplitude
+    H = rel_step * float(np.max(np.linalg.eigvalsh(pre.scene.inertia)))
+    scenes, mss = [], []
+    for sgn in (1.0, -1.0):
+        I = np.array(pre.scene.inertia, float)
+        i, j = _IDX[comp]
+        I[i, j] += sgn * H
+        if i != j:
+            I[j, i] += sgn * H
+        scenes += [replace(pre.scene, inertia=I)] * 3
+        mss += [pre.at(I)] * 3
+    amps = [f * A for f in fr] + [A]
+    runs = bt.simulate_batch(scenes, mode=pre.labels[k], amplitude=amps * 2, periods=st.periods, rtol=tight,
+                             rests=[pre.rest] * 6, modes=mss, errors="return", health=False)
+    d = [r.period / r.linear_period - 1.0 for r in runs]
+    x1, x2 = amps[0] ** 2, amps[1] ** 2
+
+    def a_of(d1, d2):
+        b = (d2 / x2 - d1 / x1) / (x2 - x1)
+        return d1 / x1 - b * x1
+
+    da = (a_of(d[0], d[1]) - a_of(d[3], d[4])) / (2 * H)
+    return da * A * A, (d[2] - d[5]) / (2 * H)
+
+
+def bench_two_term(tight: float = 1e-12) -> None:
+    from bifilar.estimation.solve import STATED_LAW_RATIO, amplitude_law
+    from bifilar.estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+    from bifilar.studies.point_amplitude import stated_amplitude_budget
+
+    for name in EVERY:
+        cfg, path, params = _point(name)
+        st = sw.resolve_settings(cfg)
+        res = sw.evaluate_point(cfg, path, params, st)
+        if not res["valid"]:
+            print(f"{name}: invalid point ({res['error']})")
+            continue
+        _, pre = _prepared(name)
+        A = pre.amplitude
+        for comp, k in pre.chosen.items():
+            e = res["components"][comp]
+            ab = e.get("amplitude_budget") or {}
+            if not ab.get("budgeted"):
+                print(f"{name} {comp}: no stated-amplitude budget")
+                continue
+            fr = (0.25, 0.5, STATED_LAW_RATIO, 1.0)
+            runs = bt.simulate_batch([pre.scene] * 4, mode=pre.labels[k], amplitude=[f * A for f in fr],
+                                     periods=st.periods, rtol=tight, rests=[pre.rest] * 4, modes=[pre.ms] * 4,
+                                     errors="return", health=False)
+            d = [r.period / float(pre.periods[k]) - 1.0 for r in runs]
+            a1, a2 = (fr[0] * A) ** 2, (fr[1] * A) ** 2
+            b = (d[1] / a2 - d[0] / a1) / (a2 - a1)  # d = a x + b x^2 through the two small amplitudes
+            a = d[0] / a1 - b * a1
+            slope = ab["slope"]
+            two_term = 4.0 * (ab["period_factor"] - 1.0) - 2.0 * a * A * A
+            slope_tight = A * amplitude_law(A, 1.0 + d[3], STATED_LAW_RATIO, 1.0 + d[2]).slope()  # the tight runs' law
+            share = (ab["contribution"] / e["sigma"]) ** 2
+            delta = abs(two_term / slope - 1.0)
+            drdI = _two_term_dr_dI(pre, comp, k, st, tight, fr[:2])
+            T_lin, r, b_ = float(pre.periods[k]), ab["period_factor"], pre.budgets[comp]
+            drdI_pt = (ab["factor_gain"] - r) / (T_lin * float(b_.dI_dT))
+            sd = [stated_amplitude_budget(b_, T_lin, r, DEFAULT_AMPLITUDE_REL, sl, dr)[0]
+                  for sl, dr in ((slope, drdI_pt), (two_term, drdI_pt), (slope, drdI[0]), (two_term, drdI[0]))]
+            print(f"{name} {comp}: dr/dI {drdI_pt:.4e} (the point's), {drdI[1]:.4e} (central, rtol {tight:g}), a' A^2 "
+                  f"{drdI[0]:.4e}; sigma {e['sigma']:.6g} (recomputed {sd[0]:.6g}), with the two-term slope "
+                  f"{abs(sd[1] / sd[0] - 1):.1e}, with a' A^2 {abs(sd[2] / sd[0] - 1):.1e}, both {abs(sd[3] / sd[0] - 1):.1e}"
+                  f" (relative)", flush=True)
+            print(f"{name} {comp} ({pre.labels[k]}, A = {A:g}): (c_a/sigma)^2 {share:.1e}, so the slope is needed "
+                  f"to {1e-6 / share:.1e}; two-term slope vs the point's {delta:.1e} (sigma {delta * share:.1e}); "
+                  f"the point's slope vs its law at rtol {tight:g} {abs(slope / slope_tight - 1):.1e}, the two-term "
+                  f"slope from that run {abs((4.0 * d[3] - 2.0 * a * A * A) / slope_tight - 1):.1e}", flush=True)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    for flag in ("--h0", "--law-periods", "--rtol", "--post"):
+    sections = {"--h0": bench_h0, "--law-periods": bench_law_periods, "--rtol": bench_rtol, "--post": bench_post,
+                "--point-batch": bench_point_batch, "--calls": bench_calls, "--two-term": bench_two_term}
+    for flag in sections:
         ap.add_argument(flag, action="store_true")
-    a = ap.parse_args(argv)
-    every = not (a.h0 or a.law_periods or a.rtol or a.post)
-    if a.h0 or every:
-        bench_h0()
-    if a.law_periods or every:
-        bench_law_periods()
-    if a.rtol or every:
-        bench_rtol()
-    if a.post or every:
-        bench_post()
-
+    a = vars(ap.parse_args(argv))
+    chosen = [fn for flag, fn in sections.items() if a[flag[2:].replace("-", "_")]]
+    for fn in chosen or sections.values():
+        fn()
 
 if __name__ == "__main__":
     main()

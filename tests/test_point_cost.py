@@ -1842,7 +1842,8 @@ def test_point_computes_the_health_of_its_own_runs_only_and_takes_its_laws_cross
     got = sw.evaluate_point(cfg, name, params, st)
     res, pre = pt._prepare(cfg, name, params, st)
     assert got["valid"] and rows == [len(pre.runs)]
-    assert windows == [len(pre.runs), len(pre.law.labels)]
+    # (session 15: a point whose components have no finite sigma, the plate's knife edge, runs no law)
+    assert windows == [len(pre.runs)] + ([len(pre.law.labels)] if pre.law.labels else [])
     monkeypatch.undo()
 
     def before(base_cfg, source, params, st, screen=False):  # each run alone, the laws' with their health
@@ -1857,3 +1858,39 @@ def test_point_computes_the_health_of_its_own_runs_only_and_takes_its_laws_cross
     monkeypatch.setattr(pt, "_evaluate", before)
     ref = sw.evaluate_point(cfg, name, params, st)
     assert json.dumps(got, sort_keys=True, default=str) == json.dumps(ref, sort_keys=True, default=str)
+
+
+def test_point_runs_only_the_amplitude_laws_a_sigma_reads(monkeypatch):
+    """(session 15, perf17) The thesis plate's point (knife edge: the CoM on
+    the attachment line, an input without a derivative) has no finite
+    small-amplitude sigma for either component, so no stated-amplitude
+    sigma reads an amplitude law there; its 4 law runs (0.9 A and stepped)
+    were made anyway, 4 of the point's 6 runs (~40 % of its CPU).  Now only
+    the point's own runs are made, and every figure is the path before's
+    (all laws run), bit for bit, the sweep's and the planner's
+    (``evaluate_points``) alike."""
+    import json
+
+    from bifilar.analysis import batch as bt
+    from bifilar.studies import point as pt
+    from bifilar.studies import sweep as sw
+
+    name, params = "thesis_plate_rest", {"spacing": 3.0}
+    cfg = read_yaml(CONFIGS / f"{name}.yaml")
+    st = sw.resolve_settings(cfg)
+    scenes: list = []
+    real = bt.simulate_batch
+    monkeypatch.setattr(bt, "simulate_batch", lambda sc, **kw: scenes.append(len(sc)) or real(sc, **kw))
+    got = sw.evaluate_point(cfg, name, params, st)
+    comps = [e for e in got["components"].values() if e.get("mode")]
+    assert got["valid"] and len(comps) == 2
+    assert all(e["sigma"] is None and e["amplitude_budget"]["note"] == "no sigma" for e in comps)
+    assert sum(scenes) == len({e["mode"] for e in comps}) == 2  # the point's own runs only (was 6: 2 + 4 laws')
+    many = pt.evaluate_points(cfg, name, [params], st)[0]
+    monkeypatch.setattr(pt, "_budgeted", lambda chosen, budgets: dict(chosen))  # the path before: every law run
+    scenes.clear()
+    ref = sw.evaluate_point(cfg, name, params, st)
+    assert sum(scenes) == 6
+    ref_many = pt.evaluate_points(cfg, name, [params], st)[0]
+    for a, b in ((got, ref), (many, ref_many)):
+        assert json.dumps(a, sort_keys=True, default=str) == json.dumps(b, sort_keys=True, default=str)

@@ -17,7 +17,7 @@ from ..jsonable import to_jsonable
 from .settings import _IDX, PRINCIPAL, SweepSettings
 from .shorthands import apply_params
 from .limits import component_scale, physical_limits
-from .point_amplitude import _law_runs, _runs_at, _stated_amplitude
+from .point_amplitude import _budgeted, _law_runs, _runs_at, _stated_amplitude
 
 
 #: below this |d ln T / d ln I| for every mode a component counts as not identifiable
@@ -589,8 +589,9 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         # the refusal `simulate` gives (InputError) rather than a run from an unreachable start; the start poses
         # go on to the runs (solved once)
         if pre.runs:
-            # the amplitude laws' runs' start poses in the same call (one solve: tests/test_point_cost.py)
-            pre.law = _law_runs(scene, rest, ms, labels, chosen, amplitude, at)
+            # the amplitude laws' runs' start poses in the same call (one solve: tests/test_point_cost.py); only
+            # the laws a sigma reads (a component without a finite small-amplitude sigma has no stated one)
+            pre.law = _law_runs(scene, rest, ms, labels, _budgeted(chosen, budgets), amplitude, at)
             law = pre.law
             sp = checked_start_poses(scene, rest, [ms.modes[k] for k in pre.runs], amplitude,
                                      more=(law.scenes, law.rests, [m.get(lab) for m, lab in zip(law.mode_sets, law.labels)],

@@ -101,6 +101,19 @@ class _LawRuns:
     runs: Any = None
 
 
+def _budgeted(chosen: dict, budgets: dict | None) -> dict:
+    """The components of ``chosen`` {component: mode index} whose
+    small-amplitude sigma (``budgets``' ``value_sigma``, kg m^2) is finite:
+    the only ones whose stated-amplitude sigma reads their amplitude law
+    (:func:`_stated_amplitude` gives the others no sigma), so the only ones
+    whose law is run.  A knife-edge point (the thesis plate: an input
+    without a derivative) has none: its law's runs, 4 of its 6, were made
+    and never read (docs/design.md, "Session 15, perf17")."""
+    if budgets is None:
+        return dict(chosen)
+    return {c: k for c, k in chosen.items() if math.isfinite(float(budgets[c].value_sigma))}
+
+
 def _law_runs(scene, rest, ms, labels, chosen: dict, amplitude: float, at=None) -> _LawRuns:
     """What :func:`_amplitude_laws` runs for the components ``chosen``
     {component: mode index} (each stepped as invert's
@@ -149,7 +162,8 @@ def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
 
     law = pre.law
     if law is None:
-        law = _law_runs(pre.scene, pre.rest, pre.ms, pre.labels, pre.chosen, pre.amplitude, pre.at)
+        law = _law_runs(pre.scene, pre.rest, pre.ms, pre.labels, _budgeted(pre.chosen, pre.budgets), pre.amplitude,
+                        pre.at)
     comps = [(n, c, k) for n, (c, k) in enumerate(law.comps) if sims.get(k) is not None and sims[k].period]
     if not comps:
         return {}
