@@ -28,17 +28,22 @@ def setup(name):
 
 
 def test_kane_checks_a_run_that_is_not_regular():
-    """The plate's swing-y at 1.5 m over 17 periods, kane model: its
-    single-cycle periods spread by 1.3e-6, and its period was 2.7e-7 s from
-    the maximal model's (which is regular there: LSODA and DOP853 at 1e-12
-    agree to 1e-11) while period_error said 7e-9 s.  Now the check widens it
-    and warns."""
+    """The plate's swing-y at 1.5 m, kane model: before, its period was
+    2.7e-7 s from the maximal model's over 17 periods while period_error said
+    7e-9 s.  Now the check widens it and warns.  The swing is parametrically
+    unstable: released in its symmetry plane, it stays there up to the
+    rounding-level asymmetry of the rest pose, which grows until the motion
+    turns irregular, so how far it has grown after 17 periods depends on the
+    BLAS kernel (single-cycle spread 1.3e-6 of the period on the default
+    kernel, 1.7e-6 on Sandybridge, 4.9e-7 on Haswell: below IRREGULAR_SPREAD,
+    unchecked).  After 20 periods it spreads by 3.0e-3 .. 3.4e-3 on all three,
+    and kane's period is 2.2e-5 .. 4.3e-5 s from the maximal model's."""
     sc, rest, ms = setup("thesis_plate_rest.yaml")
-    k = simulate_kane(sc, rest, ms, mode="swing-y", amplitude=1.5, periods=17)
-    ref = simulate(sc, "swing-y", 1.5, 17, rest=rest, modes=ms, method="DOP853", rtol=1e-12, check=False)
-    other = simulate(sc, "swing-y", 1.5, 17, rest=rest, modes=ms, method="LSODA", rtol=1e-12, check=False)
-    assert abs(ref.period - other.period) < 1e-10  # the reference is reproducible
+    k = simulate_kane(sc, rest, ms, mode="swing-y", amplitude=1.5, periods=20)
+    ref = simulate(sc, "swing-y", 1.5, 20, rest=rest, modes=ms, method="DOP853", rtol=1e-12, check=False)
+    other = simulate(sc, "swing-y", 1.5, 20, rest=rest, modes=ms, method="LSODA", rtol=1e-12, check=False)
     true = abs(k.period - ref.period)
+    assert abs(ref.period - other.period) < 0.01 * true  # the reference is reproducible at the scale that matters
     assert k.period_check is not None and true > 10 * k.period_check["model_bound"]  # the model's bound fails
     assert k.period_error >= 0.5 * true
     assert any("not regular" in w for w in k.warnings)

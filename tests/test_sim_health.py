@@ -251,7 +251,7 @@ def test_the_cylinders_swing_drift_is_not_an_amplitude_change():
     drift of 6.8e-3 of its (tiny) oscillation energy, above its resolution,
     and no warning, rightly: the drift is a passing excursion (the wires'
     7e-13 m constraint violation times m g, against 4e-10 J), the energy at
-    the end is the start's to 1e-5 of it (3e-6), so the amplitude did not move, and
+    the end is the start's to 1e-4 of it (3e-6 .. 1.6e-5 by BLAS kernel), so the amplitude did not move, and
     the period, 4e-11 from the linear one here, cannot move through it.
     Checked on the record with the energy recomputed from the samples."""
     from bifilar.config import load_scene
@@ -269,7 +269,10 @@ def test_the_cylinders_swing_drift_is_not_an_amplitude_change():
     y[:, :3] -= rest.com
     E = mx.energy(y, mx.params_from_scenes(sc))  # oscillation energy: kinetic + m g (z - z_rest)
     k = len(E) // 100  # about a period of samples at each end
-    assert abs(E[-k:].mean() - E[:k].mean()) <= 1e-5 * E[0]  # 3e-6: the amplitude moved by < 5e-6 of itself
+    # 3e-6 of E0 on the default kernel, 1.6e-5 on Haswell: the two windows are not whole periods, so their
+    # means keep part of the passing excursion's ripple (3e-14 J peak to peak, 7e-5 of E0). An amplitude
+    # change of the reported drift's size would move the energy by 6.8e-3 of it, 68x this bound
+    assert abs(E[-k:].mean() - E[:k].mean()) <= 1e-4 * E[0]  # the amplitude moved by < 5e-5 of itself
     assert r.max_constraint_violation * sc.mass * sc.gravity >= r.energy_drift * E[0]  # the excursion's size
     ref = simulate(sc, "swing-y", 4e-5, 100, rest=rest, modes=ms, method="DOP853", rtol=1e-12)
     assert abs(r.period - ref.period) <= r.period_error

@@ -50,7 +50,11 @@ def test_the_plates_irregular_swing_warns_and_widens_its_error():
     model = 15 * 1e-10 * r.period + sim.drift_period_error(r.period, r.linear_period, r.energy_drift)
     assert true > 20 * model  # the error model does not hold here (the reason for the check)
     assert r.period_error >= 0.9 * true  # the check's difference is the error's size, not a bound (design.md)
-    assert r.period_check is not None and r.period_check["model_bound"] == pytest.approx(model, rel=1e-9)
+    # the bound is the model's plus the crossings' interpolation part, which the run keeps below
+    # CROSSING_SHARE of it; that part depends on where the last crossing falls between the samples,
+    # which moves with the BLAS kernel on this irregular motion (0 here, 2.4 % of the model on Haswell)
+    assert r.period_check is not None
+    assert model * (1 - 1e-9) <= r.period_check["model_bound"] <= (1 + sim.CROSSING_SHARE) * model
     assert r.period_check["rtol"] == pytest.approx(1e-12)
     w = [w for w in r.warnings if "not regular" in w]
     assert len(w) == 1 and "differs by" in w[0]
