@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestError
+from ..errors import ConvergenceError, InputError, SlackWireError, StiffnessNeededError, UnstableRestError
 from ..rotations import cross, matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
 from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions, min_norm_multipliers
 from ..scene import Scene, lowest_point_z
@@ -444,6 +444,12 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
         raise _turn_refusal(scene, R0, R)
     slack = np.where(stretch < -tol)[0]
     if len(slack):
+        try:
+            c2, R2, lam2, kkt2 = _polish(scene, c, R)  # the pose with every wire at its length
+        except np.linalg.LinAlgError:
+            kkt2 = np.inf
+        if kkt2 < 1e-9:
+            _refuse_nearly_dependent(scene, slack, -stretch[slack], c2, R2, lam2)
         _raise_slack(scene, slack, -stretch[slack], L, pose=(c, R))
     return _finish(scene, *_polish(scene, c, R))
 
@@ -607,6 +613,7 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     weight = scene.mass * scene.gravity
     bad = np.where(T < 1e-9 * weight)[0]
     if len(bad):
+        _refuse_nearly_dependent(scene, bad, None, c, R, lam)
         _raise_slack(scene, bad, None, L, tensions=T, pose=(c, R))
     steep = float(np.max(np.abs(d[:, 2]) / np.linalg.norm(d, axis=1)))  # largest sine of a wire's angle to horizontal
     if steep < MIN_WIRE_SLOPE:
@@ -636,6 +643,47 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
         com=c, R=R, q=matrix_to_quat(R), tensions=T, wire_vectors=d,
         lowest_z=lz, depth=scene.ceiling_z - lz, kkt_residual=float(kkt),
     )
+
+
+def _refuse_nearly_dependent(scene: Scene, idx, gap, c: np.ndarray, R: np.ndarray, lam: np.ndarray) -> None:
+    """Raise :class:`~bifilar.errors.StiffnessNeededError` where the rigid
+    model would refuse a rig of 4 or 5 wires for wires ``idx`` (0-based)
+    slack by ``gap`` (m; None: at their length but pushing) although the
+    wires are nearly dependent (:func:`~bifilar.analysis.elastic_rest.
+    nearly_dependent` at the all-taut pose ``c``, ``R`` with multipliers
+    ``lam`` N/m: a length change ``e* L`` below a plausible stretch,
+    :data:`~bifilar.analysis.elastic_rest.PLAUSIBLE_STRAIN` of the length,
+    moves the split by a wire's mean load) and each gap is below ``e* L``
+    (session 10's leaning table, its wire 4 slack by 1.13 mm, ``e* L`` 0.6
+    mm, keeps its rigid verdict): there the rigid split, and whether a wire is slack, is set by length
+    differences smaller than the wires' stretch under load, which no config
+    without ``rig.stiffness`` states.  Returns otherwise."""
+    from .elastic_rest import PLAUSIBLE_STRAIN, length_strain_scale
+
+    if scene.n_wires <= MAX_ELIMINATION_WIRES:
+        return
+    L = np.asarray(scene.lengths, float)
+    idx = [int(i) for i in idx]
+    es = length_strain_scale(scene, c, R, lam)
+    if not es < PLAUSIBLE_STRAIN:
+        return
+    if gap is not None and np.any(np.asarray(gap, float) >= es * L[idx]):
+        return  # slack by more than the length change that moves the split by a wire's load: the rigid verdict
+    d = c + scene.attachments @ R.T - scene.anchors
+    T = lam * np.linalg.norm(d, axis=1)
+    names = f"wire {idx[0] + 1}" if len(idx) == 1 else "wires " + ", ".join(str(i + 1) for i in idx)
+    if gap is not None:
+        how = f"slack by {np.max(gap) * 1000:.2g} mm"
+    else:
+        how = "pushing (" + ", ".join(f"{T[i]:.3g} N" for i in idx) + ")"
+    load = scene.mass * scene.gravity / scene.n_wires
+    raise StiffnessNeededError([i + 1 for i in idx], (
+        f"on rigid wires {names} would be {how} at rest, but the {scene.n_wires} wires are nearly dependent: a change "
+        f"of one wire's length by {es:.2g} of it ({es * float(np.max(L)) * 1000:.2g} mm) moves their rigid split by a "
+        f"wire's mean load ({load:.3g} N), less than a loaded wire stretches (lab wires {PLAUSIBLE_STRAIN:g} of their "
+        "length and less), so the split, and whether any wire is slack, is set by the wires' stretch, which the rigid "
+        "model cannot say: give rig.stiffness (the wires' axial stiffness EA, N, one value or one per wire) for the "
+        "elastic split"), gaps=None if gap is None else gap)
 
 
 _NO_ADVICE = contextvars.ContextVar("bifilar_no_slack_advice", default=False)

@@ -113,11 +113,27 @@ def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
         return None
     rng = tension_range(scene, rest)
     spans = ", ".join(f"wire {i + 1} {lo:.4g} .. {hi:.4g} N" for i, (lo, hi) in enumerate(rng))
-    return (f"rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically indeterminate: "
+    return (f"rig: the {scene.n_wires} wires are {dependence_words(scene, rest)} at rest, so their tensions are "
+            "statically indeterminate: "
             f"statics allows {spans} (any split in these ranges with the same resultant holds the body); those shown "
             "are the model's split, the least-squares multipliers T_i / L_i (tension per metre of wire, not the "
             "tensions themselves: on wires of unequal length it favours the longer ones, where equal elastic "
             "wires favour the shorter); the real split is set by the wires' stretch and their lengths' tolerances")
+
+
+def dependence_words(scene: Scene, rest: RestPose) -> str:
+    """'dependent' for wires whose constraint Jacobian at rest has rank below
+    n (singular values at 1e-12 of the largest: parallel vertical wires),
+    'nearly dependent (...)' for those the model treats as dependent by the
+    run's rule though geometry holds them independent (anchors off by less
+    than a length tolerance, :func:`~bifilar.analysis.equilibrium.constraint_rank`),
+    with their smallest singular value relative to the largest."""
+    _, _, G = constraint_jacobian(scene, rest.com, rest.R)
+    sv = np.linalg.svd(G, compute_uv=False)
+    if sv[-1] <= 1e-12 * sv[0]:
+        return "dependent"
+    return (f"nearly dependent (independent by geometry, but the smallest singular value of their directions is "
+            f"{sv[-1] / sv[0]:.2g} of the largest: the model takes them as dependent, as the run does)")
 
 
 #: a mode of a dependent rig whose second-order change of the wires' lengths has a self-stress component
