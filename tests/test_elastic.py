@@ -45,3 +45,25 @@ def test_the_warning_tells_nearly_dependent_from_dependent():
     w_near = indeterminate_warning(near, rest_pose(near))
     assert "wires are dependent at rest" in w_exact and "nearly" not in w_exact
     assert "wires are nearly dependent" in w_near
+
+
+@pytest.mark.parametrize("value,field", [(1.0e5, None), ([1.0e5, 2.0e5, 1.0e5, 1.0e5], None), (0, "rig.stiffness"),
+                                         ([1.0e5, -1.0, 1.0e5, 1.0e5], "rig.stiffness.1"),
+                                         ([1.0e5, 1.0e5], "rig.stiffness")])
+def test_the_stiffness_field_is_validated(value, field):
+    # before: 'rig.stiffness: unknown key' for every value.  A scalar is every wire's EA, a list one per wire
+    import yaml
+
+    from bifilar.config import scene_from_dict
+    from bifilar.errors import InputError
+    from test_dependent_wires_messages import CORNERS, vertical
+
+    dct = yaml.safe_load(vertical(CORNERS, [1.0] * 4))
+    dct["rig"]["stiffness"] = value
+    if field is None:
+        sc = scene_from_dict(dct, "test", warn=False)
+        np.testing.assert_array_equal(sc.stiffness, np.broadcast_to(value, (4,)))
+    else:
+        with pytest.raises(InputError) as ei:
+            scene_from_dict(dct, "test", warn=False)
+        assert str(ei.value).startswith(field + ":") and "\n" not in str(ei.value)
