@@ -369,7 +369,11 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     wires, e.g. parallel vertical ones, admit a self-stress and the tensions
     printed are only one split
     (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`); the real
-    one depends on the wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`)."""
+    one depends on the wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`).
+    True on 4 or 5 wires of a stated stiffness (``rig.stiffness``): their
+    elastic statics fixes the split (:func:`_elastic_rest_pose`)."""
+    if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
+        return True
     return not _wires_dependent(scene, rest.com, rest.R)
 
 
@@ -410,6 +414,8 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
     ConvergenceError
         The solver failed.
     """
+    if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
+        return _elastic_rest_pose(scene, guess if local_only else None)
     if guess is not None and local_only:
         quick = _from_guess(scene, guess)
         if quick is not None:
@@ -452,6 +458,41 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
             _refuse_nearly_dependent(scene, slack, -stretch[slack], c2, R2, lam2)
         _raise_slack(scene, slack, -stretch[slack], L, pose=(c, R))
     return _finish(scene, *_polish(scene, c, R))
+
+
+def _elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
+    """The rest pose of 4 or 5 wires of axial stiffness ``scene.stiffness``
+    (EA, N): the static equilibrium of elastic wires
+    (:func:`~bifilar.analysis.elastic_rest.elastic_rest`), from the rigid
+    pose with every wire at its length (Newton on the all-taut KKT equations
+    from the start pose, or from ``guess``; SLSQP's pose where Newton fails).
+    The pose is the elastic one (each wire stretched by ``T_i L_i / EA_i``,
+    its wire vectors that long), its tensions the elastic split, exactly in
+    equilibrium there, so the modes are the rigid model's about the loaded
+    rig.  A wire the elastic wires leave slack is a
+    :class:`~bifilar.errors.SlackWireError` (its gap the elastic one); an
+    unstable one an :class:`~bifilar.errors.UnstableRestError` (the rigid
+    model's checks, :func:`_finish`)."""
+    from .elastic_rest import elastic_rest
+
+    if guess is not None:
+        c, R = guess.com.copy(), guess.R.copy()
+        kkt = 0.0
+    else:
+        try:
+            c, R, _, kkt = _newton_kkt(scene, *_initial_pose(scene), iters=40)
+        except np.linalg.LinAlgError:
+            kkt = np.inf
+        if not kkt < 1e-9:
+            c, R, _, _ = _slsqp(scene, *_initial_pose(scene))
+    c, R, T, res = elastic_rest(scene, scene.stiffness, c, R)
+    d = c + scene.attachments @ R.T - scene.anchors
+    ln = np.linalg.norm(d, axis=1)
+    L = np.asarray(scene.lengths, float)
+    slack = np.where(T <= 0.0)[0]
+    if len(slack):
+        _raise_slack(scene, slack, L[slack] - ln[slack], L)  # no advice: it is the rigid model's
+    return _finish(scene, c, R, T / ln, res, phi_checked=False)
 
 
 def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
@@ -601,7 +642,11 @@ def _hang_below_line(scene: Scene, c: np.ndarray, R: np.ndarray):
     return a1 + Q @ (c - a1), Q @ R
 
 
-def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
+def _finish(scene: Scene, c, R, lam, kkt, phi_checked: bool = True) -> RestPose:
+    """The :class:`RestPose` at (c, R) with multipliers ``lam`` N/m and KKT
+    residual ``kkt``, after the checks (slack, straight across, stable, the
+    start box).  ``phi_checked`` False: an elastic pose, its wires longer
+    than their lengths (no slack refusal by the nearly dependent rule)."""
     if not (kkt < 1e-9):
         raise ConvergenceError(f"rest pose did not converge (KKT residual {kkt:.2e})")
     axis = knife_edge_axes(scene.attachments)
@@ -613,7 +658,8 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     weight = scene.mass * scene.gravity
     bad = np.where(T < 1e-9 * weight)[0]
     if len(bad):
-        _refuse_nearly_dependent(scene, bad, None, c, R, lam)
+        if phi_checked:
+            _refuse_nearly_dependent(scene, bad, None, c, R, lam)
         _raise_slack(scene, bad, None, L, tensions=T, pose=(c, R))
     steep = float(np.max(np.abs(d[:, 2]) / np.linalg.norm(d, axis=1)))  # largest sine of a wire's angle to horizontal
     if steep < MIN_WIRE_SLOPE:
