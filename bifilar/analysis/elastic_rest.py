@@ -4,14 +4,16 @@ split can be trusted, and the split of elastic wires (session 15, elastic).
 A level table on four vertical wires whose anchors are off by 0.1 .. 3 mm on
 1 m wires has wires that are independent, but only just: the rigid model's
 split of its weight then hangs on length differences smaller than the wires'
-stretch under load (docs/design.md "elastic, session 15").  Two tools:
+stretch under load (docs/design.md "elastic, session 15").
 
 * :func:`length_strain_scale`: the relative length change (a strain) of one
   wire that moves the rigid split by a mean wire's load; where that is below
   :data:`PLAUSIBLE_STRAIN` (what lab wires stretch at their load), the rigid
   split is set by the wires' stretch, which the rigid model does not know;
-* :func:`elastic_rest`: the static equilibrium of the body on elastic,
-  tension-only wires of axial stiffness ``EA`` (``rig.stiffness``, N), each
+* :func:`refuse_nearly_dependent`: the rest pose's refusal of such a rig
+  where the rigid model would call a wire slack or pushing;
+* :func:`elastic_rest` (:func:`elastic_rest_pose`, the rest pose's): the
+  static equilibrium of the body on elastic, tension-only wires of axial stiffness ``EA`` (``rig.stiffness``, N), each
   a spring of stiffness ``EA_i / L_i`` beyond its length ``L_i``: Newton on
   the potential ``m g z + sum EA_i / (2 L_i) max(|d_i| - L_i, 0)^2`` over the
   pose, from the rigid rest pose.
@@ -23,10 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, StiffnessNeededError
 from ..rotations import rotvec_to_matrix
 from ..scene import Scene
-from .equilibrium import constraint_hessians, constraint_jacobian
+from ..models.maximal import MAX_ELIMINATION_WIRES
+from .equilibrium import (RestPose, _finish, _initial_pose, _newton_kkt, _raise_slack, _slsqp, constraint_hessians,
+                          constraint_jacobian)
 
 #: the largest strain a lab wire plausibly has at its load (steel or nylon wire, thread: 1e-5 .. 1e-3,
 #: docs/design.md "offcentre, session 14"): a rig whose rigid split a length change of this size moves by
@@ -69,15 +73,6 @@ def length_strain_scale(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.nd
     dT = ln[:, None] * sol[6:, :] + np.diag(lam * L)  # (wire, strained wire): dT per unit strain
     worst = float(np.max(np.abs(dT)))
     return (W / n) / worst if worst > 0 else np.inf
-
-
-def nearly_dependent(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndarray) -> bool:
-    """Whether the wires (4 or 5) are so nearly dependent that a length
-    change smaller than a plausible stretch sets their rigid split
-    (:func:`length_strain_scale` below :data:`PLAUSIBLE_STRAIN`)."""
-    from ..models.maximal import MAX_ELIMINATION_WIRES
-
-    return scene.n_wires > MAX_ELIMINATION_WIRES and length_strain_scale(scene, com, R, lam) < PLAUSIBLE_STRAIN
 
 
 def elastic_rest(scene: Scene, ea, com0: np.ndarray, R0: np.ndarray, iters: int = 60):
@@ -138,3 +133,75 @@ def elastic_rest(scene: Scene, ea, com0: np.ndarray, R0: np.ndarray, iters: int 
     if not res < 1e-10:
         raise ConvergenceError(f"elastic rest pose did not converge (residual {res:.2e} of the weight)")
     return c, R, T, res
+
+
+def refuse_nearly_dependent(scene: Scene, idx, gap, c: np.ndarray, R: np.ndarray, lam: np.ndarray) -> None:
+    """Raise :class:`~bifilar.errors.StiffnessNeededError` where the rigid
+    model would refuse a rig of 4 or 5 wires for wires ``idx`` (0-based)
+    slack by ``gap`` (m; None: at their length but pushing) although the
+    wires are nearly dependent (:func:`length_strain_scale` ``e*`` at the
+    all-taut pose ``c``, ``R`` with multipliers ``lam`` N/m below
+    :data:`PLAUSIBLE_STRAIN`: a length change ``e* L``, less than a
+    plausible stretch, moves the split by a wire's mean load) and each gap
+    is below ``e* L`` (session 10's leaning table, its wire 4 slack by
+    1.13 mm, ``e* L`` 0.6 mm, keeps its rigid verdict): there the rigid
+    split, and whether a wire is slack, is set by length differences
+    smaller than the wires' stretch under load, which no config without
+    ``rig.stiffness`` states.  Returns otherwise."""
+    if scene.n_wires <= MAX_ELIMINATION_WIRES:
+        return
+    L = np.asarray(scene.lengths, float)
+    idx = [int(i) for i in idx]
+    es = length_strain_scale(scene, c, R, lam)
+    if not es < PLAUSIBLE_STRAIN:
+        return
+    if gap is not None and np.any(np.asarray(gap, float) >= es * L[idx]):
+        return  # slack by more than the length change that moves the split by a wire's load: the rigid verdict
+    d = c + scene.attachments @ R.T - scene.anchors
+    T = lam * np.linalg.norm(d, axis=1)
+    names = f"wire {idx[0] + 1}" if len(idx) == 1 else "wires " + ", ".join(str(i + 1) for i in idx)
+    if gap is not None:
+        how = f"slack by {np.max(gap) * 1000:.2g} mm"
+    else:
+        how = "pushing (" + ", ".join(f"{T[i]:.3g} N" for i in idx) + ")"
+    load = scene.mass * scene.gravity / scene.n_wires
+    raise StiffnessNeededError([i + 1 for i in idx], (
+        f"on rigid wires {names} would be {how} at rest, but the {scene.n_wires} wires are nearly dependent: a change "
+        f"of one wire's length by {es:.2g} of it ({es * float(np.max(L)) * 1000:.2g} mm) moves their rigid split by a "
+        f"wire's mean load ({load:.3g} N), less than a loaded wire stretches (lab wires {PLAUSIBLE_STRAIN:g} of their "
+        "length and less), so the split, and whether any wire is slack, is set by the wires' stretch, which the rigid "
+        "model cannot say: give rig.stiffness (the wires' axial stiffness EA, N, one value or one per wire) for the "
+        "elastic split"), gaps=None if gap is None else gap)
+
+
+def elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
+    """The rest pose of 4 or 5 wires of axial stiffness ``scene.stiffness``
+    (EA, N): the static equilibrium of elastic wires
+    (:func:`~bifilar.analysis.elastic_rest.elastic_rest`), from the rigid
+    pose with every wire at its length (Newton on the all-taut KKT equations
+    from the start pose, or from ``guess``; SLSQP's pose where Newton fails).
+    The pose is the elastic one (each wire stretched by ``T_i L_i / EA_i``,
+    its wire vectors that long), its tensions the elastic split, exactly in
+    equilibrium there, so the modes are the rigid model's about the loaded
+    rig.  A wire the elastic wires leave slack is a
+    :class:`~bifilar.errors.SlackWireError` (its gap the elastic one); an
+    unstable one an :class:`~bifilar.errors.UnstableRestError` (the rigid
+    model's checks, :func:`~bifilar.analysis.equilibrium._finish`)."""
+    if guess is not None:
+        c, R = guess.com.copy(), guess.R.copy()
+        kkt = 0.0
+    else:
+        try:
+            c, R, _, kkt = _newton_kkt(scene, *_initial_pose(scene), iters=40)
+        except np.linalg.LinAlgError:
+            kkt = np.inf
+        if not kkt < 1e-9:
+            c, R, _, _ = _slsqp(scene, *_initial_pose(scene))
+    c, R, T, res = elastic_rest(scene, scene.stiffness, c, R)
+    d = c + scene.attachments @ R.T - scene.anchors
+    ln = np.linalg.norm(d, axis=1)
+    L = np.asarray(scene.lengths, float)
+    slack = np.where(T <= 0.0)[0]
+    if len(slack):
+        _raise_slack(scene, slack, L[slack] - ln[slack], L)  # no advice: it is the rigid model's
+    return _finish(scene, c, R, T / ln, res, phi_checked=False)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConvergenceError, InputError, SlackWireError, StiffnessNeededError, UnstableRestError
+from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestError
 from ..rotations import cross, matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
 from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions, min_norm_multipliers
 from ..scene import Scene, lowest_point_z
@@ -371,7 +371,7 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`); the real
     one depends on the wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`).
     True on 4 or 5 wires of a stated stiffness (``rig.stiffness``): their
-    elastic statics fixes the split (:func:`_elastic_rest_pose`)."""
+    elastic statics fixes the split (:func:`~bifilar.analysis.elastic_rest.elastic_rest_pose`)."""
     if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
         return True
     return not _wires_dependent(scene, rest.com, rest.R)
@@ -415,7 +415,9 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
         The solver failed.
     """
     if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
-        return _elastic_rest_pose(scene, guess if local_only else None)
+        from .elastic_rest import elastic_rest_pose
+
+        return elastic_rest_pose(scene, guess if local_only else None)
     if guess is not None and local_only:
         quick = _from_guess(scene, guess)
         if quick is not None:
@@ -455,44 +457,11 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
         except np.linalg.LinAlgError:
             kkt2 = np.inf
         if kkt2 < 1e-9:
-            _refuse_nearly_dependent(scene, slack, -stretch[slack], c2, R2, lam2)
+            from .elastic_rest import refuse_nearly_dependent
+
+            refuse_nearly_dependent(scene, slack, -stretch[slack], c2, R2, lam2)
         _raise_slack(scene, slack, -stretch[slack], L, pose=(c, R))
     return _finish(scene, *_polish(scene, c, R))
-
-
-def _elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
-    """The rest pose of 4 or 5 wires of axial stiffness ``scene.stiffness``
-    (EA, N): the static equilibrium of elastic wires
-    (:func:`~bifilar.analysis.elastic_rest.elastic_rest`), from the rigid
-    pose with every wire at its length (Newton on the all-taut KKT equations
-    from the start pose, or from ``guess``; SLSQP's pose where Newton fails).
-    The pose is the elastic one (each wire stretched by ``T_i L_i / EA_i``,
-    its wire vectors that long), its tensions the elastic split, exactly in
-    equilibrium there, so the modes are the rigid model's about the loaded
-    rig.  A wire the elastic wires leave slack is a
-    :class:`~bifilar.errors.SlackWireError` (its gap the elastic one); an
-    unstable one an :class:`~bifilar.errors.UnstableRestError` (the rigid
-    model's checks, :func:`_finish`)."""
-    from .elastic_rest import elastic_rest
-
-    if guess is not None:
-        c, R = guess.com.copy(), guess.R.copy()
-        kkt = 0.0
-    else:
-        try:
-            c, R, _, kkt = _newton_kkt(scene, *_initial_pose(scene), iters=40)
-        except np.linalg.LinAlgError:
-            kkt = np.inf
-        if not kkt < 1e-9:
-            c, R, _, _ = _slsqp(scene, *_initial_pose(scene))
-    c, R, T, res = elastic_rest(scene, scene.stiffness, c, R)
-    d = c + scene.attachments @ R.T - scene.anchors
-    ln = np.linalg.norm(d, axis=1)
-    L = np.asarray(scene.lengths, float)
-    slack = np.where(T <= 0.0)[0]
-    if len(slack):
-        _raise_slack(scene, slack, L[slack] - ln[slack], L)  # no advice: it is the rigid model's
-    return _finish(scene, c, R, T / ln, res, phi_checked=False)
 
 
 def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
@@ -659,7 +628,9 @@ def _finish(scene: Scene, c, R, lam, kkt, phi_checked: bool = True) -> RestPose:
     bad = np.where(T < 1e-9 * weight)[0]
     if len(bad):
         if phi_checked:
-            _refuse_nearly_dependent(scene, bad, None, c, R, lam)
+            from .elastic_rest import refuse_nearly_dependent
+
+            refuse_nearly_dependent(scene, bad, None, c, R, lam)
         _raise_slack(scene, bad, None, L, tensions=T, pose=(c, R))
     steep = float(np.max(np.abs(d[:, 2]) / np.linalg.norm(d, axis=1)))  # largest sine of a wire's angle to horizontal
     if steep < MIN_WIRE_SLOPE:
@@ -689,47 +660,6 @@ def _finish(scene: Scene, c, R, lam, kkt, phi_checked: bool = True) -> RestPose:
         com=c, R=R, q=matrix_to_quat(R), tensions=T, wire_vectors=d,
         lowest_z=lz, depth=scene.ceiling_z - lz, kkt_residual=float(kkt),
     )
-
-
-def _refuse_nearly_dependent(scene: Scene, idx, gap, c: np.ndarray, R: np.ndarray, lam: np.ndarray) -> None:
-    """Raise :class:`~bifilar.errors.StiffnessNeededError` where the rigid
-    model would refuse a rig of 4 or 5 wires for wires ``idx`` (0-based)
-    slack by ``gap`` (m; None: at their length but pushing) although the
-    wires are nearly dependent (:func:`~bifilar.analysis.elastic_rest.
-    nearly_dependent` at the all-taut pose ``c``, ``R`` with multipliers
-    ``lam`` N/m: a length change ``e* L`` below a plausible stretch,
-    :data:`~bifilar.analysis.elastic_rest.PLAUSIBLE_STRAIN` of the length,
-    moves the split by a wire's mean load) and each gap is below ``e* L``
-    (session 10's leaning table, its wire 4 slack by 1.13 mm, ``e* L`` 0.6
-    mm, keeps its rigid verdict): there the rigid split, and whether a wire is slack, is set by length
-    differences smaller than the wires' stretch under load, which no config
-    without ``rig.stiffness`` states.  Returns otherwise."""
-    from .elastic_rest import PLAUSIBLE_STRAIN, length_strain_scale
-
-    if scene.n_wires <= MAX_ELIMINATION_WIRES:
-        return
-    L = np.asarray(scene.lengths, float)
-    idx = [int(i) for i in idx]
-    es = length_strain_scale(scene, c, R, lam)
-    if not es < PLAUSIBLE_STRAIN:
-        return
-    if gap is not None and np.any(np.asarray(gap, float) >= es * L[idx]):
-        return  # slack by more than the length change that moves the split by a wire's load: the rigid verdict
-    d = c + scene.attachments @ R.T - scene.anchors
-    T = lam * np.linalg.norm(d, axis=1)
-    names = f"wire {idx[0] + 1}" if len(idx) == 1 else "wires " + ", ".join(str(i + 1) for i in idx)
-    if gap is not None:
-        how = f"slack by {np.max(gap) * 1000:.2g} mm"
-    else:
-        how = "pushing (" + ", ".join(f"{T[i]:.3g} N" for i in idx) + ")"
-    load = scene.mass * scene.gravity / scene.n_wires
-    raise StiffnessNeededError([i + 1 for i in idx], (
-        f"on rigid wires {names} would be {how} at rest, but the {scene.n_wires} wires are nearly dependent: a change "
-        f"of one wire's length by {es:.2g} of it ({es * float(np.max(L)) * 1000:.2g} mm) moves their rigid split by a "
-        f"wire's mean load ({load:.3g} N), less than a loaded wire stretches (lab wires {PLAUSIBLE_STRAIN:g} of their "
-        "length and less), so the split, and whether any wire is slack, is set by the wires' stretch, which the rigid "
-        "model cannot say: give rig.stiffness (the wires' axial stiffness EA, N, one value or one per wire) for the "
-        "elastic split"), gaps=None if gap is None else gap)
 
 
 _NO_ADVICE = contextvars.ContextVar("bifilar_no_slack_advice", default=False)
