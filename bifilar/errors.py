@@ -83,6 +83,19 @@ class SlackWireError(InputError):
         return (type(self), (self.wires, self.message, None, self.gaps))
 
 
+class StiffnessNeededError(SlackWireError):
+    """A rig of 4 or 5 nearly dependent wires that the rigid model would
+    refuse (a wire slack by less than a loaded wire's stretch, or pushing),
+    where the split, and whether any wire is slack, is set by the wires'
+    stretch: the field to give is ``rig.stiffness`` (docs/design.md
+    "elastic, session 15").  Same arguments as :class:`SlackWireError`."""
+
+    def __init__(self, wires: list[int], message: str, advise=None, gaps=None):
+        super().__init__(wires, message, advise, gaps)
+        self.field = "rig.stiffness"
+        self.args = (f"{self.field}: {message}",)
+
+
 class UnstableRestError(InputError):
     """The rest pose exists but a mode has negative stiffness."""
 

@@ -47,6 +47,10 @@ class Scene:
     config : dict
         The (normalised) config mapping the scene was built from; studies
         edit it by dotted path and rebuild.
+    stiffness : ndarray (n,) or None
+        The wires' axial stiffness EA, N (``rig.stiffness``); None: rigid
+        wires.  Used by the rest pose of 4 or 5 wires (elastic statics,
+        :mod:`bifilar.analysis.elastic_rest`).
     """
 
     name: str
@@ -60,6 +64,7 @@ class Scene:
     support_source: str = "attachments"
     config: dict = field(default_factory=dict, compare=False, repr=False)
     parts_com: Optional[np.ndarray] = None  # CoM in the parts' build frame, if built from parts
+    stiffness: Optional[np.ndarray] = None  # wires' axial stiffness EA (n,), N (rig.stiffness); None: rigid wires
 
     @property
     def n_wires(self) -> int:

@@ -246,6 +246,8 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     ok &= ~(np.abs(line_turns(p, R, edge_axes=axis)[0]) > LINE_TURN_TOL)
     ok &= _within_turn(R, np.cos(NEWTON_START_MAX_TURN / 2))
     ok &= np.max(np.abs(d[..., 2]) / dn, axis=1) >= MIN_WIRE_SLOPE
+    if G.shape[1] > MAX_ELIMINATION_WIRES:  # elastic wires (rig.stiffness): rest_pose's elastic statics
+        ok &= np.array([s.stiffness is None for s in scenes])
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue

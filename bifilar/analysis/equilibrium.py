@@ -369,7 +369,11 @@ def tensions_determined(scene: Scene, rest: RestPose) -> bool:
     wires, e.g. parallel vertical ones, admit a self-stress and the tensions
     printed are only one split
     (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`); the real
-    one depends on the wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`)."""
+    one depends on the wires' stretch).  Same rank rule as :func:`reduced_stiffness` (:func:`constraint_rank`).
+    True on 4 or 5 wires of a stated stiffness (``rig.stiffness``): their
+    elastic statics fixes the split (:func:`~bifilar.analysis.elastic_rest.elastic_rest_pose`)."""
+    if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
+        return True
     return not _wires_dependent(scene, rest.com, rest.R)
 
 
@@ -410,6 +414,10 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
     ConvergenceError
         The solver failed.
     """
+    if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
+        from .elastic_rest import elastic_rest_pose
+
+        return elastic_rest_pose(scene, guess if local_only else None)
     if guess is not None and local_only:
         quick = _from_guess(scene, guess)
         if quick is not None:
@@ -444,6 +452,14 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
         raise _turn_refusal(scene, R0, R)
     slack = np.where(stretch < -tol)[0]
     if len(slack):
+        try:
+            c2, R2, lam2, kkt2 = _polish(scene, c, R)  # the pose with every wire at its length
+        except np.linalg.LinAlgError:
+            kkt2 = np.inf
+        if kkt2 < 1e-9:
+            from .elastic_rest import refuse_nearly_dependent
+
+            refuse_nearly_dependent(scene, slack, -stretch[slack], c2, R2, lam2)
         _raise_slack(scene, slack, -stretch[slack], L, pose=(c, R))
     return _finish(scene, *_polish(scene, c, R))
 
@@ -595,7 +611,11 @@ def _hang_below_line(scene: Scene, c: np.ndarray, R: np.ndarray):
     return a1 + Q @ (c - a1), Q @ R
 
 
-def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
+def _finish(scene: Scene, c, R, lam, kkt, phi_checked: bool = True) -> RestPose:
+    """The :class:`RestPose` at (c, R) with multipliers ``lam`` N/m and KKT
+    residual ``kkt``, after the checks (slack, straight across, stable, the
+    start box).  ``phi_checked`` False: an elastic pose, its wires longer
+    than their lengths (no slack refusal by the nearly dependent rule)."""
     if not (kkt < 1e-9):
         raise ConvergenceError(f"rest pose did not converge (KKT residual {kkt:.2e})")
     axis = knife_edge_axes(scene.attachments)
@@ -607,6 +627,10 @@ def _finish(scene: Scene, c, R, lam, kkt) -> RestPose:
     weight = scene.mass * scene.gravity
     bad = np.where(T < 1e-9 * weight)[0]
     if len(bad):
+        if phi_checked:
+            from .elastic_rest import refuse_nearly_dependent
+
+            refuse_nearly_dependent(scene, bad, None, c, R, lam)
         _raise_slack(scene, bad, None, L, tensions=T, pose=(c, R))
     steep = float(np.max(np.abs(d[:, 2]) / np.linalg.norm(d, axis=1)))  # largest sine of a wire's angle to horizontal
     if steep < MIN_WIRE_SLOPE:

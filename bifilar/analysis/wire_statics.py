@@ -109,15 +109,67 @@ def indeterminate_warning(scene: Scene, rest: RestPose) -> str | None:
     reports (the minimum-norm multipliers ``lambda_i = T_i / L_i``: least
     squares of the tension per unit length, not of the tensions) and the
     range statics leaves each wire (:func:`tension_range`)."""
+    if scene.stiffness is not None and scene.n_wires > 3:
+        return run_split_warning(scene, rest)
     if tensions_determined(scene, rest):
         return None
     rng = tension_range(scene, rest)
     spans = ", ".join(f"wire {i + 1} {lo:.4g} .. {hi:.4g} N" for i, (lo, hi) in enumerate(rng))
-    return (f"rig: the {scene.n_wires} wires are dependent at rest, so their tensions are statically indeterminate: "
+    return (f"rig: the {scene.n_wires} wires are {dependence_words(scene, rest)} at rest, so their tensions are "
+            "statically indeterminate: "
             f"statics allows {spans} (any split in these ranges with the same resultant holds the body); those shown "
             "are the model's split, the least-squares multipliers T_i / L_i (tension per metre of wire, not the "
             "tensions themselves: on wires of unequal length it favours the longer ones, where equal elastic "
             "wires favour the shorter); the real split is set by the wires' stretch and their lengths' tolerances")
+
+
+#: the run's split at rest is "different" from the elastic one where a wire's tension differs by more than this
+#: fraction of the mean load W / n (0.025 N on the test table: 0.1 % of a wire's load, above the two's rounding)
+RUN_SPLIT_REL = 1e-3
+
+
+def run_split_warning(scene: Scene, rest: RestPose) -> str | None:
+    """On 4 or 5 wires of a stated stiffness (``rig.stiffness``, whose rest
+    pose is the elastic one), the warning that the run (the rigid-wire
+    model, :mod:`bifilar.models.maximal`: the nearly dependent directions'
+    split by its minimum-norm rule) starts with another split than the
+    rest pose's elastic one, or None when they agree to
+    :data:`RUN_SPLIT_REL` of the mean load."""
+    import bifilar.models.maximal as mx
+    from ..rotations import matrix_to_quat
+    from .equilibrium import _newton_kkt
+
+    # the run starts on rigid wires: at the pose nearest the elastic one with every wire at its length (the
+    # start of a run of zero amplitude), its multipliers
+    c, R, _, kkt = _newton_kkt(scene, rest.com, rest.R, iters=30)
+    if not kkt < 1e-9:
+        c, R = rest.com, rest.R
+    P = mx.params_from_scenes(scene)
+    run0 = np.asarray(mx.tensions(mx.pack(c, matrix_to_quat(R))[None], P)[0], float)
+    T = np.asarray(rest.tensions, float)
+    load = scene.mass * scene.gravity / scene.n_wires
+    k = int(np.argmax(np.abs(run0 - T)))
+    if not abs(run0[k] - T[k]) > RUN_SPLIT_REL * load:
+        return None
+    return (f"rig.stiffness: the rest pose's tensions are the elastic wires' split (wire {k + 1} {T[k]:.4g} N), but "
+            f"the run (simulate, tensions, sweep's and plan's tensions) is the rigid-wire model, whose split on wires at "
+            f"their lengths differs (wire {k + 1} {run0[k]:.4g} N): its tensions are not the elastic wires'; the motion and "
+            "the periods are the rigid model's about the loaded rig")
+
+
+def dependence_words(scene: Scene, rest: RestPose) -> str:
+    """'dependent' for wires whose constraint Jacobian at rest has rank below
+    n (singular values at 1e-12 of the largest: parallel vertical wires),
+    'nearly dependent (...)' for those the model treats as dependent by the
+    run's rule though geometry holds them independent (anchors off by less
+    than a length tolerance, :func:`~bifilar.analysis.equilibrium.constraint_rank`),
+    with their smallest singular value relative to the largest."""
+    _, _, G = constraint_jacobian(scene, rest.com, rest.R)
+    sv = np.linalg.svd(G, compute_uv=False)
+    if sv[-1] <= 1e-12 * sv[0]:
+        return "dependent"
+    return (f"nearly dependent (independent by geometry, but the smallest singular value of their directions is "
+            f"{sv[-1] / sv[0]:.2g} of the largest: the model takes them as dependent, as the run does)")
 
 
 #: a mode of a dependent rig whose second-order change of the wires' lengths has a self-stress component

@@ -99,7 +99,7 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True, unkn
     if mass is not None and inertia is not None and not guessed:
         _check_gyration(mass, inertia, "body.parts" if body and "parts" in body else "body.inertia", chk)
 
-    anchors = attachments = lengths = None
+    anchors = attachments = lengths = stiffness = None
     rig = cfg.get("rig")
     if "rig" in cfg and chk.keys("rig", rig, RIG_KEYS, {"anchors", "attachments", "lengths"}):
         if "anchors" in rig:
@@ -116,6 +116,7 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True, unkn
                 vals = [chk.number(f"rig.lengths.{i}", v, positive=True, limit="length", unit="m") for i, v in enumerate(L)]
                 if all(v is not None for v in vals):
                     lengths = np.asarray(vals, float)
+        stiffness = _stiffness(rig, chk)
         frame = rig.get("attachments_frame", "com")
         if not isinstance(frame, str) or frame not in ("com", "parts"):
             chk.error("rig.attachments_frame", f"must be 'com' or 'parts', got {_describe(frame)}")
@@ -145,6 +146,9 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True, unkn
                 )
             else:
                 _check_geometry(anchors, attachments, lengths, chk)
+                if stiffness is not None and stiffness.shape[0] not in (1, nw):
+                    chk.error("rig.stiffness", f"must be one EA (N) for every wire or one per wire ({nw}), got "
+                              f"{stiffness.shape[0]} items")
 
     if chk.errors:
         raise ConfigErrors(chk.errors)
@@ -161,6 +165,7 @@ def scene_from_dict(cfg: Any, source: str = "config", *, warn: bool = True, unkn
         support_source=support_source,
         config=cfg,
         parts_com=parts_com,
+        stiffness=None if stiffness is None else np.broadcast_to(stiffness, lengths.shape).copy(),
     )
     if warn:
         for w in plausibility_warnings(scene):
@@ -276,3 +281,23 @@ def load_scene(path: str | os.PathLike, *, warn: bool = True, unknown: tuple | N
     """Read and validate a config file; see :func:`read_yaml` and :func:`scene_from_dict`."""
     cfg = read_yaml(path)
     return scene_from_dict(cfg, source=str(path), warn=warn, unknown=unknown)
+
+
+def _stiffness(rig: dict, chk) -> np.ndarray | None:
+    """``rig.stiffness``: the wires' axial stiffness EA (N), one number for
+    every wire or a list of one per wire (its length checked against the
+    wires' count by the caller); optional (None: rigid wires).  Each
+    positive and finite."""
+    if "stiffness" not in rig:
+        return None
+    v = rig["stiffness"]
+    if isinstance(v, (list, tuple)):
+        if len(v) == 0 or len(v) > 100:
+            chk.error("rig.stiffness", f"must be one EA (N) for every wire or a list of one per wire, got {_describe(v)}")
+            return None
+        vals = [chk.number(f"rig.stiffness.{i}", x, positive=True, unit="N") for i, x in enumerate(v)]
+    else:
+        vals = [chk.number("rig.stiffness", v, positive=True, unit="N")]
+    if any(x is None for x in vals):
+        return None
+    return np.asarray(vals, float)

@@ -33,7 +33,7 @@ relative tolerances no longer resolve the short one)."""
 TOP_KEYS = {"name", "gravity", "body", "rig", "measurements", "uncertainty", "plan", "notes"}
 BODY_KEYS = {"mass", "inertia", "parts", "bounding_box", "name"}
 INERTIA_KEYS = {"tensor", "principal"}
-RIG_KEYS = {"anchors", "attachments", "lengths", "attachments_frame"}
+RIG_KEYS = {"anchors", "attachments", "lengths", "attachments_frame", "stiffness"}
 
 
 class _Checker:

@@ -77,6 +77,10 @@ def within_uncertainty(err: SlackWireError, scene: Scene, unc: dict, where: str)
     give it, when it does; else ``err`` itself.  The
     advice of ``err`` (how much to shorten) is kept: it is an amount
     within that uncertainty."""
+    from ..errors import StiffnessNeededError
+
+    if isinstance(err, StiffnessNeededError):  # the refusal already says the stretch decides, not the lengths
+        return err
     if not err.gaps or not all(g > 0 for g in err.gaps):
         return err
     idx = [w - 1 for w in err.wires]
