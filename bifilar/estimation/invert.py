@@ -86,7 +86,7 @@ from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
 from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
-from .prior_inertia import prior_terms, prior_warning, with_prior
+from .prior_inertia import prior_terms, prior_warning, with_prior, with_prior_curvature
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
 from .roots import Root, find_roots
 from .roots import separating_measurement
@@ -753,6 +753,8 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
         # the sigma points, each a global rest-pose search on such a scene
         return budget, std_lin, [d for d in degenerate if bctx.sigmas.get(d, 0) > 0], T_lin, bctx, amp_default
     budget, failed = second_order(pb, p, r, bctx, budget)
+    if bctx.prior is not None:  # a stated prior whose first-order term vanishes (a product on a level rig)
+        budget = with_prior_curvature(budget, bctx.prior)
     degenerate = [d for d in dict.fromkeys(degenerate + failed) if bctx.sigmas.get(d, 0) > 0]
     return budget, std_lin, degenerate, T_lin, bctx, amp_default
 
