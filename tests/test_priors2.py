@@ -75,3 +75,51 @@ def test_a_product_that_moves_the_period_at_second_order_is_budgeted(mode, comp)
     far, near = (res.value(comp) - lo, hi - res.value(comp))[::1 if shift < 0 else -1]
     assert far > 3 * near
     assert doc["budget"][comp]["groups"]["offset"]["std"] == pytest.approx(abs(shift), rel=1e-9)
+
+
+def _hangings(Iyz, unc, slip=1.0):
+    """test_priorfit's two hangings of the hangings example's trifilar (Izz
+    from the z-up and the y+z-up torsion, timed to 1 ms) with the truth's
+    Iyz given; the config's products 0; the y+z-up period written ``slip``
+    times the truth's."""
+    from bifilar.estimation import measurements as mm
+    from bifilar.estimation.invert import invert
+    from tests.test_priorfit import TRIFILAR
+    from tests.test_priorunc import EXACT
+
+    prior = scene_from_dict(TRIFILAR, warn=False)
+    c, s_ = np.cos(np.pi / 4), np.sin(np.pi / 4)
+    R = np.array([[1, 0, 0], [0, c, -s_], [0, s_, c]])
+    truth = prior.inertia.copy()
+    truth[1, 2] = truth[2, 1] = Iyz
+    hangs, meas = [], []
+    for h, (name, Rh) in enumerate([("z-up", np.eye(3)), ("yz-up", R)]):
+        sc = scene_with(prior, inertia=Rh @ truth @ Rh.T)
+        T = linear_modes(sc, rest_pose(sc)).get("torsion").period * (slip if h else 1.0)
+        hangs.append(mm.Hanging(name, scene_with(prior, inertia=Rh @ prior.inertia @ Rh.T), Rh))
+        meas.append(mm.Measurement("torsion", T, 1e-3, "period", f"{name}.period", hanging=h, amplitude=0.0,
+                                   cycles=10))
+    return invert(mm.MeasurementSet(hangs, meas), solve_for=["Izz"], unc={**EXACT, **unc}, ladder=False)
+
+
+def test_a_refusal_a_stated_prior_would_explain_names_the_option():
+    """The truth's Iyz 0.015 kg m^2 (3.5 % of sqrt(Iyy Izz)), the config's
+    0: refused unstated and at ``inertia=0.01`` (test_priorfit), passed at
+    0.1.  The refusal names ``--uncertainty inertia=REL`` and the products
+    that move the periods (Iyz first: the y+z-up torsion times (Iyy + Izz)/2
+    - Iyz), on one line.  A y+z-up period written 20 % long, which a 10 %
+    error of the priors does not explain (Iyz's 10 %, 0.028 kg m^2, moves
+    that period by ~4.7 %; written 10 % long it passes at ``inertia=0.1``),
+    is refused without the hint.  Old code: the refusal named --solve-for
+    only ("solve for other components")."""
+    from bifilar.errors import InputError
+
+    for unc in ({}, {"inertia": 0.01}):
+        with pytest.raises(InputError) as e:
+            _hangings(0.015, unc)
+        msg = str(e.value)
+        assert "\n" not in msg and "no physical tensor reproduces" in msg
+        assert "not solved for (Iyz" in msg and "--uncertainty inertia=REL" in msg, msg
+    with pytest.raises(InputError) as e:
+        _hangings(0.0, {}, slip=1.2)
+    assert "no physical tensor reproduces" in str(e.value) and "inertia=REL" not in str(e.value), str(e.value)

@@ -85,7 +85,7 @@ from .montecarlo import (  # noqa: F401
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
-from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
+from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods, prior_fit_hint
 from .prior_inertia import prior_terms, prior_warning, with_prior, with_prior_curvature
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
 from .roots import Root, find_roots
@@ -683,16 +683,20 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False, laws=None) ->
     if edge and K <= P:
         ok, test = bool(np.all(np.abs(z) <= EDGE_Z)), f"|residual| <= {EDGE_Z:g} sigma (on the edge of the physical set)"
     chi2_in = chi2_at = None
+    hint = ""
     if not ok and (K > P or edge) and np.all(np.isfinite(z)):
         # the inputs' errors shift the periods together: the check counts them (fit_check.input_fit_check)
-        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, laws, method, pb.unc))
+        amp_var = _amplitude_variance(pb, p, laws, method, pb.unc)
+        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, amp_var)
+        if not ok and method in ("linear", "nonlinear"):  # would a stated prior's error explain it?
+            hint = prior_fit_hint(pb, p, z, r, amp_var=amp_var).removesuffix("; ")
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
            "chi2_with_inputs": chi2_in, "distance_from_fit": chi2_at,
            "max_abs_normalised_residual": float(np.max(np.abs(z)))}
     if not ok and method in ("linear", "nonlinear"):
         zs = ", ".join(f"{m.label} {zk:+.3g}" for m, zk in zip(pb.measurements, z))
         raise ConvergenceError(f"the {method} estimate does not reproduce the measurements (normalised residuals "
-                               f"{zs} sigma; required {test}): no answer is given")
+                               f"{zs} sigma; required {test}): no answer is given{': ' + hint if hint else ''}")
     return out
 
 
