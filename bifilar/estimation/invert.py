@@ -364,6 +364,15 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         roots = find_roots(pb, targets0, amp_var0)
     else:
         roots = [Root(solve_linear(pb, targets0))]
+    # the triangle limit of one unknown is set by the other components: where their priors' uncertainty is
+    # stated, the limit is as uncertain as they are, and the answer is the period's own root past it (the
+    # estimate the budget, counting the priors, describes), not the limit (docs/design.md, "priors2")
+    past_edge = physical_only and scalar and bool(roots[0].edge) and float(unc_all.get("inertia", 0.0) or 0.0) > 0
+    if past_edge:
+        try:
+            roots = [Root(solve_linear(pb, targets0, p0=roots[0].p))] + list(roots[1:])
+        except BifilarError:
+            past_edge = False
     root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
     pb = root_pbs[0]
     p_start = np.asarray(roots[0].p, float)
@@ -418,7 +427,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         r_hat = est_nl.r
 
     edge = bool(roots[0].edge)
-    if method == "nonlinear" and P == 1 and pb.unknowns[0] in _IDX and physical_only:
+    if method == "nonlinear" and P == 1 and pb.unknowns[0] in _IDX and physical_only and not past_edge:
         # the fixed point refines locally and may step past the edge of the
         # physical set (a thin plate): back to the edge, which must then fit
         lo, hi = admissible_interval(pb.I_ref0, pb.unknowns[0])
@@ -504,6 +513,14 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))
+            if not admissible(I) and past_edge:
+                lo, hi = admissible_interval(I, n)
+                lim = lo if p_hat[i] < lo else hi
+                warnings.append(f"{n} = {p_hat[i]:.6g} lies past the triangle limit the other components' priors "
+                                f"set ({lim:.6g}), by {abs(p_hat[i] - lim) / budget.std[i]:.2g} of its std: their "
+                                "stated uncertainty (--uncertainty inertia) allows a real body there, so the value "
+                                "is the period's, not cut at the limit; its std counts them")
+                break
             if not admissible(I):
                 warnings.append(f"with {n} = {p_hat[i]:.6g} and the other components at their prior the tensor "
                                 "violates the triangle inequality (no real body has it): check the config's "
