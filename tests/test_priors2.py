@@ -12,23 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import yaml
 
 from bifilar.analysis.equilibrium import rest_pose
 from bifilar.analysis.modes import linear_modes
 from bifilar.config import scene_from_dict
 from bifilar.scene import scene_with
-from tests.test_priorunc import _invert
-
-# test_priorunc's level, symmetric bifilar: no product moves a period to first order
-LEVEL = yaml.safe_load("""
-gravity: 9.81
-body: {mass: 2.0, inertia: {principal: [0.03, 0.05, 0.07]}}
-rig:
-  anchors: [[-0.2, 0.0, 1.0], [0.2, 0.0, 1.0]]
-  attachments: [[-0.2, 0.0, 0.05], [0.2, 0.0, 0.05]]
-  lengths: [0.95, 0.95]
-""")
+from tests.test_priorunc import LEVEL, _invert  # LEVEL: no product moves a period to first order
 
 
 def _level_invert(scene, mode, comp, unc):

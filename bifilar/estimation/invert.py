@@ -86,7 +86,8 @@ from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
 from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods, prior_fit_hint
-from .prior_inertia import prior_terms, prior_warning, with_prior, with_prior_curvature
+from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
+                            with_prior_curvature)
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
 from .roots import Root, find_roots
 from .roots import separating_measurement
@@ -364,15 +365,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         roots = find_roots(pb, targets0, amp_var0)
     else:
         roots = [Root(solve_linear(pb, targets0))]
-    # the triangle limit of one unknown is set by the other components: where their priors' uncertainty is
-    # stated, the limit is as uncertain as they are, and the answer is the period's own root past it (the
-    # estimate the budget, counting the priors, describes), not the limit (docs/design.md, "priors2")
-    past_edge = physical_only and scalar and bool(roots[0].edge) and float(unc_all.get("inertia", 0.0) or 0.0) > 0
-    if past_edge:
-        try:
-            roots = [Root(solve_linear(pb, targets0, p0=roots[0].p))] + list(roots[1:])
-        except BifilarError:
-            past_edge = False
+    past_edge = physical_only and scalar and bool(roots[0].edge)  # a limit set by stated priors: not clamped
+    roots, past_edge = past_prior_edge(pb, roots, targets0, unc_all) if past_edge else (roots, False)
     root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
     pb = root_pbs[0]
     p_start = np.asarray(roots[0].p, float)
@@ -514,12 +508,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))
             if not admissible(I) and past_edge:
-                lo, hi = admissible_interval(I, n)
-                lim = lo if p_hat[i] < lo else hi
-                warnings.append(f"{n} = {p_hat[i]:.6g} lies past the triangle limit the other components' priors "
-                                f"set ({lim:.6g}), by {abs(p_hat[i] - lim) / budget.std[i]:.2g} of its std: their "
-                                "stated uncertainty (--uncertainty inertia) allows a real body there, so the value "
-                                "is the period's, not cut at the limit; its std counts them")
+                warnings.append(past_limit_warning(I, n, float(p_hat[i]), float(budget.std[i])))
                 break
             if not admissible(I):
                 warnings.append(f"with {n} = {p_hat[i]:.6g} and the other components at their prior the tensor "
@@ -705,8 +694,7 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False, laws=None) ->
         # the inputs' errors shift the periods together: the check counts them (fit_check.input_fit_check)
         amp_var = _amplitude_variance(pb, p, laws, method, pb.unc)
         ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, amp_var)
-        if not ok and method in ("linear", "nonlinear"):  # would a stated prior's error explain it?
-            hint = prior_fit_hint(pb, p, z, r, amp_var=amp_var).removesuffix("; ")
+        hint = prior_fit_hint(pb, p, z, r, amp_var=amp_var).removesuffix("; ") if not ok else ""
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
            "chi2_with_inputs": chi2_in, "distance_from_fit": chi2_at,
            "max_abs_normalised_residual": float(np.max(np.abs(z)))}

@@ -88,6 +88,17 @@ class PriorInertia:
     #: more than ``LINEAR_ENOUGH`` or its offset exceeds ``OFFSET_ENOUGH`` of it, as the inputs' sigma points)
     budgeted: bool = False
 
+    def quadratic_terms(self, budget) -> dict:
+        """{``prior_inertia[c]``: ((P,) ``a_c``, (P,) ``b_c``)} of the
+        budgeted second-order terms, ``a_c`` the linear term in ``budget``
+        (SI; empty where :attr:`budgeted` is False): the 95 % interval's
+        draws (:func:`~bifilar.estimation.budget.interval_95`)."""
+        if not self.budgeted:
+            return {}
+        zero = np.zeros(len(self.unknowns))
+        return {f"prior_inertia[{c}]": (np.asarray(budget.contributions.get(f"prior_inertia[{c}]", zero), float),
+                                        np.asarray(b, float)) for c, b in self.quadratic.items()}
+
     def quadratic_contributions(self) -> tuple[dict, np.ndarray]:
         """({``prior_inertia[c] (2nd order)``: (P,) ``sqrt(2) b_c``}, (P,) the
         mean offset ``sum_c b_c``) of :attr:`quadratic` (SI)."""
@@ -354,6 +365,40 @@ def with_prior_curvature(budget, pri: PriorInertia):
     for c in contrib.values():
         cov += np.outer(c, c)
     return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof))
+
+
+def past_prior_edge(pb: Problem, roots: list, targets, unc: dict) -> tuple[list, bool]:
+    """(roots, whether the first was moved) for one unknown from one
+    period whose root is on the edge of the physical set: the triangle
+    limit there is set by the other components' priors, so where their
+    uncertainty is stated (``unc["inertia"] > 0``) it is as uncertain as
+    they are, and the answer is the period's own root past it (positive
+    definite only, :func:`~bifilar.estimation.solve.solve_linear` from the
+    edge; ``targets`` (1,) the periods the linear model must give, s, or
+    None), the estimate the budget, counting the priors, describes, not the
+    limit (docs/design.md, "priors2, session 15")."""
+    from .roots import Root
+    from .solve import solve_linear
+
+    if not float(unc.get("inertia", 0.0) or 0.0) > 0:
+        return roots, False
+    try:
+        return [Root(solve_linear(pb, targets, p0=roots[0].p))] + list(roots[1:]), True
+    except BifilarError:
+        return roots, False
+
+
+def past_limit_warning(I, name: str, value: float, std: float) -> str:
+    """The warning of an answer past the triangle limit the priors set
+    (:func:`past_prior_edge`): ``I`` the tensor at it (reference body axes,
+    kg m^2), ``value`` and ``std`` the unknown ``name``'s (kg m^2)."""
+    from .problem import admissible_interval
+
+    lo, hi = admissible_interval(I, name)
+    lim = lo if value < lo else hi
+    return (f"{name} = {value:.6g} lies past the triangle limit the other components' priors set ({lim:.6g}), by "
+            f"{abs(value - lim) / std:.2g} of its std: their stated uncertainty (--uncertainty inertia) allows a "
+            "real body there, so the value is the period's, not cut at the limit; its std counts them")
 
 
 def prior_warning(pri: PriorInertia, std) -> str | None:
