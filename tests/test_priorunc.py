@@ -38,6 +38,15 @@ rig:
   attachments: [[0.0, 0.28, 0.01], [-0.242487, -0.14, 0.01], [0.242487, -0.14, 0.01]]
   lengths: [1.4, 1.4, 1.4]
 """)
+# a level, symmetric bifilar: no other component moves its torsion to first order
+LEVEL = yaml.safe_load("""
+gravity: 9.81
+body: {mass: 2.0, inertia: {principal: [0.03, 0.05, 0.07]}}
+rig:
+  anchors: [[-0.2, 0.0, 1.0], [0.2, 0.0, 1.0]]
+  attachments: [[-0.2, 0.0, 0.05], [0.2, 0.0, 0.05]]
+  lengths: [0.95, 0.95]
+""")
 T_TORSION = 2.1858  # s, near the plate's torsion at the audit's truth (Ixx 1.22, Iyy 2.10, Izz 3.30)
 EXACT = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0}
 
@@ -113,14 +122,7 @@ def test_an_unstated_prior_that_matters_is_warned_and_a_stated_one_is_not():
     assert not [x for x in _invert(_plate(), {"inertia": 0.0}).warnings if "not solved for" in x]
     assert not [x for x in _invert(_plate(), {"inertia": 0.1}).warnings if "not solved for" in x]
     # a level, symmetric bifilar: the torsion depends on Izz alone
-    level = yaml.safe_load("""
-gravity: 9.81
-body: {mass: 2.0, inertia: {principal: [0.03, 0.05, 0.07]}}
-rig:
-  anchors: [[-0.2, 0.0, 1.0], [0.2, 0.0, 1.0]]
-  attachments: [[-0.2, 0.0, 0.05], [0.2, 0.0, 0.05]]
-  lengths: [0.95, 0.95]
-""")
+    level = LEVEL
     from bifilar.analysis.equilibrium import rest_pose
     from bifilar.analysis.modes import linear_modes
 

@@ -397,7 +397,8 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
     sign ``s = +-1`` (the model and its mirror image, equally likely), plus
     ``D w`` with ``w = (r(A) - 1) / (r(A_max) - 1)`` of the mode's amplitude
     law (``u = (A/A_max)^2`` for a quadratic one), ``A`` uniform, for an unstated
-    amplitude.  Why the mirror: the model is built around the *measured*
+    amplitude, plus a stated prior's ``a_c z + b_c z^2`` (``ctx.prior.quadratic``, unmirrored: the truth
+    spreads about the prior; :func:`~bifilar.estimation.prior_inertia.with_prior_curvature`).  Why the mirror: the model is built around the *measured*
     inputs (the truth spread about them), but where the truth sits at the
     extremum of the response (the symmetric wheel) the error the
     experimenter makes is ``-e`` (the measured inputs spread about the
@@ -412,7 +413,8 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
     sd = budget.std
     half = budget.coverage_factor * sd
     lo, hi = p - half, p + half
-    skewed = ctx is not None and (ctx.surrogate or ctx.amplitude)
+    quad = ctx.prior.quadratic_terms(budget) if ctx is not None and ctx.prior is not None else {}
+    skewed = ctx is not None and (ctx.surrogate or ctx.amplitude or quad)
     if mc_samples is not None and len(mc_samples) > 1:
         q = np.quantile(np.asarray(mc_samples, float), [0.025, 0.975], axis=0)
         lo, hi = np.minimum(lo, q[0]), np.maximum(hi, q[1])
@@ -422,7 +424,7 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
         rng = np.random.default_rng(20261123)
         N = _SURROGATE_SAMPLES
         err = np.zeros((N, len(p)))
-        skip = set(ctx.surrogate) | {f"amplitude[{lab}]" for lab in ctx.amplitude} | {"offset"}
+        skip = set(ctx.surrogate) | {f"amplitude[{lab}]" for lab in ctx.amplitude} | {"offset"} | set(quad)
         for k, c in budget.contributions.items():
             if k in skip or k.endswith("(2nd order)"):
                 continue
@@ -449,6 +451,9 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
             amp += D[None, :] * (law.release_weight(u) if law is not None else u)
         if ctx.surrogate:
             err *= rng.choice([-1.0, 1.0], N)[:, None]
+        for key, (a, b) in quad.items():  # a stated prior's a z + b z^2, unmirrored: the truth spreads about it
+            z = rng.standard_normal(N)[:, None]
+            amp += a[None, :] * z + b[None, :] * z * z
         q = np.quantile(err + amp, [0.025, 0.975], axis=0)
         lo, hi = p + q[0], p + q[1]
     return np.column_stack([lo, hi])

@@ -281,6 +281,39 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
     return ok, chi2_fit, dist, test
 
 
+def prior_fit_hint(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> str:
+    """A refusal's hint where the components not solved for, taken as exact
+    (or stated tighter than :data:`~bifilar.estimation.prior_inertia.PLAUSIBLE_PRIOR_ERROR`),
+    would explain the misfit: :func:`input_fit_check` at ``p`` (residuals
+    ``z`` in timing sigma, the rest as there) re-run with ``inertia`` at
+    that error; where it passes, one clause naming the components that
+    move the periods most and ``--uncertainty inertia=REL`` beside
+    ``--solve-for`` (ending in "; "), else ``""``."""
+    import copy
+
+    from .prior_inertia import PLAUSIBLE_PRIOR_ERROR
+
+    rel = float((pb.unc or {}).get("inertia", 0.0) or 0.0)
+    if rel >= PLAUSIBLE_PRIOR_ERROR or not np.all(np.isfinite(z)):
+        return ""
+    trial = copy.copy(pb)
+    trial.unc = {**(pb.unc or {}), "inertia": PLAUSIBLE_PRIOR_ERROR}
+    try:
+        ok = input_fit_check(trial, p, z, r, extra_var, amp_var)[0]
+        names, Jq, sq = prior_period_columns(trial, p, r)
+    except (BifilarError, np.linalg.LinAlgError):
+        return ""
+    w = np.max(np.abs(Jq) * sq[None, :], axis=0) if len(names) else np.zeros(0)
+    if not ok or not np.any(w > 0):
+        return ""
+    movers = [names[q] for q in np.argsort(-w) if w[q] > 0.1 * np.max(w)]
+    taken = "as exact" if rel == 0 else f"as known to {rel:g} (inertia={rel:g})"
+    return (f"the components not solved for ({', '.join(movers)}) are taken {taken}, but with a "
+            f"{100 * PLAUSIBLE_PRIOR_ERROR:g} % error of them counted (--uncertainty inertia="
+            f"{PLAUSIBLE_PRIOR_ERROR:g}) the periods fit: state how well they are known (--uncertainty inertia=REL) "
+            "or solve for them (--solve-for); ")
+
+
 def labelled_periods(pb: Problem, p) -> np.ndarray:
     """(K,) linear periods (s) of the modes carrying the measured labels at ``p`` (NaN: no such mode)."""
     vals = pb.values(p)

@@ -85,8 +85,9 @@ from .montecarlo import (  # noqa: F401
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
-from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods
-from .prior_inertia import prior_terms, prior_warning, with_prior
+from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods, prior_fit_hint
+from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
+                            with_prior_curvature)
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
 from .roots import Root, find_roots
 from .roots import separating_measurement
@@ -364,6 +365,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         roots = find_roots(pb, targets0, amp_var0)
     else:
         roots = [Root(solve_linear(pb, targets0))]
+    past_edge = physical_only and scalar and bool(roots[0].edge)  # a limit set by stated priors: not clamped
+    roots, past_edge = past_prior_edge(pb, roots, targets0, unc_all) if past_edge else (roots, False)
     root_pbs = [problem_at(ms, pb, r.p, unc_all) for r in roots]
     pb = root_pbs[0]
     p_start = np.asarray(roots[0].p, float)
@@ -418,7 +421,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         r_hat = est_nl.r
 
     edge = bool(roots[0].edge)
-    if method == "nonlinear" and P == 1 and pb.unknowns[0] in _IDX and physical_only:
+    if method == "nonlinear" and P == 1 and pb.unknowns[0] in _IDX and physical_only and not past_edge:
         # the fixed point refines locally and may step past the edge of the
         # physical set (a thin plate): back to the edge, which must then fit
         lo, hi = admissible_interval(pb.I_ref0, pb.unknowns[0])
@@ -504,6 +507,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     for i, n in enumerate(pb.unknowns):
         if n in _IDX:
             I = pb.models[0].inertia_ref(pb.values(p_hat))
+            if not admissible(I) and past_edge:
+                warnings.append(past_limit_warning(I, n, float(p_hat[i]), float(budget.std[i])))
+                break
             if not admissible(I):
                 warnings.append(f"with {n} = {p_hat[i]:.6g} and the other components at their prior the tensor "
                                 "violates the triangle inequality (no real body has it): check the config's "
@@ -683,16 +689,19 @@ def _fit_check(pb: Problem, p, r, method: str, edge: bool = False, laws=None) ->
     if edge and K <= P:
         ok, test = bool(np.all(np.abs(z) <= EDGE_Z)), f"|residual| <= {EDGE_Z:g} sigma (on the edge of the physical set)"
     chi2_in = chi2_at = None
+    hint = ""
     if not ok and (K > P or edge) and np.all(np.isfinite(z)):
         # the inputs' errors shift the periods together: the check counts them (fit_check.input_fit_check)
-        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, _amplitude_variance(pb, p, laws, method, pb.unc))
+        amp_var = _amplitude_variance(pb, p, laws, method, pb.unc)
+        ok, chi2_in, chi2_at, test = input_fit_check(pb, p, z, r, amp_var)
+        hint = prior_fit_hint(pb, p, z, r, amp_var=amp_var).removesuffix("; ") if not ok else ""
     out = {"passed": bool(ok), "chi2": chi2, "dof": max(K - P, 0), "test": test,
            "chi2_with_inputs": chi2_in, "distance_from_fit": chi2_at,
            "max_abs_normalised_residual": float(np.max(np.abs(z)))}
     if not ok and method in ("linear", "nonlinear"):
         zs = ", ".join(f"{m.label} {zk:+.3g}" for m, zk in zip(pb.measurements, z))
         raise ConvergenceError(f"the {method} estimate does not reproduce the measurements (normalised residuals "
-                               f"{zs} sigma; required {test}): no answer is given")
+                               f"{zs} sigma; required {test}): no answer is given{': ' + hint if hint else ''}")
     return out
 
 
@@ -753,6 +762,8 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
         # the sigma points, each a global rest-pose search on such a scene
         return budget, std_lin, [d for d in degenerate if bctx.sigmas.get(d, 0) > 0], T_lin, bctx, amp_default
     budget, failed = second_order(pb, p, r, bctx, budget)
+    if bctx.prior is not None:  # a stated prior whose first-order term vanishes (a product on a level rig)
+        budget = with_prior_curvature(budget, bctx.prior)
     degenerate = [d for d in dict.fromkeys(degenerate + failed) if bctx.sigmas.get(d, 0) > 0]
     return budget, std_lin, degenerate, T_lin, bctx, amp_default
 

@@ -80,6 +80,33 @@ class PriorInertia:
     sensitivity: np.ndarray
     dr: np.ndarray
     dr_failed: list = field(default_factory=list)
+    #: {component: (P,) ``b_c``} the second-order term of a component with a stated uncertainty whose
+    #: first-order term does not carry it (:func:`prior_curvature`): the estimate's error is ``a_c z + b_c
+    #: z^2``, ``z ~ N(0, 1)``, ``a_c`` the linear term (SI)
+    quadratic: dict = field(default_factory=dict)
+    #: whether :attr:`quadratic` is in the budget (:func:`with_prior_curvature`: where it changes the std by
+    #: more than ``LINEAR_ENOUGH`` or its offset exceeds ``OFFSET_ENOUGH`` of it, as the inputs' sigma points)
+    budgeted: bool = False
+
+    def quadratic_terms(self, budget) -> dict:
+        """{``prior_inertia[c]``: ((P,) ``a_c``, (P,) ``b_c``)} of the
+        budgeted second-order terms, ``a_c`` the linear term in ``budget``
+        (SI; empty where :attr:`budgeted` is False): the 95 % interval's
+        draws (:func:`~bifilar.estimation.budget.interval_95`)."""
+        if not self.budgeted:
+            return {}
+        zero = np.zeros(len(self.unknowns))
+        return {f"prior_inertia[{c}]": (np.asarray(budget.contributions.get(f"prior_inertia[{c}]", zero), float),
+                                        np.asarray(b, float)) for c, b in self.quadratic.items()}
+
+    def quadratic_contributions(self) -> tuple[dict, np.ndarray]:
+        """({``prior_inertia[c] (2nd order)``: (P,) ``sqrt(2) b_c``}, (P,) the
+        mean offset ``sum_c b_c``) of :attr:`quadratic` (SI)."""
+        P = len(self.unknowns)
+        if not self.budgeted:
+            return {}, np.zeros(P)
+        terms = {f"prior_inertia[{c}] (2nd order)": np.sqrt(2.0) * b for c, b in self.quadratic.items()}
+        return terms, sum(self.quadratic.values(), np.zeros(P))
 
     def contributions(self) -> dict:
         """{``prior_inertia[c]``: (P,) signed standard contribution} of the
@@ -100,12 +127,16 @@ class PriorInertia:
         its ratio to the answer's std."""
         comps = {}
         for q, c in enumerate(self.names):
+            b = self.quadratic.get(c)
             comps[c] = {"prior": float(self.values[q]), "std": float(self.sigmas[q]), "scale": float(self.scales[q]),
                          "unit": "kg m^2",
                         "sensitivity": {n: (float(self.sensitivity[i, q]) if np.isfinite(self.sensitivity[i, q])
-                                            else None) for i, n in enumerate(self.unknowns)}}
+                                            else None) for i, n in enumerate(self.unknowns)},
+                        "second_order_shift": ({n: float(b[i]) for i, n in enumerate(self.unknowns)}
+                                               if b is not None else None)}
         sh = self.shift(PLAUSIBLE_PRIOR_ERROR)
         return {"relative_std": float(self.rel), "stated": bool(self.stated), "components": comps,
+                "second_order_budgeted": bool(self.budgeted),
                 "plausible_error": PLAUSIBLE_PRIOR_ERROR,
                 "plausible_shift": {n: {"std": float(sh[i]),
                                         "in_std": (float(sh[i] / std[i]) if np.isfinite(std[i]) and std[i] > 0
@@ -171,6 +202,56 @@ def _dT_lin(pb: Problem, vals: dict, c: str, v0: float, h: float) -> np.ndarray:
     return np.full(len(pb.measurements), np.nan)
 
 
+def prior_curvature(pb: Problem, p, names: list, values, sigmas, r, G) -> dict:
+    """{component: (P,) ``b_c``} the second-order term of each component
+    with a non-zero standard uncertainty ``sigmas[q]`` (kg m^2), as the
+    budget's sigma points (:func:`~bifilar.estimation.budget.second_order`):
+    the estimate ``p`` re-solved with the prior at ``I_c +- d`` (``d =
+    sqrt(3) sigma``, halved until the tensor stays positive definite; two
+    Gauss-Newton steps with the full gain ``G`` (P, K), the periods the
+    linear ones times the amplitude factors ``r``), ``p_+-``, gives the
+    error ``a z + b z^2`` over ``I_c + sigma z`` with ``b = (p_+ + p_- - 2
+    p) sigma^2 / (2 d^2)``.  A component whose pair cannot be evaluated is
+    left out.  Linear periods only (the amplitude factor's own curvature in
+    ``I_c`` is left out)."""
+    from .budget import SIGMA_POINT
+
+    out = {}
+    p = np.asarray(p, float)
+    r = np.asarray(r, float)
+    G = np.asarray(G, float)
+    vals = pb.values(p)
+    T0 = pb.periods_at(vals) * r
+
+    def resolved(c, v):
+        q = p
+        for _ in range(2):  # the first step is the linear gain's; the second corrects the periods' curvature in p
+            T = pb.periods_at({**pb.values(q), c: v}) * r
+            if not np.all(np.isfinite(T)):
+                return None
+            q = q - G @ (T - T0)
+        return q
+
+    for q, c in enumerate(names):
+        if not sigmas[q] > 0:
+            continue
+        d = SIGMA_POINT * float(sigmas[q])
+        for _ in range(8):
+            sides = [float(values[q]) + s * d for s in (1, -1)]
+            if all(np.linalg.eigvalsh(pb.models[0].inertia_ref({**vals, c: v}))[0] > 0 for v in sides):
+                try:
+                    pp, pm = (resolved(c, v) for v in sides)
+                except (BifilarError, np.linalg.LinAlgError):
+                    pp = pm = None
+                if pp is not None and pm is not None:
+                    break
+            d /= 2
+        else:
+            continue
+        out[c] = (pp + pm - 2 * p) * float(sigmas[q]) ** 2 / (2 * d ** 2)
+    return out
+
+
 def _factor_derivatives(pb: Problem, vals: dict, names: list, values, sigmas, laws, ctx, rtol: float):
     """((K, Q) ``dr_k / dI_c`` per kg m^2 for each measurement with a stated
     amplitude's law and each component with a non-zero uncertainty, the
@@ -233,7 +314,8 @@ def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, 
         J = J + np.asarray(T_lin, float)[:, None] * dr
     G = ctx.gain if ctx.gain is not None else ctx.G
     S = -(np.asarray(G, float) @ J) if Q else np.zeros((P, 0))
-    return PriorInertia(names, values, scales, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed)
+    quad = prior_curvature(pb, p_hat, names, values, sigmas, r_hat, G) if np.any(sigmas > 0) else {}
+    return PriorInertia(names, values, scales, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed, quad)
 
 
 def with_prior(budget, pri: PriorInertia):
@@ -251,6 +333,72 @@ def with_prior(budget, pri: PriorInertia):
     sig = {**budget.sigmas, **{f"prior_inertia[{c}]": float(pri.sigmas[q]) for q, c in enumerate(pri.names)
                                if f"prior_inertia[{c}]" in extra}}
     return LinearBudget(list(budget.names), cov, contrib, sig, dict(budget.dof))
+
+
+def with_prior_curvature(budget, pri: PriorInertia):
+    """``budget`` with the stated priors' second-order terms
+    (:attr:`PriorInertia.quadratic`) where they matter, by the rule of the
+    inputs' sigma points (:func:`~bifilar.estimation.budget.second_order`:
+    the std changes by more than ``LINEAR_ENOUGH`` or the mean offset
+    exceeds ``OFFSET_ENOUGH`` of it): each component's ``sqrt(2) b_c`` as
+    ``prior_inertia[c] (2nd order)`` and ``sum b_c`` added to ``offset`` (so
+    the std is the RMS distance of the truth from the estimate; the value
+    is kept, the interval is the quadratic's, :func:`~bifilar.estimation.budget.interval_95`).
+    Sets ``pri.budgeted``; itself where nothing is added."""
+    from .budget import LINEAR_ENOUGH, OFFSET_ENOUGH
+    from .uncertainty import LinearBudget
+
+    if not pri.quadratic:
+        return budget
+    pri.budgeted = True
+    terms, off = pri.quadratic_contributions()
+    std1 = budget.std
+    old_off = np.asarray(budget.contributions.get("offset", np.zeros(len(std1))), float)
+    var2 = std1 ** 2 + sum(t ** 2 for t in terms.values()) + (old_off + off) ** 2 - old_off ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        change, off_rel = np.abs(np.sqrt(var2) / std1 - 1), np.abs(off) / std1
+    if np.all(change < LINEAR_ENOUGH) and np.all(off_rel < OFFSET_ENOUGH):
+        pri.budgeted = False
+        return budget
+    contrib = {**budget.contributions, **terms, "offset": old_off + off}
+    cov = np.zeros_like(budget.covariance)
+    for c in contrib.values():
+        cov += np.outer(c, c)
+    return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof))
+
+
+def past_prior_edge(pb: Problem, roots: list, targets, unc: dict) -> tuple[list, bool]:
+    """(roots, whether the first was moved) for one unknown from one
+    period whose root is on the edge of the physical set: the triangle
+    limit there is set by the other components' priors, so where their
+    uncertainty is stated (``unc["inertia"] > 0``) it is as uncertain as
+    they are, and the answer is the period's own root past it (positive
+    definite only, :func:`~bifilar.estimation.solve.solve_linear` from the
+    edge; ``targets`` (1,) the periods the linear model must give, s, or
+    None), the estimate the budget, counting the priors, describes, not the
+    limit (docs/design.md, "priors2, session 15")."""
+    from .roots import Root
+    from .solve import solve_linear
+
+    if not float(unc.get("inertia", 0.0) or 0.0) > 0:
+        return roots, False
+    try:
+        return [Root(solve_linear(pb, targets, p0=roots[0].p))] + list(roots[1:]), True
+    except BifilarError:
+        return roots, False
+
+
+def past_limit_warning(I, name: str, value: float, std: float) -> str:
+    """The warning of an answer past the triangle limit the priors set
+    (:func:`past_prior_edge`): ``I`` the tensor at it (reference body axes,
+    kg m^2), ``value`` and ``std`` the unknown ``name``'s (kg m^2)."""
+    from .problem import admissible_interval
+
+    lo, hi = admissible_interval(I, name)
+    lim = lo if value < lo else hi
+    return (f"{name} = {value:.6g} lies past the triangle limit the other components' priors set ({lim:.6g}), by "
+            f"{abs(value - lim) / std:.2g} of its std: their stated uncertainty (--uncertainty inertia) allows a "
+            "real body there, so the value is the period's, not cut at the limit; its std counts them")
 
 
 def prior_warning(pri: PriorInertia, std) -> str | None:

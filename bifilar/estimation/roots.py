@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import BifilarError, ConvergenceError, InputError
 from .fit_check import (EDGE_Z, _input_columns, fit_statistics, input_fit_check, label_index, labelled_periods,
-                        unstated_amplitude_variance)
+                        prior_fit_hint, unstated_amplitude_variance)
 from .problem import _IDX, Problem, admissible, admissible_interval
 
 #: grid points over the admissible interval of one unknown
@@ -642,6 +642,7 @@ def multi_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) 
             if ev is None and extra_var is not None:
                 ev = np.asarray(extra_var(), float)
             ok, q["chi2"], _, q["test"] = input_fit_check(pb, q["p"], q["z"], amp_var=amp_var, extra_var=ev)
+            q["amp_var"], q["extra_var"] = amp_var, ev  # for the refusal's hint (prior_fit_hint)
             if ok:
                 found.append(q["p"])
                 continue
@@ -681,7 +682,9 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) -
                    for m, zk in zip(pb.measurements, z))
     raise InputError(pb.measurements[k].field,
                      f"no physical tensor reproduces the measured periods: the best admissible fit ({vals}) "
-                     f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); " + _loose_hint(pb) + _sampled_slip(pb, k))
+                     f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); "
+                     + prior_fit_hint(pb, best["p"], z, extra_var=best.get("extra_var"), amp_var=best.get("amp_var"))
+                     + _loose_hint(pb) + _sampled_slip(pb, k))
 
 
 def separating_measurement(pbs: list, roots: list, sigma: float) -> dict | None:
