@@ -106,7 +106,7 @@ def initial_states(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Se
     if len(bad):
         b = int(bad[0])
         raise refusal(scenes[b], modes[b], float(sp.amplitude[b]), float(sp.gap[b]),
-                      f"scene {b + 1} ('{scenes[b].name}')")
+                      f"scene {b + 1} ('{scenes[b].name}')", **sp.off_wires(b))
     return sp.states()
 
 
@@ -357,7 +357,7 @@ def simulate_batch(
                     if good:
                         continue
                     exc = refusal(scenes[k], md, float(amps[k]), float(sp.gap[jr]),
-                                  f"scene {k + 1} ('{scenes[k].name}')")
+                                  f"scene {k + 1} ('{scenes[k].name}')", **sp.off_wires(jr))
                     if errors != "return":
                         raise exc
                     out[k] = _failed(str(exc), modes_in[k], amps[k], nw, rtol)

@@ -305,7 +305,7 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
         sp = start_poses([scene] * n, [rest] * n, modes, amplitude) if modes else None
     for j, mode in enumerate(modes):
         if not sp.feasible[j]:
-            raise refusal(scene, mode, amplitude, float(sp.gap[j]))
+            raise refusal(scene, mode, amplitude, float(sp.gap[j]), **sp.off_wires(j))
     if beyond is not None:
         raise beyond
     return sp
