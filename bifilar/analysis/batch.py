@@ -106,7 +106,7 @@ def initial_states(scenes: Sequence[Scene], rests: Sequence[RestPose], modes: Se
     if len(bad):
         b = int(bad[0])
         raise refusal(scenes[b], modes[b], float(sp.amplitude[b]), float(sp.gap[b]),
-                      f"scene {b + 1} ('{scenes[b].name}')")
+                      f"scene {b + 1} ('{scenes[b].name}')", **sp.off_wires(b))
     return sp.states()
 
 
@@ -357,7 +357,7 @@ def simulate_batch(
                     if good:
                         continue
                     exc = refusal(scenes[k], md, float(amps[k]), float(sp.gap[jr]),
-                                  f"scene {k + 1} ('{scenes[k].name}')")
+                                  f"scene {k + 1} ('{scenes[k].name}')", **sp.off_wires(jr))
                     if errors != "return":
                         raise exc
                     out[k] = _failed(str(exc), modes_in[k], amps[k], nw, rtol)
@@ -621,8 +621,10 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 if obs.sample_tensions is not None:
                     T_s = (np.ascontiguousarray(obs.sample_tensions[b][0]) if one
                            else np.concatenate(obs.sample_tensions[b]))
-        if obs.viol[b] > 1e-6 * Lmax[b]:  # looked at over the samples, or the last state where none were kept
-            seen = y_s if y_s is not None else (obs.y_final[b] + np.r_[com0[b], np.zeros(10)])[None]
+        if obs.viol[b] > 1e-6 * Lmax[b]:
+            # judged at the state of the largest error, the last one and the samples where the run kept them
+            seen = np.stack([obs.y_viol[b], obs.y_final[b]]) + np.r_[com0[b], np.zeros(10)]
+            seen = seen if y_s is None else np.concatenate([seen, y_s])
             warnings.insert(len(warnings) - (period is None), violation_warning(scenes[b], seen, float(obs.viol[b])))
         out.append(SceneRun(
             period=period, period_std=pstd, crossings=tc, linear_period=float(T_ref[b]),

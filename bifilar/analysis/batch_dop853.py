@@ -133,7 +133,11 @@ def _single_health(obs: Health, run, idx, idx0, Y, n: int, ns: int) -> None:
     E = obs._energy(idx, Y[:, 1:])
     obs.dE[0] = np.max(np.abs(E - obs.E0[0]))
     T, v = obs._tension_viol(idx, run.ext[1:].T)
-    obs.viol[0] = max(obs.viol[0], float(v.max()))
+    vk = v.max(axis=0)
+    k = int(np.argmax(vk))
+    if vk[k] > obs.viol[0]:  # the state of the largest error (Health.y_viol)
+        obs.y_viol[0] = Y[:, 1 + k]
+    obs.viol[0] = max(obs.viol[0], float(vk[k]))
     obs.Tmin[0] = np.minimum(obs.Tmin[0], T.min(axis=1))
     obs.Tmax[0] = np.maximum(obs.Tmax[0], T.max(axis=1))
     for i in range(n):

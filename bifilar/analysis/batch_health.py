@@ -244,6 +244,9 @@ class Health(itg.BatchObserver):
         self.sample_tensions: list | None = None  # per scene, the kept samples' physical tensions (LSODA, one scene)
         self.t_final = np.zeros(Bn)
         self.y_final = np.zeros((Bn, 13))
+        # the state (relative to the rest CoM) where each scene's constraint violation was largest: what its
+        # violation warning looks at where the run keeps no samples (a sweep's), not only the last state
+        self.y_viol = np.zeros((Bn, 13))
 
     def _energy(self, idx, y):
         v = y[7:10]
@@ -274,6 +277,7 @@ class Health(itg.BatchObserver):
             self.prev_t[1, idx] = 0.0
             self.prev_T[:, 1, idx] = T
             self.viol[idx] = v.max(axis=0)
+            self.y_viol[idx] = y.T
         if self.lowest is not None:
             self.lowest.add_states(idx, y)
         if self.samples is not None:
@@ -301,7 +305,11 @@ class Health(itg.BatchObserver):
         E = self._energy(idx, y_new)
         self.dE[idx] = np.maximum(self.dE[idx], np.abs(E - self.E0[idx]))
         T, v = self._tension_viol(idx, ext_new)
-        self.viol[idx] = np.maximum(self.viol[idx], v.max(axis=0))
+        vmax = v.max(axis=0)
+        larger = vmax > self.viol[idx]
+        if larger.any():
+            self.y_viol[idx[larger]] = y_new[:, larger].T
+        self.viol[idx] = np.maximum(self.viol[idx], vmax)
         self.Tmin[idx] = np.minimum(self.Tmin[idx], T.T)
         self.Tmax[idx] = np.maximum(self.Tmax[idx], T.T)
         neg = T.T <= 0
@@ -434,8 +442,12 @@ def sample_health(Ys, tt, obs: Health, kx, n, com0, T_ref, stop_tau, on_slack, f
         with np.errstate(all="ignore"):
             obs.Tmin = np.fmin(obs.Tmin, np.fmin.reduce(vT, axis=1).T) if np.any(valid) else obs.Tmin
             obs.Tmax = np.fmax(obs.Tmax, np.fmax.reduce(vT, axis=1).T) if np.any(valid) else obs.Tmax
-            obs.viol = np.fmax(obs.viol, np.fmax.reduce((viol if every else np.where(valid[None], viol, np.nan))
-                                                        .reshape(-1, Bn), axis=0))
+            vk = np.fmax.reduce(viol if every else np.where(valid[None], viol, np.nan), axis=0)  # (kb, B)
+            vb = np.fmax.reduce(vk, axis=0)
+            larger = np.nonzero(vb > obs.viol)[0]  # (none where NaN: no valid sample)
+            if len(larger):  # the state of the largest error (Health.y_viol)
+                obs.y_viol[larger] = Yb[np.nanargmax(vk[:, larger], axis=0), larger]
+            obs.viol = np.fmax(obs.viol, vb)
         neg = (T <= 0) & valid[None]
         if np.any(neg):
             for i, kk, b in zip(*np.nonzero(neg)):

@@ -305,7 +305,7 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
         sp = start_poses([scene] * n, [rest] * n, modes, amplitude) if modes else None
     for j, mode in enumerate(modes):
         if not sp.feasible[j]:
-            raise refusal(scene, mode, amplitude, float(sp.gap[j]))
+            raise refusal(scene, mode, amplitude, float(sp.gap[j]), **sp.off_wires(j))
     if beyond is not None:
         raise beyond
     return sp
@@ -539,7 +539,8 @@ def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest
     # health at the solver's own steps (no interpolation error)
     Ys = sol.y.T.copy()
     Ys[:, 0:3] += rest.com
-    viol = float(np.max(mx.constraint_violation(Ys, P)))
+    cv = mx.constraint_violation(Ys, P).max(axis=1)
+    viol = float(np.max(cv))
     E = mx.energy(Ys, P)
     E_rest = scene.mass * scene.gravity * rest.com[2]
     denom = abs(E[0] - E_rest)
@@ -567,7 +568,8 @@ def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest
         # the event stops where the tension reaches zero, which the samples there show as +0 or a hair above
         stopped_slack = (int(np.argmin(mx.tensions(sol.y[:, -1], Pshift))) + 1, float(t_stop))
     return summarise_run(scene, rest, m, amplitude, ts, Y, T, state_at, viol, drift, "maximal", method, rtol,
-                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack, timing=timing)
+                         float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack, timing=timing,
+                         viol_at=Ys[int(np.argmax(cv))])
 
 
 STIFF_RATIO = 1e3
@@ -717,9 +719,9 @@ def violation_warning(scene: Scene, Y: np.ndarray, viol: float) -> str:
     (tighten rtol), or, where the wires are nearly dependent and all but
     1e-6 of it lies in the lengths the model leaves free there
     (:func:`~bifilar.analysis.wire_statics.held_violation`), what a real
-    rig's stretch takes up.  ``Y`` (k, 13): the run's states to look at (its
-    samples, or only its last state where it kept none); the error is
-    attributed only when they show at least half of ``viol``."""
+    rig's stretch takes up.  ``Y`` (k, 13): the run's states to look at (the
+    state of its largest error, and its samples or its last state); the
+    error is attributed only when they show at least half of ``viol``."""
     Lmax = float(np.max(scene.lengths))
     if scene.n_wires >= 4:
         from .wire_statics import held_violation
@@ -737,7 +739,8 @@ def violation_warning(scene: Scene, Y: np.ndarray, viol: float) -> str:
 def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float, ts: np.ndarray, Y: np.ndarray,
                   T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
                   atol: float, nfev: int, runtime: float, warnings: list,
-                  stopped_slack: tuple[int, float] | None = None, timing: float | None = None) -> SimulationResult:
+                  stopped_slack: tuple[int, float] | None = None, timing: float | None = None,
+                  viol_at: np.ndarray | None = None) -> SimulationResult:
     """Measured period, slack wires, clearance and health of a run, whatever the model.
 
     ts (k,) s and Y (k, 13) world-frame maximal states at dense samples; T (k, n)
@@ -747,6 +750,9 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     at a wire's zero tension (``on_slack="stop"``), reported as slack even
     when the samples there show the tension as a rounding above zero.
     ``timing``: the stated timing uncertainty, s (:func:`period_accuracy`).
+    ``viol_at``: the state (13,) where ``viol`` was measured (the largest
+    error, at a step the samples may miss), looked at with the samples by
+    :func:`violation_warning`.
     """
     rel = relative_pose(Y, rest)
     dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
@@ -780,7 +786,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     clear, clear_w = run_clearance(scene, rest, ts, Y)
     warnings.extend(clear_w)
     if viol > 1e-6 * Lmax:
-        warnings.append(violation_warning(scene, Y, viol))
+        warnings.append(violation_warning(scene, Y if viol_at is None else np.vstack([viol_at, Y]), viol))
     if period is None:
         stopped = any(w.startswith("run stopped at t = ") for w in warnings)
         warnings.append(no_period_warning(amplitude if m is not None else None, stopped))

@@ -43,10 +43,12 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions
 from ..rotations import quat_multiply, rotvec_to_matrix, rotvec_to_quat, skew
 from ..scene import Scene
 from .batch_rest import _cross
-from .equilibrium import RestPose
+from .equilibrium import RestPose, multiplier_matrix
+from .wire_statics import held_violation
 from .modes import COMPONENTS
 
 ITERATIONS = 200
@@ -95,6 +97,15 @@ class StartPoses:
     edge: np.ndarray
     """(B,) :func:`edge_ratio` of each start (1 at rest; below :data:`EDGE_TOL` the
     start is at the end of its reach and infeasible, with gap 0)."""
+    held: np.ndarray
+    """(B,) m: the start's length error in the directions the run holds
+    (:func:`~bifilar.analysis.wire_statics.held_violation`), on rigs of more
+    than three wires where the solver left the start off the wires; NaN
+    elsewhere (where it is not needed: the whole error decides)."""
+
+    def off_wires(self, j: int) -> dict:
+        """:func:`refusal`'s ``held`` and ``residual`` of start ``j``."""
+        return {"held": float(self.held[j]), "residual": float(self.residual[j])}
 
     def take(self, ii) -> "StartPoses":
         """The start poses of scenes ``ii`` (indices), in that order."""
@@ -510,13 +521,92 @@ def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, ampli
     x0 = amp[:, None] * S
     x0[np.arange(B), hold] = amp * S[np.arange(B), hold]  # the held value, exactly amplitude x shape
     x, res, gap = solve_start_poses(rig, x0, hold)
+    held = np.full(B, np.nan)
+    if B and scenes[0].n_wires > MAX_ELIMINATION_WIRES:
+        # nearly dependent wires: a start the solver left off the wires is put on the lengths the run holds; it
+        # is the run's start where the rest of its error, along the self-stresses the run leaves free, is at
+        # most FREE_TOL (docs/design.md, "nearfix, session 15")
+        for b in np.nonzero(gap > 0.0)[0]:
+            one = rig.take(np.array([b]))
+            x[b], held[b] = _onto_held(scenes[b], one, x[b], int(hold[b]))
+            res[b] = float(one.residual(x[b][None])[0])
+        gap = np.where((held <= FEASIBLE_TOL * rig.Lmax) & (res <= FREE_TOL), 0.0, gap)
     edge = edge_ratio(rig, x, hold)
     com, R = rig.pose(x)
+    q = _quaternion(rig, x)
+    return StartPoses(com=com, R=R, q=q, x=x, residual=res, feasible=(gap == 0.0) & ~(edge < EDGE_TOL), gap=gap,
+                      amplitude=amp, edge=edge, held=held)
+
+
+FREE_TOL = 1e-6
+"""On rigs of more than three wires, a start whose length error lies along
+the self-stresses of wires nearly dependent there (which the run's
+multipliers leave free, :func:`~bifilar.models.maximal._min_norm`; the
+error in the other directions within :data:`FEASIBLE_TOL`) is a start when
+that error is at most this share of the longest wire: what the run's own
+length error may reach before simulate warns of it, and 10x below the
+strain of lab wires at their load (1e-5 .. 1e-3), whose stretch takes it up
+(a tension change along the self-stress of at most ~10 % of the load).  A
+twisted table whose anchors are splayed by 1e-6 m is 1.3e-9 .. 4.5e-8 m
+off at 0.01 .. 0.3 rad (docs/design.md, "nearfix, session 15")."""
+
+
+def _quaternion(rig: _Rig, x: np.ndarray) -> np.ndarray:
+    """(B, 4) unit quaternions (w >= 0) of chart poses x (B, 6)."""
     q = quat_multiply(rotvec_to_quat(x[:, 3:]), rig.q0)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
-    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
-    return StartPoses(com=com, R=R, q=q, x=x, residual=res, feasible=(gap == 0.0) & ~(edge < EDGE_TOL), gap=gap,
-                      amplitude=amp, edge=edge)
+    return q * np.where(q[:, :1] < 0, -1.0, 1.0)
+
+
+def _onto_held(scene: Scene, rig: _Rig, x: np.ndarray, hold: int) -> tuple[np.ndarray, float]:
+    """Chart pose (6,) of one scene (``rig`` of one) put onto the wires'
+    lengths in the directions the run holds there (the eigen-directions of
+    its multiplier matrix ``G M^-1 G^T`` that :func:`~bifilar.models.maximal.
+    held_directions` keeps at ``x``, as many all along): Gauss-Newton from
+    ``x``, each step the minimum-W-norm correction of those constraints
+    linearised (coordinate ``hold`` fixed), backtracking on their residual;
+    the self-stresses of nearly dependent wires, which the run leaves free,
+    are left as they are.  Where the solver could not put every wire at its
+    length (the rigid constraints' near-null direction makes its steps long
+    and its Armijo test stall) this ends at the held part's rounding.
+    Returns the pose and its :func:`~bifilar.analysis.wire_statics.
+    held_violation` (m), ``x`` itself where that is lower there."""
+    Winv = 1.0 / rig.W[0]
+    Winv[hold] = 0.0
+    L2 = float(rig.Lmax[0]) ** 2
+
+    def held_part(xx, k):
+        d, w, phi = rig.wires(xx[None])
+        R = rig.pose(xx[None])[1]
+        ev, V = np.linalg.eigh(multiplier_matrix(scene.mass, scene.inertia, R, np.concatenate([d, _cross(w, d)], -1)))
+        k = int(np.sum(held_directions(ev[0]))) if k is None else k
+        Vh = V[0][:, len(ev[0]) - k:]  # the k largest
+        return Vh.T @ phi[0], Vh, d, w, k
+
+    def violation(xx):
+        state = np.concatenate([rig.pose(xx[None])[0][0], _quaternion(rig, xx[None])[0], np.zeros(6)])
+        return held_violation(scene, state[None])
+
+    x_in = x
+    r, Vh, d, w, k = held_part(x, None)
+    for _ in range(ITERATIONS):
+        if np.max(np.abs(r)) / L2 < _RES_DONE:
+            break
+        Gh = Vh.T @ rig.jacobian(x[None], d, w)[0]
+        GW = Gh * Winv
+        dx = -GW.T @ np.linalg.lstsq(GW @ Gh.T, r, rcond=1e-15)[0]
+        before, alpha = np.linalg.norm(r), 1.0
+        for _h in range(20):
+            xt = x + alpha * dx
+            rt, Vt, dt, wt, _k = held_part(xt, k)
+            if np.linalg.norm(rt) <= (1.0 - 1e-4 * alpha) * before and np.linalg.norm(xt[3:]) < _THETA_MAX:
+                x, r, Vh, d, w = xt, rt, Vt, dt, wt
+                break
+            alpha *= 0.5
+        else:
+            break
+    held_in, held_out = violation(x_in), violation(x)
+    return (x, held_out) if held_out < held_in else (x_in, held_in)
 
 
 EDGE_TOL = float(np.sqrt(2.0 * FEASIBLE_TOL))
@@ -564,12 +654,24 @@ its largest are rounding: a rig of four or five dependent wires (parallel
 vertical wires of a rectangle: 1e-17) has that rank and no more."""
 
 
-def refusal(scene: Scene, mode, amplitude: float, gap: float, which: str = "") -> InputError:
+def refusal(scene: Scene, mode, amplitude: float, gap: float, which: str = "", held: float = float("nan"),
+            residual: float = float("nan")) -> InputError:
     """The :class:`InputError` (``--amplitude``) for a start no pose reaches;
     ``gap`` (m) how far the closest start found is off the wires; ``which``
-    names the scene in a batch (e.g. "scene 3 ('name')")."""
+    names the scene in a batch (e.g. "scene 3 ('name')"); ``held`` (m) and
+    ``residual`` (relative, :meth:`StartPoses.off_wires`): where the start
+    found is off the wires only along the lengths the run leaves free (its
+    held part within :data:`FEASIBLE_TOL`), the refusal says so and that
+    the rest exceeds :data:`FREE_TOL`."""
     unit = "rad" if mode.dominant >= 3 else "m"
     where = f" for {which}" if which else ""
+    err = residual * max(scene.lengths)
+    if held <= FEASIBLE_TOL * max(scene.lengths) and err > FREE_TOL * max(scene.lengths):  # (NaN: not judged)
+        return InputError("--amplitude", f"{amplitude:g} {unit} of the {mode.label} mode is too large{where}: "
+                                         f"the closest start found is {err:.3g} m off the wires, all but {held:.1e} m "
+                                         "of it along the self-stress of wires nearly dependent there (lengths the "
+                                         f"run leaves free, but only up to {FREE_TOL:g} of the longest wire, its own "
+                                         "length error); use a smaller amplitude")
     if gap == 0.0:  # on the wires, at the end of the reach (EDGE_TOL)
         return InputError("--amplitude", f"{amplitude:g} {unit} of the {mode.label} mode is at the end of its reach"
                                          f"{where}: the wires that stop it are horizontal there (within the start "
