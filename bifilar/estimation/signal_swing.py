@@ -335,7 +335,7 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
             f"{best.label} mode at about {best.amplitude:.3g} (beyond {limit:.3g}): a second motion that large "
             f"shifts the {lab}'s period by more than the model of its release can answer for; release more "
             "cleanly (let go without a push or a swing) and record again"))
-    _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, Lmax, rtol)
+    _check_joint_release(ToneContext(pb, k, hm, values, k0, A, tone, f_rec, tol, c0, Lmax, rtol), best)
     best.amplitude_start = best.amplitude
     g, g_rel = swing_decay(m)
     if g != 1.0:  # the amplitude the record's period refers to (the model runs undamped at it)
@@ -345,7 +345,26 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
     return best
 
 
-def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, Lmax, rtol) -> None:
+@dataclass(frozen=True)
+class ToneContext:
+    """What :func:`infer_secondary` knows of measurement ``k``'s record and model when it checks a found mode
+    (:func:`_check_joint_release`)."""
+
+    pb: object  #: the problem
+    k: int  #: the measurement's index
+    hm: object  #: its hanging's model
+    values: dict  #: the model's values at the unknowns
+    k0: int  #: the timed mode's index among the hanging's modes at the prior
+    A: float  #: the timed mode's amplitude at the record's start (rad or m)
+    tone: dict  #: the record's strongest other oscillation (:func:`record_tones`)
+    f_rec: float  #: Hz, its frequency
+    tol: float  #: Hz, how far a model tone's frequency may lie from it
+    c0: float | None  #: the tone the timed mode's release alone makes (over its amplitude), None if none
+    Lmax: float  #: m, the longest wire
+    rtol: float  #: the tone runs' integrator tolerance
+
+
+def _check_joint_release(ctx: ToneContext, best: Secondary) -> None:
     """Raises :class:`~bifilar.errors.InputError` naming measurement ``k``'s
     field where the record's tone (``tone``, at ``f_rec`` Hz within ``tol``)
     gives the second mode ``best`` beyond the release bound
@@ -367,6 +386,8 @@ def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, L
     "tonepair, session 14")."""
     from ..errors import InputError
 
+    pb, k, hm, values, k0, A = ctx.pb, ctx.k, ctx.hm, ctx.values, ctx.k0, ctx.A
+    tone, f_rec, tol, c0, Lmax, rtol = ctx.tone, ctx.f_rec, ctx.tol, ctx.c0, ctx.Lmax, ctx.rtol
     bound, _ = release_bound(pb)
     own = bound / Lmax if hm.modes0.modes[best.index].dominant >= 3 else bound
     if not (bound > 0 and abs(best.amplitude) > own):
