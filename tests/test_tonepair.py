@@ -143,7 +143,7 @@ def test_a_real_2cm_swing_is_answered_with_its_truth_inside(monkeypatch):
         std = math.hypot(own, reading)
         truth = 4 * DRONE_SHIFTS["swing-y"]
         assert abs(sec.shift - truth) < 1.96 * std
-        lo, hi = sec.joint.shifts  # the joint reading's range: worst signs at its scale, then every mode at the bound
+        lo, hi = sec.joint.shifts  # the joint reading's range: the worst signs at its scale, every mode at the bound
         assert lo == pytest.approx(sec.joint.scale ** 2 * sum(DRONE_SHIFTS.values()), rel=1e-9)
         assert hi == pytest.approx(sum(DRONE_SHIFTS.values()), rel=1e-9)
         assert reading == pytest.approx(sec.shift - lo, rel=1e-12)

@@ -136,8 +136,8 @@ class JointReading:
     scale: float  #: their amplitudes over the bound that make the record's tone (the worst velocity signs)
     release: float  #: m, the release bound
     found_bound: float  #: the found mode's amplitude at the bound (rad or m, its normalised shape)
-    #: s: the timed mode's period shift of this reading, from ``scale`` (the worst signs) to ``max(scale, 1)``
-    #: (the other signs, each mode at most at the bound), set by the law (:func:`joint_reading_std`)
+    #: s: the timed mode's period shift of this reading at ``scale`` (the worst signs) and at 1 (other signs, or a
+    #: scale beyond 1 within its uncertainty: every mode at the bound), set by the law (:func:`joint_reading_std`)
     shifts: tuple | None = None
     #: s: the std the budget's ``tone_reading`` group carries: the larger difference of those shifts from the
     #: found mode's (the answer's)
@@ -461,9 +461,10 @@ def joint_reading_std(m) -> float:
     shifts set: :func:`~bifilar.estimation.solve._hidden_shifts`), summed
     (second order in each amplitude: the modes' shifts add) and times
     ``(decay scale)^2`` (the modes' amplitudes ``scale`` times the bound,
-    decaying with the record as the found mode is taken to), from the
-    ``scale`` the worst velocity signs give to ``max(scale, 1)`` (other
-    signs: every mode at most at the bound).  The std is the larger
+    decaying with the record as the found mode is taken to), at the
+    ``scale`` the worst velocity signs give and at 1 (other signs, whose
+    tone at the bound is smaller: every mode at the bound; and a scale
+    beyond 1 within its uncertainty: the bound itself).  The std is the larger
     difference of those two shifts from the found mode's, the answer's:
     the answer keeps the one-mode reading, and the other one then lies
     within one std of this group, inside the 95 % interval with the rest of
@@ -490,7 +491,7 @@ def joint_reading_std(m) -> float:
             "release more cleanly and record again"))
     at_bound = sec.shift * (jr.found_bound / sec.amplitude) ** 2 + sum(h.shift for h in hidden)
     g2 = sec.decay ** 2
-    jr.shifts = tuple(float(g2 * sc ** 2 * at_bound) for sc in (jr.scale, max(jr.scale, 1.0)))
+    jr.shifts = tuple(float(g2 * sc ** 2 * at_bound) for sc in (jr.scale, 1.0))
     jr.shift_std = float(max(abs(sec.shift - x) for x in jr.shifts))
     return jr.shift_std
 
