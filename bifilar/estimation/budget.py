@@ -696,6 +696,8 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
             if laws[k] is not None and laws[k].hidden_std > 0:
                 # the modes the record's release may have started unseen, up to the stated bound
                 contrib[f"hidden_second_mode[{lab}]"] = Gf[:, k] * laws[k].hidden_std
+            if laws[k] is not None and laws[k].reading_std > 0:  # the tone's other reading (several modes)
+                contrib[f"tone_reading[{lab}]"] = Gf[:, k] * laws[k].reading_std
     cov = np.zeros_like(budget.covariance)
     for c in contrib.values():
         cov += np.outer(c, c)

@@ -730,10 +730,11 @@ def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndar
     uncertainty under the nonlinear method (as the budget's amplitude term,
     :func:`~bifilar.estimation.budget.stated_amplitude_period_std`: the
     slope of the mode's amplitude law ``laws[k]``) and from a recording's second mode
-    (``law.secondary_std``) and from the modes it may hide (``law.hidden_std``), or None for the other methods."""
+    (``law.secondary_std``), from the modes it may hide (``law.hidden_std``) and from its tone's other reading
+    (``law.reading_std``), or None for the other methods."""
     if method != "nonlinear":
         return None
-    second = np.array([math.hypot(law.secondary_std, law.hidden_std) if law is not None else 0.0
+    second = np.array([math.hypot(law.secondary_std, law.hidden_std, law.reading_std) if law is not None else 0.0
                        for law in laws or [None] * len(pb.measurements)])
     return stated_amplitude_period_std(pb, pb.linear_periods(p), laws, unc) ** 2 + second ** 2
 

@@ -111,13 +111,42 @@ class Secondary:
     #: runs of :func:`_check_joint_release` that failed (their sign combinations unchecked), out of ``joint_runs``
     joint_failed: int = 0
     joint_runs: int = 0
+    #: the other reading of the record's tone, where the other modes released together within the bound make it
+    #: too (:func:`_check_joint_release`); None where the tone has one reading
+    joint: JointReading | None = None
 
     def to_json(self) -> dict:
         start = self.amplitude if self.amplitude_start is None else self.amplitude_start
-        return {"mode": self.label, "amplitude": self.amplitude, "amplitude_std": self.amplitude_std,
-                "amplitude_start": start, "decay": self.decay,
-                "tone_period": self.tone_period, "tone_ratio": self.tone_ratio, "tone_exponent": self.exponent,
-                "period_shift": self.shift, "period_shift_std": self.shift_std}
+        d = {"mode": self.label, "amplitude": self.amplitude, "amplitude_std": self.amplitude_std,
+             "amplitude_start": start, "decay": self.decay,
+             "tone_period": self.tone_period, "tone_ratio": self.tone_ratio, "tone_exponent": self.exponent,
+             "period_shift": self.shift, "period_shift_std": self.shift_std}
+        if self.joint is not None:
+            d["joint_reading"] = self.joint.to_json()
+        return d
+
+
+@dataclass
+class JointReading:
+    """The record's tone read as every other mode of the hanging released with the timed one within the
+    release bound (:func:`_check_joint_release`): their amplitudes ``scale`` times the bound, the tone's law
+    taken as the found mode's."""
+
+    labels: list  #: the modes released together (the found one among them)
+    scale: float  #: their amplitudes over the bound that make the record's tone (the worst velocity signs)
+    release: float  #: m, the release bound
+    found_bound: float  #: the found mode's amplitude at the bound (rad or m, its normalised shape)
+    #: s: the timed mode's period shift of this reading at ``scale`` (the worst signs) and at 1 (other signs, or a
+    #: scale beyond 1 within its uncertainty: every mode at the bound), set by the law (:func:`joint_reading_std`)
+    shifts: tuple | None = None
+    #: s: the std the budget's ``tone_reading`` group carries: the larger difference of those shifts from the
+    #: found mode's (the answer's)
+    shift_std: float | None = None
+
+    def to_json(self) -> dict:
+        return {"modes": list(self.labels), "scale": self.scale, "release": self.release,
+                "period_shift": None if self.shifts is None else list(self.shifts),
+                "period_shift_std": self.shift_std}
 
 
 def record_tones(m) -> list[dict]:
@@ -335,7 +364,7 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
             f"{best.label} mode at about {best.amplitude:.3g} (beyond {limit:.3g}): a second motion that large "
             f"shifts the {lab}'s period by more than the model of its release can answer for; release more "
             "cleanly (let go without a push or a swing) and record again"))
-    _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, Lmax, rtol)
+    best.joint = _check_joint_release(ToneContext(pb, k, hm, values, k0, A, tone, f_rec, tol, c0, Lmax, rtol), best)
     best.amplitude_start = best.amplitude
     g, g_rel = swing_decay(m)
     if g != 1.0:  # the amplitude the record's period refers to (the model runs undamped at it)
@@ -345,9 +374,28 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
     return best
 
 
-def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, Lmax, rtol) -> None:
-    """Raises :class:`~bifilar.errors.InputError` naming measurement ``k``'s
-    field where the record's tone (``tone``, at ``f_rec`` Hz within ``tol``)
+@dataclass(frozen=True)
+class ToneContext:
+    """What :func:`infer_secondary` knows of measurement ``k``'s record and model when it checks a found mode
+    (:func:`_check_joint_release`)."""
+
+    pb: object  #: the problem
+    k: int  #: the measurement's index
+    hm: object  #: its hanging's model
+    values: dict  #: the model's values at the unknowns
+    k0: int  #: the timed mode's index among the hanging's modes at the prior
+    A: float  #: the timed mode's amplitude at the record's start (rad or m)
+    tone: dict  #: the record's strongest other oscillation (:func:`record_tones`)
+    f_rec: float  #: Hz, its frequency
+    tol: float  #: Hz, how far a model tone's frequency may lie from it
+    c0: float | None  #: the tone the timed mode's release alone makes (over its amplitude), None if none
+    Lmax: float  #: m, the longest wire
+    rtol: float  #: the tone runs' integrator tolerance
+
+
+def _check_joint_release(ctx: ToneContext, best: Secondary) -> JointReading | None:
+    """The other reading (:class:`JointReading`) of measurement ``k``'s
+    record where the record's tone (``tone``, at ``f_rec`` Hz within ``tol``)
     gives the second mode ``best`` beyond the release bound
     (:func:`release_bound`) while every other mode of the hanging, released
     with the timed one at once within that bound (each at it, every
@@ -357,23 +405,27 @@ def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, L
     (``c ~ a^n``), the scale's relative std as ``best``'s amplitude's (the
     tone's noise over ``n``, :data:`CALIBRATION_SHARE`).  The record then
     cannot tell a second mode beyond the bound from several within it, and
-    their period shifts differ.  Nothing is run where ``best`` lies within
-    the bound or the hanging has one other mode.
+    their period shifts differ: the budget carries the difference
+    (:func:`joint_reading_std`).  None (nothing run) where ``best`` lies
+    within the bound or the hanging has one other mode; None where the
+    joint release makes no such tone.
 
     Why: with every other mode of the drone config at its 1 cm bound (the
     pitch at 0.0067 rad) the torsion's record held a tone at 1.64 s, 2.4e-3
     of the torsion, that the swing-y alone makes only at 2.25 cm; read as
     one swing-y, Izz z -3.0..-4.0 in 16 of 40 draws (docs/design.md,
-    "tonepair, session 14")."""
-    from ..errors import InputError
-
+    "tonepair, session 14").  Session 14 refused those records; a real 1.5
+    or 2 cm swing-y of the quadcopter-like body was refused with them
+    (docs/design.md, "tonewiden, session 15")."""
+    pb, k, hm, values, k0, A = ctx.pb, ctx.k, ctx.hm, ctx.values, ctx.k0, ctx.A
+    tone, f_rec, tol, c0, Lmax, rtol = ctx.tone, ctx.f_rec, ctx.tol, ctx.c0, ctx.Lmax, ctx.rtol
     bound, _ = release_bound(pb)
     own = bound / Lmax if hm.modes0.modes[best.index].dominant >= 3 else bound
     if not (bound > 0 and abs(best.amplitude) > own):
-        return
+        return None
     js = [j for j, mj in enumerate(hm.modes0.modes) if j != k0 and mj.period]
     if len(js) < 2:
-        return
+        return None
     amps = [bound / Lmax if hm.modes0.modes[j].dominant >= 3 else bound for j in js]
     n_signs = min(len(js) - 1, int(math.log2(MAX_JOINT_RUNS)))
     cmax = None
@@ -391,21 +443,57 @@ def _check_joint_release(pb, k, hm, values, k0, A, best, tone, f_rec, tol, c0, L
             cmax = c
     cj, cr = (cmax or 0.0) - (c0 or 0.0), tone["ratio"] - (c0 or 0.0)
     if not (cj > 0 and cr > 0):
-        return
+        return None
     # the scale of the joint release that makes the record's tone (its law the found mode's, ~ a^n), and its
     # relative std as the found amplitude's (the tone's noise, CALIBRATION_SHARE for the modes' phases)
     scale = (cr / cj) ** (1.0 / best.exponent)
     if scale > 1.0 + 2.0 * math.hypot(tone["ratio_std"] / cr / best.exponent, CALIBRATION_SHARE):
-        return
-    m = pb.measurements[k]
-    labels = ", ".join(hm.modes0.modes[j].label for j in js)
-    raise InputError(m.field, (
-        f"mode '{m.label}': the record's oscillation at {tone['period']:.4g} s ({tone['ratio']:.2g} of its "
-        f"amplitude) is as the {best.label} mode alone makes it at {best.amplitude:.3g} (beyond the release bound "
-        f"{bound:g} m), and as the {labels} modes make it released together at {scale:.2g} times that bound (within "
-        "its uncertainty of it): the record cannot tell them apart and their period shifts differ; state the "
-        "release bound you can vouch for "
-        "(--uncertainty release, m of travel) or release more cleanly and record again"))
+        return None
+    return JointReading([hm.modes0.modes[j].label for j in js], float(scale), bound, own)
+
+
+def joint_reading_std(m) -> float:
+    """s: the std of the budget's ``tone_reading`` group for measurement
+    ``m`` whose second mode (``m.secondary``, its ``shift`` set at the
+    estimate) has another reading (:attr:`Secondary.joint`); 0 without one.
+    The other reading's shift (set on the reading) is the found mode's at
+    its bound and every hidden mode's at its bound (``m.hidden``, their
+    shifts set: :func:`~bifilar.estimation.solve._hidden_shifts`), summed
+    (second order in each amplitude: the modes' shifts add) and times
+    ``(decay scale)^2`` (the modes' amplitudes ``scale`` times the bound,
+    decaying with the record as the found mode is taken to), at the
+    ``scale`` the worst velocity signs give and at 1 (other signs, whose
+    tone at the bound is smaller: every mode at the bound; and a scale
+    beyond 1 within its uncertainty: the bound itself).  The std is the larger
+    difference of those two shifts from the found mode's, the answer's:
+    the answer keeps the one-mode reading, and the other one then lies
+    within one std of this group, inside the 95 % interval with the rest of
+    the budget (a two-point uncertainty, not a spread about a mean).
+
+    Raises :class:`~bifilar.errors.InputError` naming the measurement's
+    field where a shift the other reading needs is not known (a hidden
+    mode's run at the bound failed): the two answers cannot be bracketed."""
+    from ..errors import InputError
+
+    sec = getattr(m, "secondary", None)
+    jr = None if sec is None else sec.joint
+    if jr is None:
+        return 0.0
+    hidden = getattr(m, "hidden", None) or []
+    failed = [h.label for h in hidden if h.shift is None]
+    if sec.shift is None or not sec.amplitude or failed:
+        raise InputError(m.field, (
+            f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s is as the {sec.label} mode "
+            f"alone makes it at {sec.amplitude:.3g} (beyond the release bound {jr.release:g} m) and as the "
+            f"{', '.join(jr.labels)} modes make it released together within that bound, and the run of "
+            f"{', '.join(failed) or sec.label} that gives the second reading's period shift failed, so no std can "
+            "cover both; state the release bound you can vouch for (--uncertainty release, m of travel) or "
+            "release more cleanly and record again"))
+    at_bound = sec.shift * (jr.found_bound / sec.amplitude) ** 2 + sum(h.shift for h in hidden)
+    g2 = sec.decay ** 2
+    jr.shifts = tuple(float(g2 * sc ** 2 * at_bound) for sc in (jr.scale, 1.0))
+    jr.shift_std = float(max(abs(sec.shift - x) for x in jr.shifts))
+    return jr.shift_std
 
 
 def swing_decay(m) -> tuple[float, float]:
@@ -599,6 +687,14 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, {at}; the nonlinear model is released "
                          "with both, and the budget carries that amplitude's uncertainty (second_mode)")
+            if sec.joint is not None:  # the tone has two readings: the std carries their difference
+                jr = sec.joint
+                warnings.append(f"--signal: mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s is as "
+                                f"the {sec.label} mode alone makes it at {sec.amplitude:.3g} (beyond the release bound "
+                                f"{jr.release:g} m), and as the {', '.join(jr.labels)} modes make it released together "
+                                f"at {jr.scale:.2g} times that bound: the record cannot tell them apart, so the answer "
+                                "is the first reading's with the difference of their period shifts in its std "
+                                "(tone_reading); a tighter --uncertainty release that you can vouch for narrows it")
             if sec.joint_failed:  # the check that smaller modes within the bound do not make the tone is partial
                 warnings.append(f"mode '{m.label}': the {sec.label} mode at {sec.amplitude:.3g} lies beyond the "
                                 f"release bound, and {sec.joint_failed} of the {sec.joint_runs} runs that check whether "

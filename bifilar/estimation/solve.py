@@ -457,6 +457,10 @@ class AmplitudeLaw:
     #: s: the model period's std from the modes a recording's release may have started unseen
     #: (:attr:`Measurement.hidden`, :func:`~bifilar.estimation.signal_swing.hidden_shift_std`); 0 without them
     hidden_std: float = 0.0
+    #: s: the model period's std from the other reading of a recording's tone (several modes within the release
+    #: bound, :attr:`~bifilar.estimation.signal_swing.Secondary.joint`,
+    #: :func:`~bifilar.estimation.signal_swing.joint_reading_std`); 0 without one
+    reading_std: float = 0.0
 
     def factor(self, A) -> np.ndarray | float:
         """r(A) (dimensionless; array in, array out)."""
@@ -568,6 +572,10 @@ def stated_amplitude_law(pb: Problem, p, k: int, r_A: float, rtol: float = 1e-10
         r_alone = r_A
     if getattr(m, "hidden", None):
         law.hidden_std = _hidden_shifts(pb, p, k, r_alone, rtol)
+    if sec is not None and sec.joint is not None:
+        from .signal_swing import joint_reading_std
+
+        law.reading_std = joint_reading_std(m)
     return law
 
 

@@ -87,7 +87,7 @@ UNCERTAINTY_KEYS = {
 
 #: budget groups, in display order
 GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "second_mode", "hidden_second_mode",
-          "prior_inertia", "integration", "model bias", "offset", "degenerate")
+          "tone_reading", "prior_inertia", "integration", "model bias", "offset", "degenerate")
 
 
 def default_uncertainty(overrides: dict | None = None) -> dict:
@@ -105,7 +105,8 @@ def group_of(name: str) -> str:
     (anchor and attachment coordinates), ``mass``, ``com``, ``gravity``,
     ``amplitude``, ``second_mode`` (the amplitude of a second mode a recording's release
     started, :mod:`~bifilar.estimation.signal_swing`), ``hidden_second_mode`` (the modes it may have started
-    unseen, up to the stated ``release`` bound), ``prior_inertia`` (an inertia component not solved for,
+    unseen, up to the stated ``release`` bound), ``tone_reading`` (the other reading of its tone: several modes
+    released together within the bound), ``prior_inertia`` (an inertia component not solved for,
     ``prior_inertia[Ixx]``: its prior's stated error), ``integration`` (a nonlinear run that is not a regular
     motion: its check run's difference) or ``model bias``; ``offset`` (the mean offset of a
     second-order or amplitude term) and ``degenerate`` (the targeted Monte
@@ -115,8 +116,8 @@ def group_of(name: str) -> str:
     (``timing[<hanging>:torsion]``)."""
     name = name.removesuffix(" (2nd order)")
     head = name.split("[", 1)[0]
-    if head in ("timing", "amplitude", "second_mode", "hidden_second_mode", "prior_inertia", "integration",
-                "model bias"):
+    if head in ("timing", "amplitude", "second_mode", "hidden_second_mode", "tone_reading", "prior_inertia",
+                "integration", "model bias"):
         return head
     head = name.split(":", 1)[-1].split(".")[0]
     return {"length": "lengths", "anchor": "spacings", "attachment": "spacings"}.get(head, head)
