@@ -139,3 +139,23 @@ def test_an_edge_set_by_stated_priors_does_not_clamp_the_value():
     assert linear_modes(at, rest_pose(at)).get("torsion").period == pytest.approx(T, rel=1e-9)
     assert abs(v - 3.31) < 0.3 * sd
     assert [w for w in res.warnings if "past the triangle limit" in w and "\n" not in w], res.warnings
+
+
+@pytest.mark.parametrize("mode, comp", [("torsion", "Izz"), ("roll", "Ixx")])
+def test_where_the_prior_is_right_the_interval_still_holds_the_timings_spread(mode, comp):
+    """The second-order prior term ``b z^2`` (one-sided) puts half its mass
+    within a few percent of 0, so the mixture's 2.5 % quantile on its far
+    side ended ~1e-3 of the timing's spread from the value: where the prior
+    is right (Ixz = 0, the audit's Solar Boat: [value - 5e-4, value + 29]
+    kg m^2 with a timing std of 0.034), every timing on the long side of the
+    truth left it outside.  The interval must hold, on each side, at least
+    what it holds without the prior term: the timing's 1.96 std.  Old code:
+    the torsion's far side ended at 0.69 of it (the level bifilar's b is
+    small beside the timing; on the boat, 1e-3 of it)."""
+    s = scene_from_dict(LEVEL, warn=False)
+    stated = _level_invert(s, mode, comp, {"inertia": 0.1})
+    bare = _level_invert(s, mode, comp, {})  # the same timing with the priors exact: value +- 1.96 std
+    assert stated.value(comp) == pytest.approx(bare.value(comp), rel=1e-12)
+    (lo, hi), (blo, bhi) = stated.interval[0], bare.interval[0]
+    k = bhi - bare.value(comp)
+    assert lo <= blo + 0.02 * k and hi >= bhi - 0.02 * k  # the draws' quantile noise: ~1 % of k

@@ -109,7 +109,10 @@ def test_an_unstated_prior_that_matters_is_warned_and_a_stated_one_is_not():
     priors exact) but a warning names the prior that a 10 % error would let
     move Izz by more than a third of its std (here 1.7 stds, Iyy), the
     option and ``--solve-for``; stated (even 0) no warning.  A level
-    bifilar, whose torsion no other component moves, is not warned."""
+    bifilar, whose torsion no other component moves at first order, is
+    warned of Ixz, which moves it at second order (session 15: before, the
+    warning was first order only and said nothing here, nor on the Solar
+    Boat, whose Izz a 10 % Ixz moves by 28 stds)."""
     res = _invert(_plate(), {})
     w = [x for x in res.warnings if "not solved for" in x]
     assert len(w) == 1 and "\n" not in w[0], res.warnings
@@ -121,16 +124,30 @@ def test_an_unstated_prior_that_matters_is_warned_and_a_stated_one_is_not():
     assert "prior_inertia" not in res.to_json()["budget"]["Izz"]["groups"]
     assert not [x for x in _invert(_plate(), {"inertia": 0.0}).warnings if "not solved for" in x]
     assert not [x for x in _invert(_plate(), {"inertia": 0.1}).warnings if "not solved for" in x]
-    # a level, symmetric bifilar: the torsion depends on Izz alone
-    level = LEVEL
+    # a level, symmetric bifilar: at first order the torsion depends on Izz alone, at second on Ixz too
+    import copy
+
     from bifilar.analysis.equilibrium import rest_pose
     from bifilar.analysis.modes import linear_modes
 
-    s = scene_from_dict(level, warn=False)
+    s = scene_from_dict(LEVEL, warn=False)
     T = linear_modes(s, rest_pose(s)).get("torsion").period
     res = _invert(s, {}, period=T, std=1e-4)
-    assert not [x for x in res.warnings if "not solved for" in x], res.warnings
-    assert res.to_json()["prior_inertia"]["plausible_shift"]["Izz"]["in_std"] < 1e-3
+    w = [x for x in res.warnings if "not solved for" in x]
+    assert len(w) == 1 and "Ixz" in w[0] and "Ixx" not in w[0] and "Iyy" not in w[0], res.warnings
+    pi = res.to_json()["prior_inertia"]
+    assert max(abs(v) for v in pi["components"]["Ixz"]["sensitivity"].values()) < 1e-9  # no first order
+    # independent: the truth's Ixz at 10 % of its scale, timed exactly, inverted with the prior's 0: the
+    # answer moves by |b| (the even response's second-order term); the warning's RMS distance is sqrt(3)|b|
+    moved = copy.deepcopy(LEVEL)
+    I0 = moved["body"]["inertia"].pop("principal")
+    ixz = 0.1 * (I0[0] * I0[2]) ** 0.5
+    moved["body"]["inertia"]["tensor"] = [[I0[0], 0, ixz], [0, I0[1], 0], [ixz, 0, I0[2]]]
+    sm = scene_from_dict(moved, warn=False)
+    Tm = linear_modes(sm, rest_pose(sm)).get("torsion").period
+    b = abs(_invert(s, {}, period=Tm, std=1e-4).value("Izz") - I0[2])
+    assert pi["plausible_shift"]["Izz"]["std"] == pytest.approx(3 ** 0.5 * b, rel=0.1)
+    assert pi["plausible_shift"]["Izz"]["in_std"] > 1.0 / 3.0  # prior_inertia.WARN_SHIFT
 
 
 def test_a_limit_set_by_an_uncertain_prior_does_not_cut_the_interval():

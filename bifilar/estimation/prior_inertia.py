@@ -87,6 +87,11 @@ class PriorInertia:
     #: whether :attr:`quadratic` is in the budget (:func:`with_prior_curvature`: where it changes the std by
     #: more than ``LINEAR_ENOUGH`` or its offset exceeds ``OFFSET_ENOUGH`` of it, as the inputs' sigma points)
     budgeted: bool = False
+    #: {component: (P,) ``b_c``} where the user did not state the priors' uncertainty: the second-order
+    #: term of each component at a :data:`PLAUSIBLE_PRIOR_ERROR` error (:func:`prior_curvature`), for the
+    #: warning of :func:`prior_warning` (a product of inertia given as 0 on a level rig moves the periods
+    #: only at second order: the Solar Boat's Ixz at 10 % moves its torsion by 9e-3, Izz by 16 std)
+    plausible_quadratic: dict = field(default_factory=dict)
 
     def quadratic_terms(self, budget) -> dict:
         """{``prior_inertia[c]``: ((P,) ``a_c``, (P,) ``b_c``)} of the
@@ -120,6 +125,29 @@ class PriorInertia:
         S = np.nan_to_num(self.sensitivity) * (rel * self.scales)[None, :]
         return np.sqrt(np.sum(S ** 2, axis=1)) if S.size else np.zeros(len(self.unknowns))
 
+    def plausible_parts(self) -> np.ndarray:
+        """(P, Q) the RMS distance (SI) a :data:`PLAUSIBLE_PRIOR_ERROR`
+        error of each component alone (``z ~ N(0, 1)`` of it) would move each
+        unknown by: ``sqrt(a^2 + 3 b^2)`` of the error ``a z + b z^2``,
+        ``a`` the first-order term, ``b`` :attr:`plausible_quadratic`'s."""
+        A = np.nan_to_num(self.sensitivity) * (PLAUSIBLE_PRIOR_ERROR * self.scales)[None, :]
+        B = np.zeros_like(A)
+        for q, c in enumerate(self.names):
+            if c in self.plausible_quadratic:
+                B[:, q] = np.nan_to_num(np.asarray(self.plausible_quadratic[c], float))
+        return np.sqrt(A ** 2 + 3 * B ** 2)
+
+    def plausible_shift(self) -> np.ndarray:
+        """(P,) the RMS distance (SI) independent :data:`PLAUSIBLE_PRIOR_ERROR`
+        errors of every component would move each unknown by: first order
+        and, where computed (:attr:`plausible_quadratic`), second order
+        (``E[(sum_c a_c z_c + b_c z_c^2)^2] = sum a^2 + 2 sum b^2 + (sum b)^2``)."""
+        sh = self.shift(PLAUSIBLE_PRIOR_ERROR)
+        if not self.plausible_quadratic:
+            return sh
+        b = [np.nan_to_num(np.asarray(v, float)) for v in self.plausible_quadratic.values()]
+        return np.sqrt(sh ** 2 + 2 * sum(x ** 2 for x in b) + sum(b) ** 2)
+
     def to_json(self, std) -> dict:
         """The JSON's ``prior_inertia``: per component its prior, std and
         sensitivity of every unknown; per unknown the std a
@@ -134,7 +162,7 @@ class PriorInertia:
                                             else None) for i, n in enumerate(self.unknowns)},
                         "second_order_shift": ({n: float(b[i]) for i, n in enumerate(self.unknowns)}
                                                if b is not None else None)}
-        sh = self.shift(PLAUSIBLE_PRIOR_ERROR)
+        sh = self.plausible_shift()
         return {"relative_std": float(self.rel), "stated": bool(self.stated), "components": comps,
                 "second_order_budgeted": bool(self.budgeted),
                 "plausible_error": PLAUSIBLE_PRIOR_ERROR,
@@ -315,7 +343,12 @@ def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, 
     G = ctx.gain if ctx.gain is not None else ctx.G
     S = -(np.asarray(G, float) @ J) if Q else np.zeros((P, 0))
     quad = prior_curvature(pb, p_hat, names, values, sigmas, r_hat, G) if np.any(sigmas > 0) else {}
-    return PriorInertia(names, values, scales, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed, quad)
+    # unstated: the warning's plausible error to second order too (a component whose first-order term
+    # vanishes by symmetry can still move the answer by many stds); 4 linear-period evaluations a component
+    plaus = (prior_curvature(pb, p_hat, names, values, PLAUSIBLE_PRIOR_ERROR * scales, r_hat, G)
+             if not stated and Q else {})
+    return PriorInertia(names, values, scales, sigmas, rel, bool(stated), list(pb.unknowns), S, dr, failed, quad,
+                        plausible_quadratic=plaus)
 
 
 def with_prior(budget, pri: PriorInertia):
@@ -408,13 +441,13 @@ def prior_warning(pri: PriorInertia, std) -> str | None:
     SI), else None."""
     if pri.stated or not pri.names:
         return None
-    sh = pri.shift(PLAUSIBLE_PRIOR_ERROR)
+    sh = pri.plausible_shift()
     std = np.asarray(std, float)
     hit = [i for i in range(len(pri.unknowns)) if np.isfinite(std[i]) and std[i] > 0 and sh[i] > WARN_SHIFT * std[i]]
     if not hit:
         return None
     i0 = max(hit, key=lambda i: sh[i] / std[i])
-    contrib = np.abs(np.nan_to_num(pri.sensitivity[i0]) * PLAUSIBLE_PRIOR_ERROR * pri.scales)
+    contrib = pri.plausible_parts()[i0]
     movers = [pri.names[q] for q in np.argsort(-contrib) if contrib[q] > 0.1 * sh[i0]]
     moved = ", ".join(f"{pri.unknowns[i]} by {sh[i] / std[i]:.2g} of its std" for i in hit)
     return (f"the config's {', '.join(movers)} (not solved for) {'is' if len(movers) == 1 else 'are'} taken as "
