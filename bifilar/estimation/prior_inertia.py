@@ -466,7 +466,9 @@ def planned_prior_shift(scene, rest, comp: str, label: str) -> tuple[float, list
     that carry it (largest first, those above a tenth of it).  ``invert``'s
     sensitivity with the timing gain alone: ``dI_comp/dI_c = -(dT/dI_c) /
     (dT/dI_comp)``, central differences (:data:`PRIOR_STEP` of the largest
-    moment) of the linear periods, the mode tracked by MAC."""
+    moment) of the linear periods, the mode tracked by MAC; and the
+    second-order term of each at the plausible error (its period's second
+    difference over +- that error), combined as :meth:`PriorInertia.plausible_shift`."""
     from ..analysis.modes import modes_of_inertia
     from .sensitivity import matched_periods, perturb
 
@@ -479,9 +481,24 @@ def planned_prior_shift(scene, rest, comp: str, label: str) -> tuple[float, list
         return float(matched_periods(base, at(perturb(scene, c, h).inertia))[k]
                      - matched_periods(base, at(perturb(scene, c, -h).inertia))[k]) / (2 * h)
 
+    def dT2(c, d):  # the period's second difference over +-d (s), None where a side is not a body
+        sides = [perturb(scene, c, s * d).inertia for s in (1, -1)]
+        if any(np.linalg.eigvalsh(I)[0] <= 0 for I in sides):
+            return None
+        Tp, Tm = (float(matched_periods(base, at(I))[k]) for I in sides)
+        return Tp + Tm - 2 * float(base.modes[k].period)
+
     others = [c for c in INERTIA_COMPONENTS if c != comp]
     d0 = dT(comp)
-    S = np.array([-dT(c) / d0 for c in others]) * PLAUSIBLE_PRIOR_ERROR * prior_scales(scene.inertia, others)
-    shift = float(np.sqrt(np.sum(S ** 2)))
-    movers = [others[q] for q in np.argsort(-np.abs(S)) if abs(S[q]) > 0.1 * shift] if shift > 0 else []
+    sig = PLAUSIBLE_PRIOR_ERROR * prior_scales(scene.inertia, others)
+    S = np.array([-dT(c) / d0 for c in others]) * sig
+    # second order (invert's unstated warning, session 15): a product given as 0 on a level rig moves the
+    # period only as its square; b_c = -(T(+s) + T(-s) - 2 T) / (2 dT/dI_comp) at s = the plausible error
+    B = np.zeros_like(S)
+    for q, c in enumerate(others):
+        t2 = dT2(c, float(sig[q]))
+        B[q] = 0.0 if t2 is None else -t2 / (2 * d0)
+    parts = np.sqrt(S ** 2 + 3 * B ** 2)
+    shift = float(np.sqrt(np.sum(S ** 2) + 2 * np.sum(B ** 2) + np.sum(B) ** 2))
+    movers = [others[q] for q in np.argsort(-parts) if parts[q] > 0.1 * shift] if shift > 0 else []
     return shift, movers
