@@ -248,8 +248,9 @@ def residual_tones(m) -> list[dict]:
         if not a > 0:
             continue
         g = np.array([q[2], q[3]]) / a
-        s_amp = math.sqrt(max(float(g @ cov[2:4, 2:4] @ g), 0.0)) * infl
-        sd_w = math.sqrt(max(float(cov[0, 0]), 0.0)) * infl
+        k_t = tone_inflation(t, r, q[0] / (2 * math.pi), s2, infl)
+        s_amp = math.sqrt(max(float(g @ cov[2:4, 2:4] @ g), 0.0)) * k_t
+        sd_w = math.sqrt(max(float(cov[0, 0]), 0.0)) * k_t
         if not (s_amp > 0 and a > TONE_Z * s_amp):
             continue
         conv = (w0 / q[0]) if rate else 1.0
@@ -257,6 +258,42 @@ def residual_tones(m) -> list[dict]:
         out.append({"period": T, "period_std": T / q[0] * sd_w, "ratio": a / a0 * conv,
                     "ratio_std": s_amp / a0 * conv, "source": "residual"})
     return sorted(out, key=lambda d: -d["ratio"])
+
+
+def tone_inflation(t, r, f: float, s2: float, infl: float) -> float:
+    """Factor (1 .. ``infl``) by which the residuals' serial correlation
+    inflates the least-squares std of a tone fitted at ``f`` (Hz) in the
+    residuals ``r`` ([y], at times ``t``, s) whose least-squares noise
+    variance is ``s2`` ([y]^2): ``sqrt(S(f) / s2)``, ``S(f)`` the residuals'
+    periodogram level around ``f`` (the median of the neighbouring bins, the
+    tone's own excluded: ``signal_checks._local_level``;
+    the periodogram of white noise of variance ``s2`` has level ``s2``).
+
+    Why not the fit's ``std_inflation`` (the AR density at the fundamental):
+    a tone beside the fundamental (the swing's ``2 f_s - f_t`` on a rig whose
+    swing and torsion nearly coincide) raises the density there, and the low
+    order AR model, which cannot resolve 0.15 Hz at 60 samples/s, spreads it
+    over every low frequency: on audit15's record (row 2) the AR factor is
+    5.6 at the fundamental and 6.3 at the far tone (0.308 Hz), where the
+    periodogram's local level is 0.74 of ``s2``; the tone, 325x the noise
+    level, read 3.3 of its std and was dropped (docs/design.md, "neartone,
+    session 15").  Capped at ``infl`` (a tone's
+    std never grows over the old rule's) and floored at 1 (never below the
+    least-squares std, whose ``s2`` holds every unfitted tone's power too):
+    where the residuals are white (``infl`` 1) nothing changes."""
+    if not infl > 1.0 or not s2 > 0:
+        return infl
+    from .signal_checks import _local_level, periodogram
+
+    try:
+        fr, I, _ = periodogram(t, r)
+    except (ValueError, np.linalg.LinAlgError):
+        return infl
+    k = int(np.argmin(np.abs(fr - f)))
+    S = _local_level(I, k)
+    if not S > 0:
+        return infl
+    return float(min(infl, max(1.0, math.sqrt(S / s2))))
 
 
 def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol: float):
