@@ -304,6 +304,7 @@ def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol
     list of (frequency Hz, ratio to the dominant)."""
     from ..analysis.simulate import multi_mode_state, relative_pose, simulate, two_mode_state
     from .signal import fit_period
+    from .signal_io import SignalError
 
     scene = hm.scene(values)
     rest, ms, match = hm.locate(scene)
@@ -317,13 +318,22 @@ def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol
     sim = simulate(scene, kk + 1, amplitude, cycles, rest=rest, modes=ms, y0=y0, t_end=cycles * mk.period,
                    rtol=max(rtol, TONE_RTOL), check=False, samples_per_period=32)
     y = relative_pose(sim.y, rest, mk.dominant)
-    fit = fit_period(sim.t, y, "three_mode", crossing_check=False, split_check=False)
-    if len(fit.modes) < 2:  # a noise-free run's third oscillation may not be resolved from the first two
+    try:
+        fit = fit_period(sim.t, y, "three_mode", crossing_check=False, split_check=False)
+    except SignalError:  # no third oscillation beside the dominant one to fit: its tones lie elsewhere, if any
+        fit = None
+    if fit is None or len(fit.modes) < 2:  # a noise-free run's third oscillation may not be resolved from the first two
         fit = fit_period(sim.t, y, "two_mode", crossing_check=False, split_check=False)
     if len(fit.modes) < 2 or not float(fit.modes[0]["amplitude"]) > 0:  # no multi-mode fit (its fallback)
         return []
     a0 = float(fit.modes[0]["amplitude"])
-    return [(abs(float(d["omega"])) / (2 * math.pi), float(d["amplitude"]) / a0) for d in fit.modes[1:]]
+    out = [(abs(float(d["omega"])) / (2 * math.pi), float(d["amplitude"]) / a0) for d in fit.modes[1:]]
+    # the tones the multi-mode fit leaves in its residuals (a swing's f_pitch - f_swing where its strongest
+    # tone lies beside the dominant: docs/design.md, "neartone, session 15")
+    from types import SimpleNamespace
+
+    out += [(1.0 / d["period"], d["ratio"]) for d in residual_tones(SimpleNamespace(fit=fit, details={}))]
+    return out
 
 
 def _match(tones, f: float, tol: float):
