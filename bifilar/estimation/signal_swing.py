@@ -248,7 +248,7 @@ def residual_tones(m) -> list[dict]:
         if not a > 0:
             continue
         g = np.array([q[2], q[3]]) / a
-        k_t = tone_inflation(t, r, q[0] / (2 * math.pi), s2, infl)
+        k_t = tone_inflation(t, sol.fun, q[0] / (2 * math.pi), s2, infl)  # the noise about the tone, without it
         s_amp = math.sqrt(max(float(g @ cov[2:4, 2:4] @ g), 0.0)) * k_t
         sd_w = math.sqrt(max(float(cov[0, 0]), 0.0)) * k_t
         if not (s_amp > 0 and a > TONE_Z * s_amp):
@@ -262,12 +262,14 @@ def residual_tones(m) -> list[dict]:
 
 def tone_inflation(t, r, f: float, s2: float, infl: float) -> float:
     """Factor (1 .. ``infl``) by which the residuals' serial correlation
-    inflates the least-squares std of a tone fitted at ``f`` (Hz) in the
-    residuals ``r`` ([y], at times ``t``, s) whose least-squares noise
-    variance is ``s2`` ([y]^2): ``sqrt(S(f) / s2)``, ``S(f)`` the residuals'
-    periodogram level around ``f`` (the median of the neighbouring bins, the
-    tone's own excluded: ``signal_checks._local_level``;
-    the periodogram of white noise of variance ``s2`` has level ``s2``).
+    inflates the least-squares std of a tone fitted at ``f`` (Hz) whose
+    fit leaves ``r`` ([y], at times ``t``, s: the residuals with the tone
+    removed, so that its own sidelobes do not count as noise) of
+    least-squares variance ``s2`` ([y]^2): ``sqrt(S(f) / s2)``, ``S(f)``
+    the periodogram level of ``r`` around ``f`` (the median of the
+    neighbouring bins, the tone's own +-3 excluded:
+    ``signal_checks._local_level``; white noise of variance ``s2`` has
+    level ``s2``).
 
     Why not the fit's ``std_inflation`` (the AR density at the fundamental):
     a tone beside the fundamental (the swing's ``2 f_s - f_t`` on a rig whose
