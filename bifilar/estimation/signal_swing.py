@@ -248,8 +248,9 @@ def residual_tones(m) -> list[dict]:
         if not a > 0:
             continue
         g = np.array([q[2], q[3]]) / a
-        s_amp = math.sqrt(max(float(g @ cov[2:4, 2:4] @ g), 0.0)) * infl
-        sd_w = math.sqrt(max(float(cov[0, 0]), 0.0)) * infl
+        k_t = tone_inflation(t, sol.fun, q[0] / (2 * math.pi), s2, infl)  # the noise about the tone, without it
+        s_amp = math.sqrt(max(float(g @ cov[2:4, 2:4] @ g), 0.0)) * k_t
+        sd_w = math.sqrt(max(float(cov[0, 0]), 0.0)) * k_t
         if not (s_amp > 0 and a > TONE_Z * s_amp):
             continue
         conv = (w0 / q[0]) if rate else 1.0
@@ -257,6 +258,44 @@ def residual_tones(m) -> list[dict]:
         out.append({"period": T, "period_std": T / q[0] * sd_w, "ratio": a / a0 * conv,
                     "ratio_std": s_amp / a0 * conv, "source": "residual"})
     return sorted(out, key=lambda d: -d["ratio"])
+
+
+def tone_inflation(t, r, f: float, s2: float, infl: float) -> float:
+    """Factor (1 .. ``infl``) by which the residuals' serial correlation
+    inflates the least-squares std of a tone fitted at ``f`` (Hz) whose
+    fit leaves ``r`` ([y], at times ``t``, s: the residuals with the tone
+    removed, so that its own sidelobes do not count as noise) of
+    least-squares variance ``s2`` ([y]^2): ``sqrt(S(f) / s2)``, ``S(f)``
+    the periodogram level of ``r`` around ``f`` (the median of the
+    neighbouring bins, the tone's own +-3 excluded:
+    ``signal_checks._local_level``; white noise of variance ``s2`` has
+    level ``s2``).
+
+    Why not the fit's ``std_inflation`` (the AR density at the fundamental):
+    a tone beside the fundamental (the swing's ``2 f_s - f_t`` on a rig whose
+    swing and torsion nearly coincide) raises the density there, and the low
+    order AR model, which cannot resolve 0.15 Hz at 60 samples/s, spreads it
+    over every low frequency: on audit15's record (row 2) the AR factor is
+    5.6 at the fundamental and 6.3 at the far tone (0.308 Hz), where the
+    periodogram's local level is 0.74 of ``s2``; the tone, 325x the noise
+    level, read 3.3 of its std and was dropped (docs/design.md, "neartone,
+    session 15").  Capped at ``infl`` (a tone's
+    std never grows over the old rule's) and floored at 1 (never below the
+    least-squares std, whose ``s2`` holds every unfitted tone's power too):
+    where the residuals are white (``infl`` 1) nothing changes."""
+    if not infl > 1.0 or not s2 > 0:
+        return infl
+    from .signal_checks import _local_level, periodogram
+
+    try:
+        fr, I, _ = periodogram(t, r)
+    except (ValueError, np.linalg.LinAlgError):
+        return infl
+    k = int(np.argmin(np.abs(fr - f)))
+    S = _local_level(I, k)
+    if not S > 0:
+        return infl
+    return float(min(infl, max(1.0, math.sqrt(S / s2))))
 
 
 def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol: float):
@@ -267,6 +306,7 @@ def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol
     list of (frequency Hz, ratio to the dominant)."""
     from ..analysis.simulate import multi_mode_state, relative_pose, simulate, two_mode_state
     from .signal import fit_period
+    from .signal_io import SignalError
 
     scene = hm.scene(values)
     rest, ms, match = hm.locate(scene)
@@ -280,13 +320,22 @@ def _run_tones(hm, values, k: int, j, amplitude: float, a_j, cycles: float, rtol
     sim = simulate(scene, kk + 1, amplitude, cycles, rest=rest, modes=ms, y0=y0, t_end=cycles * mk.period,
                    rtol=max(rtol, TONE_RTOL), check=False, samples_per_period=32)
     y = relative_pose(sim.y, rest, mk.dominant)
-    fit = fit_period(sim.t, y, "three_mode", crossing_check=False, split_check=False)
-    if len(fit.modes) < 2:  # a noise-free run's third oscillation may not be resolved from the first two
+    try:
+        fit = fit_period(sim.t, y, "three_mode", crossing_check=False, split_check=False)
+    except SignalError:  # no third oscillation beside the dominant one to fit: its tones lie elsewhere, if any
+        fit = None
+    if fit is None or len(fit.modes) < 2:  # a noise-free run's third oscillation may not be resolved from the first two
         fit = fit_period(sim.t, y, "two_mode", crossing_check=False, split_check=False)
     if len(fit.modes) < 2 or not float(fit.modes[0]["amplitude"]) > 0:  # no multi-mode fit (its fallback)
         return []
     a0 = float(fit.modes[0]["amplitude"])
-    return [(abs(float(d["omega"])) / (2 * math.pi), float(d["amplitude"]) / a0) for d in fit.modes[1:]]
+    out = [(abs(float(d["omega"])) / (2 * math.pi), float(d["amplitude"]) / a0) for d in fit.modes[1:]]
+    # the tones the multi-mode fit leaves in its residuals (a swing's f_pitch - f_swing where its strongest
+    # tone lies beside the dominant: docs/design.md, "neartone, session 15")
+    from types import SimpleNamespace
+
+    out += [(1.0 / d["period"], d["ratio"]) for d in residual_tones(SimpleNamespace(fit=fit, details={}))]
+    return out
 
 
 def _match(tones, f: float, tol: float):
