@@ -18,7 +18,7 @@ from bifilar.analysis.modes import linear_modes
 from bifilar.cli import main
 from bifilar.config import load_scene
 
-from conftest import CONFIGS, SHARED
+from conftest import CONFIGS
 
 LIN1 = CONFIGS / "thesis_lin1_torsion.yaml"
 LIN2 = CONFIGS / "thesis_lin2_pitch.yaml"
@@ -239,19 +239,7 @@ def test_period_bad_input(tmp_path, args, field):
     assert len(ls) == 1 and ls[0].startswith(f"error: {field}"), ls
 
 
-GYRO = SHARED / "data" / "compound-gyro-bicycleparameters" / "BrowserInsForkCompoundFirst1.mat"
-
-
-@pytest.mark.skipif(not GYRO.exists(), reason="shared recordings not present")
-def test_period_of_real_gyro_recording():
-    # BicycleParameters fork, compound pendulum: the crossing count of the
-    # same record (signal.py's independent method) agrees within 5 ms
-    r = run("period", GYRO, "--json")
-    assert r.exit_code == 0, r.stderr
-    doc = json.loads(r.stdout)
-    assert doc["signal"]["sample_rate"] == 1000.0 and doc["signal"]["n_samples"] == 30000
-    assert abs(doc["period"] - doc["crossing_period"]) < 5e-3
-    assert 1.5 < doc["period"] < 1.7
+# `period --json` on the real gyro record: tests/test_period_real.py
 
 
 # --------------------------------------------------------------------------- roots, refusals, guesses (issue 10)

@@ -104,19 +104,41 @@ def test_series_differences_follow_the_amplitude(kth):
 
 
 def test_gyro_std_reflects_its_split_half_drift():
+    """The compound-pendulum gyro trial (BicycleParameters fork), read once
+    as ``bifilar period REC --json`` reads it: the checks of three tests that
+    each fitted this 30 000-sample record (~5 s a fit; session 15 merged
+    them here: test_signal's read and fit, test_invert_cli's CLI contract,
+    this file's split-half drift)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
     if not GYRO.exists():
         pytest.skip(f"real data not found at {GYRO}")
-    t, y, _ = read_signal(GYRO)
-    fit = fit_period(t, y, model="auto", crossing_check=False)
-    (T1, s1), (T2, s2) = fit.half_periods
-    # the halves differ by ~3 ms, at tens of their stds
+    r = CliRunner().invoke(main, ["period", str(GYRO), "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    # the read: the .mat's one variable and its sampling rate
+    sig = d["signal"]
+    assert sig["column"] == "data" and sig["sample_rate"] == 1000.0 and sig["n_samples"] == 30000
+    assert sig["sample_rate_source"] == "variable 'ActualRate'"
+    # the fit, against the crossing count of the same record (an independent method): 1e-3 relative (they
+    # differ by 3e-4 because the period shortens as the amplitude decays and the two weight the record
+    # differently); r^2 and a light damping
+    assert d["r_squared"] > 0.99 and 1.55 < d["period"] < 1.63 and 0 < d["damping_ratio"] < 0.05
+    assert abs(d["period"] - d["crossing_period"]) / d["period"] < 1e-3
+    (T1, s1), (T2, s2) = d["half_periods"]
+    # the halves differ by ~3 ms, at tens of their stds, and the notes say so
     assert 2e-3 < T1 - T2 < 4e-3 and (T1 - T2) > 10 * math.hypot(s1, s2)
+    assert any("period changes" in n for n in d["notes"])
     # the headline std carries it (not the 7e-5 s of noise and correlation)
-    assert fit.uncertainty["dominant"] == "nonstationarity"
-    assert 0.5 * (T1 - T2) < fit.std < (T1 - T2)
+    assert d["uncertainty"]["dominant"] == "nonstationarity"
+    assert 0.5 * (T1 - T2) < d["std"] < (T1 - T2)
     # its drift is no amplitude law (session 9): the law's shift over the
     # envelope is not resolved, the viscous fit and its split term stay
-    assert fit.amplitude_law is not None and fit.amplitude_law["used"] is False
+    assert d["amplitude_law"] is not None and d["amplitude_law"]["used"] is False
     # a growing "second mode" is no reason to prefer two modes
-    assert fit.model == "viscous"
-    assert not fit.selection["candidates"]["two_mode"]["admissible"]
+    assert d["model"] == "viscous"
+    assert not d["selection"]["candidates"]["two_mode"]["admissible"]

@@ -21,7 +21,6 @@ from scipy.signal import lfilter
 from bifilar.errors import InputError
 from bifilar.estimation.signal import (
     MIN_SAMPLES,
-    PeriodFit,
     SignalError,
     fit_period,
     period_from_crossings,
@@ -401,28 +400,11 @@ def test_reader_errors_name_the_field(tmp_path, case, field, fragment):
 # real recordings (skipped when ../shared/data is absent)
 # ---------------------------------------------------------------------------
 
-GYRO = DATA / "compound-gyro-bicycleparameters" / "BrowserInsForkCompoundFirst1.mat"
 KTH = DATA / "trifilar-kth-2014"
 RADII = (0.25, 0.30, 0.35, 0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75)
 
 
-def test_real_gyro_compound_pendulum():
-    if not GYRO.exists():
-        pytest.skip(f"real data not found at {GYRO}")
-    t, y, meta = read_signal(GYRO)
-    assert meta["column"] == "data" and meta["sample_rate"] == 1000
-    assert meta["sample_rate_source"] == "variable 'ActualRate'" and y.size == 30000
-    fit = fit_period(t, y)
-    assert isinstance(fit, PeriodFit)
-    assert fit.r_squared > 0.99
-    # crossing method and fit: 1e-3 relative (the brief's tolerance; they
-    # differ by 3e-4 because the period shortens as the amplitude decays and
-    # the two methods weight the record differently)
-    assert abs(fit.period - fit.crossing.period) / fit.period < 1e-3
-    assert 1.55 < fit.period < 1.63 and 0 < fit.damping_ratio < 0.05
-    # that drift along the record is detected and reported
-    (T1, _), (T2, _) = fit.half_periods
-    assert T1 > T2 and any("period changes" in n for n in fit.notes)
+# the gyro trial's read and fit: tests/test_period_real.py (one CLI run for three tests' checks)
 
 
 @pytest.mark.parametrize("series", ["5s", "10s", "20s"])
