@@ -211,3 +211,37 @@ def test_sweep_names_invert_only_keys_as_invert_s(key):
     assert e.value.field == "--sigma" and "invert's" in str(e.value)
     with pytest.raises(InputError, match="unknown uncertainty key"):
         resolve_uncertainty({}, {"inertiaa": 0.01})
+
+
+def test_where_no_std_is_printed_the_prior_warning_does_not_quote_one():
+    """The thesis plate at its knife edge: no std can be given (inputs
+    without a derivative: JSON null), yet the priors' warning said "move Izz
+    by 12 of its std", a std the user never sees.  It now gives the shift in
+    SI units beside the ratio to the budget without those inputs.  The
+    shift is Iyz's at second order, the pitch being neutral: Izz - Iyz^2/Iyy
+    moves Izz by 1 % (2.6 kg m^2) at 10 % of its scale, so the RMS distance
+    sqrt(3)|b| of Iyz alone is ~4.5 and with Ixz ~4.8 kg m^2."""
+    import json
+
+    from click.testing import CliRunner
+
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.cli import main
+    from bifilar.config import load_scene
+    from conftest import CONFIGS
+
+    cfg = CONFIGS / "thesis_plate_rest.yaml"
+    s = load_scene(cfg, warn=False)
+    T = linear_modes(s, rest_pose(s)).get("torsion").period
+    r = CliRunner().invoke(main, ["invert", str(cfg), "--period", f"torsion={T!r}+-1e-3", "--amplitude", "0",
+                                  "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    assert d["inertia"]["Izz"]["std"] is None and d["std_unavailable"]
+    (w,) = [x for x in d["warnings"] if "not solved for" in x]
+    assert "of its std" not in w and "without the inputs that have no derivative" in w and "Iyz" in w
+    iyy, izz = s.inertia[1, 1], s.inertia[2, 2]
+    b = 0.01 * izz  # Iyz = 0.1 sqrt(Iyy Izz): Iyz^2 / Iyy = 0.01 Izz, the torsion's inertia drop
+    shift = float(w.split("move Izz by ")[1].split(" ")[0])
+    assert 3 ** 0.5 * b <= shift <= 1.2 * 3 ** 0.5 * b, (shift, b, iyy)

@@ -457,7 +457,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if bctx.prior.dr_failed:
         warnings.append("the amplitude factor's derivative in the prior " + ", ".join(bctx.prior.dr_failed) + " could "
                         "not be measured (the stepped scene's run failed): left at 0 in prior_inertia")
-    w = prior_warning(bctx.prior, budget.std)  # a plausible error of the components not solved for, unstated
+    # a plausible error of the components not solved for, unstated (no std printed where inputs have no derivative)
+    w = prior_warning(bctx.prior, budget.std, partial=bool(degenerate))
     if w:
         warnings.append(w)
     if bctx.nonlinear:

@@ -434,11 +434,13 @@ def past_limit_warning(I, name: str, value: float, std: float) -> str:
             "real body there, so the value is the period's, not cut at the limit; its std counts them")
 
 
-def prior_warning(pri: PriorInertia, std) -> str | None:
+def prior_warning(pri: PriorInertia, std, partial: bool = False) -> str | None:
     """One line where the user did not state the priors' uncertainty and a
     :data:`PLAUSIBLE_PRIOR_ERROR` error of each would move a solved
     component by more than :data:`WARN_SHIFT` of its std (``std`` (P,),
-    SI), else None."""
+    SI), else None.  ``partial``: no std is printed (inputs without a
+    derivative, ``std_unavailable``): ``std`` is the budget without them,
+    and the line gives the shift in SI units beside that ratio."""
     if pri.stated or not pri.names:
         return None
     sh = pri.plausible_shift()
@@ -449,7 +451,11 @@ def prior_warning(pri: PriorInertia, std) -> str | None:
     i0 = max(hit, key=lambda i: sh[i] / std[i])
     contrib = pri.plausible_parts()[i0]
     movers = [pri.names[q] for q in np.argsort(-contrib) if contrib[q] > 0.1 * sh[i0]]
-    moved = ", ".join(f"{pri.unknowns[i]} by {sh[i] / std[i]:.2g} of its std" for i in hit)
+    if partial:
+        moved = ", ".join(f"{pri.unknowns[i]} by {sh[i]:.3g} (SI), {sh[i] / std[i]:.2g} x the std the budget gives "
+                          "without the inputs that have no derivative" for i in hit)
+    else:
+        moved = ", ".join(f"{pri.unknowns[i]} by {sh[i] / std[i]:.2g} of its std" for i in hit)
     return (f"the config's {', '.join(movers)} (not solved for) {'is' if len(movers) == 1 else 'are'} taken as "
             "exact, but the measured period(s) "
             f"depend on them: a {100 * PLAUSIBLE_PRIOR_ERROR:g} % error in them would move {moved}; state how well "
