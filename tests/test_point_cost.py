@@ -1962,3 +1962,25 @@ def test_newton_batch_takes_the_final_residual_only_where_a_scene_moved(case, mo
     assert np.any(res2 > 1e-15) and np.any(res2 < 1e-15)
     assert np.array_equal(res2, full_residual(com2, R2, lam2))
 
+
+def test_start_poses_take_the_mean_moment_once_a_scene(monkeypatch):
+    # a point's start poses (its 3 runs and its laws' 6: 4 distinct scenes) solved each scene's mean principal
+    # moment once a row (9 eigvalsh on the Solar Boat); now once a distinct scene, the same numbers
+    from bifilar.analysis import start_pose as sp
+
+    base, scenes = _sigma_like("solar_boat", {"spacing": 3.0})
+    rows = [base, base, base] + scenes[1:4] + [base, scenes[1]]
+    rests = [rest_pose(s) for s in rows]
+    n = {"eigvalsh": 0}
+    real = np.linalg.eigvalsh
+
+    def counted(x):
+        n["eigvalsh"] += 1
+        return real(x)
+
+    monkeypatch.setattr(np.linalg, "eigvalsh", counted)
+    rig = sp._Rig(rows, rests)
+    monkeypatch.setattr(np.linalg, "eigvalsh", real)
+    assert n["eigvalsh"] == 4  # main: 8, one a row
+    assert np.array_equal(rig.W[:, 3], np.array([real(s.inertia).mean() for s in rows]))
+
