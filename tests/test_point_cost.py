@@ -1984,3 +1984,43 @@ def test_start_poses_take_the_mean_moment_once_a_scene(monkeypatch):
     assert n["eigvalsh"] == 4  # main: 8, one a row
     assert np.array_equal(rig.W[:, 3], np.array([real(s.inertia).mean() for s in rows]))
 
+
+def test_thesis_forcing_jacobian_from_the_rest_forcing(monkeypatch):
+    # the thesis rung's forcing Jacobian (ladder._thesis_forcing: complex step in the five angles, at rest
+    # rates) took the whole of mass_matrix_and_forcing's _core on complex numbers per column; at zero rates
+    # its N5 is the gravity term alone (kane.rest_forcing, the same expressions): the same numbers on random
+    # angles about a rest pose, real and complex, and the same Jacobian with no full _core call (main: 5)
+    from bifilar.analysis.equilibrium import rest_pose as rp
+    from bifilar.estimation import ladder
+    from bifilar.estimation.invert import HangingModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.models import kane, kane_equations
+    from bifilar.models.kane_mapping import kane_mapping
+
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    rest = rp(scene)
+    mp = kane_mapping(scene, rest)
+    p, th0, z5 = mp.params, mp.theta0, np.zeros(5)
+    rng = np.random.default_rng(5)
+    for q in range(20):
+        th = th0 + (0.05 * rng.normal(size=5) if q else 0.0)
+        assert np.array_equal(kane.rest_forcing(th, p), kane.mass_matrix_and_forcing(th, z5, p)[1])
+        for j in range(5):
+            e = np.zeros(5, complex)
+            e[j] = 1e-30j
+            assert np.array_equal(kane.rest_forcing(th + e, p), kane.mass_matrix_and_forcing(th + e, z5 + 0j, p)[1])
+    dN_ref = np.column_stack([kane.mass_matrix_and_forcing(th0 + 1e-30j * np.eye(5)[j], z5 + 0j, p)[1].imag / 1e-30
+                              for j in range(5)])
+    n = {"core": 0}
+    real = kane_equations._core
+
+    def counted(*a, **k):
+        n["core"] += 1
+        return real(*a, **k)
+
+    monkeypatch.setattr(kane_equations, "_core", counted)
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia, rest=rest)
+    M_a, N0, dN = ladder._thesis_forcing(hm)
+    assert n["core"] == 1  # the real state's quantities (M5, N0) only
+    assert np.array_equal(dN, dN_ref)
+
