@@ -2024,3 +2024,28 @@ def test_thesis_forcing_jacobian_from_the_rest_forcing(monkeypatch):
     assert n["core"] == 1  # the real state's quantities (M5, N0) only
     assert np.array_equal(dN, dN_ref)
 
+
+def test_honest_stds_build_the_rig_links_once(monkeypatch):
+    # the honest pass's problems (one a component) share one set of hanging models, so one rig_links (the
+    # configs' geometry, not the unknown): main built it again for each component (3 on the Solar Boat,
+    # ~0.03 ms each); the stds are the same bits
+    from bifilar.estimation import rig
+    from bifilar.estimation.honest import honest_stds
+
+    scene = _scene(*SCENES["Solar Boat"])
+    unc = default_uncertainty()
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    req = [(c, best_mode_for(sens, c) + 1) for c in COMPS]
+    n = {"links": 0}
+    real = rig.rig_links
+
+    def counted(*a, **k):
+        n["links"] += 1
+        return real(*a, **k)
+
+    ref = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens)
+    ref_each = [honest_stds(scene, [r], unc, unc["timing"], rest=sens.rest, sens=sens)[0] for r in req]
+    monkeypatch.setattr(rig, "rig_links", counted)
+    got = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens)
+    assert n["links"] == 1  # main: 3
+    assert got == ref == ref_each
