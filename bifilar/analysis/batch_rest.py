@@ -150,7 +150,7 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
         lam[ii] = lam[ii] + s[:, None] * step[:, 6:]
     # the final residual of the scenes that moved after their last one (a converged scene stopped where its
     # residual was taken: the same expressions on the same rows, so the same bits; every scene of a sigma-point
-    # batch converges, and this pass was a fifth of its Newton work)
+    # batch converges in 3 steps, and this pass was the fifth of its 5 constraint passes)
     ii = np.nonzero(active)[0]
     if len(ii):
         d, w, G, phi = _constraints(a, p, L, com, R, ii)
