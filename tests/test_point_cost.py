@@ -1894,3 +1894,158 @@ def test_point_runs_only_the_amplitude_laws_a_sigma_reads(monkeypatch):
     ref_many = pt.evaluate_points(cfg, name, [params], st)[0]
     for a, b in ((got, ref), (many, ref_many)):
         assert json.dumps(a, sort_keys=True, default=str) == json.dumps(b, sort_keys=True, default=str)
+
+
+# (session 16, perf18) the batched rest poses' Newton without a second final residual; the start poses' mean
+# moments once a distinct scene
+
+
+def _sigma_like(name, params, rel=1e-3):
+    """A scene and its neighbours with each measured input moved +-``rel`` of its scale (a sigma-point batch)."""
+    base = _scene(name, params)
+    Lmax = float(np.max(base.lengths))
+    out = [base]
+    for n in measured_inputs(base):
+        h = rel * (float(getattr(base, n)) if n in ("mass", "gravity") else Lmax)
+        out += [perturb(base, n, h), perturb(base, n, -h)]
+    return base, out
+
+
+@pytest.mark.parametrize("case", ["Solar Boat", "trifilar"])
+def test_newton_batch_takes_the_final_residual_only_where_a_scene_moved(case, monkeypatch):
+    # Newton's kkt residual of a scene that converged is the one it was stopped on (the same expressions on
+    # the same rows): the pass after the loop is taken only for scenes that moved after their last residual
+    # (a batch cut short).  Main took it for every scene: one _constraints call more than the loop's
+    # evaluations (the calls without a step are the last ones), ~0.1 ms of a sigma-point batch's ~1.8 ms.
+    from bifilar.analysis import batch_rest as br
+    from bifilar.analysis.equilibrium import start_coms
+
+    _, scenes = _sigma_like(*SCENES[case])
+    a, p, L, m, g, I = br._stack(scenes)
+    B = len(scenes)
+
+    def start():
+        com = start_coms(a, p, L)
+        R = np.broadcast_to(np.eye(3), (B, 3, 3)).copy()
+        _, _, G0 = br._jacobian(a, p, com, R)
+        gradV = np.zeros((B, 6))
+        gradV[:, 2] = m * g
+        return com, R, -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)
+
+    def full_residual(com, R, lam):  # main's pass after the loop, on every scene
+        d, w, G, phi = br._constraints(a, p, L, com, R, slice(None))
+        r1 = np.zeros((B, 6))
+        r1[:, 2] = m * g
+        r1 = r1 + np.einsum("bni,bn->bi", G, lam)
+        return np.maximum(np.abs(r1).max(axis=1) / (m * g), np.abs(phi).max(axis=1) / L.max(axis=1) ** 2)
+
+    calls = {"constraints": 0, "hessian": 0}
+    real_c, real_h = br._constraints, br._hessian
+
+    def counted(key, fn):
+        def wrapped(*args):
+            calls[key] += 1
+            return fn(*args)
+        return wrapped
+
+    monkeypatch.setattr(br, "_constraints", counted("constraints", real_c))
+    monkeypatch.setattr(br, "_hessian", counted("hessian", real_h))
+    com, R, lam, res = br._newton_batch(a, p, L, m, g, *start())
+    assert np.all(res < 1e-15)  # every scene converged
+    # one residual a step and the one that found the batch converged; none after
+    assert calls["constraints"] == calls["hessian"] + 1
+    monkeypatch.setattr(br, "_constraints", real_c)
+    assert np.array_equal(res, full_residual(com, R, lam))  # the same bits as main's pass
+    # cut short (two steps): every scene moved after its last residual, which is taken again (some have
+    # converged by then, some not)
+    com2, R2, lam2, res2 = br._newton_batch(a, p, L, m, g, *start(), iters=2)
+    assert np.any(res2 > 1e-15) and np.any(res2 < 1e-15)
+    assert np.array_equal(res2, full_residual(com2, R2, lam2))
+
+
+def test_start_poses_take_the_mean_moment_once_a_scene(monkeypatch):
+    # a point's start poses (its 3 runs and its laws' 6: 4 distinct scenes) solved each scene's mean principal
+    # moment once a row (9 eigvalsh on the Solar Boat); now once a distinct scene, the same numbers
+    from bifilar.analysis import start_pose as sp
+
+    base, scenes = _sigma_like("solar_boat", {"spacing": 3.0})
+    rows = [base, base, base] + scenes[1:4] + [base, scenes[1]]
+    rests = [rest_pose(s) for s in rows]
+    n = {"eigvalsh": 0}
+    real = np.linalg.eigvalsh
+
+    def counted(x):
+        n["eigvalsh"] += 1
+        return real(x)
+
+    monkeypatch.setattr(np.linalg, "eigvalsh", counted)
+    rig = sp._Rig(rows, rests)
+    monkeypatch.setattr(np.linalg, "eigvalsh", real)
+    assert n["eigvalsh"] == 4  # main: 8, one a row
+    assert np.array_equal(rig.W[:, 3], np.array([real(s.inertia).mean() for s in rows]))
+
+
+def test_thesis_forcing_jacobian_from_the_rest_forcing(monkeypatch):
+    # the thesis rung's forcing Jacobian (ladder._thesis_forcing: complex step in the five angles, at rest
+    # rates) took the whole of mass_matrix_and_forcing's _core on complex numbers per column; at zero rates
+    # its N5 is the gravity term alone (kane.rest_forcing, the same expressions): the same numbers on random
+    # angles about a rest pose, real and complex, and the same Jacobian with no full _core call (main: 5)
+    from bifilar.analysis.equilibrium import rest_pose as rp
+    from bifilar.estimation import ladder
+    from bifilar.estimation.invert import HangingModel
+    from bifilar.estimation.measurements import Hanging
+    from bifilar.models import kane, kane_equations
+    from bifilar.models.kane_mapping import kane_mapping
+
+    scene = _scene("solar_boat", {"spacing": 3.0})
+    rest = rp(scene)
+    mp = kane_mapping(scene, rest)
+    p, th0, z5 = mp.params, mp.theta0, np.zeros(5)
+    rng = np.random.default_rng(5)
+    for q in range(20):
+        th = th0 + (0.05 * rng.normal(size=5) if q else 0.0)
+        assert np.array_equal(kane.rest_forcing(th, p), kane.mass_matrix_and_forcing(th, z5, p)[1])
+        for j in range(5):
+            e = np.zeros(5, complex)
+            e[j] = 1e-30j
+            assert np.array_equal(kane.rest_forcing(th + e, p), kane.mass_matrix_and_forcing(th + e, z5 + 0j, p)[1])
+    dN_ref = np.column_stack([kane.mass_matrix_and_forcing(th0 + 1e-30j * np.eye(5)[j], z5 + 0j, p)[1].imag / 1e-30
+                              for j in range(5)])
+    n = {"core": 0}
+    real = kane_equations._core
+
+    def counted(*a, **k):
+        n["core"] += 1
+        return real(*a, **k)
+
+    monkeypatch.setattr(kane_equations, "_core", counted)
+    hm = HangingModel(Hanging("h", scene, np.eye(3)), scene.inertia, rest=rest)
+    M_a, N0, dN = ladder._thesis_forcing(hm)
+    assert n["core"] == 1  # the real state's quantities (M5, N0) only
+    assert np.array_equal(dN, dN_ref)
+
+
+def test_honest_stds_build_the_rig_links_once(monkeypatch):
+    # the honest pass's problems (one a component) share one set of hanging models, so one rig_links (the
+    # configs' geometry, not the unknown): main built it again for each component (3 on the Solar Boat,
+    # ~0.03 ms each); the stds are the same bits
+    from bifilar.estimation import rig
+    from bifilar.estimation.honest import honest_stds
+
+    scene = _scene(*SCENES["Solar Boat"])
+    unc = default_uncertainty()
+    sens = period_sensitivity(scene, COMPS + measured_inputs(scene))
+    req = [(c, best_mode_for(sens, c) + 1) for c in COMPS]
+    n = {"links": 0}
+    real = rig.rig_links
+
+    def counted(*a, **k):
+        n["links"] += 1
+        return real(*a, **k)
+
+    ref = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens)
+    ref_each = [honest_stds(scene, [r], unc, unc["timing"], rest=sens.rest, sens=sens)[0] for r in req]
+    monkeypatch.setattr(rig, "rig_links", counted)
+    got = honest_stds(scene, req, unc, unc["timing"], rest=sens.rest, sens=sens)
+    assert n["links"] == 1  # main: 3
+    assert got == ref == ref_each

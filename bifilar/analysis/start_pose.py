@@ -149,7 +149,12 @@ class _Rig:
         self.L = np.array([s.lengths for s in scenes], float)
         self.Lmax = self.L.max(axis=1)
         m = np.array([s.mass for s in scenes], float)
-        Ibar = np.array([np.linalg.eigvalsh(s.inertia).mean() for s in scenes], float)
+        # one eigvalsh a distinct scene (a point's rows repeat its scene: 4 distinct of its 9), the same numbers
+        ibar: dict = {}
+        for s in scenes:
+            if id(s) not in ibar:
+                ibar[id(s)] = np.linalg.eigvalsh(s.inertia).mean()
+        Ibar = np.array([ibar[id(s)] for s in scenes], float)
         self.W = np.concatenate([np.repeat(m[:, None], 3, 1), np.repeat(Ibar[:, None], 3, 1)], axis=1)
         self.com0 = np.array([r.com for r in rests], float)
         self.R0 = np.array([r.R for r in rests], float)

@@ -63,7 +63,7 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     cache: dict = {}
     if sens is not None:
         _seed_sensitivity(cache, scene, sens)
-    ms = models = None
+    ms = models = links = None
     for (comp, mode), fb in zip(requests, fallbacks):
         try:
             if ms is None:
@@ -81,12 +81,15 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
                                                amplitude=amplitude)])
             unc_all = default_uncertainty({**meas.uncertainty, **(unc or {})})
             pb = build_problem(meas, [comp], unc_all, rests=[rest], models=models, ats=[at])
+            if links is not None and pb.models is models:
+                pb._links = links  # rig_links of the same hangings (their configs' geometry, not the unknown)
             models = pb.models  # one hanging model (and its mode sets) for every component
             pb.unc = unc_all
             p = pb.prior
             r = np.ones(1)
             budget, _, degenerate, *_ = full_budget(pb, p, r, "linear", {"linear": {"p": p, "r": r}}, "linear",
                                                     unc_all, rtol, cache=cache)
+            links = pb._links
             sd = np.nan if degenerate else float(budget.std[0])
             if not np.isfinite(sd):
                 if fb is None:

@@ -38,6 +38,7 @@ from .kane_equations import (  # noqa: F401 (re-exported: the model's public nam
     constraint,
     mass_matrix_and_forcing,
     mass_matrix_with_inertia,
+    rest_forcing,
     rhs,
     state_quantities,
 )

@@ -238,10 +238,13 @@ def _pose_vel(theta, thetadot, p):
 # ---------------------------------------------------------------------------
 
 
-def _core(theta, thetadot, p, *, check=True):
-    """All quantities of section 5.1 at one state; see mass_matrix_and_forcing."""
+def _geometry(theta, p, check=True):
+    """The quantities of :func:`_core` that depend on the angles alone (not
+    on the rates): sines and cosines, the frame R, the CoM offset rN, BC,
+    CD, E = D - A, the Jacobians JC, JCD, JE, G and V, beta = dg/dtheta and
+    gamma (5.1.4), with its checks; the same expressions, so the same
+    numbers (complex angles allowed: the complex step)."""
     theta = np.asarray(theta)
-    td = np.asarray(thetadot)
     s, c = _sc(theta)
     s1, s2, s3, s4, s5 = s
     c1, c2, c3, c4, c5 = c
@@ -295,6 +298,18 @@ def _core(theta, thetadot, p, *, check=True):
         )
     gamma = -beta[:4] / b5  # (5.1.4)
 
+    return s, c, R, rN, BC, CD, E, z, JC, JCD, G, V, JE, beta, gamma
+
+
+def _core(theta, thetadot, p, *, check=True):
+    """All quantities of section 5.1 at one state; see mass_matrix_and_forcing."""
+    td = np.asarray(thetadot)
+    s, c, R, rN, BC, CD, E, z, JC, JCD, G, V, JE, beta, gamma = _geometry(theta, p, check)
+    _, s2, s3, s4, s5 = s
+    _, c2, c3, c4, c5 = c
+    l, bp = p.l, p.b_prime
+    nt3 = R[:, 2]
+
     omega = G @ td
     v = V @ td
     Edot = JE @ td
@@ -337,6 +352,22 @@ def _core(theta, thetadot, p, *, check=True):
         R=R, rN=rN, BC=BC, CD=CD, E=E, V=V, G=G, beta=beta, gamma=gamma,
         omega=omega, v=v, Vdtd=Vdtd, Gdtd=Gdtd, M5=M5, N5=N5, Iw=Iw, Gn=Gn, MV=MV,
     )
+
+
+def rest_forcing(theta, p: KaneParams) -> np.ndarray:
+    """N5 (5,) of :func:`mass_matrix_and_forcing` at ``theta`` with every
+    rate zero (rows 1..4 N m, row 5 m^2/s^2): with the rates zero every
+    velocity term of rows 1..4 is an exact zero and row 5 (-betadot .
+    thetadot) is zero, so N5 is the gravity term ``-m g Vn[2]`` alone, from
+    the same expressions (:func:`_geometry`), so the same numbers but for
+    the sign of an exact zero.  Complex ``theta`` allowed: the thesis rung's
+    forcing Jacobian by complex step (:func:`bifilar.estimation.ladder._thesis_forcing`)
+    needs only this, ~40 % of a full :func:`_core` on complex numbers."""
+    s, *_, V, _, _, gamma = _geometry(theta, p)
+    Vn = V[:, :4] + np.outer(V[:, 4], gamma)
+    N5 = np.zeros(5, dtype=np.result_type(s, float))
+    N5[:4] = -(p.mass * p.g * Vn[2])
+    return N5
 
 
 def state_quantities(theta, thetadot, p: KaneParams) -> dict:
