@@ -20,6 +20,7 @@ PLAUSIBLE = {
     "gyration_attachments": 30.0,  # k / attachment spread (either way) when only attachments are known
     "gyration_for_mass": 10.0,  # m: largest k for 1 kg, scaled by (m / 1 kg)^(1/3); a whole config in mm
     "attachments_beyond_shape": 10.0,  # attachment reach / the known shape's reach: the rig in cm or mm?
+    "stretch": 1e-3,  # m: a wire stretched by more than a length's default uncertainty at its share of the weight
 }
 """Thresholds of :func:`plausibility_warnings` (SI units)."""
 
@@ -91,4 +92,38 @@ def plausibility_warnings(scene: Scene) -> list[str]:
     if not bad and k > k_max:
         out.append(f"body: radius of gyration sqrt(I/m) = {k:.3g} m is implausibly large for a {scene.mass:.3g} kg body "
                    f"(above {k_max:.3g} m); is the whole config in millimetres (lengths in m, inertia in kg m^2)?")
+    w = stretch_warning(scene)
+    if w is not None:
+        out.append(w)
     return out
+
+
+def stretch_warning(scene: Scene) -> str | None:
+    """The warning for a stated ``rig.stiffness`` (EA, N) that stretches a
+    wire, at an equal share of the weight ``m g / n``, by more than
+    ``PLAUSIBLE["stretch"]`` (1 mm, a length's default uncertainty), where
+    the model does not carry the stretch through (audit16: a 200 kg trifilar,
+    2 m wires, EA 1e5 N, stretched 13 mm, gave Izz 0.65 % high, z +57 with
+    exact inputs, +2.8 with the default ones, no word; the 4-wire twin's
+    runs 0.23 % short of its own linear period, Izz z +16 at 0.05 rad), or
+    None.  2 and 3 wires: the model takes ``rig.lengths`` as the hanging
+    (loaded) lengths and ignores EA.  4 and 5 wires: the rest pose and the
+    modes are the stretched rig's (the lengths unstretched), but the
+    nonlinear runs' wires are ``rig.lengths`` themselves, unstretched."""
+    if scene.stiffness is None:
+        return None
+    share = scene.mass * scene.gravity / scene.n_wires
+    dl = share * np.asarray(scene.lengths, float) / np.asarray(scene.stiffness, float)  # m
+    i = int(np.argmax(dl))
+    if not dl[i] > PLAUSIBLE["stretch"]:
+        return None
+    strain = dl[i] / scene.lengths[i]
+    head = (f"rig.stiffness: at an equal share of the weight ({share:.4g} N) wire {i + 1} stretches by {1e3 * dl[i]:.3g} "
+            f"mm (strain {strain:.2g}: the periods move by ~{strain / 2:.2g} of themselves), more than a length's "
+            f"{1e3 * PLAUSIBLE['stretch']:g} mm default uncertainty; ")
+    if scene.n_wires <= 3:
+        return head + (f"{scene.n_wires}-wire rigs do not use it: rig.lengths are taken as the wires' hanging (loaded) "
+                       "lengths; give those (and drop rig.stiffness), or the inertia comes out ~that strain high")
+    return head + ("the rest pose and the modes are the stretched wires', but the nonlinear runs (simulate, the "
+                   "amplitude factor of invert, sweep and plan) keep the wires at rig.lengths, unstretched: their "
+                   "periods are short of the loaded rig's by about that much; time small releases (--amplitude 0)")

@@ -519,6 +519,25 @@ def _same_body(ref: Hanging, scene, fld: str) -> list[InputError]:
     return out
 
 
+#: the keys that only one way of giving a measurement reads (the others: mode, amplitude, amplitude_std, note,
+#: cycles); given with another way they would be ignored, e.g. ``time_std`` beside a ``period`` left the period
+#: at the default 1 ms std however large the stated one (audit16)
+_KIND_KEYS = {"period": {"std"}, "times": {"time_std"},
+              "signal": {"column", "sample_rate", "quantity", "scale", "model", "t_start", "t_stop", "trim"}}
+
+
+def _refuse_other_kinds_keys(m: dict, fm: str, kind: str) -> None:
+    """Refuse (exit 2, naming the key) a key of measurement ``m`` that only
+    another way of giving a measurement (``period``, ``times``, ``signal``)
+    reads, instead of ignoring it silently."""
+    for other, keys in _KIND_KEYS.items():
+        for k in sorted(keys & set(m)) if other != kind else ():
+            hint = {"std": "a stopwatch's trial std is time_std", "time_std": "a period's std is std (or period: T +- s)"}
+            extra = f"; {hint[k]}" if k in hint and kind in ("period", "times") else ""
+            raise InputError(f"{fm}.{k}", f"applies to a measurement given by {other} only; this one gives {kind}, "
+                             f"which would ignore it{extra}")
+
+
 def _measurement(m: Any, fm: str, base: Path, unc: dict, src: dict | None = None) -> Measurement:
     if not isinstance(m, dict):
         raise InputError(fm, "must be a mapping with mode and one of period, times, signal")
@@ -531,6 +550,7 @@ def _measurement(m: Any, fm: str, base: Path, unc: dict, src: dict | None = None
     kinds = [k for k in ("period", "times", "signal") if k in m]
     if len(kinds) != 1:
         raise InputError(fm, "give exactly one of period, times (with cycles) or signal")
+    _refuse_other_kinds_keys(m, fm, kinds[0])
     amp = amp_s = None
     if "amplitude" in m:
         amp, amp_s = parse_value_sigma(m["amplitude"], f"{fm}.amplitude", "AMPLITUDE")

@@ -170,7 +170,7 @@ def parse_times(text: Any, fld: str) -> list[float]:
         except (TypeError, ValueError):
             raise InputError(fld, f"not a time in seconds: {it!r}") from None
         if not (math.isfinite(v) and v > 0):
-            raise InputError(fld, f"times must be positive, got {it!r}")
+            raise InputError(fld, f"times must be positive and finite, got {it!r}")
         out.append(v)
     if not out:
         raise InputError(fld, "no times given")
