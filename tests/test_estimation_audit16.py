@@ -105,3 +105,31 @@ def test_a_stated_stiffness_the_model_does_not_carry_through_is_warned_of():
 
     ratio = torsion(_heavy(3, 200.0, None, 2.0 * (1 + strain))) / torsion(_heavy(3, 200.0, None))
     assert ratio - 1 == pytest.approx(strain / 2, rel=0.01)
+
+
+def test_the_config_warning_reaches_the_json_warnings(tmp_path):
+    """Audit16's found-not-fixed: the config layer's warnings (here the
+    stretch warning above) went to stderr only, so a program reading
+    ``invert --json`` saw an answer 0.65 % high with an empty ``warnings``
+    list.  Now ``emit_json`` puts them at the head of the document's
+    ``warnings`` (created where a command has none, as ``modes``), once
+    each; a config without warnings keeps its documents as they were."""
+    import yaml
+
+    cfg = tmp_path / "heavy3.yaml"
+    cfg.write_text(yaml.safe_dump(_heavy(3, 200.0, 1e5)))
+    quiet = tmp_path / "quiet3.yaml"
+    quiet.write_text(yaml.safe_dump(_heavy(3, 10.0, 1e5)))
+    runner = CliRunner()
+    for path, warned in ((cfg, True), (quiet, False)):
+        r = runner.invoke(main, ["modes", str(path), "--json"])
+        assert r.exit_code == 0, r.stderr
+        doc = json.loads(r.stdout)
+        mine = [w for w in doc.get("warnings", []) if w.startswith("rig.stiffness")]
+        assert len(mine) == (1 if warned else 0) and ("warnings" in doc) == warned, doc.get("warnings")
+        assert ("warning: rig.stiffness" in r.stderr) == warned  # still logged as it arises
+        T = next(m["period"] for m in doc["modes"] if m["label"] == "torsion")
+        r = runner.invoke(main, ["invert", str(path), "--period", f"torsion={T:.9f}", "--json"])
+        assert r.exit_code == 0, r.stderr
+        doc = json.loads(r.stdout)
+        assert [w for w in doc["warnings"] if w.startswith("rig.stiffness")] == mine, doc["warnings"]

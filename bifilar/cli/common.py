@@ -50,6 +50,22 @@ class _LowerLevelFormatter(logging.Formatter):
         return f"{record.levelname.lower()}: {_one_line(record.getMessage())}"
 
 
+class _Collector(logging.Handler):
+    """Keeps the one-line text of every warning the config layer logs while a
+    command runs (:func:`handle_errors` installs it), for :func:`emit_json`."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(_one_line(record.getMessage()))
+
+
+#: the collector of the running command (None outside :func:`handle_errors`)
+_config_warnings: _Collector | None = None
+
+
 def setup_logging(verbose: bool) -> None:
     """Send the package's log records (``bifilar.*``) to stderr as
     ``warning: ...`` lines; INFO too with ``verbose``.  Idempotent."""
@@ -103,6 +119,11 @@ def handle_errors(fn: Callable) -> Callable:
 
         ctx = click.get_current_context()
         debug = bool((ctx.obj or {}).get("debug"))
+        global _config_warnings
+        config_log = logging.getLogger("bifilar.config")
+        collector, outer = _Collector(), _config_warnings
+        config_log.addHandler(collector)
+        _config_warnings = collector
         try:
             with stop_handlers(), warnings.catch_warnings(), _native_stdout_to_stderr():
                 if not debug:
@@ -150,6 +171,9 @@ def handle_errors(fn: Callable) -> Callable:
             click.echo(f"error: internal error ({type(exc).__name__}: {_one_line(str(exc))}); "
                        "rerun with --debug for a traceback", err=True)
             ctx.exit(1)
+        finally:
+            config_log.removeHandler(collector)
+            _config_warnings = outer
 
     return wrapper
 
@@ -323,8 +347,23 @@ def warn_at_rest(scene, rest, modes, only: str | None = None) -> None:
 
 
 def emit_json(doc: Any) -> None:
-    """Print exactly one JSON document on stdout (NaN/inf become null)."""
+    """Print exactly one JSON document on stdout (NaN/inf become null).
+
+    The warnings the config layer logged while the command read its inputs
+    (implausible values, a stated ``rig.stiffness`` the model does not carry
+    through: :func:`bifilar.config.plausibility_warnings`) go to stderr as
+    they arise; they are put at the head of the document's ``warnings`` list
+    too (created if need be), so that a program reading the JSON sees every
+    caveat of its answer, not only those of the computation."""
     from ..jsonable import to_jsonable
+
+    if isinstance(doc, dict) and _config_warnings is not None and _config_warnings.messages:
+        have = doc.get("warnings")
+        have = list(have) if isinstance(have, (list, tuple)) else ([] if have is None else None)
+        if have is not None:
+            extra = [w for w in dict.fromkeys(_config_warnings.messages) if w not in have]
+            if extra:
+                doc = {**doc, "warnings": extra + have}
 
     click.echo(json.dumps(to_jsonable(doc), allow_nan=False))
 
