@@ -169,15 +169,32 @@ def record_tones(m) -> list[dict]:
     s_amp = float(fit.noise_std) * math.sqrt(2.0 / n) * max(float(fit.std_inflation or 1.0), 1.0)
     T_rec = float(fit.t1 - fit.t0)
     rate = m.details.get("quantity") == "rate"
-    out = []
+    # a decaying record's chirp (the timed mode's frequency following its amplitude) is fitted by a multi-mode
+    # model as a mode beside the dominant one; residual_tones skips such peaks, and so is such a mode skipped
+    chirp = 4 * math.pi / T_rec if _decays(fit) else 0.0  # rad/s: 2 / T_record
+    out, skipped = [], False
     for md in fit.modes[1:]:
         a, w = float(md["amplitude"]), abs(float(md["omega"]))
         if not (w > 0 and a > TONE_Z * s_amp and w * T_rec >= 4 * math.pi):
             continue
+        if abs(w - abs(w0)) <= chirp:
+            skipped = True
+            continue
         conv = (w0 / w) if rate else 1.0
         out.append({"period": 2 * math.pi / w, "period_std": float(md.get("std", 0.0) or 0.0),
                     "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv})
+    if skipped:  # the tones the fit left in its residuals, where it spent a mode on the chirp
+        out += residual_tones(m)
     return sorted(out, key=lambda d: -d["ratio"])
+
+
+def _decays(fit) -> bool:
+    """Whether ``fit``'s record decays measurably: its damping ratio beyond :data:`DECAY_Z` of its std (the
+    amplitude law's criterion)."""
+    zeta = float(getattr(fit, "damping_ratio", float("nan")))
+    modes = getattr(fit, "modes", None) or [{}]
+    z_std = float(modes[0].get("damping_ratio_std", 0.0) or 0.0)
+    return math.isfinite(zeta) and math.isfinite(z_std) and zeta > DECAY_Z * z_std
 
 
 def residual_tones(m) -> list[dict]:
@@ -578,10 +595,10 @@ def swing_decay(m) -> tuple[float, float]:
     t = getattr(fit, "t_used", None)
     if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
         return 1.0, 0.0
+    if not _decays(fit):
+        return 1.0, 0.0
     zeta = float(fit.damping_ratio)
     z_std = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
-    if not (math.isfinite(zeta) and math.isfinite(z_std) and zeta > DECAY_Z * z_std):
-        return 1.0, 0.0
     t = np.asarray(t, float)
     env = np.abs(np.asarray(fit.envelope(t), float))
     if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
