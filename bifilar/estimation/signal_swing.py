@@ -155,7 +155,12 @@ def record_tones(m) -> list[dict]:
     (s), ``ratio`` (amplitude over the dominant mode's, angle-equivalent:
     a rate record's times ``omega_0 / omega_j``), ``ratio_std``, ``period_std``.
     Kept where the amplitude exceeds :data:`TONE_Z` of its std and the
-    oscillation has two cycles in the record."""
+    oscillation has two cycles in the record; not a mode that dies within
+    two of its cycles (a transient), nor, where the record decays
+    measurably, one within 2 / T_record of the fundamental (the chirp's, as
+    :func:`residual_tones` skips it): where one is set aside, the fit's
+    residuals are read as a single-mode fit's are (docs/design.md,
+    "damprate, session 16")."""
     fit = getattr(m, "fit", None)
     if fit is None or not (getattr(fit, "modes", None) or []):
         return []
@@ -170,14 +175,16 @@ def record_tones(m) -> list[dict]:
     T_rec = float(fit.t1 - fit.t0)
     rate = m.details.get("quantity") == "rate"
     # a decaying record's chirp (the timed mode's frequency following its amplitude) is fitted by a multi-mode
-    # model as a mode beside the dominant one; residual_tones skips such peaks, and so is such a mode skipped
+    # model as a mode beside the dominant one; residual_tones skips such peaks, and so is such a mode skipped; and a
+    # mode that dies within two of its cycles (sigma > f / 2) is a transient of the record's start, no free mode's
+    # tone (audit15 row 1: 2.1-2.2 s at 0.26-0.28 1/s, 1.3-2.2 / T_record from the torsion, read as a metre of swing-x)
     chirp = 4 * math.pi / T_rec if _decays(fit) else 0.0  # rad/s: 2 / T_record
     out, skipped = [], False
     for md in fit.modes[1:]:
         a, w = float(md["amplitude"]), abs(float(md["omega"]))
         if not (w > 0 and a > TONE_Z * s_amp and w * T_rec >= 4 * math.pi):
             continue
-        if abs(w - abs(w0)) <= chirp:
+        if abs(w - abs(w0)) <= chirp or float(md.get("sigma", 0.0) or 0.0) > w / (4 * math.pi):
             skipped = True
             continue
         conv = (w0 / w) if rate else 1.0
