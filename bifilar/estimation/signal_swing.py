@@ -78,7 +78,9 @@ EXPLAINED_SHARE = 0.3
 #: stated share, not a measurement.  The record cannot tell it: the quadcopter's tones decay as the swing and
 #: the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
 #: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
-#: (docs/design.md, "dampdecay, session 14")
+#: (docs/design.md, "dampdecay, session 14").  What it covers, measured (the quadcopter, torsion Q 100, 30
+#: cycles): a swing decaying between half and twice the timed mode's rate (|z| <= 1.68, 80 of 80 inside) and at
+#: three times it (z <= +1.92); at a third of it not (14 of 20 inside; docs/design.md, "damprate, session 16")
 DECAY_SHARE = 0.5
 #: a record's envelope decays measurably (and a found second mode is taken to decay with it) where its damping
 #: ratio exceeds this many of its std (the amplitude law's criterion, :mod:`.signal_law`)
