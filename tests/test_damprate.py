@@ -96,7 +96,7 @@ def test_a_decaying_records_mode_beside_the_fundamental_is_not_its_tone():
     and ratio within 4 of their stds of the truth's.  The old code returned
     the chirp's mode (2.140 s, 8.8e-3) as the strongest tone."""
     tones = record_tones(SimpleNamespace(fit=_fit(), details={"quantity": "angle"}))
-    assert tones, "the 2.570 s tone (1.9e-3 of the torsion, ~60 of its std) was not read from the residuals"
+    assert tones, "the 2.570 s tone (1.9e-3 of the torsion, ~23 of its std) was not read from the residuals"
     assert all(abs(1 / d["period"] - F0) > 2.0 / T_REC for d in tones), tones
     tone = tones[0]
     assert abs(tone["period"] - T1) < 4 * tone["period_std"], tone
