@@ -137,7 +137,7 @@ def bench_engines() -> dict:
     import numpy as np
 
     from bifilar.analysis.batch import modes_batch, rest_poses, simulate_batch
-    from bifilar.estimation import budget
+    from bifilar.estimation import second_order as budget  # where the sigma points' periods are computed
     from bifilar.studies import point as pt
 
     path = CASES["Solar Boat"][0]

@@ -772,7 +772,7 @@ def test_pair_terms_recover_a_known_biquadratic(monkeypatch):
     ``contrib[j] += K21``, ``contrib[i] += K12``, both quadratic terms
     ``+= sqrt 2 K22``, the cross terms listed with their Hermite weights
     and the returned offset K22."""
-    from bifilar.estimation import budget as bm
+    from bifilar.estimation import second_order as bm  # the sigma points (budget.py before session 16)
 
     K = {(0, 0): 5.0, (1, 0): 0.7, (0, 1): -0.4, (2, 0): 0.3, (0, 2): 0.2,
          (1, 1): 0.11, (2, 1): -0.05, (1, 2): 0.07, (2, 2): 0.013}
@@ -852,7 +852,7 @@ def test_second_order_std_is_the_rms_of_the_quadratic_error(monkeypatch, b):
     from the estimate; b = 0 keeps the linear budget unchanged."""
     from types import SimpleNamespace as NS
 
-    from bifilar.estimation import budget as bm
+    from bifilar.estimation import second_order as bm  # the sigma points (budget.py before session 16)
     from bifilar.estimation.uncertainty import LinearBudget
 
     a, ct, s, p0 = 0.5, 0.3, 0.002, 7.0

@@ -555,7 +555,7 @@ def test_sigma_points_settled_in_one_step_all_at_once(monkeypatch):
     # against _resolve point by point (the path before): the same re-solved unknowns, bit for bit, over
     # the honest cases (second order and pair terms: the wheel, the drone) and an inversion of three
     # modes for three components (K = P = 3, the example measurements file)
-    from bifilar.estimation import budget
+    from bifilar.estimation import second_order as budget  # where the sigma points are solved (session 16 split)
 
     seen: list = []
     real_solve, real_one = budget._solve_points, budget._one_step
@@ -619,7 +619,7 @@ def test_solve_points_with_kept_hangings_equals_the_one_before(monkeypatch):
     # the hangings each input key affects are found once per key, not once per point; against the loop
     # before: the same re-solved points, bit for bit, over the honest cases (one hanging, sigma points and
     # pair corners) and an inversion of six hangings (inputs of one hanging, shared CoM, mass, gravity)
-    from bifilar.estimation import budget
+    from bifilar.estimation import second_order as budget  # where the sigma points are solved
 
     seen: list = []
 
