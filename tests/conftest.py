@@ -71,6 +71,24 @@ rig:
 """
 
 
+def two_wire_yaml(mass, principal, ys, anchor_z, attachment_z, length, name=None, gravity=None) -> str:
+    """The config text (YAML) of a two-wire rig whose wires hang in the
+    y-z plane: anchors at ``(0, y, anchor_z)`` (world frame, m) and
+    attachments at ``(0, y, attachment_z)`` (body frame about the CoM, m)
+    for each ``y`` of ``ys``, both wires ``length`` (m) long; ``mass`` (kg),
+    ``principal`` moments (kg m^2), optional ``name`` and ``gravity``
+    (m/s^2).  Ends with a newline, so that a test may append keys
+    (``uncertainty: ...``)."""
+    def vec(v):
+        return "[" + ", ".join(repr(float(x)) for x in v) + "]"
+
+    head = (f"name: {name}\n" if name else "") + (f"gravity: {gravity!r}\n" if gravity is not None else "")
+    return (head + f"body:\n  mass: {mass!r}\n  inertia: {{principal: {vec(principal)}}}\nrig:\n"
+            f"  anchors: [{', '.join(vec((0, y, anchor_z)) for y in ys)}]\n"
+            f"  attachments: [{', '.join(vec((0, y, attachment_z)) for y in ys)}]\n"
+            f"  lengths: {vec((length, length))}\n")
+
+
 def one_error_line(res, field: str) -> str:
     """The CLI contract for bad input (a click ``Result``): exit 2, one
     ``error: FIELD: ...`` line on stderr besides warnings, nothing on stdout,

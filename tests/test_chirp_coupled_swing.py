@@ -167,25 +167,44 @@ def test_the_nonlinear_models_period_at_a_records_amplitude_is_the_true_one(trif
 
 def test_invert_on_the_record_is_as_unbiased_as_the_records_period(trifilar, draws):
     """``invert --signal torsion=REC --signal-quantity angle --solve-for
-    Izz`` with every other input exact, on the 12 noise draws above: Izz's
-    z and the record's own z (its period against the truth at its
-    amplitude) differ by the model's error at the true inertia alone, the
-    same in every draw (sd 0.01-0.03).  Bands: that difference's mean within
-    0.3 (twice the truth's own std, 5.5e-7 s, over the record's 3.6e-6 s);
-    Izz's z mean within 2/sqrt(12) = 0.58 of 0.  Here -0.10 and -0.24 (the
-    record's own -0.13); before, +0.73 and +0.59 ("found, not fixed" in
-    session 9: the amplitude factor's period was the run's crossings',
-    docs/invert.md, "Signal audit, session 10")."""
+    Izz`` with every other input exact, on the first 3 of the noise draws
+    above.  In period units the record's error ``e_rec = T - T_true(A)``
+    and Izz's ``e_izz = (Izz - I_true) dT/dIzz`` (the linear model's slope,
+    0.47 s / kg m^2; the amplitude factor's own slope moves it by ~1e-3 of
+    itself) differ by the model's error at the true inertia alone, the same
+    in every draw: measured +3.69e-7 s in each of the 12 draws (spread
+    +-5e-10 s).  Bands: that difference within 1.1e-6 s (twice the truth's
+    own std and 0.1 of the record's, as the model's error is held to in the
+    test above) and the same in every draw within 1e-8 s.  Before ("found,
+    not fixed" in session 9: the amplitude factor's period was the run's
+    crossings', docs/invert.md, "Signal audit, session 10") it was -2.7e-6
+    s, 0.75 of the record's std, in every draw.
+
+    Test economy, session 16: this was Izz's z against the record's z over
+    all 12 draws (20 s of CPU, 12 nonlinear inverts), on the ground that
+    the two z differ by a constant (sd 0.01-0.03).  Since Izz's std carries
+    the hidden second mode's term (``hidden_second_mode[torsion]``, 1.05e-5
+    kg m^2 beside the timing's 7.6e-6) they do not: Izz's z is ~0.58 of
+    the record's, their differences had sd 0.41 (-0.38 .. +0.61) and only
+    their mean over 12 draws separated the bug (+0.73) from the band (0.3).
+    In seconds the difference is deterministic, so each draw checks it
+    alone; the record's own bias over the 12 draws is the first test's
+    (mean z within 0.58), and Izz's bias in its std is that one's plus
+    3.7e-7 s over Izz's std in seconds (6.1e-6 s): 0.06."""
     _, _, truth, _, scene = trifilar
     I_true = float(np.asarray(scene.inertia)[2, 2])
-    z_izz, z_rec = [], []
-    for m in draws:
-        T_true, s_true = _true_period(truth, m.amplitude)
-        z_rec.append((m.period - T_true) / math.hypot(m.std, s_true))
+    pb = build_problem(mm.MeasurementSet([mm.Hanging("reference", scene, np.eye(3))], [draws[0]]), ["Izz"])
+    h = 1e-6 * I_true
+    dT_dI = float(pb.linear_periods(np.array([I_true + h]))[0] - pb.linear_periods(np.array([I_true - h]))[0]) / (2 * h)
+    diff = []
+    for m in draws[:3]:
+        T_true, _ = _true_period(truth, m.amplitude)
         ms = mm.MeasurementSet([mm.Hanging("reference", scene, np.eye(3))], [m])
         ms.uncertainty = {**ms.uncertainty, **EXACT}
         r = invert(ms, solve_for=["Izz"])
-        z_izz.append((r.value("Izz") - I_true) / r.sigma("Izz"))
-    z_izz, z_rec = np.asarray(z_izz), np.asarray(z_rec)
-    assert abs(np.mean(z_izz - z_rec)) < 0.3, (z_izz, z_rec)
-    assert abs(z_izz.mean()) < 0.58, z_izz
+        diff.append((m.period - T_true) - (r.value("Izz") - I_true) * dT_dI)
+        # Izz's std holds at least the record's timing: in seconds not below the record's std
+        assert r.sigma("Izz") * dT_dI >= m.std, (r.sigma("Izz"), m.std)
+    diff = np.asarray(diff)
+    assert np.all(np.abs(diff) < 1.1e-6), diff
+    assert np.ptp(diff) < 1e-8, diff

@@ -30,17 +30,9 @@ import pytest
 from click.testing import CliRunner
 
 from bifilar.cli import main
-from conftest import CONFIGS, one_error_line
+from conftest import CONFIGS, one_error_line, two_wire_yaml
 
-ROD = """\
-body:
-  mass: 5.0
-  inertia: {principal: [1.0, 0.01, 1.0]}
-rig:
-  anchors: [[0.0, -0.4, 0.0], [0.0, 0.4, 0.0]]
-  attachments: [[0.0, -0.4, 0.1], [0.0, 0.4, 0.1]]
-  lengths: [1, 1]
-"""
+ROD = two_wire_yaml(5.0, [1.0, 0.01, 1.0], (-0.4, 0.4), 0.0, 0.1, 1.0)
 
 
 def run(*args):

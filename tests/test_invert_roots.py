@@ -240,7 +240,7 @@ def _check_scene(rng, n_wires):
     std = 1e-4 * T
     # the prior of the unknown is off by up to +-25 %
     prior = with_component(s, comp, x_true * (1 + rng.uniform(-0.25, 0.25)) if x_true else 0.25 * h * 1e3)
-    res = invert(one(prior, mode.label, T, std), solve_for=[comp], ladder=False)
+    res = invert(one(prior, mode.label, T, std), solve_for=[comp], ladder=False, rtol=1e-8)
     xs = [r["inertia"][comp]["value"] for r in res.roots]
     for x in xs:  # every answer is physical and reproduces its period (forward, independently)
         sx = with_component(s, comp, x)

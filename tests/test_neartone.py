@@ -23,6 +23,7 @@ import pytest
 
 from bifilar.estimation.signal_checks import serial_factor
 from bifilar.estimation.signal_swing import TONE_Z, residual_tones, tone_inflation
+from conftest import two_wire_yaml
 
 FS, T_REC, F0 = 60.0, 66.5, 0.4510  # the audit's 30 torsion cycles at 60 fps
 SIGMA = 1e-4  # 0.1 % of the 0.1 rad release
@@ -88,16 +89,7 @@ def test_no_false_tone_without_one():
     assert [d for d in residual_tones(m) if abs(1 / d["period"] - F_FAR) < 2.0 / T_REC] == []
 
 
-SYM = """name: sym
-gravity: 9.81
-body:
-  mass: 1.2
-  inertia: {principal: [0.015, 0.016, 0.02748]}
-rig:
-  anchors: [[0.0, -0.15, 1.23], [0.0, 0.15, 1.23]]
-  attachments: [[0.0, -0.15, 0.03], [0.0, 0.15, 0.03]]
-  lengths: [1.2, 1.2]
-"""
+SYM = two_wire_yaml(1.2, [0.015, 0.016, 0.02748], (-0.15, 0.15), 1.23, 0.03, 1.2, name="sym", gravity=9.81)
 
 
 def test_a_model_run_whose_tones_lie_away_from_the_dominant_still_gives_them(tmp_path):

@@ -20,18 +20,12 @@ from bifilar.analysis.simulate import relative_pose, simulate, two_mode_state
 from bifilar.config import load_scene
 from bifilar.models import maximal as mx
 
+from conftest import two_wire_yaml
+
 # a quadcopter-like body, its CoM 3 cm off the attachments' centre along their line
 # (the session 11 signal audit's): torsion 2.0246 s, swing-y 2.1975 s
-QUAD = """name: quadcopter-like body, CoM 3 cm off the attachments' centre
-gravity: 9.81
-body:
-  mass: 1.2
-  inertia: {principal: [0.012, 0.013, 0.022]}
-rig:
-  anchors: [[0.0, -0.18, 1.23], [0.0, 0.12, 1.23]]
-  attachments: [[0.0, -0.18, 0.03], [0.0, 0.12, 0.03]]
-  lengths: [1.2, 1.2]
-"""
+QUAD = two_wire_yaml(1.2, [0.012, 0.013, 0.022], (-0.18, 0.12), 1.23, 0.03, 1.2,
+                     name="quadcopter-like body, CoM 3 cm off the attachments' centre", gravity=9.81)
 EXACT = ["--uncertainty", "length=0", "--uncertainty", "position=0", "--uncertainty", "mass=0",
          "--uncertainty", "com=0"]
 

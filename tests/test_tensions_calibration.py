@@ -39,7 +39,16 @@ from bifilar.rotations import quat_to_matrix
 
 from test_audit6_tensions import COM, POSITION, heavy_bifilar
 
-N = 200
+# Test economy, session 16: 100 draws (was 200; ~3 s of CPU each of the three tests, ~9 s in all).  The
+# bands stay 3 of the sample's standard errors, so a calibrated std's false alarm is what it was (sd band
+# ~2.7e-3 two-sided, chi^2_99 outside 99 (0.788^2, 1.212^2)); the bug guarded, the geometry counted twice
+# (sd(z) 0.54-0.58), passes sd(z) > 1 - 0.212 only with chi^2_99 > 99 (0.788 / 0.58)^2 = 183: P ~ 1e-8
+# (200 draws: below 1e-15), and the explicit sd(z) > 0.75 as surely; the residual std 2.6x too small (the
+# control) gives sd(z_res) ~2.6, P(< 1.212) below 1e-30.  These seeds at 100 draws: sd(z) 1.129 / 0.924
+# (margins 1.2 / 1.8 standard errors of a sample sd, 0.071), coverage 0.93 / 0.98 (band +-0.065); the
+# control's sd(z_res) 1.114, coverage 0.94, sd(z) 0.20.  Broken on purpose (record_std's geometry term
+# doubled): sd(z) 0.57 / 0.46, both fail
+N = 100
 SD_BAND = 3 / math.sqrt(2 * N)
 COV_BAND = 3 * math.sqrt(0.95 * 0.05 / N)
 
