@@ -68,8 +68,8 @@ def test_the_swings_amplitude_is_the_one_the_fitted_period_averages(averaged):
     assert g * g == pytest.approx(g2, rel=1e-2)
     rms2 = -math.expm1(-2 * SIGMA * fit.t1) / (2 * SIGMA * fit.t1)
     assert abs(rms2 - g2) > 4e-2 * g2  # the tolerance tells the rules apart
-    # the decay's own uncertainty: d ln g / d lam ~ ln g (0.37 here) times DECAY_SHARE (0.5), ~0.17
-    assert 0.1 < rel < 0.3
+    # the decay's own uncertainty: d ln g / d lam ~ ln g (0.37 here) times DECAY_SHARE (1.0, session 16), ~0.33
+    assert 0.25 < rel < 0.45
 
 
 def _problem(fit, decay: float):

@@ -79,9 +79,12 @@ EXPLAINED_SHARE = 0.3
 #: the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
 #: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
 #: (docs/design.md, "dampdecay, session 14").  What it covers, measured (the quadcopter, torsion Q 100, 30
-#: cycles): a swing decaying between half and twice the timed mode's rate (|z| <= 1.68, 80 of 80 inside) and at
-#: three times it (z <= +1.92); at a third of it not (14 of 20 inside; docs/design.md, "damprate, session 16")
-DECAY_SHARE = 0.5
+#: cycles): at 0.5 a swing decaying between half and three times the timed mode's rate (|z| <= 1.92), but at a
+#: third of it 14 of 20 inside (z -2.21..-1.47); at 1.0 every rate measured, a third to three times, inside
+#: (20 of 20 at a third), the Izz std of a damped record with a found swing 1.5-1.6x wider (docs/design.md,
+#: "damprate, session 16"; lead, session 16: a swing decaying three times slower than the torsion is a real
+#: rig's, a torsion damped by the body's air drag, so the wider share)
+DECAY_SHARE = 1.0
 #: a record's envelope decays measurably (and a found second mode is taken to decay with it) where its damping
 #: ratio exceeds this many of its std (the amplitude law's criterion, :mod:`.signal_law`)
 DECAY_Z = 3.0
