@@ -152,8 +152,15 @@ def test_the_budgeted_curvature_makes_the_std_the_rms_distance_of_the_truth():
     base2 = _budget({"period[torsion]": 0.5})
     pri2 = _prior(["Ixz"], {"Ixz": small})
     assert small / 0.5 < 0.1 and with_prior_curvature(base2, pri2) is base2 and not pri2.budgeted
+    # a budget that already holds an offset (the inputs' sigma points): the prior's mean adds to it, and the
+    # rule judges the whole: 0.45 timing, 0.2 offset, b = 0.025 -> std 0.4924 -> 0.5044 (+2.4 %), budgeted
+    base4 = _budget({"period[torsion]": 0.45, "offset": 0.2})
+    pri4 = _prior(["Ixz"], {"Ixz": 0.025})
+    out4 = with_prior_curvature(base4, pri4)
+    assert pri4.budgeted and out4.contributions["offset"][0] == pytest.approx(0.225, rel=1e-12)
+    assert out4.std[0] == pytest.approx(math.sqrt(0.45 ** 2 + 2 * 0.025 ** 2 + 0.225 ** 2), rel=1e-12)
     # the offset alone over the rule (a one-sided term that moves the std by < 2 %): budgeted
-    pri3 = _prior(["Ixz", "Ixy"], {"Ixz": 0.06, "Ixy": -0.06 + 0.055})
+    pri3 = _prior(["Ixz", "Ixy"], {"Ixz": 0.03, "Ixy": 0.025})  # std +1.2 %, offset 11 % of it
     out3 = with_prior_curvature(base2, pri3)
     assert pri3.budgeted and out3.contributions["offset"][0] == pytest.approx(0.055, rel=1e-9)
 
