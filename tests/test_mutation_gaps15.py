@@ -516,3 +516,22 @@ def test_a_kite_on_2m_wires_is_refused_with_its_length_error_in_metres():
     assert "along the self-stress of wires nearly dependent" in msg, msg
     found = float(re.search(r"closest start found is (\S+) m off", msg).group(1))
     assert found == pytest.approx(closed, rel=0.02)
+
+
+def test_a_one_item_stiffness_list_is_every_wires_and_an_empty_one_is_refused():
+    """``rig.stiffness`` as a list: one item is every wire's EA (as the
+    scalar), an empty list names the field (the wires' count check alone
+    would say "0 items"; either way one line on rig.stiffness)."""
+    import yaml
+    from test_dependent_wires_messages import CORNERS, vertical
+
+    from bifilar.config import scene_from_dict
+    from bifilar.errors import InputError
+
+    dct = yaml.safe_load(vertical(CORNERS, [1.0] * 4))
+    dct["rig"]["stiffness"] = [2.0e5]
+    np.testing.assert_array_equal(scene_from_dict(dct, "test", warn=False).stiffness, np.full(4, 2.0e5))
+    dct["rig"]["stiffness"] = []
+    with pytest.raises(InputError) as e:
+        scene_from_dict(dct, "test", warn=False)
+    assert str(e.value).startswith("rig.stiffness:") and "\n" not in str(e.value)
