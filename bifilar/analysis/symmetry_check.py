@@ -394,10 +394,11 @@ def offset_error(tc: np.ndarray, tc_check: np.ndarray) -> float:
     their sum over the run is at most the sum of the moduli plus one
     cycle's difference.  Measured on the plate's swing-y at 1.5 m, 10-40
     periods (docs/design.md, "symcheck, session 16"): starts 1e-15..1e-13
-    off moved the mean period by up to 0.6 of this; the means' difference
-    alone missed them at 15 and 16 periods, where the check had left the
-    subspace a fraction of a cycle before them (0.0050 and 0.0094 s on its
-    15th and 16th cycles, 0.036 and 0.029 s on theirs)."""
+    off moved the mean period by up to 0.63 of this; the means' difference
+    alone missed them at 16 and 17 periods (0.00414 s against 0.00415 s,
+    0.00382 against 0.00397), the moduli's sum alone at 16, where the check
+    left the plane a fraction of a cycle before them (0.050 and 0.0094 s on
+    its 15th and 16th cycles, 0.036 and 0.029 s on theirs)."""
     N = len(tc) - 1
     n = min(N, len(tc_check) - 1)
     if N < 1 or n < 1:
