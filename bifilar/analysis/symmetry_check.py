@@ -17,20 +17,21 @@ What is done here (SI units, world frame; states are
 :mod:`bifilar.models.maximal`'s 13 numbers with the position relative to
 the rest CoM unless said otherwise):
 
-* :func:`start_symmetry`: the rig's symmetries (vertical mirrors and turns
-  about the vertical through the rest CoM that map anchors, attachments at
-  rest, lengths and inertia onto themselves, checked on the model's own
-  right-hand side), those that fix the start, and the directions that
-  leave their fixed subspace (a few microseconds where there is none);
+* :func:`rig_symmetries`, :func:`start_symmetry`: the rig's symmetries
+  (vertical mirrors and turns about the vertical through the rest CoM that
+  map anchors, attachments at rest, lengths and inertia onto themselves),
+  those that fix the start, and the directions that leave their fixed
+  subspace (~0.3 ms; nothing more where the start has none);
 * :func:`transverse_growth`: the Floquet multipliers of the orbit across
   that subspace, from the run's own samples over its first period (the
-  variational equations restricted to the transverse directions, their
-  matrix by finite differences of the compiled right-hand side at the
-  samples, integrated by products of matrix exponentials);
-* where the predicted growth over the run could matter
-  (:data:`GROWTH_GATE`), :func:`symmetry_check`: a second run from the
-  start moved off the subspace by :data:`START_OFFSET`, its period's
-  difference folded into ``period_error`` with a warning.
+  variational equation restricted to the transverse directions, its matrix
+  by differences of the compiled right-hand side at the samples, two
+  kernel calls, integrated by Runge-Kutta steps; ~0.5 ms);
+* where the predicted growth over the run reaches :data:`GROWTH_GATE`,
+  :func:`check_symmetric_start` runs it again from a start moved off the
+  subspace by :data:`START_OFFSET`; where the periods differ by more than
+  the stated error, :func:`offset_error` of the two runs is folded into
+  ``period_error`` with one warning.
 """
 
 from __future__ import annotations
@@ -137,6 +138,26 @@ def _candidates(pts: np.ndarray, n: int) -> tuple[np.ndarray, list]:
     return np.array(mats), names, dets
 
 
+def _none_possible(A: np.ndarray, W: np.ndarray, L: np.ndarray, tol: float) -> bool:
+    """A quick sufficient test that a rig has no symmetry (~20 us, what an
+    asymmetric rig pays): a symmetry keeps each wire's anchor and attachment
+    distances from the vertical through the rest CoM, their heights and the
+    length, so where no two wires agree in these it maps every wire onto
+    itself, which only a mirror whose plane holds every anchor and
+    attachment does (a turn moves every point off that vertical); so there
+    is none where these do not lie in one vertical plane through it.
+    ``A``, ``W`` (n, 3): anchors and attachments at rest relative to the
+    rest CoM, m; ``L`` (n,) lengths, m; ``tol`` m."""
+    key = np.stack([np.hypot(A[:, 0], A[:, 1]), A[:, 2], L, np.hypot(W[:, 0], W[:, 1]), W[:, 2]], axis=1)
+    close = np.all(np.abs(key[:, None, :] - key[None, :, :]) <= tol, axis=2)
+    if np.count_nonzero(close) > len(L):  # two wires alike: a swap is possible
+        return False
+    h = np.concatenate([A, W])[:, :2]
+    k = int(np.argmax(np.hypot(h[:, 0], h[:, 1])))
+    u = h[k] / max(float(np.hypot(*h[k])), 1e-300)
+    return bool(np.max(np.abs(h[:, 0] * u[1] - h[:, 1] * u[0])) > tol)  # not all in the plane through u
+
+
 def rig_symmetries(scene: Scene, rest: RestPose) -> list[Symmetry]:
     """The symmetries of ``scene`` hanging at ``rest`` (:class:`Symmetry`):
     each candidate of :func:`_candidates` that maps the anchors (relative to
@@ -150,6 +171,8 @@ def rig_symmetries(scene: Scene, rest: RestPose) -> list[Symmetry]:
     W = np.asarray(scene.attachments, float) @ rest.R.T
     L = np.asarray(scene.lengths, float)
     tol = SYMMETRY_TOL * float(np.max(L))
+    if _none_possible(A, W, L, tol):
+        return []
     Ss, names, dets = _candidates(np.concatenate([A, W]), scene.n_wires)
     AS = A @ Ss.transpose(0, 2, 1)  # (c, n, 3): S a_i
     d = np.linalg.norm(AS[:, :, None, :] - A[None, None, :, :], axis=-1)  # (c, n, n)
@@ -234,10 +257,27 @@ def _rates(kernel, Y: np.ndarray) -> np.ndarray:
 
 
 RK4_REACH = 1.0
-"""Largest |eigenvalue of A| x step (rad) :func:`transverse_growth` takes: the
-classical Runge-Kutta step's error in the multipliers is ~(that)^5 / 120 a
-step (1e-2 at 1: a multiplier of 1 read as at most ~1.3 over a period), and
-beyond 2.8 it is unstable."""
+"""Largest |eigenvalue of A| x step (rad) :func:`transverse_growth` takes.
+The classical Runge-Kutta step's relative error on such a mode is
+~(that)^5 / 120 (8e-3 at 1; 2e-4 over the ~32 steps of a period at 0.4,
+where the plate's default runs lie: 0.11-0.43), and beyond 2.8 the step is
+unstable; past 1 (a stiff body's fast modes, a run sampled far below 64 a
+period) the multipliers are not established."""
+
+
+def _within_reach(A: np.ndarray, step: np.ndarray, h: float) -> bool:
+    """Whether the eigenvalues of the matrices ``A`` (m, k, k) times ``h``
+    (s) stay within :data:`RK4_REACH`: where the Frobenius norm of each in
+    the directions' natural units (``step``), which bounds its eigenvalues,
+    does, at once; else by the eigenvalues of the largest such matrix, the
+    first and the middle one (the transverse rates vary smoothly along the
+    orbit; all 35 of a period cost ~1 ms, 3 ~0.08 ms)."""
+    B = A * step[None, None, :] / step[None, :, None]  # D^-1 A D, D = diag(step): the same eigenvalues
+    fro = np.sqrt(np.einsum("mij,mij->m", B, B))
+    if float(np.max(fro)) * h <= RK4_REACH:
+        return True
+    pick = sorted({0, len(A) // 2, int(np.argmax(fro))})
+    return float(np.max(np.abs(np.linalg.eigvals(A[pick])))) * h <= RK4_REACH
 
 
 def transverse_growth(P: mx.RigParams, t: np.ndarray, Y_rel: np.ndarray, period: float, basis: np.ndarray,
@@ -282,7 +322,7 @@ def transverse_growth(P: mx.RigParams, t: np.ndarray, Y_rel: np.ndarray, period:
     D = (Fp[2:].reshape(len(X), k, 13) - F0[:, None, :]) @ basis  # (m, j, i): B^T (f(x + h b_j) - f(x))
     A = D.transpose(0, 2, 1) / step[None, None, :]  # (m, k, k): A[:, :, j] the j-th direction's column
     h = np.r_[t[2:Ke + 1:2] - t[0:Ke - 1:2], period - t[Ke]][:, None, None]
-    if float(np.max(np.abs(np.linalg.eigvals(A)))) * float(np.max(h)) > RK4_REACH:
+    if not _within_reach(A, step, float(np.max(h))):
         return np.full(k, np.nan)  # transverse motion too fast for the samples: not established
     # each Runge-Kutta step's propagator, all at once: Phi -> M Phi, M = I + h/6 (K1 + 2 K2 + 2 K3 + K4)
     A0 = np.concatenate([A[0:Ke:2], A[Ke:Ke + 1]])
@@ -312,12 +352,16 @@ square of the offset)."""
 GROWTH_GATE = 1e6
 """Growth of an offset over the run (the largest Floquet multiplier's
 modulus to the power of the run's periods) from which the check run is
-made: below it a start 1e-12 off ends the run at most 1e-9 off the
-subspace, and the period, even in its offset (a symmetric orbit's period
-moves as the offset squared), by ~1e-18 of itself, far below any stated
-error; measured (docs/design.md, "symcheck, session 16"): the check's
-difference stayed below the error bound up to growths of XXX."""
-
+made.  Below it a start 1e-12 off ends the run at most 1e-6 off the
+subspace, and the period of a symmetric orbit moves as the square of the
+offset (the mirror image of a run times the same crossings): by ~1e-12 of
+itself.  Measured on the plate's swing-y (docs/design.md, "symcheck,
+session 16"): the check's difference over the error bound was 1e-7 .. 1e-5
+at growths of 3e4 .. 1.5e8 (1.5 m) and 1e5 .. 4e7 (1.0 m), 0.014 .. 0.016
+at 1e10, 37 at 6.6e11 (1.5 m, 13 periods): it exceeds the bound from ~1e11,
+five decades above the gate.  (At 0.5 m, growths of 5e4 and 3e9, it was
+0.004 and 0.03: the two runs' integration errors, their steps differing,
+not the offset.)"""
 
 
 def natural_sizes(Lmax: float, omega: float) -> np.ndarray:
@@ -438,7 +482,8 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
     symmetries (:func:`start_symmetry`).  Otherwise ``res.period_symmetry``
     gets the symmetry, the largest Floquet multiplier's modulus
     (:func:`transverse_growth`) and its power over the run's periods (the
-    growth of an offset); from a growth of :data:`GROWTH_GATE` the run is
+    growth of an offset; None where not established: :data:`RK4_REACH`,
+    then no check); from a growth of :data:`GROWTH_GATE` the run is
     made again from :func:`offset_start` (same method, tolerances and
     samples) and, where its period differs by more than ``res.period_error``,
     that error becomes the larger of the difference and
@@ -472,8 +517,8 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
         growth = float(np.exp(cycles * np.log(rho))) if rho > 0 else float("nan")
     res.period_symmetry = {"symmetry": tr.names, "multiplier": rho if np.isfinite(rho) else None,
                            "growth": growth if np.isfinite(growth) else None, "check": None}
-    if growth < GROWTH_GATE:  # (NaN: not established, checked)
-        return
+    if not growth >= GROWTH_GATE:  # (NaN: not established, a stiff body's fast modes: its run is costly, and
+        return                    # doubling it was measured at 2.3 s for a thin rod's torsion, whose check agreed)
     _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth)
 
 
