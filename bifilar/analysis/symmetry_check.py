@@ -242,42 +242,18 @@ def start_symmetry(syms: list, y_rel: np.ndarray, scale: np.ndarray) -> Transver
     return Transverse(symmetries=fix, basis=np.array(cols).T)
 
 
-def _hermite(t0, t1, y0, y1, f0, f1, t):
-    """Cubic Hermite interpolant of states (y, rates f) between t0 and t1, at t."""
-    h = t1 - t0
-    s = (t - t0) / h
-    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
-    return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
-
-
 def _rates(kernel, Y: np.ndarray) -> np.ndarray:
     """The model's rates (m, 13) at states ``Y`` (m, 13), one kernel call."""
     out = kernel(*np.ascontiguousarray(Y.T))
     return np.stack(np.broadcast_arrays(*out[:13]), axis=-1)
 
 
-RK4_REACH = 1.0
+RK4_REACH = 0.5
 """Largest |eigenvalue of A| x step (rad) :func:`transverse_growth` takes.
-The classical Runge-Kutta step's relative error on such a mode is
-~(that)^5 / 120 (8e-3 at 1; 2e-4 over the ~32 steps of a period at 0.4,
-where the plate's default runs lie: 0.11-0.43), and beyond 2.8 the step is
-unstable; past 1 (a stiff body's fast modes, a run sampled far below 64 a
-period) the multipliers are not established."""
-
-
-def _within_reach(A: np.ndarray, step: np.ndarray, h: float) -> bool:
-    """Whether the eigenvalues of the matrices ``A`` (m, k, k) times ``h``
-    (s) stay within :data:`RK4_REACH`: where the Frobenius norm of each in
-    the directions' natural units (``step``), which bounds its eigenvalues,
-    does, at once; else by the eigenvalues of the largest such matrix, the
-    first and the middle one (the transverse rates vary smoothly along the
-    orbit; all 35 of a period cost ~1 ms, 3 ~0.08 ms)."""
-    B = A * step[None, None, :] / step[None, :, None]  # D^-1 A D, D = diag(step): the same eigenvalues
-    fro = np.sqrt(np.einsum("mij,mij->m", B, B))
-    if float(np.max(fro)) * h <= RK4_REACH:
-        return True
-    pick = sorted({0, len(A) // 2, int(np.argmax(fro))})
-    return float(np.max(np.abs(np.linalg.eigvals(A[pick])))) * h <= RK4_REACH
+The classical Runge-Kutta step damps an oscillation of that phase step by
+~(that)^6 / 144 (1e-4 at 0.5; the plate's default runs, 0.11-0.43 at 64
+samples a period, read a neutral multiplier as 0.9996-1) and is unstable
+beyond 2.8; a grid beyond the reach is refined to half of it."""
 
 
 def transverse_growth(P: mx.RigParams, t: np.ndarray, Y_rel: np.ndarray, period: float, basis: np.ndarray,
@@ -292,52 +268,83 @@ def transverse_growth(P: mx.RigParams, t: np.ndarray, Y_rel: np.ndarray, period:
     columns by one-sided differences of f along each direction (``step``
     (k,), in the state's units: 1e-7 of its natural size, where the
     difference's error, even in the offset for a mirror, is ~1e-14 and its
-    rounding ~1e-8), at every sample of the period and at two points of its
-    last interval, cubic Hermite interpolants of the samples (one kernel
-    call for all); X(period) from X(0) = I by classical Runge-Kutta steps of
-    two sample intervals (their midpoint is a sample), 4th order: on the
+    rounding ~1e-8), on a uniform grid of the period as fine as the samples
+    (the orbit there by cubic Hermite interpolants of the samples and their
+    rates, which are exact at the samples and ~(2 pi / 64)^4 / 384 = 3e-7
+    between them; one kernel call for all); X(period) from X(0) = I by
+    classical Runge-Kutta steps of two grid intervals, 4th order: on the
     plate's orbits at 64 samples a period the multipliers' moduli agree with
-    256 samples to ~1e-5.  The eigenvalues of X(period) are the multipliers;
-    a modulus above 1 is a growth per period of an offset from the
-    subspace.  NaN (not established) where the run has fewer samples than
-    that needs (a period under 3 sample intervals, or a transverse rate
-    beyond :data:`RK4_REACH` over a step: a stiff body's fast modes)."""
+    256 samples to ~1e-5.  Where the transverse motion is too fast for that
+    grid (:data:`RK4_REACH`: the swing-x of the thesis 7.1 rigs, 42 s, beside
+    a torsion of 2.7 s), the grid is refined up to 16 times.  The eigenvalues of
+    X(period) are the multipliers; a modulus above 1 is a growth per period
+    of an offset from the subspace.  NaN (not established) where the run has
+    fewer than 3 samples in the period or even 16 times its rate is too
+    coarse (a stiff body's fast modes)."""
     t = np.asarray(t, float)
     K = int(np.searchsorted(t, period, side="right")) - 1  # t[K] <= period < t[K + 1]
-    if K < 2 or K + 1 >= len(t):
-        return np.full(basis.shape[1], np.nan)
-    kern = mx.compiled_kernel(P)
-    Ke = K - (K % 2)  # an even number of sample intervals, then the rest up to the period (1 to 2 intervals)
-    t_mid = 0.5 * (t[Ke] + period)
-    j = min(int(np.searchsorted(t, t_mid, side="right")) - 1, K)
-    # the rates at the samples (for the interpolants), then at the samples of the even part and the two
-    # interpolated points moved along each transverse direction: two kernel calls
-    F = _rates(kern, Y_rel[:K + 2])
-    extra = np.array([_hermite(t[j], t[j + 1], Y_rel[j], Y_rel[j + 1], F[j], F[j + 1], t_mid),
-                      _hermite(t[K], t[K + 1], Y_rel[K], Y_rel[K + 1], F[K], F[K + 1], period)])
-    X = np.concatenate([Y_rel[:Ke + 1], extra])  # the points A is needed at
     k = basis.shape[1]
-    Fp = _rates(kern, np.concatenate([extra, (X[:, None, :] + (basis * step).T[None, :, :]).reshape(-1, 13)]))
-    F0 = np.concatenate([F[:Ke + 1], Fp[:2]])
-    D = (Fp[2:].reshape(len(X), k, 13) - F0[:, None, :]) @ basis  # (m, j, i): B^T (f(x + h b_j) - f(x))
-    A = D.transpose(0, 2, 1) / step[None, None, :]  # (m, k, k): A[:, :, j] the j-th direction's column
-    h = np.r_[t[2:Ke + 1:2] - t[0:Ke - 1:2], period - t[Ke]][:, None, None]
-    if not _within_reach(A, step, float(np.max(h))):
-        return np.full(k, np.nan)  # transverse motion too fast for the samples: not established
-    # each Runge-Kutta step's propagator, all at once: Phi -> M Phi, M = I + h/6 (K1 + 2 K2 + 2 K3 + K4)
-    A0 = np.concatenate([A[0:Ke:2], A[Ke:Ke + 1]])
-    Am = np.concatenate([A[1:Ke:2], A[-2:-1]])
-    A1 = np.concatenate([A[2:Ke + 1:2], A[-1:]])
+    if K < 2 or K + 1 >= len(t):
+        return np.full(k, np.nan)
+    kern = mx.compiled_kernel(P)
+    F = _rates(kern, Y_rel[:K + 2])  # the rates at the samples, for the interpolants
+    M = (K + 1) // 2  # Runge-Kutta steps of two grid intervals over the period
+    for _ in range(2):
+        A, h = _grid_matrices(kern, t, Y_rel, F, K, period, M, basis, step)
+        need = _reach_factor(A, step, h)
+        if need <= 1.0:
+            break
+        if need > 16.0:
+            return np.full(k, np.nan)  # transverse motion too fast for the samples: not established
+        M = int(np.ceil(M * need))
+    else:
+        return np.full(k, np.nan)
+    # each Runge-Kutta step's propagator, all at once: Phi -> S Phi, S = I + h/6 (K1 + 2 K2 + 2 K3 + K4)
+    A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
     eye = np.eye(k)
     K1 = A0
     K2 = Am @ (eye + 0.5 * h * K1)
     K3 = Am @ (eye + 0.5 * h * K2)
     K4 = A1 @ (eye + h * K3)
-    M = eye + h / 6.0 * (K1 + 2.0 * K2 + 2.0 * K3 + K4)
-    Phi = M[0]
-    for Mi in M[1:]:
-        Phi = Mi @ Phi
+    Sm = eye + h / 6.0 * (K1 + 2.0 * K2 + 2.0 * K3 + K4)
+    Phi = Sm[0]
+    for Si in Sm[1:]:
+        Phi = Si @ Phi
     return np.linalg.eigvals(Phi)
+
+
+def _grid_matrices(kern, t, Y_rel, F, K, period, M, basis, step):
+    """A (2M + 1, k, k) of :func:`transverse_growth` on the uniform grid of
+    2M intervals over [0, ``period``], and the Runge-Kutta step (s, two
+    intervals)."""
+    tg = np.linspace(0.0, period, 2 * M + 1)
+    i = np.clip(np.searchsorted(t, tg, side="right") - 1, 0, K)
+    h = (t[i + 1] - t[i])[:, None]
+    sg = (tg[:, None] - t[i][:, None]) / h
+    X = ((2 * sg**3 - 3 * sg**2 + 1) * Y_rel[i] + (sg**3 - 2 * sg**2 + sg) * h * F[i]
+         + (-2 * sg**3 + 3 * sg**2) * Y_rel[i + 1] + (sg**3 - sg**2) * h * F[i + 1])  # cubic Hermite
+    k = basis.shape[1]
+    Fp = _rates(kern, np.concatenate([X, (X[:, None, :] + (basis * step).T[None, :, :]).reshape(-1, 13)]))
+    D = (Fp[len(X):].reshape(len(X), k, 13) - Fp[:len(X), None, :]) @ basis  # (m, j, i): B^T (f(x + h b_j) - f(x))
+    return D.transpose(0, 2, 1) / step[None, None, :], 2.0 * period / (2 * M)  # A[:, :, j]: direction j's column
+
+
+def _reach_factor(A: np.ndarray, step: np.ndarray, h: float) -> float:
+    """By how much the Runge-Kutta step ``h`` (s) must shrink for the
+    eigenvalues of the matrices ``A`` (m, k, k) times it to stay within
+    :data:`RK4_REACH` (at most 1: none).  First by the Frobenius norm of
+    each in the directions' natural units (``step``), which bounds its
+    eigenvalues, at once; where that exceeds the reach, by the eigenvalues
+    of the largest such matrix, the first and the middle one (the transverse
+    rates vary smoothly along the orbit; all 35 of a period cost ~1 ms, 3
+    ~0.08 ms), with a margin of 2."""
+    B = A * step[None, None, :] / step[None, :, None]  # D^-1 A D, D = diag(step): the same eigenvalues
+    fro = np.sqrt(np.einsum("mij,mij->m", B, B))
+    if float(np.max(fro)) * h <= RK4_REACH:
+        return 1.0
+    pick = sorted({0, len(A) // 2, int(np.argmax(fro))})
+    lam = float(np.max(np.abs(np.linalg.eigvals(A[pick])))) * h
+    return 1.0 if lam <= RK4_REACH else 2.0 * lam / RK4_REACH  # (to half the reach)
 
 
 START_OFFSET = 1e-12
