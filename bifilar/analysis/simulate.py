@@ -464,6 +464,10 @@ def simulate(
         run (docs/performance.md, session 13).  Other methods compute it
         anyway.
     """
+    if check and rest is None:  # (the symmetric-start check reads them too: solved once for both)
+        rest = rest_pose(scene)
+    if check and modes is None:
+        modes = linear_modes(scene, rest)
     kw = dict(rest=rest, modes=modes, y0=y0, t_end=t_end, method=method, rtol=rtol, atol=atol,
               samples_per_period=samples_per_period, on_slack=on_slack, max_evaluations=max_evaluations,
               timing=timing, coordinate=coordinate, bound=bound)
