@@ -385,12 +385,16 @@ def _mode_of(ms: ModeSet, key) -> Mode:
 
 def run_one(scene: Scene, rest: RestPose, md: Mode, amplitude: float, periods: float, rtol: float = 1e-10,
             atol=None, samples_per_period: int | None = None, lowest_point: bool = True, health: bool = True,
-            method: str = "auto", on_slack: str = "continue", progress: Callable | None = None) -> SceneRun:
+            method: str = "auto", on_slack: str = "continue", progress: Callable | None = None,
+            y0: np.ndarray | None = None) -> SceneRun:
     """One scene through the float fast path (what :func:`simulate_batch` does
     for a batch of one), given its rest pose and mode (no input checks).
-    ``progress(done, total)`` as in :func:`simulate_batch`."""
+    ``progress(done, total)`` as in :func:`simulate_batch`.  ``y0`` (13,):
+    start from this state (absolute position) instead of the mode's start
+    at ``amplitude`` (which still scales the tolerances and times the run)."""
     return _run_group([scene], [rest], [md], np.array([amplitude], float), np.array([periods], float), rtol, atol,
-                      on_slack, samples_per_period, lowest_point, progress, method, health)[0]
+                      on_slack, samples_per_period, lowest_point, progress, method, health,
+                      None if y0 is None else np.asarray(y0, float)[None, :])[0]
 
 
 SMALL_BATCH = 20

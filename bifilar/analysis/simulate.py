@@ -141,6 +141,15 @@ class SimulationResult(RunSummary):
     """The check run of a motion that is not clean (:func:`check_period`): ``method``, ``rtol``, its
     ``period`` (s), the ``difference`` from :attr:`period` (s) and the error model's ``model_bound`` (s);
     None where the single-cycle periods did not call for one."""
+    period_symmetry: dict | None = None
+    """A start on a symmetric subspace of a symmetric rig
+    (:func:`~bifilar.analysis.symmetry_check.check_symmetric_start`): ``symmetry``, the Floquet
+    ``multiplier`` across the subspace and its ``growth`` over the run, and the ``check`` run's
+    ``offset``, ``period`` (s), ``difference`` (s), ``reproducible_cycles`` and ``error`` (s) where the
+    growth called for one (else None); None where the start is not symmetric or not checked."""
+    period_error_symmetry: float = 0.0
+    """The part of :attr:`period_error` an unstable symmetric orbit's dependence on its start sets, s
+    (:attr:`period_symmetry`; 0 where none): period_error is at least this."""
 
     @property
     def energy_drift_below_resolution(self) -> bool | None:
@@ -153,6 +162,7 @@ class SimulationResult(RunSummary):
                               "runtime_s": float(self.runtime)})
         doc.update(health_json(self))
         doc["period_check"] = None if self.period_check is None else dict(self.period_check)
+        doc["period_symmetry"] = None if self.period_symmetry is None else dict(self.period_symmetry)
         return doc
 
 
@@ -173,6 +183,7 @@ def health_json(r) -> dict:
                                                                                r.energy_drift)}
     if hasattr(r, "period_error_crossings"):  # a SimulationResult (the batch's runs do not estimate it)
         doc["period_error_crossings"] = None if perr is None else f(r.period_error_crossings)
+        doc["period_error_symmetry"] = None if perr is None else f(r.period_error_symmetry)
     if getattr(r, "clearance", None) is not None:  # a SimulationResult's checks along the run
         doc.update(r.clearance)
     return doc
@@ -439,7 +450,11 @@ def simulate(
     check : where the single-cycle periods spread by more than
         :data:`IRREGULAR_SPREAD` of the period, run again from the same start
         at a tighter tolerance and take the difference into ``period_error``
-        (:func:`check_period`; False: the error model alone, one run).
+        (:func:`check_period`); where the start lies on a symmetric subspace
+        of a symmetric rig and an offset from it would grow over the run,
+        run again from a start 1e-12 off it and take that difference in too
+        (:func:`~bifilar.analysis.symmetry_check.check_symmetric_start`;
+        False: the error model alone, one run).
     coordinate : False: ``method="auto"``'s result leaves out the timed
         coordinate at the samples (:attr:`SimulationResult.coordinate` None;
         every other field the same, bit for bit), for a caller that reads
@@ -449,6 +464,10 @@ def simulate(
         run (docs/performance.md, session 13).  Other methods compute it
         anyway.
     """
+    if check and rest is None:  # (the symmetric-start check reads them too: solved once for both)
+        rest = rest_pose(scene)
+    if check and modes is None:
+        modes = linear_modes(scene, rest)
     kw = dict(rest=rest, modes=modes, y0=y0, t_end=t_end, method=method, rtol=rtol, atol=atol,
               samples_per_period=samples_per_period, on_slack=on_slack, max_evaluations=max_evaluations,
               timing=timing, coordinate=coordinate, bound=bound)
@@ -460,6 +479,10 @@ def simulate(
                                   **{**kw, "method": method2, "rtol": rtol2, "atol": atol2})
 
         check_period(res, again, method, atol, timing)
+    if check:  # a start on a symmetric subspace, whose unstable orbit the run itself cannot show
+        from .symmetry_check import check_symmetric_start
+
+        check_symmetric_start(res, scene, mode, amplitude, periods, kw)
     return res
 
 
