@@ -36,9 +36,12 @@ FLOOR_BAND = 0.2
 #: at least this many stretches of a cycle or more at the floor
 MIN_FLAT_RUNS = 2
 #: the warning needs at least this many steps forward ...
-MIN_STEPS = 3
+MIN_STEPS = 2
 #: ... and at most this share of as many excursions backward (a beat)
 MAX_BACKWARD_SHARE = 0.25
+#: longer records are not checked (a camera's run at 30-240 fps is far
+#: shorter; memory and time stay bounded)
+MAX_SAMPLES = 200_000
 #: fewer samples a cycle than this: one frame's phase step is too coarse
 #: to tell from the cycle's own (not checked)
 MIN_SAMPLES_PER_CYCLE = 8
@@ -48,8 +51,9 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     """Steps of the phase of an oscillation at ``frequency`` (Hz) along a
     uniformly sampled record ``(t`` in s, ``y`` in any unit).
 
-    Returns None when the record is too short (under four cycles) or too
-    coarsely sampled (under ``MIN_SAMPLES_PER_CYCLE`` samples a cycle);
+    Returns None when the record is too short (under four cycles), too
+    coarsely sampled (under ``MIN_SAMPLES_PER_CYCLE`` samples a cycle) or
+    longer than ``MAX_SAMPLES``;
     else a dict: ``step`` (``h = 2 pi f dt``, rad: one frame's phase),
     ``forward`` (the steps up above ``STEP_SHARE h``: their times, s, one
     a cycle at most), ``backward`` (the same, down), ``floor`` (rad, the
@@ -66,7 +70,7 @@ def phase_steps(t, y, frequency: float) -> dict | None:
         return None
     dt = float(np.median(np.diff(t)))
     W = int(round(1.0 / (frequency * dt)))
-    if W < MIN_SAMPLES_PER_CYCLE or n < 4 * W + 2:
+    if W < MIN_SAMPLES_PER_CYCLE or n < 4 * W + 2 or n > MAX_SAMPLES:
         return None
     h = 2.0 * np.pi * frequency * dt
     # the local mean over exactly one cycle (an offset or a drift many times
@@ -93,8 +97,10 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     def peaks(v, level):
         # a step's triangle: up by ``level`` within one cycle on either side (a beat or a changing
         # frequency moves the phase difference far more slowly)
-        idx = [i for i in range(W, v.size - W) if v[i] >= v[i - 1] and v[i] > v[i + 1] and v[i] > level
-               and v[i] - v[i - W] > level and v[i] - v[i + W] > level]
+        i = np.arange(W, v.size - W)
+        ok = (v[i] >= v[i - 1]) & (v[i] > v[i + 1]) & (v[i] > level) & (v[i] - v[i - W] > level) \
+            & (v[i] - v[i + W] > level)
+        idx = i[ok].tolist()
         kept: list[int] = []
         for i in idx:  # one a half cycle: a step's triangle is one cycle wide
             if kept and i - kept[-1] <= half:
