@@ -33,6 +33,10 @@ STEP_SHARE = 0.5
 FLOOR_PERCENTILE = 5.0
 #: a sample is at the floor within this share of ``h``
 FLOOR_BAND = 0.2
+#: a step counts only where the phase difference's noise (white noise over
+#: the local amplitude) is below this share of ``h``: its ``STEP_SHARE`` is
+#: then 4 sigma (a faint, decayed stretch shows noise peaks as large)
+MAX_NOISE_SHARE = 0.125
 #: at least this many stretches of a cycle or more at the floor
 MIN_FLAT_RUNS = 2
 #: the warning needs at least this many steps forward ...
@@ -55,8 +59,9 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     coarsely sampled (under ``MIN_SAMPLES_PER_CYCLE`` samples a cycle) or
     longer than ``MAX_SAMPLES``;
     else a dict: ``step`` (``h = 2 pi f dt``, rad: one frame's phase),
-    ``forward`` (the steps up above ``STEP_SHARE h``: their times, s, one
-    a cycle at most), ``backward`` (the same, down), ``floor`` (rad, the
+    ``forward`` (the steps up above ``STEP_SHARE h``, where the phase
+    difference's noise is below ``MAX_NOISE_SHARE h``: their times, s, one
+    a half cycle at most), ``backward`` (the same, down), ``floor`` (rad, the
     ``FLOOR_PERCENTILE`` of the phase differences), ``flat_runs`` (how
     many stretches of a cycle or more stay within ``FLOOR_BAND h`` of it),
     ``flat_level`` (rad, their median: the fitted frequency's offset from
@@ -91,6 +96,12 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     left = cz[j] - cz[j - W]
     right = cz[j + W] - cz[j]
     d = np.angle(right * np.conj(left))
+    # the phase difference's noise where the record is faint: white noise sigma_y (from the third
+    # differences: the oscillation's own is A h^3, small) on a cycle's sum of amplitude a W / 2
+    sig_y = float(np.sqrt(np.mean(np.diff(y, 3) ** 2) / 20.0))
+    amp = 2.0 * np.minimum(np.abs(left), np.abs(right)) / W
+    with np.errstate(divide="ignore"):
+        noise = np.where(amp > 0, 2.0 * sig_y / (amp * np.sqrt(W)), np.inf)
     floor = float(np.percentile(d, FLOOR_PERCENTILE))
     x = d - floor
 
@@ -99,7 +110,7 @@ def phase_steps(t, y, frequency: float) -> dict | None:
         # frequency moves the phase difference far more slowly)
         i = np.arange(W, v.size - W)
         ok = (v[i] >= v[i - 1]) & (v[i] > v[i + 1]) & (v[i] > level) & (v[i] - v[i - W] > level) \
-            & (v[i] - v[i + W] > level)
+            & (v[i] - v[i + W] > level) & (noise[i] < MAX_NOISE_SHARE * h)
         idx = i[ok].tolist()
         kept: list[int] = []
         for i in idx:  # one a half cycle: a step's triangle is one cycle wide
