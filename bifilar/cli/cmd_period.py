@@ -94,6 +94,11 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     if slip:  # e.g. a time column in ms read as s, or a wrong --sample-rate
         slip += f" (the time scale came from {meta.get('time_source')}: check its unit)"
         meta["warnings"] = list(meta.get("warnings") or []) + [slip]
+    from ..estimation.signal_timebase import dropped_frames_warning
+
+    tbw = dropped_frames_warning(t, y, fit, meta.get("time_source"))
+    if tbw:  # frames dropped from a record without its time column
+        meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
     if plot_p is not None:
         from pathlib import Path
 
@@ -108,6 +113,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
         doc = {"period": fit.period, "std": fit.std, "damping_ratio": fit.damping_ratio}
         doc.update({k: v for k, v in d.items() if k not in doc})
         doc["signal"] = sig
+        doc["warnings"] = list(sig.get("warnings") or [])  # the record's, as the --timed path's
         emit_json(doc)
         for w in meta.get("warnings", []) or []:
             click.echo(f"warning: {w}", err=True)

@@ -226,6 +226,8 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
                                     "window": [fit.t0, fit.t1], "notes": list(fit.notes)},
            "amplitude_source": "fit (the amplitude the fitted period refers to)" if r["amplitude"] is not None else None,
            "decay": r["decay"], "quantity": kw.get("quantity", "other")}
+    if r.get("time_base_warning"):
+        det["time_base_warning"] = r["time_base_warning"]
     std = r["std"]
     if r.get("dof") is not None:
         det["dof"] = r["dof"]

@@ -377,7 +377,10 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
     (rad or m, None unless ``quantity`` is ``angle`` or ``rate``),
     ``decay`` (the amplitude the period refers to over the envelope at the
     fit window's start, unit-free, <= 1 for a decaying record; None for a
-    crossings-only fit), ``cycles``, ``fit``, ``t``, ``y``, ``meta``.
+    crossings-only fit), ``cycles``, ``fit``, ``t``, ``y``, ``meta``,
+    ``time_base_warning`` (one line, or None: a record without its time
+    column whose phase steps as dropped frames step it,
+    :mod:`.signal_timebase`; also in ``meta["warnings"]``).
 
     The amplitude of a decaying recording is the one its fitted period
     refers to, :attr:`~bifilar.estimation.signal_result.PeriodFit.amplitude_period`
@@ -394,6 +397,11 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
         fit = fit_period(t, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
     except SignalError as exc:
         raise InputError(f"{fld} ({exc.field})", exc.message) from None
+    from .signal_timebase import dropped_frames_warning
+
+    tbw = dropped_frames_warning(t, y, fit, meta.get("time_source"), fld)
+    if tbw:  # frames dropped from a record without its time column
+        meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
     Td = float(fit.period)
     zeta = float(fit.damping_ratio) if np.isfinite(fit.damping_ratio) else 0.0
     zstd = 0.0
@@ -422,4 +430,4 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
             amp = a_eff
     cycles = max((fit.t1 - fit.t0) / Td, 1.0)
     return {"period": Tn, "std": std, "dof": nu, "observed_period": Td, "damping_ratio": zeta, "amplitude": amp,
-            "decay": decay, "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta}
+            "decay": decay, "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta, "time_base_warning": tbw}

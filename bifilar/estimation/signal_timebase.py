@@ -1,0 +1,163 @@
+"""Dropped frames in a record without a time column.
+
+A record read at a stated sample rate (``--sample-rate``, or a ``.mat``
+file's rate variable) has the nominal time base ``t_j = j / fs``.  A camera
+that dropped frames leaves the samples after each drop one frame ``dt = 1 /
+fs`` later than that time base says: the oscillation's phase steps forward
+by ``h = 2 pi f dt`` at every drop (0.12 rad at 30 fps for a 1.7 s
+period), the time base is short by the drops' share and the fitted period
+with it (audit 16, row 2d: 1 % dropped, the period 1 % short, z down to
+-32, 4 of 10 draws with no warning).  The samples alone cannot say where
+the drops were to better than about a cycle, so the time base cannot be
+recovered: the time column can.
+
+:func:`phase_steps` finds the staircase: the phase of the fitted frequency
+over one cycle of samples just after each sample ``j`` minus that just
+before it (complex demodulation, the local mean removed) is flat, at the
+record's small frequency offset, where the time base is regular, and rises
+by ``h`` in a triangle one cycle wide about each drop.  A dropped frame only
+steps forward; an oscillation beating with another mode, or a changing
+frequency, moves the phase both ways.  SI units: time s, frequency Hz,
+phase rad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: a step counts when the phase difference rises above its floor by this
+#: share of ``h`` (a backward one when it falls below it by as much)
+STEP_SHARE = 0.5
+#: the floor: this percentile of the phase differences (the regular time
+#: base's level, between the drops' triangles)
+FLOOR_PERCENTILE = 5.0
+#: a sample is at the floor within this share of ``h``
+FLOOR_BAND = 0.2
+#: a step counts only where the phase difference's noise (white noise over
+#: the local amplitude) is below this share of ``h``: its ``STEP_SHARE`` is
+#: then 4 sigma (a faint, decayed stretch shows noise peaks as large)
+MAX_NOISE_SHARE = 0.125
+#: at least this many stretches of a cycle or more at the floor
+MIN_FLAT_RUNS = 2
+#: the warning needs at least this many steps forward ...
+MIN_STEPS = 2
+#: ... and at most this share of as many excursions backward (a beat)
+MAX_BACKWARD_SHARE = 0.25
+#: longer records are not checked (a camera's run at 30-240 fps is far
+#: shorter; memory and time stay bounded)
+MAX_SAMPLES = 200_000
+#: fewer samples a cycle than this: one frame's phase step is too coarse
+#: to tell from the cycle's own (not checked)
+MIN_SAMPLES_PER_CYCLE = 8
+
+
+def phase_steps(t, y, frequency: float) -> dict | None:
+    """Steps of the phase of an oscillation at ``frequency`` (Hz) along a
+    uniformly sampled record ``(t`` in s, ``y`` in any unit).
+
+    Returns None when the record is too short (under four cycles), too
+    coarsely sampled (under ``MIN_SAMPLES_PER_CYCLE`` samples a cycle) or
+    longer than ``MAX_SAMPLES``;
+    else a dict: ``step`` (``h = 2 pi f dt``, rad: one frame's phase),
+    ``forward`` (the steps up above ``STEP_SHARE h``, where the phase
+    difference's noise is below ``MAX_NOISE_SHARE h``: their times, s, one
+    a half cycle at most), ``backward`` (the same, down), ``floor`` (rad, the
+    ``FLOOR_PERCENTILE`` of the phase differences), ``flat_runs`` (how
+    many stretches of a cycle or more stay within ``FLOOR_BAND h`` of it),
+    ``flat_level`` (rad, their median: the fitted frequency's offset from
+    the samples' own between drops, ``(omega - omega_fit) W dt``),
+    ``samples_per_cycle`` (``W``).
+    """
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    n = t.size
+    if n < 2 or not (np.isfinite(frequency) and frequency > 0):
+        return None
+    dt = float(np.median(np.diff(t)))
+    W = int(round(1.0 / (frequency * dt)))
+    if W < MIN_SAMPLES_PER_CYCLE or n < 4 * W + 2 or n > MAX_SAMPLES:
+        return None
+    h = 2.0 * np.pi * frequency * dt
+    # the local mean over exactly one cycle (an offset or a drift many times
+    # the amplitude would leak into the phase of a cycle's sum otherwise)
+    c = np.concatenate([[0.0], np.cumsum(y)])
+    half = W // 2
+    k = np.arange(half, n - (W - half) + 1)  # the mean over [k - half, k - half + W) is centred on k
+    ym = np.full(n, np.nan)
+    ym[k] = (c[k - half + W] - c[k - half]) / W
+    z = (y - ym) * np.exp(-2j * np.pi * frequency * t)
+    good = np.isfinite(z)
+    z = np.where(good, z, 0.0)
+    cz = np.concatenate([[0.0], np.cumsum(z)])
+    lo, hi = int(k[0]), int(k[-1])  # z valid on [lo, hi]
+    j = np.arange(lo + W, hi - W + 2)  # left window [j - W, j), right [j, j + W) both valid
+    if j.size < 3:
+        return None
+    left = cz[j] - cz[j - W]
+    right = cz[j + W] - cz[j]
+    d = np.angle(right * np.conj(left))
+    # the phase difference's noise where the record is faint: white noise sigma_y (from the third
+    # differences: the oscillation's own is A h^3, small) on a cycle's sum of amplitude a W / 2
+    sig_y = float(np.sqrt(np.mean(np.diff(y, 3) ** 2) / 20.0))
+    amp = 2.0 * np.minimum(np.abs(left), np.abs(right)) / W
+    with np.errstate(divide="ignore"):
+        noise = np.where(amp > 0, 2.0 * sig_y / (amp * np.sqrt(W)), np.inf)
+    floor = float(np.percentile(d, FLOOR_PERCENTILE))
+    x = d - floor
+
+    def peaks(v, level):
+        # a step's triangle: up by ``level`` within one cycle on either side (a beat or a changing
+        # frequency moves the phase difference far more slowly)
+        i = np.arange(W, v.size - W)
+        ok = (v[i] >= v[i - 1]) & (v[i] > v[i + 1]) & (v[i] > level) & (v[i] - v[i - W] > level) \
+            & (v[i] - v[i + W] > level) & (noise[i] < MAX_NOISE_SHARE * h)
+        idx = i[ok].tolist()
+        kept: list[int] = []
+        for i in idx:  # one a half cycle: a step's triangle is one cycle wide
+            if kept and i - kept[-1] <= half:
+                if v[i] > v[kept[-1]]:
+                    kept[-1] = i
+                continue
+            kept.append(i)
+        return [float(t[j[i]]) for i in kept]
+
+    # stretches of a cycle or more flat at the floor: a regular time base between drops
+    flat = np.abs(x) < FLOOR_BAND * h
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flat.astype(int), [0]])))
+    runs = int(np.sum(edges[1::2] - edges[::2] >= W))
+    return {"step": float(h), "forward": peaks(x, STEP_SHARE * h), "backward": peaks(-x, STEP_SHARE * h),
+            "floor": floor, "flat_runs": runs,
+            "flat_level": float(np.median(x[flat]) + floor) if flat.any() else float("nan"), "samples_per_cycle": W}
+
+
+def dropped_frames_warning(t, y, fit, time_source: str | None, field: str = "SIGNAL") -> str | None:
+    """One line when a record without a time column shows its phase
+    stepping forward by one frame's phase (:func:`phase_steps`) at least
+    ``MIN_STEPS`` times with few steps backward: dropped frames, a time base
+    short by them and a period short with it, which its std does not hold.
+    None otherwise (a record with its time column is never checked: its
+    times are the frames' own)."""
+    if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
+        return None
+    try:
+        st = phase_steps(t, y, float(fit.frequency))
+    except (ValueError, FloatingPointError):
+        return None
+    if st is None:
+        return None
+    nf, nb = len(st["forward"]), len(st["backward"])
+    if nf < MIN_STEPS or nb > MAX_BACKWARD_SHARE * nf or st["flat_runs"] < MIN_FLAT_RUNS:
+        return None
+    where = ", ".join(f"{x:.3g}" for x in st["forward"][:5]) + (" ..." if nf > 5 else "")
+    back = f"back only {nb} times" if nb else "never back"
+    # between the drops the samples' time base is right: the phase difference's flat level is the
+    # fitted frequency's offset from theirs, (omega - omega_fit) W dt
+    dt = float(np.median(np.diff(t)))
+    T_flat = 2 * np.pi / (2 * np.pi * float(fit.frequency) + st["flat_level"] / (st["samples_per_cycle"] * dt))
+    short = 1.0 - float(fit.period) / T_flat
+    return (f"{field}: the oscillation's phase steps forward by one frame's phase ({st['step']:.2g} rad) {nf} "
+            f"times (at t = {where} s) and {back}: in a record without a time column that is the mark of "
+            f"dropped frames (an irregular time base), which shorten the time base and the period by their share, "
+            f"beyond the stated std (here about {short:.2%}: between the steps the record runs at a period of about "
+            f"{T_flat:.5g} s, the fit {float(fit.period):.5g} s); the samples cannot give the missing times: "
+            f"give the time column")
