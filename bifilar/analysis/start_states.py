@@ -67,11 +67,7 @@ def multi_mode_state(scene: Scene, rest: RestPose, mode: Mode, amplitude: float,
     kin = mx.kinematics(y0, P)
     d, Rp, R = kin["d"], kin["Rp"], kin["R"]
     G = np.concatenate([d, np.cross(Rp, d)], axis=1)  # phidot_i = G_i . [v, w_world]
-    Wi = np.zeros((6, 6))  # the inverse of the kinetic-energy metric of [v, w_world]: 1/m, R I^-1 R^T
-    Wi[:3, :3] = np.eye(3) / scene.mass
-    Wi[3:, 3:] = R @ np.linalg.inv(np.asarray(scene.inertia, float)) @ R.T
-    S = G @ Wi @ G.T
-    vel = vel - Wi @ G.T @ np.linalg.lstsq(S, G @ vel, rcond=None)[0]
+    vel = tangent_to_wires(scene, R, G, vel)
     y0 = y0.copy()
     y0[7:10] = vel[:3]
     y0[10:13] = R.T @ vel[3:]  # body axes
@@ -123,3 +119,20 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
     if beyond is not None:
         raise beyond
     return sp
+
+
+def tangent_to_wires(scene: Scene, R: np.ndarray, G: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """The vector closest to ``u`` (6,: a CoM velocity or displacement, m/s
+    or m, and an angular velocity or small rotation, rad/s or rad, both world
+    frame) in the body's kinetic-energy metric (mass ``scene.mass``, inertia
+    ``R I R^T``; ``R`` the attitude body -> world) that changes no wire's
+    length to first order: ``G u' = 0`` with ``G`` (n, 6) the wires'
+    constraint Jacobian ``[d_i, (R p_i) x d_i]`` at the pose
+    (:func:`bifilar.analysis.equilibrium.constraint_jacobian`).  Used for a
+    release's second-mode velocities (:func:`multi_mode_state`) and the
+    symmetric-start check's offset (:func:`bifilar.analysis.symmetry_check.offset_start`)."""
+    Wi = np.zeros((6, 6))  # the inverse of the kinetic-energy metric of [v, w_world]: 1/m, R I^-1 R^T
+    Wi[:3, :3] = np.eye(3) / scene.mass
+    Wi[3:, 3:] = R @ np.linalg.inv(np.asarray(scene.inertia, float)) @ R.T
+    S = G @ Wi @ G.T
+    return u - Wi @ G.T @ np.linalg.lstsq(S, G @ u, rcond=None)[0]

@@ -389,6 +389,7 @@ def offset_start(scene: Scene, y0: np.ndarray, basis: np.ndarray, offset: float 
     ``offset`` of the longest wire (m) or ``offset`` rad.  The wires' lengths
     are then kept to ~offset^2 (1e-24 of a wire)."""
     from .equilibrium import constraint_jacobian
+    from .start_states import tangent_to_wires
 
     rng = np.random.default_rng(seed)
     d = basis @ rng.standard_normal(basis.shape[1])
@@ -399,11 +400,7 @@ def offset_start(scene: Scene, y0: np.ndarray, basis: np.ndarray, offset: float 
     delta = np.r_[d[0:3] * Lmax, dth]
     R = mx.quat_to_matrix(q)
     _, _, G = constraint_jacobian(scene, com, R)
-    Minv = np.zeros((6, 6))
-    Minv[:3, :3] = np.eye(3) / scene.mass
-    Minv[3:, 3:] = R @ np.linalg.inv(np.asarray(scene.inertia, float)) @ R.T
-    S = G @ Minv @ G.T
-    delta = delta - Minv @ G.T @ np.linalg.lstsq(S, G @ delta, rcond=None)[0]
+    delta = tangent_to_wires(scene, R, G, delta)
     size = max(float(np.max(np.abs(delta[:3]))) / Lmax, float(np.max(np.abs(delta[3:]))))
     if not size > 0:
         return y0.copy()
