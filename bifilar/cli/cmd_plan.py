@@ -32,7 +32,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     from ..config import read_yaml, scene_from_dict
     from ..errors import InputError
     from ..studies.plan import plan as run_plan
-    from ..studies.shorthands import check_param, parse_bounds
+    from ..studies.shorthands import check_param, overlap_warnings, parse_bounds
 
     check_workers(workers)
     cfg = read_yaml(config)
@@ -42,6 +42,9 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     bounds = [parse_bounds(p) for p in params]
     for n, lo, hi in bounds:
         check_param(cfg, n, (lo, hi))
+    pre = overlap_warnings([b[0] for b in bounds])
+    for w in pre:
+        click.echo(f"warning: {w}", err=True)
     from ..studies.timing import check_reaction, parse_sensor
 
     reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
@@ -63,7 +66,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
                                 hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
     joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
-    doc["warnings"] = point_warnings(cfg, config, res.best, "the planned point", cons, joint) + mh_warnings
+    doc["warnings"] = pre + point_warnings(cfg, config, res.best, "the planned point", cons, joint) + mh_warnings
     from ..studies.sweep import stretching_summary
 
     if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow

@@ -312,7 +312,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..config import read_yaml, scene_from_dict
     from ..errors import InputError
     from ..studies import sweep as sw
-    from ..studies.shorthands import check_param, parse_param
+    from ..studies.shorthands import check_param, overlap_warnings, parse_param
     from ..studies.timing import check_reaction, parse_sensor
 
     check_workers(workers)
@@ -326,6 +326,9 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     for s in specs:
         check_param(cfg, s.name, s.values)
     grid = sw.build_grid(specs, zip_)
+    pre = overlap_warnings([s.name for s in specs])
+    for w in pre:
+        click.echo(f"warning: {w}", err=True)
     reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
     settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
                                          lengths_available, min_separation, no_tensions, sim_periods,
@@ -367,7 +370,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
     remedies_for(rec, points, cfg, config, settings)
-    warnings = []
+    warnings = list(pre)
     if (w := sw.stretching_summary(points)) is not None:
         click.echo(f"warning: {w}", err=True)
         warnings.append(w)

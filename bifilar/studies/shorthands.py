@@ -217,6 +217,42 @@ def set_path(cfg: dict, path: str, value: float) -> None:
     node[key] = float(value)
 
 
+#: shorthand -> (the config list it edits after every dotted path, the coordinates of each item it moves
+#: (None: the item itself), how)
+_MOVES = {"length": ("rig.lengths", None, "every wire shifted by the same amount"),
+          "length_offset": ("rig.lengths", None, "the lengths replaced about their mean"),
+          "spacing": ("rig.attachments", (0, 1), "scaled about their centroid"),
+          "ceiling_spacing": ("rig.anchors", (0, 1), "scaled about their centroid"),
+          "height": ("rig.attachments", (2,), "every attachment raised by the same amount")}
+
+
+def overlap_warnings(names) -> list[str]:
+    """One line per swept dotted path that a shorthand swept with it moves
+    afterwards (:func:`apply_params` applies the shorthands after every
+    dotted path): ``rig.lengths.0`` with ``length`` (every wire shifted to
+    the mean) or ``length_offset`` (the lengths replaced), a horizontal
+    ``rig.attachments.I.0``/``.1`` with ``spacing`` (scaled about the
+    centroid), ``rig.attachments.I.2`` with ``height``, ``rig.anchors.I.0``/
+    ``.1`` with ``ceiling_spacing``.  Such a point's ``params`` value of the
+    path is the one before the shorthand, not the built rig's (audit17:
+    ``--param length=1:2:2 --param rig.lengths.0=1.2:1.4:2`` labelled a
+    point ``rig.lengths.0: 1.2`` whose wire 1 was 0.85 m); its ``lengths``
+    and ``rig`` give the built one."""
+    out = []
+    for n in names:
+        toks = n.split(".")
+        for s in names:
+            if s not in _MOVES or toks[:2] != _MOVES[s][0].split("."):
+                continue
+            _, coords, how = _MOVES[s]
+            if coords is not None and not (len(toks) == 4 and toks[3].isdigit() and int(toks[3]) in coords):
+                continue
+            out.append(f"--param: {n} is set before {s}, which then moves it ({how}): "
+                       f"a point's {n} is the value before that move, not the built rig's (read each point's "
+                       "lengths and rig, or sweep one of the two)")
+    return out
+
+
 def is_shorthand(name: str) -> bool:
     return name in SHORTHANDS
 
