@@ -113,6 +113,9 @@ class Secondary:
     #: period refers to, ``decay`` times it, :func:`swing_decay`); None: the same as ``amplitude``
     amplitude_start: float | None = None
     decay: float = 1.0  #: ``amplitude`` over ``amplitude_start`` (1: the record does not decay measurably)
+    #: (1/s, its std): the mode's own decay rate read off its tone (:mod:`.signal_swing_rate`), None where it is
+    #: taken as the timed mode's (with :data:`DECAY_SHARE`)
+    decay_rate: tuple | None = None
     #: runs of :func:`_check_joint_release` that failed (their sign combinations unchecked), out of ``joint_runs``
     joint_failed: int = 0
     joint_runs: int = 0
@@ -124,6 +127,8 @@ class Secondary:
         start = self.amplitude if self.amplitude_start is None else self.amplitude_start
         d = {"mode": self.label, "amplitude": self.amplitude, "amplitude_std": self.amplitude_std,
              "amplitude_start": start, "decay": self.decay,
+             "decay_rate": None if self.decay_rate is None else self.decay_rate[0],
+             "decay_rate_std": None if self.decay_rate is None else self.decay_rate[1],
              "tone_period": self.tone_period, "tone_ratio": self.tone_ratio, "tone_exponent": self.exponent,
              "period_shift": self.shift, "period_shift_std": self.shift_std}
         if self.joint is not None:
@@ -194,7 +199,8 @@ def record_tones(m) -> list[dict]:
             continue
         conv = (w0 / w) if rate else 1.0
         out.append({"period": 2 * math.pi / w, "period_std": float(md.get("std", 0.0) or 0.0),
-                    "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv})
+                    "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv,
+                    "sigma": float(md.get("sigma", 0.0) or 0.0), "sigma_std": float(md.get("sigma_std", 0.0) or 0.0)})
     if skipped:  # the tones the fit left in its residuals, where it spent a mode on the chirp
         out += residual_tones(m)
     return sorted(out, key=lambda d: -d["ratio"])
@@ -285,7 +291,8 @@ def residual_tones(m) -> list[dict]:
         conv = (w0 / q[0]) if rate else 1.0
         T = 2 * math.pi / q[0]
         out.append({"period": T, "period_std": T / q[0] * sd_w, "ratio": a / a0 * conv,
-                    "ratio_std": s_amp / a0 * conv, "source": "residual"})
+                    "ratio_std": s_amp / a0 * conv, "source": "residual", "sigma": float(q[1]),
+                    "sigma_std": math.sqrt(max(float(cov[1, 1]), 0.0)) * k_t})
     return sorted(out, key=lambda d: -d["ratio"])
 
 
@@ -450,6 +457,9 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
     best.amplitude_start = best.amplitude
     g, g_rel = swing_decay(m)
     if g != 1.0:  # the amplitude the record's period refers to (the model runs undamped at it)
+        from .signal_swing_rate import own_decay
+
+        g, g_rel, best.decay_rate = own_decay(m, tone, hm, best.index, k0, g, g_rel)
         rel = math.hypot(best.amplitude_std / abs(best.amplitude), g_rel)
         best.amplitude, best.decay = best.amplitude * g, g
         best.amplitude_std = rel * abs(best.amplitude)
@@ -605,28 +615,41 @@ def swing_decay(m) -> tuple[float, float]:
     is 0.812-0.816 / 0.692-0.697 of the start, this rule 0.811 / 0.690,
     the plain RMS of the envelope 0.805 / 0.671 (docs/design.md,
     "dampdecay, session 14")."""
-    from .signal_result import period_kernel
-
-    fit = getattr(m, "fit", None)
-    t = getattr(fit, "t_used", None)
-    if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
+    kern = decay_kernel(m)
+    if kern is None:
         return 1.0, 0.0
-    if not _decays(fit):
-        return 1.0, 0.0
+    fit = m.fit
     zeta = float(fit.damping_ratio)
     z_std = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
-    t = np.asarray(t, float)
-    env = np.abs(np.asarray(fit.envelope(t), float))
-    if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
-        return 1.0, 0.0
-    u2 = (env / env[0]) ** 2
-    K = period_kernel(t, u2)
+    t, u2, K = kern
     sk, sku = float(np.sum(K)), float(np.sum(K * u2))
     if not (sk > 0 and sku > 0):
         return 1.0, 0.0
     g = math.sqrt(sku / sk)
     dlng = float(np.sum(K * u2 * 0.5 * np.log(u2))) / sku
     return g, abs(dlng) * math.hypot(DECAY_SHARE, z_std / zeta)
+
+
+def decay_kernel(m):
+    """(t s, u2, K): measurement ``m``'s fit window's samples, its timed
+    mode's squared envelope over its start's and the weights with which its
+    fitted period averages (:func:`~bifilar.estimation.signal_result.period_kernel`);
+    None where the record does not decay measurably (:func:`_decays`) or
+    holds no fit with a positive envelope."""
+    from .signal_result import period_kernel
+
+    fit = getattr(m, "fit", None)
+    t = getattr(fit, "t_used", None)
+    if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
+        return None
+    if not _decays(fit):
+        return None
+    t = np.asarray(t, float)
+    env = np.abs(np.asarray(fit.envelope(t), float))
+    if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
+        return None
+    u2 = (env / env[0]) ** 2
+    return t, u2, period_kernel(t, u2)
 
 
 #: m: the default bound on a second mode a release starts unseen (``--uncertainty release``): the travel of the
@@ -764,7 +787,8 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
             m.secondary = sec
             at = f"at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}" if sec.decay == 1.0 else (
                 f"at {sec.amplitude_start:.3g} at the record's start and {sec.amplitude:.3g} +- {sec.amplitude_std:.2g} "
-                f"over it, the amplitude its period refers to (decaying as the {m.label} does)")
+                f"over it, the amplitude its period refers to (decaying " + (f"as the {m.label} does)" if sec.decay_rate is None
+                else f"at {sec.decay_rate[0]:.3g} +- {sec.decay_rate[1]:.2g} 1/s, its tone's)"))
             notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, {at}; the nonlinear model is released "
