@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import BifilarError
+from .signal_swing_rate import DECAY_SHARE, decay_kernel, swing_decay  # noqa: F401  (their home since session 17)
 
 #: a record's other oscillation counts when its amplitude exceeds this many of its std
 TONE_Z = 5.0
@@ -74,17 +75,6 @@ CALIBRATION_SHARE = 0.1
 #: :data:`TONE_Z` of its std) is the model's own, no sign of a second mode: the damped trifilar's swings at
 #: 0.48 Hz, 0.16 % of its torsion (tests/test_chirp_coupled_swing.py), were taken for a 0.35 mm swing-x
 EXPLAINED_SHARE = 0.3
-#: the relative std of a found second mode's decay rate, taken as the timed mode's (the record's envelope): a
-#: stated share, not a measurement.  The record cannot tell it: the quadcopter's tones decay as the swing and
-#: the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
-#: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
-#: (docs/design.md, "dampdecay, session 14").  What it covers, measured (the quadcopter, torsion Q 100, 30
-#: cycles): at 0.5 a swing decaying between half and three times the timed mode's rate (|z| <= 1.92), but at a
-#: third of it 14 of 20 inside (z -2.21..-1.47); at 1.0 every rate measured, a third to three times, inside
-#: (20 of 20 at a third), the Izz std of a damped record with a found swing 1.5-1.6x wider (docs/design.md,
-#: "damprate, session 16"; lead, session 16: a swing decaying three times slower than the torsion is a real
-#: rig's, a torsion damped by the body's air drag, so the wider share)
-DECAY_SHARE = 1.0
 #: a record's envelope decays measurably (and a found second mode is taken to decay with it) where its damping
 #: ratio exceeds this many of its std (the amplitude law's criterion, :mod:`.signal_law`)
 DECAY_Z = 3.0
@@ -586,70 +576,6 @@ def joint_reading_std(m) -> float:
     jr.shifts = tuple(float(g2 * sc ** 2 * at_bound) for sc in (jr.scale, 1.0))
     jr.shift_std = float(max(abs(sec.shift - x) for x in jr.shifts))
     return jr.shift_std
-
-
-def swing_decay(m) -> tuple[float, float]:
-    """(g, s): a second mode's amplitude that measurement ``m``'s fitted
-    period refers to over its amplitude at the fit window's start
-    (unit-free, <= 1 for a decaying record), and the relative std of that
-    amplitude from ``g``'s uncertainty.  (1, 0) where the record does not
-    decay measurably (damping ratio within :data:`DECAY_Z` of its std) or
-    holds no fit with an envelope.
-
-    The second mode is taken to decay as the timed mode does (its envelope
-    ``u = env / env(t0)`` to the power ``lam``, ``lam`` = 1 with the
-    relative std :data:`DECAY_SHARE` and the record's damping ratio's),
-    and its period shift to go as its amplitude squared, averaged over the
-    window as the fitted frequency averages the instantaneous one
-    (:func:`~bifilar.estimation.signal_result.period_kernel`, weights from
-    the timed mode's envelope): ``g = sqrt(sum K u^(2 lam) / sum K)``, at
-    ``lam`` = 1 the timed mode's own ``decay``; ``d ln g / d lam = sum K
-    u^2 ln u / sum K u^2``.
-
-    Why: the model runs undamped; released with the swing at its start
-    amplitude it put the swing's whole start shift in a record whose swing
-    decays with it (the quadcopter, torsion 0.118 rad and swing-y 3 cm at
-    Q 200 / 100 over 30 cycles: Izz z +0.6..+1.3 / +1.2..+2.2).  Measured
-    on those records (the fitted period with the swing less without it,
-    against the undamped model's shift ~ a^2): the amplitude it refers to
-    is 0.812-0.816 / 0.692-0.697 of the start, this rule 0.811 / 0.690,
-    the plain RMS of the envelope 0.805 / 0.671 (docs/design.md,
-    "dampdecay, session 14")."""
-    kern = decay_kernel(m)
-    if kern is None:
-        return 1.0, 0.0
-    fit = m.fit
-    zeta = float(fit.damping_ratio)
-    z_std = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
-    t, u2, K = kern
-    sk, sku = float(np.sum(K)), float(np.sum(K * u2))
-    if not (sk > 0 and sku > 0):
-        return 1.0, 0.0
-    g = math.sqrt(sku / sk)
-    dlng = float(np.sum(K * u2 * 0.5 * np.log(u2))) / sku
-    return g, abs(dlng) * math.hypot(DECAY_SHARE, z_std / zeta)
-
-
-def decay_kernel(m):
-    """(t s, u2, K): measurement ``m``'s fit window's samples, its timed
-    mode's squared envelope over its start's and the weights with which its
-    fitted period averages (:func:`~bifilar.estimation.signal_result.period_kernel`);
-    None where the record does not decay measurably (:func:`_decays`) or
-    holds no fit with a positive envelope."""
-    from .signal_result import period_kernel
-
-    fit = getattr(m, "fit", None)
-    t = getattr(fit, "t_used", None)
-    if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
-        return None
-    if not _decays(fit):
-        return None
-    t = np.asarray(t, float)
-    env = np.abs(np.asarray(fit.envelope(t), float))
-    if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
-        return None
-    u2 = (env / env[0]) ** 2
-    return t, u2, period_kernel(t, u2)
 
 
 #: m: the default bound on a second mode a release starts unseen (``--uncertainty release``): the travel of the

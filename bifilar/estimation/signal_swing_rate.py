@@ -5,7 +5,7 @@ Why: a damped record's second mode (a swing found from its tone,
 :func:`~bifilar.estimation.signal_swing.infer_secondary`) is run in the
 undamped model at the amplitude the record's period refers to, which
 depends on how fast the swing decays.  Taken as the timed mode's rate with
-a stated relative std (:data:`~bifilar.estimation.signal_swing.DECAY_SHARE`
+a stated relative std (:data:`DECAY_SHARE`
 = 1.0, wide enough for a swing decaying at a third to three times the
 torsion's rate), the Izz std of every damped record with a found swing was
 1.5-1.6x what the 0.5 share gave (docs/design.md, "damprate, session 16").
@@ -43,6 +43,18 @@ import math
 
 import numpy as np
 
+#: the relative std of a found second mode's decay rate where it is taken as the timed mode's (the record's envelope;
+#: where its tone does not give its own, :func:`own_decay`): a stated share, not a measurement.  The tone law alone
+#: cannot tell it (the tone's frequency says how it is made, :func:`tone_swing_rate`): the quadcopter's tones
+#: decay as the swing and the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
+#: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
+#: (docs/design.md, "dampdecay, session 14").  What it covers, measured (the quadcopter, torsion Q 100, 30
+#: cycles): at 0.5 a swing decaying between half and three times the timed mode's rate (|z| <= 1.92), but at a
+#: third of it 14 of 20 inside (z -2.21..-1.47); at 1.0 every rate measured, a third to three times, inside
+#: (20 of 20 at a third), the Izz std of a damped record with a found swing 1.5-1.6x wider (docs/design.md,
+#: "damprate, session 16"; lead, session 16: a swing decaying three times slower than the torsion is a real
+#: rig's, a torsion damped by the body's air drag, so the wider share)
+DECAY_SHARE = 1.0
 #: a tone's frequency is read as a combination of the model's linear frequencies within this share of it (the
 #: model's frequencies are at the prior and small amplitude: the quadcopter's tones lie within 0.3 % of theirs)
 COMBO_TOL = 0.02
@@ -163,13 +175,11 @@ def decay_at_rate(t, K, rate: float, std: float) -> tuple[float, float]:
 
 def own_decay(m, tone: dict, hm, j: int, k0: int, g: float, g_rel: float):
     """(g, g_rel, rate): the second mode ``j``'s decay share ``g`` and its
-    relative std (:func:`~bifilar.estimation.signal_swing.swing_decay`'s
+    relative std (:func:`swing_decay`'s
     meaning) from its own rate read off ``tone`` (:func:`tone_swing_rate`),
     with ``rate`` its (value, std) in 1/s; the given ``g``, ``g_rel`` (the
     timed mode's rate with the stated share) and None where the tone cannot
     say or its rate is the less certain (its ``g_rel`` the larger)."""
-    from .signal_swing import decay_kernel
-
     rate = tone_swing_rate(m, tone, hm, j, k0)
     kern = decay_kernel(m)
     if rate is None or kern is None:
@@ -178,3 +188,69 @@ def own_decay(m, tone: dict, hm, j: int, k0: int, g: float, g_rel: float):
     if not (math.isfinite(rel2) and rel2 < g_rel and g2 > 0):
         return g, g_rel, None
     return g2, rel2, rate
+
+
+def swing_decay(m) -> tuple[float, float]:
+    """(g, s): a second mode's amplitude that measurement ``m``'s fitted
+    period refers to over its amplitude at the fit window's start
+    (unit-free, <= 1 for a decaying record), and the relative std of that
+    amplitude from ``g``'s uncertainty.  (1, 0) where the record does not
+    decay measurably (damping ratio within :data:`DECAY_Z` of its std) or
+    holds no fit with an envelope.
+
+    The second mode is taken to decay as the timed mode does (its envelope
+    ``u = env / env(t0)`` to the power ``lam``, ``lam`` = 1 with the
+    relative std :data:`DECAY_SHARE` and the record's damping ratio's),
+    and its period shift to go as its amplitude squared, averaged over the
+    window as the fitted frequency averages the instantaneous one
+    (:func:`~bifilar.estimation.signal_result.period_kernel`, weights from
+    the timed mode's envelope): ``g = sqrt(sum K u^(2 lam) / sum K)``, at
+    ``lam`` = 1 the timed mode's own ``decay``; ``d ln g / d lam = sum K
+    u^2 ln u / sum K u^2``.
+
+    Why: the model runs undamped; released with the swing at its start
+    amplitude it put the swing's whole start shift in a record whose swing
+    decays with it (the quadcopter, torsion 0.118 rad and swing-y 3 cm at
+    Q 200 / 100 over 30 cycles: Izz z +0.6..+1.3 / +1.2..+2.2).  Measured
+    on those records (the fitted period with the swing less without it,
+    against the undamped model's shift ~ a^2): the amplitude it refers to
+    is 0.812-0.816 / 0.692-0.697 of the start, this rule 0.811 / 0.690,
+    the plain RMS of the envelope 0.805 / 0.671 (docs/design.md,
+    "dampdecay, session 14")."""
+    kern = decay_kernel(m)
+    if kern is None:
+        return 1.0, 0.0
+    fit = m.fit
+    zeta = float(fit.damping_ratio)
+    z_std = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
+    t, u2, K = kern
+    sk, sku = float(np.sum(K)), float(np.sum(K * u2))
+    if not (sk > 0 and sku > 0):
+        return 1.0, 0.0
+    g = math.sqrt(sku / sk)
+    dlng = float(np.sum(K * u2 * 0.5 * np.log(u2))) / sku
+    return g, abs(dlng) * math.hypot(DECAY_SHARE, z_std / zeta)
+
+
+def decay_kernel(m):
+    """(t s, u2, K): measurement ``m``'s fit window's samples, its timed
+    mode's squared envelope over its start's and the weights with which its
+    fitted period averages (:func:`~bifilar.estimation.signal_result.period_kernel`);
+    None where the record does not decay measurably
+    (:func:`~bifilar.estimation.signal_swing._decays`) or
+    holds no fit with a positive envelope."""
+    from .signal_result import period_kernel
+    from .signal_swing import _decays
+
+    fit = getattr(m, "fit", None)
+    t = getattr(fit, "t_used", None)
+    if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
+        return None
+    if not _decays(fit):
+        return None
+    t = np.asarray(t, float)
+    env = np.abs(np.asarray(fit.envelope(t), float))
+    if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
+        return None
+    u2 = (env / env[0]) ** 2
+    return t, u2, period_kernel(t, u2)
