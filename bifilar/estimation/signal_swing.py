@@ -713,8 +713,9 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
             m.secondary = sec
             at = f"at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}" if sec.decay == 1.0 else (
                 f"at {sec.amplitude_start:.3g} at the record's start and {sec.amplitude:.3g} +- {sec.amplitude_std:.2g} "
-                f"over it, the amplitude its period refers to (decaying " + (f"as the {m.label} does)" if sec.decay_rate is None
-                else f"at {sec.decay_rate[0]:.3g} +- {sec.decay_rate[1]:.2g} 1/s, its tone's)"))
+                f"over it, the amplitude its period refers to (decaying "
+                + (f"as the {m.label} does)" if sec.decay_rate is None
+                   else f"at {sec.decay_rate[0]:.3g} +- {sec.decay_rate[1]:.2g} 1/s, its tone's)"))
             notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, {at}; the nonlinear model is released "

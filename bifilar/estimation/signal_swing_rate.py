@@ -46,8 +46,8 @@ import numpy as np
 #: the relative std of a found second mode's decay rate where it is taken as the timed mode's (the record's envelope;
 #: where its tone does not give its own, :func:`own_decay`): a stated share, not a measurement.  The tone law alone
 #: cannot tell it (the tone's frequency says how it is made, :func:`tone_swing_rate`): the quadcopter's tones
-#: decay as the swing and the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
-#: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
+#: decay as the swing and the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over
+#: the torsion's, the 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
 #: (docs/design.md, "dampdecay, session 14").  What it covers, measured (the quadcopter, torsion Q 100, 30
 #: cycles): at 0.5 a swing decaying between half and three times the timed mode's rate (|z| <= 1.92), but at a
 #: third of it 14 of 20 inside (z -2.21..-1.47); at 1.0 every rate measured, a third to three times, inside
@@ -85,8 +85,8 @@ def tone_swing_rate(m, tone: dict, hm, j: int, k0: int) -> tuple[float, float] |
     ``tone`` (:func:`~bifilar.estimation.signal_swing.record_tones`' dict,
     with its fitted ``sigma`` and ``sigma_std``), the timed mode being
     ``k0``; None where the record's tone cannot say (module docstring): a
-    fit without the timed mode's rate, a frequency no combination makes.  The rate is floored at 0 (a swing does not grow;
-    its std stays)."""
+    fit without the timed mode's rate, a frequency no combination makes.
+    The rate is floored at 0 (a swing does not grow; its std stays)."""
     fit = getattr(m, "fit", None)
     modes = getattr(fit, "modes", None) or []
     if not modes or "sigma" not in tone:
