@@ -63,7 +63,8 @@ COMBO_TOL = 0.02
 CHIRP_DEGREE = 3
 #: the relative std of a swing's rate read off its tone, beyond the fits' own: the other factor of a pitch x swing
 #: tone decaying otherwise than the timed mode, the multi-mode fit's neighbouring oscillations (measured on the
-#: quadcopter's multi-mode fits, docs/design.md, "swingrate, session 17": truth 3x the torsion's rate read 2.9-4.9x)
+#: quadcopter's fits, docs/design.md, "swingrate, session 17": truth 3x the torsion's rate read 2.5-5.2x, one draw
+#: whose start holds a transient 1.2x; 17 of 18 within 2 of their std)
 RATE_SHARE = 0.3
 
 
@@ -195,7 +196,8 @@ def swing_decay(m) -> tuple[float, float]:
     period refers to over its amplitude at the fit window's start
     (unit-free, <= 1 for a decaying record), and the relative std of that
     amplitude from ``g``'s uncertainty.  (1, 0) where the record does not
-    decay measurably (damping ratio within :data:`DECAY_Z` of its std) or
+    decay measurably (damping ratio within
+    :data:`~bifilar.estimation.signal_swing.DECAY_Z` of its std) or
     holds no fit with an envelope.
 
     The second mode is taken to decay as the timed mode does (its envelope
