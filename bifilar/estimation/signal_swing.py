@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import BifilarError
+from .signal_swing_rate import DECAY_SHARE, decay_kernel, swing_decay  # noqa: F401  (their home since session 17)
 
 #: a record's other oscillation counts when its amplitude exceeds this many of its std
 TONE_Z = 5.0
@@ -74,17 +75,6 @@ CALIBRATION_SHARE = 0.1
 #: :data:`TONE_Z` of its std) is the model's own, no sign of a second mode: the damped trifilar's swings at
 #: 0.48 Hz, 0.16 % of its torsion (tests/test_chirp_coupled_swing.py), were taken for a 0.35 mm swing-x
 EXPLAINED_SHARE = 0.3
-#: the relative std of a found second mode's decay rate, taken as the timed mode's (the record's envelope): a
-#: stated share, not a measurement.  The record cannot tell it: the quadcopter's tones decay as the swing and
-#: the motion that makes them do (its 2.57 s tone, pitch x swing, at the swing's rate over the torsion's, the
-#: 2.40 s one, swing^2 x torsion, at twice it), which the undamped model's tone law does not say
-#: (docs/design.md, "dampdecay, session 14").  What it covers, measured (the quadcopter, torsion Q 100, 30
-#: cycles): at 0.5 a swing decaying between half and three times the timed mode's rate (|z| <= 1.92), but at a
-#: third of it 14 of 20 inside (z -2.21..-1.47); at 1.0 every rate measured, a third to three times, inside
-#: (20 of 20 at a third), the Izz std of a damped record with a found swing 1.5-1.6x wider (docs/design.md,
-#: "damprate, session 16"; lead, session 16: a swing decaying three times slower than the torsion is a real
-#: rig's, a torsion damped by the body's air drag, so the wider share)
-DECAY_SHARE = 1.0
 #: a record's envelope decays measurably (and a found second mode is taken to decay with it) where its damping
 #: ratio exceeds this many of its std (the amplitude law's criterion, :mod:`.signal_law`)
 DECAY_Z = 3.0
@@ -113,6 +103,9 @@ class Secondary:
     #: period refers to, ``decay`` times it, :func:`swing_decay`); None: the same as ``amplitude``
     amplitude_start: float | None = None
     decay: float = 1.0  #: ``amplitude`` over ``amplitude_start`` (1: the record does not decay measurably)
+    #: (1/s, its std): the mode's own decay rate read off its tone (:mod:`.signal_swing_rate`), None where it is
+    #: taken as the timed mode's (with :data:`DECAY_SHARE`)
+    decay_rate: tuple | None = None
     #: runs of :func:`_check_joint_release` that failed (their sign combinations unchecked), out of ``joint_runs``
     joint_failed: int = 0
     joint_runs: int = 0
@@ -124,6 +117,8 @@ class Secondary:
         start = self.amplitude if self.amplitude_start is None else self.amplitude_start
         d = {"mode": self.label, "amplitude": self.amplitude, "amplitude_std": self.amplitude_std,
              "amplitude_start": start, "decay": self.decay,
+             "decay_rate": None if self.decay_rate is None else self.decay_rate[0],
+             "decay_rate_std": None if self.decay_rate is None else self.decay_rate[1],
              "tone_period": self.tone_period, "tone_ratio": self.tone_ratio, "tone_exponent": self.exponent,
              "period_shift": self.shift, "period_shift_std": self.shift_std}
         if self.joint is not None:
@@ -194,7 +189,8 @@ def record_tones(m) -> list[dict]:
             continue
         conv = (w0 / w) if rate else 1.0
         out.append({"period": 2 * math.pi / w, "period_std": float(md.get("std", 0.0) or 0.0),
-                    "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv})
+                    "ratio": a / a0 * conv, "ratio_std": s_amp / a0 * conv,
+                    "sigma": float(md.get("sigma", 0.0) or 0.0), "sigma_std": float(md.get("sigma_std", 0.0) or 0.0)})
     if skipped:  # the tones the fit left in its residuals, where it spent a mode on the chirp
         out += residual_tones(m)
     return sorted(out, key=lambda d: -d["ratio"])
@@ -285,7 +281,8 @@ def residual_tones(m) -> list[dict]:
         conv = (w0 / q[0]) if rate else 1.0
         T = 2 * math.pi / q[0]
         out.append({"period": T, "period_std": T / q[0] * sd_w, "ratio": a / a0 * conv,
-                    "ratio_std": s_amp / a0 * conv, "source": "residual"})
+                    "ratio_std": s_amp / a0 * conv, "source": "residual", "sigma": float(q[1]),
+                    "sigma_std": math.sqrt(max(float(cov[1, 1]), 0.0)) * k_t})
     return sorted(out, key=lambda d: -d["ratio"])
 
 
@@ -450,6 +447,9 @@ def infer_secondary(pb, k: int, p, rtol: float = 1e-10):
     best.amplitude_start = best.amplitude
     g, g_rel = swing_decay(m)
     if g != 1.0:  # the amplitude the record's period refers to (the model runs undamped at it)
+        from .signal_swing_rate import own_decay
+
+        g, g_rel, best.decay_rate = own_decay(m, tone, hm, best.index, k0, g, g_rel)
         rel = math.hypot(best.amplitude_std / abs(best.amplitude), g_rel)
         best.amplitude, best.decay = best.amplitude * g, g
         best.amplitude_std = rel * abs(best.amplitude)
@@ -576,57 +576,6 @@ def joint_reading_std(m) -> float:
     jr.shifts = tuple(float(g2 * sc ** 2 * at_bound) for sc in (jr.scale, 1.0))
     jr.shift_std = float(max(abs(sec.shift - x) for x in jr.shifts))
     return jr.shift_std
-
-
-def swing_decay(m) -> tuple[float, float]:
-    """(g, s): a second mode's amplitude that measurement ``m``'s fitted
-    period refers to over its amplitude at the fit window's start
-    (unit-free, <= 1 for a decaying record), and the relative std of that
-    amplitude from ``g``'s uncertainty.  (1, 0) where the record does not
-    decay measurably (damping ratio within :data:`DECAY_Z` of its std) or
-    holds no fit with an envelope.
-
-    The second mode is taken to decay as the timed mode does (its envelope
-    ``u = env / env(t0)`` to the power ``lam``, ``lam`` = 1 with the
-    relative std :data:`DECAY_SHARE` and the record's damping ratio's),
-    and its period shift to go as its amplitude squared, averaged over the
-    window as the fitted frequency averages the instantaneous one
-    (:func:`~bifilar.estimation.signal_result.period_kernel`, weights from
-    the timed mode's envelope): ``g = sqrt(sum K u^(2 lam) / sum K)``, at
-    ``lam`` = 1 the timed mode's own ``decay``; ``d ln g / d lam = sum K
-    u^2 ln u / sum K u^2``.
-
-    Why: the model runs undamped; released with the swing at its start
-    amplitude it put the swing's whole start shift in a record whose swing
-    decays with it (the quadcopter, torsion 0.118 rad and swing-y 3 cm at
-    Q 200 / 100 over 30 cycles: Izz z +0.6..+1.3 / +1.2..+2.2).  Measured
-    on those records (the fitted period with the swing less without it,
-    against the undamped model's shift ~ a^2): the amplitude it refers to
-    is 0.812-0.816 / 0.692-0.697 of the start, this rule 0.811 / 0.690,
-    the plain RMS of the envelope 0.805 / 0.671 (docs/design.md,
-    "dampdecay, session 14")."""
-    from .signal_result import period_kernel
-
-    fit = getattr(m, "fit", None)
-    t = getattr(fit, "t_used", None)
-    if fit is None or t is None or len(t) < 3 or not getattr(fit, "modes", None):
-        return 1.0, 0.0
-    if not _decays(fit):
-        return 1.0, 0.0
-    zeta = float(fit.damping_ratio)
-    z_std = float(fit.modes[0].get("damping_ratio_std", 0.0) or 0.0)
-    t = np.asarray(t, float)
-    env = np.abs(np.asarray(fit.envelope(t), float))
-    if not (np.all(np.isfinite(env)) and env[0] > 0 and np.all(env > 0)):
-        return 1.0, 0.0
-    u2 = (env / env[0]) ** 2
-    K = period_kernel(t, u2)
-    sk, sku = float(np.sum(K)), float(np.sum(K * u2))
-    if not (sk > 0 and sku > 0):
-        return 1.0, 0.0
-    g = math.sqrt(sku / sk)
-    dlng = float(np.sum(K * u2 * 0.5 * np.log(u2))) / sku
-    return g, abs(dlng) * math.hypot(DECAY_SHARE, z_std / zeta)
 
 
 #: m: the default bound on a second mode a release starts unseen (``--uncertainty release``): the travel of the
@@ -764,7 +713,9 @@ def attach_second_modes(pb, p, rtol: float, notes: list) -> list:
             m.secondary = sec
             at = f"at {sec.amplitude:.3g} +- {sec.amplitude_std:.2g}" if sec.decay == 1.0 else (
                 f"at {sec.amplitude_start:.3g} at the record's start and {sec.amplitude:.3g} +- {sec.amplitude_std:.2g} "
-                f"over it, the amplitude its period refers to (decaying as the {m.label} does)")
+                f"over it, the amplitude its period refers to (decaying "
+                + (f"as the {m.label} does)" if sec.decay_rate is None
+                   else f"at {sec.decay_rate[0]:.3g} +- {sec.decay_rate[1]:.2g} 1/s, its tone's)"))
             notes.append(f"mode '{m.label}': the record's oscillation at {sec.tone_period:.4g} s "
                          f"({sec.tone_ratio:.2g} of its amplitude) says its release also started the {sec.label} "
                          f"mode, {at}; the nonlinear model is released "
