@@ -139,6 +139,13 @@ def dropped_frames_warning(t, y, fit, time_source: str | None, field: str = "SIG
     times are the frames' own)."""
     if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
         return None
+    w = _flat_level_warning(t, y, fit, field)
+    return None if w is None else w[0]
+
+
+def _flat_level_warning(t, y, fit, field: str) -> tuple[str, float] | None:
+    """(the warning, the period between the steps, s) of
+    :func:`dropped_frames_warning`, or None."""
     try:
         st = phase_steps(t, y, float(fit.frequency))
     except (ValueError, FloatingPointError):
@@ -160,4 +167,131 @@ def dropped_frames_warning(t, y, fit, time_source: str | None, field: str = "SIG
             f"dropped frames (an irregular time base), which shorten the time base and the period by their share, "
             f"beyond the stated std (here about {short:.2%}: between the steps the record runs at a period of about "
             f"{T_flat:.5g} s, the fit {float(fit.period):.5g} s); the samples cannot give the missing times: "
-            f"give the time column")
+            f"give the time column"), T_flat
+
+
+def widen_std(fit, extra: float) -> None:
+    """Add ``extra`` (s) to the fit's headline std in quadrature, as the
+    ``time_base`` term of its ``uncertainty`` (the degrees of freedom
+    recombined: the term counts as normal)."""
+    import math
+
+    old = float(fit.std)
+    fit.std = math.hypot(old, float(extra))
+    u = fit.uncertainty
+    u["time_base"] = float(extra)
+    u["total"] = fit.std
+    if u.get("dof") is not None:
+        from .uncertainty import combined_dof
+
+        nu = combined_dof([(old, float(u["dof"])), (float(extra), math.inf)])
+        u["dof"] = nu if math.isfinite(nu) else None
+    if float(extra) > old:
+        u["dominant"] = "time_base"
+    if fit.modes:
+        fit.modes[0]["std_total"] = fit.std
+
+
+def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIGNAL") -> dict | None:
+    """The answer of a record without its time column whose camera dropped
+    frames (design.md "dropfix, session 17").
+
+    ``refit(t_new)`` fits the same samples on another time base (s) with
+    the caller's options and returns a PeriodFit.  Returns None for a
+    record with its time column, a crossings-only fit, or a record with no
+    sign of dropped frames; else a dict: ``t`` (s, the time base the answer
+    stands on), ``fit`` (the answer: its ``std`` holds the time base's own
+    term, ``uncertainty["time_base"]``), ``warning`` (one line),
+    ``time_base`` (JSON: ``method``, ``dropped_frames``,
+    ``nominal_period``, ``std_added``).
+
+    ``method`` is ``"recovered"`` where :func:`.signal_frames.recover_frames`
+    finds the frames' lattice and the refit on it explains the record
+    better (the drops put back; the term is
+    :func:`.signal_frames.correction_std`), ``"widened"`` where only the
+    phase steps are seen (:func:`phase_steps`): the fit on the nominal time
+    base stays the answer and the distance to the period between the steps
+    joins its std, so its interval reaches the truth.
+    """
+    if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
+        return None
+    from .signal_frames import MAX_RMS_RATIO, correction_std, recover_frames
+
+    t = np.asarray(t, float)
+    try:
+        rec = recover_frames(t, y, float(fit.frequency))
+    except (ValueError, FloatingPointError):
+        rec = None
+    if rec is not None and rec["resolved"]:
+        from .signal import SignalError
+
+        try:
+            fit2 = refit(rec["t"])
+        except SignalError:
+            fit2 = None
+        if fit2 is not None and fit2.model != "crossings" and fit2.residual_rms <= MAX_RMS_RATIO * fit.residual_rms:
+            W = int(round(1.0 / (fit2.frequency * float(np.median(np.diff(rec["t"]))))))
+            extra = correction_std(float(fit2.period), t.size, rec["dropped"], rec["edge"], W)
+            widen_std(fit2, extra)
+            short = 1.0 - float(fit.period) / float(fit2.period)
+            msg = (f"{field}: {rec['dropped']} dropped frames found and put back (the oscillation's phase on the "
+                   f"nominal time base steps forward by one frame's phase at each; in a record without a time "
+                   f"column the time base and the period are short by the drops' share, here {short:.2%}): the "
+                   f"period {float(fit2.period):.6g} s is fitted on the recovered time base (on the nominal one "
+                   f"{float(fit.period):.6g} s) and its std holds the recovery's own {extra:.2g} s; give the time "
+                   f"column to be sure")
+            return {"t": rec["t"], "fit": fit2, "warning": msg,
+                    "time_base": {"method": "recovered", "dropped_frames": rec["dropped"],
+                                  "nominal_period": float(fit.period), "std_added": extra}}
+    w = _flat_level_warning(t, y, fit, field)
+    if w is None:
+        _refuse_hidden_drops(t, y, fit, rec, field)
+        return None
+    msg, T_flat = w
+    extra = abs(T_flat - float(fit.period))
+    widen_std(fit, extra)
+    return {"t": t, "fit": fit, "warning": msg + f"; the period's std holds the {extra:.2g} s between the two",
+            "time_base": {"method": "widened", "dropped_frames": None, "nominal_period": float(fit.period),
+                          "std_added": extra, "period_between_steps": T_flat}}
+
+
+#: the refusal: a lattice this weak at best (the noise allows no more) hides
+#: one frame's step in each sample's phase (the KTH records, 240 Hz, allow
+#: 0.71-0.86 and show none: no drops there)
+HIDDEN_LATTICE = 0.5
+#: ... the fit leaves this much more than the record's white noise (dropped
+#: frames the fit cannot follow: 1.2-2.6 measured where they were not put
+#: back; a beat's two-mode fit 0.93-1.12) ...
+MIN_RESIDUAL_EXCESS = 1.2
+
+
+def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
+    """Exit 2 (InputError naming ``field``) for a record without its time
+    column that shows the phase steps of dropped frames (``MIN_STEPS``
+    forward or more, at most ``MAX_BACKWARD_SHARE`` as many back) where
+    neither the frames could be put back nor a drop-free stretch gives the
+    period between them: its noise hides a frame's step
+    (``lattice_expected`` below ``HIDDEN_LATTICE``) and the fit leaves
+    ``MIN_RESIDUAL_EXCESS`` times the white noise or more.  The period is
+    then short by the drops' unknown share (3 % dense drops: 2.6-4.0 %,
+    z -2.3 .. -146) and no std can hold it."""
+    if rec is None or not rec["lattice_expected"] < HIDDEN_LATTICE:
+        return
+    try:
+        st = phase_steps(t, y, float(fit.frequency))
+    except (ValueError, FloatingPointError):
+        return
+    if st is None:
+        return
+    nf, nb = len(st["forward"]), len(st["backward"])
+    sig_y = float(np.sqrt(np.mean(np.diff(np.asarray(y, float), 3) ** 2) / 20.0))
+    if nf < MIN_STEPS or nb > MAX_BACKWARD_SHARE * nf or not float(fit.residual_rms) >= MIN_RESIDUAL_EXCESS * sig_y:
+        return
+    from ..errors import InputError
+
+    raise InputError(field, f"the oscillation's phase steps forward by one frame's phase {nf} times and "
+                            f"{'back only ' + str(nb) + ' times' if nb else 'never back'}, and the fit leaves "
+                            f"{float(fit.residual_rms) / sig_y:.2g} x the record's noise: the mark of dropped frames "
+                            f"in a record without a time column, which shorten the period by their unknown share; "
+                            f"the noise hides each frame's step, so they cannot be put back: give the record's time "
+                            f"column in place of --sample-rate")
