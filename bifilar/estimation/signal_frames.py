@@ -95,21 +95,17 @@ def recover_frames(t, y, frequency: float) -> dict | None:
     from scipy.ndimage import median_filter
     from scipy.signal import hilbert
 
-    t = np.asarray(t, float)
-    y = np.asarray(y, float)
+    from .signal_timebase import detrended, uniform_cycles, white_noise
+
+    u = uniform_cycles(t, y, frequency, MIN_SAMPLES_PER_CYCLE, MAX_SAMPLES)
+    if u is None:
+        return None
+    t, y, dt, W = u
     n = y.size
-    if n < 2 or not (np.isfinite(frequency) and frequency > 0):
-        return None
-    dt = float(np.median(np.diff(t)))
-    W = int(round(1.0 / (frequency * dt)))
-    if W < MIN_SAMPLES_PER_CYCLE or n < 4 * W + 2 or n > MAX_SAMPLES:
-        return None
     # the one-cycle local mean removed (an offset or a drift), then the analytic signal, its first and
     # last half cycle dropped (the transform's edge)
-    c = np.concatenate([[0.0], np.cumsum(y)])
-    half = W // 2
-    k = np.arange(half, n - (W - half) + 1)
-    a = hilbert(y[k] - (c[k - half + W] - c[k - half]) / W)
+    k, yk = detrended(y, W)
+    a = hilbert(yk)
     e = max(W // 2, 4)
     a, jj = a[e:-e], k[e:-e]
     theta = np.unwrap(np.angle(a))
@@ -122,7 +118,7 @@ def recover_frames(t, y, frequency: float) -> dict | None:
     omega_fit = 2.0 * np.pi * frequency
     h = omega_fit * dt
     # white noise sigma_y (third differences: the oscillation's own is A h^3, small) over the local amplitude
-    sig_y = float(np.sqrt(np.mean(np.diff(y, 3) ** 2) / 20.0))
+    sig_y = white_noise(y)
     with np.errstate(divide="ignore", over="ignore"):
         r_pred = float(np.sum(wgt * np.exp(-2.0 * np.pi ** 2 * (sig_y / np.maximum(amp, 1e-300) / h) ** 2)))
     m = int(4 * (SEARCH_SPAN + SEARCH_ABOVE) * jj.size) + 50

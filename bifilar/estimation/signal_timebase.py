@@ -51,6 +51,39 @@ MAX_SAMPLES = 200_000
 MIN_SAMPLES_PER_CYCLE = 8
 
 
+def uniform_cycles(t, y, frequency: float, min_per_cycle: int, max_samples: int):
+    """``(t, y, dt, W)`` (arrays, s, samples a cycle at ``frequency`` Hz)
+    for a record of four cycles or more, ``min_per_cycle`` samples a cycle
+    or more and at most ``max_samples``; else None."""
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    n = t.size
+    if n < 2 or not (np.isfinite(frequency) and frequency > 0):
+        return None
+    dt = float(np.median(np.diff(t)))
+    W = int(round(1.0 / (frequency * dt)))
+    if W < min_per_cycle or n < 4 * W + 2 or n > max_samples:
+        return None
+    return t, y, dt, W
+
+
+def detrended(y, W: int):
+    """``(k, y[k] - m[k])``: the samples ``k`` where the mean ``m`` over
+    exactly one cycle of ``W`` samples centred on them exists, less that
+    mean (an offset or a drift many times the amplitude would leak into the
+    phase otherwise)."""
+    c = np.concatenate([[0.0], np.cumsum(y)])
+    half = W // 2
+    k = np.arange(half, y.size - (W - half) + 1)  # the mean over [k - half, k - half + W) is centred on k
+    return k, y[k] - (c[k - half + W] - c[k - half]) / W
+
+
+def white_noise(y) -> float:
+    """The white noise's std in ``y`` ([y]) from its third differences
+    (an oscillation sampled W times a cycle leaves ``A (2 pi / W)^3``)."""
+    return float(np.sqrt(np.mean(np.diff(np.asarray(y, float), 3) ** 2) / 20.0))
+
+
 def phase_steps(t, y, frequency: float) -> dict | None:
     """Steps of the phase of an oscillation at ``frequency`` (Hz) along a
     uniformly sampled record ``(t`` in s, ``y`` in any unit).
@@ -68,23 +101,16 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     the samples' own between drops, ``(omega - omega_fit) W dt``),
     ``samples_per_cycle`` (``W``).
     """
-    t = np.asarray(t, float)
-    y = np.asarray(y, float)
+    u = uniform_cycles(t, y, frequency, MIN_SAMPLES_PER_CYCLE, MAX_SAMPLES)
+    if u is None:
+        return None
+    t, y, dt, W = u
     n = t.size
-    if n < 2 or not (np.isfinite(frequency) and frequency > 0):
-        return None
-    dt = float(np.median(np.diff(t)))
-    W = int(round(1.0 / (frequency * dt)))
-    if W < MIN_SAMPLES_PER_CYCLE or n < 4 * W + 2 or n > MAX_SAMPLES:
-        return None
     h = 2.0 * np.pi * frequency * dt
-    # the local mean over exactly one cycle (an offset or a drift many times
-    # the amplitude would leak into the phase of a cycle's sum otherwise)
-    c = np.concatenate([[0.0], np.cumsum(y)])
     half = W // 2
-    k = np.arange(half, n - (W - half) + 1)  # the mean over [k - half, k - half + W) is centred on k
+    k, yk = detrended(y, W)
     ym = np.full(n, np.nan)
-    ym[k] = (c[k - half + W] - c[k - half]) / W
+    ym[k] = y[k] - yk
     z = (y - ym) * np.exp(-2j * np.pi * frequency * t)
     good = np.isfinite(z)
     z = np.where(good, z, 0.0)
@@ -98,7 +124,7 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     d = np.angle(right * np.conj(left))
     # the phase difference's noise where the record is faint: white noise sigma_y (from the third
     # differences: the oscillation's own is A h^3, small) on a cycle's sum of amplitude a W / 2
-    sig_y = float(np.sqrt(np.mean(np.diff(y, 3) ** 2) / 20.0))
+    sig_y = white_noise(y)
     amp = 2.0 * np.minimum(np.abs(left), np.abs(right)) / W
     with np.errstate(divide="ignore"):
         noise = np.where(amp > 0, 2.0 * sig_y / (amp * np.sqrt(W)), np.inf)
@@ -284,7 +310,7 @@ def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
     if st is None:
         return
     nf, nb = len(st["forward"]), len(st["backward"])
-    sig_y = float(np.sqrt(np.mean(np.diff(np.asarray(y, float), 3) ** 2) / 20.0))
+    sig_y = white_noise(y)
     if nf < MIN_STEPS or nb > MAX_BACKWARD_SHARE * nf or not float(fit.residual_rms) >= MIN_RESIDUAL_EXCESS * sig_y:
         return
     from ..errors import InputError
