@@ -49,7 +49,8 @@ SEARCH_ABOVE = 0.003
 MIN_LATTICE = 0.12
 #: ... and this share of what the record's noise allows (isolated drops:
 #: 0.5-0.95 of it, dense ones 0.31-0.5 (the analytic signal smears each
-#: step over a few samples); chirps 0.20-0.30, beats 0.18-0.45)
+#: step over a few samples); chirps 0.20-0.30, beats 0.18-0.45, the KTH
+#: records under 0.27)
 MIN_LATTICE_SHARE = 0.25
 #: the recovered count's curvature along the record, in standard errors of
 #: a Poisson staircase (drops at a constant rate: -2.5 .. +0.6 measured),

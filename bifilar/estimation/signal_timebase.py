@@ -7,9 +7,10 @@ fs`` later than that time base says: the oscillation's phase steps forward
 by ``h = 2 pi f dt`` at every drop (0.12 rad at 30 fps for a 1.7 s
 period), the time base is short by the drops' share and the fitted period
 with it (audit 16, row 2d: 1 % dropped, the period 1 % short, z down to
--32, 4 of 10 draws with no warning).  The samples alone cannot say where
-the drops were to better than about a cycle, so the time base cannot be
-recovered: the time column can.
+-32, 4 of 10 draws with no warning).  The phase differences here place a
+drop to about a cycle only; where the phase shows each frame's step,
+:mod:`.signal_frames` puts the frames back, and :func:`check_time_base`
+decides the answer (put back, the std widened, or refused).
 
 :func:`phase_steps` finds the staircase: the phase of the fitted frequency
 over one cycle of samples just after each sample ``j`` minus that just
@@ -283,11 +284,11 @@ def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIG
 
 #: the refusal: a lattice this weak at best (the noise allows no more) hides
 #: one frame's step in each sample's phase (the KTH records, 240 Hz, allow
-#: 0.71-0.86 and show none: no drops there)
+#: 0.71-0.90 and show none: no drops there)
 HIDDEN_LATTICE = 0.5
 #: ... the fit leaves this much more than the record's white noise (dropped
-#: frames the fit cannot follow: 1.2-2.6 measured where they were not put
-#: back; a beat's two-mode fit 0.93-1.12) ...
+#: frames the fit cannot follow: 1.2-3.8 measured where they were not put
+#: back, one at 1.18 missed; a beat's two-mode fit 0.93-1.12) ...
 MIN_RESIDUAL_EXCESS = 1.2
 
 
