@@ -88,17 +88,20 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     check_signal_scale(t, y, "SIGNAL")
     fit = fit_period(t, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"],
                      trim="auto" if trim else None)
+    from ..estimation.signal_timebase import check_time_base
+
+    tb = check_time_base(t, y, fit, meta.get("time_source"), lambda tn: fit_period(
+        tn, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"], trim="auto" if trim else None))
+    if tb:  # frames dropped from a record without its time column: put back, or the std widened
+        t, fit = tb["t"], tb["fit"]
+        meta["warnings"] = list(meta.get("warnings") or []) + [tb["warning"]]
+        meta["time_base"] = tb["time_base"]
     from ..estimation.period_specs import implausible_period
 
     slip = implausible_period(fit.period, None, "SIGNAL")
     if slip:  # e.g. a time column in ms read as s, or a wrong --sample-rate
         slip += f" (the time scale came from {meta.get('time_source')}: check its unit)"
         meta["warnings"] = list(meta.get("warnings") or []) + [slip]
-    from ..estimation.signal_timebase import dropped_frames_warning
-
-    tbw = dropped_frames_warning(t, y, fit, meta.get("time_source"))
-    if tbw:  # frames dropped from a record without its time column
-        meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
     if plot_p is not None:
         from pathlib import Path
 
@@ -106,7 +109,7 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
 
         plot_fit(plot_p, fit, t, y, title=Path(signal).name)
     sig = {k: meta.get(k) for k in ("path", "format", "decimal", "column", "columns", "time_source", "sample_rate",
-                                    "sample_rate_source", "n_samples", "n_dropped", "duration", "warnings")}
+                                    "sample_rate_source", "n_samples", "n_dropped", "duration", "time_base", "warnings")}
     sig["path"] = str(sig["path"]) if sig["path"] is not None else str(signal)
     if as_json:
         d = fit.to_dict()
@@ -131,8 +134,9 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
         quant = f", quantisation +{u['quantisation']:.2g}" if u.get("quantisation") else ""
         if u.get("noise_replaced_by_quantisation"):
             quant = f"; in their place quantisation {u['quantisation']:.2g} (re-quantised copies)"
+        tbase = f", time base +{u['time_base']:.2g}" if u.get("time_base") else ""
         tb.add_row("  std terms (s)", f"noise {u['noise']:.2g}, serial corr. +{u['serial_correlation']:.2g}{quant}, "
-                                      f"non-stationarity {u['nonstationarity']:.2g}")
+                                      f"non-stationarity {u['nonstationarity']:.2g}{tbase}")
         tb.add_row("  dominant term", u["dominant"].replace("_", " "))
     tb.add_row("frequency (Hz)", fmt(fit.frequency, 9))
     if fit.period_undamped is not None:

@@ -219,7 +219,7 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
     r = period_from_signal(path, fld=fld, **kw)
     fit = r["fit"]
     meta = {k: v for k, v in r["meta"].items() if k in ("path", "column", "n_samples", "sample_rate", "duration",
-                                                         "time_source", "warnings")}
+                                                         "time_source", "time_base", "warnings")}
     meta["path"] = str(meta.get("path", path))
     det = {"signal": meta, "fit": {"model": fit.model, "period": fit.period, "std": fit.std,
                                     "damping_ratio": fit.damping_ratio, "r_squared": fit.r_squared,

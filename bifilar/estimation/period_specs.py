@@ -397,11 +397,17 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
         fit = fit_period(t, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
     except SignalError as exc:
         raise InputError(f"{fld} ({exc.field})", exc.message) from None
-    from .signal_timebase import dropped_frames_warning
+    from .signal_timebase import check_time_base
 
-    tbw = dropped_frames_warning(t, y, fit, meta.get("time_source"), fld)
-    if tbw:  # frames dropped from a record without its time column
+    def refit(tn):
+        return fit_period(tn, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
+
+    tbc = check_time_base(t, y, fit, meta.get("time_source"), refit, fld)
+    tbw = None
+    if tbc:  # frames dropped from a record without its time column: put back, or the std widened
+        t, fit, tbw = tbc["t"], tbc["fit"], tbc["warning"]
         meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
+        meta["time_base"] = tbc["time_base"]
     Td = float(fit.period)
     zeta = float(fit.damping_ratio) if np.isfinite(fit.damping_ratio) else 0.0
     zstd = 0.0

@@ -7,9 +7,10 @@ fs`` later than that time base says: the oscillation's phase steps forward
 by ``h = 2 pi f dt`` at every drop (0.12 rad at 30 fps for a 1.7 s
 period), the time base is short by the drops' share and the fitted period
 with it (audit 16, row 2d: 1 % dropped, the period 1 % short, z down to
--32, 4 of 10 draws with no warning).  The samples alone cannot say where
-the drops were to better than about a cycle, so the time base cannot be
-recovered: the time column can.
+-32, 4 of 10 draws with no warning).  The phase differences here place a
+drop to about a cycle only; where the phase shows each frame's step,
+:mod:`.signal_frames` puts the frames back, and :func:`check_time_base`
+decides the answer (put back, the std widened, or refused).
 
 :func:`phase_steps` finds the staircase: the phase of the fitted frequency
 over one cycle of samples just after each sample ``j`` minus that just
@@ -51,6 +52,39 @@ MAX_SAMPLES = 200_000
 MIN_SAMPLES_PER_CYCLE = 8
 
 
+def uniform_cycles(t, y, frequency: float, min_per_cycle: int, max_samples: int):
+    """``(t, y, dt, W)`` (arrays, s, samples a cycle at ``frequency`` Hz)
+    for a record of four cycles or more, ``min_per_cycle`` samples a cycle
+    or more and at most ``max_samples``; else None."""
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    n = t.size
+    if n < 2 or not (np.isfinite(frequency) and frequency > 0):
+        return None
+    dt = float(np.median(np.diff(t)))
+    W = int(round(1.0 / (frequency * dt)))
+    if W < min_per_cycle or n < 4 * W + 2 or n > max_samples:
+        return None
+    return t, y, dt, W
+
+
+def detrended(y, W: int):
+    """``(k, y[k] - m[k])``: the samples ``k`` where the mean ``m`` over
+    exactly one cycle of ``W`` samples centred on them exists, less that
+    mean (an offset or a drift many times the amplitude would leak into the
+    phase otherwise)."""
+    c = np.concatenate([[0.0], np.cumsum(y)])
+    half = W // 2
+    k = np.arange(half, y.size - (W - half) + 1)  # the mean over [k - half, k - half + W) is centred on k
+    return k, y[k] - (c[k - half + W] - c[k - half]) / W
+
+
+def white_noise(y) -> float:
+    """The white noise's std in ``y`` ([y]) from its third differences
+    (an oscillation sampled W times a cycle leaves ``A (2 pi / W)^3``)."""
+    return float(np.sqrt(np.mean(np.diff(np.asarray(y, float), 3) ** 2) / 20.0))
+
+
 def phase_steps(t, y, frequency: float) -> dict | None:
     """Steps of the phase of an oscillation at ``frequency`` (Hz) along a
     uniformly sampled record ``(t`` in s, ``y`` in any unit).
@@ -68,23 +102,16 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     the samples' own between drops, ``(omega - omega_fit) W dt``),
     ``samples_per_cycle`` (``W``).
     """
-    t = np.asarray(t, float)
-    y = np.asarray(y, float)
+    u = uniform_cycles(t, y, frequency, MIN_SAMPLES_PER_CYCLE, MAX_SAMPLES)
+    if u is None:
+        return None
+    t, y, dt, W = u
     n = t.size
-    if n < 2 or not (np.isfinite(frequency) and frequency > 0):
-        return None
-    dt = float(np.median(np.diff(t)))
-    W = int(round(1.0 / (frequency * dt)))
-    if W < MIN_SAMPLES_PER_CYCLE or n < 4 * W + 2 or n > MAX_SAMPLES:
-        return None
     h = 2.0 * np.pi * frequency * dt
-    # the local mean over exactly one cycle (an offset or a drift many times
-    # the amplitude would leak into the phase of a cycle's sum otherwise)
-    c = np.concatenate([[0.0], np.cumsum(y)])
     half = W // 2
-    k = np.arange(half, n - (W - half) + 1)  # the mean over [k - half, k - half + W) is centred on k
+    k, yk = detrended(y, W)
     ym = np.full(n, np.nan)
-    ym[k] = (c[k - half + W] - c[k - half]) / W
+    ym[k] = y[k] - yk
     z = (y - ym) * np.exp(-2j * np.pi * frequency * t)
     good = np.isfinite(z)
     z = np.where(good, z, 0.0)
@@ -98,7 +125,7 @@ def phase_steps(t, y, frequency: float) -> dict | None:
     d = np.angle(right * np.conj(left))
     # the phase difference's noise where the record is faint: white noise sigma_y (from the third
     # differences: the oscillation's own is A h^3, small) on a cycle's sum of amplitude a W / 2
-    sig_y = float(np.sqrt(np.mean(np.diff(y, 3) ** 2) / 20.0))
+    sig_y = white_noise(y)
     amp = 2.0 * np.minimum(np.abs(left), np.abs(right)) / W
     with np.errstate(divide="ignore"):
         noise = np.where(amp > 0, 2.0 * sig_y / (amp * np.sqrt(W)), np.inf)
@@ -139,6 +166,13 @@ def dropped_frames_warning(t, y, fit, time_source: str | None, field: str = "SIG
     times are the frames' own)."""
     if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
         return None
+    w = _flat_level_warning(t, y, fit, field)
+    return None if w is None else w[0]
+
+
+def _flat_level_warning(t, y, fit, field: str) -> tuple[str, float] | None:
+    """(the warning, the period between the steps, s) of
+    :func:`dropped_frames_warning`, or None."""
     try:
         st = phase_steps(t, y, float(fit.frequency))
     except (ValueError, FloatingPointError):
@@ -160,4 +194,131 @@ def dropped_frames_warning(t, y, fit, time_source: str | None, field: str = "SIG
             f"dropped frames (an irregular time base), which shorten the time base and the period by their share, "
             f"beyond the stated std (here about {short:.2%}: between the steps the record runs at a period of about "
             f"{T_flat:.5g} s, the fit {float(fit.period):.5g} s); the samples cannot give the missing times: "
-            f"give the time column")
+            f"give the time column"), T_flat
+
+
+def widen_std(fit, extra: float) -> None:
+    """Add ``extra`` (s) to the fit's headline std in quadrature, as the
+    ``time_base`` term of its ``uncertainty`` (the degrees of freedom
+    recombined: the term counts as normal)."""
+    import math
+
+    old = float(fit.std)
+    fit.std = math.hypot(old, float(extra))
+    u = fit.uncertainty
+    u["time_base"] = float(extra)
+    u["total"] = fit.std
+    if u.get("dof") is not None:
+        from .uncertainty import combined_dof
+
+        nu = combined_dof([(old, float(u["dof"])), (float(extra), math.inf)])
+        u["dof"] = nu if math.isfinite(nu) else None
+    if float(extra) > old:
+        u["dominant"] = "time_base"
+    if fit.modes:
+        fit.modes[0]["std_total"] = fit.std
+
+
+def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIGNAL") -> dict | None:
+    """The answer of a record without its time column whose camera dropped
+    frames (design.md "dropfix, session 17").
+
+    ``refit(t_new)`` fits the same samples on another time base (s) with
+    the caller's options and returns a PeriodFit.  Returns None for a
+    record with its time column, a crossings-only fit, or a record with no
+    sign of dropped frames; else a dict: ``t`` (s, the time base the answer
+    stands on), ``fit`` (the answer: its ``std`` holds the time base's own
+    term, ``uncertainty["time_base"]``), ``warning`` (one line),
+    ``time_base`` (JSON: ``method``, ``dropped_frames``,
+    ``nominal_period``, ``std_added``).
+
+    ``method`` is ``"recovered"`` where :func:`.signal_frames.recover_frames`
+    finds the frames' lattice and the refit on it explains the record
+    better (the drops put back; the term is
+    :func:`.signal_frames.correction_std`), ``"widened"`` where only the
+    phase steps are seen (:func:`phase_steps`): the fit on the nominal time
+    base stays the answer and the distance to the period between the steps
+    joins its std, so its interval reaches the truth.
+    """
+    if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
+        return None
+    from .signal_frames import MAX_RMS_RATIO, correction_std, recover_frames
+
+    t = np.asarray(t, float)
+    try:
+        rec = recover_frames(t, y, float(fit.frequency))
+    except (ValueError, FloatingPointError):
+        rec = None
+    if rec is not None and rec["resolved"]:
+        from .signal import SignalError
+
+        try:
+            fit2 = refit(rec["t"])
+        except SignalError:
+            fit2 = None
+        if fit2 is not None and fit2.model != "crossings" and fit2.residual_rms <= MAX_RMS_RATIO * fit.residual_rms:
+            W = int(round(1.0 / (fit2.frequency * float(np.median(np.diff(rec["t"]))))))
+            extra = correction_std(float(fit2.period), t.size, rec["dropped"], rec["edge"], W)
+            widen_std(fit2, extra)
+            short = 1.0 - float(fit.period) / float(fit2.period)
+            msg = (f"{field}: {rec['dropped']} dropped frames found and put back (the oscillation's phase on the "
+                   f"nominal time base steps forward by one frame's phase at each; in a record without a time "
+                   f"column the time base and the period are short by the drops' share, here {short:.2%}): the "
+                   f"period {float(fit2.period):.6g} s is fitted on the recovered time base (on the nominal one "
+                   f"{float(fit.period):.6g} s) and its std holds the recovery's own {extra:.2g} s; give the time "
+                   f"column to be sure")
+            return {"t": rec["t"], "fit": fit2, "warning": msg,
+                    "time_base": {"method": "recovered", "dropped_frames": rec["dropped"],
+                                  "nominal_period": float(fit.period), "std_added": extra}}
+    w = _flat_level_warning(t, y, fit, field)
+    if w is None:
+        _refuse_hidden_drops(t, y, fit, rec, field)
+        return None
+    msg, T_flat = w
+    extra = abs(T_flat - float(fit.period))
+    widen_std(fit, extra)
+    return {"t": t, "fit": fit, "warning": msg + f"; the period's std holds the {extra:.2g} s between the two",
+            "time_base": {"method": "widened", "dropped_frames": None, "nominal_period": float(fit.period),
+                          "std_added": extra, "period_between_steps": T_flat}}
+
+
+#: the refusal: a lattice this weak at best (the noise allows no more) hides
+#: one frame's step in each sample's phase (the KTH records, 240 Hz, allow
+#: 0.71-0.90 and show none: no drops there)
+HIDDEN_LATTICE = 0.5
+#: ... the fit leaves this much more than the record's white noise (dropped
+#: frames the fit cannot follow: 1.2-3.8 measured where they were not put
+#: back, one at 1.18 missed; a beat's two-mode fit 0.93-1.12) ...
+MIN_RESIDUAL_EXCESS = 1.2
+
+
+def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
+    """Exit 2 (InputError naming ``field``) for a record without its time
+    column that shows the phase steps of dropped frames (``MIN_STEPS``
+    forward or more, at most ``MAX_BACKWARD_SHARE`` as many back) where
+    neither the frames could be put back nor a drop-free stretch gives the
+    period between them: its noise hides a frame's step
+    (``lattice_expected`` below ``HIDDEN_LATTICE``) and the fit leaves
+    ``MIN_RESIDUAL_EXCESS`` times the white noise or more.  The period is
+    then short by the drops' unknown share (3 % dense drops: 2.6-4.0 %,
+    z -2.3 .. -146) and no std can hold it."""
+    if rec is None or not rec["lattice_expected"] < HIDDEN_LATTICE:
+        return
+    try:
+        st = phase_steps(t, y, float(fit.frequency))
+    except (ValueError, FloatingPointError):
+        return
+    if st is None:
+        return
+    nf, nb = len(st["forward"]), len(st["backward"])
+    sig_y = white_noise(y)
+    if nf < MIN_STEPS or nb > MAX_BACKWARD_SHARE * nf or not float(fit.residual_rms) >= MIN_RESIDUAL_EXCESS * sig_y:
+        return
+    from ..errors import InputError
+
+    raise InputError(field, f"the oscillation's phase steps forward by one frame's phase {nf} times and "
+                            f"{'back only ' + str(nb) + ' times' if nb else 'never back'}, and the fit leaves "
+                            f"{float(fit.residual_rms) / sig_y:.2g} x the record's noise: the mark of dropped frames "
+                            f"in a record without a time column, which shorten the period by their unknown share; "
+                            f"the noise hides each frame's step, so they cannot be put back: give the record's time "
+                            f"column in place of --sample-rate")
