@@ -139,7 +139,11 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     of the period the same start is run again at rtol / 100
     (:func:`~bifilar.analysis.run_accuracy.check_period`: ``period_check``,
     ``period_error`` at least the difference, a warning for a motion that is
-    not regular); False: the error model alone.
+    not regular), and a start on a symmetric subspace of a symmetric rig is
+    checked as the default model's is
+    (:func:`~bifilar.analysis.symmetry_check.check_symmetric_start`, its
+    check run on this model: ``period_symmetry``, ``period_error_symmetry``);
+    False: the error model alone.
 
     Returns a :class:`~bifilar.analysis.simulate.SimulationResult` (world frame)
     with an extra attribute ``theta`` (k, 5).  Raises
@@ -182,6 +186,18 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     res = once(method, rtol, None, progress)
     if check and needs_check(res):
         check_period(res, once, method, None, timing)
+    if check and m is not None:  # a start on a symmetric subspace: the default model's check, on this model's runs
+        from .symmetry_check import CHECK_EXTRA_PERIODS, check_symmetric_start
+
+        def rerun(y13: np.ndarray):
+            yk = from_world(km, y13)
+            yk = kn.complete_initial_state(yk[:4], yk[5:9], km.p, theta5_guess=yk[4])
+            return _integrate(scene, rest, km, m, yk, t_end + CHECK_EXTRA_PERIODS * T_ref, T_ref,
+                              amplitude if theta is None else float("nan"), method, rtol, rtol * amp,
+                              samples_per_period, None, timing)
+
+        check_symmetric_start(res, scene, m.label, amplitude if theta is None else float("nan"), periods,
+                              {"rest": rest, "modes": modes}, rerun=rerun)
     return res
 
 

@@ -475,7 +475,7 @@ def _run_scale(scene: Scene, rest: RestPose, m, amplitude: float, y0: np.ndarray
     return state_scale(max(float(np.max(np.abs(disp[3:]))), float(np.max(np.abs(disp[:3]))) / Lmax), 3, Lmax, omega)
 
 
-def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: float, kw: dict) -> None:
+def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: float, kw: dict, rerun=None) -> None:
     """Check run ``res`` (a :class:`~bifilar.analysis.simulate.SimulationResult`
     of ``simulate(scene, mode, amplitude, periods, **kw)``, updated in place)
     for a start on a symmetric subspace of a symmetric rig whose orbit is
@@ -492,7 +492,13 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
     samples) and, where its period differs by more than ``res.period_error``,
     that error becomes the larger of the difference and
     :func:`offset_error` (``period_error_symmetry``), with one warning
-    saying over how many periods the run is reproducible."""
+    saying over how many periods the run is reproducible.
+
+    ``rerun``: ``rerun(y_start)`` makes the check run from ``y_start`` (13,
+    a maximal state, absolute position) for :data:`CHECK_EXTRA_PERIODS`
+    linear periods more, on the run's own model (``--model kane``'s
+    reduced coordinates: :func:`~bifilar.analysis.kane_run.simulate_kane`);
+    None: :func:`simulate`'s engines (``kw`` its arguments)."""
     if res.period is None or not np.isfinite(res.period_error) or len(res.crossings) < 3:
         return
     from .equilibrium import rest_pose
@@ -523,14 +529,14 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
                            "growth": growth if np.isfinite(growth) else None, "check": None}
     if not growth >= GROWTH_GATE:  # (NaN: not established, a stiff body's fast modes: its run is costly, and
         return                    # doubling it was measured at 2.3 s for a thin rod's torsion, whose check agreed)
-    _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth)
+    _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth, rerun)
 
 
-def _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth) -> None:
+def _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth, rerun=None) -> None:
     """The run of :func:`check_symmetric_start` from the offset start, and what follows from it."""
     yp = offset_start(scene, y0, tr.basis)
     try:
-        chk = _again(res, scene, rest, m, amplitude, periods, kw, yp)
+        chk = rerun(yp) if rerun is not None else _again(res, scene, rest, m, amplitude, periods, kw, yp)
     except (InputError, IntegrationError) as exc:
         res.warnings.append(f"the start is symmetric ({tr.names}) and an offset from it grows by {rho:.3g} a period, "
                             f"but the run checking the period from a start {START_OFFSET:g} off failed ({exc}): the "
