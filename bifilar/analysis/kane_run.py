@@ -186,24 +186,26 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     res = once(method, rtol, None, progress)
     if check and needs_check(res):
         check_period(res, once, method, None, timing)
-    if check and m is not None:  # a start on a symmetric subspace: the default model's check, on this model's runs
-        from .symmetry_check import CHECK_EXTRA_PERIODS, check_symmetric_start
+    if check:  # a start on a symmetric subspace: the default model's check, on this model's runs
+        from .symmetry_check import CHECK_EXTRA_PERIODS, check_symmetric_start, timed_index
 
         def rerun(y13: np.ndarray):
             yk = from_world(km, y13)
             yk = kn.complete_initial_state(yk[:4], yk[5:9], km.p, theta5_guess=yk[4])
-            return _integrate(scene, rest, km, m, yk, t_end + CHECK_EXTRA_PERIODS * T_ref, T_ref,
+            more = T_ref if m is not None else res.period  # (without a mode: two of the cycles it timed)
+            return _integrate(scene, rest, km, m, yk, t_end + CHECK_EXTRA_PERIODS * more, T_ref,
                               amplitude if theta is None else float("nan"), method, rtol, rtol * amp,
-                              samples_per_period, None, timing)
+                              samples_per_period, None, timing, timed_index(res))
 
-        check_symmetric_start(res, scene, m.label, amplitude if theta is None else float("nan"), periods,
-                              {"rest": rest, "modes": modes}, rerun=rerun)
+        check_symmetric_start(res, scene, None if m is None else m.label,
+                              amplitude if theta is None else float("nan"), periods, {"rest": rest, "modes": modes},
+                              rerun=rerun)
     return res
 
 
 def _integrate(scene: Scene, rest: RestPose, km: KaneMap, m, y0: np.ndarray, t_end: float, T_ref: float,
                amplitude: float, method: str, rtol: float, atol: float, samples_per_period: int, progress,
-               timing: float | None):
+               timing: float | None, timed: int | None = None):
     """One run of :func:`simulate_kane` from the thesis state ``y0`` (10,) for
     ``t_end`` s (``T_ref`` the timed mode's period, s; ``m`` that mode or
     None), at ``rtol`` and ``atol`` (the angles' absolute tolerance, rad):
@@ -234,6 +236,6 @@ def _integrate(scene: Scene, rest: RestPose, km: KaneMap, m, y0: np.ndarray, t_e
     Y = to_world(km, th)
     T = np.array([kn.tensions(th[:, i], km.p)[:2] for i in range(th.shape[1])])
     res = summarise_run(scene, rest, m, amplitude, ts, Y, T, lambda tt: to_world(km, sol.sol(tt)), viol, drift,
-                        "kane", method, rtol, atol, int(sol.nfev), runtime, [], timing=timing)
+                        "kane", method, rtol, atol, int(sol.nfev), runtime, [], timing=timing, timed=timed)
     res.theta = th.T
     return res
