@@ -230,3 +230,30 @@ def test_a_kane_start_given_as_angles_is_checked(plate):
     assert max(diffs) > 5.0 * 2.6e-9
     assert max(diffs) <= doc["period_error"] == doc["period_error_symmetry"]
     assert doc["period_symmetry"]["check"]["cycles"] == doc["cycles"]
+
+
+def test_a_sweep_point_warns_of_an_unstable_symmetric_run(plate):
+    """A sweep point's runs (the batched engine, session 17): at the
+    default 3 periods nothing is computed (a growth of 1e6 would need a
+    multiplier of 100); the plate's swing-y at 1.5 m over 15 periods grows
+    an offset by 7.33^15 = 1e13, and the point now says so in one line
+    naming the --periods below the gate (before: nothing, while the point's
+    nonlinear period moved between BLAS kernels beyond its period_error, and
+    starts 1e-13 off the plane move it by ~2e-3 s against 6e-7 s)."""
+    from bifilar.config import read_yaml
+    from bifilar.studies import sweep as sw
+
+    sc, rest, ms = plate
+    md = ms.get("swing-y")
+    cfg = read_yaml(PLATE)
+    params = {"body.mass": 100.0}
+    pts = {p: sw.evaluate_point(cfg, str(PLATE), params, sw.resolve_settings(cfg, components=["Ixx"], amplitude=1.5,
+                                                                              periods=p)) for p in (3.0, 15.0)}
+    said = {p: [w for w in pt["warnings"] if "released symmetric" in w] for p, pt in pts.items()}
+    assert said[3.0] == []
+    assert len(said[15.0]) == 1 and said[15.0][0].startswith("swing-y: ") and "(--periods 6)" in said[15.0][0]
+    run = pts[15.0]["runs"]["swing-y"]
+    y0 = initial_state(sc, rest, md, 1.5)
+    diffs = [abs(run_one(sc, rest, md, 1.5, 15, 1e-8, y0=off_plane(y0, e)).period - run["period"])
+             for e in (1e-13, -1e-13)]
+    assert max(diffs) > 100 * run["period_error"]  # what the warning is for

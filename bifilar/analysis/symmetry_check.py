@@ -475,6 +475,32 @@ def _run_scale(scene: Scene, rest: RestPose, m, T_ref: float, amplitude: float, 
     return state_scale(max(float(np.max(np.abs(disp[3:]))), float(np.max(np.abs(disp[:3]))) / Lmax), 3, Lmax, omega)
 
 
+def run_multiplier(scene: Scene, rest: RestPose, syms: list, m, T_ref: float, amplitude: float, t: np.ndarray,
+                   y: np.ndarray, period: float):
+    """(:class:`Transverse`, the largest Floquet multiplier's modulus) of a
+    run sampled at ``t`` (s, uniform from 0) as ``y`` (k, 13, absolute
+    positions) from its start ``y[0]`` at ``amplitude`` of mode ``m`` (None:
+    an explicit start; ``T_ref`` s the run's unit period) and timed at
+    ``period`` (s): None where no symmetry of ``syms`` fixes the start; the
+    modulus NaN where not established (:func:`transverse_growth`)."""
+    y0 = np.asarray(y[0], float)
+    y_rel = y0 - np.r_[rest.com, np.zeros(10)]
+    tr = start_symmetry(syms, y_rel, _run_scale(scene, rest, m, T_ref, amplitude, y0))
+    if tr is None:
+        return None
+    Lmax = float(np.max(scene.lengths))
+    step = 1e-7 * (np.abs(tr.basis.T) @ natural_sizes(Lmax, 2 * np.pi / T_ref))
+    Y = np.asarray(y, float) - np.r_[rest.com, np.zeros(10)]
+    mu = transverse_growth(shifted_params(scene, rest), t, Y, period, tr.basis, step)
+    return tr, float(np.max(np.abs(mu)))
+
+
+def growth_over(rho: float, cycles: float) -> float:
+    """``rho`` to the power ``cycles``: an offset's growth over a run (NaN where ``rho`` is not established)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.exp(cycles * np.log(rho))) if rho > 0 else float("nan")
+
+
 def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: float, kw: dict, rerun=None) -> None:
     """Check run ``res`` (a :class:`~bifilar.analysis.simulate.SimulationResult`
     of ``simulate(scene, mode, amplitude, periods, **kw)``, updated in place)
@@ -511,24 +537,17 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
     modes = kw.get("modes") or linear_modes(scene, rest)
     m = modes.get(mode) if mode is not None else None
     y0 = np.asarray(res.y[0], float)
-    y_rel = y0 - np.r_[rest.com, np.zeros(10)]
     if m is not None and m.period is None:
         return
     # the unit of --periods: the mode's period, for an explicit start without one the shortest (simulate's T_ref)
     T_ref = m.period if m is not None else min((x.period for x in modes.modes if x.period), default=None)
     if T_ref is None:
         return
-    tr = start_symmetry(syms, y_rel, _run_scale(scene, rest, m, T_ref, amplitude, y0))
-    if tr is None:
+    found = run_multiplier(scene, rest, syms, m, T_ref, amplitude, res.t, res.y, res.period)
+    if found is None:
         return
-    Lmax = float(np.max(scene.lengths))
-    step = 1e-7 * (np.abs(tr.basis.T) @ natural_sizes(Lmax, 2 * np.pi / T_ref))
-    Y = np.asarray(res.y, float) - np.r_[rest.com, np.zeros(10)]
-    mu = transverse_growth(shifted_params(scene, rest), res.t, Y, res.period, tr.basis, step)
-    rho = float(np.max(np.abs(mu)))
-    cycles = float(res.t[-1] - res.t[0]) / res.period
-    with np.errstate(over="ignore", invalid="ignore"):
-        growth = float(np.exp(cycles * np.log(rho))) if rho > 0 else float("nan")
+    tr, rho = found
+    growth = growth_over(rho, float(res.t[-1] - res.t[0]) / res.period)
     res.period_symmetry = {"symmetry": tr.names, "multiplier": rho if np.isfinite(rho) else None,
                            "growth": growth if np.isfinite(growth) else None, "check": None}
     if not growth >= GROWTH_GATE:  # (NaN: not established, a stiff body's fast modes: its run is costly, and
