@@ -64,8 +64,10 @@ def symmetric_run_warnings(scene, rest, ms, labels: list, amplitude: float, peri
         growth = growth_over(rho, periods * m.period / run.period)
         if growth >= GROWTH_GATE:
             n = int(np.floor(np.log(GROWTH_GATE) / np.log(rho) * run.period / m.period))
+            cure = (f"time at most {n} periods (--periods {n}) or release at a smaller amplitude" if n >= 2
+                    else "release at a smaller amplitude")  # (--periods takes 2 at least)
             run.warnings.append(
                 f"released symmetric under {tr.names}, the run stays so only up to rounding, and an offset grows by "
                 f"{rho:.3g} a period ({growth:.1e} over the run): its period and what follows from it (amplitude "
                 f"bias, depth, tensions) may depend on the machine's rounding beyond its period_error; `bifilar "
-                f"simulate` checks it, or time at most {n} periods (--periods {n}) or release at a smaller amplitude")
+                f"simulate` checks it, or {cure}")
