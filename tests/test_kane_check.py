@@ -37,7 +37,12 @@ def test_kane_checks_a_run_that_is_not_regular():
     BLAS kernel (single-cycle spread 1.3e-6 of the period on the default
     kernel, 1.7e-6 on Sandybridge, 4.9e-7 on Haswell: below IRREGULAR_SPREAD,
     unchecked).  After 20 periods it spreads by 3.0e-3 .. 3.4e-3 on all three,
-    and kane's period is 2.2e-5 .. 4.3e-5 s from the maximal model's."""
+    and kane's period is 2.2e-5 .. 4.3e-5 s from the maximal model's.
+    Session 17: the symmetric-start check runs on kane too (before:
+    ``period_symmetry`` null), its check run on the kane model from a start
+    1e-12 off the plane, timing all 20 cycles; its error covers the
+    difference (tests/test_symcheck.py: the same at 13 cycles, where the
+    spread check cannot see it)."""
     sc, rest, ms = setup("thesis_plate_rest.yaml")
     k = simulate_kane(sc, rest, ms, mode="swing-y", amplitude=1.5, periods=20)
     ref = simulate(sc, "swing-y", 1.5, 20, rest=rest, modes=ms, method="DOP853", rtol=1e-12, check=False)
@@ -47,6 +52,10 @@ def test_kane_checks_a_run_that_is_not_regular():
     assert k.period_check is not None and true > 10 * k.period_check["model_bound"]  # the model's bound fails
     assert k.period_error >= 0.5 * true
     assert any("not regular" in w for w in k.warnings)
+    sym = k.period_symmetry
+    assert sym is not None and sym["multiplier"] == pytest.approx(7.33, rel=0.01)
+    assert sym["check"]["cycles"] == len(k.crossings) - 1 and k.period_error >= k.period_error_symmetry >= true
+    assert len([w for w in k.warnings if "unstable symmetric orbit" in w]) == 1
 
 
 def test_kane_json_has_the_check_of_a_beating_run():

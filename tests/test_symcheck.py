@@ -182,3 +182,78 @@ def test_an_asymmetric_rig_is_not_checked():
     assert r.period_symmetry is None
     doc = r.to_json()
     assert doc["period_symmetry"] is None and doc["period_error_symmetry"] == 0.0
+
+
+def test_an_explicit_start_without_a_mode_is_checked(plate):
+    """An explicit start state without a mode (session 17: the library's
+    ``simulate(y0=..., mode=None)``; before, not checked): the plate's
+    swing-y start at 1.5 m given as a state, over 15 swing periods, timed on
+    the coordinate that moves most (y).  Before: period_error 1.3e-9 s,
+    while starts 1e-13 off the plane move the period by 2.5e-3 s (the
+    references: the batched engine from those starts, timed on y); now the
+    check's 7e-3 s covers them, and its check run times the same
+    coordinate over as many cycles."""
+    sc, rest, ms = plate
+    md = ms.get("swing-y")
+    y0 = initial_state(sc, rest, md, 1.5)
+    r = simulate(sc, None, 1.5, 1, rest=rest, modes=ms, y0=y0, t_end=15 * md.period)
+    assert r.mode is None and r.coordinate_name == "y"
+    diffs = [abs(run_one(sc, rest, md, 1.5, 15, 1e-10, samples_per_period=64, y0=off_plane(y0, e)).period - r.period)
+             for e in (1e-13, -1e-13)]
+    assert max(diffs) > 1e3 * 1.3e-9  # the old statement (the integration's error model alone)
+    assert max(diffs) <= r.period_error == r.period_error_symmetry
+    assert r.period_symmetry["check"]["cycles"] == len(r.crossings) - 1
+    assert len([w for w in r.warnings if "unstable symmetric orbit" in w]) == 1
+
+
+def test_a_kane_start_given_as_angles_is_checked(plate):
+    """``--model kane --theta`` without ``--mode`` (session 17): the plate
+    released at theta2 = 1.0198877 rad in its plane (the swing-y at 1.5 m:
+    theta1 = theta4 = 0, theta3 = pi/2), 23.2 torsion periods (the unit of
+    --periods without a mode), 13 swing cycles timed on y.  Before:
+    period_error 2.6e-9 s and no warning, while starts 1e-13 off the plane
+    move the period by 5e-8 s (the default model's batched engine from the
+    same start, its angles mapped to a state, and from starts 1e-13 off);
+    now covered."""
+    sc, rest, ms = plate
+    md = ms.get("swing-y")
+    theta = "0,1.0198877388915517,1.5707963267948966,0"
+    periods = 13 * md.period / ms.get("torsion").period + 0.2
+    args = ["simulate", str(PLATE), "--model", "kane", "--theta", theta, "--periods", f"{periods:.4f}", "--json"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["mode"] is None and doc["timed_coordinate"] == "y" and doc["cycles"] == 13
+    y0 = initial_state(sc, rest, md, 1.5)
+    diffs = [abs(run_one(sc, rest, md, 1.5, 13, 1e-10, samples_per_period=64, y0=off_plane(y0, e)).period
+                 - doc["period"]) for e in (1e-13, -1e-13)]
+    assert max(diffs) > 5.0 * 2.6e-9
+    assert max(diffs) <= doc["period_error"] == doc["period_error_symmetry"]
+    assert doc["period_symmetry"]["check"]["cycles"] == doc["cycles"]
+
+
+def test_a_sweep_point_warns_of_an_unstable_symmetric_run(plate):
+    """A sweep point's runs (the batched engine, session 17): at the
+    default 3 periods nothing is computed (a growth of 1e6 would need a
+    multiplier of 100); the plate's swing-y at 1.5 m over 15 periods grows
+    an offset by 7.33^15 = 1e13, and the point now says so in one line
+    naming the --periods below the gate (before: nothing, while the point's
+    nonlinear period moved between BLAS kernels beyond its period_error, and
+    starts 1e-13 off the plane move it by ~2e-3 s against 6e-7 s)."""
+    from bifilar.config import read_yaml
+    from bifilar.studies import sweep as sw
+
+    sc, rest, ms = plate
+    md = ms.get("swing-y")
+    cfg = read_yaml(PLATE)
+    params = {"body.mass": 100.0}
+    pts = {p: sw.evaluate_point(cfg, str(PLATE), params, sw.resolve_settings(cfg, components=["Ixx"], amplitude=1.5,
+                                                                              periods=p)) for p in (3.0, 15.0)}
+    said = {p: [w for w in pt["warnings"] if "released symmetric" in w] for p, pt in pts.items()}
+    assert said[3.0] == []
+    assert len(said[15.0]) == 1 and said[15.0][0].startswith("swing-y: ") and "(--periods 6)" in said[15.0][0]
+    run = pts[15.0]["runs"]["swing-y"]
+    y0 = initial_state(sc, rest, md, 1.5)
+    diffs = [abs(run_one(sc, rest, md, 1.5, 15, 1e-8, y0=off_plane(y0, e)).period - run["period"])
+             for e in (1e-13, -1e-13)]
+    assert max(diffs) > 100 * run["period_error"]  # what the warning is for

@@ -139,7 +139,11 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     of the period the same start is run again at rtol / 100
     (:func:`~bifilar.analysis.run_accuracy.check_period`: ``period_check``,
     ``period_error`` at least the difference, a warning for a motion that is
-    not regular); False: the error model alone.
+    not regular), and a start on a symmetric subspace of a symmetric rig is
+    checked as the default model's is
+    (:func:`~bifilar.analysis.symmetry_check.check_symmetric_start`, its
+    check run on this model: ``period_symmetry``, ``period_error_symmetry``);
+    False: the error model alone.
 
     Returns a :class:`~bifilar.analysis.simulate.SimulationResult` (world frame)
     with an extra attribute ``theta`` (k, 5).  Raises
@@ -182,12 +186,26 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     res = once(method, rtol, None, progress)
     if check and needs_check(res):
         check_period(res, once, method, None, timing)
+    if check:  # a start on a symmetric subspace: the default model's check, on this model's runs
+        from .symmetry_check import CHECK_EXTRA_PERIODS, check_symmetric_start, timed_index
+
+        def rerun(y13: np.ndarray):
+            yk = from_world(km, y13)
+            yk = kn.complete_initial_state(yk[:4], yk[5:9], km.p, theta5_guess=yk[4])
+            more = T_ref if m is not None else res.period  # (without a mode: two of the cycles it timed)
+            return _integrate(scene, rest, km, m, yk, t_end + CHECK_EXTRA_PERIODS * more, T_ref,
+                              amplitude if theta is None else float("nan"), method, rtol, rtol * amp,
+                              samples_per_period, None, timing, timed_index(res))
+
+        check_symmetric_start(res, scene, None if m is None else m.label,
+                              amplitude if theta is None else float("nan"), periods, {"rest": rest, "modes": modes},
+                              rerun=rerun)
     return res
 
 
 def _integrate(scene: Scene, rest: RestPose, km: KaneMap, m, y0: np.ndarray, t_end: float, T_ref: float,
                amplitude: float, method: str, rtol: float, atol: float, samples_per_period: int, progress,
-               timing: float | None):
+               timing: float | None, timed: int | None = None):
     """One run of :func:`simulate_kane` from the thesis state ``y0`` (10,) for
     ``t_end`` s (``T_ref`` the timed mode's period, s; ``m`` that mode or
     None), at ``rtol`` and ``atol`` (the angles' absolute tolerance, rad):
@@ -218,6 +236,6 @@ def _integrate(scene: Scene, rest: RestPose, km: KaneMap, m, y0: np.ndarray, t_e
     Y = to_world(km, th)
     T = np.array([kn.tensions(th[:, i], km.p)[:2] for i in range(th.shape[1])])
     res = summarise_run(scene, rest, m, amplitude, ts, Y, T, lambda tt: to_world(km, sol.sol(tt)), viol, drift,
-                        "kane", method, rtol, atol, int(sol.nfev), runtime, [], timing=timing)
+                        "kane", method, rtol, atol, int(sol.nfev), runtime, [], timing=timing, timed=timed)
     res.theta = th.T
     return res

@@ -384,8 +384,11 @@ def simulate(
 
 def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest, modes, y0, t_end, method: str,
                    rtol: float, atol, samples_per_period: int, on_slack: str, progress, max_evaluations: float,
-                   timing: float | None, coordinate: bool = True, bound: bool = False) -> SimulationResult:
-    """One run of :func:`simulate` (its arguments), without the check of an irregular motion."""
+                   timing: float | None, coordinate: bool = True, bound: bool = False,
+                   timed: int | None = None) -> SimulationResult:
+    """One run of :func:`simulate` (its arguments), without the check of an irregular motion; ``timed``
+    (0-5, dx dy dz rx ry rz) the coordinate an explicit start without a mode times (None: the one that
+    moves most, :func:`summarise_run`)."""
     if on_slack not in ("continue", "stop"):
         raise InputError("--on-slack", "must be 'continue' or 'stop'")
     check_rtol(rtol)
@@ -488,7 +491,7 @@ def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest
         stopped_slack = (int(np.argmin(mx.tensions(sol.y[:, -1], Pshift))) + 1, float(t_stop))
     return summarise_run(scene, rest, m, amplitude, ts, Y, T, state_at, viol, drift, "maximal", method, rtol,
                          float(np.min(atol_v)), int(sol.nfev), runtime, warnings, stopped_slack, timing=timing,
-                         viol_at=Ys[int(np.argmax(cv))])
+                         viol_at=Ys[int(np.argmax(cv))], timed=timed)
 
 
 STIFF_RATIO = 1e3
@@ -659,7 +662,7 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
                   T: np.ndarray, state_at, viol: float, drift: float, model: str, method: str, rtol: float,
                   atol: float, nfev: int, runtime: float, warnings: list,
                   stopped_slack: tuple[int, float] | None = None, timing: float | None = None,
-                  viol_at: np.ndarray | None = None) -> SimulationResult:
+                  viol_at: np.ndarray | None = None, timed: int | None = None) -> SimulationResult:
     """Measured period, slack wires, clearance and health of a run, whatever the model.
 
     ts (k,) s and Y (k, 13) world-frame maximal states at dense samples; T (k, n)
@@ -671,10 +674,11 @@ def summarise_run(scene: Scene, rest: RestPose, m: Mode | None, amplitude: float
     ``timing``: the stated timing uncertainty, s (:func:`period_accuracy`).
     ``viol_at``: the state (13,) where ``viol`` was measured (the largest
     error, at a step the samples may miss), looked at with the samples by
-    :func:`violation_warning`.
+    :func:`violation_warning`.  ``timed``: the coordinate (0-5) a run without a mode times (None: the
+    one that moves most; a check run times the run's own).
     """
     rel = relative_pose(Y, rest)
-    dom = m.dominant if m is not None else int(np.argmax(np.ptp(rel, axis=0)))
+    dom = m.dominant if m is not None else (timed if timed is not None else int(np.argmax(np.ptp(rel, axis=0))))
     c = rel[:, dom]
 
     def fine(tt: float) -> float:

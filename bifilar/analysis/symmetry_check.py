@@ -461,21 +461,47 @@ the run, so that it times as many cycles (a motion leaving the subspace
 lengthens them: the plate's swing-y check timed 14 of the run's 15)."""
 
 
-def _run_scale(scene: Scene, rest: RestPose, m, amplitude: float, y0: np.ndarray) -> np.ndarray:
+def _run_scale(scene: Scene, rest: RestPose, m, T_ref: float, amplitude: float, y0: np.ndarray) -> np.ndarray:
     """(13,) the tolerance scale of a run (``simulate``'s: the mode's
     amplitude, or for an explicit start without one its displacement from
-    rest, as a wire angle)."""
+    rest, as a wire angle; ``T_ref`` (s) the run's unit period)."""
     from .simulate import relative_pose, state_scale
 
     Lmax = float(np.max(scene.lengths))
-    omega = 2 * np.pi / m.period
-    if np.isfinite(amplitude) and amplitude != 0:
+    omega = 2 * np.pi / T_ref
+    if m is not None and np.isfinite(amplitude) and amplitude != 0:
         return state_scale(amplitude, m.dominant, Lmax, omega)
     disp = relative_pose(y0[None, :], rest)[0]
     return state_scale(max(float(np.max(np.abs(disp[3:]))), float(np.max(np.abs(disp[:3]))) / Lmax), 3, Lmax, omega)
 
 
-def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: float, kw: dict) -> None:
+def run_multiplier(scene: Scene, rest: RestPose, syms: list, m, T_ref: float, amplitude: float, t: np.ndarray,
+                   y: np.ndarray, period: float):
+    """(:class:`Transverse`, the largest Floquet multiplier's modulus) of a
+    run sampled at ``t`` (s, uniform from 0) as ``y`` (k, 13, absolute
+    positions) from its start ``y[0]`` at ``amplitude`` of mode ``m`` (None:
+    an explicit start; ``T_ref`` s the run's unit period) and timed at
+    ``period`` (s): None where no symmetry of ``syms`` fixes the start; the
+    modulus NaN where not established (:func:`transverse_growth`)."""
+    y0 = np.asarray(y[0], float)
+    y_rel = y0 - np.r_[rest.com, np.zeros(10)]
+    tr = start_symmetry(syms, y_rel, _run_scale(scene, rest, m, T_ref, amplitude, y0))
+    if tr is None:
+        return None
+    Lmax = float(np.max(scene.lengths))
+    step = 1e-7 * (np.abs(tr.basis.T) @ natural_sizes(Lmax, 2 * np.pi / T_ref))
+    Y = np.asarray(y, float) - np.r_[rest.com, np.zeros(10)]
+    mu = transverse_growth(shifted_params(scene, rest), t, Y, period, tr.basis, step)
+    return tr, float(np.max(np.abs(mu)))
+
+
+def growth_over(rho: float, cycles: float) -> float:
+    """``rho`` to the power ``cycles``: an offset's growth over a run (NaN where ``rho`` is not established)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.exp(cycles * np.log(rho))) if rho > 0 else float("nan")
+
+
+def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: float, kw: dict, rerun=None) -> None:
     """Check run ``res`` (a :class:`~bifilar.analysis.simulate.SimulationResult`
     of ``simulate(scene, mode, amplitude, periods, **kw)``, updated in place)
     for a start on a symmetric subspace of a symmetric rig whose orbit is
@@ -492,7 +518,13 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
     samples) and, where its period differs by more than ``res.period_error``,
     that error becomes the larger of the difference and
     :func:`offset_error` (``period_error_symmetry``), with one warning
-    saying over how many periods the run is reproducible."""
+    saying over how many periods the run is reproducible.
+
+    ``rerun``: ``rerun(y_start)`` makes the check run from ``y_start`` (13,
+    a maximal state, absolute position) for :data:`CHECK_EXTRA_PERIODS`
+    linear periods more, on the run's own model (``--model kane``'s
+    reduced coordinates: :func:`~bifilar.analysis.kane_run.simulate_kane`);
+    None: :func:`simulate`'s engines (``kw`` its arguments)."""
     if res.period is None or not np.isfinite(res.period_error) or len(res.crossings) < 3:
         return
     from .equilibrium import rest_pose
@@ -505,32 +537,29 @@ def check_symmetric_start(res, scene: Scene, mode, amplitude: float, periods: fl
     modes = kw.get("modes") or linear_modes(scene, rest)
     m = modes.get(mode) if mode is not None else None
     y0 = np.asarray(res.y[0], float)
-    y_rel = y0 - np.r_[rest.com, np.zeros(10)]
-    if m is None or m.period is None:
+    if m is not None and m.period is None:
         return
-    tr = start_symmetry(syms, y_rel, _run_scale(scene, rest, m, amplitude, y0))
-    if tr is None:
+    # the unit of --periods: the mode's period, for an explicit start without one the shortest (simulate's T_ref)
+    T_ref = m.period if m is not None else min((x.period for x in modes.modes if x.period), default=None)
+    if T_ref is None:
         return
-    Lmax = float(np.max(scene.lengths))
-    step = 1e-7 * (np.abs(tr.basis.T) @ natural_sizes(Lmax, 2 * np.pi / m.period))
-    Y = np.asarray(res.y, float) - np.r_[rest.com, np.zeros(10)]
-    mu = transverse_growth(shifted_params(scene, rest), res.t, Y, res.period, tr.basis, step)
-    rho = float(np.max(np.abs(mu)))
-    cycles = float(res.t[-1] - res.t[0]) / res.period
-    with np.errstate(over="ignore", invalid="ignore"):
-        growth = float(np.exp(cycles * np.log(rho))) if rho > 0 else float("nan")
+    found = run_multiplier(scene, rest, syms, m, T_ref, amplitude, res.t, res.y, res.period)
+    if found is None:
+        return
+    tr, rho = found
+    growth = growth_over(rho, float(res.t[-1] - res.t[0]) / res.period)
     res.period_symmetry = {"symmetry": tr.names, "multiplier": rho if np.isfinite(rho) else None,
                            "growth": growth if np.isfinite(growth) else None, "check": None}
     if not growth >= GROWTH_GATE:  # (NaN: not established, a stiff body's fast modes: its run is costly, and
         return                    # doubling it was measured at 2.3 s for a thin rod's torsion, whose check agreed)
-    _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth)
+    _offset_check(res, scene, rest, m, T_ref, amplitude, periods, kw, tr, y0, rho, growth, rerun)
 
 
-def _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, growth) -> None:
+def _offset_check(res, scene, rest, m, T_ref, amplitude, periods, kw, tr, y0, rho, growth, rerun=None) -> None:
     """The run of :func:`check_symmetric_start` from the offset start, and what follows from it."""
     yp = offset_start(scene, y0, tr.basis)
     try:
-        chk = _again(res, scene, rest, m, amplitude, periods, kw, yp)
+        chk = rerun(yp) if rerun is not None else _again(res, scene, rest, m, amplitude, periods, kw, yp)
     except (InputError, IntegrationError) as exc:
         res.warnings.append(f"the start is symmetric ({tr.names}) and an offset from it grows by {rho:.3g} a period, "
                             f"but the run checking the period from a start {START_OFFSET:g} off failed ({exc}): the "
@@ -554,7 +583,7 @@ def _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, grow
         return
     res.period_error = max(stated, err)
     res.period_error_symmetry = err
-    n_lin = int(np.floor(kept * res.period / m.period)) if kept else 0
+    n_lin = int(np.floor(kept * res.period / T_ref)) if kept else 0
     cure = (f"time at most {n_lin} periods (--periods {n_lin}) or release at a smaller amplitude" if n_lin >= 2
             else "release at a smaller amplitude")
     res.warnings.append(
@@ -565,6 +594,14 @@ def _offset_check(res, scene, rest, m, amplitude, periods, kw, tr, y0, rho, grow
         f"depends on the machine's rounding and its error is {res.period_error:.1g} s (period_error); {cure}")
 
 
+def timed_index(res) -> int:
+    """The index (0-5, dx dy dz rx ry rz) of the coordinate run ``res`` timed, for its check run to time
+    the same (a run without a mode times the one that moves most, which leaving the subspace can change)."""
+    from .modes import COMPONENTS
+
+    return COMPONENTS.index(res.coordinate_name)
+
+
 def _again(res, scene, rest, m, amplitude, periods, kw, y_start):
     """``res``'s run again from ``y_start`` (13, absolute), for
     :data:`CHECK_EXTRA_PERIODS` more: the batched engine's LSODA for an
@@ -573,6 +610,12 @@ def _again(res, scene, rest, m, amplitude, periods, kw, y_start):
     from . import simulate as sim
     from .batch import run_one
 
+    if m is None:  # an explicit start without a mode (DOP853 or a solve_ivp method): two timed cycles more
+        T_ref = min(x.period for x in kw["modes"].modes if x.period)
+        t_end = (kw.get("t_end") or periods * T_ref) + CHECK_EXTRA_PERIODS * res.period
+        args = {**kw, "rest": rest, "y0": y_start, "method": res.method, "progress": None, "t_end": t_end,
+                "timed": timed_index(res)}
+        return sim._simulate_once(scene, None, amplitude, periods + CHECK_EXTRA_PERIODS, **args)
     if res.method.startswith("LSODA (scipy odeint"):
         spp = int(round(m.period / float(res.t[1] - res.t[0])))
         run = run_one(scene, rest, m, amplitude, periods + CHECK_EXTRA_PERIODS, res.rtol, kw.get("atol"), samples_per_period=spp,

@@ -663,6 +663,9 @@ def _evaluate(base_cfg: dict, source: str, params: dict, st: SweepSettings, scre
                 runs, pre.law.runs = runs[:len(labels)], runs[len(labels):]
         if runs is None:
             runs = _nonlinear_runs(pre.scene, pre.rest, pre.ms, labels, pre.amplitude, st, pre.starts)
+        from .point_symmetry import symmetric_run_warnings
+
+        symmetric_run_warnings(pre.scene, pre.rest, pre.ms, labels, pre.amplitude, st.periods, st.rtol, runs)
         sims = dict(zip(pre.runs, runs))
     return _finish(res, pre, sims, st, screen)
 
