@@ -137,8 +137,10 @@ def run_split_warning(scene: Scene, rest: RestPose) -> str | None:
     :data:`RUN_SPLIT_REL` of the mean load."""
     import bifilar.models.maximal as mx
     from ..rotations import matrix_to_quat
+    from .elastic_rest import loaded_scene
     from .equilibrium import _newton_kkt
 
+    scene = loaded_scene(scene, rest)  # the run's wires: loaded, the elastic pose on them
     # the run starts on rigid wires: at the pose nearest the elastic one with every wire at its length (the
     # start of a run of zero amplitude), its multipliers
     c, R, _, kkt = _newton_kkt(scene, rest.com, rest.R, iters=30)
