@@ -154,8 +154,8 @@ def run_split_warning(scene: Scene, rest: RestPose) -> str | None:
     if not abs(run0[k] - T[k]) > RUN_SPLIT_REL * load:
         return None
     return (f"rig.stiffness: the rest pose's tensions are the elastic wires' split (wire {k + 1} {T[k]:.4g} N), but "
-            f"the run (simulate, tensions, sweep's and plan's tensions) is the rigid-wire model, whose split on wires at "
-            f"their lengths differs (wire {k + 1} {run0[k]:.4g} N): its tensions are not the elastic wires'; the motion and "
+            f"the run (simulate, tensions, sweep's and plan's tensions) is the rigid-wire model, whose split on the loaded "
+            f"wires differs (wire {k + 1} {run0[k]:.4g} N): its tensions are not the elastic wires'; the motion and "
             "the periods are the rigid model's about the loaded rig")
 
 
