@@ -127,7 +127,9 @@ def test_the_config_warning_reaches_the_json_warnings(tmp_path):
         doc = json.loads(r.stdout)
         mine = [w for w in doc.get("warnings", []) if w.startswith("rig.stiffness")]
         assert len(mine) == (1 if warned else 0) and ("warnings" in doc) == warned, doc.get("warnings")
-        assert ("warning: rig.stiffness" in r.stderr) == warned  # still logged as it arises
+        # still logged as it arises (the config's warning; session 17's stretch-coupling warning of the modes is
+        # the computation's, on stderr for the quiet rig too: its swings' elastic periods differ by 5e-6)
+        assert ("warning: rig.stiffness: at an equal share" in r.stderr) == warned
         T = next(m["period"] for m in doc["modes"] if m["label"] == "torsion")
         r = runner.invoke(main, ["invert", str(path), "--period", f"torsion={T:.9f}", "--json"])
         assert r.exit_code == 0, r.stderr
