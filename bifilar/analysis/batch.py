@@ -64,6 +64,7 @@ from .batch_dop853 import _dop853, _health_at_dense_samples
 from .batch_health import Health, LowestPoint, SharedLowestPoint
 from .batch_lsoda import _BatchFailed, _lsoda, _lsoda_joint, _NotJoint
 from .batch_rest import _groups, modes_batch, rest_and_modes, rest_poses  # noqa: F401  (re-exported)
+from .elastic_rest import loaded_scenes
 from .equilibrium import RestPose
 from .modes import COMPONENTS, Mode, ModeSet
 from .simulate import (RunSummary, drift_floor, measured_period, no_period_warning, period_accuracy,
@@ -441,6 +442,7 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     lowest point goes into one fold at the end (one support-function call a
     body).  The same figures, bit for bit, as each
     run alone (tests/test_run_cost.py, tests/test_batch_determinism.py)."""
+    scenes = loaded_scenes(scenes, rests)  # stated stiffness: the run's wires are the loaded ones
     Bn = len(scenes)
     out: list = [None] * Bn
     groups: dict = {}  # (scene, rest CoM) -> its runs
@@ -513,6 +515,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
     (:func:`~bifilar.analysis.batch_lsoda._lsoda_joint`; raises
     :class:`~bifilar.analysis.batch_lsoda._NotJoint` where that does not
     apply)."""
+    scenes = loaded_scenes(scenes, rests)  # stated stiffness: the run's wires are the loaded ones
     Bn = len(scenes)
     if method == "auto":
         method = "lsoda" if Bn < LARGE_BATCH else "dop853"

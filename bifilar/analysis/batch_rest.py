@@ -250,8 +250,7 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     ok &= ~(np.abs(line_turns(p, R, edge_axes=axis)[0]) > LINE_TURN_TOL)
     ok &= _within_turn(R, np.cos(NEWTON_START_MAX_TURN / 2))
     ok &= np.max(np.abs(d[..., 2]) / dn, axis=1) >= MIN_WIRE_SLOPE
-    if G.shape[1] > MAX_ELIMINATION_WIRES:  # elastic wires (rig.stiffness): rest_pose's elastic statics
-        ok &= np.array([s.stiffness is None for s in scenes])
+    ok &= np.array([s.stiffness is None for s in scenes])  # elastic wires (rig.stiffness): rest_pose's elastic statics
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue
@@ -386,6 +385,8 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose], lazy: bool =
         d, w, G = _jacobian(a, p, com, R)
         dn = np.linalg.norm(d, axis=2)
         N, full = _null_space(G, m, I, R)
+    if G.shape[1] > MAX_ELIMINATION_WIRES:  # elastic wires: linear_modes, whose rank rule knows the stiffness
+        full = full & np.array([s.stiffness is None for s in scenes])
     lam = np.array([r.tensions for r in rests]) / dn
     M = _mass_matrix(m, I, R)
     Nt = np.swapaxes(N, 1, 2)

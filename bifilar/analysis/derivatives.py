@@ -271,6 +271,11 @@ def analytic_period_jacobian(scene: Scene, rest: RestPose, ms: ModeSet, names: l
     neutral direction (:func:`_pose_derivative`; dimensionless, 0 to
     rounding where the column is finite).
     """
+    if scene.stiffness is not None:
+        # elastic wires: the pose is the elastic one and a change of an input moves each wire's stretch too
+        # (a length by 1 + T / EA and more), which this rigid KKT derivative does not know: the callers'
+        # finite differences of the whole chain carry it (docs/design.md "stretch, session 17")
+        raise NotDifferentiable("elastic wires (rig.stiffness): the stretch changes with every input")
     if not ms.modes:
         z = np.zeros((0, len(names)))
         return (z, np.zeros(len(names))) if push else z

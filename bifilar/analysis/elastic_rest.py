@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, StiffnessNeededError
 from ..rotations import rotvec_to_matrix
-from ..scene import Scene
+from ..scene import Scene, scene_with
 from ..models.maximal import MAX_ELIMINATION_WIRES
 from .equilibrium import (RestPose, _finish, _initial_pose, _newton_kkt, _raise_slack, _slsqp, constraint_hessians,
                           constraint_jacobian)
@@ -175,11 +175,13 @@ def refuse_nearly_dependent(scene: Scene, idx, gap, c: np.ndarray, R: np.ndarray
 
 
 def elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
-    """The rest pose of 4 or 5 wires of axial stiffness ``scene.stiffness``
-    (EA, N): the static equilibrium of elastic wires
+    """The rest pose of wires of axial stiffness ``scene.stiffness`` (EA, N;
+    any number of wires since session 17, ``rig.lengths`` their unloaded
+    lengths): the static equilibrium of elastic wires
     (:func:`~bifilar.analysis.elastic_rest.elastic_rest`), from the rigid
-    pose with every wire at its length (Newton on the all-taut KKT equations
-    from the start pose, or from ``guess``; SLSQP's pose where Newton fails).
+    pose with every wire at its length (2 or 3 wires: the rigid rest pose;
+    4 or 5: Newton on the all-taut KKT equations from the start pose; or
+    from ``guess``; SLSQP's pose where Newton fails).
     The pose is the elastic one (each wire stretched by ``T_i L_i / EA_i``,
     its wire vectors that long), its tensions the elastic split, exactly in
     equilibrium there, so the modes are the rigid model's about the loaded
@@ -190,6 +192,11 @@ def elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
     if guess is not None:
         c, R = guess.com.copy(), guess.R.copy()
         kkt = 0.0
+    elif scene.n_wires <= MAX_ELIMINATION_WIRES:  # independent wires: the rigid rest (its checks, a line turn) starts it
+        from .equilibrium import rest_pose
+
+        rigid = rest_pose(scene_with(scene, stiffness=None))
+        c, R = rigid.com.copy(), rigid.R.copy()
     else:
         try:
             c, R, _, kkt = _newton_kkt(scene, *_initial_pose(scene), iters=40)
@@ -205,3 +212,133 @@ def elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
     if len(slack):
         _raise_slack(scene, slack, L[slack] - ln[slack], L)  # no advice: it is the rigid model's
     return _finish(scene, c, R, T / ln, res, phi_checked=False)
+
+
+def loaded_scene(scene: Scene, rest: RestPose) -> Scene:
+    """The scene the runs integrate: with a stated ``rig.stiffness`` the
+    rigid-wire model on the loaded wires, each as long as it hangs at
+    ``rest`` (the elastic rest pose, :func:`elastic_rest_pose`: ``|d_i|`` =
+    ``L_i (1 + T_i / EA_i)``, m) and no stiffness (so nothing stretches
+    them again); ``scene`` itself without one.  The run then starts on its
+    wires at the rest pose the modes are taken about (docs/design.md
+    "stretch, session 17": before, the runs held the wires at their unloaded
+    lengths, 0.23 % off the 4-wire twin's period).  What the rigid run
+    leaves out, the stretch's change with the swing's tension, is
+    :func:`dynamic_stretch_warning`'s."""
+    if scene.stiffness is None:
+        return scene
+    return scene_with(scene, lengths=np.linalg.norm(np.asarray(rest.wire_vectors, float), axis=1), stiffness=None)
+
+
+def loaded_scenes(scenes, rests) -> list:
+    """:func:`loaded_scene` of each (scene, rest) pair (a rest that is no
+    :class:`RestPose`, a batch's error, leaves its scene as it is); one new
+    scene for each distinct pair, so runs that share a scene and rest still
+    share it (the batch groups them by identity)."""
+    out, seen = [], {}
+    for s, r in zip(scenes, rests):
+        if s.stiffness is None or not isinstance(r, RestPose):
+            out.append(s)
+            continue
+        key = (id(s), id(r))
+        if key not in seen:
+            seen[key] = loaded_scene(s, r)
+        out.append(seen[key])
+    return out
+
+
+def elastic_hessian(scene: Scene, rest: RestPose) -> np.ndarray:
+    """The Hessian (6, 6) of the elastic wires' potential (gravity's is
+    linear in the pose) at ``rest`` in the (dr, dtheta world) chart of
+    :func:`~bifilar.analysis.equilibrium.constraint_jacobian`: each taut
+    wire's spring ``EA_i / L_i`` along its direction plus its tension's
+    geometric term (:func:`elastic_rest`'s Hessian).  Units N/m, N, N m."""
+    L = np.asarray(scene.lengths, float)
+    k = np.asarray(scene.stiffness, float) / L
+    d, w, G = constraint_jacobian(scene, rest.com, rest.R)
+    ln = np.linalg.norm(d, axis=1)
+    lam = np.asarray(rest.tensions, float) / ln
+    Gn = G / ln[:, None]
+    H = np.einsum("i,ij,ik->jk", k * (ln > L) - lam, Gn, Gn) + np.einsum("i,ijk->jk", lam, constraint_hessians(d, w))
+    return 0.5 * (H + H.T)
+
+
+def elastic_period_ratios(scene: Scene, rest: RestPose, modes) -> np.ndarray:
+    """For each mode of ``modes`` (the linear modes about the elastic rest
+    pose ``rest``: the rigid-wire model on the loaded wires), the ratio of
+    the elastic wires' linear period to the mode's (NaN for a neutral mode):
+    the full 6-coordinate eigenproblem of :func:`elastic_hessian` and the
+    body's mass, its slowest ``len(modes)`` modes matched to ``modes`` by
+    their shapes (kinetic-energy metric).  1 to rounding where the wires'
+    stretch does not couple with the mode (a symmetric rig's torsion: the
+    2 m trifilar of EA 1e5 N, 1 + 5e-8 by finite differences); a swing whose
+    attachments sit above the CoM couples with the wires' tilt, a
+    correction ~ the strain times the coupling (that trifilar's swings
+    1 + 1.0e-4).  Dimensionless."""
+    from scipy.linalg import eigh
+
+    modes = list(getattr(modes, "modes", modes))
+    if not modes:
+        return np.zeros(0)
+    M = np.zeros((6, 6))
+    M[:3, :3] = scene.mass * np.eye(3)
+    M[3:, 3:] = rest.R @ scene.inertia @ rest.R.T
+    w2, V = eigh(elastic_hessian(scene, rest), M)
+    k = len(modes)
+    S = np.array([np.asarray(m.shape, float) for m in modes]).T  # (6, k)
+    mac = (S.T @ M @ V[:, :k]) ** 2 / (np.einsum("ik,ij,jk->k", S, M, S)[:, None]
+                                       * np.einsum("ik,ij,jk->k", V[:, :k], M, V[:, :k])[None, :])
+    from scipy.optimize import linear_sum_assignment
+
+    col = linear_sum_assignment(-mac)[1]
+    out = np.full(k, np.nan)
+    for j, m in enumerate(modes):
+        if m.period and w2[col[j]] > 0:
+            out[j] = (2 * np.pi / np.sqrt(w2[col[j]])) / m.period
+    return out
+
+
+#: a mode whose elastic linear period differs from the model's by more than this share of itself is warned
+#: of (:func:`stretch_coupling_warning`): the seventh significant digit, which ``modes`` prints
+COUPLING_REL = 1e-6
+
+
+def stretch_coupling_warning(scene: Scene, rest: RestPose, modes, only=None) -> str | None:
+    """With a stated ``rig.stiffness``, the warning naming the modes (all,
+    or the one labelled ``only``) whose elastic linear period
+    (:func:`elastic_period_ratios`; ``modes`` a ModeSet or a list of its
+    modes) differs from the model's (rigid wires at
+    their loaded lengths) by more than :data:`COUPLING_REL` of itself, or
+    None."""
+    if scene.stiffness is None:
+        return None
+    modes = list(getattr(modes, "modes", modes))
+    ratio = elastic_period_ratios(scene, rest, modes)
+    bad = [(m, r) for m, r in zip(modes, ratio)
+           if np.isfinite(r) and abs(r - 1) > COUPLING_REL and (only is None or m.label == only)]
+    if not bad:
+        return None
+    parts = ", ".join(f"{m.label} {r - 1:+.2g} ({m.period * r:.7g} s)" for m, r in bad)
+    return ("rig.stiffness: the model's periods are the rigid wires' at their loaded lengths, but the wires' "
+            f"stretch couples with the motion: the elastic wires' linear periods differ by {parts} of "
+            "themselves; those modes' periods (and an inertia from them) are off by that much")
+
+
+def dynamic_stretch_warning(scene: Scene, rest: RestPose, period, linear_period, period_error) -> str | None:
+    """With a stated ``rig.stiffness``, the warning that a run's amplitude
+    shift (``period - linear_period``, s) leaves out the stretch's change
+    with the swing's tension, where its size, ~ the largest strain at rest
+    times the shift, exceeds the run's ``period_error`` (s); None otherwise.
+    Measured against elastic wires (a spring-law rigid body, the 2 m
+    trifilar and its 4-wire twin of EA 1e5 N, strain 6.5e-3 / 4.9e-3,
+    torsion at 0.02 .. 0.1 rad): the run's shift short by 1.1 x the strain
+    of itself (0.1 rad: 5.1e-6 of the period, 7.1e-4 shift)."""
+    if scene.stiffness is None or period is None or linear_period is None:
+        return None
+    strain = float(np.max(np.asarray(rest.tensions, float) / np.asarray(scene.stiffness, float)))
+    err = strain * abs(period - linear_period)
+    if not err > (period_error if np.isfinite(period_error) else 0.0):
+        return None
+    return (f"rig.stiffness: the run holds the wires at their loaded lengths; their stretch changes with the swing's "
+            f"tension, which it leaves out: its amplitude shift ({period - linear_period:.3g} s) is short by about "
+            f"the strain ({strain:.2g}) of itself, ~{err:.2g} s")

@@ -117,10 +117,15 @@ def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray |
     held_directions`, eigenvalues of ``G M^-1 G^T`` at or above 1e-6 of the
     largest), so that a rig whose wires are only nearly dependent (anchors
     splayed by less than a length tolerance) is dependent at rest as in the
-    run (docs/design.md "restrank, session 14")."""
+    run (docs/design.md "restrank, session 14").  Elastic wires
+    (``rig.stiffness``) always take the run's rule: a direction the wires
+    hold only by their stretch (a splay of 1 mm on 2 m wires: a stiffness
+    ~1e-4 of gravity's) is a mode, as in the run, and the mode count then
+    does not jump within a length's uncertainty (docs/design.md "stretch,
+    session 17")."""
     if sv is None:
         sv = np.linalg.svd(G, compute_uv=False)
-    if G.shape[0] > MAX_ELIMINATION_WIRES and near_dependent(sv):
+    if G.shape[0] > MAX_ELIMINATION_WIRES and (near_dependent(sv) or scene.stiffness is not None):
         return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene.mass, scene.inertia, R, G)))))
     return int(np.sum(sv > 1e-12 * sv[0]))
 
@@ -414,7 +419,7 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
     ConvergenceError
         The solver failed.
     """
-    if scene.stiffness is not None and scene.n_wires > MAX_ELIMINATION_WIRES:
+    if scene.stiffness is not None:
         from .elastic_rest import elastic_rest_pose
 
         return elastic_rest_pose(scene, guess if local_only else None)
@@ -465,6 +470,15 @@ def rest_pose(scene: Scene, guess: RestPose | None = None, local_only: bool = Fa
 
 
 def _from_guess(scene: Scene, guess: RestPose) -> RestPose | None:
+    if scene.stiffness is not None:  # elastic wires: their equilibrium from the neighbour's (Newton on the potential)
+        from .elastic_rest import elastic_rest_pose
+
+        try:
+            r = elastic_rest_pose(scene, guess)
+        except (SlackWireError, UnstableRestError, ConvergenceError, InputError, np.linalg.LinAlgError):
+            return None
+        turn = np.arccos(np.clip((np.trace(r.R @ guess.R.T) - 1) / 2, -1, 1))
+        return r if turn <= 0.05 else None
     lam0 = guess.tensions / np.linalg.norm(guess.wire_vectors, axis=1)
     if lam0.shape[0] != scene.n_wires:
         return None

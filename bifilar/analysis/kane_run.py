@@ -28,6 +28,7 @@ from ..models import kane as kn
 from ..models import maximal as mx
 from ..rotations import matrix_to_quat, quat_to_matrix
 from ..scene import Scene
+from .elastic_rest import loaded_scene
 from .equilibrium import RestPose
 from .modes import ModeSet
 from .simulate import check_period, check_rtol, initial_state, needs_check, summarise_run
@@ -149,6 +150,7 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
     with an extra attribute ``theta`` (k, 5).  Raises
     :class:`~bifilar.models.kane.KaneSingularityError` (exit 1) at vertical wires.
     """
+    scene = loaded_scene(scene, rest)  # stated stiffness: the loaded wires
     km = kane_map(scene)
     check_rtol(rtol)
     rest_theta = from_world(km, mx.pack(rest.com, rest.q))

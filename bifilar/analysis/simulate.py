@@ -62,6 +62,7 @@ from .run_accuracy import (  # noqa: F401 (the names callers import from here)
     TIMING_SHARE,
     untimed,
 )
+from .elastic_rest import dynamic_stretch_warning, loaded_scene
 from .start_pose import refusal
 from .start_states import (checked_start_poses, initial_state, multi_mode_state,  # noqa: F401 (re-exported)
                            reachable_amplitude, two_mode_state)
@@ -378,7 +379,11 @@ def simulate(
     if check:  # a start on a symmetric subspace, whose unstable orbit the run itself cannot show
         from .symmetry_check import check_symmetric_start
 
-        check_symmetric_start(res, scene, mode, amplitude, periods, kw)
+        check_symmetric_start(res, loaded_scene(scene, rest), mode, amplitude, periods, kw)
+    if scene.stiffness is not None:  # the stretch's change with the swing, which the run leaves out
+        w = dynamic_stretch_warning(scene, rest or rest_pose(scene), res.period, res.linear_period, res.period_error)
+        if w is not None:
+            res.warnings.append(w)
     return res
 
 
@@ -394,6 +399,7 @@ def _simulate_once(scene: Scene, mode, amplitude: float, periods: float, *, rest
     check_rtol(rtol)
     rest = rest or rest_pose(scene)
     modes = modes or linear_modes(scene, rest)
+    scene = loaded_scene(scene, rest)  # stated stiffness: the run's wires are the loaded ones
     warnings: list[str] = []
     m = modes.get(mode) if y0 is None else (modes.get(mode) if mode is not None else None)
     if method == "auto" and y0 is not None:

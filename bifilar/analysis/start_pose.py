@@ -47,6 +47,7 @@ from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions
 from ..rotations import quat_multiply, rotvec_to_matrix, rotvec_to_quat, skew
 from ..scene import Scene
 from .batch_rest import _cross
+from .elastic_rest import loaded_scenes
 from .equilibrium import RestPose, multiplier_matrix
 from .wire_statics import held_violation
 from .modes import COMPONENTS
@@ -517,7 +518,7 @@ def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, ampli
     (scalar or (B,), rad or m) x each mode's shape, the dominant coordinate
     held (see the module doc).  Never raises for an unreachable start: see
     ``feasible`` and ``gap``."""
-    scenes = list(scenes)
+    scenes = loaded_scenes(scenes, rests)  # stated stiffness: the wires the run holds, loaded
     B = len(scenes)
     amp = np.broadcast_to(np.asarray(amplitude, float), (B,)).copy()
     rig = _Rig(scenes, rests)

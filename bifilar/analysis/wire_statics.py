@@ -137,8 +137,10 @@ def run_split_warning(scene: Scene, rest: RestPose) -> str | None:
     :data:`RUN_SPLIT_REL` of the mean load."""
     import bifilar.models.maximal as mx
     from ..rotations import matrix_to_quat
+    from .elastic_rest import loaded_scene
     from .equilibrium import _newton_kkt
 
+    scene = loaded_scene(scene, rest)  # the run's wires: loaded, the elastic pose on them
     # the run starts on rigid wires: at the pose nearest the elastic one with every wire at its length (the
     # start of a run of zero amplitude), its multipliers
     c, R, _, kkt = _newton_kkt(scene, rest.com, rest.R, iters=30)
@@ -152,8 +154,8 @@ def run_split_warning(scene: Scene, rest: RestPose) -> str | None:
     if not abs(run0[k] - T[k]) > RUN_SPLIT_REL * load:
         return None
     return (f"rig.stiffness: the rest pose's tensions are the elastic wires' split (wire {k + 1} {T[k]:.4g} N), but "
-            f"the run (simulate, tensions, sweep's and plan's tensions) is the rigid-wire model, whose split on wires at "
-            f"their lengths differs (wire {k + 1} {run0[k]:.4g} N): its tensions are not the elastic wires'; the motion and "
+            f"the run (simulate, tensions, sweep's and plan's tensions) is the rigid-wire model, whose split on the loaded "
+            f"wires differs (wire {k + 1} {run0[k]:.4g} N): its tensions are not the elastic wires'; the motion and "
             "the periods are the rigid model's about the loaded rig")
 
 

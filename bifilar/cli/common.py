@@ -337,11 +337,15 @@ def warn_at_rest(scene, rest, modes, only: str | None = None) -> None:
     (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`), modes
     that stretch the wires (:func:`~bifilar.analysis.wire_statics.stretching_warning`,
     of mode ``only`` or of all ``modes``), the body through the ceiling and
-    crossing wires (:func:`~bifilar.analysis.clearance.clearance_warnings`)."""
+    crossing wires (:func:`~bifilar.analysis.clearance.clearance_warnings`),
+    elastic wires whose stretch the model's periods leave out
+    (:func:`~bifilar.analysis.elastic_rest.stretch_coupling_warning`)."""
     from ..analysis.clearance import clearance_warnings
+    from ..analysis.elastic_rest import stretch_coupling_warning
     from ..analysis.wire_statics import indeterminate_warning, stretching_warning
 
-    ws = [indeterminate_warning(scene, rest), stretching_warning(scene, rest, modes, only=only)]
+    ws = [indeterminate_warning(scene, rest), stretching_warning(scene, rest, modes, only=only),
+          stretch_coupling_warning(scene, rest, modes, only=only)]
     for w in [w for w in ws if w is not None] + clearance_warnings(scene, rest):
         click.echo(f"warning: {w}", err=True)
 

@@ -101,15 +101,14 @@ def plausibility_warnings(scene: Scene) -> list[str]:
 def stretch_warning(scene: Scene) -> str | None:
     """The warning for a stated ``rig.stiffness`` (EA, N) that stretches a
     wire, at an equal share of the weight ``m g / n``, by more than
-    ``PLAUSIBLE["stretch"]`` (1 mm, a length's default uncertainty), where
-    the model does not carry the stretch through (audit16: a 200 kg trifilar,
-    2 m wires, EA 1e5 N, stretched 13 mm, gave Izz 0.65 % high, z +57 with
-    exact inputs, +2.8 with the default ones, no word; the 4-wire twin's
-    runs 0.23 % short of its own linear period, Izz z +16 at 0.05 rad), or
-    None.  2 and 3 wires: the model takes ``rig.lengths`` as the hanging
-    (loaded) lengths and ignores EA.  4 and 5 wires: the rest pose and the
-    modes are the stretched rig's (the lengths unstretched), but the
-    nonlinear runs' wires are ``rig.lengths`` themselves, unstretched."""
+    ``PLAUSIBLE["stretch"]`` (1 mm, a length's default uncertainty), or
+    None.  Since session 17 the model carries the stretch on every wire
+    count (``rig.lengths`` the unloaded lengths; the rest pose, the modes
+    and the runs on the loaded wires, docs/design.md "stretch, session
+    17"); what it does not carry is EA's own uncertainty, which no budget
+    holds: the warning says how far a 10 % error in EA moves the loaded
+    lengths and the periods.  (Session 16's warning, that 2 and 3 wires
+    ignored EA and 4 and 5 wires ran on unstretched wires, is void.)"""
     if scene.stiffness is None:
         return None
     share = scene.mass * scene.gravity / scene.n_wires
@@ -118,12 +117,8 @@ def stretch_warning(scene: Scene) -> str | None:
     if not dl[i] > PLAUSIBLE["stretch"]:
         return None
     strain = dl[i] / scene.lengths[i]
-    head = (f"rig.stiffness: at an equal share of the weight ({share:.4g} N) wire {i + 1} stretches by {1e3 * dl[i]:.3g} "
-            f"mm (strain {strain:.2g}: the periods move by ~{strain / 2:.2g} of themselves), more than a length's "
-            f"{1e3 * PLAUSIBLE['stretch']:g} mm default uncertainty; ")
-    if scene.n_wires <= 3:
-        return head + (f"{scene.n_wires}-wire rigs do not use it: rig.lengths are taken as the wires' hanging (loaded) "
-                       "lengths; give those (and drop rig.stiffness), or the inertia comes out ~that strain high")
-    return head + ("the rest pose and the modes are the stretched wires', but the nonlinear runs (simulate, the "
-                   "amplitude factor of invert, sweep and plan) keep the wires at rig.lengths, unstretched: their "
-                   "periods are short of the loaded rig's by about that much; time small releases (--amplitude 0)")
+    return (f"rig.stiffness: at an equal share of the weight ({share:.4g} N) wire {i + 1} stretches by "
+            f"{1e3 * dl[i]:.3g} mm (strain {strain:.2g}), more than a length's {1e3 * PLAUSIBLE['stretch']:g} mm "
+            "default uncertainty; rig.lengths are read as the unloaded lengths and the model hangs the body on the "
+            "loaded wires, but EA is taken as exact (no uncertainty term holds it): a 10 % error in it moves each "
+            f"loaded length by {0.1e3 * dl[i]:.2g} mm and the periods by ~{0.1 * strain / 2:.2g} of themselves")
