@@ -257,6 +257,14 @@ def test_a_tones_ratio_std_is_the_amplitudes_cramer_rao_std_over_the_fundamental
         tone = next(d for d in tones if abs(d["period"] - 1 / f) < 1e-9)
         want = fit.noise_std * math.sqrt(2.0 / fit.n_samples) * factor / fit.modes[0]["amplitude"]
         assert tone["ratio_std"] == pytest.approx(want, rel=1e-12), infl
+    # the documented significance: kept above TONE_Z of that std, not below
+    from bifilar.estimation.signal_swing import TONE_Z
+
+    for z, kept in ((0.9, False), (1.1, True)):
+        fit = _fit(zeta_std=1.0, near=(f, NEAR_RATIO, NEAR_PERIOD_STD, SIGMA))
+        s_amp = fit.noise_std * math.sqrt(2.0 / fit.n_samples) * fit.std_inflation
+        fit.modes[1]["amplitude"] = z * TONE_Z * s_amp
+        assert _has_near(record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"})), f) == kept, z
     fit = _fit()
     fit.modes = []
     assert record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"})) == []
@@ -298,3 +306,95 @@ def test_an_equilateral_trifilar_has_the_three_mirrors_and_two_turns_of_d3():
     assert len(found) == 5
     for W in want:
         assert any(np.allclose(F, W, atol=1e-9) for F in found), W
+
+
+# ---------------------------------------------------------------------------
+# more of phase_steps: the local mean, the noise gate
+# ---------------------------------------------------------------------------
+
+def test_an_offset_and_a_drift_ten_times_the_amplitude_do_not_move_the_phase():
+    """The local mean over exactly one cycle removes an offset of 10 x the
+    amplitude (0.5 rad) and a drift of 6 x it over the record: the phase
+    differences are those of the record without them (a cycle's sum of a
+    constant or a straight line, demodulated, is zero to rounding at W =
+    51 samples a cycle exactly): the flat level the same to 1e-9 rad, one
+    flat stretch, no step."""
+    T = 1.7
+    t, y, _ = _samples(T, cycles=30, seed=3)
+    tn = np.arange(t.size) / FS
+    a = phase_steps(tn, y, 1.002 / T)
+    b = phase_steps(tn, y + 0.5 + 0.3 * tn / tn[-1], 1.002 / T)
+    assert abs(a["flat_level"] - b["flat_level"]) < 1e-9
+    assert b["flat_runs"] == 1 and b["forward"] == [] and b["backward"] == []
+
+
+@pytest.mark.parametrize("share, found", [(0.08, 6), (0.2, 0)])
+def test_a_step_counts_only_where_the_phase_noise_is_below_an_eighth_of_a_frame(share, found):
+    """The documented gate (``MAX_NOISE_SHARE`` = 1/8): the phase
+    difference's noise a cycle is 2 sigma / (a sqrt(W)) for white noise
+    sigma on a cosine of amplitude a (a cycle's sum of W samples: amplitude
+    a W / 2, noise sigma sqrt(W)).  Six drops on a record whose noise puts
+    that at 0.08 h at the last drop (its amplitude the smallest): all six
+    found; at 0.2 h, none (the steps are there, but no longer told from
+    noise)."""
+    T = 1.7
+    h = 2 * np.pi / (T * FS)
+    drops = np.arange(4, 28, 4) * T + 0.3 * T
+    t = np.arange(0.0, 30 * T, 1 / FS)
+    sig = share * h * 0.05 * np.exp(-0.003 * drops[-1]) * math.sqrt(51) / 2
+    y = 0.05 * np.exp(-0.003 * t) * np.cos(2 * np.pi / T * t + 0.4)
+    y = y + sig * np.random.default_rng(5).standard_normal(t.size)
+    keep = np.ones(t.size, bool)
+    keep[np.searchsorted(t, drops)] = False
+    st = phase_steps(np.arange(keep.sum()) / FS, y[keep], 1 / T)
+    assert len(st["forward"]) == found and st["backward"] == []
+
+
+# ---------------------------------------------------------------------------
+# more of symmetry_check: a rig in one vertical plane; the start's tolerance
+# ---------------------------------------------------------------------------
+
+def test_two_unequal_wires_in_a_vertical_plane_have_its_mirror():
+    """Two wires of 1.0 and 1.2 m in the vertical plane at 30 degrees from
+    x (no two wires alike, so the quick test decides by the plane), a body
+    symmetric about the vertical: the one symmetry is the mirror in that
+    plane, S = I - 2 n n^T with n horizontal at 120 degrees."""
+    from bifilar.analysis import symmetry_check as sy
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.config import scene_from_dict
+
+    u = np.array([math.cos(math.pi / 6), math.sin(math.pi / 6)])
+    rig = {"anchors": [[*(0.3 * u), 0.0], [*(-0.3 * u), 0.0]],
+           "attachments": [[*(0.2 * u), 0.05], [*(-0.2 * u), 0.05]], "lengths": [1.0, 1.2]}
+    sc = scene_from_dict({"name": "p", "body": {"mass": 2.0, "inertia": {"principal": [0.1, 0.1, 0.15]}},
+                          "rig": rig}, "p", warn=False)
+    found = sy.rig_symmetries(sc, rest_pose(sc))
+    n = np.array([math.cos(2 * math.pi / 3), math.sin(2 * math.pi / 3), 0.0])
+    assert len(found) == 1 and np.allclose(found[0].S, np.eye(3) - 2 * np.outer(n, n), atol=1e-9)
+
+
+def test_a_start_is_symmetric_within_the_tolerance_of_its_own_scale():
+    """``start_symmetry``'s documented tolerance: each state component
+    within SYMMETRY_TOL (1e-9) of the run's scale.  The plate at rest moved
+    across its symmetry plane (x = 0) by 0.5e-9 and 2e-9 of a scale of 1e-3
+    m: fixed by its mirror, then not (by a scale of 1 the second would be
+    within it)."""
+    from bifilar.analysis import symmetry_check as sy
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.config import load_scene
+
+    from conftest import CONFIGS
+
+    sc = load_scene(CONFIGS / "thesis_plate_rest.yaml")
+    rest = rest_pose(sc)
+    syms = sy.rig_symmetries(sc, rest)
+    y = np.r_[np.zeros(3), rest.q, np.zeros(6)]
+    scale = np.full(13, 1e-3)
+    for off, fixed_by_x_mirror in ((0.5e-12, True), (2e-12, False)):
+        y1 = y.copy()
+        y1[0] = off
+        tr = sy.start_symmetry(syms, y1, scale)
+        names = [] if tr is None else [s.name for s in tr.symmetries]
+        x_mirror = [s for s in syms if np.allclose(s.S, np.diag([-1.0, 1.0, 1.0]))]
+        assert len(x_mirror) == 1
+        assert (x_mirror[0].name in names) == fixed_by_x_mirror, (off, names)
