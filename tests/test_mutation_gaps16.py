@@ -265,6 +265,10 @@ def test_a_tones_ratio_std_is_the_amplitudes_cramer_rao_std_over_the_fundamental
         s_amp = fit.noise_std * math.sqrt(2.0 / fit.n_samples) * fit.std_inflation
         fit.modes[1]["amplitude"] = z * TONE_Z * s_amp
         assert _has_near(record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"})), f) == kept, z
+    # and two cycles in the record (T_record = fit.t1 - fit.t0): 2.2 kept, 1.8 not
+    T = T_REC - 1 / 60.0
+    for cycles, kept in ((2.2, True), (1.8, False)):
+        assert _has_near(_tones(cycles / T, 0.005, zeta_std=1.0), cycles / T) == kept, cycles
     fit = _fit()
     fit.modes = []
     assert record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"})) == []
