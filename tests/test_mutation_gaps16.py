@@ -265,6 +265,12 @@ def test_a_tones_ratio_std_is_the_amplitudes_cramer_rao_std_over_the_fundamental
         s_amp = fit.noise_std * math.sqrt(2.0 / fit.n_samples) * fit.std_inflation
         fit.modes[1]["amplitude"] = z * TONE_Z * s_amp
         assert _has_near(record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"})), f) == kept, z
+    # a rate record's tone in angle: a rate amplitude is omega x the angle's, so the angles' ratio is
+    # (a / omega) / (a0 / omega0)
+    fit = _fit(zeta_std=1.0, near=(f, NEAR_RATIO, NEAR_PERIOD_STD, SIGMA))
+    tone = next(d for d in record_tones(SimpleNamespace(fit=fit, details={"quantity": "rate"}))
+                if abs(d["period"] - 1 / f) < 1e-9)
+    assert tone["ratio"] == pytest.approx(NEAR_RATIO * F0 / f, rel=1e-12)
     # and two cycles in the record (T_record = fit.t1 - fit.t0): 2.2 kept, 1.8 not
     T = T_REC - 1 / 60.0
     for cycles, kept in ((2.2, True), (1.8, False)):
@@ -352,6 +358,38 @@ def test_a_step_counts_only_where_the_phase_noise_is_below_an_eighth_of_a_frame(
     keep[np.searchsorted(t, drops)] = False
     st = phase_steps(np.arange(keep.sum()) / FS, y[keep], 1 / T)
     assert len(st["forward"]) == found and st["backward"] == []
+
+
+def _fit_at(T):
+    return SimpleNamespace(frequency=1 / T, period=T, model="viscous")
+
+
+def test_a_repeated_frame_steps_the_phase_back_and_the_warning_counts_from_two_drops():
+    """A camera that repeats a frame leaves the later samples one frame
+    early: the phase steps back by h (a dropped frame's step reversed).
+    Among 8 drops (4 cycles apart, 40 cycles) one repeated frame: 8 steps
+    forward, 1 back, and the warning still given (1 back is within a
+    quarter of 8).  The documented count: one drop (flat stretches either
+    side) is no warning, two are; a record read with its time column is
+    never checked (its times are the frames' own), drops or not."""
+    from bifilar.estimation.signal_timebase import dropped_frames_warning
+
+    T = 1.7
+    t, y, _ = _samples(T, cycles=40, seed=3)
+    idx = np.delete(np.arange(t.size), np.searchsorted(t, np.arange(4, 36, 4) * T + 0.3 * T))
+    idx = np.sort(np.r_[idx, np.searchsorted(t, 6.3 * T)])
+    tn = np.arange(idx.size) / FS
+    st = phase_steps(tn, y[idx], 1 / T)
+    assert len(st["forward"]) == 8 and len(st["backward"]) == 1
+    assert abs(st["backward"][0] - 6.3 * T) < 0.5 * T + 3 / FS  # (nominal time: 3 frames behind there)
+    assert dropped_frames_warning(tn, y[idx], _fit_at(T), "sample_rate") is not None
+    t, y, _ = _samples(T, cycles=30, seed=3)
+    for nd, warned in ((1, False), (2, True)):
+        keep = np.ones(t.size, bool)
+        keep[np.searchsorted(t, (np.arange(nd) * 8 + 8) * T + 0.3 * T)] = False
+        tn = np.arange(keep.sum()) / FS
+        assert (dropped_frames_warning(tn, y[keep], _fit_at(T), "sample_rate") is not None) == warned, nd
+        assert dropped_frames_warning(tn, y[keep], _fit_at(T), "column") is None
 
 
 # ---------------------------------------------------------------------------
