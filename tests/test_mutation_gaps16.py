@@ -271,6 +271,13 @@ def test_a_tones_ratio_std_is_the_amplitudes_cramer_rao_std_over_the_fundamental
     tone = next(d for d in record_tones(SimpleNamespace(fit=fit, details={"quantity": "rate"}))
                 if abs(d["period"] - 1 / f) < 1e-9)
     assert tone["ratio"] == pytest.approx(NEAR_RATIO * F0 / f, rel=1e-12)
+    s_amp = fit.noise_std * math.sqrt(2.0 / fit.n_samples) * fit.std_inflation
+    assert tone["ratio_std"] == pytest.approx(s_amp / fit.modes[0]["amplitude"] * F0 / f, rel=1e-12)
+    # strongest first: a third mode twice as strong as the second leads
+    fit = _fit(zeta_std=1.0, near=(f, NEAR_RATIO, NEAR_PERIOD_STD, SIGMA))
+    fit.modes.append({**fit.modes[1], "omega": 2 * math.pi * 0.3, "amplitude": 2 * fit.modes[1]["amplitude"]})
+    tones = record_tones(SimpleNamespace(fit=fit, details={"quantity": "angle"}))
+    assert [round(d["period"], 6) for d in tones] == [round(1 / 0.3, 6), round(1 / f, 6)]
     # and two cycles in the record (T_record = fit.t1 - fit.t0): 2.2 kept, 1.8 not
     T = T_REC - 1 / 60.0
     for cycles, kept in ((2.2, True), (1.8, False)):
@@ -471,3 +478,25 @@ def test_the_dominant_multiplier_is_converged_at_64_samples_a_period():
         rho.append(float(np.max(np.abs(mu))))
     assert rho[0] == pytest.approx(7.33, rel=0.01)
     assert abs(rho[0] / rho[1] - 1) < 1e-4, rho
+
+
+def test_offset_error_and_reproducible_cycles_written_out():
+    """``offset_error``'s documented rule by hand: the check's cycle-by-cycle
+    differences from the run, their moduli summed over the run's N cycles
+    plus the largest, over N; ``reproducible_cycles``: the largest n for
+    which the mean periods over the first m <= n cycles agree within the
+    error.  Run: 4 cycles of 1 s; check: cycles 1, 1.001, 0.998, 1.004 (and
+    one more, the check runs longer)."""
+    from bifilar.analysis import symmetry_check as sy
+
+    tc = np.array([0.0, 1.0, 2.0, 3.0, 4.0])
+    tk = np.cumsum([0.0, 1.0, 1.001, 0.998, 1.004, 1.0])
+    d = np.abs(np.array([1.0, 1.001, 0.998, 1.004]) - 1.0)
+    assert sy.offset_error(tc, tk) == pytest.approx((d.sum() + d.max()) / 4, rel=1e-9)
+    assert sy.offset_error(tc[:2], tk) == pytest.approx(0.0, abs=1e-12)  # one cycle: its own difference, 0
+    assert sy.offset_error(tc[:2], tk + np.r_[0.0, 0.002, np.zeros(4)]) == pytest.approx(2 * 0.002, rel=1e-6)
+    assert sy.offset_error(tc[:1], tk) == 0.0
+    # mean periods over m cycles differ by 0, 0.0005, 0.00033, 0.00075: within 6e-4 the first 3 of 4
+    assert sy.reproducible_cycles(tc, tk, 6e-4) == 3
+    assert sy.reproducible_cycles(tc, tk, 1e-3) == 4
+    assert sy.reproducible_cycles(tc, tk, 1e-4) == 1
