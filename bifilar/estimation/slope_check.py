@@ -35,6 +35,10 @@ SECANT_DISAGREE = 0.2
 #: answer states; on audit17 row B3 over +-1 std the secant differed from the local slope by -18 .. -24 %, at the
 #: threshold, over +-1.96 std by -22 .. -47 %, while the smooth torsions of row B1 differ by 1e-5 at any reach)
 SECANT_REACH = 1.96
+#: a difference of the two slopes counts only where it moves the period over the reach by more than this share of
+#: the measurement's timing std (a period that does not depend on an unknown has slopes of ~1e-14 s per kg m^2 either
+#: way, 100 % apart: the example file's torsion in Ixx); a single unknown's 20 % always moves it by > 0.39 of it
+SECANT_SIGNIFICANT = 0.1
 
 
 def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) -> tuple[list[str], bool]:
@@ -44,8 +48,9 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
     of the full model period ``T = T_lin r`` over ``h`` =
     :data:`SECANT_REACH` times the estimate's std (``std``, the first
     budget's).  Where they differ by more than
-    :data:`SECANT_DISAGREE` of the local slope and the secant is the smaller
-    in magnitude, ``laws[k].dr_dp[j]`` is set so that the full slope is the
+    :data:`SECANT_DISAGREE` of the local slope (and by more than
+    :data:`SECANT_SIGNIFICANT` of the timing std over the reach) and the
+    secant is the smaller in magnitude, ``laws[k].dr_dp[j]`` is set so that the full slope is the
     secant (the budget's gain, hence the timing and amplitude terms and the
     Monte Carlo's, then follow it); a larger secant leaves the law alone
     (the local slope already gives the larger std).  ``p`` the estimate,
@@ -70,11 +75,13 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
             s = float(std[j]) if j < std.size else math.nan
             if not math.isfinite(s) or s <= 0:
                 continue
-            sec = _secant(pb, k, p, j, SECANT_REACH * s, rtol)
+            h, loc = SECANT_REACH * s, float(r[k] * J[k, j] + T_lin[k] * law.dr_dp[j])
+            if 2.0 * abs(loc) * h <= SECANT_SIGNIFICANT * m.std:
+                continue  # no smaller secant could matter (|sec - loc| < 2 |loc|): no runs
+            sec = _secant(pb, k, p, j, h, rtol)
             if sec is None:
                 continue
-            loc = float(r[k] * J[k, j] + T_lin[k] * law.dr_dp[j])
-            if not loc or abs(sec - loc) <= SECANT_DISAGREE * abs(loc):
+            if abs(sec - loc) <= SECANT_DISAGREE * abs(loc) or abs(sec - loc) * h <= SECANT_SIGNIFICANT * m.std:
                 continue
             used = "secant" if abs(sec) < abs(loc) else "local"
             if used == "secant":
