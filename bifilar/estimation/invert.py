@@ -280,6 +280,14 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(pb, p_hat, r_hat, method, rungs, best,
                                                                             unc_all, rtol, laws=laws,
                                                                             prior_stated=stated)
+    if laws:  # the local slope against the secant over the estimate's std (a period that wiggles in the unknown)
+        from .slope_check import secant_check
+
+        rough, changed = secant_check(pb, p_hat, r_hat, laws, budget.std, rtol, multi=len(pb.models) > 1)
+        warnings += rough
+        if changed:
+            budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(
+                pb, p_hat, r_hat, method, rungs, best, unc_all, rtol, laws=laws, prior_stated=stated)
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
         # the shift in % of |value| so that its sign is the shift's, as the std's is (a negative product

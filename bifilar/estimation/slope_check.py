@@ -1,0 +1,112 @@
+"""The full model's slope over the estimate's own uncertainty (invert only).
+
+The nonlinear rung's budget takes the model period's derivative in the
+unknowns as the *local* one at the estimate, ``r dT_lin/dp + T_lin dr/dp``
+(``dr/dp`` a forward difference at :data:`~bifilar.estimation.solve.FACTOR_STEP`
+of the scale, :func:`~bifilar.estimation.solve.stated_amplitude_law`).
+Where the timed motion exchanges energy with another mode (a swing near
+twice a pitch's period released at 0.2 m: docs/design.md "Estimation
+audit, session 17", row B3) the mean period over the timed cycles wiggles
+in the unknown on a scale smaller than the estimate's std, and the local
+slope is that of one stretch of the wiggle (0.35x .. 1.5x the average on
+that row): the std it gives was 0.6x .. 2.4x the realised spread.
+
+:func:`secant_check` measures the slope again as a secant over the
+estimate's 95 % interval, +-:data:`SECANT_REACH` std (two runs of the stated-amplitude model per unknown and
+measurement) and, where the two differ by more than
+:data:`SECANT_DISAGREE`, keeps the smaller slope magnitude (the larger
+std) and warns.  SI units; the unknowns in the reference body axes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import BifilarError
+from .amplitude_runs import _unchecked_factor
+
+#: the relative difference between the secant and the local full-model slope above which the period is taken
+#: as not smooth in the unknown over its std (a smooth factor's secant over +-1 std differs from its local slope
+#: by the slope's curvature only: 1e-4 .. 1e-2 on the torsions and pitch of audit17 rows B1/B2)
+SECANT_DISAGREE = 0.2
+#: the secant's half-width in the estimate's std: the 95 % interval's (the slope must hold over the interval the
+#: answer states; on audit17 row B3 over +-1 std the secant differed from the local slope by -18 .. -24 %, at the
+#: threshold, over +-1.96 std by -22 .. -47 %, while the smooth torsions of row B1 differ by 1e-5 at any reach)
+SECANT_REACH = 1.96
+#: a difference of the two slopes counts only where it moves the period over the reach by more than this share of
+#: the measurement's timing std (a period that does not depend on an unknown has slopes of ~1e-14 s per kg m^2 either
+#: way, 100 % apart: the example file's torsion in Ixx); a single unknown's 20 % always moves it by > 0.39 of it
+SECANT_SIGNIFICANT = 0.1
+
+
+def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) -> tuple[list[str], bool]:
+    """Compare each stated-amplitude measurement's local full-model slope
+    ``dT/dp_j = r dT_lin/dp_j + T_lin dr/dp_j`` (s per unit of ``p_j``:
+    kg m^2 or m) with the secant ``(T(p + h e_j) - T(p - h e_j)) / (2 h)``
+    of the full model period ``T = T_lin r`` over ``h`` =
+    :data:`SECANT_REACH` times the estimate's std (``std``, the first
+    budget's).  Where they differ by more than
+    :data:`SECANT_DISAGREE` of the local slope (and by more than
+    :data:`SECANT_SIGNIFICANT` of the timing std over the reach) and the
+    secant is the smaller in magnitude, ``laws[k].dr_dp[j]`` is set so that the full slope is the
+    secant (the budget's gain, hence the timing and amplitude terms and the
+    Monte Carlo's, then follow it); a larger secant leaves the law alone
+    (the local slope already gives the larger std).  ``p`` the estimate,
+    ``r`` (K,) its amplitude factors, ``laws`` the estimate's amplitude laws
+    (only those with ``dr_dp``: a nonlinear run law), runs at ``rtol``.  A
+    stepped run that fails (a slack wire, no rest pose) leaves that pair
+    unchecked.  Returns (one warning per (measurement, unknown) that
+    disagrees, whether a law was changed: the budget must be made again)."""
+    p = np.asarray(p, float)
+    std = np.asarray(std, float)
+    if laws is None or not any(law is not None and law.dr_dp is not None for law in laws):
+        return [], False
+    T_lin = pb.linear_periods(p)
+    J = pb.jacobian(p)
+    out, changed = [], False
+    for k, law in enumerate(laws):
+        if law is None or law.dr_dp is None:
+            continue
+        m = pb.measurements[k]
+        lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
+        for j, name in enumerate(pb.unknowns):
+            s = float(std[j]) if j < std.size else math.nan
+            if not math.isfinite(s) or s <= 0:
+                continue
+            h, loc = SECANT_REACH * s, float(r[k] * J[k, j] + T_lin[k] * law.dr_dp[j])
+            if 2.0 * abs(loc) * h <= SECANT_SIGNIFICANT * m.std:
+                continue  # no smaller secant could matter (|sec - loc| < 2 |loc|): no runs
+            sec = _secant(pb, k, p, j, h, rtol)
+            if sec is None:
+                continue
+            if abs(sec - loc) <= SECANT_DISAGREE * abs(loc) or abs(sec - loc) * h <= SECANT_SIGNIFICANT * m.std:
+                continue
+            used = "secant" if abs(sec) < abs(loc) else "local"
+            if used == "secant":
+                law.dr_dp = np.array(law.dr_dp, float)
+                law.dr_dp[j] = (sec - r[k] * J[k, j]) / T_lin[k]
+                changed = True
+            out.append(f"mode '{lab}': the period is not smooth in {name} at this amplitude (--amplitude "
+                       f"{m.amplitude:g}): its slope over the estimate's 95 % interval ({sec:.3g} s per unit) "
+                       f"differs from the local one ({loc:.3g}) by {100 * abs(sec - loc) / abs(loc):.0f} % "
+                       f"(another mode exchanging energy with it?); the std is from the {used} slope, the smaller; "
+                       "time it at a smaller amplitude")
+    return out, changed
+
+
+def _secant(pb, k: int, p: np.ndarray, j: int, s: float, rtol: float) -> float | None:
+    """(T(p + s e_j) - T(p - s e_j)) / (2 s), s per unit of ``p_j``: the
+    full model period ``T_lin r`` of measurement ``k`` (its amplitude runs,
+    unchecked, at ``rtol``); None where a run or a linear model fails."""
+    T = []
+    for sign in (1.0, -1.0):
+        q = np.array(p, float)
+        q[j] += sign * s
+        try:
+            T.append(float(pb.linear_periods(q)[k]) * _unchecked_factor(pb, k, q, rtol))
+        except BifilarError:
+            return None
+    val = (T[0] - T[1]) / (2.0 * s)
+    return val if math.isfinite(val) else None
