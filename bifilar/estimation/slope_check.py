@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import BifilarError
 from .amplitude_runs import _unchecked_factor
+from .problem import admissible
 
 #: the relative difference between the secant and the local full-model slope above which the period is taken
 #: as not smooth in the unknown over its std (a smooth factor's secant over +-1 std differs from its local slope
@@ -99,14 +100,20 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
 def _secant(pb, k: int, p: np.ndarray, j: int, s: float, rtol: float) -> float | None:
     """(T(p + s e_j) - T(p - s e_j)) / (2 s), s per unit of ``p_j``: the
     full model period ``T_lin r`` of measurement ``k`` (its amplitude runs,
-    unchecked, at ``rtol``); None where a run or a linear model fails."""
+    unchecked, at ``rtol``); None where a run or a linear model fails, or
+    where either end leaves the tensors a body can have (a swing whose
+    period barely moves with an inertia has a std reaching past zero: the
+    thesis roll rig's swing-x in Ixx; its modes have no meaning there)."""
     T = []
     for sign in (1.0, -1.0):
         q = np.array(p, float)
         q[j] += sign * s
+        vals = pb.values(q)
+        if not all(admissible(model.inertia_ref(vals)) for model in pb.models):
+            return None
         try:
             T.append(float(pb.linear_periods(q)[k]) * _unchecked_factor(pb, k, q, rtol))
-        except BifilarError:
+        except (BifilarError, np.linalg.LinAlgError):
             return None
     val = (T[0] - T[1]) / (2.0 * s)
     return val if math.isfinite(val) else None
