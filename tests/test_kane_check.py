@@ -54,8 +54,13 @@ def test_kane_checks_a_run_that_is_not_regular():
     assert any("not regular" in w for w in k.warnings)
     sym = k.period_symmetry
     assert sym is not None and sym["multiplier"] == pytest.approx(7.33, rel=0.01)
-    assert sym["check"]["cycles"] == len(k.crossings) - 1 and k.period_error >= k.period_error_symmetry >= true
-    assert len([w for w in k.warnings if "unstable symmetric orbit" in w]) == 1
+    assert sym["check"]["cycles"] == len(k.crossings) - 1 and k.period_error >= k.period_error_symmetry
+    # the stated error holds both the maximal model's period and the check run's: the symmetry term sets it where
+    # the rtol/100 rerun's difference does not already (under Sandybridge that rerun differs by 2.9e-3 s, more
+    # than the check run's 2.3e-3, so period_error_symmetry is 0 there; 1.0e-2 / 1.2e-2 s on the others)
+    assert k.period_error >= max(true, sym["check"]["difference"])
+    # its own warning where it set the error (one), none where the irregularity warning's error already held it
+    assert len([w for w in k.warnings if "unstable symmetric orbit" in w]) == (1 if k.period_error_symmetry > 0 else 0)
 
 
 def test_kane_json_has_the_check_of_a_beating_run():
