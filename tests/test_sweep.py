@@ -52,9 +52,15 @@ def test_value_specifications():
     p = sh.parse_param("rig.lengths.1=4:5:2")
     assert p.name == "rig.lengths.1" and p.values == (4.0, 5.0)
     assert sh.parse_bounds("spacing=1:4.8") == ("spacing", 1.0, 4.8)
+    assert list(sh.parse_values(" +1e-1 , .5, 2. ")) == [0.1, 0.5, 2.0]  # plain notations stay accepted
+    with pytest.raises(InputError):
+        sh.parse_bounds("spacing=1_0:20")
 
 
-@pytest.mark.parametrize("bad", ["", "1:2", "log:-1:2:3", "a,b", "1:2:x", "[1, \"a\"]", "1:2:0", "nan", "[]"])
+@pytest.mark.parametrize("bad", ["", "1:2", "log:-1:2:3", "a,b", "1:2:x", "[1, \"a\"]", "1:2:0", "nan", "[]",
+                                 # Python's float()/int() read these as 10, 20 and 1 (audit17 row F: a typo swept
+                                 # silently as another value)
+                                 "1_0:2:3", "1:2:1_0", "0.5,2_0", "[\"1_0\"]", "\uff11:2:3", "1:2:\uff13"])
 def test_bad_value_specifications_name_the_argument(bad):
     with pytest.raises(InputError) as e:
         sh.parse_values(bad)

@@ -68,6 +68,12 @@ class ParamSpec:
     values: tuple[float, ...]
 
 
+#: a number as a user types one on the command line: ASCII digits, an optional point and exponent.  Python's
+#: float() and int() also take '1_0' (10) and other scripts' digits, a typo read as another value
+_PLAIN_NUMBER = re.compile(r"\s*[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?\s*")
+_PLAIN_COUNT = re.compile(r"\s*\+?[0-9]+\s*")
+
+
 def _num(text: str, arg: str, what: str) -> float:
     try:
         v = float(text)
@@ -75,12 +81,16 @@ def _num(text: str, arg: str, what: str) -> float:
         raise InputError(arg, f"{what} {text!r} is not a number") from None
     if not math.isfinite(v):
         raise InputError(arg, f"{what} must be finite, got {text}")
+    if not _PLAIN_NUMBER.fullmatch(text):
+        raise InputError(arg, f"{what} {text!r} is not a plain decimal number (digits 0-9, e.g. 1.5 or 2e-3)")
     return v
 
 
 def _count(text: str, arg: str) -> int:
     try:
         n = int(text)
+        if not _PLAIN_COUNT.fullmatch(text):
+            raise ValueError
     except ValueError:
         raise InputError(arg, f"the number of points {text!r} must be a whole number") from None
     if not 1 <= n <= MAX_POINTS:
