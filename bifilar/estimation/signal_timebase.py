@@ -284,8 +284,8 @@ def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIG
                           "std_added": extra, "period_between_steps": T_flat}}
 
 
-#: the frames' lattice is searched (:func:`.signal_frames.recover_frames`, ~0.15 s for 2000 samples, growing as
-#: their square) only where the nominal fit leaves this much more than the record's white noise (third
+#: the frames' lattice is searched (:func:`.signal_frames.recover_frames`; with the refit 0.75 s CPU for 2075
+#: samples, growing as their square: scripts/bench_timebase.py) only where the nominal fit leaves this much more than the record's white noise (third
 #: differences, :func:`white_noise`).  On dropfix's 176 synthetic records (docs/design.md "dropfix, session 17")
 #: every record put back, widened or refused left 1.22-17 x, so none of those outcomes changes; 71 of the 80
 #: drop-free controls (all clean and quantised ones, 23 of 24 beats, 8 of 16 chirps) leave below 1.1 x and skip it
