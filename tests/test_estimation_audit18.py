@@ -100,3 +100,49 @@ def test_a_record_that_is_no_wrapped_angle_is_left_alone(y):
     out, w = unwrap_record(y)
     assert w is None
     assert np.array_equal(out, y)
+
+
+PLATE3 = """name: plate3
+gravity: 9.81
+body:
+  mass: {mass}
+  inertia: {{tensor: [[0.03, 0.0, 0.0], [0.0, 0.035, 0.0], [0.0, 0.0, 0.06]]}}
+rig:
+  anchors: [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]]
+  attachments: [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]]
+  lengths: [1.0, 1.0, 1.0]
+"""
+
+
+@pytest.mark.parametrize("text, meant", [("1:30", 90), ("010", 8), ("2:30.5", 150.5)])
+def test_a_base_60_or_octal_number_in_a_config_is_refused_naming_the_field(tmp_path, text, meant):
+    """Audit18's bad-input row: YAML 1.1 (PyYAML's safe_load) reads ``mass:
+    1:30`` as 90 (base 60) and ``010`` as 8 (octal): on the old code `modes`
+    ran a 90 kg plate without a word ('plate3: 90 kg on 3 wires').  Now such
+    a plain scalar is text (YAML 1.2 reads ``1:30`` so), and the number
+    field refuses it in one line naming it and the cause."""
+    p = tmp_path / "m.yaml"
+    p.write_text(PLATE3.format(mass=text))
+    r = CliRunner().invoke(main, ["modes", str(p), "--json"])
+    assert r.exit_code == 2, (r.exit_code, r.stdout[:200])
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: body.mass:") and "base 60" in lines[0], r.stderr
+    assert r.stdout == ""
+    import yaml
+
+    assert yaml.safe_load(f"x: {text}")["x"] == meant  # what the old reading silently was
+
+
+def test_base_60_is_kept_where_a_stopwatch_time_means_it_and_text_stays_text():
+    """Under a time key (``times``, ``period``) ``m:ss.ss`` stays the stopwatch
+    reading YAML 1.1 gives it (0:19.07 is 19.07 s, as before); a name or a
+    note written ``12:30`` stays that text (the old code made it 750)."""
+    from bifilar.config import parse_yaml
+
+    d = parse_yaml("name: 12:30\nnotes: 010\nmeasurements:\n  - {mode: torsion, cycles: 10, "
+                   "times: [0:19.07, 1:00.5], period: 0:01.9}\n")
+    assert d["name"] == "12:30" and d["notes"] == "010"
+    m = d["measurements"][0]
+    assert m["times"] == pytest.approx([19.07, 60.5]) and m["period"] == pytest.approx(1.9)
+    # ordinary numbers untouched
+    assert parse_yaml("a: [0, 0.5, 10, -3, 1e-3, 1_000, 0x10]")["a"] == [0, 0.5, 10, -3, 1e-3, 1000, 16]
