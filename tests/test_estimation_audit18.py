@@ -146,3 +146,30 @@ def test_base_60_is_kept_where_a_stopwatch_time_means_it_and_text_stays_text():
     assert m["times"] == pytest.approx([19.07, 60.5]) and m["period"] == pytest.approx(1.9)
     # ordinary numbers untouched
     assert parse_yaml("a: [0, 0.5, 10, -3, 1e-3, 1_000, 0x10]")["a"] == [0, 0.5, 10, -3, 1e-3, 1000, 16]
+
+
+def test_tensions_of_a_recorded_motion_budget_the_configs_stated_geometry(tmp_path):
+    """Audit18's tensions row: `tensions --motion` gave the config geometry's
+    share of the std (`std_geometry`) from the default 1 mm / 2 mm whatever
+    the config's ``uncertainty:`` block stated (the asymmetric trifilar's Izz:
+    0.0065 kg m^2 with 5 mm stated, with 0 stated, and with nothing).  The
+    share is linear in the input stds (first-order propagation,
+    geometry_jacobian): position and com stated 5x the defaults give 5x it,
+    stated 0 give 0.  On the old code all three equal."""
+    motion = tmp_path / "motion.csv"
+    r = CliRunner().invoke(main, ["simulate", str(DRONE), "--mode", "torsion", "--amplitude", "0.1",
+                                  "--periods", "3", "--out", str(motion), "--json"])
+    assert r.exit_code == 0, r.stderr
+    text = DRONE.read_text()
+    out = {}
+    for name, block in (("default", ""), ("five", "uncertainty: {position: 0.005, com: 0.01}\n"),
+                        ("exact", "uncertainty: {position: 0, com: 0}\n")):
+        cfg = tmp_path / f"{name}.yaml"
+        cfg.write_text(text + "\n" + block)
+        r = CliRunner().invoke(main, ["tensions", str(cfg), "--motion", str(motion), "--solve-for", "Izz", "--json"])
+        assert r.exit_code == 0, r.stderr
+        out[name] = json.loads(r.stdout)["inertia_from_tensions"]["Izz"]
+    assert out["default"]["std_geometry"] > 0
+    assert out["five"]["std_geometry"] == pytest.approx(5 * out["default"]["std_geometry"], rel=1e-9)
+    assert out["exact"]["std_geometry"] == 0.0
+    assert out["five"]["std"] > 4 * out["default"]["std"]  # the geometry's share dominates this record's std
