@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,13 @@ TOP_KEYS = {"name", "gravity", "body", "rig", "measurements", "uncertainty", "pl
 BODY_KEYS = {"mass", "inertia", "parts", "bounding_box", "name"}
 INERTIA_KEYS = {"tensor", "principal"}
 RIG_KEYS = {"anchors", "attachments", "lengths", "attachments_frame", "stiffness"}
+
+
+#: plain scalars YAML 1.1 reads as numbers other than the decimal ones they look like: base 60
+#: (``1:30`` is 90, ``12:30`` 750) and a leading zero (``010`` is octal 8).  The config reader
+#: (:mod:`.yaml_safe`) reads them as text, as YAML 1.2 reads the first: a number field then refuses
+#: them naming the field, a name or a note keeps what was written.
+_YAML11_SURPRISE = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?|0[0-7_]+)$")
 
 
 class _Checker:
@@ -67,7 +75,10 @@ class _Checker:
         (zero allowed unless ``positive``)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             hint = ""
-            if isinstance(value, str):
+            if isinstance(value, str) and _YAML11_SURPRISE.match(value):
+                hint = (" (YAML 1.1 reads it as a number in base 60 or, with its leading zero, octal; "
+                        "write the number in plain decimal digits)")
+            elif isinstance(value, str):
                 try:
                     float(value)
                     hint = " (a number in quotes is text; remove the quotes)"

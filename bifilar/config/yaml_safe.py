@@ -20,7 +20,7 @@ from typing import Any
 import yaml
 
 from ..errors import ConfigErrors, InputError
-from .fields import _clip, _join, _one_line
+from .fields import _YAML11_SURPRISE, _clip, _join, _one_line
 
 MAX_CONFIG_BYTES = 1_000_000
 """Largest config file read, bytes (a real config is ~1-10 kB)."""
@@ -153,6 +153,27 @@ def _yaml_error(exc: yaml.YAMLError) -> InputError:
     return InputError(where, _one_line(msg))
 
 
+_STR = "tag:yaml.org,2002:str"
+
+
+#: keys whose values are times, where a stopwatch's ``m:ss.ss`` is meant as base 60 (``0:19.07`` is 19.07 s)
+_TIME_KEYS = {"times", "period"}
+
+
+def _as_text_if_yaml11_number(node: yaml.ScalarNode, path: str) -> None:
+    """Retag a plain scalar that YAML 1.1 reads as a base-60 or octal number
+    (``_YAML11_SURPRISE``) as a string, in place; base 60 stays a number
+    under a time key (:data:`_TIME_KEYS`, the last name in the dotted
+    ``path``)."""
+    if node.style or node.tag not in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float") \
+            or not _YAML11_SURPRISE.match(node.value):
+        return
+    names = [p for p in str(path).split(".") if p and not p.isdigit()]
+    if ":" in node.value and names and names[-1] in _TIME_KEYS:
+        return
+    node.tag = _STR
+
+
 def _scan_nodes(root: yaml.Node) -> list[InputError]:
     """Walk the composed node graph (aliases followed, iteratively) and
     collect: duplicate keys, non-scalar keys, unsafe tags, recursive aliases,
@@ -181,6 +202,7 @@ def _scan_nodes(root: yaml.Node) -> list[InputError]:
                 "numbers, strings, true/false, null")))
             continue
         if isinstance(node, yaml.ScalarNode):
+            _as_text_if_yaml11_number(node, path)
             continue
         on_path.add(id(node))
         stack.append((False, node, path))

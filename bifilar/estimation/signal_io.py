@@ -523,6 +523,10 @@ def _finish(t: np.ndarray, y: np.ndarray, meta: dict):
                                         f"another column (columns found: {', '.join(map(str, meta['columns']))})")
         t, y = t[~bad], y[~bad]
         meta["warnings"].append(f"dropped {nb} NaN/missing sample(s) of {n}")
+    from .signal_wrap import unwrap_record
+    y, wrapped = unwrap_record(y)
+    if wrapped:
+        meta["warnings"].append(wrapped)
     if len(y) < MIN_SAMPLES:
         raise SignalError("signal", f"only {len(y)} usable samples in {meta['column']!r}; "
                                     f"need at least {MIN_SAMPLES}")

@@ -1,0 +1,175 @@
+"""Estimation audit, session 18 (docs/design.md, "Estimation audit, session
+18"): closed loops on cases nobody here wrote.  The audit's draws stay in
+its throw-away harness; these tests pin what its findings changed."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from bifilar.cli import main
+from bifilar.estimation.signal_wrap import unwrap_record
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+DRONE = CONFIGS / "drone_parallel.yaml"
+T_DRONE = 1.8800643384877211  # the drone's linear torsion period, s (`bifilar modes`)
+
+
+def _record(tmp_path: Path, name: str, y: np.ndarray, t: np.ndarray) -> Path:
+    p = tmp_path / name
+    np.savetxt(p, np.c_[t, y], delimiter=",", header="t,heading", comments="", fmt="%.12g")
+    return p
+
+
+def _torsion(seed: int, rest: float, turn: float = 2 * math.pi):
+    """A 30-cycle torsion record at 50 Hz about the heading ``rest`` (in the
+    unit of ``turn``), 0.05 rad, Q 300, white noise 0.5 % of the amplitude;
+    returns (t, the heading as recorded, wrapped into one turn by atan2, and
+    unwrapped)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 30 * T_DRONE, 0.02)
+    w = 2 * math.pi / T_DRONE
+    a = 0.05 * np.exp(-w * t / 600) * np.cos(w * t + 0.3) + 2.5e-4 * rng.standard_normal(t.size)
+    heading = rest + a * turn / (2 * math.pi)
+    wrapped = np.angle(np.exp(1j * heading * 2 * math.pi / turn)) * turn / (2 * math.pi)
+    return t, wrapped, heading
+
+
+def _period(path: Path) -> dict:
+    r = CliRunner().invoke(main, ["period", str(path), "--json"])
+    assert r.exit_code == 0, r.stderr
+    return json.loads(r.stdout)
+
+
+def test_an_angle_wrapped_at_pi_is_unwrapped_and_said(tmp_path):
+    """Audit18's camera heading about a rest near +-pi (30 draws on the
+    trifilar plate): the atan2 angle jumps by 2 pi each time it crosses the
+    wrap.  On the old code `period` fitted the jumps (two_mode, std ~30x the
+    clean record's: 2.1e-4 against 4-8e-6 s) without a word, and `invert
+    --signal-quantity angle` refused every draw as a record in degrees
+    ("an amplitude of 3.9 rad ... beyond any reachable start").  Now the
+    record is unwrapped, with one warning line, and both answer as on the
+    unwrapped record (the independent formulation: the same numbers to
+    rounding)."""
+    t, wrapped, heading = _torsion(18, math.pi - 0.02)
+    assert np.abs(np.diff(wrapped)).max() > 6.0  # the record really wraps
+    pw = _record(tmp_path, "wrapped.csv", wrapped, t)
+    pu = _record(tmp_path, "heading.csv", heading, t)
+    dw, du = _period(pw), _period(pu)
+    assert dw["period"] == pytest.approx(du["period"], rel=1e-12)
+    assert dw["std"] == pytest.approx(du["std"], rel=1e-9)
+    assert abs(dw["period"] - T_DRONE) < 3 * dw["std"]
+    hits = [w for w in dw["warnings"] if "wrapped at +-pi" in w]
+    assert len(hits) == 1 and "\n" not in hits[0], dw["warnings"]
+    assert not any("wrapped" in w for w in du["warnings"])
+    exact = ["--uncertainty", "length=0", "--uncertainty", "position=0", "--uncertainty", "mass=0",
+             "--uncertainty", "com=0"]
+    docs = []
+    for p in (pw, pu):
+        r = CliRunner().invoke(main, ["invert", str(DRONE), "--signal", f"torsion={p}", "--solve-for", "Izz",
+                                      "--signal-quantity", "angle", *exact, "--json"])
+        assert r.exit_code == 0, r.stderr  # old code: exit 2, "beyond any reachable start"
+        docs.append(json.loads(r.stdout)["inertia"]["Izz"])
+    assert docs[0]["value"] == pytest.approx(docs[1]["value"], rel=1e-10)
+    assert docs[0]["std"] == pytest.approx(docs[1]["std"], rel=1e-6)
+
+
+def test_a_heading_in_degrees_wrapped_at_180_is_unwrapped():
+    """The same record as a heading in degrees wrapping at +-180 (the 0.05
+    rad torsion is 2.9 degrees): unwrapped to the degree record."""
+    t, wrapped, heading = _torsion(19, 179.0, turn=360.0)
+    y, w = unwrap_record(wrapped)
+    assert w is not None and "+-180 degrees" in w
+    # numpy.unwrap starts from the first sample: the record is the heading up to whole turns
+    assert np.allclose(y - heading, np.round((y[0] - heading[0]) / 360.0) * 360.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("y", [
+    np.r_[np.zeros(20), 4.0 * np.ones(20)],  # one step of 4 (> pi) that no whole turn explains
+    np.sin(np.linspace(0, 20, 200)) * 3.5,  # a smooth signal spanning 7 (more than a turn), no jump
+    np.r_[np.linspace(-3.1, 3.1, 3), np.linspace(-3.1, 3.1, 3)] .repeat(5),  # big steps left after unwrapping
+])
+def test_a_record_that_is_no_wrapped_angle_is_left_alone(y):
+    """Jumps that are not whole turns, or a record spanning more than one
+    turn, are left as they are (no warning)."""
+    out, w = unwrap_record(y)
+    assert w is None
+    assert np.array_equal(out, y)
+
+
+PLATE3 = """name: plate3
+gravity: 9.81
+body:
+  mass: {mass}
+  inertia: {{tensor: [[0.03, 0.0, 0.0], [0.0, 0.035, 0.0], [0.0, 0.0, 0.06]]}}
+rig:
+  anchors: [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]]
+  attachments: [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]]
+  lengths: [1.0, 1.0, 1.0]
+"""
+
+
+@pytest.mark.parametrize("text, meant", [("1:30", 90), ("010", 8), ("2:30.5", 150.5)])
+def test_a_base_60_or_octal_number_in_a_config_is_refused_naming_the_field(tmp_path, text, meant):
+    """Audit18's bad-input row: YAML 1.1 (PyYAML's safe_load) reads ``mass:
+    1:30`` as 90 (base 60) and ``010`` as 8 (octal): on the old code `modes`
+    ran a 90 kg plate without a word ('plate3: 90 kg on 3 wires').  Now such
+    a plain scalar is text (YAML 1.2 reads ``1:30`` so), and the number
+    field refuses it in one line naming it and the cause."""
+    p = tmp_path / "m.yaml"
+    p.write_text(PLATE3.format(mass=text))
+    r = CliRunner().invoke(main, ["modes", str(p), "--json"])
+    assert r.exit_code == 2, (r.exit_code, r.stdout[:200])
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: body.mass:") and "base 60" in lines[0], r.stderr
+    assert r.stdout == ""
+    import yaml
+
+    assert yaml.safe_load(f"x: {text}")["x"] == meant  # what the old reading silently was
+
+
+def test_base_60_is_kept_where_a_stopwatch_time_means_it_and_text_stays_text():
+    """Under a time key (``times``, ``period``) ``m:ss.ss`` stays the stopwatch
+    reading YAML 1.1 gives it (0:19.07 is 19.07 s, as before); a name or a
+    note written ``12:30`` stays that text (the old code made it 750)."""
+    from bifilar.config import parse_yaml
+
+    d = parse_yaml("name: 12:30\nnotes: 010\nmeasurements:\n  - {mode: torsion, cycles: 10, "
+                   "times: [0:19.07, 1:00.5], period: 0:01.9}\n")
+    assert d["name"] == "12:30" and d["notes"] == "010"
+    m = d["measurements"][0]
+    assert m["times"] == pytest.approx([19.07, 60.5]) and m["period"] == pytest.approx(1.9)
+    # ordinary numbers untouched
+    assert parse_yaml("a: [0, 0.5, 10, -3, 1e-3, 1_000, 0x10]")["a"] == [0, 0.5, 10, -3, 1e-3, 1000, 16]
+
+
+def test_tensions_of_a_recorded_motion_budget_the_configs_stated_geometry(tmp_path):
+    """Audit18's tensions row: `tensions --motion` gave the config geometry's
+    share of the std (`std_geometry`) from the default 1 mm / 2 mm whatever
+    the config's ``uncertainty:`` block stated (the asymmetric trifilar's Izz:
+    0.0065 kg m^2 with 5 mm stated, with 0 stated, and with nothing).  The
+    share is linear in the input stds (first-order propagation,
+    geometry_jacobian): position and com stated 5x the defaults give 5x it,
+    stated 0 give 0.  On the old code all three equal."""
+    motion = tmp_path / "motion.csv"
+    r = CliRunner().invoke(main, ["simulate", str(DRONE), "--mode", "torsion", "--amplitude", "0.1",
+                                  "--periods", "3", "--out", str(motion), "--json"])
+    assert r.exit_code == 0, r.stderr
+    text = DRONE.read_text()
+    out = {}
+    for name, block in (("default", ""), ("five", "uncertainty: {position: 0.005, com: 0.01}\n"),
+                        ("exact", "uncertainty: {position: 0, com: 0}\n")):
+        cfg = tmp_path / f"{name}.yaml"
+        cfg.write_text(text + "\n" + block)
+        r = CliRunner().invoke(main, ["tensions", str(cfg), "--motion", str(motion), "--solve-for", "Izz", "--json"])
+        assert r.exit_code == 0, r.stderr
+        out[name] = json.loads(r.stdout)["inertia_from_tensions"]["Izz"]
+    assert out["default"]["std_geometry"] > 0
+    assert out["five"]["std_geometry"] == pytest.approx(5 * out["default"]["std_geometry"], rel=1e-9)
+    assert out["exact"]["std_geometry"] == 0.0
+    assert out["five"]["std"] > 4 * out["default"]["std"]  # the geometry's share dominates this record's std
