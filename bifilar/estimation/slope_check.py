@@ -40,6 +40,10 @@ SECANT_REACH = 1.96
 #: the measurement's timing std (a period that does not depend on an unknown has slopes of ~1e-14 s per kg m^2 either
 #: way, 100 % apart: the example file's torsion in Ixx); a single unknown's 20 % always moves it by > 0.39 of it
 SECANT_SIGNIFICANT = 0.1
+#: an end of the reach outside the physical tensors is brought in to their edge, and where a run fails the reach is
+#: halved, this many times; with less than 1/2**SECANT_HALVINGS of the interval's width left, a warning (the local
+#: slope then stands unchecked)
+SECANT_HALVINGS = 2
 
 
 def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) -> tuple[list[str], bool]:
@@ -48,7 +52,11 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
     kg m^2 or m) with the secant ``(T(p + h e_j) - T(p - h e_j)) / (2 h)``
     of the full model period ``T = T_lin r`` over ``h`` =
     :data:`SECANT_REACH` times the estimate's std (``std``, the first
-    budget's).  Where they differ by more than
+    budget's; an end outside the physical tensors brought in to their edge,
+    a reach whose run fails halved up to :data:`SECANT_HALVINGS` times, and
+    with less than a quarter of the width left a warning that the slope
+    stands unchecked: :func:`_checked_secant`).  Where they
+    differ by more than
     :data:`SECANT_DISAGREE` of the local slope (and by more than
     :data:`SECANT_SIGNIFICANT` of the timing std over the reach) and the
     secant is the smaller in magnitude, ``laws[k].dr_dp[j]`` is set so that the full slope is the
@@ -56,10 +64,11 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
     Monte Carlo's, then follow it); a larger secant leaves the law alone
     (the local slope already gives the larger std).  ``p`` the estimate,
     ``r`` (K,) its amplitude factors, ``laws`` the estimate's amplitude laws
-    (only those with ``dr_dp``: a nonlinear run law), runs at ``rtol``.  A
-    stepped run that fails (a slack wire, no rest pose) leaves that pair
-    unchecked.  Returns (one warning per (measurement, unknown) that
-    disagrees, whether a law was changed: the budget must be made again)."""
+    (only those with ``dr_dp``: a nonlinear run law), runs at ``rtol``.
+    Pairs that cannot matter (twice the local slope over the reach moves the
+    period by at most :data:`SECANT_SIGNIFICANT` of its timing std) are not
+    run.  Returns (one warning per (measurement, unknown) that
+    disagrees or could not be checked, whether a law was changed: the budget must be made again)."""
     p = np.asarray(p, float)
     std = np.asarray(std, float)
     if laws is None or not any(law is not None and law.dr_dp is not None for law in laws):
@@ -79,41 +88,99 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
             h, loc = SECANT_REACH * s, float(r[k] * J[k, j] + T_lin[k] * law.dr_dp[j])
             if 2.0 * abs(loc) * h <= SECANT_SIGNIFICANT * m.std:
                 continue  # no smaller secant could matter (|sec - loc| < 2 |loc|): no runs
-            sec = _secant(pb, k, p, j, h, rtol)
-            if sec is None:
+            sec, a, b, why = _checked_secant(pb, k, p, j, h, rtol)
+            if isinstance(sec, str):
+                out.append(f"mode '{lab}': the slope of its period in {name} could not be checked over the "
+                           f"estimate's 95 % interval nor over a quarter of it ({sec}): the std is from the local "
+                           f"slope ({loc:.3g} s per unit), too small if the period wiggles in {name} (another mode "
+                           "exchanging energy with it); time it at a smaller amplitude to be sure")
                 continue
-            if abs(sec - loc) <= SECANT_DISAGREE * abs(loc) or abs(sec - loc) * h <= SECANT_SIGNIFICANT * m.std:
+            if (abs(sec - loc) <= SECANT_DISAGREE * abs(loc)
+                    or abs(sec - loc) * (a + b) / 2 <= SECANT_SIGNIFICANT * m.std):
                 continue
+            where = ("the estimate's 95 % interval" if why is None else
+                     f"{0.0 - a / s:+.3g} .. {b / s:+.3g} std of the estimate (over the 95 % interval, {why})")
             used = "secant" if abs(sec) < abs(loc) else "local"
             if used == "secant":
                 law.dr_dp = np.array(law.dr_dp, float)
                 law.dr_dp[j] = (sec - r[k] * J[k, j]) / T_lin[k]
                 changed = True
             out.append(f"mode '{lab}': the period is not smooth in {name} at this amplitude (--amplitude "
-                       f"{m.amplitude:g}): its slope over the estimate's 95 % interval ({sec:.3g} s per unit) "
+                       f"{m.amplitude:g}): its slope over {where} ({sec:.3g} s per unit) "
                        f"differs from the local one ({loc:.3g}) by {100 * abs(sec - loc) / abs(loc):.0f} % "
                        f"(another mode exchanging energy with it?); the std is from the {used} slope, the smaller; "
                        "time it at a smaller amplitude")
     return out, changed
 
 
-def _secant(pb, k: int, p: np.ndarray, j: int, s: float, rtol: float) -> float | None:
-    """(T(p + s e_j) - T(p - s e_j)) / (2 s), s per unit of ``p_j``: the
+def _checked_secant(pb, k: int, p: np.ndarray, j: int, h: float, rtol: float):
+    """(secant or why not, a, b, why the reach was shortened or None): the
+    full model period's secant (:func:`_secant`) over ``p_j - a .. p_j +
+    b``, ``a``, ``b`` = ``h`` where the tensors there are physical; else
+    each end brought in to the edge of the physical set (:func:`_physical_reach`:
+    a flat body's estimate sits on it, the thesis plates' and the KTH
+    table's torsion), and where a run fails both halved, up to
+    :data:`SECANT_HALVINGS` times.  Not checked (the first item a phrase)
+    where less than a quarter of the interval's width is left."""
+    a, b = _physical_reach(pb, p, j, -1.0, h), _physical_reach(pb, p, j, 1.0, h)
+    why = None if a == h and b == h else _UNPHYSICAL
+    for _ in range(SECANT_HALVINGS + 1):
+        if a + b < 2.0 * h / 2 ** SECANT_HALVINGS:
+            break
+        sec = _secant(pb, k, p, j, a, b, rtol)
+        if not isinstance(sec, str):
+            return sec, a, b, why
+        why, a, b = sec, a / 2.0, b / 2.0
+    return ("less than a quarter of it is a physical tensor" if why == _UNPHYSICAL else why), a, b, why
+
+
+_UNPHYSICAL = "its end is no physical inertia tensor"
+
+
+def _physical(pb, q: np.ndarray) -> bool:
+    vals = pb.values(q)
+    return all(admissible(model.inertia_ref(vals)) for model in pb.models)
+
+
+def _physical_reach(pb, p: np.ndarray, j: int, sign: float, h: float) -> float:
+    """The largest ``t`` in 0 .. ``h`` (to 1e-6 of ``h``) with every
+    hanging's tensor at ``p + sign t e_j`` physical (:func:`admissible`:
+    positive definite, the triangle inequality; a convex set, so along a
+    line an interval and bisection finds its end); 0 where ``p`` itself is
+    not.  No runs."""
+    q = np.array(p, float)
+
+    def ok(t: float) -> bool:
+        q[j] = p[j] + sign * t
+        return _physical(pb, q)
+
+    if ok(h):
+        return h
+    if not ok(0.0):
+        return 0.0
+    lo, hi = 0.0, h
+    while hi - lo > 1e-6 * h:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
+
+
+def _secant(pb, k: int, p: np.ndarray, j: int, a: float, b: float, rtol: float) -> float | str:
+    """(T(p + b e_j) - T(p - a e_j)) / (a + b), s per unit of ``p_j``: the
     full model period ``T_lin r`` of measurement ``k`` (its amplitude runs,
-    unchecked, at ``rtol``); None where a run or a linear model fails, or
-    where either end leaves the tensors a body can have (a swing whose
-    period barely moves with an inertia has a std reaching past zero: the
-    thesis roll rig's swing-x in Ixx; its modes have no meaning there)."""
+    unchecked, at ``rtol``; an end at ``p`` itself run there too); where it
+    cannot be had, why (a phrase): a run or a linear model fails, or the
+    difference is not finite.  The ends must be physical tensors
+    (:func:`_physical_reach`; a swing whose period barely moves with an
+    inertia has a std reaching past zero, the thesis roll rig's swing-x in
+    Ixx: its modes have no meaning there)."""
     T = []
-    for sign in (1.0, -1.0):
+    for t in (b, -a):
         q = np.array(p, float)
-        q[j] += sign * s
-        vals = pb.values(q)
-        if not all(admissible(model.inertia_ref(vals)) for model in pb.models):
-            return None
+        q[j] += t
         try:
             T.append(float(pb.linear_periods(q)[k]) * _unchecked_factor(pb, k, q, rtol))
         except (BifilarError, np.linalg.LinAlgError):
-            return None
-    val = (T[0] - T[1]) / (2.0 * s)
-    return val if math.isfinite(val) else None
+            return "a run at its end failed"
+    val = (T[0] - T[1]) / (a + b)
+    return val if math.isfinite(val) else "the period at its ends is not finite"
