@@ -201,3 +201,58 @@ def test_an_estimate_on_the_edge_is_checked_one_sided(monkeypatch):
     sec = _analytic_secant(edge, edge + 1.96e-3)
     assert changed and len(out) == 1 and "+0 .. +1.96 std of the estimate" in out[0], out
     assert abs((1.0 * C + (T0 + C * (edge - P0)) * law.dr_dp[0]) - sec) <= 1e-5 * sec
+
+
+# -- the inputs' slopes where the period is not smooth (docs/design.md "secant2, session 18") -----------------------
+# The analytic problem above with two inputs of std 2e-3 m: "com.z", on which the factor wiggles as on Iyy
+# (r = 1 + W sin(2 pi x / LX + PHI), the linear period T0 + DX x), evaluated where its local full slope is at its
+# flattest, and "length.1", on which nothing wiggles (the linear period only).
+
+LX, DX, PHI = 1.5e-3, -0.7, 0.0
+
+
+def _input_factor(key, x):
+    return 1.0 + (W * math.sin(2 * math.pi * x / LX + PHI) if key == "com.z" else 0.0)
+
+
+def _fake_runs(groups, rtol):
+    """stepped_factor_runs on the analytic inputs: the factor and linear
+    period of each step ((key, sign), d)."""
+    for g in groups:
+        (j,) = g.idx
+        g.r0[j] = _input_factor("com.z", 0.0)
+        g.T_lin[j] = {None: T0}
+        g.dr_dx[j], g.failed[j] = {}, []
+        for key, d, _ in g.steps:
+            g.dr_dx[j][key] = (_input_factor(key[0], d) - g.r0[j]) / d
+            g.T_lin[j][key] = T0 + DX * d
+
+
+def test_where_the_period_wiggles_the_inputs_slopes_are_secants_too(monkeypatch):
+    """Iyy's check fires (std 1e-3, as above); then com.z's full slope over
+    +-1.96 std (3.92e-3 m, 2.6 wiggles) is the analytic secant
+    ((T0 + DX d) r(d) - (T0 - DX d) r(-d)) / (2 d) = -0.72, 2.6x the local -0.27 (the
+    flattest stretch): the budget must take it (1e-9: rounding), and leave
+    length.1 (no wiggle, secant = local) alone.  The old code kept every
+    input's local slope (no ``ctx``: a TypeError here)."""
+    from bifilar.estimation import factor_inputs, second_order, slope_check
+
+    monkeypatch.setattr(slope_check, "_unchecked_factor", lambda pb, k, q, rtol: _factor(q))
+    monkeypatch.setattr(factor_inputs, "stepped_factor_runs", _fake_runs)
+    monkeypatch.setattr(second_order, "_perturbed_scene", lambda pb, h, scene, moves: None)
+    pb = _Problem(1e-4)
+    pb.mode_index = [0]
+    pb.measurements[0].cycles = 20
+    r0 = _input_factor("com.z", 0.0)
+    local = 2 * math.pi * W / LX * math.cos(PHI)
+    law = type("L", (), {"dr_dp": np.array([2 * math.pi * W / LAM]), "dr_dx": {"com.z": local, "length.1": 0.0}})()
+    ctx = type("Ctx", (), {"sigmas": {"com.z": 2e-3, "length.1": 2e-3}, "match": [[0]], "scenes": [None],
+                           "rests": [None], "modes": [None]})()
+    out, changed = slope_check.secant_check(pb, np.array([P0]), np.array([r0]), [law], np.array([1e-3]), ctx=ctx)
+    d = 1.96 * 2e-3
+    sec = ((T0 + DX * d) * _input_factor("com.z", d) - (T0 - DX * d) * _input_factor("com.z", -d)) / (2 * d)
+    assert changed and len(out) == 2 and "not smooth in the inputs either" in out[1] and "com.z" in out[1], out
+    assert "length.1" not in out[1]
+    assert abs(r0 * DX + T0 * law.dr_dx["com.z"] - sec) <= 1e-9 * abs(sec)
+    assert abs(sec) > 2 * abs(r0 * DX + T0 * local)
+    assert law.dr_dx["length.1"] == 0.0

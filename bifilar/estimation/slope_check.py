@@ -46,7 +46,8 @@ SECANT_SIGNIFICANT = 0.1
 SECANT_HALVINGS = 2
 
 
-def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) -> tuple[list[str], bool]:
+def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False,
+                 ctx=None) -> tuple[list[str], bool]:
     """Compare each stated-amplitude measurement's local full-model slope
     ``dT/dp_j = r dT_lin/dp_j + T_lin dr/dp_j`` (s per unit of ``p_j``:
     kg m^2 or m) with the secant ``(T(p + h e_j) - T(p - h e_j)) / (2 h)``
@@ -67,15 +68,20 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
     (only those with ``dr_dp``: a nonlinear run law), runs at ``rtol``.
     Pairs that cannot matter (twice the local slope over the reach moves the
     period by at most :data:`SECANT_SIGNIFICANT` of its timing std) are not
-    run.  Returns (one warning per (measurement, unknown) that
-    disagrees or could not be checked, whether a law was changed: the budget must be made again)."""
+    run.  Where a measurement's period is found not smooth in an unknown,
+    its inputs' slopes are checked the same way (:func:`input_secants`,
+    ``ctx`` the budget's :class:`~bifilar.estimation.second_order.BudgetContext`;
+    none where it is None).  Returns (one warning per (measurement, unknown)
+    that disagrees or could not be checked, and one per measurement whose
+    inputs' slopes were widened; whether a law was changed: the budget must
+    be made again)."""
     p = np.asarray(p, float)
     std = np.asarray(std, float)
     if laws is None or not any(law is not None and law.dr_dp is not None for law in laws):
         return [], False
     T_lin = pb.linear_periods(p)
     J = pb.jacobian(p)
-    out, changed = [], False
+    out, changed, rough = [], False, []
     for k, law in enumerate(laws):
         if law is None or law.dr_dp is None:
             continue
@@ -110,7 +116,80 @@ def secant_check(pb, p, r, laws, std, rtol: float = 1e-10, multi: bool = False) 
                        f"differs from the local one ({loc:.3g}) by {100 * abs(sec - loc) / abs(loc):.0f} % "
                        f"(another mode exchanging energy with it?); the std is from the {used} slope, the smaller; "
                        "time it at a smaller amplitude")
+            if k not in rough:
+                rough.append(k)
+    if rough and ctx is not None:
+        more = input_secants(pb, [laws[k] for k in rough], rough, ctx, rtol, multi)
+        out += more
+        changed = changed or bool(more)
     return out, changed
+
+
+def input_secants(pb, laws, ks, ctx, rtol: float, multi: bool) -> list[str]:
+    """The full model period's slope in each input of measurements ``ks``
+    (``laws`` theirs, with ``dr_dx``) as a secant over the input's
+    +-:data:`SECANT_REACH` std, ``(T(x + d) - T(x - d)) / (2 d)`` with
+    ``T = T_lin r`` (two runs an input, all in one batch:
+    :func:`~bifilar.estimation.factor_inputs.stepped_factor_runs`, the
+    estimate's own run among them), against
+    the budget's local one ``r dT_lin/dx + T_lin dr/dx`` (``dT_lin/dx`` the
+    same two runs' secant: the linear period is smooth).  Only for the
+    measurements whose period :func:`secant_check` found not smooth in an
+    unknown: the same energy exchange makes ``dr/dx`` wiggle (audit17 row
+    B3 with the inputs at their default stds: the CoM height's local full
+    slope 0.22 .. 1.1 s per m about ~0.7; docs/design.md "secant2, session
+    18").  Where the secant is larger in magnitude by more than
+    :data:`SECANT_DISAGREE` and moves the period over the reach by more
+    than :data:`SECANT_SIGNIFICANT` of the timing std, ``law.dr_dx[key]``
+    is set so that the full slope is the secant (the larger, the input's
+    term the larger); a smaller one leaves it.  ``ctx``: the budget's
+    context (its scenes, rests, modes, mode matches and input stds at the
+    estimate).  Returns one warning per measurement whose inputs changed."""
+    from .factor_inputs import SteppedFactors, stepped_factor_runs
+    from .second_order import _perturbed_scene
+
+    plans = []
+    for k, law in zip(ks, laws):
+        m = pb.measurements[k]
+        h = m.hanging
+        keys = [key for key in (law.dr_dx or {}) if ctx.sigmas.get(key, 0) > 0]
+        if not keys:
+            continue
+        j = int(ctx.match[h][pb.mode_index[k]])
+        steps = [((key, sign), sign * SECANT_REACH * ctx.sigmas[key],
+                  _perturbed_scene(pb, h, ctx.scenes[h], [(key, sign * SECANT_REACH * ctx.sigmas[key])]))
+                 for key in keys for sign in (1.0, -1.0)]
+        plans.append((k, law, keys, j, SteppedFactors(ctx.scenes[h], ctx.rests[h], ctx.modes[h], [j], m.amplitude,
+                                                      m.cycles, steps)))
+    if not plans:
+        return []
+    stepped_factor_runs([plan[4] for plan in plans], rtol)
+    out = []
+    for k, law, keys, j, g in plans:
+        m = pb.measurements[k]
+        if j not in g.r0:
+            continue
+        r0, T0, dx, T = g.r0[j], g.T_lin[j][None], g.dr_dx[j], g.T_lin[j]
+        wider = []
+        for key in keys:
+            up, down = (key, 1.0), (key, -1.0)
+            if up not in dx or down not in dx:
+                continue  # a stepped scene that cannot hang or whose run failed: the local slope stands
+            d = SECANT_REACH * ctx.sigmas[key]
+            T_up, T_down = T[up], T[down]
+            r_up, r_down = r0 + d * dx[up], r0 - d * dx[down]
+            sec = (T_up * r_up - T_down * r_down) / (2.0 * d)
+            lin = (T_up - T_down) / (2.0 * d)
+            loc = r0 * lin + T0 * law.dr_dx[key]
+            if abs(sec) > (1.0 + SECANT_DISAGREE) * abs(loc) and abs(sec - loc) * d > SECANT_SIGNIFICANT * m.std:
+                law.dr_dx = dict(law.dr_dx)
+                law.dr_dx[key] = (sec - r0 * lin) / T0
+                wider.append(f"{key} {sec / loc:.2g}x" if loc else key)
+        if wider:
+            lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
+            out.append(f"mode '{lab}': its period is not smooth in the inputs either: the budget takes the slopes "
+                       "over their 95 % intervals where larger than the local ones (" + ", ".join(wider) + ")")
+    return out
 
 
 def _checked_secant(pb, k: int, p: np.ndarray, j: int, h: float, rtol: float):
