@@ -96,8 +96,9 @@ class SteppedFactors:
     periods, and ``steps`` [(key, step d in SI, the scene with the input
     moved by d)].  Filled in: ``r0`` {mode index: the factor of the scene's
     own run in the same call}, ``dr_dx`` {mode index: {key: d r / d x}}
-    and ``failed`` {mode index: [keys whose stepped scene cannot hang,
-    lost the mode or whose run failed]}; a mode whose own run fails has no
+    ``failed`` {mode index: [keys whose stepped scene cannot hang,
+    lost the mode or whose run failed]} and ``T_lin`` (the runs' linear
+    periods); a mode whose own run fails has no
     ``r0`` and every key failed."""
 
     scene: Any
@@ -110,6 +111,8 @@ class SteppedFactors:
     r0: dict = field(default_factory=dict)
     dr_dx: dict = field(default_factory=dict)
     failed: dict = field(default_factory=dict)
+    #: {mode index: {key or None (the scene's own run): the run's linear period, s}}
+    T_lin: dict = field(default_factory=dict)
 
 
 def stepped_factor_runs(groups: list, rtol: float) -> None:
@@ -148,12 +151,14 @@ def stepped_factor_runs(groups: list, rtol: float) -> None:
     for j, run in zip(jobs, runs):
         if j[2] is None and not run.error and run.period:
             j[0].r0[j[1]] = run.period / run.linear_period
+            j[0].T_lin.setdefault(j[1], {})[None] = run.linear_period
     for j, run in zip(jobs, runs):
         g, k, key = j[0], j[1], j[2]
         if key is None:
             continue
         if k in g.r0 and not run.error and run.period:
             g.dr_dx[k][key] = (run.period / run.linear_period - g.r0[k]) / j[3]
+            g.T_lin.setdefault(k, {})[key] = run.linear_period
         else:
             g.failed[k].append(key)
 

@@ -283,7 +283,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if laws:  # the local slope against the secant over the estimate's std (a period that wiggles in the unknown)
         from .slope_check import secant_check
 
-        rough, changed = secant_check(pb, p_hat, r_hat, laws, budget.std, rtol, multi=len(pb.models) > 1)
+        rough, changed = secant_check(pb, p_hat, r_hat, laws, budget.std, rtol, multi=len(pb.models) > 1, ctx=bctx)
         warnings += rough
         if changed:
             budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(
