@@ -194,3 +194,165 @@ def test_a_pair_without_a_std_or_a_nonlinear_law_is_not_checked(factor):
     assert secant_check(pb, [P0], np.array([1.0]), [SimpleNamespace(dr_dp=None)], np.array([1e-3])) == ([], False)
     assert secant_check(pb, [P0], np.array([1.0]), None, np.array([1e-3])) == ([], False)
     assert factor.calls == []
+
+
+# ---------------------------------------------------------------------------
+# symmetry_check._reach_factor: the Runge-Kutta step's reach over the transverse rates
+# ---------------------------------------------------------------------------
+
+def _rotation_rates(omega, step):
+    """(1, 2, 2) rates matrix A = D [[0, w], [-w, 0]] D^-1 (D = diag(step)):
+    eigenvalues +-i w whatever the directions' units."""
+    D = np.diag(step)
+    return (D @ np.array([[0.0, omega], [-omega, 0.0]]) @ np.linalg.inv(D))[None]
+
+
+@pytest.mark.parametrize("step", [(1e-3, 1e-3), (1e-3, 2.0), (5.0, 1e-4)])
+@pytest.mark.parametrize("wh, factor", [(0.3, 1.0), (0.45, 1.0), (1.5, 6.0), (4.0, 16.0)])
+def test_the_reach_factor_brings_the_fastest_rate_to_half_the_reach(step, wh, factor):
+    """RK4_REACH = 0.5: a grid whose step h has |lambda| h within it needs
+    no refinement (factor 1; at 0.45 the Frobenius bound sqrt(2) w h = 0.64
+    exceeds it but the eigenvalues do not); beyond it the step shrinks by
+    2 |lambda| h / 0.5 (to half the reach: 6 at 1.5, 16 at 4).  Truth: the
+    rates' eigenvalues +-i w, built in; the directions' units (step) must
+    not matter (before round 17, `/ step -> * step` survived: in units of
+    1e-3 the bound then passed every grid)."""
+    from bifilar.analysis.symmetry_check import RK4_REACH, _reach_factor
+
+    assert RK4_REACH == 0.5
+    h = 0.01
+    A = np.concatenate([_rotation_rates(0.1 / h, np.array(step)), _rotation_rates(wh / h, np.array(step)),
+                        _rotation_rates(0.2 / h, np.array(step))])
+    f = _reach_factor(A, np.array(step, float), h)
+    assert f == pytest.approx(factor, rel=1e-9)
+    assert wh / f <= RK4_REACH + 1e-12
+
+
+# ---------------------------------------------------------------------------
+# signal_frames: the lattice search, the step reading, the curvature, correction_std
+# ---------------------------------------------------------------------------
+
+FPS = 30.0
+
+
+def _dropped_record(drops=(300, 520, 760, 1000, 1210), T=1.7, n_frames=1535, noise=5e-4, seed=4):
+    """A 0.05 rad cosine of period T at 30 fps, white noise ``noise``, the
+    frames ``drops`` (indices of the camera's frames) missing: (nominal
+    times j dt, samples, the kept frames' true times)."""
+    rng = np.random.default_rng(seed)
+    tt = np.arange(n_frames) / FPS
+    keep = np.ones(n_frames, bool)
+    keep[list(drops)] = False
+    y = 0.05 * np.cos(2 * np.pi * tt / T + 0.4) + noise * rng.standard_normal(n_frames)
+    y = y[keep]
+    return np.arange(y.size) / FPS, y, tt[keep]
+
+
+def test_recover_frames_finds_the_true_frequency_and_each_drop():
+    """Five frames dropped from a 1.7 s cosine: the fit on the nominal
+    time base reads the frequency high by the drops' share (5 / 1555); the
+    lattice's peak is at the true frequency within its width over a quarter
+    step (1 / n of it: the search steps by a quarter of that); each sample's
+    recovered time is its frame's true time except within the median's
+    reach (a quarter cycle, 13 samples) of a drop; the lattice's strength
+    at the noise's prediction exp(-2 pi^2 (sigma / (a w dt))^2) (constant
+    amplitude), within 2 % (the third-difference noise estimate's error).
+    The record is 1530 samples, 30 whole cycles: in 1555 samples (30.5
+    cycles) the analytic signal's phase is off by over half a frame for
+    ~25 samples past the half cycle dropped at the start, the count's zero
+    is taken there, and the drop at sample 300 is not counted
+    (docs/mutation.md "Round 17", found)."""
+    from bifilar.estimation.signal_frames import recover_frames
+
+    t, y, t_true = _dropped_record()
+    f_nom = (1 / 1.7) * (1 + 5 / 1555)  # the nominal time base's frequency (no fit needed: the share is known)
+    rec = recover_frames(t, y, f_nom)
+    assert rec["resolved"] and rec["dropped"] == 5
+    assert rec["frequency"] == pytest.approx(1 / 1.7, rel=1.0 / t.size)
+    off = np.abs(rec["t"] - t_true) > 0.5 / FPS
+    assert off.sum() <= 5 * 13, off.sum()
+    assert rec["edge"] == 2 * (51 // 2)  # a cycle (W = 51): half the local mean's, half the analytic signal's
+    h = 2 * np.pi / 1.7 / FPS
+    pred = math.exp(-2 * np.pi ** 2 * (5e-4 / (0.05 * h)) ** 2)
+    assert rec["lattice_expected"] == pytest.approx(pred, rel=0.02)
+    assert rec["lattice"] >= 0.5 * pred and rec["lattice_at_fit"] < 0.2 * rec["lattice"]
+    assert rec["rises"] == 5 and rec["falls"] == 0
+
+
+def test_a_clean_record_has_no_drops_to_recover():
+    """No frame missing: the lattice peaks at the fitted frequency, nothing
+    is recovered (dropped 0, not resolved), the time base is the nominal."""
+    from bifilar.estimation.signal_frames import recover_frames
+
+    t, y, t_true = _dropped_record(drops=())
+    rec = recover_frames(t, y, 1 / 1.7)
+    assert rec["dropped"] == 0 and not rec["resolved"]
+    np.testing.assert_allclose(rec["t"], t_true, atol=1e-12)
+
+
+@pytest.mark.parametrize("per_cycle, cycles, searched", [(8, 4.3, True), (7, 30, False), (30, 3.9, False)])
+def test_recover_frames_searches_from_eight_samples_a_cycle_and_four_cycles(per_cycle, cycles, searched):
+    """The documented limits (MIN_SAMPLES_PER_CYCLE 8, four cycles and two samples: n >= 4 W + 2)."""
+    from bifilar.estimation.signal_frames import recover_frames
+
+    f = FPS / per_cycle
+    n = int(cycles * per_cycle)
+    t = np.arange(n) / FPS
+    y = np.cos(2 * np.pi * f * t)
+    assert (recover_frames(t, y, f) is not None) is searched
+
+
+def test_the_curvature_of_a_poisson_staircase_is_a_standard_normal():
+    """_curvature_z in standard errors of a staircase of drops at a
+    constant rate: over 300 seeded staircases (20 drops at uniform places
+    in 1500 samples, a Poisson process given its count) the z's mean is 0
+    within 0.2 and their sd 1 within 0.15 (the sd of 300 normals' sd is
+    0.04; the bridge's lumping onto 200 points is exact to ~1e-3); a
+    frequency drifting with the amplitude (the count quadratic in time) is
+    far beyond the gate's 2."""
+    from bifilar.estimation.signal_frames import MAX_CURVATURE_Z, _curvature_z
+
+    rng = np.random.default_rng(17)
+    n, D = 1500, 20
+    z = []
+    for _ in range(300):
+        places = rng.uniform(0, n, D)
+        z.append(_curvature_z(np.searchsorted(np.sort(places), np.arange(n), side="right").astype(float)))
+    z = np.array(z)
+    assert abs(z.mean()) < 0.2 and 0.85 < z.std() < 1.15, (z.mean(), z.std())
+    u = np.arange(n) / n
+    assert _curvature_z(np.floor(10 * D * u * u)) > 3 * MAX_CURVATURE_Z  # 200 drops: z ~ sqrt(200) x 0.5
+
+
+def _fit_bias(n, at):
+    """The relative change of a least-squares line's slope through a phase
+    of n samples (unit slope) stepped by one sample's phase at sample
+    ``at``: the relative period error of a drop there (independent of the
+    code: numpy's polyfit)."""
+    j = np.arange(n, dtype=float)
+    return np.polyfit(j, j + (j >= at), 1)[0] - 1.0
+
+
+def test_correction_std_is_a_misplaced_and_a_missed_drops_fit_bias():
+    """The two terms against least-squares fits of a stepped phase: a drop
+    misplaced by the median's reach (a quarter cycle, W / 4 samples) moves
+    the fitted period by at most 6 (W / 4) / n^2 of it (at the record's
+    ends; polyfit's largest change over the places), sqrt(D) of it for D
+    drops misplaced at random; a drop missed within ``edge`` samples of an
+    end biases it by at most the bias of a step at ``edge`` (~6 edge / n^2)
+    times the 2 edge D / n drops expected there (W = 0: the placement term
+    alone is zero)."""
+    from bifilar.estimation.signal_frames import correction_std
+
+    n, W, T = 1200, 48, 1.7
+    worst = max(abs(_fit_bias(n, j + W // 4) - _fit_bias(n, j)) for j in range(1, n - W // 4, 7))
+    assert correction_std(T, n, 1, 0, W) / T == pytest.approx(worst, rel=0.03)
+    assert correction_std(T, n, 9, 0, W) == pytest.approx(3 * correction_std(T, n, 1, 0, W), rel=1e-12)
+    assert correction_std(T, n, 0, 0, W) == pytest.approx(correction_std(T, n, 1, 0, W), rel=1e-12)
+    edge, D = 25, 12
+    missed = 2 * edge * D / n * abs(_fit_bias(n, edge))
+    assert correction_std(T, n, D, edge, 0) / T == pytest.approx(missed, rel=0.05)
+    both = correction_std(T, n, D, edge, W)
+    assert both == pytest.approx(math.hypot(correction_std(T, n, D, edge, 0), correction_std(T, n, D, 0, W)),
+                                 rel=1e-12)
+    assert correction_std(T, 0, 3, 2, W) == 0.0
