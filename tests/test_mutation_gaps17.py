@@ -207,9 +207,10 @@ def _rotation_rates(omega, step):
     return (D @ np.array([[0.0, omega], [-omega, 0.0]]) @ np.linalg.inv(D))[None]
 
 
-@pytest.mark.parametrize("step", [(1e-3, 1e-3), (1e-3, 2.0), (5.0, 1e-4)])
+@pytest.mark.parametrize("step, h", [((1e-3, 1e-3), 0.01), ((1e-3, 2.0), 0.01), ((5.0, 1e-4), 0.01),
+                                     ((20.0, 20.0), 0.01), ((1e-3, 1e-3), 4.0)])
 @pytest.mark.parametrize("wh, factor", [(0.3, 1.0), (0.45, 1.0), (1.5, 6.0), (4.0, 16.0)])
-def test_the_reach_factor_brings_the_fastest_rate_to_half_the_reach(step, wh, factor):
+def test_the_reach_factor_brings_the_fastest_rate_to_half_the_reach(step, h, wh, factor):
     """RK4_REACH = 0.5: a grid whose step h has |lambda| h within it needs
     no refinement (factor 1; at 0.45 the Frobenius bound sqrt(2) w h = 0.64
     exceeds it but the eigenvalues do not); beyond it the step shrinks by
@@ -220,12 +221,25 @@ def test_the_reach_factor_brings_the_fastest_rate_to_half_the_reach(step, wh, fa
     from bifilar.analysis.symmetry_check import RK4_REACH, _reach_factor
 
     assert RK4_REACH == 0.5
-    h = 0.01
     A = np.concatenate([_rotation_rates(0.1 / h, np.array(step)), _rotation_rates(wh / h, np.array(step)),
                         _rotation_rates(0.2 / h, np.array(step))])
     f = _reach_factor(A, np.array(step, float), h)
     assert f == pytest.approx(factor, rel=1e-9)
     assert wh / f <= RK4_REACH + 1e-12
+
+
+@pytest.mark.parametrize("fast", [0, 2])
+def test_the_reach_factor_reads_the_first_and_the_middle_rates(fast):
+    """The eigenvalues are read of the first, the middle and the largest
+    (Frobenius) of the matrices along the orbit (the documented rule): the
+    fastest rotation (w h = 1.5: factor 6) first or in the middle of five,
+    a nilpotent matrix (eigenvalues 0, the largest norm) last."""
+    from bifilar.analysis.symmetry_check import _reach_factor
+
+    h, step = 0.01, np.array([1e-3, 1e-3])
+    A = [_rotation_rates(0.1 / h, step) for _ in range(4)] + [np.array([[[0.0, 50.0 / h], [0.0, 0.0]]])]
+    A[fast] = _rotation_rates(1.5 / h, step)
+    assert _reach_factor(np.concatenate(A), step, h) == pytest.approx(6.0, rel=1e-9)
 
 
 # ---------------------------------------------------------------------------
@@ -450,6 +464,10 @@ def test_a_tone_the_rate_cannot_be_read_from_gives_none():
     assert tone_swing_rate(m, tone, hm, 1, 0) is None
     m, tone, hm = _rate_inputs(None, 0.07, F_T + F_S)
     assert tone_swing_rate(m, tone, hm, 1, 0) is None
+    # the swing's own harmonic 2 f_s (swing^2, decaying at 2 sigma_s) is none of the combinations read: the swing
+    # is not "another mode" beside itself (nor is the timed mode)
+    m, tone, hm = _rate_inputs(0.02, 0.10, 2 * F_S)
+    assert tone_swing_rate(m, tone, hm, 1, 0) is None
 
 
 @pytest.mark.parametrize("rate", [0.0, 0.02, 0.1])
@@ -484,10 +502,11 @@ def test_a_residual_tones_rate_is_read_beside_the_fits_mismatch():
     from bifilar.estimation.signal_swing_rate import residual_tone_rate
 
     rng = np.random.default_rng(21)
-    t = np.arange(0.0, 40.0, 1 / 50.0)
+    t = np.arange(12.0, 52.0, 1 / 50.0)  # the window starts at 12 s: tau from there
+    tau = t - 12.0
     w0, s0 = 2 * np.pi, 0.03
-    mism = 2e-4 * np.exp(-s0 * t) * (t / 40.0) ** 3 * np.cos(w0 * t + 0.3)
-    r = 1e-3 * np.exp(-0.08 * t) * np.cos(2 * np.pi * 0.7 * t + 1.1) + mism + 2e-5 * rng.standard_normal(t.size)
+    mism = 2e-4 * np.exp(-s0 * tau) * (tau / 40.0) ** 3 * np.cos(w0 * tau + 0.3)
+    r = 1e-3 * np.exp(-0.08 * tau) * np.cos(2 * np.pi * 0.7 * tau + 1.1) + mism + 2e-5 * rng.standard_normal(t.size)
     fit = SimpleNamespace(t_used=t, residuals=r, modes=[{"omega": w0, "sigma": s0}], std_inflation=1.0)
     sg, sd = residual_tone_rate(fit, 0.7, 0.05)
     assert abs(sg - 0.08) < 3 * sd and sd < 0.008, (sg, sd)
