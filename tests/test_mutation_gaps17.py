@@ -510,3 +510,45 @@ def test_a_residual_tones_rate_is_read_beside_the_fits_mismatch():
     fit = SimpleNamespace(t_used=t, residuals=r, modes=[{"omega": w0, "sigma": s0}], std_inflation=1.0)
     sg, sd = residual_tone_rate(fit, 0.7, 0.05)
     assert abs(sg - 0.08) < 3 * sd and sd < 0.008, (sg, sd)
+
+
+# ---------------------------------------------------------------------------
+# elastic_rest: Hooke's law at the elastic rest, the loaded scene, the torsion on it
+# ---------------------------------------------------------------------------
+
+def test_the_loaded_bifilar_is_hookes_and_its_torsion_the_parallel_wire_law():
+    """A level bifilar of vertical 2 m wires 0.8 m apart, 200 kg, EA 1e5 N:
+    each wire carries m g / 2 = 981 N (vertical wires, the CoM under their
+    middle), so by Hooke's law it hangs L (1 + m g / (2 EA)) = 2.01962 m and
+    the body 19.62 mm lower than on rigid wires.  loaded_scene's wires are
+    that long and stiff (no stiffness: nothing stretches them again), and
+    the torsion on them is the parallel-wire law w^2 = m g r^2 / (Izz L')
+    (r = 0.4 m: the linear restoring torque of two vertical wires, each
+    tilted by r theta / L', carrying m g / 2), to 1e-9; on the unloaded
+    lengths it would be 4.9e-3 short.  loaded_scenes keeps a batch's error
+    entry's scene and shares one loaded scene per (scene, rest) pair."""
+    from bifilar.analysis.elastic_rest import loaded_scene, loaded_scenes
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.config import scene_from_dict
+    from test_estimation_audit16 import _heavy
+
+    m, g, EA, L, r = 200.0, 9.81, 1.0e5, 2.0, 0.4
+    sc = scene_from_dict(_heavy(2, m, EA), "h", warn=False)
+    rigid = scene_from_dict(_heavy(2, m, None), "h", warn=False)
+    rest, rest0 = rest_pose(sc), rest_pose(rigid)
+    Lp = L * (1 + m * g / 2 / EA)
+    np.testing.assert_allclose(rest.tensions, m * g / 2, rtol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(rest.wire_vectors, axis=1), Lp, rtol=1e-12)
+    assert rest0.com[2] - rest.com[2] == pytest.approx(Lp - L, rel=1e-8)
+    ls = loaded_scene(sc, rest)
+    assert ls.stiffness is None and loaded_scene(rigid, rest0) is rigid
+    np.testing.assert_allclose(ls.lengths, Lp, rtol=1e-12)
+    w2 = m * g * r * r / (20.0 * Lp)
+    T_law = 2 * np.pi / math.sqrt(w2)
+    assert linear_modes(ls, rest_pose(ls)).get("torsion").period == pytest.approx(T_law, rel=1e-9)
+    assert linear_modes(sc, rest).get("torsion").period == pytest.approx(T_law, rel=1e-9)
+    err = ValueError("a batch's failed rest")
+    out = loaded_scenes([sc, sc, sc, rigid], [rest, rest, err, rest0])
+    assert out[0] is out[1] and out[0] is not sc and out[2] is sc and out[3] is rigid
+    np.testing.assert_allclose(out[0].lengths, Lp, rtol=1e-12)
