@@ -552,3 +552,87 @@ def test_the_loaded_bifilar_is_hookes_and_its_torsion_the_parallel_wire_law():
     out = loaded_scenes([sc, sc, sc, rigid], [rest, rest, err, rest0])
     assert out[0] is out[1] and out[0] is not sc and out[2] is sc and out[3] is rigid
     np.testing.assert_allclose(out[0].lengths, Lp, rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# point_symmetry: the sweep/plan point's warning of a symmetric run, its --periods
+# ---------------------------------------------------------------------------
+
+@pytest.fixture
+def sym_stubs(monkeypatch):
+    """symmetric_run_warnings with its runs and multiplier stood in: the
+    rig symmetric, each short run sampled, the multiplier ``state.rho``."""
+    import bifilar.analysis.batch as batch
+    import bifilar.analysis.symmetry_check as sc
+
+    state = SimpleNamespace(rho=2.0, short=0, syms=["C2"])
+    monkeypatch.setattr(sc, "rig_symmetries", lambda scene, rest: state.syms)
+
+    def short(*a, **k):
+        state.short += 1
+        return SimpleNamespace(t=np.zeros(3), y=np.zeros((3, 13)))
+
+    monkeypatch.setattr(batch, "run_one", short)
+    monkeypatch.setattr(sc, "run_multiplier",
+                        lambda *a: (SimpleNamespace(names="the mirror y"), state.rho))
+    return state
+
+
+def _point_run(period=2.2):
+    return SimpleNamespace(period=period, error=None, warnings=[])
+
+
+@pytest.mark.parametrize("rho, periods, T_lin, T_run", [(4.0, 12.0, 2.0, 2.2), (7.33, 17.0, 3.0, 3.24),
+                                                        (30.0, 6.0, 2.0, 1.9), (2.0, 40.0, 2.0, 2.0),
+                                                        (2.0, 19.0, 2.0, 2.0), (2000.0, 4.0, 2.0, 2.0)])
+def test_a_symmetric_points_periods_advice_is_the_longest_run_below_the_gate(sym_stubs, rho, periods, T_lin, T_run):
+    """An offset grows by rho each period of the run (T_run s), and a run of
+    N linear periods (T_lin s) lasts N T_lin / T_run of them: the warning
+    comes where rho^(periods T_lin / T_run) reaches GROWTH_GATE (1e6) and
+    names the largest N with rho^(N T_lin / T_run) below it (N >= 2: --periods
+    takes 2 at least; else only the smaller amplitude).  Truth: the gate's
+    definition, counted here."""
+    import re
+
+    from bifilar.analysis.symmetry_check import GROWTH_GATE
+    from bifilar.studies.point_symmetry import symmetric_run_warnings
+
+    assert GROWTH_GATE == 1e6
+    sym_stubs.rho = rho
+    ms = SimpleNamespace(get=lambda lab: SimpleNamespace(period=T_lin))
+    run = _point_run(T_run)
+    symmetric_run_warnings(None, None, ms, ["torsion"], 0.1, periods, 1e-10, [run])
+    growth = rho ** (periods * T_lin / T_run)
+    assert (len(run.warnings) == 1) is (growth >= GROWTH_GATE)
+    if not run.warnings:
+        return
+    N = 0
+    while rho ** ((N + 1) * T_lin / T_run) < GROWTH_GATE:
+        N += 1
+    got = re.findall(r"--periods (\d+)", run.warnings[0])
+    assert got == ([str(N)] if N >= 2 else []), (N, run.warnings[0])
+    assert f"{rho:.3g}" in run.warnings[0]
+
+
+def test_short_runs_and_asymmetric_rigs_cost_nothing(sym_stubs):
+    """At most SHORT_RUN_PERIODS (3) linear periods no run is made (the gate
+    would need a multiplier of 100 a period: 100^3 = 1e6); a rig without
+    symmetry neither; a run that timed no period or failed is skipped."""
+    from bifilar.studies.point_symmetry import SHORT_RUN_PERIODS, symmetric_run_warnings
+
+    assert SHORT_RUN_PERIODS == 3.0
+    sym_stubs.rho = 1000.0
+    ms = SimpleNamespace(get=lambda lab: SimpleNamespace(period=2.0))
+    run = _point_run()
+    symmetric_run_warnings(None, None, ms, ["torsion"], 0.1, 3.0, 1e-10, [run])
+    assert sym_stubs.short == 0 and run.warnings == []
+    symmetric_run_warnings(None, None, ms, ["torsion"], 0.1, 3.01, 1e-10, [run])
+    assert sym_stubs.short == 1 and len(run.warnings) == 1
+    sym_stubs.syms = []
+    run = _point_run()
+    symmetric_run_warnings(None, None, ms, ["torsion"], 0.1, 10.0, 1e-10, [run])
+    assert sym_stubs.short == 1 and run.warnings == []
+    sym_stubs.syms = ["C2"]
+    runs = [SimpleNamespace(period=None, error=None, warnings=[]), SimpleNamespace(period=2.0, error="x", warnings=[])]
+    symmetric_run_warnings(None, None, ms, ["a", "b"], 0.1, 10.0, 1e-10, runs)
+    assert sym_stubs.short == 1 and all(r.warnings == [] for r in runs)
