@@ -185,6 +185,21 @@ def test_a_secant_end_outside_the_bodys_tensors_leaves_the_pair_unchecked(factor
         assert law.dr_dp[0] == 0.0
 
 
+def test_only_the_measurements_with_a_nonlinear_law_are_checked(factor):
+    """Two measurements of the same torsion: the first without a law (None)
+    or with a law without dr_dp (a linear rung), the second with one: only
+    the second is checked (its two runs) and changed."""
+    factor.abk = (0.0, 1.0, 8.0)
+    pb, law = _problem(1e-6, dr_dp=0.0)
+    pb.measurements = pb.measurements * 2
+    pb.linear_periods = lambda q: np.array([C * math.sqrt(q[0])] * 2)
+    pb.jacobian = lambda q: np.array([[C / (2.0 * math.sqrt(q[0]))]] * 2)
+    for first in (None, SimpleNamespace(dr_dp=None)):
+        factor.calls.clear()
+        msgs, changed = secant_check(pb, [P0], np.array([1.0, 1.0]), [first, law], np.array([1e-3]))
+        assert len(msgs) == 1 and len(factor.calls) == 2 and not changed  # the secant 1.32x: the law stays
+
+
 def test_a_pair_without_a_std_or_a_nonlinear_law_is_not_checked(factor):
     """No run where the unknown's std is 0 / NaN, or no law has dr_dp."""
     pb, law = _problem(1e-6, dr_dp=0.0)
