@@ -563,6 +563,17 @@ def test_the_loaded_bifilar_is_hookes_and_its_torsion_the_parallel_wire_law():
     T_law = 2 * np.pi / math.sqrt(w2)
     assert linear_modes(ls, rest_pose(ls)).get("torsion").period == pytest.approx(T_law, rel=1e-9)
     assert linear_modes(sc, rest).get("torsion").period == pytest.approx(T_law, rel=1e-9)
+    # the elastic wires' own linear periods, matched to the modes by shape: the torsion's is the same (vertical
+    # wires: it does not tilt them), the rest within half the strain 9.8e-3 (a coupling ~ strain x itself);
+    # a mode matched to another shape would be off by the ratio of two different periods (>= 1.028 here)
+    from bifilar.analysis.elastic_rest import elastic_period_ratios
+
+    ms = linear_modes(sc, rest)
+    ratio = elastic_period_ratios(sc, rest, ms)
+    assert ratio[[md.label for md in ms.modes].index("torsion")] == pytest.approx(1.0, abs=1e-9)
+    per = sorted(md.period for md in ms.modes if md.period)
+    assert min(b / a for a, b in zip(per, per[1:])) > 1.02
+    assert np.all(np.abs(ratio[np.isfinite(ratio)] - 1) < 5e-3), ratio
     err = ValueError("a batch's failed rest")
     out = loaded_scenes([sc, sc, sc, rigid], [rest, rest, err, rest0])
     assert out[0] is out[1] and out[0] is not sc and out[2] is sc and out[3] is rigid
@@ -651,3 +662,31 @@ def test_short_runs_and_asymmetric_rigs_cost_nothing(sym_stubs):
     runs = [SimpleNamespace(period=None, error=None, warnings=[]), SimpleNamespace(period=2.0, error="x", warnings=[])]
     symmetric_run_warnings(None, None, ms, ["a", "b"], 0.1, 10.0, 1e-10, runs)
     assert sym_stubs.short == 1 and all(r.warnings == [] for r in runs)
+
+
+# ---------------------------------------------------------------------------
+# shorthands.overlap_warnings: warned exactly where apply_params moves the path
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("short, value", [("length", 1.1), ("length_offset", 0.1), ("spacing", 0.45),
+                                          ("ceiling_spacing", 0.45), ("height", 0.1)])
+def test_a_path_is_warned_of_exactly_where_its_shorthand_moves_it(short, value):
+    """Every coordinate of every attachment and anchor and every length of
+    the drone config, set to a value off its own and swept beside one
+    shorthand: warned iff apply_params' built config holds another value
+    there (the truth: the edit itself, not the warning's table)."""
+    from pathlib import Path
+
+    from bifilar.config import read_yaml
+    from bifilar.studies.shorthands import apply_params, get_path, overlap_warnings
+
+    cfg = read_yaml(Path(__file__).resolve().parents[1] / "configs" / "drone_parallel.yaml")
+    n = len(cfg["rig"]["lengths"])
+    paths = [f"rig.lengths.{i}" for i in range(n)] + [f"rig.{key}.{i}.{c}" for key in ("attachments", "anchors")
+                                                       for i in range(n) for c in range(3)]
+    for path in paths:
+        set_to = float(get_path(cfg, path)) + 0.0123
+        built, _ = apply_params(cfg, {path: set_to, short: value})
+        moved = abs(float(get_path(built, path)) - set_to) > 1e-9
+        said = overlap_warnings([path, short])
+        assert len(said) == int(moved), (path, short, moved, said)
