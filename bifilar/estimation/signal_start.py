@@ -1,22 +1,27 @@
-"""A record whose start is not a free oscillation: the hand ramping the body
-to its release angle and holding it there before letting go.
+"""A record whose start is not a free oscillation (the hand ramping the body
+to its release angle and holding it there before letting go), or whose end
+is not (the body caught and held, or stopped).
 
 SI units: times in s, frequencies in Hz; the signal in its own unit ``[y]``.
 
 A fit of the whole record reads the hold as part of the motion (``auto``
-takes it for a second mode, at a std 8-50x the free part's: audit17 row
-C3).  The free part is found from one-period windows slid along the record
+took it for a second mode, at a std 8-50x the free part's: audit17 row C3;
+a caught end widened a viscous fit's std 20-1000x through its halves).
+The free part is found from one-period windows slid along the record
 (:func:`local_sinusoids`): in each, the linear least-squares fit of ``c +
 p cos(w t) + q sin(w t)`` at the record's frequency ``w`` gives the
 window's level ``c`` and amplitude ``A = hypot(p, q)``.  Over a free
-oscillation ``c`` follows the record's level (a drift is a straight line)
+oscillation ``c`` follows a straight line (the record's level and drift)
 within a small share of ``A``: one period of a damped cosine averages to
 ``~ A zeta``, a second close mode beats without moving ``c``.  A window
-over the hold has its level at the release angle, one amplitude from the
-record's level, and little oscillation at ``w``.  :func:`held_start`
-finds the leading run of windows whose level lies off the line the rest
-of the record's levels follow; the fit starts half a period after the
-last of them (:data:`MARGIN_PERIODS`).
+over the hold has its level at the release angle, about one amplitude off
+that line, and little oscillation at ``w``.  :func:`held_start` finds the
+leading run of such windows (the rules at :func:`held_start`); the fit
+starts half a period after the first free window (:data:`MARGIN_PERIODS`).
+:func:`held_end` is the mirror, on the record reversed in time, with the
+leading-rest rule reversed for a body stopped at its rest level.
+``fit_period`` calls :func:`trim_held_start` unless ``t_start`` is given
+and :func:`trim_held_end` unless ``t_stop`` is: an explicit window wins.
 """
 
 from __future__ import annotations
@@ -98,13 +103,18 @@ def held_start(t, y, T: float):
     off the line, in units of the largest amplitude), ``rest_deviation``
     (the largest of the other windows', same unit).
 
-    The level line is the straight-line fit of the windows' levels over the
-    record's second half; the held run is the leading run of windows
-    starting within the record's first half and ending at the last window
-    that still lies ``FREE_SHARE`` off the line.  It fires when the first
-    window lies at least ``FIRE_SHARE`` off, with an amplitude below
-    ``HELD_AMPLITUDE`` of the largest, and ``REST_RATIO`` times further off
-    than any window after the run."""
+    The rules, with ``u`` a window's level off a straight line in units of
+    the largest window amplitude: the line is fitted first to the levels
+    of the record's second half; the free part starts at the first window
+    ``j`` followed by ``FREE_RUN`` periods of windows with ``u <
+    FREE_SHARE``, within the record's first half.  It fires when ``u`` falls
+    from ``FIRE_SHARE`` to ``FREE_SHARE`` within ``SHARP_PERIODS`` periods
+    (a release is sudden; a swelling baseline is gradual), a run longer
+    than ``LONG_RUN`` periods holds a window with ``A`` below
+    ``HELD_AMPLITUDE`` of the first free period's (a hold does not
+    oscillate), and, against the line refitted to the windows a period
+    past ``j``, the first window lies ``FIRE_SHARE`` off and ``REST_RATIO``
+    times further than any of those."""
     loc = local_sinusoids(t, y, T)
     if loc is None:
         return None
