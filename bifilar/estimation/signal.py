@@ -200,7 +200,10 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
         onset found from the one-period envelope
         (:func:`.signal_models._leading_rest`), said in ``notes`` and in
         ``oscillation["leading_rest"]`` (``onset``, ``t_start`` = the first
-        sample fitted, s; ``samples_left_out``).
+        sample fitted, s; ``samples_left_out``).  Else a start held by hand
+        (the level off the rest's, :mod:`.signal_start`) is left out:
+        ``oscillation["held_start"]``; without ``t_stop``, a held or
+        stopped end likewise: ``oscillation["held_end"]``.
     drift : bool
         Fit the linear drift ``c1`` (else fixed at 0).
     viscous_term : bool
