@@ -187,10 +187,10 @@ def trim_held_start(t, y, osc: dict, notes: list):
 def start_warning(h: dict, t0: float) -> str:
     """The one line saying a held start was left out (``h`` from
     :func:`trim_held_start`, ``t0`` the record's first time, s)."""
-    return (f"the record's first {h['t_start'] - t0:.3g} s are not a free oscillation (its level there lies "
-            f"{h['deviation']:.2g} of the amplitude off the rest's: the body held or moved by hand before "
-            f"the release); the fit starts at t = {h['t_start']:.4g} s, leaving out {h['samples_left_out']} "
-            "samples (give --t-start to choose the start)")
+    return (f"the record is not a free oscillation before about t = {h['t_free']:.4g} s (its level there lies "
+            f"{h['deviation']:.2g} of the amplitude off the rest's: the body held or moved by hand before the "
+            f"release); the fit starts at t = {h['t_start']:.4g} s, leaving out the first {h['t_start'] - t0:.3g} s "
+            f"({h['samples_left_out']} samples; give --t-start to choose the start)")
 
 
 def take_start_warning(fit) -> str | None:
@@ -244,8 +244,9 @@ def trim_held_end(t, y, osc: dict, notes: list):
         return t, y, osc
     h = dict(h, t_stop=float(t[keep][-1]), samples_left_out=int((~keep).sum()))
     what = "held by hand" if h["how"] == "held" else "stopped at rest"
-    h["line"] = (f"the record's last {float(t[-1]) - h['t_stop']:.3g} s are not a free oscillation (the body "
-                 f"{what}: caught?); the fit ends at t = {h['t_stop']:.4g} s, leaving out "
-                 f"{h['samples_left_out']} samples (give --t-stop to choose the end)")
+    h["line"] = (f"the record is not a free oscillation after about t = {h['t_held']:.4g} s (the body {what}: "
+                 f"caught?); the fit ends at t = {h['t_stop']:.4g} s, leaving out the last "
+                 f"{float(t[-1]) - h['t_stop']:.3g} s ({h['samples_left_out']} samples; give --t-stop to choose "
+                 "the end)")
     notes.append(h["line"])
     return t[keep], y[keep], dict(osc, held_end=h)
