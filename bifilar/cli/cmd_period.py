@@ -96,6 +96,11 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
         t, fit = tb["t"], tb["fit"]
         meta["warnings"] = list(meta.get("warnings") or []) + [tb["warning"]]
         meta["time_base"] = tb["time_base"]
+    from ..estimation.signal_start import take_start_warning
+
+    held = take_start_warning(fit)  # the body held before the release: left out of the fit
+    if held:
+        meta["warnings"] = list(meta.get("warnings") or []) + [held]
     from ..estimation.period_specs import implausible_period
 
     slip = implausible_period(fit.period, None, "SIGNAL")

@@ -226,8 +226,9 @@ def signal_measurement(label: str, path, fld: str, *, amplitude=None, amplitude_
                                     "window": [fit.t0, fit.t1], "notes": list(fit.notes)},
            "amplitude_source": "fit (the amplitude the fitted period refers to)" if r["amplitude"] is not None else None,
            "decay": r["decay"], "quantity": kw.get("quantity", "other")}
-    if r.get("time_base_warning"):
-        det["time_base_warning"] = r["time_base_warning"]
+    for key in ("time_base_warning", "start_warning"):
+        if r.get(key):
+            det[key] = r[key]
     std = r["std"]
     if r.get("dof") is not None:
         det["dof"] = r["dof"]

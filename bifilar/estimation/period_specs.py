@@ -380,7 +380,10 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
     crossings-only fit), ``cycles``, ``fit``, ``t``, ``y``, ``meta``,
     ``time_base_warning`` (one line, or None: a record without its time
     column whose phase steps as dropped frames step it,
-    :mod:`.signal_timebase`; also in ``meta["warnings"]``).
+    :mod:`.signal_timebase`; also in ``meta["warnings"]``),
+    ``start_warning`` (one line, or None: the record's start held by hand
+    and left out of the fit, :mod:`.signal_start`; also in
+    ``meta["warnings"]``).
 
     The amplitude of a decaying recording is the one its fitted period
     refers to, :attr:`~bifilar.estimation.signal_result.PeriodFit.amplitude_period`
@@ -408,6 +411,11 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
         t, fit, tbw = tbc["t"], tbc["fit"], tbc["warning"]
         meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
         meta["time_base"] = tbc["time_base"]
+    from .signal_start import take_start_warning
+
+    held = take_start_warning(fit)  # the body held before the release: left out of the fit
+    if held:
+        meta["warnings"] = list(meta.get("warnings") or []) + [held]
     Td = float(fit.period)
     zeta = float(fit.damping_ratio) if np.isfinite(fit.damping_ratio) else 0.0
     zstd = 0.0
@@ -436,4 +444,5 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
             amp = a_eff
     cycles = max((fit.t1 - fit.t0) / Td, 1.0)
     return {"period": Tn, "std": std, "dof": nu, "observed_period": Td, "damping_ratio": zeta, "amplitude": amp,
-            "decay": decay, "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta, "time_base_warning": tbw}
+            "decay": decay, "cycles": cycles, "fit": fit, "t": t, "y": y, "meta": meta, "time_base_warning": tbw,
+            "start_warning": held}

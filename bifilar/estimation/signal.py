@@ -102,6 +102,7 @@ from .signal_models import _auto_trim, _leading_rest
 from .signal_law import _amplitude_law
 from .signal_quantisation import _quantisation
 from .signal_result import PeriodFit
+from .signal_start import trim_held_end, trim_held_start
 from .signal_windows import AMPLITUDE_LAW_MODEL, _fit_window, _residual_peaks, _stationarity  # noqa: F401 (the model's name)
 
 __all__ = [
@@ -199,7 +200,10 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
         onset found from the one-period envelope
         (:func:`.signal_models._leading_rest`), said in ``notes`` and in
         ``oscillation["leading_rest"]`` (``onset``, ``t_start`` = the first
-        sample fitted, s; ``samples_left_out``).
+        sample fitted, s; ``samples_left_out``).  Else a start held by hand
+        (the level off the rest's, :mod:`.signal_start`) is left out:
+        ``oscillation["held_start"]``; without ``t_stop``, a held or
+        stopped end likewise: ``oscillation["held_end"]``.
     drift : bool
         Fit the linear drift ``c1`` (else fixed at 0).
     viscous_term : bool
@@ -256,6 +260,10 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
                          "samples (give --t-start to choose)")
             osc = dict(osc, leading_rest={"onset": t_on, "t_start": t_fit, "samples_left_out": int((~keep).sum())})
             t, y = t[keep], y[keep]
+        else:  # the body held at the release angle before it was let go
+            t, y, osc = trim_held_start(t, y, osc, notes)
+    if t_stop is None:  # the body caught and held, or stopped, before the record ends
+        t, y, osc = trim_held_end(t, y, osc, notes)
     try:
         fit = _fit_period(t, y, model, trim, trim_k, drift, freq_guess, tuple(candidates),
                           criterion.upper(), crossing_check, split_check, notes)
