@@ -103,7 +103,7 @@ def resolution(y, ad=None) -> float:
         ad = np.abs(np.diff(y))
     scale = float(np.max(np.abs(y))) if y.size else 1.0
     floor = 4.0 * np.finfo(float).eps * (scale or 1.0)
-    sub = y[y != 0][:: max(1, y.size // 2000)]
+    sub = y[y != 0][:: max(1, y.size // 200)]  # ~200 values: the median of their last decimal places
     q = max(float(np.median([_decimal_step(v) for v in sub])) if sub.size else 0.0, floor)
     pos = ad[ad > 0]
     if pos.size:

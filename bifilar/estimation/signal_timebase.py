@@ -325,8 +325,10 @@ SEARCH_RESIDUAL_EXCESS = 1.1
 HIDDEN_LATTICE = 0.5
 #: ... the fit leaves this much more than the record's white noise (dropped
 #: frames the fit cannot follow: 1.2-3.8 measured where they were not put
-#: back, one at 1.18 missed; a beat's two-mode fit 0.93-1.12) ...
-MIN_RESIDUAL_EXCESS = 1.2
+#: back, one at 1.18 missed; a beat's two-mode fit 0.93-1.12; dropfix2: 1.15,
+#: so that 1 % dropped with two repeats removed, 1.176, is refused as the
+#: same record with its repeats was, 1.215) ...
+MIN_RESIDUAL_EXCESS = 1.15
 
 
 def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
