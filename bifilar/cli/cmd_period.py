@@ -90,10 +90,10 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
                      trim="auto" if trim else None)
     from ..estimation.signal_timebase import check_time_base
 
-    tb = check_time_base(t, y, fit, meta.get("time_source"), lambda tn: fit_period(
-        tn, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"], trim="auto" if trim else None))
-    if tb:  # frames dropped from a record without its time column: put back, or the std widened
-        t, fit = tb["t"], tb["fit"]
+    tb = check_time_base(t, y, fit, meta.get("time_source"), lambda tn, yn=y: fit_period(
+        tn, yn, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"], trim="auto" if trim else None))
+    if tb:  # frames dropped (or repeated) in a record without its time column: put back, or the std widened
+        t, y, fit = tb["t"], tb.get("y", y), tb["fit"]
         meta["warnings"] = list(meta.get("warnings") or []) + [tb["warning"]]
         meta["time_base"] = tb["time_base"]
     from ..estimation.signal_start import take_start_warning

@@ -402,13 +402,13 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
         raise InputError(f"{fld} ({exc.field})", exc.message) from None
     from .signal_timebase import check_time_base
 
-    def refit(tn):
-        return fit_period(tn, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
+    def refit(tn, yn=y):
+        return fit_period(tn, yn, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
 
     tbc = check_time_base(t, y, fit, meta.get("time_source"), refit, fld)
     tbw = None
     if tbc:  # frames dropped from a record without its time column: put back, or the std widened
-        t, fit, tbw = tbc["t"], tbc["fit"], tbc["warning"]
+        t, y, fit, tbw = tbc["t"], tbc.get("y", y), tbc["fit"], tbc["warning"]
         meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
         meta["time_base"] = tbc["time_base"]
     from .signal_start import take_start_warning

@@ -443,7 +443,9 @@ def _mode_rank(omega: float, amplitude: float, T_rec: float, sigma: float = 0.0)
     from .signal_checks import MIN_CYCLES  # signal_checks imports this module
 
     x = 2.0 * sigma * T_rec
-    share = 1.0 if abs(x) < 1e-12 else -math.expm1(-x) / x  # mean of e^{-2 sigma tau} over the record
+    # mean of e^{-2 sigma tau} over the record (a mode growing 300 e-folds or more ranks as if it grew 350: the
+    # exponential would overflow; dropfix2 met one in a refit on a recovered time base)
+    share = 1.0 if abs(x) < 1e-12 else -math.expm1(min(-x, 700.0)) / x
     return (abs(omega) * T_rec / (2 * math.pi) < MIN_CYCLES, -amplitude * math.sqrt(max(share, 0.0)))
 
 

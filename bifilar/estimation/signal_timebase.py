@@ -223,14 +223,18 @@ def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIG
     """The answer of a record without its time column whose camera dropped
     frames (design.md "dropfix, session 17").
 
-    ``refit(t_new)`` fits the same samples on another time base (s) with
-    the caller's options and returns a PeriodFit.  Returns None for a
+    ``refit(t_new, y_new=y)`` fits samples (the record's, or those left
+    where repeated frames were removed: only then is ``y_new`` given) on
+    another time base (s) with the caller's options and returns a PeriodFit.  Returns None for a
     record with its time column, a crossings-only fit, or a record with no
-    sign of dropped frames; else a dict: ``t`` (s, the time base the answer
-    stands on), ``fit`` (the answer: its ``std`` holds the time base's own
+    sign of dropped or repeated frames; else a dict: ``t`` (s, the time base the answer
+    stands on), ``y`` (the samples it stands on, present where repeated
+    frames were removed: :mod:`.signal_repeats`), ``fit`` (the answer: its ``std`` holds the time base's own
     term, ``uncertainty["time_base"]``), ``warning`` (one line),
     ``time_base`` (JSON: ``method``, ``dropped_frames``,
-    ``nominal_period``, ``std_added``).
+    ``nominal_period``, ``std_added``; ``repeated_frames`` where repeats
+    were removed, ``method`` then ``"repeats_removed"`` unless frames were
+    also put back or the std widened for drops).
 
     ``method`` is ``"recovered"`` where :func:`.signal_frames.recover_frames`
     finds the frames' lattice and the refit on it explains the record
@@ -242,6 +246,29 @@ def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIG
     """
     if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
         return None
+    from .signal_repeats import remove_repeats
+
+    rep = remove_repeats(t, y, fit, refit, field)  # frames written twice: removed first (design.md "dropfix2")
+    if rep is None:
+        return _check_drops(t, y, fit, refit, field)
+    y = rep["y"]
+    res = _check_drops(rep["t"], y, rep["fit"], lambda tn: refit(tn, y), field)
+    if res is None:
+        res = {"t": rep["t"], "fit": rep["fit"], "warning": rep["warning"],
+               "time_base": {"method": "repeats_removed", "dropped_frames": None, "std_added": rep["std_added"]}}
+    else:
+        res["warning"] = rep["warning"] + "; also " + res["warning"]
+        if res["time_base"]["method"] == "recovered" and rep["std_added"] > 0:  # a fresh refit: add the repeats'
+            widen_std(res["fit"], rep["std_added"])
+        both = float(np.hypot(rep["std_added"], res["time_base"]["std_added"]))
+        res["time_base"]["std_added"] = res["fit"].uncertainty["time_base"] = both
+    res["y"] = y
+    res["time_base"].update(repeated_frames=rep["repeated"], nominal_period=rep["nominal_period"])
+    return res
+
+
+def _check_drops(t, y, fit, refit, field: str) -> dict | None:
+    """:func:`check_time_base`'s dropped frames, on a record without repeats."""
     from .signal_frames import MAX_RMS_RATIO, correction_std, recover_frames
 
     t = np.asarray(t, float)
@@ -298,8 +325,10 @@ SEARCH_RESIDUAL_EXCESS = 1.1
 HIDDEN_LATTICE = 0.5
 #: ... the fit leaves this much more than the record's white noise (dropped
 #: frames the fit cannot follow: 1.2-3.8 measured where they were not put
-#: back, one at 1.18 missed; a beat's two-mode fit 0.93-1.12) ...
-MIN_RESIDUAL_EXCESS = 1.2
+#: back, one at 1.18 missed; a beat's two-mode fit 0.93-1.12; dropfix2: 1.15,
+#: so that 1 % dropped with two repeats removed, 1.176, is refused as the
+#: same record with its repeats was, 1.215) ...
+MIN_RESIDUAL_EXCESS = 1.15
 
 
 def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
