@@ -147,9 +147,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         w = implausible_period(m.period, m.label, m.field, m.details.get("cycles") if m.source == "timed" else None)
         if w:
             warnings.append(w)
-        for key in ("time_base_warning", "start_warning"):  # dropped frames; a start held by hand
-            if m.details.get(key):
-                warnings.append(f"mode '{m.label}': {m.details[key]}")
+        # a recording's own warnings (the reader's: NaN rows dropped, an angle unwrapped; the time base's
+        # dropped or repeated frames; a start held by hand), as `period` lists them at its top level
+        for w in (m.details.get("signal") or {}).get("warnings") or []:
+            warnings.append(f"mode '{m.label}': {w}")
     if "release" in {**ms.uncertainty, **(unc or {})} and not any(m.source == "signal" for m in ms.measurements):
         warnings.append("uncertainty release is budgeted for recordings (--signal) only: a period's "
                         "second modes are not modelled, so the stated bound is not in this answer's std")
