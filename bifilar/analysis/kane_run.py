@@ -31,7 +31,7 @@ from ..scene import Scene
 from .elastic_rest import loaded_scene
 from .equilibrium import RestPose
 from .modes import ModeSet
-from .simulate import check_period, check_rtol, initial_state, needs_check, summarise_run
+from .simulate import check_period, check_rtol, initial_state, needs_period_check, summarise_run
 
 
 @dataclass(frozen=True)
@@ -186,7 +186,7 @@ def simulate_kane(scene: Scene, rest: RestPose, modes: ModeSet, *, mode=None, am
                           method, rtol, rtol * amp if atol is None else atol, samples_per_period, progress, timing)
 
     res = once(method, rtol, None, progress)
-    if check and needs_check(res):
+    if check and needs_period_check(res):
         check_period(res, once, method, None, timing)
     if check:  # a start on a symmetric subspace: the default model's check, on this model's runs
         from .symmetry_check import CHECK_EXTRA_PERIODS, check_symmetric_start, timed_index

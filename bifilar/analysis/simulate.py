@@ -51,6 +51,7 @@ from .run_accuracy import (  # noqa: F401 (the names callers import from here)
     MIN_RTOL,
     MIN_TIMED_ANGLE,
     needs_check,
+    needs_period_check,
     period_accuracy,
     PERIOD_ERROR_FLOOR,
     PERIOD_ERROR_PER_RTOL,
@@ -369,7 +370,7 @@ def simulate(
               samples_per_period=samples_per_period, on_slack=on_slack, max_evaluations=max_evaluations,
               timing=timing, coordinate=coordinate, bound=bound)
     res = _simulate_once(scene, mode, amplitude, periods, progress=progress, **kw)
-    if check and needs_check(res):
+    if check and needs_period_check(res):
 
         def again(method2: str, rtol2: float, atol2) -> SimulationResult:
             return _simulate_once(scene, mode, amplitude, periods, progress=None,
