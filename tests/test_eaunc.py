@@ -124,3 +124,33 @@ def test_sweep_states_ea_and_its_point_sigma_carries_the_term():
     assert np.sqrt(s1 ** 2 - s0 ** 2) == pytest.approx(want, rel=2e-2), (s1, s0, want)
     assert with_ea["components"]["Izz"]["shares"]["stiffness"] > 0.05
     assert "stiffness" not in exact["components"]["Izz"]["shares"]
+
+
+def test_tensions_compares_the_motion_with_the_loaded_wires():
+    """``tensions`` checks that the motion's poses keep each wire at its
+    length (1 %).  With ``rig.stiffness`` the run hangs on the loaded wires,
+    so against the unloaded ``rig.lengths`` the check saw the stretch: a
+    200 kg trifilar on EA 4e4 N (strain 1.6 %) warned that its own
+    simulated record 'does not fit this config's rig' and reported a
+    mismatch of 0.0327 m, Hooke's law's ``L m g / (3 EA)`` (the old code
+    fails here).  Now the mismatch is the run's constraint drift (< 1e-9 m)
+    and no warning."""
+    import json
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    cfg = _heavy(3, 200.0, 4.0e4)
+    import yaml
+
+    runner = CliRunner()
+    with runner.isolated_filesystem():
+        with open("soft.yaml", "w") as f:
+            yaml.safe_dump(cfg, f)
+        r = runner.invoke(main, ["tensions", "soft.yaml", "--periods", "1", "--json"])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["max_wire_length_mismatch"] < 1e-9, doc["max_wire_length_mismatch"]
+    assert "does not fit" not in r.stderr
+    assert doc["inertia_from_tensions"]["Izz"]["value"] == pytest.approx(20.0, rel=1e-8)
