@@ -154,3 +154,38 @@ def test_tensions_compares_the_motion_with_the_loaded_wires():
     assert doc["max_wire_length_mismatch"] < 1e-9, doc["max_wire_length_mismatch"]
     assert "does not fit" not in r.stderr
     assert doc["inertia_from_tensions"]["Izz"]["value"] == pytest.approx(20.0, rel=1e-8)
+
+
+def test_the_amplitude_factor_moves_with_g_as_with_ea():
+    """The amplitude factor ``r = T(A) / T_lin`` of a stiff rig depends on
+    ``g`` and EA through the strain ``m g / EA`` of its loaded wires (and
+    ``g`` otherwise only scales time): raising ``g`` by 5 % and lowering
+    every EA to ``1 / 1.05`` of itself move ``r`` alike (two independent
+    runs, the trifilar's torsion at 0.1 rad, rtol 1e-10: the runs agree to
+    ~1e-10 of ``r`` while each moves it by 5.4e-8).  So the exact route that
+    gave ``dr/dg = 0`` (right on rigid wires) is wrong here; the routes
+    derive it as ``-dr/ds / g`` from EA's factor ``s`` (and run it where
+    EA's is not measured).  The old code has no ``stiff`` routes (fails)."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.estimation.factor_inputs import (SteppedFactors, derive_factor_routes, factor_routes,
+                                                  stepped_factor_runs)
+    from bifilar.estimation.sensitivity import perturb
+
+    s = _scene(3, 200.0)
+    rest = rest_pose(s)
+    ms = linear_modes(s, rest)
+    k = [m.label for m in ms.modes].index("torsion")
+    h = 0.05
+    dg, ds = h * s.gravity, 1 / (1 + h) - 1
+    g = SteppedFactors(s, rest, ms, [k], 0.1, 3.0, [("gravity", dg, perturb(s, "gravity", dg)),
+                                                    ("stiffness", ds, perturb(s, "stiffness", ds))])
+    stepped_factor_runs([g], 1e-10)
+    moved_g, moved_ea = g.dr_dx[k]["gravity"] * dg, g.dr_dx[k]["stiffness"] * ds
+    assert abs(moved_g) > 2e-8, moved_g  # not 0: g moves the factor through the strain
+    assert moved_g == pytest.approx(moved_ea, rel=1e-2), (moved_g, moved_ea)
+    assert factor_routes(3, ["gravity"], stiff=True) == (["gravity"], {})  # EA's not measured: run
+    run, derived = factor_routes(3, ["gravity", "stiffness"], stiff=True)
+    dx = {"stiffness": 2.0e-6}
+    derive_factor_routes(dx, derived, s, np.eye(3))
+    assert run == ["stiffness"] and dx["gravity"] == pytest.approx(-2.0e-6 / s.gravity, rel=1e-12)
