@@ -80,6 +80,8 @@ def uncertainty_too_large(key: str, value: float) -> str | None:
     unit = {"mass": "relative", "gravity": "relative", "amplitude": "relative", "inertia": "relative",
             "stiffness": "relative", "timing": "s", "trial_time": "s"}.get(key, "m")
     what = "(100 % of the quantity)" if unit == "relative" else "(beyond it a budget says nothing)"
+    if key == "stiffness":
+        what = "(the budget's sigma points at sqrt(3) of it must keep every EA positive)"
     return f"{key} must be at most {hi:g} {unit} {what}, got {value:g}"
 
 
