@@ -14,9 +14,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
 import sys
-import time
 import traceback
 from pathlib import Path
 
@@ -25,6 +23,9 @@ sys.path.insert(0, str(ROOT))
 
 from bifilar.analysis import elastic_rest as er  # noqa: E402
 from bifilar.studies import sweep as sw  # noqa: E402
+
+sys.path.insert(0, str(ROOT / "scripts"))
+from bench_sweep import timed  # noqa: E402  (median CPU and wall s of a call)
 
 
 def rig(n: int, mass: float, stiffness) -> dict:
@@ -63,15 +64,6 @@ def count_rests(fn) -> dict:
     return counts
 
 
-def cpu(fn, repeats: int) -> float:
-    out = []
-    for _ in range(repeats):
-        c0 = time.process_time()
-        fn()
-        out.append(time.process_time() - c0)
-    return statistics.median(out)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
@@ -83,7 +75,7 @@ def main() -> None:
             st = sw.resolve_settings(cfg, components=["Izz"], tensions=not a.no_tensions)
             pt = sw.evaluate_point(cfg, "bench", {}, st)  # warm-up
             assert pt["valid"], pt["error"]
-            t = cpu(lambda: sw.evaluate_point(cfg, "bench", {}, st), a.repeats)
+            t = timed(lambda: sw.evaluate_point(cfg, "bench", {}, st), a.repeats)[0]
             rests = count_rests(lambda: sw.evaluate_point(cfg, "bench", {}, st)) if ea else {}
             print(f"{n} wires, EA {ea}: point {t * 1e3:.0f} ms CPU, sigma(Izz) {pt['components']['Izz']['sigma']:.5g}, "
                   f"elastic rests {sum(rests.values())} {rests}")
