@@ -522,6 +522,10 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     except SlackWireError as e:
         raise _slack_cause(e, scene, cfg, st, params) from None
     unc = point_uncertainty(st, params)
+    if scene.stiffness is not None:  # EA's default, listed in the point's uncertainty only where EA is stated
+        from ..estimation.sensitivity import DEFAULT_STIFFNESS_REL
+
+        unc.setdefault("stiffness", DEFAULT_STIFFNESS_REL)
     names = list(st.components) + measured_inputs(scene)
     if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known), as invert's budget
         names.append("gravity")
