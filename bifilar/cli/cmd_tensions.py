@@ -218,6 +218,8 @@ def _hanging_lengths(scene, rest, config) -> tuple:
     ``rig.stiffness`` the loaded ones at the rest pose (``rest``, solved here when None; :func:`~bifilar.analysis.
     elastic_rest.loaded_scene`), named "loaded (rig.lengths stretched under rig.stiffness) " (session 18: the
     unloaded ones were compared at 1 %, which a strain above 1 % alone tripped)."""
+    import numpy as np
+
     if scene.stiffness is None:
         return np.asarray(scene.lengths, float), ""
     from ..analysis.elastic_rest import loaded_scene

@@ -27,7 +27,7 @@ def _factor_routes(pb: Problem, h: int, keys: list) -> tuple[list, dict]:
     hanging's name where there are several)."""
     pre = f"{pb.models[h].hanging.name}:" if len(pb.models) > 1 else ""
     scene = pb.models[h].hanging.scene
-    return factor_routes(scene.n_wires, keys, pre, stiff=scene.stiffness is not None)
+    return factor_routes(scene.n_wires, keys, pre, stiff=getattr(scene, "stiffness", None) is not None)
 
 
 def factor_routes(n_wires: int, keys: list, pre: str = "", stiff: bool = False) -> tuple[list, dict]:
@@ -85,7 +85,7 @@ def derive_factor_routes(dx: dict, derived: dict, scene, R, pre: str = "", trans
         if why == "translation":
             dx[key] = -sum(dx[f"{pre}anchor.{i + 1}.{key[-1]}"] for i in range(nw - 1))
         elif why == "gravity":  # g only scales time, and where EA is stated moves the strain m g / EA
-            dx[key] = -dx["stiffness"] / scene.gravity if scene.stiffness is not None else 0.0
+            dx[key] = -dx["stiffness"] / scene.gravity if getattr(scene, "stiffness", None) is not None else 0.0
     for key, why in derived.items():
         if why == "com":
             a = "xyz".index(key[-1])
@@ -94,7 +94,7 @@ def derive_factor_routes(dx: dict, derived: dict, scene, R, pre: str = "", trans
             s = sum(input_value(scene, x.split(":", 1)[-1]) * v for x, v in dx.items()
                     if x.split(":", 1)[-1].split(".")[0] in ("length", "anchor", "attachment"))
             dx[key] = (s + translation_slope) / (2.0 * scene.mass)
-            if scene.stiffness is not None:  # and the strain m g / EA
+            if getattr(scene, "stiffness", None) is not None:  # and the strain m g / EA
                 dx[key] -= dx["stiffness"] / scene.mass
 
 

@@ -65,7 +65,8 @@ def _bound_scale(scene, name: str, rest=None) -> float:
     if name == "stiffness":
         return float(np.max(np.asarray(rest.tensions, float) / np.asarray(scene.stiffness, float)))
     if name == "gravity":
-        return 0.0 if scene.stiffness is None else _bound_scale(scene, "stiffness", rest) / float(scene.gravity)
+        stiff = getattr(scene, "stiffness", None) is not None
+        return _bound_scale(scene, "stiffness", rest) / float(scene.gravity) if stiff else 0.0
     if name == "mass":
         return 1.0 / float(scene.mass)
     return 1.0 / float(np.max(scene.lengths))
