@@ -87,7 +87,7 @@ def test_a_stated_stiffness_warns_of_what_the_model_does_not_carry():
 
     s3 = scene_from_dict(_heavy(3, 200.0, 1e5), "heavy3", warn=False)
     w3 = [w for w in plausibility_warnings(s3) if w.startswith("rig.stiffness")]
-    assert len(w3) == 1 and "13.1 mm" in w3[0] and "EA is taken as exact" in w3[0] and "1.3 mm" in w3[0], w3
+    assert len(w3) == 1 and "13.1 mm" in w3[0] and "EA's uncertainty is budgeted" in w3[0] and "1.3 mm" in w3[0], w3
     assert "do not use it" not in w3[0] and "\n" not in w3[0]
     s4 = scene_from_dict(_heavy(4, 200.0, 1e5), "heavy4", warn=False)
     w4 = [w for w in plausibility_warnings(s4) if w.startswith("rig.stiffness")]

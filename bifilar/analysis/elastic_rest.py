@@ -83,7 +83,8 @@ def elastic_rest(scene: Scene, ea, com0: np.ndarray, R0: np.ndarray, iters: int 
     ``k_i g_i g_i^T`` and their tensions' geometric term), each step halved
     until the potential falls, from the rigid pose (``com0`` m, ``R0``) moved
     down by the stretch the mean load gives the softest wire (every wire
-    taut at the start).  Returns (com (3,), R (3, 3), tensions (n,) N,
+    taut at the start), or from ``com0``, ``R0`` as they are where every
+    wire is already stretched there (a neighbouring scene's elastic rest).  Returns (com (3,), R (3, 3), tensions (n,) N,
     residual: the largest force or moment / length left, per unit weight);
     :class:`~bifilar.errors.ConvergenceError` when Newton does not reach
     1e-10 of the weight (its rounding floor ~1e-12)."""
@@ -102,9 +103,14 @@ def elastic_rest(scene: Scene, ea, com0: np.ndarray, R0: np.ndarray, iters: int 
         return d, w, G, ln, T, gradV + G.T @ (T / ln), energy
 
     scale = np.concatenate([np.full(3, 1.0 / W), np.full(3, 1.0 / (W * Ls))])
-    c = np.asarray(com0, float) - np.array([0.0, 0.0, (W / scene.n_wires) / float(np.min(k))])
-    R = np.asarray(R0, float)
+    xscale = np.concatenate([np.full(3, 1.0 / Ls), np.ones(3)])  # a step relative to the rig's size, rad
+    c, R = np.asarray(com0, float), np.asarray(R0, float)
     d, w, G, ln, T, g, E = state(c, R)
+    if not np.all(ln > L):  # a rigid pose (wires at their lengths): down by the stretch, every wire taut
+        c = c - np.array([0.0, 0.0, (W / scene.n_wires) / float(np.min(k))])
+        d, w, G, ln, T, g, E = state(c, R)
+    # else a loaded pose (a neighbour's elastic rest, session 18): Newton from it, ~3 steps instead of ~8 from
+    # the shifted one
     for _ in range(iters):
         if np.max(np.abs(g * scale)) < 1e-14:
             break
@@ -119,6 +125,9 @@ def elastic_rest(scene: Scene, ea, com0: np.ndarray, R0: np.ndarray, iters: int 
         if ev[0] <= 1e-12 * ev[-1]:  # not convex here (a wire slack, a neutral turn): shift to a descent step
             H = H + (1e-12 * ev[-1] - ev[0]) * np.eye(6)
         x = -np.linalg.solve(H, g)
+        if np.max(np.abs(x) * xscale) < 1e-13 and np.max(np.abs(g * scale)) < 1e-12:
+            break  # the step is rounding (the bifilar's floor 1.3e-14 of the weight sat above the 1e-14 aim: 60
+            # rounding-sized steps, 20-50 ms, before session 18); nearly dependent wires take tiny steps at 1e-10
         for _half in range(40):
             c1, R1 = c + x[:3], rotvec_to_matrix(x[3:]) @ R
             st = state(c1, R1)

@@ -37,7 +37,8 @@ from .common import check_journal_path, check_output_path, console, emit_json, e
 @click.option("--uncertainty", "uncertainty", multiple=True, metavar="KEY=VALUE",
               help="Override an assumed input uncertainty: length, position, com (m), mass, gravity, amplitude (relative), "
                    "timing, trial_time (s); release (m, default 0.01: the largest second mode a recording's release "
-                   "started unseen); repeatable.")
+                   "started unseen); stiffness (relative, the wires' EA where rig.stiffness is stated, default "
+                   "0.1); repeatable.")
 @click.option("--monte-carlo", "monte_carlo", default=None, metavar="N",
               help="Check the linear uncertainty with N Monte Carlo re-estimates on the full model.")
 @click.option("--seed", default=None, help="Random seed of the Monte Carlo draws.")

@@ -8,7 +8,8 @@ from ..output import write_yaml
 from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc, fmt,
                      handle_errors, progress_bar)
 
-UNC_HELP = "Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity [relative]."
+UNC_HELP = ("Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity, "
+            "stiffness (EA, where rig.stiffness is stated; default 0.1) [relative].")
 
 
 def common_options(fn):
@@ -75,8 +76,8 @@ def parse_sigmas(sigmas) -> dict:
 SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.lengths.1, body.mass, "
                   "uncertainty.timing) or a shorthand: spacing (body attachments' spacing, m), ceiling_spacing "
                   "(anchors' spacing, m), length (mean wire length, m), length_offset (last minus first wire, m), "
-                  "height (attachments above the CoM, m), amplitude (excitation), rotate_x/_y/_z[_deg] (turn the "
-                  "body before hanging); see README 'Sweep parameters'.")
+                  "height (attachments above the CoM, m), stiffness (every wire's EA, N), amplitude (excitation), "
+                  "rotate_x/_y/_z[_deg] (turn the body before hanging); see README 'Sweep parameters'.")
 
 
 def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,

@@ -61,7 +61,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         t, y, T_model = res.t, res.y, res.tensions
         for w in res.warnings:  # a wire going slack: the 'tensions' after it are not physical
             click.echo(f"warning: {w}", err=True)
-        P = mx.params_from_scenes(scene)
+        from ..analysis.elastic_rest import loaded_scene
+
+        P = mx.params_from_scenes(loaded_scene(scene, rest))  # the run's wires (loaded where rig.stiffness is stated)
         accel, alpha, _, _ = mx.solve_dynamics(y, P, stabilise=False)
         omega = y[:, 10:13]
         source = f"simulated mode {res.mode}, amplitude {amplitude:g}"
@@ -71,13 +73,15 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     R = quat_to_matrix(y[:, 3:7])
     u = wire_units(scene, y[:, 0:3], R)
     # how far the motion's poses are from the wire lengths (m): a record in another frame or of
-    # another rig gives wire directions, hence 'general' tensions and inertia, that are not this rig's
+    # another rig gives wire directions, hence 'general' tensions and inertia, that are not this rig's.  With
+    # rig.stiffness the wires hang loaded, L (1 + T / EA) at rest (the run's wires): compared with those
+    lengths, which = _hanging_lengths(scene, rest if motion is None else None, config)
     span = np.linalg.norm(y[:, None, 0:3] + np.einsum("kij,nj->kni", R, scene.attachments) - scene.anchors, axis=-1)
-    off = np.max(np.abs(span - scene.lengths), axis=0)
-    worst = int(np.argmax(off / scene.lengths))
-    if off[worst] > 0.01 * scene.lengths[worst]:
-        click.echo(f"warning: --motion: the recorded poses are up to {off[worst]:.3g} m off the length of wire "
-                   f"{worst + 1} ({off[worst] / scene.lengths[worst]:.1%}): the record does not fit this config's "
+    off = np.max(np.abs(span - lengths), axis=0)
+    worst = int(np.argmax(off / lengths))
+    if off[worst] > 0.01 * lengths[worst]:
+        click.echo(f"warning: --motion: the recorded poses are up to {off[worst]:.3g} m off the {which}length of wire "
+                   f"{worst + 1} ({off[worst] / lengths[worst]:.1%}): the record does not fit this config's "
                    "rig (another frame, units or rig?); the wire directions and all figures from them are suspect",
                    err=True)
     F_gen, resid = general_tensions(scene.mass, scene.gravity, accel, u)
@@ -225,6 +229,21 @@ its inertia's std)."""
 
 def _idx(c):
     return {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}[c]
+
+
+def _hanging_lengths(scene, rest, config) -> tuple:
+    """(the wires' lengths as they hang, m; the word naming them in a warning): ``rig.lengths``, or with
+    ``rig.stiffness`` the loaded ones at the rest pose (``rest``, solved here when None; :func:`~bifilar.analysis.
+    elastic_rest.loaded_scene`), named "loaded (rig.lengths stretched under rig.stiffness) " (session 18: the
+    unloaded ones were compared at 1 %, which a strain above 1 % alone tripped)."""
+    import numpy as np
+
+    if scene.stiffness is None:
+        return np.asarray(scene.lengths, float), ""
+    from ..analysis.elastic_rest import loaded_scene
+
+    rest = rest if rest is not None else config_rest_pose(scene, config)
+    return loaded_scene(scene, rest).lengths, "loaded (rig.lengths stretched under rig.stiffness) "
 
 
 def _read_motion(path, scene):

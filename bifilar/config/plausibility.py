@@ -105,9 +105,9 @@ def stretch_warning(scene: Scene) -> str | None:
     None.  Since session 17 the model carries the stretch on every wire
     count (``rig.lengths`` the unloaded lengths; the rest pose, the modes
     and the runs on the loaded wires, docs/design.md "stretch, session
-    17"); what it does not carry is EA's own uncertainty, which no budget
-    holds: the warning says how far a 10 % error in EA moves the loaded
-    lengths and the periods.  (Session 16's warning, that 2 and 3 wires
+    17"); EA's own uncertainty is budgeted since session 18 (``invert``'s
+    and a sweep point's ``stiffness`` term, default 10 %): the warning says
+    how far a 10 % error in EA moves the loaded lengths and the periods.  (Session 16's warning, that 2 and 3 wires
     ignored EA and 4 and 5 wires ran on unstretched wires, is void.)"""
     if scene.stiffness is None:
         return None
@@ -120,5 +120,6 @@ def stretch_warning(scene: Scene) -> str | None:
     return (f"rig.stiffness: at an equal share of the weight ({share:.4g} N) wire {i + 1} stretches by "
             f"{1e3 * dl[i]:.3g} mm (strain {strain:.2g}), more than a length's {1e3 * PLAUSIBLE['stretch']:g} mm "
             "default uncertainty; rig.lengths are read as the unloaded lengths and the model hangs the body on the "
-            "loaded wires, but EA is taken as exact (no uncertainty term holds it): a 10 % error in it moves each "
-            f"loaded length by {0.1e3 * dl[i]:.2g} mm and the periods by ~{0.1 * strain / 2:.2g} of themselves")
+            "loaded wires, and EA's uncertainty is budgeted (uncertainty key stiffness, default 0.1): a 10 % error in "
+            f"it moves each loaded length by {0.1e3 * dl[i]:.2g} mm and the periods by ~{0.1 * strain / 2:.2g} of "
+            "themselves")

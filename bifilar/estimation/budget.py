@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import BifilarError, ConvergenceError
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
-from .sensitivity import input_sigma, measured_inputs
+from .sensitivity import input_sigma, measured_inputs, stiff_inputs
 from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
 from .second_order import (LINEAR_ENOUGH, OFFSET_ENOUGH, SIGMA_POINT, BudgetContext,  # noqa: F401 (re-exported)
                            _coefs3, _hanging_periods, _key_hanging, _one_step, _pair_terms, _perturbed_scene,
@@ -230,6 +230,7 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
         names = [n for n in measured_inputs(scene) if not n.startswith("com.")]
         if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known)
             names.append("gravity")
+        names += stiff_inputs(scene, unc)  # EA's factor, where rig.stiffness is stated (its own, shared by hangings)
         names += list(COM_UNKNOWNS)
         ck = ("sensitivity", scene_key(scene), tuple(names))
         if cache is not None and ck in cache:
@@ -240,7 +241,7 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
                 cache[ck] = (sens, failed)
         links = pb.links
         degenerate += [d for n in failed
-                       for d in ([n] if n.startswith("com.") or n in ("mass", "gravity") else
+                       for d in ([n] if n.startswith("com.") or n in ("mass", "gravity", "stiffness") else
                                  [key for key, _ in links.of(h, n)])]
         row = {k: (match[pb.mode_index[k]] if rows is None else rows(h, ms_h, match, k)) for k in ks}
         for j, n in enumerate(sens.names):
@@ -256,7 +257,7 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
                         continue
                     cols[key] = cols.get(key, np.zeros(K)) + col * hm.R[ax, a]
                     sigmas[key] = input_sigma(scene, key, unc)
-            elif n in ("mass", "gravity"):
+            elif n in ("mass", "gravity", "stiffness"):
                 cols[n] = cols.get(n, np.zeros(K)) + col
                 sigmas[n] = input_sigma(scene, n, unc)
             else:
@@ -410,7 +411,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
             all_sig[d] = float(unc["com"])
         else:
             h = next(iter(_key_hanging(pb, d)))
-            all_sig[d] = input_sigma(scenes[h], pb.links.moves(d, h)[0][0] if d not in ("mass", "gravity") else d, unc)
+            all_sig[d] = input_sigma(scenes[h], pb.links.moves(d, h)[0][0]
+                                     if d not in ("mass", "gravity", "stiffness") else d, unc)
     ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
                         list(degenerate), scenes, rests, modes, matches, cache=cache, factor_shift=shift,
                         gain=gain)

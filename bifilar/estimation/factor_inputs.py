@@ -26,10 +26,11 @@ def _factor_routes(pb: Problem, h: int, keys: list) -> tuple[list, dict]:
     """:func:`factor_routes` of hanging ``h`` of ``pb`` (its keys carry the
     hanging's name where there are several)."""
     pre = f"{pb.models[h].hanging.name}:" if len(pb.models) > 1 else ""
-    return factor_routes(pb.models[h].hanging.scene.n_wires, keys, pre)
+    scene = pb.models[h].hanging.scene
+    return factor_routes(scene.n_wires, keys, pre, stiff=getattr(scene, "stiffness", None) is not None)
 
 
-def factor_routes(n_wires: int, keys: list, pre: str = "") -> tuple[list, dict]:
+def factor_routes(n_wires: int, keys: list, pre: str = "", stiff: bool = False) -> tuple[list, dict]:
     """How ``dr/dx`` of each input ``keys`` of a hanging with ``n_wires``
     wires (keys prefixed ``pre``) is got: (keys run with the input stepped,
     {key: why derived}).  Derived exactly, without a run: ``gravity`` (``r`` is a
@@ -45,22 +46,29 @@ def factor_routes(n_wires: int, keys: list, pre: str = "") -> tuple[list, dict]:
     attachment coordinate (body frame at the CoM), ``A dr/dA`` only where
     the mode's dominant coordinate is a translation).  Each where the
     inputs it needs are among ``keys`` (the same uncertainty for every
-    wire: all or none), else run.  :func:`derive_factor_routes` fills them in."""
+    wire: all or none), else run.  :func:`derive_factor_routes` fills them in.
+
+    ``stiff`` (the hanging states ``rig.stiffness``): ``r`` then depends on
+    ``m``, ``g`` and EA also through the strain ``m g / EA`` of the loaded
+    wires, so ``gravity`` is ``-dr/ds / g`` and the ``mass`` gets
+    ``-dr/ds / m`` beside the scaling identity (``s`` the ``stiffness``
+    factor): derived only where ``stiffness`` is among ``keys``, else run."""
     nw = n_wires
     have = set(keys)
     att = [f"{pre}attachment.{i + 1}.{a}" for i in range(nw) for a in "xyz"]
     geom = ([f"{pre}length.{i + 1}" for i in range(nw)] + [f"{pre}anchor.{i + 1}.{a}" for i in range(nw) for a in "xyz"]
             + att)
     derived = {}
+    ea = not stiff or "stiffness" in have  # the strain's share is known (no EA, or EA's own derivative run)
     for key in keys:
-        if key == "gravity":
+        if key == "gravity" and ea:
             derived[key] = "gravity"
         elif key.startswith(f"{pre}anchor.{nw}.") and all(f"{pre}anchor.{i + 1}.{key[-1]}" in have
                                                              for i in range(nw - 1)):
             derived[key] = "translation"
         elif key.startswith("com.") and have.issuperset(att):
             derived[key] = "com"
-        elif key == "mass" and have.issuperset(geom):
+        elif key == "mass" and ea and have.issuperset(geom):
             derived[key] = "scaling"
     return [k for k in keys if k not in derived], derived
 
@@ -76,8 +84,8 @@ def derive_factor_routes(dx: dict, derived: dict, scene, R, pre: str = "", trans
     for key, why in derived.items():
         if why == "translation":
             dx[key] = -sum(dx[f"{pre}anchor.{i + 1}.{key[-1]}"] for i in range(nw - 1))
-        elif why == "gravity":
-            dx[key] = 0.0
+        elif why == "gravity":  # g only scales time, and where EA is stated moves the strain m g / EA
+            dx[key] = -dx["stiffness"] / scene.gravity if getattr(scene, "stiffness", None) is not None else 0.0
     for key, why in derived.items():
         if why == "com":
             a = "xyz".index(key[-1])
@@ -86,6 +94,8 @@ def derive_factor_routes(dx: dict, derived: dict, scene, R, pre: str = "", trans
             s = sum(input_value(scene, x.split(":", 1)[-1]) * v for x, v in dx.items()
                     if x.split(":", 1)[-1].split(".")[0] in ("length", "anchor", "attachment"))
             dx[key] = (s + translation_slope) / (2.0 * scene.mass)
+            if getattr(scene, "stiffness", None) is not None:  # and the strain m g / EA
+                dx[key] -= dx["stiffness"] / scene.mass
 
 
 @dataclass

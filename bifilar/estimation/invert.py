@@ -97,6 +97,7 @@ from .solve import measured_factor
 from .answer_checks import (AMPLITUDE_CONTRADICTION_RATIO, AMPLITUDE_CONTRADICTION_Z,  # noqa: F401
                             irregular_warnings, monotonic_warnings, refuse_amplitude_the_record_contradicts,
                             refuse_unreachable_record_amplitudes)
+from .sensitivity import DEFAULT_STIFFNESS_REL
 from .uncertainty import default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
 from .inversion_result import InversionResult, _assumed, std_unavailable_text  # noqa: F401 (callers import them here)
@@ -141,6 +142,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if method not in ("auto",) + METHODS:
         raise InputError("--method", f"unknown method {method!r}; choose auto, {', '.join(METHODS)}")
     unc_all = default_uncertainty({**ms.uncertainty, **(unc or {})})
+    if any(h.scene.stiffness is not None for h in ms.hangings):  # EA's default, listed only where it is stated
+        unc_all.setdefault("stiffness", DEFAULT_STIFFNESS_REL)
     warnings: list[str] = []
     notes: list[str] = list(ms.notes)
     for m in ms.measurements:  # a unit slip that still gives a reachable period runs, with a warning

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import BifilarError
 from .measurements import COM_UNKNOWNS, MeasurementSet
 from .problem import _IDX, Problem, build_problem, physical_interval
+from .sensitivity import input_sigma, perturb
 from .solve import solve_linear
 from .uncertainty import MonteCarloSummary, summarise
 
@@ -114,6 +115,10 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
             dm = rng.normal(0.0, unc["mass"])
             dg = rng.normal(0.0, unc.get("gravity", 0.0))
             dcom = np.array([0.0 if f"com.{a}" in solved_com else rng.normal(0.0, unc["com"]) for a in "xyz"])
+            # the wires' EA: one relative factor for every hanging, drawn only where it is budgeted (a rig without
+            # rig.stiffness draws the numbers it drew before)
+            s_ea = max(input_sigma(hm.hanging.scene, "stiffness", unc) for hm in pb.models)
+            dea = rng.normal(0.0, s_ea) if s_ea > 0 else 0.0
             hangs = []
             slope = np.zeros((len(pb.measurements), len(pb.unknowns)))
             offset = np.zeros(len(pb.measurements))
@@ -140,11 +145,15 @@ def draw_monte_carlo(res: InversionResult, n: int, rng: np.random.Generator) -> 
                         att[i, a] += error(h, f"attachment.{i + 1}.{'xyz'[a]}", unc["position"])
                 s2 = replace(s, mass=s.mass * (1 + dm), gravity=s.gravity * (1 + dg), lengths=L, anchors=an,
                              attachments=att, inertia=s.inertia + hm.R @ dI @ hm.R.T)
+                if dea:
+                    s2 = perturb(s2, "stiffness", dea)
                 hangs.append(replace(hm.hanging, scene=s2))
             # each input's error under its budget key (input_columns's keys: a shared rig input's once), for the
             # factor's dr/dx
             dx = {"mass": pb.models[0].hanging.scene.mass * dm, "gravity": pb.models[0].hanging.scene.gravity * dg,
                   **{f"com.{a}": dcom[q] for q, a in enumerate("xyz")}, **drawn}
+            if dea:
+                dx["stiffness"] = dea
             meas = []
             for k, m in enumerate(pb.measurements):
                 # a period from n timed trials: its std is estimated with

@@ -93,14 +93,16 @@ class BudgetContext:
 
 def scene_key(scene) -> tuple:
     """A hashable key of every array of ``scene`` (equal keys: the same scene)."""
-    return (float(scene.mass), float(scene.gravity), np.asarray(scene.lengths, float).tobytes(),
-            np.asarray(scene.anchors, float).tobytes(), np.asarray(scene.attachments, float).tobytes(),
-            np.asarray(scene.inertia, float).tobytes())
+    key = (float(scene.mass), float(scene.gravity), np.asarray(scene.lengths, float).tobytes(),
+           np.asarray(scene.anchors, float).tobytes(), np.asarray(scene.attachments, float).tobytes(),
+           np.asarray(scene.inertia, float).tobytes())
+    # the wires' EA too where stated: a stiffness sigma point differs from its base only there
+    return key if getattr(scene, "stiffness", None) is None else key + (np.asarray(scene.stiffness, float).tobytes(),)
 
 
 def _key_hanging(pb: Problem, key: str) -> list:
     """Indices of the hangings an input key affects."""
-    if key.startswith("com.") or key in ("mass", "gravity"):
+    if key.startswith("com.") or key in ("mass", "gravity", "stiffness"):
         return list(range(len(pb.models)))
     return pb.links.hangings(key)
 
@@ -116,7 +118,7 @@ def _perturbed_scene(pb: Problem, h: int, scene, moves):
             v = np.zeros(3)
             v["xyz".index(key[-1])] = d
             scene = scene_with(scene, attachments=scene.attachments - (pb.models[h].R @ v)[None, :])
-        elif key in ("mass", "gravity"):
+        elif key in ("mass", "gravity", "stiffness"):
             scene = perturb(scene, key, d)
         else:
             for n, c in pb.links.moves(key, h):

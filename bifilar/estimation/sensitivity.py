@@ -9,7 +9,10 @@ The inputs an experimenter measures (SI units) are named like this:
 * ``anchor.i.x`` (``.y``, ``.z``): ceiling point coordinates, world frame, m;
 * ``attachment.i.x`` ...: body point coordinates, body frame, m;
 * ``com.x`` ...: position of the CoM relative to the attachment points, m
-  (moving the CoM by +d moves every attachment by -d in the body frame).
+  (moving the CoM by +d moves every attachment by -d in the body frame);
+* ``stiffness``: one relative factor on every wire's axial stiffness EA
+  (``rig.stiffness``; +d scales each EA_i by 1 + d), dimensionless; an input
+  only of a scene that states EA (docs/design.md "eaunc, session 18").
 
 Sensitivities are analytic (:mod:`bifilar.analysis.derivatives`: implicit
 differentiation of the rest pose and first-order eigenvalue perturbation, at
@@ -46,6 +49,16 @@ DEFAULT_UNCERTAINTY = {
     "timing": 1e-3,       # s, standard uncertainty of one measured period (if not given)
 }
 
+#: the default relative standard uncertainty of the wires' axial stiffness EA, where ``rig.stiffness`` is
+#: stated (a steel rope's effective modulus, a fibre line's creep: 5-20 %); not in
+#: :data:`DEFAULT_UNCERTAINTY`, so that a scene without EA lists and budgets nothing new.  One factor shared by
+#: every wire (the wires cut from one line: its modulus's error is common to them)
+DEFAULT_STIFFNESS_REL = 0.1
+
+#: the input uncertainty keys a planner (sweep, plan: ``--sigma``, the config's ``uncertainty:`` block,
+#: ``uncertainty.KEY`` parameters) takes: the defaults' and EA's
+PLANNER_UNCERTAINTY_KEYS = tuple(DEFAULT_UNCERTAINTY) + ("stiffness",)
+
 #: the largest standard uncertainty each kind of input may be given (its unit
 #: as in :data:`DEFAULT_UNCERTAINTY`): a length's at most the longest length a
 #: config holds (1e5 m, ``bifilar.parts.MAX_SIZE``), a time's 1e5 s, a
@@ -54,7 +67,8 @@ DEFAULT_UNCERTAINTY = {
 #: ``invert`` ended in exit 1 (an internal error) and ``sweep`` printed
 #: overflow warnings
 MAX_UNCERTAINTY = {"length": 1e5, "position": 1e5, "com": 1e5, "mass": 1.0, "gravity": 1.0, "amplitude": 1.0,
-                   "timing": 1e5, "trial_time": 1e5, "release": 1e5, "inertia": 1.0}
+                   "timing": 1e5, "trial_time": 1e5, "release": 1e5, "inertia": 1.0,
+                   "stiffness": 0.5}  # EA's: the sigma points at sqrt(3) of it keep every EA positive
 
 
 def uncertainty_too_large(key: str, value: float) -> str | None:
@@ -64,8 +78,10 @@ def uncertainty_too_large(key: str, value: float) -> str | None:
     if hi is None or value <= hi:
         return None
     unit = {"mass": "relative", "gravity": "relative", "amplitude": "relative", "inertia": "relative",
-            "timing": "s", "trial_time": "s"}.get(key, "m")
+            "stiffness": "relative", "timing": "s", "trial_time": "s"}.get(key, "m")
     what = "(100 % of the quantity)" if unit == "relative" else "(beyond it a budget says nothing)"
+    if key == "stiffness":
+        what = "(the budget's sigma points at sqrt(3) of it must keep every EA positive)"
     return f"{key} must be at most {hi:g} {unit} {what}, got {value:g}"
 
 
@@ -82,6 +98,10 @@ def perturb(scene: Scene, name: str, delta: float) -> Scene:
         return scene_with(scene, mass=scene.mass + delta)
     if name == "gravity":
         return scene_with(scene, gravity=scene.gravity + delta)
+    if name == "stiffness":  # a relative change of every wire's EA (a scene without EA has none to change)
+        if scene.stiffness is None:
+            return scene
+        return scene_with(scene, stiffness=np.asarray(scene.stiffness, float) * (1.0 + delta))
     parts = name.split(".")
     if parts[0] == "length":
         L = scene.lengths.copy()
@@ -99,7 +119,7 @@ def perturb(scene: Scene, name: str, delta: float) -> Scene:
 
 
 def input_value(scene: Scene, name: str) -> float:
-    """Current value of input ``name`` (0 for ``com.*``, which is a shift)."""
+    """Current value of input ``name`` (0 for ``com.*`` and ``stiffness``, which are shifts)."""
     if name in _IDX:
         return float(scene.inertia[_IDX[name]])
     if name in ("mass", "gravity"):
@@ -111,7 +131,7 @@ def input_value(scene: Scene, name: str) -> float:
         return float(scene.anchors[int(parts[1]) - 1, _AX[parts[2]]])
     if parts[0] == "attachment":
         return float(scene.attachments[int(parts[1]) - 1, _AX[parts[2]]])
-    if parts[0] == "com":
+    if parts[0] in ("com", "stiffness"):
         return 0.0
     raise KeyError(name)
 
@@ -138,6 +158,8 @@ def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
         return u("mass") * scene.mass
     if name == "gravity":
         return u("gravity") * scene.gravity
+    if name == "stiffness":  # relative; only where EA is stated (default DEFAULT_STIFFNESS_REL there)
+        return 0.0 if scene.stiffness is None else float(unc.get("stiffness", DEFAULT_STIFFNESS_REL))
     head = name.split(".")[0]
     if head == "length":
         return u("length")
@@ -146,6 +168,25 @@ def input_sigma(scene: Scene, name: str, unc: dict | None = None) -> float:
     if head == "com":
         return u("com")
     return 0.0  # inertia components: the unknowns
+
+
+def stiffness_step(rel_step: float) -> float:
+    """The finite-difference step of the ``stiffness`` factor for a relative
+    step ``rel_step`` of the other inputs: ``100 rel_step``, at most 0.01.
+    A relative change ``d`` of EA moves the loaded lengths by only ``strain
+    x d`` of themselves (strain 1e-5 .. 1e-2), so the lengths' ``rel_step``
+    (1e-6) would move the periods by ~1e-10 of themselves, near the rest
+    pose's and the eigen-solve's rounding; 1e-4 leaves a forward
+    difference's truncation ~1e-4 of the derivative (``1 / (1 + d)`` is
+    smooth) and its rounding ~2e-9 / strain of it."""
+    return min(100.0 * rel_step, 1e-2)
+
+
+def stiff_inputs(scene: Scene, unc: dict | None) -> list[str]:
+    """``["stiffness"]`` where ``scene`` states EA and its uncertainty
+    (``unc``, default :data:`DEFAULT_STIFFNESS_REL`) is not 0, else ``[]``:
+    the budgeted inputs beyond :func:`measured_inputs`."""
+    return ["stiffness"] if input_sigma(scene, "stiffness", unc) > 0 else []
 
 
 def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarray]:
@@ -324,6 +365,8 @@ def _fd_sensitivity(scene: Scene, names: list[str], rel_step: float, rest: RestP
             h = rel_step * scene.mass
         elif name == "gravity":
             h = rel_step * scene.gravity
+        elif name == "stiffness":
+            h = stiffness_step(rel_step)
         else:
             h = rel_step * Lmax
         Tp = _periods_or_none(perturb(scene, name, h), ms, rest)

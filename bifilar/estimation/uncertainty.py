@@ -61,6 +61,7 @@ from .sensitivity import (
     matched_periods,
     measured_inputs,
     perturb,
+    stiffness_step,
 )
 
 #: default standard uncertainty of the oscillation amplitude, relative
@@ -83,11 +84,13 @@ UNCERTAINTY_KEYS = {
                "an angle mode's this over the longest wire, rad)",
     "inertia": "relative (invert: each inertia component not solved for, the config's value its prior, known to "
                "this fraction of itself, a product to this fraction of sqrt(I_ii I_jj); 0: taken as exact)",
+    "stiffness": "relative (the wires' axial stiffness EA, rig.stiffness: one factor common to every wire; "
+                 "default 0.1 where rig.stiffness is stated, nothing without it)",
 }
 
 #: budget groups, in display order
-GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "amplitude", "second_mode", "hidden_second_mode",
-          "tone_reading", "prior_inertia", "integration", "model bias", "offset", "degenerate")
+GROUPS = ("timing", "lengths", "spacings", "mass", "com", "gravity", "stiffness", "amplitude", "second_mode",
+          "hidden_second_mode", "tone_reading", "prior_inertia", "integration", "model bias", "offset", "degenerate")
 
 
 def default_uncertainty(overrides: dict | None = None) -> dict:
@@ -103,7 +106,7 @@ def default_uncertainty(overrides: dict | None = None) -> dict:
 def group_of(name: str) -> str:
     """Budget group of an input name: ``timing``, ``lengths``, ``spacings``
     (anchor and attachment coordinates), ``mass``, ``com``, ``gravity``,
-    ``amplitude``, ``second_mode`` (the amplitude of a second mode a recording's release
+    ``stiffness`` (the wires' EA, one factor), ``amplitude``, ``second_mode`` (the amplitude of a second mode a recording's release
     started, :mod:`~bifilar.estimation.signal_swing`), ``hidden_second_mode`` (the modes it may have started
     unseen, up to the stated ``release`` bound), ``tone_reading`` (the other reading of its tone: several modes
     released together within the bound), ``prior_inertia`` (an inertia component not solved for,
@@ -135,6 +138,8 @@ def _step(scene: Scene, name: str, rel_step: float) -> float:
         return rel_step * scene.mass
     if name == "gravity":
         return rel_step * scene.gravity
+    if name == "stiffness":
+        return stiffness_step(rel_step)
     return rel_step * float(np.max(scene.lengths))
 
 

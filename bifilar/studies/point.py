@@ -44,6 +44,10 @@ def _fd_step(scene, name: str, rel_step: float = 1e-6) -> float:
         return rel_step * float(np.max(np.linalg.eigvalsh(scene.inertia)))
     if name in ("mass", "gravity"):
         return rel_step * float(getattr(scene, name))
+    if name == "stiffness":
+        from ..estimation.sensitivity import stiffness_step
+
+        return stiffness_step(rel_step)
     return rel_step * float(np.max(scene.lengths))
 
 
@@ -506,7 +510,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     """(the point's figures up to its nonlinear runs, :class:`_Prepared`); raises for a bad point."""
     from ..analysis.equilibrium import rest_pose
     from ..config import scene_from_dict
-    from ..estimation.sensitivity import best_mode_for, grouped_shares, input_sigma, measured_inputs
+    from ..estimation.sensitivity import best_mode_for, grouped_shares, input_sigma, measured_inputs, stiff_inputs
 
     cfg, amp_override = apply_params(base_cfg, params, source)
     amplitude = st.amplitude if amp_override is None else amp_override
@@ -518,9 +522,14 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
     except SlackWireError as e:
         raise _slack_cause(e, scene, cfg, st, params) from None
     unc = point_uncertainty(st, params)
+    if scene.stiffness is not None:  # EA's default, listed in the point's uncertainty only where EA is stated
+        from ..estimation.sensitivity import DEFAULT_STIFFNESS_REL
+
+        unc.setdefault("stiffness", DEFAULT_STIFFNESS_REL)
     names = list(st.components) + measured_inputs(scene)
     if input_sigma(scene, "gravity", unc) > 0:  # a stated uncertainty of g (default 0: known), as invert's budget
         names.append("gravity")
+    names += stiff_inputs(scene, unc)  # EA's factor where rig.stiffness is stated, as invert's budget
     at = _stiffness(scene, rest0)
     sens, notes = point_sensitivity(scene, names, rest0, at=at)
     ms, rest = sens.modes, sens.rest

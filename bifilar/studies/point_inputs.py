@@ -57,11 +57,16 @@ def _inputs(pre, comp: str, k: int, unc: dict):
     return out, float(sens.column(comp)[k])
 
 
-def _bound_scale(scene, name: str) -> float:
+def _bound_scale(scene, name: str, rest=None) -> float:
     """``|dr/dx|`` per ``A^2`` over :data:`FACTOR_INPUT_K` (1/SI unit of the input): 0 for gravity
-    (exact: ``r`` is a ratio of periods), ``1/m`` for the mass, else ``1/L`` (the longest wire)."""
+    (exact: ``r`` is a ratio of periods; where EA is stated it moves the strain ``m g / EA``: EA's
+    over ``g``), ``1/m`` for the mass, the largest strain at ``rest`` for EA's factor (it moves the
+    loaded lengths by that share of themselves per unit), else ``1/L`` (the longest wire)."""
+    if name == "stiffness":
+        return float(np.max(np.asarray(rest.tensions, float) / np.asarray(scene.stiffness, float)))
     if name == "gravity":
-        return 0.0
+        stiff = getattr(scene, "stiffness", None) is not None
+        return _bound_scale(scene, "stiffness", rest) / float(scene.gravity) if stiff else 0.0
     if name == "mass":
         return 1.0 / float(scene.mass)
     return 1.0 / float(np.max(scene.lengths))
@@ -77,7 +82,8 @@ def input_factor_bound(pre, comp: str, k: int, unc: dict, T_lin: float, g: float
     at most their root sum of squares (the triangle inequality)."""
     rows, dT_dI = _inputs(pre, comp, k, unc)
     a2 = FACTOR_INPUT_K * pre.amplitude ** 2
-    return math.sqrt(sum((T_lin * s * a2 * _bound_scale(pre.scene, name) / (g * dT_dI)) ** 2 for name, s, _ in rows))
+    return math.sqrt(sum((T_lin * s * a2 * _bound_scale(pre.scene, name, pre.rest) / (g * dT_dI)) ** 2
+                         for name, s, _ in rows))
 
 
 def input_factor_terms(pre, comp: str, k: int, unc: dict, T_lin: float, r: float, g: float, dr_dx: dict,
@@ -122,7 +128,7 @@ def measure_factor_inputs_many(items: list, unc: dict, st) -> list:
     for pre, modes in items:
         scene = pre.scene
         names = [n for n in pre.sens.names if n not in _IDX and input_sigma(scene, n, unc) > 0]
-        run, derived = factor_routes(scene.n_wires, names)
+        run, derived = factor_routes(scene.n_wires, names, stiff=scene.stiffness is not None)
         steps = []
         for name in run:
             d = _step(scene, name, FACTOR_STEP)

@@ -16,7 +16,8 @@ from typing import Any
 
 
 from ..errors import InputError
-from ..estimation.sensitivity import DEFAULT_UNCERTAINTY, INERTIA_COMPONENTS, uncertainty_too_large
+from ..estimation.sensitivity import (DEFAULT_UNCERTAINTY, INERTIA_COMPONENTS, PLANNER_UNCERTAINTY_KEYS,
+                                      uncertainty_too_large)
 from .shorthands import ParamSpec
 
 _IDX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
@@ -131,10 +132,10 @@ def resolve_uncertainty(cfg: dict, overrides: dict | None = None) -> dict:
                 raise InputError(f"{src}.{k}" if src == "uncertainty" else src,
                                  f"{k!r} is invert's ({INVERT_ONLY_UNCERTAINTY[k]}); sweep and plan predict invert's "
                                  "sigma without it: give it to invert's --uncertainty instead; keys here: "
-                                 f"{', '.join(DEFAULT_UNCERTAINTY)}")
-            if k not in DEFAULT_UNCERTAINTY:
+                                 f"{', '.join(PLANNER_UNCERTAINTY_KEYS)}")
+            if k not in PLANNER_UNCERTAINTY_KEYS:
                 raise InputError(f"{src}.{k}" if src == "uncertainty" else src,
-                                 f"unknown uncertainty key {k!r}; keys: {', '.join(DEFAULT_UNCERTAINTY)}")
+                                 f"unknown uncertainty key {k!r}; keys: {', '.join(PLANNER_UNCERTAINTY_KEYS)}")
             out[k] = _number(v, f"{src}.{k}" if src == "uncertainty" else src, nonneg=True)
             too_large = uncertainty_too_large(k, out[k])
             if too_large:

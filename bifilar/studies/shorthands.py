@@ -12,9 +12,10 @@ A sweep parameter is either
 Values are SI (m, kg, s, rad, N) except the ``*_deg`` rotations (degrees).
 Shorthands edit the config the way an experimenter would change the rig and
 are applied after every dotted path, in this order: ``length``,
-``length_offset``, ``spacing``, ``ceiling_spacing``, ``height``, then the
-rotations in the order given.  ``amplitude`` is not a config value: it sets
-the excitation amplitude of the point.
+``length_offset``, ``spacing``, ``ceiling_spacing``, ``height``,
+``stiffness`` (every wire's EA, N), then the rotations in the order given.
+``amplitude`` is not a config value: it sets the excitation amplitude of the
+point.
 
 Value specifications (:func:`parse_values`): ``START:STOP:NUM`` (linear,
 both ends included), ``log:START:STOP:NUM`` (geometric), a list ``[0.5, 1, 2]``
@@ -46,6 +47,8 @@ SHORTHANDS: dict[str, tuple[str, str]] = {
     "height": ("m", "height of the attachment points above the centre of mass (mean over the "
                     "attachments, body z); all attachments move vertically together"),
     "amplitude": ("rad or m", "excitation amplitude: this times each mode's normalised shape"),
+    "stiffness": ("N", "the wires' axial stiffness EA, one value for every wire (rig.stiffness; rig.lengths "
+                       "are then the unloaded lengths)"),
     "rotate_x": ("rad", "rotate the body about the world x axis before hanging (inertia, shape and "
                         "attachments turn with it; parts-built bodies turn their parts)"),
     "rotate_y": ("rad", "the same about world y"),
@@ -274,10 +277,11 @@ def check_param(cfg: dict, name: str, values=()) -> None:
     sweep parameters)."""
     head = name.split(".")
     if head[0] == "uncertainty":
-        from ..estimation.sensitivity import DEFAULT_UNCERTAINTY, uncertainty_too_large
+        from ..estimation.sensitivity import PLANNER_UNCERTAINTY_KEYS, uncertainty_too_large
 
-        if len(head) != 2 or head[1] not in DEFAULT_UNCERTAINTY:
-            raise InputError("--param", f"{name}: use uncertainty.KEY with KEY one of {', '.join(DEFAULT_UNCERTAINTY)}")
+        if len(head) != 2 or head[1] not in PLANNER_UNCERTAINTY_KEYS:
+            raise InputError("--param", f"{name}: use uncertainty.KEY with KEY one of "
+                                        f"{', '.join(PLANNER_UNCERTAINTY_KEYS)}")
         bad = [v for v in values if v < 0]
         if bad:
             raise InputError("--param", f"{name}: a standard uncertainty must not be negative, got {bad[0]:g}")
@@ -288,8 +292,8 @@ def check_param(cfg: dict, name: str, values=()) -> None:
     if head[0] == "plan":
         raise InputError("--param", f"{name}: the plan block holds options (target, constraints, amplitude), "
                                     "not sweep parameters; give them as options, or sweep the amplitude shorthand")
-    if name == "amplitude" and any(v <= 0 for v in values):
-        raise InputError("--param", f"amplitude must be positive, got {min(values):g}")
+    if name in ("amplitude", "stiffness") and any(v <= 0 for v in values):
+        raise InputError("--param", f"{name} must be positive, got {min(values):g}")
     if is_shorthand(name):
         rig = cfg.get("rig") if isinstance(cfg, dict) else None
         if name in ("spacing", "ceiling_spacing", "height") and not isinstance(rig, dict):
@@ -409,6 +413,11 @@ def apply_params(base_cfg: dict, params: dict[str, float], source: str = "config
                 com_z = float(_scene(cfg, source).parts_com[2])
             pts[:, 2] += v - (pts[:, 2].mean() - com_z)
             cfg["rig"]["attachments"] = pts.tolist()
+    if "stiffness" in params:
+        v = float(params["stiffness"])
+        if not isinstance(cfg.get("rig"), dict):
+            raise InputError("--param", "stiffness needs a rig")
+        cfg["rig"]["stiffness"] = v  # a bad value is the config's error (rig.stiffness), as a dotted path's
     rots = [(n, params[n]) for n in params if n.startswith("rotate_")]
     if rots:
         from ..rotations import rotvec_to_matrix
@@ -434,6 +443,10 @@ def base_value(cfg: dict, name: str, source: str = "config", amplitude: float | 
             return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
         if name == "amplitude":
             return amplitude
+        if name == "stiffness":  # the config's one EA (a list of equal ones counts as one), else none
+            ea = (cfg.get("rig") or {}).get("stiffness")
+            ea = np.asarray(ea if ea is not None else [], float).reshape(-1)
+            return float(ea[0]) if ea.size and np.all(ea == ea[0]) else None
         if name.startswith("rotate_"):
             return 0.0
         if name == "length":
@@ -461,6 +474,8 @@ def param_unit(name: str) -> str:
     head = name.split(".")
     if head[0] == "rig" and len(head) > 1 and head[1] in ("anchors", "attachments", "lengths"):
         return "m"
+    if head[0] == "rig" and len(head) > 1 and head[1] == "stiffness":
+        return "N"
     if name == "body.mass" or name.endswith(".mass"):
         return "kg"
     if name == "gravity":
