@@ -21,7 +21,10 @@ Properties:
 Volumes (``max_examples``, 3920 examples in all) are bounded so that the
 file runs in well under 60 s on two cores (about 35 s of CPU); the environment
 variable ``BIFILAR_FUZZ_SCALE=10`` multiplies them for a deeper local run
-(about 3 min; it found nothing more at the time of writing).
+(about 3 min; it found nothing more at the time of writing).  At the default
+scale the examples are derandomized (the same draws on every run and
+machine: a suite that passes in one place passes in CI); a scaled run draws
+afresh, to look further.
 """
 
 from __future__ import annotations
@@ -53,7 +56,7 @@ NO_HEALTH = [HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filte
 
 
 def fuzz(n: int):
-    return settings(max_examples=n * SCALE, deadline=None, suppress_health_check=NO_HEALTH)
+    return settings(max_examples=n * SCALE, deadline=None, suppress_health_check=NO_HEALTH, derandomize=SCALE == 1)
 
 
 # --------------------------------------------------------------------------- strategies
@@ -178,7 +181,8 @@ def check_rest_or_reason(scene) -> str:
     try:
         rest = rest_pose(scene)
     except InputError as e:  # SlackWireError, UnstableRestError, unreachable: exit 2 through the CLI
-        assert e.field in ("rig.lengths", "rig.attachments"), e
+        # rig.stiffness: nearly dependent 4-5 wires whose split needs the wires' EA (StiffnessNeededError)
+        assert e.field in ("rig.lengths", "rig.attachments", "rig.stiffness"), e
         assert "\n" not in str(e)
         if isinstance(e, SlackWireError):
             check_slack_claim(scene, e)
