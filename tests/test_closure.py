@@ -184,15 +184,33 @@ CLOSURE_RUNS = [(n, "torsion") for n in SCENES] + [("thesis_lin2_pitch", "pitch"
                                                    ("thesis_cylinder_6_4", "pitch"), ("thesis_lin3_roll", "swing-x")]
 
 
+@pytest.fixture(scope="module")
+def simulated_record(tmp_path_factory):
+    """``simulate --amplitude 0.05 --periods 20 --out run.csv --json`` of a
+    (config, mode), run once per module: (JSON, record path).  Test economy,
+    session 18: the two tests below ran this same command for the Solar
+    Boat's roll and the pitch rig's torsion each (a simulate run with its
+    checks, ~0.5-1 s of CPU each); neither writes to the record."""
+    done = {}
+
+    def get(name: str, label: str):
+        if (name, label) not in done:
+            out = tmp_path_factory.mktemp(f"{name}-{label}") / "run.csv"
+            sim = ok_json(run("simulate", cfg(name), "--mode", label, "--amplitude", 0.05, "--periods", 20,
+                              "--out", out, "--json"))
+            done[name, label] = sim, out
+        return done[name, label]
+    return get
+
+
 @pytest.mark.parametrize("name, label", CLOSURE_RUNS)
-def test_simulated_record_gives_back_period_and_inertia(name, label, tmp_path):
+def test_simulated_record_gives_back_period_and_inertia(name, label, tmp_path, simulated_record):
     """A simulated record (amplitude 0.05, 20 periods) through `period`
     agrees with `simulate`'s period; inverted at the stated amplitude, its
     period brackets the config's inertia (from a config with the solved
     component null where the body is given as moments)."""
-    A, N = 0.05, 20
-    out = tmp_path / "run.csv"
-    sim = ok_json(run("simulate", cfg(name), "--mode", label, "--amplitude", A, "--periods", N, "--out", out, "--json"))
+    A = 0.05  # the fixture's amplitude (20 periods)
+    sim, out = simulated_record(name, label)
     col = COLUMN[sim["timed_coordinate"]]
     per = ok_json(run("period", out, "--column", col, "--json"))
     data = np.genfromtxt(out, delimiter=",", names=True)
@@ -218,13 +236,11 @@ def test_simulated_record_gives_back_period_and_inertia(name, label, tmp_path):
 
 
 @pytest.mark.parametrize("name, label", [("solar_boat", "roll"), ("thesis_lin2_pitch", "torsion")])
-def test_simulated_record_inverted_directly(name, label, tmp_path):
+def test_simulated_record_inverted_directly(name, label, simulated_record):
     """The record itself (`invert --signal`, its amplitude taken from the
     fit of the mode's angle): the interval brackets the config's inertia.
     The Solar Boat's roll beats with its swing (the fit's two-mode case)."""
-    out = tmp_path / "run.csv"
-    sim = ok_json(run("simulate", cfg(name), "--mode", label, "--amplitude", 0.05, "--periods", 20, "--out", out,
-                      "--json"))
+    sim, out = simulated_record(name, label)  # amplitude 0.05, 20 periods
     inv = ok_json(run("invert", cfg(name), "--signal", f"{label}={out}", "--column", COLUMN[sim["timed_coordinate"]],
                       "--signal-quantity", "angle", "--json"))
     # the fitted amplitude is the one simulated (the fit's amplitude: 1e-3 relative allows for the

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from bifilar.estimation.signal import fit_period
 from bifilar.estimation.signal_checks import lattice_step, quantisation_levels
@@ -110,7 +111,18 @@ def test_a_noisy_or_sub_pixel_record_is_not_treated_as_quantised():
         assert fit.std_quantisation == 0.0 and "quantisation_test" not in fit.uncertainty
 
 
-def test_quantised_120fps_std_is_not_twice_the_error():
+@pytest.fixture(scope="module")
+def fits_120fps():
+    """(t, y, full fit) of the 8 seed-6 draws at 120 fps, 10 steps, no
+    noise: the std sample of the test below, whose first draw is also the
+    record of ``test_copies_spread_carries_its_dof_into_invert`` (test
+    economy, session 18: that test fitted the same record again, ~0.6 s of
+    CPU; the fits are deterministic, so sharing them changes no figure)."""
+    return [(t, y, fit_period(t, y, model="viscous", crossing_check=False, split_check=False))
+            for t, y in _quantised_draws(8, fs=120.0, steps=10, seed=6)]
+
+
+def test_quantised_120fps_std_is_not_twice_the_error(fits_120fps):
     """10 steps of amplitude at 120 fps, no noise: the signal dwells on each
     level for several frames, the quantisation error is a saw-tooth whose
     power lies far above the oscillation's frequency, and the least-squares
@@ -127,8 +139,7 @@ def test_quantised_120fps_std_is_not_twice_the_error():
            for t, y in _quantised_draws(150, **kw)]
     sd_err = float(np.sqrt(np.mean(np.square(err))))
     stds = []
-    for t, y in _quantised_draws(8, fs=120.0, steps=10, seed=6):
-        fit = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+    for _, _, fit in fits_120fps:
         assert fit.uncertainty["quantisation_test"]["replaces_noise"]
         stds.append(fit.std)
     ratio = float(np.median(stds)) / sd_err
@@ -172,7 +183,7 @@ def test_record_resting_on_a_level_std_is_not_inflated_by_its_offset():
     assert 0.75 < ratio < 1.33, (ratio, sd_err, stds)
 
 
-def test_copies_spread_carries_its_dof_into_invert(tmp_path):
+def test_copies_spread_carries_its_dof_into_invert(fits_120fps, tmp_path):
     """The std of a quantised 120 fps record is the rms spread of its m =
     40 re-quantised copies about the fitted period: m sq^2 / sigma^2 is
     chi^2_m, so the period's 95 % interval is Student's with m dof (2.02
@@ -186,8 +197,7 @@ def test_copies_spread_carries_its_dof_into_invert(tmp_path):
     from bifilar.estimation.measurements import signal_measurement
     from bifilar.estimation.uncertainty import propagate
 
-    t, y = next(_quantised_draws(1, fs=120.0, steps=10, seed=6))
-    fit = fit_period(t, y, model="viscous", crossing_check=False, split_check=False)
+    t, y, fit = fits_120fps[0]
     qt = fit.uncertainty["quantisation_test"]
     assert qt["replaces_noise"] and fit.std_nonstationary == 0.0
     assert math.isclose(fit.uncertainty["dof"], qt["draws"], rel_tol=1e-6)
