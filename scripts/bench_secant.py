@@ -31,23 +31,14 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-DRONE = """name: drone
-gravity: 9.81
-body:
-  mass: 1.4
-  inertia: {tensor: [[0.014, 0.0, 0.0], [0.0, 0.016, 0.0], [0.0, 0.0, 0.026]]}
-rig:
-  anchors: [[0.0, -0.16, 1.0], [0.0, 0.16, 1.0]]
-  attachments: [[0.0, -0.16, 0.04], [0.0, 0.16, 0.04]]
-  lengths: [0.9, 0.9]
-"""
-EXACT = ["--uncertainty", "length=0", "--uncertainty", "position=0", "--uncertainty", "mass=0",
-         "--uncertainty", "com=0"]
+sys.path.insert(0, str(ROOT / "tests"))
+from test_secant_slope import DRONE, EXACT  # noqa: E402 (audit17 row B3's drone and exact inputs, one copy)
 
 
 def cases(tmp: Path) -> list:
