@@ -102,7 +102,13 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                             "max_abs_difference_to_model": np.max(np.abs(F_sym[:, None] - T_model), axis=0),
                             "note": "valid only for mirror-symmetric motion (thesis 7.2)"}
     # a record's rig is measured: its geometry's std is its own term, kept out of the residuals' (record_std)
-    geometry = None if motion is None else _stated_geometry_uncertainty(config)
+    if motion is None:
+        geometry = None
+    else:  # the config's stated position / com std (m), which the record's torque arms and wire directions rest on
+        from ..config import read_yaml
+        from ..studies.settings import stated_geometry_uncertainty
+
+        geometry = stated_geometry_uncertainty(read_yaml(config))
     est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps,
                                 geometry=geometry)
     std, std_inputs, interval, dof = dict(est.std), None, None, est.dof
@@ -187,24 +193,6 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     con.print(it)
     if slack:
         con.print(f"inertia from tensions: {esc(slack)}")
-
-
-def _stated_geometry_uncertainty(config) -> dict:
-    """The config's ``uncertainty:`` block's ``position`` and ``com`` (m), the
-    inputs a recorded motion's torque arms and wire directions rest on,
-    checked as sweep and plan read the block; ``{}`` where it states neither
-    (the defaults, 1 and 2 mm).  Audit18: the block was ignored here, so a
-    stated 5 mm printed the 1 mm std."""
-    from ..config import read_yaml
-    from ..studies.settings import resolve_uncertainty
-
-    cfg = read_yaml(config)
-    block = cfg.get("uncertainty") if isinstance(cfg, dict) else None
-    if not isinstance(block, dict):
-        return {}
-    keys = [k for k in ("position", "com") if k in block]
-    unc = resolve_uncertainty({"uncertainty": {k: block[k] for k in keys}})
-    return {k: unc[k] for k in keys}
 
 
 def slack_reason(slack: list) -> str:

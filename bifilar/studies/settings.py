@@ -120,6 +120,21 @@ INVERT_ONLY_UNCERTAINTY = {
 }
 
 
+def stated_geometry_uncertainty(cfg: dict) -> dict:
+    """The config's ``uncertainty:`` block's ``position`` and ``com`` (m,
+    standard uncertainties), the inputs a recorded motion's torque arms and
+    wire directions rest on (``tensions --motion``), checked as
+    :func:`resolve_uncertainty` checks the block; ``{}`` where it states
+    neither (the estimator's defaults, 1 and 2 mm).  Audit18: the block was
+    ignored there, so a stated 5 mm printed the 1 mm std."""
+    block = cfg.get("uncertainty") if isinstance(cfg, dict) else None
+    if not isinstance(block, dict):
+        return {}
+    keys = [k for k in ("position", "com") if k in block]
+    unc = resolve_uncertainty({"uncertainty": {k: block[k] for k in keys}})
+    return {k: unc[k] for k in keys}
+
+
 def resolve_uncertainty(cfg: dict, overrides: dict | None = None) -> dict:
     """Input uncertainties: defaults < the config's ``uncertainty:`` block < ``overrides`` (flags)."""
     out = dict(DEFAULT_UNCERTAINTY)
