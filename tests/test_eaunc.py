@@ -98,6 +98,11 @@ def test_ea_is_budgeted_only_where_it_is_stated():
     r0 = _invert(rigid, T, {}).to_json()
     assert "stiffness" not in r0["assumed_uncertainty"]
     assert all("stiffness" not in e["groups"] for e in r0["budget"].values())
+    # a stiffness uncertainty stated for a rig without EA is said to be left out (lead, session 18: it was
+    # dropped without a word), and only there
+    said = "uncertainty stiffness is EA's"
+    assert sum(said in w for w in _invert(rigid, T, {"stiffness": 0.1}).to_json()["warnings"]) == 1
+    assert not any(said in w for w in _invert(stiff, T, {"stiffness": 0.1}).to_json()["warnings"])
 
 
 def test_sweep_states_ea_and_its_point_sigma_carries_the_term():

@@ -154,6 +154,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         # dropped or repeated frames; a start held by hand), as `period` lists them at its top level
         for w in (m.details.get("signal") or {}).get("warnings") or []:
             warnings.append(f"mode '{m.label}': {w}")
+    if "stiffness" in {**ms.uncertainty, **(unc or {})} and all(h.scene.stiffness is None for h in ms.hangings):
+        warnings.append("uncertainty stiffness is EA's (rig.stiffness), which no hanging's config states: the "
+                        "wires are taken as rigid and the stated uncertainty is not in this answer's std")
     if "release" in {**ms.uncertainty, **(unc or {})} and not any(m.source == "signal" for m in ms.measurements):
         warnings.append("uncertainty release is budgeted for recordings (--signal) only: a period's "
                         "second modes are not modelled, so the stated bound is not in this answer's std")
