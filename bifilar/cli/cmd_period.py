@@ -76,31 +76,17 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
             raise InputError(name, f"must be a number, got {v!r}") from None
         if math.isnan(vals[name]):  # was read as a window of 'only 0 samples between nan s and inf s'
             raise InputError(name, f"must be a number, got {v}")
-    from ..estimation.period_specs import MAX_SAMPLE_RATE, check_signal_scale
+    from ..estimation.period_specs import MAX_SAMPLE_RATE
 
     sr = vals["--sample-rate"]
     if sr is not None and not 0 < sr <= MAX_SAMPLE_RATE:
         raise InputError("--sample-rate", f"must be in (0, {MAX_SAMPLE_RATE:g}] Hz, got {sr:g}")
     plot_p = check_output_path(plot, force, [signal], "--plot")
-    from ..estimation.signal import fit_period, read_signal
+    from ..estimation.period_specs import fit_record
 
-    t, y, meta = read_signal(signal, column=column, sample_rate=sr)
-    check_signal_scale(t, y, "SIGNAL")
-    fit = fit_period(t, y, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"],
-                     trim="auto" if trim else None)
-    from ..estimation.signal_timebase import check_time_base
-
-    tb = check_time_base(t, y, fit, meta.get("time_source"), lambda tn, yn=y: fit_period(
-        tn, yn, model=model, t_start=vals["--t-start"], t_stop=vals["--t-stop"], trim="auto" if trim else None))
-    if tb:  # frames dropped (or repeated) in a record without its time column: put back, or the std widened
-        t, y, fit = tb["t"], tb.get("y", y), tb["fit"]
-        meta["warnings"] = list(meta.get("warnings") or []) + [tb["warning"]]
-        meta["time_base"] = tb["time_base"]
-    from ..estimation.signal_start import take_start_warning
-
-    held = take_start_warning(fit)  # the body held before the release: left out of the fit
-    if held:
-        meta["warnings"] = list(meta.get("warnings") or []) + [held]
+    t, y, fit, meta, _, _ = fit_record(signal, "SIGNAL", column=column, sample_rate=sr, model=model,
+                                       t_start=vals["--t-start"], t_stop=vals["--t-stop"],
+                                       trim="auto" if trim else None)
     from ..estimation.period_specs import implausible_period
 
     slip = implausible_period(fit.period, None, "SIGNAL")

@@ -365,6 +365,46 @@ def parse_target(text: str, period: float, fld: str = "--target") -> float:
     return v
 
 
+def fit_record(path, fld: str = "SIGNAL", *, column=None, sample_rate=None, model: str = "auto", t_start=None,
+               t_stop=None, trim=None) -> tuple:
+    """Read and fit a recorded oscillation as `period` and `invert --signal`
+    both do: ``(t, y, fit, meta, time_base_warning, start_warning)``.
+
+    :func:`~bifilar.estimation.signal.read_signal` (``t`` s, ``y`` in the
+    file's unit), the scale check, :func:`~bifilar.estimation.signal.fit_period`
+    (``t_start``/``t_stop`` s, ``trim``), then the time base of a record
+    without its time column (dropped or repeated frames put back, or the
+    std widened: :func:`~bifilar.estimation.signal_timebase.check_time_base`,
+    which may return another ``t``, ``y`` and fit; its line, or None) and a
+    start or end held by hand left out of the fit
+    (:func:`~bifilar.estimation.signal_start.take_start_warning`: its line,
+    or None).  Both lines are also appended to ``meta["warnings"]``, and the
+    time base's summary is ``meta["time_base"]``.  ``fld`` names the input
+    in refusals.  Raises :class:`~bifilar.estimation.signal.SignalError`
+    (exit 2) for a record that cannot be read or fitted."""
+    from .signal import fit_period, read_signal
+    from .signal_start import take_start_warning
+    from .signal_timebase import check_time_base
+
+    t, y, meta = read_signal(path, column=column, sample_rate=sample_rate)
+    check_signal_scale(t, y, fld)
+    fit = fit_period(t, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
+
+    def refit(tn, yn=y):
+        return fit_period(tn, yn, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
+
+    tbc = check_time_base(t, y, fit, meta.get("time_source"), refit, fld)
+    tbw = None
+    if tbc:  # frames dropped or repeated in a record without its time column: put back, or the std widened
+        t, y, fit, tbw = tbc["t"], tbc.get("y", y), tbc["fit"], tbc["warning"]
+        meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
+        meta["time_base"] = tbc["time_base"]
+    held = take_start_warning(fit)  # the body held before the release: left out of the fit
+    if held:
+        meta["warnings"] = list(meta.get("warnings") or []) + [held]
+    return t, y, fit, meta, tbw, held
+
+
 def period_from_signal(path, *, column=None, sample_rate=None, model: str = "auto", quantity: str = "other",
                        scale: float | None = None, t_start=None, t_stop=None, trim=None, fld: str = "--signal"):
     """Fit a recorded oscillation (:mod:`bifilar.estimation.signal`).
@@ -390,32 +430,15 @@ def period_from_signal(path, *, column=None, sample_rate=None, model: str = "aut
     (the envelope weighted as a least-squares slope weighs it), times
     ``scale``; for ``rate`` it is further divided by omega.
     """
-    from .signal import SignalError, fit_period, read_signal
+    from .signal import SignalError
 
     if quantity not in ("angle", "rate", "other"):
         raise InputError(fld, f"quantity must be angle, rate or other, got {quantity!r}")
     try:
-        t, y, meta = read_signal(path, column=column, sample_rate=sample_rate)
-        check_signal_scale(t, y, fld)
-        fit = fit_period(t, y, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
+        t, y, fit, meta, tbw, held = fit_record(path, fld, column=column, sample_rate=sample_rate, model=model,
+                                                t_start=t_start, t_stop=t_stop, trim=trim)
     except SignalError as exc:
         raise InputError(f"{fld} ({exc.field})", exc.message) from None
-    from .signal_timebase import check_time_base
-
-    def refit(tn, yn=y):
-        return fit_period(tn, yn, model=model, t_start=t_start, t_stop=t_stop, trim=trim)
-
-    tbc = check_time_base(t, y, fit, meta.get("time_source"), refit, fld)
-    tbw = None
-    if tbc:  # frames dropped from a record without its time column: put back, or the std widened
-        t, y, fit, tbw = tbc["t"], tbc.get("y", y), tbc["fit"], tbc["warning"]
-        meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
-        meta["time_base"] = tbc["time_base"]
-    from .signal_start import take_start_warning
-
-    held = take_start_warning(fit)  # the body held before the release: left out of the fit
-    if held:
-        meta["warnings"] = list(meta.get("warnings") or []) + [held]
     Td = float(fit.period)
     zeta = float(fit.damping_ratio) if np.isfinite(fit.damping_ratio) else 0.0
     zstd = 0.0
