@@ -6,11 +6,14 @@ torsion at 0.05 rad over 10 periods (the default run, clean: never checked);
 the Solar Boat's roll at 0.05 rad over 10 periods (a default run that beats:
 checked, agrees); the 6.4 cylinder's pitch at 0.3 rad over 40 periods
 (beating, checked); the plate's swing-y at 1.5 m over 40 periods (irregular:
-checked, warns).  Each case is timed in a fresh process of each tree, the
+checked, warns); a trifilar plate's torsion at 3.0 rad over 10 periods
+(audit18's row H2, the wires' turn at pi near: its cycles agree, but its
+period lies 150 % from the linear one, so the run is checked by DOP853 since
+session 18: ``run_accuracy.FAR_FROM_LINEAR``).  Each case is timed in a fresh process of each tree, the
 trees alternating, CPU time (``time.process_time``) of ``simulate`` alone
 (configs loaded, rest pose and modes solved before), medians over repeats.
 
-    python scripts/bench_period_check.py --other /work/main [--rounds 3 --repeats 9]
+    python scripts/bench_period_check.py --other /work/main [--rounds 3 --repeats 9] [--only CONFIG]
 """
 
 from __future__ import annotations
@@ -21,11 +24,24 @@ import os
 import statistics
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = [("thesis_plate_rest.yaml", "torsion", 0.05, 10), ("solar_boat.yaml", "roll", 0.05, 10),
-         ("thesis_cylinder_6_4.yaml", "pitch", 0.3, 40), ("thesis_plate_rest.yaml", "swing-y", 1.5, 40)]
+         ("thesis_cylinder_6_4.yaml", "pitch", 0.3, 40), ("thesis_plate_rest.yaml", "swing-y", 1.5, 40),
+         ("plate3 (audit18 H2)", "torsion", 3.0, 10)]
+#: the trifilar plate of audit18's row H2 (not a shipped config: written to a temporary file)
+PLATE3 = """name: plate3
+gravity: 9.81
+body:
+  mass: 2.5
+  inertia: {tensor: [[0.03, 0.0, 0.0], [0.0, 0.035, 0.0], [0.0, 0.0, 0.06]]}
+rig:
+  anchors: [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]]
+  attachments: [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]]
+  lengths: [1.0, 1.0, 1.0]
+"""
 
 CHILD = r"""
 import json, sys, time
@@ -45,10 +61,14 @@ print(json.dumps(out))
 """
 
 
-def run(tree: Path, case, repeats: int) -> list[float]:
+def run(tree: Path, case, repeats: int, tmp: Path) -> list[float]:
     cfg, mode, amp, per = case
+    path = ROOT / "configs" / cfg
+    if cfg.startswith("plate3"):
+        path = tmp / "plate3.yaml"
+        path.write_text(PLATE3)
     env = {**os.environ, "PYTHONPATH": str(tree)}
-    p = subprocess.run([sys.executable, "-c", CHILD, str(ROOT / "configs" / cfg), mode, str(amp), str(per),
+    p = subprocess.run([sys.executable, "-c", CHILD, str(path), mode, str(amp), str(per),
                         str(repeats)], env=env, capture_output=True, text=True, check=True, cwd=str(tree))
     return json.loads(p.stdout.strip().splitlines()[-1])
 
@@ -58,12 +78,16 @@ def main() -> None:
     ap.add_argument("--other", required=True, type=Path, help="checkout to compare with (e.g. main)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--repeats", type=int, default=9)
+    ap.add_argument("--only", default=None, help="time only the cases whose config name starts with this")
     a = ap.parse_args()
+    tmp = Path(tempfile.mkdtemp())
     for case in CASES:
+        if a.only and not case[0].startswith(a.only):
+            continue
         times = {"other": [], "this": []}
         for _ in range(a.rounds):
-            times["other"] += run(a.other, case, a.repeats)
-            times["this"] += run(ROOT, case, a.repeats)
+            times["other"] += run(a.other, case, a.repeats, tmp)
+            times["this"] += run(ROOT, case, a.repeats, tmp)
         mo, mt = statistics.median(times["other"]), statistics.median(times["this"])
         print(f"{case[0]:26s} {case[1]:8s} A={case[2]:<5g} {case[3]:>3g} periods: other {1e3 * mo:7.1f} ms, "
               f"this {1e3 * mt:7.1f} ms CPU ({mt / mo:.2f}x)", flush=True)
