@@ -69,3 +69,24 @@ def test_repeated_stopwatch_entries_and_releases_each_keep_their_own_terms(tmp_p
             assert {"timing[torsion]", "timing[torsion#2]"} <= set(b["inputs"])
     assert groups[2]["amplitude"]["std"] == pytest.approx(groups[1]["amplitude"]["std"] / 2 ** 0.5, rel=1e-3)
     assert groups[2]["timing"]["std"] == pytest.approx(groups[1]["timing"]["std"] / 2 ** 0.5, rel=1e-3)
+
+
+def test_periods_that_agree_only_marginally_are_warned():
+    """Audit19's row A3: the torsion timed twice at 1 ms, one timing 0.2 %
+    off (a typo), inputs exact: 23 of 30 draws answered (the fit check
+    refuses below p = 0.001), z +2.56, 3 of 23 within their interval, no
+    word.  Now a fit accepted at p < 0.01 says so, naming the mode with the
+    largest residual.  Two timings 3.76 ms apart at 1 ms each: chi2 =
+    3.76^2 / 2 = 7.07 for 1 dof, p = 0.0078 (the analytic chi-square of
+    two equal-std values about their mean); 1.2 ms apart (chi2 0.72, p
+    0.40) is quiet."""
+    out = {}
+    for gap in (0.0012, 0.00376):
+        r = CliRunner().invoke(main, ["invert", str(DRONE), f"--period=torsion={T_DRONE}+-0.001",
+                                      f"--period=torsion={T_DRONE + gap}+-0.001", "--amplitude", "0", *EXACT, "--json"])
+        assert r.exit_code == 0, r.stderr
+        d = json.loads(r.stdout)
+        assert d["fit"]["chi2"] == pytest.approx(gap ** 2 / 2e-6, rel=1e-3)
+        out[gap] = [w for w in d["warnings"] if "agree only" in w]
+    assert out[0.0012] == []
+    assert len(out[0.00376]) == 1 and "p = 0.0078" in out[0.00376][0] and "'torsion" in out[0.00376][0]
