@@ -173,7 +173,7 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
     from .solve import RELEASE_LAW_RATIO, amplitude_law_at
 
     out = {}
-    multi = len(pb.models) > 1
+    labels = pb.term_labels()
     for k, m in enumerate(pb.measurements):
         if m.amplitude is not None:
             continue
@@ -189,7 +189,7 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
         except BifilarError:
             continue
         r_max = float(law.factor(A))
-        lab = f"{hm.hanging.name}:{m.label}" if multi else m.label
+        lab = labels[k]
         e = np.zeros(len(pb.measurements))
         e[k] = ctx.T_hat[k] * (r_max - 1) / r_max
         D = -(ctx.G @ e)
@@ -338,10 +338,11 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
         if in_sig[j] > 0:
             contrib[n] = -(Gf @ Jx[:, j]) * in_sig[j]
             shift[n] = contrib[n] - budget.contributions[n]
+    labels = pb.term_labels()
     for k, m in enumerate(pb.measurements):
         contrib[timing_names[k]] = Gf[:, k] * sig[k]
         if m.amplitude:
-            lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
+            lab = labels[k]
             contrib[f"amplitude[{lab}]"] = -Gf[:, k] * s_amp[k]
             if laws[k] is not None and laws[k].irregular > 0:
                 # a motion that is not regular: its model period known only to the check run's difference
@@ -382,16 +383,14 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     G = gain_matrix(Jp, sig)
     extra = {}
     s_amp = stated_amplitude_period_std(pb, T_lin, laws, unc) if method == "nonlinear" else np.zeros(K)
+    labels = pb.term_labels()  # one name per measurement: two timings of one mode are two terms
     for k, m in enumerate(pb.measurements):
-        lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
+        lab = labels[k]
         if method == "nonlinear" and m.amplitude:
             extra[f"amplitude[{lab}]"] = -G[:, k] * s_amp[k]
     if method != best and best in rungs and "p" in rungs[best]:
         extra["model bias"] = np.abs(np.asarray(p_hat) - rungs[best]["p"])
-    tn = []
-    for m in pb.measurements:
-        lab = f"{pb.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
-        tn.append(f"timing[{lab}]")
+    tn = [f"timing[{lab}]" for lab in labels]
     budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn,
                        timing_dof=[m.dof for m in pb.measurements])
     shift, gain = {}, G

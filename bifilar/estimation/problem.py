@@ -318,6 +318,21 @@ class Problem:
     def values(self, p) -> dict:
         return {n: float(v) for n, v in zip(self.unknowns, np.atleast_1d(p))}
 
+    def term_labels(self) -> list[str]:
+        """Each measurement's name in the budget's terms of one measurement
+        (``timing[...]``, ``amplitude[...]``): its mode label, after
+        ``<hanging>:`` with several hangings; the second and later
+        measurements of one mode in one hanging numbered (``torsion#2``), so
+        that each keeps its own, independent term (one name for two timings
+        kept only the last one's: a std 1/sqrt(2) too small for two)."""
+        multi = len(self.models) > 1
+        out, seen = [], {}
+        for m in self.measurements:
+            lab = f"{self.models[m.hanging].hanging.name}:{m.label}" if multi else m.label
+            seen[lab] = seen.get(lab, 0) + 1
+            out.append(lab if seen[lab] == 1 else f"{lab}#{seen[lab]}")
+        return out
+
     def linear_periods(self, p) -> np.ndarray:
         """(K,) linear periods of the measured modes at unknowns ``p``, s."""
         return self.periods_at(self.values(p))
