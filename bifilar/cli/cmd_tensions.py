@@ -36,8 +36,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..analysis.simulate import simulate
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
     from ..config import load_scene
-    from ..estimation.from_tensions import inertia_from_tensions, record_std
-    from ..estimation.motion_record import length_mismatch, read_motion
+    from ..estimation.from_tensions import inertia_from_tensions
+    from ..estimation.motion_record import (length_mismatch, pose_noise_reason, pose_noise_warnings, read_motion,
+                                            record_inertia)
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
@@ -70,7 +71,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         source = f"simulated mode {res.mode}, amplitude {amplitude:g}"
     else:
         rec = read_motion(motion, scene.n_wires)
-        t, y, T_model, omega, accel, alpha, alt = rec.t, rec.y, rec.tensions, rec.omega, rec.accel, rec.alpha, rec.alt
+        t, y, T_model, omega, accel, alpha = rec.t, rec.y, rec.tensions, rec.omega, rec.accel, rec.alpha
         source = f"recorded motion {motion}"
         # with rig.stiffness the wires hang loaded, L (1 + T / EA) at rest: the record is compared with those
         rest = config_rest_pose(scene, config) if scene.stiffness is not None else None
@@ -104,24 +105,21 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         from ..studies.settings import stated_geometry_uncertainty
 
         geometry = stated_geometry_uncertainty(read_yaml(config))
-    est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps,
-                                geometry=geometry)
-    std, std_inputs, interval, dof = dict(est.std), None, None, est.dof
+    noisy = []  # components the record's pose noise leaves undetermined
     if motion is None:
+        est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps)
         # a simulated motion is exact only to the integrator's tolerance, which the
         # residuals (at rounding level) cannot show: the cylinder of 6.4 gave Ixx
         # 1e-12 off with a residual std of 4e-14
-        std = {c: math.hypot(std[c], SIM_RTOL * abs(est.values[c])) for c in comps}
+        std, std_inputs, interval, dof = ({c: math.hypot(est.std[c], SIM_RTOL * abs(est.values[c])) for c in comps},
+                                          None, None, est.dof)
     else:
-        # the rates of a record are differentiated, not known: the spread between two differentiations
-        # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
-        # and the config's geometry is measured too (torque arms, wire directions): systematic over the record
-        # the same fit (est's components, the others held) with the other rates; its std is not used
-        kept = tuple(c for c in comps if c not in est.poorly_excited) or comps
-        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=kept,
-                                      fix_poorly_excited=False)
-        std, std_inputs, interval, dof = record_std(est, other)
-        dof = {c: (v if math.isfinite(v) else None) for c, v in dof.items()}
+        # the rates of a record are differentiated, not known; the config's geometry is measured too
+        fit = record_inertia(scene, rec, comps, geometry)
+        est, std, std_inputs, interval, noisy = fit.est, fit.std, fit.std_geometry, fit.interval, fit.noise_undetermined
+        dof = {c: (v if math.isfinite(v) else None) for c, v in fit.dof.items()}
+        for w in pose_noise_warnings(fit):
+            click.echo(f"warning: {w}", err=True)
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
     # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
     undetermined = [c for c in comps if not std[c] == std[c]]
@@ -131,7 +129,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
             "interval_95": interval[c] if interval else est.interval95(c, std[c]),
             "config": float(scene.inertia[_idx(c)])} for c in comps}
     for c in undetermined:
-        doc["inertia_from_tensions"][c]["reason"] = NOT_DETERMINED
+        doc["inertia_from_tensions"][c]["reason"] = pose_noise_reason(fit) if c in noisy else NOT_DETERMINED
     if std_inputs is not None:  # the config geometry's share of std (record_std)
         for c in comps:
             doc["inertia_from_tensions"][c]["std_geometry"] = std_inputs.get(c) if c not in undetermined else None
