@@ -227,3 +227,23 @@ def test_tensions_from_a_noisy_motion_capture_are_not_diluted(tmp_path):
         assert d["std"] < 0.1 * truth, d
         assert abs(d["value"] - truth) < 3.5 * d["std"], d
         assert "attitude noise" in r.stderr and r.stderr.count("\n") <= 3
+
+
+def test_a_component_the_motion_does_not_move_gets_no_value_even_alone(tmp_path):
+    """README: a component the motion does not excite gets no value.  When
+    every requested component was poorly excited, the fit fell back to all of
+    them and printed each: the drone's torsion record asked for Ixx alone
+    gave 1e-4 +- 7e9 kg m^2 (config 0.0082), its torques at rounding level.
+    Now such a component is null with the reason; one that is moved but
+    imprecise keeps its value and std (nothing to hold it at).  Old code:
+    Ixx's value printed (ran: fails)."""
+    motion = tmp_path / "motion.csv"
+    r = CliRunner().invoke(main, ["simulate", str(DRONE), "--mode", "torsion", "--amplitude", "0.1",
+                                  "--periods", "3", "--out", str(motion), "--json"])
+    assert r.exit_code == 0, r.stderr
+    r = CliRunner().invoke(main, ["tensions", str(DRONE), "--motion", str(motion), "--solve-for", "Ixx", "--json"])
+    assert r.exit_code == 0, r.stderr
+    d = json.loads(r.stdout)
+    ixx = d["inertia_from_tensions"]["Ixx"]
+    assert ixx["value"] is None and ixx["std"] is None and "not determined" in ixx["reason"]
+    assert d["inertia_from_tensions_poorly_excited"] == ["Ixx"]
