@@ -140,14 +140,21 @@ def alpha_noise(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray | None, float]
     dt = np.diff(t)
     if not np.ptp(dt) <= 1e-6 * np.median(dt) or len(t) < 3 * SG_WINDOW:
         return None, 0.0
-    h = float(np.mean(dt))
     half = SG_WINDOW // 2
     eps = 2 * quat_multiply(q * np.array([1, -1, -1, -1]), q - savgol_filter(q, SG_WINDOW, SG_ORDER, axis=0))[:, 1:]
     eps = eps[half:-half]
     c0 = float(savgol_coeffs(SG_WINDOW, SG_ORDER)[half])
     c_theta = eps.T @ eps / (len(eps) * (1 - c0))
-    c2 = savgol_coeffs(SG_WINDOW, SG_ORDER, deriv=2, delta=h)
-    return c_theta * float(np.sum(c2 ** 2)), variance_rse(len(eps) * (1 - c0))
+    return c_theta * _second_derivative_gain(t), variance_rse(len(eps) * (1 - c0))
+
+
+def _second_derivative_gain(t: np.ndarray) -> float:
+    """s^-4: the sum of the squared weights of :func:`derivatives`' second
+    derivative at a centred sample of the evenly spaced times ``t`` (s)."""
+    from scipy.signal import savgol_coeffs
+
+    h = float(np.mean(np.diff(t)))
+    return float(np.sum(savgol_coeffs(SG_WINDOW, SG_ORDER, deriv=2, delta=h) ** 2))
 
 
 def derivatives(t: np.ndarray, x: np.ndarray, spline: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -295,8 +302,8 @@ def record_inertia(scene: Scene, rec: MotionRecord, components: tuple, geometry:
     (:func:`differentiation_error`) budgeted as
     :func:`~bifilar.estimation.from_tensions.record_std` does."""
     from ..rotations import quat_to_matrix
-    from .design_noise import DILUTION_MAX
-    from .from_tensions import inertia_from_tensions, record_std
+    from .design_noise import DILUTION_MAX, design_noise
+    from .from_tensions import COMPONENTS, euler_design, inertia_from_tensions, record_std
 
     sl = interior(rec)
     y = rec.y[sl]
@@ -310,21 +317,11 @@ def record_inertia(scene: Scene, rec: MotionRecord, components: tuple, geometry:
     if rec.alpha_noise is not None:
         plain = inertia_from_tensions(*args, alpha=rec.alpha[sl], components=components, geometry=geometry)
         dilution = {c: (1 - plain.values[c] / est.values[c]) if est.values[c] else 0.0 for c in components}
-        from .design_noise import design_noise
-        from .from_tensions import euler_design
-
-        A = euler_design(rec.omega[sl], rec.alpha[sl], components)
-        power = np.sum(A ** 2, axis=(0, 1))
+        power = np.sum(euler_design(rec.omega[sl], rec.alpha[sl], components) ** 2, axis=(0, 1))
         S = np.diag(design_noise(rec.alpha_noise))
-        from .from_tensions import COMPONENTS
-
         swamped = [c for j, c in enumerate(components)
                    if len(y) * S[COMPONENTS.index(c)] > DILUTION_MAX * max(power[j], 1e-300)]
-        h = float(np.mean(np.diff(rec.t)))
-        from scipy.signal import savgol_coeffs
-
-        gain = float(np.sum(savgol_coeffs(SG_WINDOW, SG_ORDER, deriv=2, delta=h) ** 2))
-        noise_rms = math.sqrt(float(np.trace(rec.alpha_noise)) / (3 * gain))
+        noise_rms = math.sqrt(float(np.trace(rec.alpha_noise)) / (3 * _second_derivative_gain(rec.t)))
     return RecordInertia(est, std, geo, interval, dof, diff, dilution, swamped, noise_rms)
 
 
