@@ -316,11 +316,16 @@ def record_inertia(scene: Scene, rec: MotionRecord, components: tuple, geometry:
     dilution, swamped, noise_rms = {c: 0.0 for c in components}, [], None
     if rec.alpha_noise is not None:
         plain = inertia_from_tensions(*args, alpha=rec.alpha[sl], components=components, geometry=geometry)
-        dilution = {c: (1 - plain.values[c] / est.values[c]) if est.values[c] else 0.0 for c in components}
-        power = np.sum(euler_design(rec.omega[sl], rec.alpha[sl], components) ** 2, axis=(0, 1))
+        # only the components fitted (not held: a finite std) are said to be moved by the correction
+        dilution = {c: (1 - plain.values[c] / est.values[c]) if est.values[c] and math.isfinite(est.std[c])
+                    else 0.0 for c in components}
+        A = euler_design(rec.omega[sl], rec.alpha[sl], components)
+        power = np.sum(A ** 2, axis=(0, 1))
         S = np.diag(design_noise(rec.alpha_noise))
-        swamped = [c for j, c in enumerate(components)
-                   if len(y) * S[COMPONENTS.index(c)] > DILUTION_MAX * max(power[j], 1e-300)]
+        # the noise is named only where a plain fit would have determined the component (a clean record's
+        # barely moved axis, its "noise" the fits' truncation, keeps the not-excited reason and no warning)
+        swamped = [c for j, c in enumerate(components) if c not in plain.poorly_excited
+                   and len(y) * S[COMPONENTS.index(c)] > DILUTION_MAX * max(power[j], 1e-300)]
         noise_rms = math.sqrt(float(np.trace(rec.alpha_noise)) / (3 * _second_derivative_gain(rec.t)))
     return RecordInertia(est, std, geo, interval, dof, diff, dilution, swamped, noise_rms)
 
