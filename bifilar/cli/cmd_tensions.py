@@ -36,7 +36,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..analysis.simulate import simulate
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
     from ..config import load_scene
-    from ..estimation.from_tensions import inertia_from_tensions, record_std
+    from ..estimation.from_tensions import inertia_from_tensions
+    from ..estimation.motion_record import (length_mismatch, pose_noise_reason, pose_noise_warnings, read_motion,
+                                            record_inertia)
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
@@ -68,22 +70,16 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         omega = y[:, 10:13]
         source = f"simulated mode {res.mode}, amplitude {amplitude:g}"
     else:
-        t, y, T_model, omega, accel, alpha, alt = _read_motion(motion, scene)
+        rec = read_motion(motion, scene.n_wires)
+        t, y, T_model, omega, accel, alpha = rec.t, rec.y, rec.tensions, rec.omega, rec.accel, rec.alpha
         source = f"recorded motion {motion}"
+        # with rig.stiffness the wires hang loaded, L (1 + T / EA) at rest: the record is compared with those
+        rest = config_rest_pose(scene, config) if scene.stiffness is not None else None
     R = quat_to_matrix(y[:, 3:7])
     u = wire_units(scene, y[:, 0:3], R)
-    # how far the motion's poses are from the wire lengths (m): a record in another frame or of
-    # another rig gives wire directions, hence 'general' tensions and inertia, that are not this rig's.  With
-    # rig.stiffness the wires hang loaded, L (1 + T / EA) at rest (the run's wires): compared with those
-    lengths, which = _hanging_lengths(scene, rest if motion is None else None, config)
-    span = np.linalg.norm(y[:, None, 0:3] + np.einsum("kij,nj->kni", R, scene.attachments) - scene.anchors, axis=-1)
-    off = np.max(np.abs(span - lengths), axis=0)
-    worst = int(np.argmax(off / lengths))
-    if off[worst] > 0.01 * lengths[worst]:
-        click.echo(f"warning: --motion: the recorded poses are up to {off[worst]:.3g} m off the {which}length of wire "
-                   f"{worst + 1} ({off[worst] / lengths[worst]:.1%}): the record does not fit this config's "
-                   "rig (another frame, units or rig?); the wire directions and all figures from them are suspect",
-                   err=True)
+    mismatch, mismatch_warning = length_mismatch(scene, y[:, 0:3], R, rest)
+    if mismatch_warning:
+        click.echo(f"warning: {mismatch_warning}", err=True)
     F_gen, resid = general_tensions(scene.mass, scene.gravity, accel, u)
     doc = {"source": source, "samples": int(len(t)),
            "model": {"min": T_model.min(axis=0), "max": T_model.max(axis=0)},
@@ -91,7 +87,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                        "max_abs_difference_to_model": np.max(np.abs(F_gen - T_model), axis=0),
                        "max_residual": float(resid.max()),
                        "determined": scene.n_wires <= 3},
-           "max_wire_length_mismatch": float(off.max())}
+           "max_wire_length_mismatch": mismatch}
     if scene.n_wires > 3:
         doc["general"]["note"] = (f"underdetermined: {scene.n_wires} wires, 3 equations (Newton's law); the minimum-norm "
                                   "tensions balance the forces but are not the wire tensions")
@@ -109,24 +105,21 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         from ..studies.settings import stated_geometry_uncertainty
 
         geometry = stated_geometry_uncertainty(read_yaml(config))
-    est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps,
-                                geometry=geometry)
-    std, std_inputs, interval, dof = dict(est.std), None, None, est.dof
+    noisy = []  # components the record's pose noise leaves undetermined
     if motion is None:
+        est = inertia_from_tensions(scene, t, y[:, 0:3], R, omega, T_model, alpha=alpha, components=comps)
         # a simulated motion is exact only to the integrator's tolerance, which the
         # residuals (at rounding level) cannot show: the cylinder of 6.4 gave Ixx
         # 1e-12 off with a residual std of 4e-14
-        std = {c: math.hypot(std[c], SIM_RTOL * abs(est.values[c])) for c in comps}
+        std, std_inputs, interval, dof = ({c: math.hypot(est.std[c], SIM_RTOL * abs(est.values[c])) for c in comps},
+                                          None, None, est.dof)
     else:
-        # the rates of a record are differentiated, not known: the spread between two differentiations
-        # (local quartic fits, quintic splines) is a systematic error the residuals cannot show
-        # and the config's geometry is measured too (torque arms, wire directions): systematic over the record
-        # the same fit (est's components, the others held) with the other rates; its std is not used
-        kept = tuple(c for c in comps if c not in est.poorly_excited) or comps
-        other = inertia_from_tensions(scene, t, y[:, 0:3], R, alt[0], T_model, alpha=alt[1], components=kept,
-                                      fix_poorly_excited=False)
-        std, std_inputs, interval, dof = record_std(est, other)
-        dof = {c: (v if math.isfinite(v) else None) for c, v in dof.items()}
+        # the rates of a record are differentiated, not known; the config's geometry is measured too
+        fit = record_inertia(scene, rec, comps, geometry)
+        est, std, std_inputs, interval, noisy = fit.est, fit.std, fit.std_geometry, fit.interval, fit.noise_undetermined
+        dof = {c: (v if math.isfinite(v) else None) for c, v in fit.dof.items()}
+        for w in pose_noise_warnings(fit):
+            click.echo(f"warning: {w}", err=True)
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
     # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
     undetermined = [c for c in comps if not std[c] == std[c]]
@@ -136,7 +129,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
             "interval_95": interval[c] if interval else est.interval95(c, std[c]),
             "config": float(scene.inertia[_idx(c)])} for c in comps}
     for c in undetermined:
-        doc["inertia_from_tensions"][c]["reason"] = NOT_DETERMINED
+        doc["inertia_from_tensions"][c]["reason"] = pose_noise_reason(fit) if c in noisy else NOT_DETERMINED
     if std_inputs is not None:  # the config geometry's share of std (record_std)
         for c in comps:
             doc["inertia_from_tensions"][c]["std_geometry"] = std_inputs.get(c) if c not in undetermined else None
@@ -217,96 +210,3 @@ its inertia's std)."""
 
 def _idx(c):
     return {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}[c]
-
-
-def _hanging_lengths(scene, rest, config) -> tuple:
-    """(the wires' lengths as they hang, m; the word naming them in a warning): ``rig.lengths``, or with
-    ``rig.stiffness`` the loaded ones at the rest pose (``rest``, solved here when None; :func:`~bifilar.analysis.
-    elastic_rest.loaded_scene`), named "loaded (rig.lengths stretched under rig.stiffness) " (session 18: the
-    unloaded ones were compared at 1 %, which a strain above 1 % alone tripped)."""
-    import numpy as np
-
-    if scene.stiffness is None:
-        return np.asarray(scene.lengths, float), ""
-    from ..analysis.elastic_rest import loaded_scene
-
-    rest = rest if rest is not None else config_rest_pose(scene, config)
-    return loaded_scene(scene, rest).lengths, "loaded (rig.lengths stretched under rig.stiffness) "
-
-
-def _read_motion(path, scene):
-    """Read t, com, quaternion, tensions from CSV; derive omega (body axes) and the accelerations
-    (see :func:`_derivatives`)."""
-    import numpy as np
-
-    from ..errors import InputError
-    from ..rotations import quat_multiply
-
-    import os
-    import warnings
-
-    try:
-        if os.path.getsize(path) == 0:
-            raise InputError("--motion", f"{path} is empty; expected a CSV with a header row (t, com_x, ..., q_w, ...)")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # numpy's "empty input" warnings: reported below as one error
-            data = np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True))
-    except (OSError, ValueError, IndexError, TypeError) as exc:
-        reason = getattr(exc, "strerror", None) or type(exc).__name__
-        raise InputError("--motion", f"cannot read {path} as a CSV table with a header row ({reason})") from None
-    names = data.dtype.names or ()
-    need = ["t", "com_x", "com_y", "com_z", "q_w", "q_x", "q_y", "q_z"] + [f"tension_{i + 1}" for i in range(scene.n_wires)]
-    missing = [n for n in need if n not in names]
-    if missing:
-        raise InputError("--motion", f"missing columns {', '.join(missing)} (have {', '.join(names)})")
-    if len(data) < 20:
-        raise InputError("--motion", "fewer than 20 samples")
-    for n in need:  # a blank cell or a word reads as nan: name the first one (file line, header = line 1)
-        bad = np.flatnonzero(~np.isfinite(data[n]))
-        if len(bad):
-            raise InputError("--motion", f"column {n}, line {bad[0] + 2}: not a finite number "
-                             f"({len(bad)} such value(s) in the column)")
-    t = data["t"]
-    if np.any(np.diff(t) <= 0):
-        raise InputError("--motion", "time column t must increase strictly")
-    com = np.c_[data["com_x"], data["com_y"], data["com_z"]]
-    q = np.c_[data["q_w"], data["q_x"], data["q_y"], data["q_z"]]
-    qn = np.linalg.norm(q, axis=1, keepdims=True)
-    if np.any(qn < 1e-6):
-        raise InputError("--motion", f"line {int(np.argmax(qn[:, 0] < 1e-6)) + 2}: the quaternion (q_w, q_x, q_y, q_z) "
-                         "is zero; it must be a rotation (unit length)")
-    q /= qn
-    T = np.c_[tuple(data[f"tension_{i + 1}"] for i in range(scene.n_wires))]
-    # second differences were biased by ~(omega h)^2 / 3, 0.3 % at 64 samples per period, far beyond the
-    # estimate's std; local quartic fits over 9 samples (Savitzky-Golay) err by ~1e-5 there and pass less
-    # noise; unevenly sampled records take quintic interpolating splines (as accurate, noisier)
-    conj = q * np.array([1, -1, -1, -1])
-
-    def rates(spline):
-        qdot, qddot = _derivatives(t, q, spline)
-        # body axes; alpha is d/dt of omega: conj(qdot) qdot is a scalar for a unit q
-        return 2 * quat_multiply(conj, qdot)[:, 1:], 2 * quat_multiply(conj, qddot)[:, 1:]
-
-    omega, alpha = rates(False)
-    vel, accel = _derivatives(t, com, False)
-    y = np.zeros((len(t), 13))
-    y[:, 0:3], y[:, 3:7], y[:, 7:10], y[:, 10:13] = com, q, vel, omega
-    return t, y, T, omega, accel, alpha, rates(True)
-
-
-def _derivatives(t, x, spline=False):
-    """First and second time derivatives of samples ``x`` (k, m) at times ``t`` (k,), s: local quartic
-    least-squares fits over 9 samples (Savitzky-Golay) when the sampling is even, else (or with
-    ``spline``) quintic interpolating splines."""
-    import numpy as np
-
-    dt = np.diff(t)
-    if not spline and np.ptp(dt) <= 1e-6 * np.median(dt):
-        from scipy.signal import savgol_filter
-
-        h = float(np.mean(dt))
-        return (savgol_filter(x, 9, 4, deriv=1, delta=h, axis=0), savgol_filter(x, 9, 4, deriv=2, delta=h, axis=0))
-    from scipy.interpolate import make_interp_spline
-
-    s = make_interp_spline(t, x, k=5, axis=0)
-    return s.derivative(1)(t), s.derivative(2)(t)

@@ -17,13 +17,14 @@ inaccurate for exactly this reason.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import math
 
 import numpy as np
 
 from ..analysis.tensions import wire_units
+from .design_noise import design_noise
 from ..scene import Scene
 
 COMPONENTS = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
@@ -115,7 +116,8 @@ def wire_torque_body(scene: Scene, com: np.ndarray, R: np.ndarray, tensions: np.
 def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.ndarray, omega: np.ndarray,
                           tensions: np.ndarray, alpha: np.ndarray | None = None,
                           components=("Ixx", "Iyy", "Izz"), threshold: float = 0.01,
-                          fix_poorly_excited: bool = True, geometry: dict | None = None) -> TensionInertia:
+                          fix_poorly_excited: bool = True, geometry: dict | None = None,
+                          alpha_noise: np.ndarray | None = None, alpha_noise_rse: float = 0.0) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     With ``fix_poorly_excited`` (default) the components the motion does not
@@ -135,6 +137,14 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     residuals is removed before their std is taken (see :func:`_solve`);
     the relative-std rule for ``poorly_excited`` then applies to both in
     quadrature.  None (default): the geometry is exact.
+
+    ``alpha_noise`` (3, 3) (rad/s^2)^2: the covariance of the noise each
+    sample of ``alpha`` (body axes) carries when it is differentiated from
+    noisy poses (:func:`~bifilar.estimation.motion_record.read_motion`), and
+    ``alpha_noise_rse`` the relative standard error of that estimate: the
+    least squares are then corrected for the noise in their design
+    (:mod:`~bifilar.estimation.design_noise`), which otherwise pulls every
+    estimate toward zero.  None (default): the rates are exact.
     """
     if alpha is None:
         alpha = np.gradient(omega, t, axis=0, edge_order=2)
@@ -142,12 +152,23 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     if geometry is not None:
         B = geometry_jacobian(scene, com, R, _motion_fit(com, R, omega, alpha, tensions), geometry)[1]
         B = B.reshape(3 * len(t), -1)
-    first = _solve(scene, t, com, R, omega, tensions, alpha, tuple(components), threshold, B)
-    if not fix_poorly_excited or not first.poorly_excited or len(first.poorly_excited) == len(first.components):
+    noise = None if alpha_noise is None else design_noise(alpha_noise)
+    first = _solve(scene, t, com, R, omega, tensions, alpha, tuple(components), threshold, B, noise, alpha_noise_rse)
+    if not fix_poorly_excited or not first.poorly_excited:
         return first
+    if len(first.poorly_excited) == len(first.components):
+        # nothing to hold the others at: each keeps its fit and std (poorly excited), but one whose torque is at
+        # the rounding level is not determined at all (the drone's torsion gave Ixx 1e-4 +- 7e9 for 0.0082)
+        A2 = euler_design(omega, alpha, first.components).reshape(-1, len(first.components))
+        dead = ~_excited(scene, com, R, tensions, A2, len(t))
+        if not dead.any():
+            return first
+        nan = {c: math.nan for c, d in zip(first.components, dead) if d}
+        return replace(first, std={**first.std, **nan},
+                       std_geometry=None if first.std_geometry is None else {**first.std_geometry, **nan})
     components = tuple(components)
     keep = tuple(c for c in components if c not in first.poorly_excited)
-    second = _solve(scene, t, com, R, omega, tensions, alpha, keep, threshold, B)
+    second = _solve(scene, t, com, R, omega, tensions, alpha, keep, threshold, B, noise, alpha_noise_rse)
     values = {**first.values, **second.values}
     nan = {c: math.nan for c in first.poorly_excited}
     std = {**nan, **second.std}
@@ -161,7 +182,7 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
 
 
 def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold,
-           B: np.ndarray | None = None) -> TensionInertia:
+           B: np.ndarray | None = None, noise: np.ndarray | None = None, noise_rse: float = 0.0) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     Parameters
@@ -175,6 +196,9 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     B : (3k, p) N m, the torques' change per standard uncertainty of each
         geometric input (:func:`geometry_jacobian`, at the tensions of
         :func:`_motion_fit`), None when the geometry is exact.
+    noise, noise_rse : the design's per-sample error covariance (6, 6) and
+        the relative standard error of that estimate
+        (:mod:`~bifilar.estimation.design_noise`), or None: exact rates.
 
     The config's geometry enters the torques ``b`` only (the design ``A``
     is the motion's), linearly over its uncertainty: ``b = A theta + B
@@ -194,11 +218,11 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     of the directions and their weights (the noise removed with them).
     """
     comps = tuple(components)
-    x, A2, b2, scale = _least_squares(scene, com, R, omega, tensions, alpha, comps)
+    x, A2, b2, scale, eiv = _least_squares(scene, com, R, omega, tensions, alpha, comps, noise)
     r = A2 @ x - b2
     s2 = float(r @ r) / max(len(b2) - len(comps), 1)
     As = A2 / scale
-    AtA = As.T @ As
+    AtA = As.T @ As if eiv is None else As.T @ As - len(t) * eiv[0]
     cond = float(np.linalg.cond(AtA)) ** 0.5
     bread = np.linalg.pinv(AtA)
     geo, extra, weight = None, None, None
@@ -209,6 +233,8 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
         r = r - extra @ (weight * (extra.T @ r))
     As3, r3 = As.reshape(len(t), 3, -1), r.reshape(len(t), 3)
     g = _scores(As3, r3)  # (k, m)
+    if eiv is not None:  # the corrected normal equations' scores, less each sample's expected noise product (r = A x - b)
+        g = g - eiv[1]
     meat, lags = _score_covariance(g, len(comps))
     f = np.sqrt(_leverage_correction(As3, r3, bread, lags, extra, weight))
     cov = f[:, None] * (bread @ meat @ bread) * f[None, :] / np.outer(scale, scale)
@@ -216,6 +242,11 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     dof = 3 * h2.sum(axis=0) ** 2 / ((2 * lags + 3) * np.maximum((h2 ** 2).sum(axis=0), 1e-300))
     std = np.sqrt(np.maximum(np.diag(cov), 0))
     corr = cov / np.maximum(np.outer(std, std), 1e-300)
+    if eiv is not None:  # the correction's own uncertainty (the pose noise is estimated), and where it fails
+        from .design_noise import correction_std, undetermined_by_noise
+
+        std = np.hypot(std, correction_std(x, eiv[2], noise_rse))
+        std[undetermined_by_noise(len(t) * np.diag(eiv[0]), AtA)] = np.nan
     values = dict(zip(comps, map(float, x)))
     stds = dict(zip(comps, map(float, std)))
     total = std if geo is None else np.hypot(std, geo)
@@ -318,13 +349,23 @@ def _design_basis(As: np.ndarray) -> np.ndarray:
     return U[:, sv > math.sqrt(1e-15) * max(float(sv.max()), 1e-300)] if sv.size else U
 
 
-def _least_squares(scene: Scene, com, R, omega, tensions, alpha, comps: tuple):
+def _least_squares(scene: Scene, com, R, omega, tensions, alpha, comps: tuple, noise: np.ndarray | None = None):
     """(estimate (m,) kg m^2, design (3k, m), torques (3k,) N m, column
-    scales) of Euler's equations over every sample, the components not in
-    ``comps`` at the scene's values."""
+    scales, errors-in-variables terms or None) of Euler's equations over
+    every sample, the components not in ``comps`` at the scene's values.
+
+    ``noise`` (6, 6): the per-sample covariance of the design's errors over
+    :data:`COMPONENTS` (:func:`design_noise`, from the noise of an ``alpha``
+    differentiated from noisy poses), or None.  Given, the normal equations
+    are corrected for it (:func:`~bifilar.estimation.design_noise`):
+    ``(A^T A - k S_cc) x = A^T b + k S_cf x_f`` (``c`` the solved, ``f``
+    the held components), and the last item is ``(S_cc scaled (m, m),
+    each sample's score offset (m,) scaled, the plain least-squares
+    estimate (m,) kg m^2)``."""
     fixed = [c for c in COMPONENTS if c not in comps]
     A = euler_design(omega, alpha, comps)
     b = wire_torque_body(scene, com, R, tensions)
+    xf = np.zeros(0)
     if fixed:
         Af = euler_design(omega, alpha, fixed)
         idx = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
@@ -335,7 +376,12 @@ def _least_squares(scene: Scene, com, R, omega, tensions, alpha, comps: tuple):
     scale = np.linalg.norm(A2, axis=0)
     scale[scale == 0] = 1.0
     x, *_ = np.linalg.lstsq(A2 / scale, b2, rcond=None)
-    return x / scale, A2, b2, scale
+    if noise is None:
+        return x / scale, A2, b2, scale, None
+    from .design_noise import corrected_normal_equations
+
+    xc, S_cc, offset = corrected_normal_equations(A2 / scale, b2, scale, noise, comps, fixed, xf, len(omega))
+    return xc / scale, A2, b2, scale, (S_cc, offset, x / scale)
 
 
 GEOMETRY_INPUTS = ("anchor.", "attachment.", "com.")
@@ -393,11 +439,13 @@ def _skew(x: np.ndarray) -> np.ndarray:
                      np.stack([-x[..., 1], x[..., 0], z], -1)], -2)
 
 
-def record_std(est: TensionInertia, other: TensionInertia) -> tuple[dict, dict, dict, dict]:
+def record_std(est: TensionInertia, other: TensionInertia | None = None,
+               differentiation: dict | None = None) -> tuple[dict, dict, dict, dict]:
     """The uncertainty (kg m^2) of each component of ``est`` from a recorded
     motion: the residuals' std (``est.std``, Student's t with ``est.dof``),
+    the differentiation's: ``differentiation[c]`` (kg m^2) when given, else
     the difference from ``other`` (the same fit with the rates
-    differentiated another way; NaN for a component it lacks) and the config's geometry
+    differentiated another way; NaN for a component it lacks), and the config's geometry
     (``est.std_geometry``: ``est`` must be fitted with ``geometry=``, which
     also keeps the geometry's residuals out of ``est.std``), the last two
     systematic over the record, which the residuals cannot show (normal,
@@ -422,7 +470,8 @@ def record_std(est: TensionInertia, other: TensionInertia) -> tuple[dict, dict, 
     g = est.std_geometry
     std, interval, dof = {}, {}, {}
     for c in est.components:
-        s_res, s_diff, s_geo = est.std[c], est.values[c] - other.values.get(c, math.nan), g.get(c, 0.0)
+        s_diff = differentiation[c] if differentiation is not None else est.values[c] - other.values.get(c, math.nan)
+        s_res, s_geo = est.std[c], g.get(c, 0.0)
         std[c] = float(math.hypot(math.hypot(s_res, s_diff), s_geo))
         nu = est.dof.get(c, math.inf)
         t = float(stats.t.ppf(0.975, nu)) if math.isfinite(nu) and nu > 0 else Z95
