@@ -576,7 +576,7 @@ def _finish(t: np.ndarray, y: np.ndarray, meta: dict):
     meta["n_dropped"] = nb
     if nb:
         if nb > max(1, int(MAX_NAN_FRACTION * n)):
-            raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN, missing or inf "
+            raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN or missing (or inf) "
                                         f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording or choose "
                                         f"another column (columns found: {', '.join(map(str, meta['columns']))})")
         t, y = t[~bad], y[~bad]
