@@ -749,7 +749,9 @@ def test_three_attachments_on_one_line_are_refused_and_a_millimetre_off_it_is_no
     ("gravity", 1.1e4, "must be at most 10000 m/s^2 in magnitude, got 11000.0"),
     ("gravity", 5e-4, "must be at least 0.001 m/s^2, got 0.0005"),
     ("gravity", 0, "must be positive, got 0"),
-    ("gravity", True, "must be a number, got bool True"),
+    # readers19: a YAML boolean (`yes`) is named as one, not as Python's `bool True`
+    ("gravity", True, "must be a number, got a YAML boolean (True: yes/no, on/off and true/false are read so); "
+                      "write the number"),
     ("gravity", "9.81", "must be a number, got str '9.81' (a number in quotes is text; remove the quotes)"),
     ("gravity", "fast", "must be a number, got str 'fast'"),
     ("gravity", 10 ** 400, "must be finite, got an integer with 401 digits"),

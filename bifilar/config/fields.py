@@ -75,6 +75,10 @@ class _Checker:
         (zero allowed unless ``positive``)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             hint = ""
+            if isinstance(value, bool):  # YAML 1.1 reads yes/no, on/off, true/false as booleans
+                self.error(path, f"must be a number, got a YAML boolean ({value!r}: yes/no, on/off and true/false "
+                                 "are read so); write the number")
+                return None
             if isinstance(value, str) and _YAML11_SURPRISE.match(value):
                 hint = (" (YAML 1.1 reads it as a number in base 60 or, with its leading zero, octal; "
                         "write the number in plain decimal digits)")

@@ -321,7 +321,8 @@ def check_signal_scale(t, y, fld: str = "--signal") -> None:
     peak = float(np.max(np.abs(finite))) if finite.size else 0.0
     lo, hi = SIGNAL_MAGNITUDE
     if peak > hi or 0 < peak < lo:
-        raise InputError(fld, f"samples as large as {peak:.3g}: outside {lo:g} .. {hi:g}; rescale the signal "
+        # the samples' own field, as the reader's refusals name it (`period`'s argument is SIGNAL)
+        raise InputError("signal" if fld == "SIGNAL" else fld, f"samples as large as {peak:.3g}: outside {lo:g} .. {hi:g}; rescale the signal "
                               "(the period does not depend on its unit)")
 
 
@@ -383,6 +384,7 @@ def fit_record(path, fld: str = "SIGNAL", *, column=None, sample_rate=None, mode
     in refusals.  Raises :class:`~bifilar.estimation.signal.SignalError`
     (exit 2) for a record that cannot be read or fitted."""
     from .signal import fit_period, read_signal
+    from .signal_clip import take_fault_warnings
     from .signal_start import take_start_warning
     from .signal_timebase import check_time_base
 
@@ -400,8 +402,10 @@ def fit_record(path, fld: str = "SIGNAL", *, column=None, sample_rate=None, mode
         meta["warnings"] = list(meta.get("warnings") or []) + [tbw]
         meta["time_base"] = tbc["time_base"]
     held = take_start_warning(fit)  # the body held before the release: left out of the fit
-    if held:
-        meta["warnings"] = list(meta.get("warnings") or []) + [held]
+    faults = take_fault_warnings(fit)  # a saturated sensor's flat tops left out, an offset's step taken out
+    for line in [held] + faults:
+        if line:
+            meta["warnings"] = list(meta.get("warnings") or []) + [line]
     return t, y, fit, meta, tbw, held
 
 

@@ -185,22 +185,38 @@ def _is_number(s: str) -> bool:
         return s.strip().lower() in _MISSING - {""}
 
 
+def _encoding(p: Path) -> str:
+    """The text encoding of a table: UTF-16 where the file starts with its
+    byte-order mark (a Windows "Unicode text" export), else UTF-8 (a UTF-8
+    BOM skipped)."""
+    with open(p, "rb") as fh:
+        head = fh.read(2)
+    return "utf-16" if head in (b"\xff\xfe", b"\xfe\xff") else "utf-8-sig"
+
+
 def _header(p: Path):
     """First non-comment, non-blank line of a text table: (its 0-based line
     index, its text, the delimiter).  Reads only up to that line."""
     try:
-        with open(p, encoding="utf-8-sig") as fh:
+        with open(p, encoding=_encoding(p)) as fh:
             for i, ln in enumerate(fh):
                 if ln.strip() and not ln.lstrip().startswith("#"):
                     return i, ln.rstrip("\r\n"), _sniff_delimiter(ln)
     except UnicodeDecodeError:
-        raise SignalError("path", f"{p.name} is not a text table (and not a .mat file)") from None
+        with open(p, "rb") as fh:
+            head = fh.read(4096)
+        if head[1::2].count(0) > 0.4 * len(head[1::2]) or head[0::2].count(0) > 0.4 * len(head[0::2]):
+            raise SignalError("path", f"{p.name} looks like UTF-16 text without its byte-order mark; save it as "
+                                      "UTF-8 (or UTF-16 with a BOM)") from None
+        raise SignalError("path", f"{p.name} is not a text table in UTF-8 or UTF-16 (and not a .mat file)") from None
     raise SignalError("signal", f"{p.name} is empty")
 
 
 def _has_interior_blank_line(p: Path, chunk: int = 1 << 22) -> bool:
     """True if a blank line lies between data rows (read in chunks: memory
     does not grow with the file)."""
+    if _encoding(p) == "utf-16":
+        return True  # not scanned: the line-by-line parser reads it (blank lines its way)
     pat = re.compile(rb"\n[ \t\r]*\n(?=[ \t\r]*[^\s#])")
     tail = b""
     with open(p, "rb") as fh:
@@ -225,7 +241,7 @@ def _stream_columns(p: Path, start: int, split, cols: list[int], names: list[str
     out = [array("d") for _ in cols]
     pending_blank = 0
     nan = float("nan")
-    with open(p, encoding="utf-8-sig") as fh:
+    with open(p, encoding=_encoding(p)) as fh:
         for i, ln in enumerate(fh):
             if i < start or ln.lstrip().startswith("#"):
                 continue
@@ -263,7 +279,7 @@ def _load_columns(p: Path, start: int, delim, cols: list[int], names: list[str],
     the numbers have a decimal comma (:func:`_decimal_comma`)."""
     if not _has_interior_blank_line(p):
         try:
-            with open(p, encoding="utf-8-sig") as fh:
+            with open(p, encoding=_encoding(p)) as fh:
                 a = np.loadtxt(fh, delimiter=delim, comments="#", skiprows=start, usecols=cols,
                                ndmin=2, dtype=float, quotechar='"', converters=_comma_float if comma else None)
             return [a[:, k].copy() for k in range(len(cols))]
@@ -299,7 +315,7 @@ def _first_rows(p: Path, start: int, n: int = SNIFF_ROWS) -> list[str]:
     """Up to ``n`` data lines from 0-based line ``start`` (comments and blank
     lines skipped; reads only those lines)."""
     out: list[str] = []
-    with open(p, encoding="utf-8-sig") as fh:
+    with open(p, encoding=_encoding(p)) as fh:
         for i, ln in enumerate(fh):
             if i < start or not ln.strip() or ln.lstrip().startswith("#"):
                 continue
@@ -307,6 +323,28 @@ def _first_rows(p: Path, start: int, n: int = SNIFF_ROWS) -> list[str]:
             if len(out) >= n:
                 break
     return out
+
+
+def _units_row(p: Path, start: int, split):
+    """``(line index, cells)`` of a row of units right under the header (every
+    cell text, no number, each at most 16 characters: ``s,rad``, ``[s],[deg]``)
+    with a number row after it; else None."""
+    rows: list[tuple[int, str]] = []
+    with open(p, encoding=_encoding(p)) as fh:
+        for i, ln in enumerate(fh):
+            if i < start or not ln.strip() or ln.lstrip().startswith("#"):
+                continue
+            rows.append((i, ln.rstrip("\r\n")))
+            if len(rows) == 2:
+                break
+    if len(rows) < 2:
+        return None
+    cells, nxt = split(rows[0][1]), split(rows[1][1])
+    if not cells or any(not c or len(c) > 16 or _is_number(c) or _COMMA_NUMBER.match(c) for c in cells):
+        return None
+    if not any(_is_number(c) or _COMMA_NUMBER.match(c) for c in nxt):
+        return None
+    return rows[0][0], cells
 
 
 def _decimal_comma(p: Path, rows: list[list[str]], delim, n_fields: int) -> bool:
@@ -348,11 +386,18 @@ def _read_text(p: Path, column, fs):
 
     def split(s: str) -> list[str]:
         cells = s.split(delim) if delim else s.split()
-        return [c.strip().strip('"').strip("'").strip() for c in cells]
+        cells = [c.strip().strip('"').strip("'").strip() for c in cells]
+        while len(cells) > 1 and not cells[-1]:  # a trailing separator ('t,y,'): an empty last column
+            cells.pop()
+        return cells
 
     warnings_: list[str] = []
     header = split(first)
     numeric_header = all(_is_number(c) or _COMMA_NUMBER.match(c) for c in header)
+    units = None if numeric_header else _units_row(p, hline + 1, split)
+    if units is not None:  # a row of units under the header ('s,rad'): skipped, its time unit read
+        hline, units = units
+        warnings_.append(f"row {hline + 1} ({', '.join(units)}) read as the columns' units and skipped")
     sample = [split(r) for r in _first_rows(p, hline if numeric_header else hline + 1)]
     comma = _decimal_comma(p, sample, delim, len(header))
     if comma:
@@ -412,6 +457,14 @@ def _read_text(p: Path, column, fs):
             nums = [names[i] for i in range(len(names)) if numeric(i) is True]
             raise SignalError("--column", f"column {names[col_idx]!r} of {p.name} is not numeric ({kind!r}); "
                                           f"numeric columns: {', '.join(nums) or 'none'} ({found})")
+    time_name = names[time_idx] if time_idx is not None else None
+    if units is not None and time_idx is not None and time_idx < len(units) and fs is None:
+        u = units[time_idx].strip("[]() ").lower()
+        if u not in ("s", "sec", "seconds", "ms", "msec", "milliseconds"):
+            raise SignalError("time", f"the units row of {p.name} gives the time column {time_name!r} in "
+                                      f"{units[time_idx]!r}: only s or ms are read; convert it to s")
+        if u in _MS_UNITS and _time_scale(time_name) == 1.0:
+            time_name = f"{time_name} [ms]"  # read as ms, converted
     if fs is None and time_idx is None:
         raise SignalError(
             "--sample-rate",
@@ -431,7 +484,7 @@ def _read_text(p: Path, column, fs):
         if time_idx is not None:
             warnings_.append(f"time column {names[time_idx]!r} ignored: sample_rate given")
     else:
-        t, src = _time_column(names[time_idx], arrays[1], "column")
+        t, src = _time_column(time_name, arrays[1], "column")
         meta.update(time_source=src, sample_rate=None,
                     sample_rate_source=f"median step of column {names[time_idx]!r}")
     return t, y, meta
@@ -483,6 +536,10 @@ def _read_mat(p: Path, column, fs):
                                           f"(dtype {getattr(v, 'dtype', type(v))}, shape {getattr(v, 'shape', '?')}); "
                                           f"numeric 1-D variables: {', '.join(numeric) or 'none'}")
     y = _as_1d_numeric(vars_[name])
+    if y.size < MIN_SAMPLES:  # the signal named before the time: a variable this short is not the recording
+        raise SignalError("signal", f"variable {name!r} of {p.name} holds only {y.size} samples (need at least "
+                                    f"{MIN_SAMPLES}): not the recording? choose it with --column (variables: "
+                                    f"{', '.join(vars_)})")
     meta: dict[str, Any] = {"path": str(p), "format": "mat", "column": name,
                             "columns": list(numeric), "fields": fields, "warnings": warnings_}
     rate_var = next((k for k in vars_ if k.lower() in _RATE_NAMES and isinstance(vars_[k], np.ndarray)
@@ -513,16 +570,20 @@ def _read_mat(p: Path, column, fs):
 
 def _finish(t: np.ndarray, y: np.ndarray, meta: dict):
     n = len(y)
+    t0, y0 = t, y
     bad = ~np.isfinite(y) | ~np.isfinite(t)
     nb = int(bad.sum())
     meta["n_dropped"] = nb
     if nb:
         if nb > max(1, int(MAX_NAN_FRACTION * n)):
-            raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN or missing "
+            raise SignalError("signal", f"{nb} of {n} samples of {meta['column']!r} are NaN or missing (or inf) "
                                         f"(more than {MAX_NAN_FRACTION:.0%}); clean the recording or choose "
                                         f"another column (columns found: {', '.join(map(str, meta['columns']))})")
         t, y = t[~bad], y[~bad]
-        meta["warnings"].append(f"dropped {nb} NaN/missing sample(s) of {n}")
+        ninf = int(np.sum(np.isinf(y0) | np.isinf(t0)))
+        what = " and ".join(w for w in ((f"{nb - ninf} NaN/missing" if nb > ninf else ""),
+                                        (f"{ninf} infinite (inf)" if ninf else "")) if w)
+        meta["warnings"].append(f"dropped {what} sample(s) of {n}")
     from .signal_wrap import unwrap_record
     y, wrapped = unwrap_record(y)
     if wrapped:
