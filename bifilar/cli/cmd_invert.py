@@ -67,6 +67,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     from ..errors import InputError
     from ..estimation import measurements as mm
     from ..estimation import period_specs as ps
+    from ..estimation import stated_inputs as sti
 
     if method is not None and method not in mm.METHOD_NAMES:
         raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
@@ -122,13 +123,13 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
         given = s is not None
         if not given:  # the assumed timing: checked as a stated +-SIGMA is, naming where it came from
             s = mm.default_uncertainty(ms.uncertainty)["timing"]
-            _check_assumed(T, s, f"--period {label}", "timing", unc, ms.uncertainty)
+            sti.check_assumed_std(T, s, f"--period {label}", "timing", unc, ms.uncertainty)
         ms.measurements.append(mm.Measurement(label, T, s, "period", "--period",
                                               cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
                                               std_given=given))
     for label, n, times in t_specs:
         T, s, det = ps.period_from_trials(n, times, None, ms.uncertainty)
-        _check_assumed(T, s, f"--timed {label}", "trial_time", unc, ms.uncertainty)
+        sti.check_assumed_std(T, s, f"--timed {label}", "trial_time", unc, ms.uncertainty)
         ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
                                               details=det))
     for label, path in s_specs:
@@ -136,7 +137,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
                                                      model=signal_model, quantity=signal_quantity, scale=scale))
     if not ms.measurements:
         raise InputError("--period", "no measurement: give --period, --timed or --signal (or --measurements FILE)")
-    _apply_amplitudes(ms, amps)
+    sti.apply_amplitudes(ms, amps)
     # inputs named inside the measurements file (its config, recordings) are inputs too
     inputs += [h.source for h in ms.hangings if getattr(h, "source", None)]
     inputs += [str(m.details["signal"]["path"]) for m in ms.measurements
@@ -176,19 +177,6 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
             click.echo(f"warning: {w}", err=True)
         return
     _render(ms, res)
-
-
-def _check_assumed(T: float, s: float, what: str, key: str, flags: dict, unc: dict) -> None:
-    """Check the period std ``s`` (s) that the stated uncertainty ``key``
-    gave the period ``T`` (s) of ``what``, naming where it was stated:
-    ``--uncertainty`` (the flags) or ``uncertainty.KEY`` (the config's
-    block).  The built-in defaults are not checked here: for an absurd
-    period the inversion's refusal (no physical inertia gives it, a unit
-    slip?) says more."""
-    from ..estimation import period_specs as ps
-
-    if key in flags or key in unc:
-        ps.check_assumed_sigma(T, s, what, "--uncertainty" if key in flags else f"uncertainty.{key}")
 
 
 def _eye():
@@ -231,19 +219,6 @@ def _float(v, name, positive=False):
     if not math.isfinite(x) or (positive and x <= 0):
         raise InputError(name, f"must be a {'positive ' if positive else ''}finite number, got {v!r}")
     return x
-
-
-def _apply_amplitudes(ms, amps: dict) -> None:
-    from ..errors import InputError
-
-    labels = {m.label for m in ms.measurements}
-    for lab in amps:
-        if lab is not None and lab not in labels:
-            raise InputError("--amplitude", f"no measurement of mode '{lab}' (measured: {', '.join(sorted(labels))})")
-    for m in ms.measurements:
-        spec = amps.get(m.label, amps.get(None))
-        if spec is not None and (m.amplitude is None or m.label in amps):
-            m.state_amplitude(*spec)
 
 
 def _render(ms, res) -> None:
