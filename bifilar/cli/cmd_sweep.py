@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..output import write_yaml
-from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc, fmt,
+from .common import (check_journal_path, check_output_path, check_workers, console, emit_json, esc, fmt,
                      handle_errors, progress_bar)
 
 UNC_HELP = ("Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity, "
@@ -58,61 +58,11 @@ def common_options(fn):
     return fn
 
 
-def parse_sigmas(sigmas) -> dict:
-    from ..errors import InputError
-
-    out = {}
-    for s in sigmas:
-        if "=" not in s:
-            raise InputError("--sigma", f"{s!r} must be KEY=VALUE, e.g. timing=0.002")
-        k, v = (x.strip() for x in s.split("=", 1))
-        try:
-            out[k] = float(v)
-        except ValueError:
-            raise InputError("--sigma", f"{s!r}: {v!r} is not a number") from None
-    return out
-
-
 SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.lengths.1, body.mass, "
                   "uncertainty.timing) or a shorthand: spacing (body attachments' spacing, m), ceiling_spacing "
                   "(anchors' spacing, m), length (mean wire length, m), length_offset (last minus first wire, m), "
                   "height (attachments above the CoM, m), stiffness (every wire's EA, N), amplitude (excitation), "
                   "rotate_x/_y/_z[_deg] (turn the body before hanging); see README 'Sweep parameters'.")
-
-
-def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-                min_separation, no_tensions, sim_periods, names=(), source="config", rig="shared"):
-    """(settings, constraints, target) from the config and the flags; exit 2
-    on bad input, or at once when no point of a search over the parameters
-    ``names`` can meet a constraint."""
-    from dataclasses import replace
-
-    from ..errors import InputError
-    from ..studies.shorthands import parse_values
-    from ..studies.sweep import resolve_constraints, resolve_settings, resolve_target
-    from ..studies.settings import unreachable
-
-    from ..estimation.rig import RIG_MODELS
-
-    if sim_periods is not None and sim_periods > MAX_SWEEP_PERIODS:
-        raise InputError("--periods", f"must be at most {MAX_SWEEP_PERIODS} periods per mode, got {sim_periods:g}")
-    if rig not in RIG_MODELS:
-        raise InputError("--rig", f"must be one of {', '.join(RIG_MODELS)}, got {rig!r}")
-    la = None
-    if lengths_available is not None:
-        la = [float(v) for v in parse_values(lengths_available, "--lengths-available")]
-    cons = resolve_constraints(cfg, max_tension, max_depth, la, min_separation)
-    settings = resolve_settings(cfg, components=list(components) or None, amplitude=amplitude,
-                                sigma=parse_sigmas(sigmas), tensions=not no_tensions, periods=sim_periods)
-    settings = replace(settings, rig=rig)
-    if no_tensions and cons.needs_nonlinear:
-        which = "--max-tension" if cons.max_tension is not None else "--max-depth"
-        raise InputError("--no-tensions", f"{which} needs the nonlinear run; drop one of them")
-    both = sorted(set(parse_sigmas(sigmas)) & {n.split(".", 1)[1] for n in names if n.startswith("uncertainty.")})
-    if both:
-        raise InputError("--sigma", f"{both[0]} is both set by --sigma and swept as uncertainty.{both[0]}; drop one")
-    unreachable(cfg, source, list(names), cons)
-    return settings, cons, resolve_target(cfg, target, settings.components)
 
 
 def point_config(base_cfg: dict, source: str, point: dict) -> dict:
@@ -314,6 +264,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, overlap_warnings, parse_param
+    from ..studies.study_inputs import resolve_study
     from ..studies.timing import check_reaction, parse_sensor
 
     check_workers(workers)
@@ -331,9 +282,9 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     for w in pre:
         click.echo(f"warning: {w}", err=True)
     reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
-    settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
-                                         lengths_available, min_separation, no_tensions, sim_periods,
-                                         [s.name for s in specs], config, rig)
+    settings, cons, target = resolve_study(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
+                                           lengths_available, min_separation, no_tensions, sim_periods,
+                                           [s.name for s in specs], config, rig)
     journal = None
     if out:
         journal = check_journal_path(sw.journal_path(out), [config, plot], "--out", resume=resume)

@@ -231,8 +231,7 @@ def _silence_stdout() -> None:
 MAX_SIM_PERIODS = 10_000
 """Most periods ``simulate`` and ``tensions`` integrate (~45 s and ~2 M
 samples for the thesis plate; more would run for hours and fill memory)."""
-MAX_SWEEP_PERIODS = 1_000
-"""Most periods a ``sweep`` or ``plan`` point simulates per mode."""
+from ..studies.study_inputs import MAX_SWEEP_PERIODS  # noqa: E402,F401 (re-exported; sweep's and plan's limit)
 MAX_WORKERS = 1024
 """Largest ``--workers`` accepted; fewer processes start when there are fewer
 points or CPUs (:func:`bifilar.studies.sweep.effective_workers`)."""
