@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, amplitude_advice, common_options, multi_hanging, point_warnings,
-                        render_amplitude, render_identifiability, render_multi_hanging, render_rig, render_timing,
-                        timing_advice, write_point_config)
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, log_warnings, multi_hanging, render_amplitude,
+                        render_identifiability, render_multi_hanging, render_rig, render_timing)
 from .common import check_output_path, check_workers, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 
@@ -33,6 +32,8 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     from ..errors import InputError
     from ..studies.plan import plan as run_plan
     from ..studies.shorthands import check_param, overlap_warnings, parse_bounds
+    from ..studies.amplitude import amplitude_advice
+    from ..studies.point_advice import point_cautions, timing_advice, write_point_config
     from ..studies.study_inputs import resolve_study
 
     check_workers(workers)
@@ -67,7 +68,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
                                 hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
     joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
-    doc["warnings"] = pre + point_warnings(cfg, config, res.best, "the planned point", cons, joint) + mh_warnings
+    doc["warnings"] = pre + log_warnings(point_cautions(cfg, config, res.best, "the planned point", cons, joint)) + mh_warnings
     from ..studies.sweep import stretching_summary
 
     if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow

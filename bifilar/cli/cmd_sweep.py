@@ -65,64 +65,11 @@ SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.length
                   "rotate_x/_y/_z[_deg] (turn the body before hanging); see README 'Sweep parameters'.")
 
 
-def point_config(base_cfg: dict, source: str, point: dict) -> dict:
-    """The config of a point (the base config edited by its parameters)."""
-    from ..studies.shorthands import apply_params
-
-    cfg, _ = apply_params(base_cfg, point["params"], source)
-    return cfg
-
-
-def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None,
-                   joint: dict | None = None) -> list[str]:
-    """The config plausibility warnings of a recommended or planned point
-    (:func:`bifilar.studies.sweep.point_warnings`), its components'
-    ``physical_limit`` (an estimate often outside what a real body can
-    have) and, under the constraints ``cons``, its dependent wires' range
-    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`),
-    each logged to stderr now (``warning: WHAT: ...``) and returned for the
-    JSON document.  ``joint``: the multi-hanging plan's
-    ``accuracy`` when that plan is the experiment (``--hangings``): its
-    components' limits are those of the joint sigma, not of the point's
-    own hanging (whose Ixx from a swing, a 300 % sigma, warned of 68 % of
-    experiments where the plan's 0.44 % puts the limit 94 sigmas away)."""
-    from ..studies.ranking import tension_range_caution
-    from ..studies.sweep import point_warnings as check
-    from ..studies.sweep import prior_cautions
-
-    out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
-    out += [f"{what}: {w}" for w in prior_cautions(cfg, source, point)]
-    joint = joint or {}
-    out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
-            if c not in joint and e.get("physical_limit")]
-    out += [f"{what}: {c} by the multi-hanging plan: {e['physical_limit']}" for c, e in joint.items()
-            if e.get("physical_limit")]
-    if cons is not None and (w := tension_range_caution(point, cons)) is not None:
-        out.append(f"{what}: {w}")
-    for w in out:
+def log_warnings(ws: list[str]) -> list[str]:
+    """Log each line of ``ws`` to stderr (``warning: ...``); returns ``ws``."""
+    for w in ws:
         click.echo(f"warning: {w}", err=True)
-    return out
-
-
-def write_point_config(path, base_cfg: dict, source: str, point: dict, what: str) -> None:
-    """Write a point's config (YAML, atomically) with its parameters and
-    planned periods in a header comment; `bifilar modes` reproduces them."""
-    write_yaml(path, point_config(base_cfg, source, point),
-               [f"{what} of {source}", "parameters: " + ", ".join(f"{k} = {v:.10g}" for k, v in point["params"].items()),
-                "planned linear periods (s): " + ", ".join(f"{k} {v:.8g}" for k, v in point["periods"].items() if v),
-                "check: bifilar modes THIS_FILE"])
-
-
-def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> None:
-    """Add the remedies of the components no point can measure (and of a
-    target that is not) to ``rec["identifiability"]``, evaluated at the
-    recommended point (else the first valid one)."""
-    from ..studies.remedy import add_remedies
-
-    need = list(rec.get("not_measurable") or [])
-    ref = points[rec["best"]] if rec.get("best") is not None else next((p for p in points if p.get("valid")), None)
-    if need and ref is not None:
-        add_remedies(rec, cfg, source, ref["params"], settings, need)
+    return ws
 
 
 def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
@@ -172,25 +119,6 @@ def render_multi_hanging(con, doc: dict) -> None:
     if doc.get("measurements_written"):
         con.print(f"measurements file written to {doc['measurements_written']} "
                   f"(bifilar invert --measurements {doc['measurements_written']})")
-
-
-def timing_advice(point: dict, reaction: float, sensor, min_separation: float | None = None) -> list[dict]:
-    """How to time the point's modes to reach its assumed timing sigma
-    (:func:`bifilar.studies.timing.how_to_time`); ``min_separation``: only
-    the modes at least that far from the others (the search left the guard
-    to the multi-hanging plan, whose measurements say how to time the rest)."""
-    from ..studies.timing import how_to_time
-
-    rows = how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
-    return [r for r in rows if not min_separation or r["separation"] is None or r["separation"] >= min_separation]
-
-
-def amplitude_advice(cfg: dict, source: str, point: dict, settings) -> dict:
-    """What the point's sigmas assume about the release amplitude and what
-    an unstated one costs (:func:`bifilar.studies.amplitude.amplitude_advice`)."""
-    from ..studies.amplitude import amplitude_advice as advise
-
-    return advise(cfg, source, point, settings)
 
 
 def render_amplitude(con, adv: dict | None) -> None:
@@ -264,6 +192,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, overlap_warnings, parse_param
+    from ..studies.amplitude import amplitude_advice
+    from ..studies.point_advice import add_point_remedies, point_cautions, timing_advice, write_point_config
     from ..studies.study_inputs import resolve_study
     from ..studies.timing import check_reaction, parse_sensor
 
@@ -321,7 +251,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
             write_out()
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
-    remedies_for(rec, points, cfg, config, settings)
+    add_point_remedies(rec, points, cfg, config, settings)
     warnings = list(pre)
     if (w := sw.stretching_summary(points)) is not None:
         click.echo(f"warning: {w}", err=True)
@@ -334,7 +264,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                                     hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
                                     best if deferred else None)
         joint = rec["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in rec else None
-        warnings += point_warnings(cfg, config, best, "the recommended point", cons, joint) + mh_warnings
+        warnings += log_warnings(point_cautions(cfg, config, best, "the recommended point", cons, joint)) + mh_warnings
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:
