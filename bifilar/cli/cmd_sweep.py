@@ -74,35 +74,20 @@ def log_warnings(ws: list[str]) -> list[str]:
 
 def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
                   wm_p, who: str, deferred: dict | None = None) -> list[str]:
-    """Add the multi-hanging plan at ``params`` to ``doc`` (when ``wanted``
-    or a measurements file is asked for) and write that file.  ``deferred``:
-    the planned point, when the search left ``--min-separation`` to this
-    plan (``separation_guard`` ``multi_hanging``): a plan that cannot meet
-    it exits 2, and the warning returned (also logged) names the point's
-    own modes not to time."""
+    """Add the multi-hanging plan at ``params`` (:func:`bifilar.studies.point_hangings.hangings_at_point`)
+    to ``doc`` when ``wanted`` or a measurements file ``wm_p`` is asked
+    for, write that file, and log and return the plan's warnings."""
     if not (wanted or wm_p):
         return []
-    from ..studies.hangings import check_separated, close_modes_warning, measurements_document, plan_hangings
+    from ..studies.point_hangings import hangings_at_point
 
-    hp = plan_hangings(cfg, config, params, settings, list(settings.components), cons.min_separation, reaction, sensor)
-    warnings = []
-    if deferred is not None:
-        check_separated(hp)
-        warnings = [close_modes_warning(deferred, cons.min_separation,
-                                        "the planned point" if who == "bifilar plan" else "the recommended point")]
-        click.echo(f"warning: {warnings[0]}", err=True)
-    doc["multi_hanging"] = hp.to_json()
+    ph = hangings_at_point(cfg, config, params, settings, cons, reaction, sensor, who, deferred)
+    warnings = log_warnings(list(ph.warnings))
+    doc["multi_hanging"] = ph.document
     if wm_p:
-        sep = ([f"time these modes only: each is at least {100 * cons.min_separation:g} % (--min-separation) from "
-                "every other mode of its hanging"] if cons.min_separation else [])
-        notes: list = []  # periods that could not be run over invert's cycles: said, and kept in the file
-        mdoc = measurements_document(hp, notes=notes)
-        for w in notes:
-            click.echo(f"warning: {w}", err=True)
-        warnings += notes
-        write_yaml(wm_p, mdoc, [f"measurements planned by {who} for {config}", *sep,
-                                "the periods are the PLANNED ones (the config's inertia): replace them with the "
-                                "measured periods", *notes, f"then: bifilar invert --measurements {wm_p.name}"])
+        mdoc, notes, header = ph.measurements_file(wm_p.name)
+        warnings += log_warnings(notes)
+        write_yaml(wm_p, mdoc, header)
         doc["measurements_written"] = str(wm_p)
     return warnings
 
