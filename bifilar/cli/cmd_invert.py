@@ -106,38 +106,9 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     plot_p = check_output_path(plot, force, [*inputs, journal], "--plot")
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
-    if measurements is not None:
-        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for), overrides=unc)
-    else:
-        from ..config import load_scene
-
-        scene = load_scene(config, unknown=tuple(solve_for))
-        # the config's uncertainty block (what sweep/plan budgeted) below --uncertainty
-        ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config),
-                               uncertainty=mm.config_uncertainty(config))
-    if rig is not None:
-        ms.rig = rig
-    merged = dict(unc)
-    ms.uncertainty = {**ms.uncertainty, **merged}
-    for label, T, s in p_specs:
-        given = s is not None
-        if not given:  # the assumed timing: checked as a stated +-SIGMA is, naming where it came from
-            s = mm.default_uncertainty(ms.uncertainty)["timing"]
-            sti.check_assumed_std(T, s, f"--period {label}", "timing", unc, ms.uncertainty)
-        ms.measurements.append(mm.Measurement(label, T, s, "period", "--period",
-                                              cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
-                                              std_given=given))
-    for label, n, times in t_specs:
-        T, s, det = ps.period_from_trials(n, times, None, ms.uncertainty)
-        sti.check_assumed_std(T, s, f"--timed {label}", "trial_time", unc, ms.uncertainty)
-        ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
-                                              details=det))
-    for label, path in s_specs:
-        ms.measurements.append(mm.signal_measurement(label, path, "--signal", column=column, sample_rate=sr,
-                                                     model=signal_model, quantity=signal_quantity, scale=scale))
-    if not ms.measurements:
-        raise InputError("--period", "no measurement: give --period, --timed or --signal (or --measurements FILE)")
-    sti.apply_amplitudes(ms, amps)
+    ms = sti.measurement_set(config, measurements, solve_for, unc, rig, p_specs, t_specs, s_specs, amps, cyc,
+                             dict(column=column, sample_rate=sr, model=signal_model, quantity=signal_quantity,
+                                  scale=scale))
     # inputs named inside the measurements file (its config, recordings) are inputs too
     inputs += [h.source for h in ms.hangings if getattr(h, "source", None)]
     inputs += [str(m.details["signal"]["path"]) for m in ms.measurements
@@ -177,12 +148,6 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
             click.echo(f"warning: {w}", err=True)
         return
     _render(ms, res)
-
-
-def _eye():
-    import numpy as np
-
-    return np.eye(3)
 
 
 def _safe(label: str) -> str:
