@@ -99,11 +99,11 @@ def test_a_stated_release_amplitude_is_carried_to_the_amplitude_the_period_refer
     assert m.amplitude_std == pytest.approx(0.01 * math.sqrt(a2), rel=0.01)
     assert "record's start" in m.details["amplitude_source"]
     # the command line's --amplitude goes the same way (set after the fit)
-    from bifilar.cli.cmd_invert import _apply_amplitudes
+    from bifilar.estimation.stated_inputs import apply_amplitudes
 
     m2 = mm.signal_measurement("torsion", path, "--signal", model="viscous")
     assert m2.amplitude is None
-    _apply_amplitudes(mm.MeasurementSet([], [m2]), ps.parse_amplitudes(["0.1"]))
+    apply_amplitudes(mm.MeasurementSet([], [m2]), ps.parse_amplitudes(["0.1"]))
     assert m2.amplitude == pytest.approx(A0 * math.sqrt(a2), rel=0.01)
     # a timed period has no record to scale by: the stated amplitude as given
     mt = mm.Measurement("torsion", 1.5, 1e-3, "period", "--period")

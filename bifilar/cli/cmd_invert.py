@@ -67,6 +67,7 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     from ..errors import InputError
     from ..estimation import measurements as mm
     from ..estimation import period_specs as ps
+    from ..estimation import stated_inputs as sti
 
     if method is not None and method not in mm.METHOD_NAMES:
         raise InputError("--method", f"unknown method {method!r}; choose {', '.join(mm.METHOD_NAMES)}")
@@ -105,38 +106,9 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     plot_p = check_output_path(plot, force, [*inputs, journal], "--plot")
     if config is None and measurements is None:
         raise InputError("CONFIG", "give a scene config (or --measurements FILE naming one)")
-    if measurements is not None:
-        ms = mm.load_measurements(measurements, config_override=config, unknown=tuple(solve_for), overrides=unc)
-    else:
-        from ..config import load_scene
-
-        scene = load_scene(config, unknown=tuple(solve_for))
-        # the config's uncertainty block (what sweep/plan budgeted) below --uncertainty
-        ms = mm.MeasurementSet([mm.Hanging("reference", scene, _eye(), str(config))], [], source=str(config),
-                               uncertainty=mm.config_uncertainty(config))
-    if rig is not None:
-        ms.rig = rig
-    merged = dict(unc)
-    ms.uncertainty = {**ms.uncertainty, **merged}
-    for label, T, s in p_specs:
-        given = s is not None
-        if not given:  # the assumed timing: checked as a stated +-SIGMA is, naming where it came from
-            s = mm.default_uncertainty(ms.uncertainty)["timing"]
-            _check_assumed(T, s, f"--period {label}", "timing", unc, ms.uncertainty)
-        ms.measurements.append(mm.Measurement(label, T, s, "period", "--period",
-                                              cycles=min(cyc or mm.DEFAULT_CYCLES, mm.MAX_SIM_CYCLES),
-                                              std_given=given))
-    for label, n, times in t_specs:
-        T, s, det = ps.period_from_trials(n, times, None, ms.uncertainty)
-        _check_assumed(T, s, f"--timed {label}", "trial_time", unc, ms.uncertainty)
-        ms.measurements.append(mm.Measurement(label, T, s, "timed", "--timed", cycles=min(n, mm.MAX_SIM_CYCLES),
-                                              details=det))
-    for label, path in s_specs:
-        ms.measurements.append(mm.signal_measurement(label, path, "--signal", column=column, sample_rate=sr,
-                                                     model=signal_model, quantity=signal_quantity, scale=scale))
-    if not ms.measurements:
-        raise InputError("--period", "no measurement: give --period, --timed or --signal (or --measurements FILE)")
-    _apply_amplitudes(ms, amps)
+    ms = sti.measurement_set(config, measurements, solve_for, unc, rig, p_specs, t_specs, s_specs, amps, cyc,
+                             dict(column=column, sample_rate=sr, model=signal_model, quantity=signal_quantity,
+                                  scale=scale))
     # inputs named inside the measurements file (its config, recordings) are inputs too
     inputs += [h.source for h in ms.hangings if getattr(h, "source", None)]
     inputs += [str(m.details["signal"]["path"]) for m in ms.measurements
@@ -178,25 +150,6 @@ def invert(config, periods, timed, signals, column, sample_rate, signal_model, s
     _render(ms, res)
 
 
-def _check_assumed(T: float, s: float, what: str, key: str, flags: dict, unc: dict) -> None:
-    """Check the period std ``s`` (s) that the stated uncertainty ``key``
-    gave the period ``T`` (s) of ``what``, naming where it was stated:
-    ``--uncertainty`` (the flags) or ``uncertainty.KEY`` (the config's
-    block).  The built-in defaults are not checked here: for an absurd
-    period the inversion's refusal (no physical inertia gives it, a unit
-    slip?) says more."""
-    from ..estimation import period_specs as ps
-
-    if key in flags or key in unc:
-        ps.check_assumed_sigma(T, s, what, "--uncertainty" if key in flags else f"uncertainty.{key}")
-
-
-def _eye():
-    import numpy as np
-
-    return np.eye(3)
-
-
 def _safe(label: str) -> str:
     import re
 
@@ -231,19 +184,6 @@ def _float(v, name, positive=False):
     if not math.isfinite(x) or (positive and x <= 0):
         raise InputError(name, f"must be a {'positive ' if positive else ''}finite number, got {v!r}")
     return x
-
-
-def _apply_amplitudes(ms, amps: dict) -> None:
-    from ..errors import InputError
-
-    labels = {m.label for m in ms.measurements}
-    for lab in amps:
-        if lab is not None and lab not in labels:
-            raise InputError("--amplitude", f"no measurement of mode '{lab}' (measured: {', '.join(sorted(labels))})")
-    for m in ms.measurements:
-        spec = amps.get(m.label, amps.get(None))
-        if spec is not None and (m.amplitude is None or m.label in amps):
-            m.state_amplitude(*spec)
 
 
 def _render(ms, res) -> None:

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, amplitude_advice, common_options, multi_hanging, point_warnings,
-                        render_amplitude, render_identifiability, render_multi_hanging, render_rig, render_timing,
-                        resolve_all, timing_advice, write_point_config)
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, log_warnings, multi_hanging, render_amplitude,
+                        render_identifiability, render_multi_hanging, render_rig, render_timing)
 from .common import check_output_path, check_workers, console, emit_json, esc, fmt, handle_errors, progress_bar
 
 
@@ -33,6 +32,9 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     from ..errors import InputError
     from ..studies.plan import plan as run_plan
     from ..studies.shorthands import check_param, overlap_warnings, parse_bounds
+    from ..studies.amplitude import amplitude_advice
+    from ..studies.point_advice import point_cautions, timing_advice, write_point_config
+    from ..studies.study_inputs import resolve_study
 
     check_workers(workers)
     cfg = read_yaml(config)
@@ -50,9 +52,9 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
     if zip_ and len(bounds) < 2:
         raise InputError("--zip", "needs two parameters or more to move together")
-    settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
-                                         lengths_available, min_separation, no_tensions, sim_periods,
-                                         [b[0] for b in bounds], config, rig)
+    settings, cons, target = resolve_study(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
+                                           lengths_available, min_separation, no_tensions, sim_periods,
+                                           [b[0] for b in bounds], config, rig)
     wc_p = check_output_path(write_config, force, [config], "--write-config")
     wm_p = check_output_path(write_measurements, force, [config, write_config], "--write-measurements")
     with progress_bar("planning", enabled=True) as upd:
@@ -66,7 +68,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
                                 hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
     joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
-    doc["warnings"] = pre + point_warnings(cfg, config, res.best, "the planned point", cons, joint) + mh_warnings
+    doc["warnings"] = pre + log_warnings(point_cautions(cfg, config, res.best, "the planned point", cons, joint)) + mh_warnings
     from ..studies.sweep import stretching_summary
 
     if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..output import write_yaml
-from .common import (MAX_SWEEP_PERIODS, check_journal_path, check_output_path, check_workers, console, emit_json, esc, fmt,
+from .common import (check_journal_path, check_output_path, check_workers, console, emit_json, esc, fmt,
                      handle_errors, progress_bar)
 
 UNC_HELP = ("Measurement uncertainty KEY=VALUE (repeatable): timing [s], length, position, com [m], mass, gravity, "
@@ -58,21 +58,6 @@ def common_options(fn):
     return fn
 
 
-def parse_sigmas(sigmas) -> dict:
-    from ..errors import InputError
-
-    out = {}
-    for s in sigmas:
-        if "=" not in s:
-            raise InputError("--sigma", f"{s!r} must be KEY=VALUE, e.g. timing=0.002")
-        k, v = (x.strip() for x in s.split("=", 1))
-        try:
-            out[k] = float(v)
-        except ValueError:
-            raise InputError("--sigma", f"{s!r}: {v!r} is not a number") from None
-    return out
-
-
 SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.lengths.1, body.mass, "
                   "uncertainty.timing) or a shorthand: spacing (body attachments' spacing, m), ceiling_spacing "
                   "(anchors' spacing, m), length (mean wire length, m), length_offset (last minus first wire, m), "
@@ -80,132 +65,29 @@ SHORTHAND_HELP = ("NAME is a dotted config path (rig.attachments.0.0, rig.length
                   "rotate_x/_y/_z[_deg] (turn the body before hanging); see README 'Sweep parameters'.")
 
 
-def resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth, lengths_available,
-                min_separation, no_tensions, sim_periods, names=(), source="config", rig="shared"):
-    """(settings, constraints, target) from the config and the flags; exit 2
-    on bad input, or at once when no point of a search over the parameters
-    ``names`` can meet a constraint."""
-    from dataclasses import replace
-
-    from ..errors import InputError
-    from ..studies.shorthands import parse_values
-    from ..studies.sweep import resolve_constraints, resolve_settings, resolve_target
-    from ..studies.settings import unreachable
-
-    from ..estimation.rig import RIG_MODELS
-
-    if sim_periods is not None and sim_periods > MAX_SWEEP_PERIODS:
-        raise InputError("--periods", f"must be at most {MAX_SWEEP_PERIODS} periods per mode, got {sim_periods:g}")
-    if rig not in RIG_MODELS:
-        raise InputError("--rig", f"must be one of {', '.join(RIG_MODELS)}, got {rig!r}")
-    la = None
-    if lengths_available is not None:
-        la = [float(v) for v in parse_values(lengths_available, "--lengths-available")]
-    cons = resolve_constraints(cfg, max_tension, max_depth, la, min_separation)
-    settings = resolve_settings(cfg, components=list(components) or None, amplitude=amplitude,
-                                sigma=parse_sigmas(sigmas), tensions=not no_tensions, periods=sim_periods)
-    settings = replace(settings, rig=rig)
-    if no_tensions and cons.needs_nonlinear:
-        which = "--max-tension" if cons.max_tension is not None else "--max-depth"
-        raise InputError("--no-tensions", f"{which} needs the nonlinear run; drop one of them")
-    both = sorted(set(parse_sigmas(sigmas)) & {n.split(".", 1)[1] for n in names if n.startswith("uncertainty.")})
-    if both:
-        raise InputError("--sigma", f"{both[0]} is both set by --sigma and swept as uncertainty.{both[0]}; drop one")
-    unreachable(cfg, source, list(names), cons)
-    return settings, cons, resolve_target(cfg, target, settings.components)
-
-
-def point_config(base_cfg: dict, source: str, point: dict) -> dict:
-    """The config of a point (the base config edited by its parameters)."""
-    from ..studies.shorthands import apply_params
-
-    cfg, _ = apply_params(base_cfg, point["params"], source)
-    return cfg
-
-
-def point_warnings(cfg: dict, source: str, point: dict, what: str, cons=None,
-                   joint: dict | None = None) -> list[str]:
-    """The config plausibility warnings of a recommended or planned point
-    (:func:`bifilar.studies.sweep.point_warnings`), its components'
-    ``physical_limit`` (an estimate often outside what a real body can
-    have) and, under the constraints ``cons``, its dependent wires' range
-    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`),
-    each logged to stderr now (``warning: WHAT: ...``) and returned for the
-    JSON document.  ``joint``: the multi-hanging plan's
-    ``accuracy`` when that plan is the experiment (``--hangings``): its
-    components' limits are those of the joint sigma, not of the point's
-    own hanging (whose Ixx from a swing, a 300 % sigma, warned of 68 % of
-    experiments where the plan's 0.44 % puts the limit 94 sigmas away)."""
-    from ..studies.ranking import tension_range_caution
-    from ..studies.sweep import point_warnings as check
-    from ..studies.sweep import prior_cautions
-
-    out = [f"{what}: {w}" for w in check(cfg, source, point["params"])]
-    out += [f"{what}: {w}" for w in prior_cautions(cfg, source, point)]
-    joint = joint or {}
-    out += [f"{what}: {c}: {e['physical_limit']}" for c, e in point.get("components", {}).items()
-            if c not in joint and e.get("physical_limit")]
-    out += [f"{what}: {c} by the multi-hanging plan: {e['physical_limit']}" for c, e in joint.items()
-            if e.get("physical_limit")]
-    if cons is not None and (w := tension_range_caution(point, cons)) is not None:
-        out.append(f"{what}: {w}")
-    for w in out:
+def log_warnings(ws: list[str]) -> list[str]:
+    """Log each line of ``ws`` to stderr (``warning: ...``); returns ``ws``."""
+    for w in ws:
         click.echo(f"warning: {w}", err=True)
-    return out
-
-
-def write_point_config(path, base_cfg: dict, source: str, point: dict, what: str) -> None:
-    """Write a point's config (YAML, atomically) with its parameters and
-    planned periods in a header comment; `bifilar modes` reproduces them."""
-    write_yaml(path, point_config(base_cfg, source, point),
-               [f"{what} of {source}", "parameters: " + ", ".join(f"{k} = {v:.10g}" for k, v in point["params"].items()),
-                "planned linear periods (s): " + ", ".join(f"{k} {v:.8g}" for k, v in point["periods"].items() if v),
-                "check: bifilar modes THIS_FILE"])
-
-
-def remedies_for(rec: dict, points: list, cfg: dict, source: str, settings) -> None:
-    """Add the remedies of the components no point can measure (and of a
-    target that is not) to ``rec["identifiability"]``, evaluated at the
-    recommended point (else the first valid one)."""
-    from ..studies.remedy import add_remedies
-
-    need = list(rec.get("not_measurable") or [])
-    ref = points[rec["best"]] if rec.get("best") is not None else next((p for p in points if p.get("valid")), None)
-    if need and ref is not None:
-        add_remedies(rec, cfg, source, ref["params"], settings, need)
+    return ws
 
 
 def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
                   wm_p, who: str, deferred: dict | None = None) -> list[str]:
-    """Add the multi-hanging plan at ``params`` to ``doc`` (when ``wanted``
-    or a measurements file is asked for) and write that file.  ``deferred``:
-    the planned point, when the search left ``--min-separation`` to this
-    plan (``separation_guard`` ``multi_hanging``): a plan that cannot meet
-    it exits 2, and the warning returned (also logged) names the point's
-    own modes not to time."""
+    """Add the multi-hanging plan at ``params`` (:func:`bifilar.studies.point_hangings.hangings_at_point`)
+    to ``doc`` when ``wanted`` or a measurements file ``wm_p`` is asked
+    for, write that file, and log and return the plan's warnings."""
     if not (wanted or wm_p):
         return []
-    from ..studies.hangings import check_separated, close_modes_warning, measurements_document, plan_hangings
+    from ..studies.point_hangings import hangings_at_point
 
-    hp = plan_hangings(cfg, config, params, settings, list(settings.components), cons.min_separation, reaction, sensor)
-    warnings = []
-    if deferred is not None:
-        check_separated(hp)
-        warnings = [close_modes_warning(deferred, cons.min_separation,
-                                        "the planned point" if who == "bifilar plan" else "the recommended point")]
-        click.echo(f"warning: {warnings[0]}", err=True)
-    doc["multi_hanging"] = hp.to_json()
+    ph = hangings_at_point(cfg, config, params, settings, cons, reaction, sensor, who, deferred)
+    warnings = log_warnings(list(ph.warnings))
+    doc["multi_hanging"] = ph.document
     if wm_p:
-        sep = ([f"time these modes only: each is at least {100 * cons.min_separation:g} % (--min-separation) from "
-                "every other mode of its hanging"] if cons.min_separation else [])
-        notes: list = []  # periods that could not be run over invert's cycles: said, and kept in the file
-        mdoc = measurements_document(hp, notes=notes)
-        for w in notes:
-            click.echo(f"warning: {w}", err=True)
-        warnings += notes
-        write_yaml(wm_p, mdoc, [f"measurements planned by {who} for {config}", *sep,
-                                "the periods are the PLANNED ones (the config's inertia): replace them with the "
-                                "measured periods", *notes, f"then: bifilar invert --measurements {wm_p.name}"])
+        mdoc, notes, header = ph.measurements_file(wm_p.name)
+        warnings += log_warnings(notes)
+        write_yaml(wm_p, mdoc, header)
         doc["measurements_written"] = str(wm_p)
     return warnings
 
@@ -222,25 +104,6 @@ def render_multi_hanging(con, doc: dict) -> None:
     if doc.get("measurements_written"):
         con.print(f"measurements file written to {doc['measurements_written']} "
                   f"(bifilar invert --measurements {doc['measurements_written']})")
-
-
-def timing_advice(point: dict, reaction: float, sensor, min_separation: float | None = None) -> list[dict]:
-    """How to time the point's modes to reach its assumed timing sigma
-    (:func:`bifilar.studies.timing.how_to_time`); ``min_separation``: only
-    the modes at least that far from the others (the search left the guard
-    to the multi-hanging plan, whose measurements say how to time the rest)."""
-    from ..studies.timing import how_to_time
-
-    rows = how_to_time(point, point["uncertainty"]["timing"], reaction, sensor)
-    return [r for r in rows if not min_separation or r["separation"] is None or r["separation"] >= min_separation]
-
-
-def amplitude_advice(cfg: dict, source: str, point: dict, settings) -> dict:
-    """What the point's sigmas assume about the release amplitude and what
-    an unstated one costs (:func:`bifilar.studies.amplitude.amplitude_advice`)."""
-    from ..studies.amplitude import amplitude_advice as advise
-
-    return advise(cfg, source, point, settings)
 
 
 def render_amplitude(con, adv: dict | None) -> None:
@@ -314,6 +177,9 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, overlap_warnings, parse_param
+    from ..studies.amplitude import amplitude_advice
+    from ..studies.point_advice import add_point_remedies, point_cautions, timing_advice, write_point_config
+    from ..studies.study_inputs import resolve_study
     from ..studies.timing import check_reaction, parse_sensor
 
     check_workers(workers)
@@ -331,9 +197,9 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     for w in pre:
         click.echo(f"warning: {w}", err=True)
     reaction, sensor = check_reaction(reaction), parse_sensor(sensor)
-    settings, cons, target = resolve_all(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
-                                         lengths_available, min_separation, no_tensions, sim_periods,
-                                         [s.name for s in specs], config, rig)
+    settings, cons, target = resolve_study(cfg, components, target, amplitude, sigmas, max_tension, max_depth,
+                                           lengths_available, min_separation, no_tensions, sim_periods,
+                                           [s.name for s in specs], config, rig)
     journal = None
     if out:
         journal = check_journal_path(sw.journal_path(out), [config, plot], "--out", resume=resume)
@@ -370,7 +236,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
             write_out()
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
-    remedies_for(rec, points, cfg, config, settings)
+    add_point_remedies(rec, points, cfg, config, settings)
     warnings = list(pre)
     if (w := sw.stretching_summary(points)) is not None:
         click.echo(f"warning: {w}", err=True)
@@ -383,7 +249,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                                     hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
                                     best if deferred else None)
         joint = rec["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in rec else None
-        warnings += point_warnings(cfg, config, best, "the recommended point", cons, joint) + mh_warnings
+        warnings += log_warnings(point_cautions(cfg, config, best, "the recommended point", cons, joint)) + mh_warnings
         rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
         rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
     elif wm_p or hangings:

@@ -231,8 +231,7 @@ def _silence_stdout() -> None:
 MAX_SIM_PERIODS = 10_000
 """Most periods ``simulate`` and ``tensions`` integrate (~45 s and ~2 M
 samples for the thesis plate; more would run for hours and fill memory)."""
-MAX_SWEEP_PERIODS = 1_000
-"""Most periods a ``sweep`` or ``plan`` point simulates per mode."""
+from ..studies.study_inputs import MAX_SWEEP_PERIODS  # noqa: E402,F401 (re-exported; sweep's and plan's limit)
 MAX_WORKERS = 1024
 """Largest ``--workers`` accepted; fewer processes start when there are fewer
 points or CPUs (:func:`bifilar.studies.sweep.effective_workers`)."""
@@ -314,39 +313,21 @@ class OptionChecker:
 
 
 def config_rest_pose(scene, config):
-    """The rest pose of ``scene`` (the config at path ``config``), for the
-    commands without an inversion (``simulate``, ``tensions``, ``modes``):
-    a slack wire's refusal says, as ``invert``'s does, when the config's
-    ``uncertainty:`` block puts the slack within what its measured inputs
-    give it (:func:`bifilar.estimation.slack_cause.explain_config_slack`)."""
-    from ..analysis.equilibrium import rest_pose
-    from ..errors import SlackWireError
+    """The rest pose of ``scene`` (the config at path ``config``); kept here
+    for the commands that import it: :func:`bifilar.estimation.slack_cause.config_rest_pose`
+    (imported when called, so that the CLI starts without it)."""
+    from ..estimation.slack_cause import config_rest_pose as rest_of_config
 
-    try:
-        return rest_pose(scene)
-    except SlackWireError as e:
-        from ..estimation.slack_cause import explain_config_slack
-
-        raise explain_config_slack(e, scene, config) from None
+    return rest_of_config(scene, config)
 
 
 def warn_at_rest(scene, rest, modes, only: str | None = None) -> None:
     """Log the rest pose's warnings to stderr (``warning: ...``), as
-    ``modes``, ``simulate`` and ``tensions`` give them: dependent wires'
-    tensions only one split of many
-    (:func:`~bifilar.analysis.wire_statics.indeterminate_warning`), modes
-    that stretch the wires (:func:`~bifilar.analysis.wire_statics.stretching_warning`,
-    of mode ``only`` or of all ``modes``), the body through the ceiling and
-    crossing wires (:func:`~bifilar.analysis.clearance.clearance_warnings`),
-    elastic wires whose stretch the model's periods leave out
-    (:func:`~bifilar.analysis.elastic_rest.stretch_coupling_warning`)."""
-    from ..analysis.clearance import clearance_warnings
-    from ..analysis.elastic_rest import stretch_coupling_warning
-    from ..analysis.wire_statics import indeterminate_warning, stretching_warning
+    ``modes``, ``simulate`` and ``tensions`` give them
+    (:func:`bifilar.analysis.rest_warnings.rest_warnings`)."""
+    from ..analysis.rest_warnings import rest_warnings
 
-    ws = [indeterminate_warning(scene, rest), stretching_warning(scene, rest, modes, only=only),
-          stretch_coupling_warning(scene, rest, modes, only=only)]
-    for w in [w for w in ws if w is not None] + clearance_warnings(scene, rest):
+    for w in rest_warnings(scene, rest, modes, only=only):
         click.echo(f"warning: {w}", err=True)
 
 

@@ -168,3 +168,18 @@ def explain_config_slack(err: SlackWireError, scene: Scene, path) -> SlackWireEr
     if not states_geometry(stated):
         return err
     return within_uncertainty(err, scene, default_uncertainty(stated), "the config's uncertainty block")
+
+
+def config_rest_pose(scene: Scene, config):
+    """The rest pose of ``scene`` (the config at path ``config``), for the
+    commands without an inversion (``simulate``, ``tensions``, ``modes``):
+    :func:`bifilar.analysis.equilibrium.rest_pose`, whose slack wire's
+    refusal says, as ``invert``'s does, when the config's ``uncertainty:``
+    block puts the slack within what its measured inputs give it
+    (:func:`explain_config_slack`)."""
+    from ..analysis.equilibrium import rest_pose
+
+    try:
+        return rest_pose(scene)
+    except SlackWireError as e:
+        raise explain_config_slack(e, scene, config) from None
