@@ -40,8 +40,8 @@ WALK_SHARE = 1.0 / 15.0
 PHASE_CHI2 = 3.0
 #: ... and this many times the amplitude's (or the cycles', where that is
 #: less): a time base's walk moves the phase only (hidden drops and repeats
-#: 4-230 with two of 40 at 1.7-2.1; the KTH laser records, whose noise is
-#: not white, 0.4-2.2; chirps fitted two-mode 0.1-0.2)
+#: 4.1-271 with two of 40 at 1.7-2.1; the KTH laser records, whose noise is
+#: not white, 0.14-2.2; chirps fitted two-mode 0.1-0.2)
 PHASE_OVER_AMPLITUDE = 3.0
 #: records longer than this are not checked (the camera records the frame
 #: checks are for: :data:`.signal_frames.MAX_SAMPLES`)
