@@ -236,7 +236,10 @@ def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIG
     were removed, ``method`` then ``"repeats_removed"`` unless frames were
     also put back or the std widened for drops).
 
-    ``method`` is ``"recovered"`` where :func:`.signal_frames.recover_frames`
+    ``method`` is ``"phase_walk"`` where none of that shows but the phase
+    strays from the fit's cycle by cycle as frames' steps would move it
+    (:func:`.signal_phasewander.phase_walk_check`: the std widened), and
+    ``"recovered"`` where :func:`.signal_frames.recover_frames`
     finds the frames' lattice and the refit on it explains the record
     better (the drops put back; the term is
     :func:`.signal_frames.correction_std`), ``"widened"`` where only the
@@ -248,11 +251,14 @@ def check_time_base(t, y, fit, time_source: str | None, refit, field: str = "SIG
         return None
     from .signal_repeats import remove_repeats
 
+    from .signal_phasewander import phase_walk_check
+
     rep = remove_repeats(t, y, fit, refit, field)  # frames written twice: removed first (design.md "dropfix2")
-    if rep is None:
-        return _check_drops(t, y, fit, refit, field)
+    if rep is None:  # nothing seen frame by frame: the phase's walk (faults the noise hides, design.md "dropfix3")
+        return _check_drops(t, y, fit, refit, field) or phase_walk_check(t, y, fit, field)
     y = rep["y"]
-    res = _check_drops(rep["t"], y, rep["fit"], lambda tn: refit(tn, y), field)
+    res = _check_drops(rep["t"], y, rep["fit"], lambda tn: refit(tn, y), field) \
+        or phase_walk_check(rep["t"], y, rep["fit"], field)
     if res is None:
         res = {"t": rep["t"], "fit": rep["fit"], "warning": rep["warning"],
                "time_base": {"method": "repeats_removed", "dropped_frames": None, "std_added": rep["std_added"]}}
