@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError
+from .amplitude_secant import amplitude_sigma, far_amplitude_stds
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
 from .sensitivity import input_sigma, measured_inputs, stiff_inputs
@@ -300,8 +301,7 @@ def stated_amplitude_period_std(pb: Problem, T_lin, laws, unc: dict) -> np.ndarr
     out = np.zeros(len(pb.measurements))
     for k, m in enumerate(pb.measurements):
         if m.amplitude:
-            sA = m.amplitude_std if m.amplitude_std is not None else unc["amplitude"] * abs(m.amplitude)
-            out[k] = abs(T_lin[k] * laws[k].slope()) * sA
+            out[k] = abs(T_lin[k] * laws[k].slope()) * amplitude_sigma(m, unc)
     return out
 
 
@@ -383,6 +383,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     G = gain_matrix(Jp, sig)
     extra = {}
     s_amp = stated_amplitude_period_std(pb, T_lin, laws, unc) if method == "nonlinear" else np.zeros(K)
+    if method == "nonlinear":  # far from linear: a secant over the amplitude's 95 % range
+        far_amplitude_stds(pb, p_hat, T_lin, laws, unc, s_amp, rtol)
     labels = pb.term_labels()  # one name per measurement: two timings of one mode are two terms
     for k, m in enumerate(pb.measurements):
         lab = labels[k]
