@@ -282,3 +282,53 @@ def test_a_slope_whose_runs_fail_within_a_quarter_of_the_reach_is_left_unchecked
     assert runs.calls == [] and len(runs.failed) == 3
     assert len(msgs) == 1 and "could not be checked" in msgs[0] and "a run at its end failed" in msgs[0]
     assert not changed and law.dr_dp[0] == 0.0
+
+
+# ---------------------------------------------------------------------------
+# signal_wrap: the eighth of a turn; config/yaml_safe: only plain scalars
+# ---------------------------------------------------------------------------
+
+from bifilar.estimation.signal_wrap import MAX_STEP_TURNS, unwrap_record  # noqa: E402
+
+
+@pytest.mark.parametrize("share, unwrapped", [(0.9, True), (1.1, False)])
+def test_a_wrapped_angle_is_put_back_only_where_its_steps_stay_within_an_eighth_of_a_turn(share, unwrapped):
+    """A heading turning steadily by 0.9 / 1.1 x MAX_STEP_TURNS (1/8) of a
+    turn a sample, wrapped by atan2 into +-pi over 3/4 of a turn (within one
+    turn: the other two conditions hold): below the eighth it is the
+    steady rotation again (up to whole turns), above it is left alone."""
+    assert MAX_STEP_TURNS == 0.125
+    step = share * MAX_STEP_TURNS * 2 * math.pi
+    k = np.arange(int(0.75 * 2 * math.pi / step) + 1)
+    true = 2.5 + step * k  # crosses pi once
+    wrapped = np.angle(np.exp(1j * true))
+    assert np.abs(np.diff(wrapped)).max() > math.pi
+    y, w = unwrap_record(wrapped)
+    assert (w is not None) is unwrapped
+    if unwrapped:
+        assert np.allclose(y, true, atol=1e-12)
+    else:
+        assert np.array_equal(y, wrapped)
+
+
+def test_three_samples_across_the_wrap_are_unwrapped():
+    """The rule holds from three samples (two steps): 3.0, -3.0, 3.0 rad
+    is 3.0, 2 pi - 3.0, 3.0 (steps 0.28 rad, within an eighth of a turn)."""
+    y, w = unwrap_record(np.array([3.0, -3.0, 3.0]))
+    assert w is not None and np.allclose(y, [3.0, 2 * math.pi - 3.0, 3.0], atol=1e-12)
+
+
+def test_an_explicitly_tagged_quoted_number_keeps_its_tag():
+    """Only a plain scalar is retagged (the docstring): ``!!int "010"`` and
+    ``!!float "1:30"`` ask for YAML 1.1's number explicitly, and are read
+    as PyYAML's safe_load reads them (8, 90.0), while the same text plain
+    stays text."""
+    import yaml
+
+    from bifilar.config import parse_yaml
+
+    text = 'a: !!int "010"\nb: !!float "1:30"\nc: 010\n'
+    d = parse_yaml(text)
+    ref = yaml.safe_load(text)
+    assert d["a"] == ref["a"] == 8 and d["b"] == ref["b"] == 90.0
+    assert d["c"] == "010"
