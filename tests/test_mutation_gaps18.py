@@ -81,6 +81,15 @@ def test_a_far_run_is_checked_by_dop853_at_a_hundredth_of_its_rtol(rtol, expect)
     assert len(r.warnings) == 1 and "150%" in r.warnings[0]  # 2.5 / 1 - 1, as a percentage
 
 
+@pytest.mark.parametrize("own", [None, math.inf, math.nan])
+def test_a_far_runs_check_without_its_own_bound_adds_only_the_difference(own):
+    """A check run whose own bound is not established counts as exact:
+    the error becomes 1.1 x the difference alone."""
+    r = _run(2.5, error=1e-9)
+    ra.check_period(r, _Again(2.5 + 4e-8, own=own), "LSODA", None)
+    assert r.period_error == pytest.approx(1.1 * 4e-8, rel=1e-6)
+
+
 def test_a_far_runs_check_within_its_bound_changes_nothing():
     """1.1 x 5e-10 + 2 x 1e-10 = 7.5e-10 < the model's 1e-9: the bound
     stands, no warning (a regular far run the error model bounds)."""
@@ -156,6 +165,8 @@ def test_windows_need_two_periods_of_samples(n_per, n, ok):
     assert (out is not None) is ok
     if ok:
         assert np.allclose(out[2], 0.25, atol=1e-12) and np.allclose(out[3], 1.0, rtol=1e-12)
+        # a window every m / 8 samples, at least every sample: n - m + 1 windows at 4 samples a period
+        assert out[0].size == (n - n_per + 1 if n_per < STEPS else (n - n_per) // (n_per // STEPS) + 1)
 
 
 def _held_record(d, hold=1.0, T=2.0, fs=50.0, cycles=20):
@@ -250,6 +261,12 @@ def test_only_the_end_outside_the_tensors_is_brought_in(runs):
     msgs, _ = secant_check(pb, [P0], np.array([1.0]), [law], np.array([std]))
     assert sorted(runs.calls) == pytest.approx([P0 - h, top], abs=2e-6 * h)
     assert len(msgs) == 1 and f"-{SECANT_REACH:.3g} .. +{(top - P0) / std:.3g} std" in msgs[0], msgs
+    assert "no physical inertia tensor" in msgs[0]
+    # both ends inside (std 2e-3: 0.0161 .. 0.0239): the full interval, named as such
+    runs.calls.clear()
+    msgs, _ = secant_check(pb, [P0], np.array([1.0]), [law], np.array([2e-3]))
+    assert len(runs.calls) == 2 and len(msgs) == 1
+    assert "over the estimate's 95 % interval (" in msgs[0] and " std of the estimate" not in msgs[0], msgs
 
 
 def test_a_failed_run_halves_the_reach_up_to_twice(runs):
@@ -332,3 +349,58 @@ def test_an_explicitly_tagged_quoted_number_keeps_its_tag():
     ref = yaml.safe_load(text)
     assert d["a"] == ref["a"] == 8 and d["b"] == ref["b"] == 90.0
     assert d["c"] == "010"
+
+
+# ---------------------------------------------------------------------------
+# signal_repeats: the resolution's share of a difference's noise
+# ---------------------------------------------------------------------------
+
+from bifilar.estimation.signal_repeats import repeated_samples  # noqa: E402
+
+
+def test_repeats_in_a_quantised_noise_free_record_are_found_at_their_frames():
+    """A cosine of 150 steps of q = 1 mrad, rounded to q (no other noise),
+    30 fps, period 1.7 s: five frames written twice where the steps either
+    side are 10-18 q.  Two independent roundings differ by a noise of
+    variance 2 q^2 / 12 = q^2 / 6 (the documented s): with it the repeats
+    stand ~6 s from chance and are found, each where it was put; the
+    record without them shows none."""
+    FS, T, q = 30.0, 1.7, 1e-3
+    t = np.arange(0.0, 30 * T, 1 / FS)
+    y = np.round(150 * np.cos(2 * np.pi * t / T + 0.4)) * q
+    d = np.diff(y)
+    fast = np.nonzero((np.abs(d[:-1]) > 10 * q) & (np.abs(d[1:]) > 10 * q) & (np.sign(d[:-1]) == np.sign(d[1:])))[0] + 1
+    frames = np.sort(np.random.default_rng(1).choice(fast[10:-10], 5, replace=False))
+    cnt = np.zeros(t.size, int)
+    cnt[frames] = 1
+    idx, _ = repeated_samples(np.repeat(y, 1 + cnt))
+    assert np.array_equal(idx, frames + np.arange(5) + 1)
+    assert repeated_samples(y)[0].size == 0
+
+
+# ---------------------------------------------------------------------------
+# period_specs.fit_record: every line kept, in order
+# ---------------------------------------------------------------------------
+
+
+def test_fit_record_keeps_the_readers_the_time_bases_and_the_held_starts_lines(tmp_path):
+    """A heading without its time column at 30 fps, wrapped at +-pi (the
+    reader's line), with six frames written twice (the time base's) and
+    held for 1.5 s before the release (the held start's): the period is the
+    cosine's 1.7 s within 3 std, and meta's warnings hold the three lines
+    once each, in that order (none lost when the next is appended)."""
+    from bifilar.estimation.period_specs import fit_record
+
+    from test_signal_repeats import FS, T, _record
+
+    y, _ = _record(seed=3)
+    hold = y[0] + 5e-4 * np.random.default_rng(7).standard_normal(int(1.5 * FS))
+    yw = np.angle(np.exp(1j * (math.pi - 0.02 + np.r_[hold, y])))
+    p = tmp_path / "heading.csv"
+    np.savetxt(p, yw, header="heading", comments="", fmt="%.10g")
+    _, _, fit, meta, tbw, held = fit_record(p, sample_rate=FS)
+    assert abs(float(fit.period) - T) < 3 * float(fit.std)
+    w = meta["warnings"]
+    assert len(w) == 3 and "wrapped at +-pi" in w[0] and w[1] == tbw and w[2] == held, w
+    assert "6 repeated frames" in tbw and "not a free oscillation before" in held
+    assert meta["time_base"]["repeated_frames"] == 6
