@@ -113,8 +113,9 @@ def test_a_spread_run_takes_the_irregular_check_not_the_far_one():
     difference itself (no 1.1 x, no check bound) as the error."""
     r = _run(2.5, spread=1e-3, error=1e-9)
     again = _Again(2.5 + 4e-8, own=3e-10)
-    ra.check_period(r, again, "LSODA", None)
-    assert again.calls[0][0] == "LSODA"
+    ra.check_period(r, again, "LSODA", np.array([3e-9]))
+    assert again.calls[0][0] == "LSODA" and again.calls[0][1] == pytest.approx(1e-12, rel=1e-12)
+    assert np.allclose(again.calls[0][2], [3e-11], rtol=1e-12)
     assert r.period_error == pytest.approx(4e-8, rel=1e-6)
 
 
@@ -269,6 +270,19 @@ def test_only_the_end_outside_the_tensors_is_brought_in(runs):
     assert "over the estimate's 95 % interval (" in msgs[0] and " std of the estimate" not in msgs[0], msgs
 
 
+def test_a_reach_less_than_a_quarter_physical_is_not_run(runs):
+    """Izz = 0.020 between 0 and the triangle's edge 0.030: with std 0.04
+    the reach +-1.96 std = 0.078 keeps at most 0.030 of its 0.157 width
+    physical, under a quarter (0.039): no run, one warning saying so; with
+    std 0.018 (0.030 of 0.071, over a quarter) the clipped ends are run."""
+    pb, law = _problem(1e-6, dr_dp=0.0)
+    msgs, changed = secant_check(pb, [P0], np.array([1.0]), [law], np.array([0.04]))
+    assert runs.calls == [] and not changed
+    assert len(msgs) == 1 and "less than a quarter of it is a physical tensor" in msgs[0], msgs
+    msgs, _ = secant_check(pb, [P0], np.array([1.0]), [law], np.array([0.018]))
+    assert len(runs.calls) == 2 and "could not be checked" not in msgs[0]
+
+
 def test_a_failed_run_halves_the_reach_up_to_twice(runs):
     """Runs fail beyond 0.3 h of the estimate: the secant is taken over +-h,
     then +-h / 2 (both fail), then +-h / 4 (SECANT_HALVINGS = 2), where it
@@ -326,6 +340,18 @@ def test_a_wrapped_angle_is_put_back_only_where_its_steps_stay_within_an_eighth_
         assert np.allclose(y, true, atol=1e-12)
     else:
         assert np.array_equal(y, wrapped)
+
+
+def test_a_record_spanning_more_than_a_turn_is_no_wrapped_angle():
+    """A heading turning steadily from -1/4 to 5/4 of a turn, a turn taken
+    off once as it passes one turn: its steps would unwrap within an eighth
+    of a turn, but it spans 1.25 turns, which no atan2 angle does: left as
+    it is (documented: the values span at most one turn)."""
+    true = 2 * math.pi * np.linspace(-0.25, 1.25, 61)
+    y = np.where(true > 2 * math.pi, true - 2 * math.pi, true)
+    assert np.ptp(y) > 2 * math.pi and np.abs(np.diff(y)).max() > math.pi
+    out, w = unwrap_record(y)
+    assert w is None and np.array_equal(out, y)
 
 
 def test_three_samples_across_the_wrap_are_unwrapped():
