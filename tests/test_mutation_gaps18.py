@@ -430,3 +430,30 @@ def test_fit_record_keeps_the_readers_the_time_bases_and_the_held_starts_lines(t
     assert len(w) == 3 and "wrapped at +-pi" in w[0] and w[1] == tbw and w[2] == held, w
     assert "6 repeated frames" in tbw and "not a free oscillation before" in held
     assert meta["time_base"]["repeated_frames"] == 6
+
+
+# ---------------------------------------------------------------------------
+# factor_inputs (eaunc): gravity and mass derived through the strain m g / EA
+# ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("stiff", [True, False])
+def test_mass_and_gravity_slopes_follow_the_strain_and_the_scaling(stiff):
+    """A stand-in amplitude factor r = 1 + a I / (m L^2) + c m g / EA (one
+    wire of length L; the strain term only where EA is stated), written
+    out: dr/dL = -2 a I / (m L^3), dr/ds = -c m g / EA (EA -> EA (1 + s)),
+    and analytically dr/dm = -a I / (m^2 L^2) + c g / EA, dr/dg = c m / EA;
+    without EA, dr/dg = 0 (g only scales time).  derive_factor_routes must
+    give those from the measured dr/dL and dr/ds."""
+    from bifilar.estimation.factor_inputs import derive_factor_routes
+
+    a, c, I, m, g, L, EA = 0.3, 40.0, 0.05, 2.0, 9.81, 1.2, 5e4
+    cc = c if stiff else 0.0
+    scene = SimpleNamespace(n_wires=1, mass=m, gravity=g, lengths=np.array([L]),
+                            stiffness=np.array([EA]) if stiff else None)
+    dx = {"length.1": -2 * a * I / (m * L**3)}
+    if stiff:
+        dx["stiffness"] = -cc * m * g / EA
+    derive_factor_routes(dx, {"mass": "scaling", "gravity": "gravity"}, scene, np.eye(3))
+    assert dx["mass"] == pytest.approx(-a * I / (m**2 * L**2) + cc * g / EA, rel=1e-12)
+    assert dx["gravity"] == pytest.approx(cc * m / EA, rel=1e-12, abs=0.0)
