@@ -268,11 +268,13 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings
     (``screen``) does not run them."""
     from ..estimation.sensitivity import Budget, grouped_shares
     from ..estimation.uncertainty import DEFAULT_AMPLITUDE_REL
+    from .point_far_amplitude import far_amplitude
     from .point_inputs import FACTOR_INPUT_ENOUGH, input_factor_bound, input_factor_terms, measure_factor_inputs
 
     laws = _amplitude_laws(pre, sims, st)
     unc = res["uncertainty"]
     todo = {}
+    fars = {}  # mode index: its FarAmplitude (None within FAR_FROM_LINEAR), one pair of runs a mode
     for comp, k in pre.chosen.items():
         e = res["components"][comp]
         b = pre.budgets[comp]
@@ -292,6 +294,16 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings
                             "(invert --amplitude 0)")
             continue
         slope, dr_dI = laws[comp]
+        if k not in fars:
+            fars[k] = far_amplitude(pre, k, r, T_lin, DEFAULT_AMPLITUDE_REL, st)
+        far = fars[k]
+        if far is not None and far.slope is None:  # the range reaches the half turn, or its runs failed: as invert
+            e.update(sigma=math.inf, rel_sigma=math.inf, sigma_unavailable=far.note)
+            info["note"] = far.note
+            continue
+        if far is not None:  # far from linear: the secant over the amplitude's 95 % range, where larger
+            slope = math.copysign(max(abs(slope), far.slope), slope)
+            info["amplitude_secant"] = far.secant
         g = r + T_lin * dr_dI * float(b.dI_dT)
         sd = stated_amplitude_budget(b, T_lin, r, DEFAULT_AMPLITUDE_REL, slope, dr_dI)[0]
         bound = input_factor_bound(pre, comp, k, unc, T_lin, g)
