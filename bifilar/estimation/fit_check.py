@@ -81,6 +81,60 @@ def marginal_fit_warning(pb: Problem, fit: dict, z: np.ndarray) -> str | None:
             "right within its stated std")
 
 
+#: a measurement whose leverage in the weighted fit exceeds this is all but
+#: unchecked by the others (:func:`unchecked_notes`): its residual shows at
+#: most ``sqrt(1 - h)`` (10 %) of an error in its period
+UNCHECKED_LEVERAGE = 0.99
+
+
+def leverages(pb: Problem, p) -> np.ndarray | None:
+    """(K,) leverage ``h_kk`` of each measured period in the timing-weighted
+    fit of the unknowns at ``p``: the diagonal of the hat matrix ``A
+    A^+`` with ``A = J / s`` (``J`` the linear periods' derivatives in the
+    unknowns by central differences, steps 1e-6 of each unknown or 1e-8
+    SI where it is 0; ``s`` the periods' stds).  ``h_kk`` near 1: the
+    fitted period follows the measured one whatever its error (the fit
+    cannot check it); the ``h_kk`` sum to the fit's rank.  None where a
+    period has no derivative (NaN)."""
+    p = np.asarray(p, float)
+    K, P = len(pb.measurements), len(p)
+    J = np.empty((K, P))
+    for i in range(P):
+        h = 1e-6 * abs(p[i]) if p[i] else 1e-8
+        up, dn = p.copy(), p.copy()
+        up[i] += h
+        dn[i] -= h
+        J[:, i] = (labelled_periods(pb, up) - labelled_periods(pb, dn)) / (2.0 * h)
+    if not np.all(np.isfinite(J)):
+        return None
+    A = J / np.array([m.std for m in pb.measurements])[:, None]
+    U, sv, _ = np.linalg.svd(A, full_matrices=False)
+    U = U[:, sv > 1e-9 * sv[0]] if sv.size and sv[0] > 0 else U[:, :0]
+    return np.sum(U * U, axis=1)
+
+
+def unchecked_notes(pb: Problem, p, dof: int) -> list[str]:
+    """One note per measured period that no other measurement checks (its
+    leverage above :data:`UNCHECKED_LEVERAGE`, :func:`leverages`) in an
+    overdetermined fit (``dof`` > 0): the chi-square's degrees of freedom
+    test the other periods, not this one, so a mistyped period there gives
+    chi2 0 and a wrong answer within its own std (audit19, row A1: the
+    drone's torsion 2 % off among torsion, pitch and both swings, solving
+    Izz and Iyy: Izz +4 %, chi2 0, "2 degrees of freedom").  None for an
+    exactly determined fit (no check at all, which its ``dof`` 0 says)."""
+    if dof <= 0:
+        return []
+    h = leverages(pb, p)
+    if h is None:
+        return []
+    labels = pb.term_labels()
+    return [f"the period of '{labels[k]}' is checked by no other measurement (leverage {h[k]:.3f}: an error in "
+            f"it shows {100 * np.sqrt(max(1.0 - h[k], 0.0)):.0f} % in its residual), so the fit's {dof} degree"
+            f"{'s' if dof > 1 else ''} of freedom test the other periods only: time it again, or time another "
+            "mode that moves the same unknowns, to check it"
+            for k in range(len(h)) if h[k] > UNCHECKED_LEVERAGE]
+
+
 def chi2_limit(K: int, P: int) -> float:
     """The ``1 - CHI2_P`` quantile of chi-square with ``K - P`` degrees of freedom."""
     from scipy.stats import chi2 as chi2_dist

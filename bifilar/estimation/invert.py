@@ -84,7 +84,8 @@ from .montecarlo import (  # noqa: F401
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
-from .fit_check import EDGE_Z, fit_statistics, input_fit_check, labelled_periods, marginal_fit_warning, prior_fit_hint
+from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_periods, marginal_fit_warning,
+                        prior_fit_hint, unchecked_notes)
 from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
                             with_prior_curvature)
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
@@ -353,6 +354,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
     if (w := marginal_fit_warning(pb, fit, _residuals(pb, p_hat, r_hat)[1])) is not None:
         warnings.append(w)
+    notes.extend(unchecked_notes(pb, p_hat, fit["dof"]))
     if fit.get("chi2_with_inputs") is not None and fit["dof"] == 0:
         notes.append(f"the measured period(s) lie beyond what a physical tensor gives, by up to "
                      f"{fit['max_abs_normalised_residual']:.3g} timing sigma, but within their uncertainty with the "
