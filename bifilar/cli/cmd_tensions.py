@@ -198,8 +198,8 @@ def slack_reason(slack: list) -> str:
 
 
 NOT_DETERMINED = ("not determined: the motion hardly excites this component (its torque is at rounding level "
-                  "or its relative std, with the config geometry's for a record, above 1 % in a first fit), so the fit "
-                  "held it at the config's value; "
+                  "or its relative std, with the config geometry's for a record, above 1 % in a first fit), so the record "
+                  "cannot determine it (beside better-excited components the fit holds it at the config's value); "
                   "excite a mode that turns the body about this axis")
 """The reason a component's ``value`` is ``null`` in ``inertia_from_tensions``."""
 
