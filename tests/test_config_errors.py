@@ -327,8 +327,10 @@ def test_plausibility_thresholds_are_sharp():
     assert len(warns(gravity=0.9)) == 1 and len(warns(gravity=31)) == 1
     assert warns(body__mass=9e4, body__inertia={"principal": [4.5e3, 4.5e3, 9e3]}) == []
     assert warns(body__mass=2e5, body__inertia={"principal": [1e4, 1e4, 2e4]})[0].startswith("body.mass = 200000 kg")
-    # wire lengths: 99 m is not flagged, all > 100 m in a 1 m rig is
-    assert warns(rig__lengths=[99.0, 99.0]) == []
+    # wire lengths in a 1 m rig: 19.9 m is not flagged; all > 20 m reads as centimetres (a drone's 0.8 m wires
+    # entered as 80: audit19), all > 100 m as millimetres
+    assert warns(rig__lengths=[19.9, 19.9]) == []
+    assert "centimetres" in warns(rig__lengths=[20.1, 20.1])[0] and "centimetres" in warns(rig__lengths=[99.0, 99.0])[0]
     assert "millimetres" in warns(rig__lengths=[101.0, 101.0])[0]
     # radius of gyration for the mass: k_max = 10 m (m / 1 kg)^(1/3) = 12.6 m for 2 kg, i.e. I = m k^2 = 317.5
     # (the attachments reaching 0.5 m keep the shape rule, k <= 15 m, out of the way)

@@ -16,6 +16,8 @@ PLAUSIBLE = {
     "gravity": (1.0, 30.0),  # m/s^2: the Moon (1.62) .. well above Jupiter (24.8)
     "mm_length": 100.0,  # m: every wire longer than this ...
     "mm_span": 10.0,  # m: ... while anchors and attachments span less: lengths in mm?
+    "cm_length": 20.0,  # m: every wire longer than this ...
+    "cm_span": 2.0,  # m: ... while anchors and attachments span less: lengths in cm?
     "gyration_shape": 2.0,  # k / extent, body shape known: sqrt(3) is the geometric limit
     "gyration_attachments": 30.0,  # k / attachment spread (either way) when only attachments are known
     "gyration_for_mass": 10.0,  # m: largest k for 1 kg, scaled by (m / 1 kg)^(1/3); a whole config in mm
@@ -31,8 +33,10 @@ def plausibility_warnings(scene: Scene) -> list[str]:
 
     * every wire longer than 100 m while anchors and attachments each span
       less than 10 m: lengths in millimetres (the thesis's 500 m wires with
-      anchors 505 m apart are consistent and do not warn); otherwise a wire
-      longer than 1000 m;
+      anchors 505 m apart are consistent and do not warn); every wire longer
+      than 20 m while they span less than 2 m: lengths in centimetres (a
+      drone's 0.8 m wires entered as 80; audit19); otherwise a wire longer
+      than 1000 m;
     * a body heavier than 100 t;
     * gravity outside 1 .. 30 m/s^2 (e.g. 981: cm/s^2);
     * a radius of gyration k = sqrt(I_max / m) inconsistent with the body's
@@ -59,6 +63,9 @@ def plausibility_warnings(scene: Scene) -> list[str]:
     if np.min(L) > PLAUSIBLE["mm_length"] and max(span_a, span_p) < PLAUSIBLE["mm_span"]:
         out.append(f"rig.lengths: every wire is longer than {PLAUSIBLE['mm_length']:g} m while the anchors and "
                    f"attachments span less than {PLAUSIBLE['mm_span']:g} m; are the lengths in millimetres?")
+    elif np.min(L) > PLAUSIBLE["cm_length"] and max(span_a, span_p) < PLAUSIBLE["cm_span"]:
+        out.append(f"rig.lengths: every wire is longer than {PLAUSIBLE['cm_length']:g} m while the anchors and "
+                   f"attachments span less than {PLAUSIBLE['cm_span']:g} m; are the lengths in centimetres?")
     elif np.max(L) > PLAUSIBLE["max_length"]:
         i = int(np.argmax(L))
         out.append(f"rig.lengths.{i} = {L[i]:g} m is implausibly long for a pendulum rig; are the lengths in millimetres?")
