@@ -125,6 +125,9 @@ def test_audit18_minor_reader_cases(tmp_path):
     assert np.array_equal(y, ref[1]) and m["columns"] == ["t", "y"]
     t, y, m = read_signal(_csv(tmp_path, "u16.csv", "t,y\n" + _rows(), encoding="utf-16"))
     assert np.array_equal(y, ref[1])
+    for enc in ("utf-16-le", "utf-16-be"):  # no byte-order mark: the NULs decode as UTF-8 and were refused as
+        t, y, m = read_signal(_csv(tmp_path, f"{enc}.csv", "t,y\n" + _rows(), encoding=enc))  # "not a header"
+        assert np.array_equal(y, ref[1])
     t, y, m = read_signal(_csv(tmp_path, "inf.csv", "t,y\n" + _rows().replace("0.100000", "inf", 1)))
     assert any("1 infinite (inf)" in w for w in m["warnings"]) and not any("NaN" in w for w in m["warnings"])
     p = tmp_path / "wrong.mat"

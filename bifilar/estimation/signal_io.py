@@ -187,11 +187,21 @@ def _is_number(s: str) -> bool:
 
 def _encoding(p: Path) -> str:
     """The text encoding of a table: UTF-16 where the file starts with its
-    byte-order mark (a Windows "Unicode text" export), else UTF-8 (a UTF-8
-    BOM skipped)."""
+    byte-order mark (a Windows "Unicode text" export), or without it where
+    one byte of each pair is NUL and the other is not (ASCII text as
+    UTF-16-LE/BE: the NULs are valid UTF-8, so it would decode and be refused
+    as "not a header"), else UTF-8 (a UTF-8 BOM skipped)."""
     with open(p, "rb") as fh:
-        head = fh.read(2)
-    return "utf-16" if head in (b"\xff\xfe", b"\xfe\xff") else "utf-8-sig"
+        head = fh.read(4096)
+    if head[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return "utf-16"
+    odd, even = head[1::2], head[0::2]
+    if len(head) >= 8:
+        if odd.count(0) > 0.9 * len(odd) and even.count(0) < 0.1 * len(even):
+            return "utf-16-le"
+        if even.count(0) > 0.9 * len(even) and odd.count(0) < 0.1 * len(odd):
+            return "utf-16-be"
+    return "utf-8-sig"
 
 
 def _header(p: Path):
@@ -215,7 +225,7 @@ def _header(p: Path):
 def _has_interior_blank_line(p: Path, chunk: int = 1 << 22) -> bool:
     """True if a blank line lies between data rows (read in chunks: memory
     does not grow with the file)."""
-    if _encoding(p) == "utf-16":
+    if _encoding(p).startswith("utf-16"):
         return True  # not scanned: the line-by-line parser reads it (blank lines its way)
     pat = re.compile(rb"\n[ \t\r]*\n(?=[ \t\r]*[^\s#])")
     tail = b""
