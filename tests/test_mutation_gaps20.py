@@ -233,3 +233,48 @@ def test_two_complete_periods_between_lost_crossings_are_enough():
     assert cp.period == pytest.approx(1.0, abs=1e-4)
     assert cp.mean_period == pytest.approx(1.0, abs=1e-4)
 
+
+
+# ---------------------------------------------------------------- signal_quantisation
+
+from bifilar.estimation.signal_models import _model  # noqa: E402
+from bifilar.estimation.signal_quantisation import _turned  # noqa: E402
+
+#: parameters of each model kind: offset, drift, then per oscillation (a, b,
+#: omega rad/s, sigma 1/s) -- quadratic (a, b, omega, kappa, sigma), chirp
+#: (a, b, omega, sigma, beta, beta2) and further damped cosines
+_KINDS = {
+    "viscous": [0.1, 0.01, 0.3, -0.2, 3.3, 0.02],
+    "two_mode": [0.1, 0.01, 0.3, -0.2, 3.3, 0.02, 0.05, 0.04, 5.1, 0.03],
+    "three_mode": [0.1, 0.01, 0.3, -0.2, 3.3, 0.02, 0.05, 0.04, 5.1, 0.03, -0.02, 0.03, 7.7, 0.01],
+    "quadratic": [0.1, 0.01, 0.3, -0.2, 3.3, 0.5, 0.02],
+    "chirp": [0.1, 0.01, 0.3, -0.2, 3.3, 0.02, 0.1, 0.01, 0.05, 0.04, 5.1, 0.03],
+}
+
+
+@pytest.mark.parametrize("kind", sorted(_KINDS))
+def test_turning_every_oscillation_by_half_a_turn_negates_it(kind):
+    """``_turned`` shifts every oscillation's phase by ``dphi``: ``a cos th +
+    b sin th -> a cos(th - dphi) + b sin(th - dphi)`` (the rotation of each
+    (a, b) pair), so at ``dphi = pi`` the model less its line is negated and
+    at ``2 pi`` unchanged, for every oscillation of every kind (the second
+    and third modes, the chirp's extra damped cosine included); the line
+    (offset, drift) and the frequencies and dampings are untouched."""
+    p = np.array(_KINDS[kind])
+    t = np.linspace(0.0, 6.0, 301)
+    line = p[0] + p[1] * (t - 3.0)
+    osc = _model(kind, p, t, 0.0, 3.0) - line
+    half = _turned(p, kind, math.pi)
+    assert np.allclose(_model(kind, half, t, 0.0, 3.0) - line, -osc, atol=1e-12)
+    assert np.allclose(_turned(p, kind, 2 * math.pi), p, atol=1e-12)
+    moved = [i for i in range(p.size) if not math.isclose(half[i], p[i], abs_tol=1e-15)]
+    pairs = {"quadratic": [2], "chirp": [2, 8]}.get(kind, list(range(2, p.size, 4)))
+    assert moved == sorted([i for j in pairs for i in (j, j + 1)])
+
+
+def test_a_quarter_turn_makes_the_cosine_a_sine():
+    """``dphi = pi / 2``: ``a cos th + b sin th -> a sin th - b cos th``, i.e.
+    ``(a, b) -> (-b, a)``."""
+    p = np.array(_KINDS["viscous"])
+    q = _turned(p, "viscous", math.pi / 2)
+    assert np.allclose(q, [0.1, 0.01, 0.2, 0.3, 3.3, 0.02], atol=1e-15)
