@@ -278,3 +278,84 @@ def test_a_quarter_turn_makes_the_cosine_a_sine():
     p = np.array(_KINDS["viscous"])
     q = _turned(p, "viscous", math.pi / 2)
     assert np.allclose(q, [0.1, 0.01, 0.2, 0.3, 3.3, 0.02], atol=1e-15)
+
+
+def _resting_record():
+    """A cosine of 15 steps resting on level 0 (an encoder zeroed at rest),
+    30 fps for 40 s, rounded to whole steps; its viscous fit; its levels;
+    and the fit in level indices that the rest rule makes (the same call)
+    with its offsets' miss ``d`` from the nearest level at both ends."""
+    from bifilar.estimation.signal_checks import quantisation_levels
+    from bifilar.estimation.signal_windows import _fit_window
+
+    t = np.arange(0.0, 40.0, 1.0 / 30.0)
+    y = np.round(15.0 * np.exp(-t / 200.0) * np.cos(2 * math.pi * t / 1.7 + 0.4))
+    fit, _ = _fit_window(t, y, "viscous", True, None, (), "BIC")
+    lev = quantisation_levels(y)
+    fk, _ = _fit_window(t, lev.index(y), "viscous", True, fit.frequency, (), "BIC")
+    p = fk.params
+    d = p[0] + p[1] * (np.array([t[0], t[-1]]) - fk.t_ref) - np.round(p[0])
+    return t, y, fit, lev, fk, d
+
+
+def _ends_with_chi2(d: np.ndarray, target: float, step: float) -> np.ndarray:
+    """10 copies' end offsets [y] whose covariance (``e^T e / m``, in steps)
+    is ``diag(a^2, b^2) / 2`` -- five rows ``(+-a, 0)``, five ``(0, +-b)`` --
+    with ``a, b`` chosen so that ``d^T C^-1 d = 2 d0^2 / a^2 + 2 d1^2 / b^2``
+    is ``target`` (half from each end)."""
+    a, b = (math.sqrt(4.0 * di ** 2 / target) for di in d)
+    rows = [(a, 0.0), (-a, 0.0)] * 2 + [(a, 0.0)] + [(0.0, b), (0.0, -b)] * 2 + [(0.0, -b)]
+    return np.array(rows) * step
+
+
+@pytest.mark.parametrize("share, rests", [(0.9, True), (1.1, False)])
+def test_a_record_rests_on_a_level_within_the_99_percent_chi2_of_its_copies_offsets(share, rests):
+    """The rest rule by hand: the offsets at both ends minus the nearest
+    level, ``d`` (steps), against the copies' offset covariance ``C``:
+    rests when ``d^T C^-1 d`` is within chi^2_2's 99 % quantile (9.21).  At
+    0.9 x that it rests -- the returned parameters are the index fit's with
+    the offset on the level and no drift, and its time origins -- at 1.1 x
+    it does not.  Ten copies are enough."""
+    from scipy import stats
+
+    from bifilar.estimation.signal_quantisation import REST_LEVEL_CHI2, _rest_on_level
+
+    t, y, fit, lev, fk, d = _resting_record()
+    assert np.all(np.abs(d) > 0) and np.all(np.abs(d) < 0.1)  # the fit misses the level a little
+    assert REST_LEVEL_CHI2 == 0.99
+    ends = _ends_with_chi2(d, share * stats.chi2.ppf(0.99, 2), 1.0)
+    out = _rest_on_level(fit, t, y, lev, ends, True, "BIC")
+    assert (out is not None) is rests
+    if rests:
+        p, ref = out
+        assert p[0] == np.round(fk.params[0]) and p[1] == 0.0
+        assert np.allclose(p[2:], fk.params[2:])
+        assert ref == (fk.t0, fk.t_ref)
+
+
+@pytest.mark.parametrize("share, rests", [(0.9, True), (1.1, False)])
+def test_without_drift_the_rest_rule_is_chi2_1_on_the_first_offset(share, rests):
+    """Without drift the two ends are one offset: ``d0^2 / C00`` against
+    chi^2_1's 99 % quantile (6.63); the second end's column is ignored (b
+    tiny here would make the two-end chi^2 huge)."""
+    from scipy import stats
+
+    from bifilar.estimation.signal_quantisation import _rest_on_level
+    from bifilar.estimation.signal_windows import _fit_window
+
+    t, y, fit, lev, _, _ = _resting_record()
+    fk, _ = _fit_window(t, lev.index(y), "viscous", False, fit.frequency, (), "BIC")
+    d0 = fk.params[0] + fk.params[1] * (t[0] - fk.t_ref) - np.round(fk.params[0])
+    a = math.sqrt(d0 ** 2 / (share * stats.chi2.ppf(0.99, 1)))  # C00 = a^2 with rows +-a
+    ends = np.array([(a, 1e-9), (-a, -1e-9)] * 5)
+    out = _rest_on_level(fit, t, y, lev, ends, False, "BIC")
+    assert (out is not None) is rests
+
+
+def test_fewer_than_ten_copies_do_not_decide_a_rest():
+    from bifilar.estimation.signal_quantisation import _rest_on_level
+
+    t, y, fit, lev, _, d = _resting_record()
+    ends = _ends_with_chi2(d, 1.0, 1.0)  # well within the quantile
+    assert _rest_on_level(fit, t, y, lev, ends, True, "BIC") is not None
+    assert _rest_on_level(fit, t, y, lev, ends[:9], True, "BIC") is None
