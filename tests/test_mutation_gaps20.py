@@ -282,16 +282,19 @@ def test_a_quarter_turn_makes_the_cosine_a_sine():
     assert np.allclose(q, [0.1, 0.01, 0.2, 0.3, 3.3, 0.02], atol=1e-15)
 
 
+STEP = 5e-4  # rad, the encoder's step (not 1: the copies' offsets are divided by it)
+
+
 def _resting_record():
-    """A cosine of 15 steps resting on level 0 (an encoder zeroed at rest),
-    30 fps for 40 s, rounded to whole steps; its viscous fit; its levels;
+    """A cosine of 15 steps of 0.5 mrad resting on level 0 (an encoder zeroed
+    at rest), 30 fps for 40 s, rounded to whole steps; its viscous fit; its levels;
     and the fit in level indices that the rest rule makes (the same call)
     with its offsets' miss ``d`` from the nearest level at both ends."""
     from bifilar.estimation.signal_checks import quantisation_levels
     from bifilar.estimation.signal_windows import _fit_window
 
     t = np.arange(0.0, 40.0, 1.0 / 30.0)
-    y = np.round(15.0 * np.exp(-t / 200.0) * np.cos(2 * math.pi * t / 1.7 + 0.4))
+    y = STEP * np.round(15.0 * np.exp(-t / 200.0) * np.cos(2 * math.pi * t / 1.7 + 0.4))
     fit, _ = _fit_window(t, y, "viscous", True, None, (), "BIC")
     lev = quantisation_levels(y)
     fk, _ = _fit_window(t, lev.index(y), "viscous", True, fit.frequency, (), "BIC")
@@ -325,7 +328,7 @@ def test_a_record_rests_on_a_level_within_the_99_percent_chi2_of_its_copies_offs
     t, y, fit, lev, fk, d = _resting_record()
     assert np.all(np.abs(d) > 0) and np.all(np.abs(d) < 0.1)  # the fit misses the level a little
     assert REST_LEVEL_CHI2 == 0.99
-    ends = _ends_with_chi2(d, share * stats.chi2.ppf(0.99, 2), 1.0)
+    ends = _ends_with_chi2(d, share * stats.chi2.ppf(0.99, 2), STEP)
     out = _rest_on_level(fit, t, y, lev, ends, True, "BIC")
     assert (out is not None) is rests
     if rests:
@@ -349,7 +352,7 @@ def test_without_drift_the_rest_rule_is_chi2_1_on_the_first_offset(share, rests)
     fk, _ = _fit_window(t, lev.index(y), "viscous", False, fit.frequency, (), "BIC")
     d0 = fk.params[0] + fk.params[1] * (t[0] - fk.t_ref) - np.round(fk.params[0])
     a = math.sqrt(d0 ** 2 / (share * stats.chi2.ppf(0.99, 1)))  # C00 = a^2 with rows +-a
-    ends = np.array([(a, 1e-9), (-a, -1e-9)] * 5)
+    ends = np.array([(a, 1e-9), (-a, -1e-9)] * 5) * STEP
     out = _rest_on_level(fit, t, y, lev, ends, False, "BIC")
     assert (out is not None) is rests
 
@@ -358,6 +361,6 @@ def test_fewer_than_ten_copies_do_not_decide_a_rest():
     from bifilar.estimation.signal_quantisation import _rest_on_level
 
     t, y, fit, lev, _, d = _resting_record()
-    ends = _ends_with_chi2(d, 1.0, 1.0)  # well within the quantile
+    ends = _ends_with_chi2(d, 1.0, STEP)  # well within the quantile
     assert _rest_on_level(fit, t, y, lev, ends, True, "BIC") is not None
     assert _rest_on_level(fit, t, y, lev, ends[:9], True, "BIC") is None
