@@ -28,20 +28,11 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from conftest import plate3_yaml  # noqa: E402  audit18's row-H2 trifilar plate (not a shipped config)
 CASES = [("thesis_plate_rest.yaml", "torsion", 0.05, 10), ("solar_boat.yaml", "roll", 0.05, 10),
          ("thesis_cylinder_6_4.yaml", "pitch", 0.3, 40), ("thesis_plate_rest.yaml", "swing-y", 1.5, 40),
          ("plate3 (audit18 H2)", "torsion", 3.0, 10)]
-#: the trifilar plate of audit18's row H2 (not a shipped config: written to a temporary file)
-PLATE3 = """name: plate3
-gravity: 9.81
-body:
-  mass: 2.5
-  inertia: {tensor: [[0.03, 0.0, 0.0], [0.0, 0.035, 0.0], [0.0, 0.0, 0.06]]}
-rig:
-  anchors: [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]]
-  attachments: [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]]
-  lengths: [1.0, 1.0, 1.0]
-"""
 
 CHILD = r"""
 import json, sys, time
@@ -66,7 +57,7 @@ def run(tree: Path, case, repeats: int, tmp: Path) -> list[float]:
     path = ROOT / "configs" / cfg
     if cfg.startswith("plate3"):
         path = tmp / "plate3.yaml"
-        path.write_text(PLATE3)
+        path.write_text(plate3_yaml())
     env = {**os.environ, "PYTHONPATH": str(tree)}
     p = subprocess.run([sys.executable, "-c", CHILD, str(path), mode, str(amp), str(per),
                         str(repeats)], env=env, capture_output=True, text=True, check=True, cwd=str(tree))

@@ -71,6 +71,43 @@ rig:
 """
 
 
+# audit18's 3-wire thesis plate (row H2; not a shipped config): 2.5 kg, wires 1 m on a 0.2 m circle,
+# attachments 20 mm above the CoM; its torsion towards the wires' half turn at pi rad (an unstable
+# equilibrium) lengthens its period as -ln(pi - A): T / T_lin 1.98 at 2.8 rad
+PLATE3_YAML = """name: plate3
+gravity: 9.81
+body:
+  mass: {mass}
+  inertia: {{tensor: [[0.03, 0.0, 0.0], [0.0, 0.035, 0.0], [0.0, 0.0, 0.06]]}}
+rig:
+  anchors: [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]]
+  attachments: [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]]
+  lengths: [1.0, 1.0, 1.0]
+"""
+
+
+def plate3_yaml(mass=2.5) -> str:
+    """The plate3 config text with ``body.mass`` written as ``mass`` (kg, or
+    any text a test puts there)."""
+    return PLATE3_YAML.format(mass=mass)
+
+
+def plate3_scene(mass=2.5):
+    """The plate3 :class:`~bifilar.scene.Scene` (``mass`` kg)."""
+    import yaml
+
+    sc = scene_from_dict(yaml.safe_load(plate3_yaml(mass)))
+    return sc[0] if isinstance(sc, tuple) else sc
+
+
+@pytest.fixture(scope="session")
+def plate3_path(tmp_path_factory):
+    """Path of the plate3 config (2.5 kg) written once per session."""
+    path = tmp_path_factory.mktemp("plate3") / "plate3.yaml"
+    path.write_text(plate3_yaml())
+    return path
+
+
 def two_wire_yaml(mass, principal, ys, anchor_z, attachment_z, length, name=None, gravity=None) -> str:
     """The config text (YAML) of a two-wire rig whose wires hang in the
     y-z plane: anchors at ``(0, y, anchor_z)`` (world frame, m) and

@@ -19,22 +19,16 @@ from bifilar.analysis.equilibrium import rest_pose
 from bifilar.analysis.modes import linear_modes
 from bifilar.analysis.simulate import simulate
 from bifilar.cli import main
-from bifilar.config import scene_from_dict
-from test_sim_irregular import PLATE3
+from conftest import plate3_scene
 
 EXACT = [x for k in ("length", "position", "com", "mass", "gravity") for x in ("--uncertainty", f"{k}=0")]
 
 
 @pytest.fixture(scope="module")
-def plate3(tmp_path_factory):
-    import yaml
-
-    path = tmp_path_factory.mktemp("sepinv") / "plate3.yaml"
-    path.write_text(yaml.safe_dump(PLATE3))
-    sc = scene_from_dict(PLATE3)
-    sc = sc[0] if isinstance(sc, tuple) else sc
+def plate3(plate3_path):
+    sc = plate3_scene()
     rest = rest_pose(sc)
-    return path, sc, rest, linear_modes(sc, rest)
+    return plate3_path, sc, rest, linear_modes(sc, rest)
 
 
 def invert(path, period, amplitude):

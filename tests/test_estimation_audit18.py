@@ -14,6 +14,7 @@ from click.testing import CliRunner
 
 from bifilar.cli import main
 from bifilar.estimation.signal_wrap import unwrap_record
+from conftest import plate3_yaml
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 DRONE = CONFIGS / "drone_parallel.yaml"
@@ -107,18 +108,6 @@ def test_a_record_that_is_no_wrapped_angle_is_left_alone(y):
     assert np.array_equal(out, y)
 
 
-PLATE3 = """name: plate3
-gravity: 9.81
-body:
-  mass: {mass}
-  inertia: {{tensor: [[0.03, 0.0, 0.0], [0.0, 0.035, 0.0], [0.0, 0.0, 0.06]]}}
-rig:
-  anchors: [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]]
-  attachments: [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]]
-  lengths: [1.0, 1.0, 1.0]
-"""
-
-
 @pytest.mark.parametrize("text, meant", [("1:30", 90), ("010", 8), ("2:30.5", 150.5)])
 def test_a_base_60_or_octal_number_in_a_config_is_refused_naming_the_field(tmp_path, text, meant):
     """Audit18's bad-input row: YAML 1.1 (PyYAML's safe_load) reads ``mass:
@@ -127,7 +116,7 @@ def test_a_base_60_or_octal_number_in_a_config_is_refused_naming_the_field(tmp_p
     a plain scalar is text (YAML 1.2 reads ``1:30`` so), and the number
     field refuses it in one line naming it and the cause."""
     p = tmp_path / "m.yaml"
-    p.write_text(PLATE3.format(mass=text))
+    p.write_text(plate3_yaml(mass=text))
     r = CliRunner().invoke(main, ["modes", str(p), "--json"])
     assert r.exit_code == 2, (r.exit_code, r.stdout[:200])
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]

@@ -87,7 +87,7 @@ def test_a_point_whose_body_reaches_the_ceiling_ranks_after_every_clean_one(swep
 def test_crossing_wires_rank_last_and_a_clashing_point_is_still_recommended_alone(swept):
     # the rule on the sweep's own points: a clean copy of the clashing point with crossing wires ranks after the
     # clean point too; where every point clashes the best of them is recommended (the warning says why)
-    from bifilar.studies.ranking import assess
+    from bifilar.studies.recommend import assess
 
     clash, clean = swept[0]["points"]
     cross = copy.deepcopy(clash)
@@ -101,10 +101,10 @@ def test_crossing_wires_rank_last_and_a_clashing_point_is_still_recommended_alon
 
 
 def test_plans_optimum_ranks_a_clashing_point_after_a_clean_one(swept):
-    from bifilar.studies.plan import _choose
+    from bifilar.studies.recommend import choose
 
     clash, clean = swept[0]["points"]
-    best, over, why = _choose([copy.deepcopy(clash), copy.deepcopy(clean)], Constraints(min_separation=None), "Ixx",
+    best, over, why = choose([copy.deepcopy(clash), copy.deepcopy(clean)], Constraints(min_separation=None), "Ixx",
                               ["Ixx"])
     assert best["params"] == {"height": 0.2}
     assert over == [{"params": {"height": 0.05}, "objective": clash["objective"], "reason": "ceiling_clash"}]

@@ -23,7 +23,7 @@ from bifilar.analysis.simulate import simulate
 from bifilar.cli import main
 from bifilar.config import load_scene
 from bifilar.errors import InputError
-from conftest import CONFIGS
+from conftest import CONFIGS, plate3_scene
 
 PLATE = CONFIGS / "thesis_plate_rest.yaml"
 PERIODS = 40  # the fewest (of 30, 35, 40) over which the plate's swing-y at 1.5 m leaves its bound
@@ -183,13 +183,6 @@ def test_a_difference_of_several_bounds_warns_below_the_users_timing():
         assert bool(r.warnings) is warns and (not warns or "not regular" in r.warnings[0])
 
 
-PLATE3 = {"name": "plate3", "gravity": 9.81,
-          "body": {"mass": 2.5, "inertia": {"tensor": [[0.03, 0, 0], [0, 0.035, 0], [0, 0, 0.06]]}},
-          "rig": {"anchors": [[0.2, 0.0, 1.02], [-0.1, 0.17320508, 1.02], [-0.1, -0.17320508, 1.02]],
-                  "attachments": [[0.2, 0.0, 0.02], [-0.1, 0.17320508, 0.02], [-0.1, -0.17320508, 0.02]],
-                  "lengths": [1.0, 1.0, 1.0]}}
-
-
 @pytest.mark.parametrize("amplitude", [3.0, 3.1])
 def test_a_torsion_near_the_wires_turn_states_an_error_that_holds(amplitude):
     """Audit18's row H2: a trifilar plate's torsion at 3.0 / 3.1 rad (the
@@ -202,10 +195,7 @@ def test_a_torsion_near_the_wires_turn_states_an_error_that_holds(amplitude):
     same start (audit18: an independent DOP853 run matched it to 1.6e-10 s).
     Now a period more than 20 % from the linear one is checked by a second
     run: the stated error holds the truth, and one warning says why it grew."""
-    from bifilar.config import scene_from_dict
-
-    sc = scene_from_dict(PLATE3)
-    sc = sc[0] if isinstance(sc, tuple) else sc
+    sc = plate3_scene()
     rest = rest_pose(sc)
     ms = linear_modes(sc, rest)
     r = simulate(sc, "torsion", amplitude, 10, rest=rest, modes=ms, method="auto", rtol=1e-10)

@@ -22,17 +22,12 @@ from bifilar.analysis.equilibrium import rest_pose
 from bifilar.analysis.modes import linear_modes
 from bifilar.analysis.simulate import simulate
 from bifilar.cli import main
-from bifilar.config import scene_from_dict
-from test_sim_irregular import PLATE3
+from conftest import plate3_scene
 
 
 @pytest.fixture(scope="module")
-def plate3(tmp_path_factory):
-    import yaml
-
-    path = tmp_path_factory.mktemp("farsweep") / "plate3.yaml"
-    path.write_text(yaml.safe_dump(PLATE3))
-    return path
+def plate3(plate3_path):
+    return plate3_path
 
 
 def _sweep(path, amplitude, *more):
@@ -43,8 +38,7 @@ def _sweep(path, amplitude, *more):
 
 
 def test_sweep_sigma_far_from_linear_is_inverts_std(plate3):
-    sc = scene_from_dict(PLATE3)
-    sc = sc[0] if isinstance(sc, tuple) else sc
+    sc = plate3_scene()
     rest = rest_pose(sc)
     T = simulate(sc, "torsion", 2.0, 4, rest=rest, modes=linear_modes(sc, rest), rtol=1e-11).period
     r = CliRunner().invoke(main, ["invert", str(plate3), "--period", f"torsion={T!r}+-0.001", "--amplitude", "2.0",

@@ -204,7 +204,8 @@ def test_an_uncautioned_point_the_figures_cannot_tell_apart_is_recommended(swept
     # figures do not resolve (its sigma is the linear budget wherever the second-order one is within
     # budget.LINEAR_ENOUGH = 2 % of it).  Within 2 % the rival now ranks first and the recommendation says
     # why; 3 % worse it does not (the caution does not outweigh a difference the figures resolve)
-    from bifilar.studies.ranking import EQUAL_REL, assess
+    from bifilar.studies.ranking import EQUAL_REL
+    from bifilar.studies.recommend import assess
 
     assert EQUAL_REL == 0.02
     p = swept[0]["points"][0]
@@ -225,16 +226,16 @@ def test_an_uncautioned_point_the_figures_cannot_tell_apart_is_recommended(swept
 
 
 def test_plans_optimum_prefers_an_uncautioned_point_the_figures_cannot_tell_apart(swept):
-    # plan's optimum is ranked the same way (studies.plan._choose), and says so in its JSON
-    from bifilar.studies.plan import _choose
+    # plan's optimum is ranked the same way (studies.recommend.choose), and says so in its JSON
+    from bifilar.studies.recommend import choose
 
     p = swept[0]["points"][0]
     full = [dict(p), _twin(p, 1.01, 1.1), _twin(p, 1.5, 1.2)]
-    best, over, why = _choose(full, Constraints(max_tension=40.0), "Izz", ["Izz"])
+    best, over, why = choose(full, Constraints(max_tension=40.0), "Izz", ["Izz"])
     assert best["params"] == {"length": 1.1} and best["objective"] == pytest.approx(
         1.01 * p["components"]["Izz"]["rel_sigma"])
     assert over == [{"params": p["params"], "objective": pytest.approx(p["components"]["Izz"]["rel_sigma"]),
                      "reason": "tension_range_caution"}]
     assert why is not None and "tension_range_caution" in why
-    best, over, why = _choose(full, Constraints(max_tension=60.0), "Izz", ["Izz"])  # above every range: no caution
+    best, over, why = choose(full, Constraints(max_tension=60.0), "Izz", ["Izz"])  # above every range: no caution
     assert best["params"] == p["params"] and over == [] and why is None

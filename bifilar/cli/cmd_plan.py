@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, log_warnings, multi_hanging, render_amplitude,
+from .cmd_sweep import (_ABBR, SHORTHAND_HELP, _pct, common_options, recommendation_warnings, render_amplitude,
                         render_identifiability, render_multi_hanging, render_rig, render_timing)
 from .common import check_output_path, check_workers, console, emit_json, esc, fmt, handle_errors, progress_bar
 
@@ -32,8 +32,8 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     from ..errors import InputError
     from ..studies.plan import plan as run_plan
     from ..studies.shorthands import check_param, overlap_warnings, parse_bounds
-    from ..studies.amplitude import amplitude_advice
-    from ..studies.point_advice import point_cautions, timing_advice, write_point_config
+    from ..studies.point_advice import write_point_config
+    from ..studies.recommend import add_point_remedies, point_advice
     from ..studies.study_inputs import resolve_study
 
     check_workers(workers)
@@ -62,25 +62,20 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
                        hangings=hangings)
     doc = res.to_json()
     deferred = res.separation_guard == "multi_hanging"  # --min-separation left to the hangings plan
-    ident = doc["identifiability"]
-    need = [c for c, e in ident.items() if not e["identifiable"]]
+    need = [c for c, e in doc["identifiability"].items() if not e["identifiable"]]
     # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
-    mh_warnings = multi_hanging(doc, cfg, config, res.best["params"], settings, cons, reaction, sensor,
-                                hangings or bool(need), wm_p, "bifilar plan", res.best if deferred else None)
-    joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
-    doc["warnings"] = pre + log_warnings(point_cautions(cfg, config, res.best, "the planned point", cons, joint)) + mh_warnings
+    doc["warnings"] = pre + recommendation_warnings(doc, cfg, config, res.best, settings, cons, reaction, sensor,
+                                                    hangings or bool(need), wm_p, "bifilar plan", "the planned point",
+                                                    deferred, hangings)
     from ..studies.sweep import stretching_summary
 
     if (w := stretching_summary(res.evaluated)) is not None:  # rigid-wire runs on modes the wires cannot follow
         click.echo(f"warning: {w}", err=True)
         doc["warnings"].append(w)
     doc["settings"] = settings.describe()
-    doc["how_to_time"] = timing_advice(res.best, reaction, sensor, cons.min_separation if deferred else None)
-    doc["amplitude_advice"] = amplitude_advice(cfg, config, res.best, settings)
-    if need:
-        from ..studies.remedy import add_remedies
-
-        add_remedies({"identifiability": ident}, cfg, config, res.best["params"], settings, need)
+    doc.update(point_advice(res.best, cfg, config, settings, reaction, sensor,
+                            cons.min_separation if deferred else None))
+    add_point_remedies(doc, need, res.best, cfg, config, settings)
     if wc_p:
         write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
         doc["config_written"] = str(wc_p)

@@ -92,6 +92,24 @@ def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, con
     return warnings
 
 
+def recommendation_warnings(doc: dict, cfg: dict, config: str, point: dict, settings, cons, reaction, sensor,
+                            wanted: bool, wm_p, who: str, what: str, deferred: bool, hangings: bool) -> list[str]:
+    """The warnings of a study's recommended (``sweep``) or planned (``plan``)
+    ``point``, logged: the multi-hanging plan at it first (:func:`multi_hanging`,
+    into ``doc``; a plan that cannot meet ``--min-separation`` exits 2
+    before any warning or file), then the point's cautions
+    (:func:`~bifilar.studies.point_advice.point_cautions`, ``what`` names
+    the point; with ``hangings`` the joint sigma's physical limits), then
+    the plan's warnings.  ``deferred``: the search left ``--min-separation``
+    to the multi-hanging plan."""
+    from ..studies.point_advice import point_cautions
+
+    mh_warnings = multi_hanging(doc, cfg, config, point["params"], settings, cons, reaction, sensor, wanted, wm_p,
+                                who, point if deferred else None)
+    joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
+    return log_warnings(point_cautions(cfg, config, point, what, cons, joint)) + mh_warnings
+
+
 def render_multi_hanging(con, doc: dict) -> None:
     mh = doc.get("multi_hanging")
     if not mh:
@@ -177,8 +195,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..errors import InputError
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, overlap_warnings, parse_param
-    from ..studies.amplitude import amplitude_advice
-    from ..studies.point_advice import add_point_remedies, point_cautions, timing_advice, write_point_config
+    from ..studies.point_advice import write_point_config
+    from ..studies.recommend import add_point_remedies, point_advice, reference_point
     from ..studies.study_inputs import resolve_study
     from ..studies.timing import check_reaction, parse_sensor
 
@@ -236,7 +254,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
             write_out()
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
-    add_point_remedies(rec, points, cfg, config, settings)
+    add_point_remedies(rec, rec.get("not_measurable") or [], reference_point(rec, points), cfg, config, settings)
     warnings = list(pre)
     if (w := sw.stretching_summary(points)) is not None:
         click.echo(f"warning: {w}", err=True)
@@ -245,13 +263,11 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         best = points[rec["best"]]
         deferred = rec["separation_guard"] == "multi_hanging"  # --min-separation left to the hangings plan
         # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
-        mh_warnings = multi_hanging(rec, cfg, config, rec["params"], settings, cons, reaction, sensor,
-                                    hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
-                                    best if deferred else None)
-        joint = rec["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in rec else None
-        warnings += log_warnings(point_cautions(cfg, config, best, "the recommended point", cons, joint)) + mh_warnings
-        rec["how_to_time"] = timing_advice(best, reaction, sensor, cons.min_separation if deferred else None)
-        rec["amplitude_advice"] = amplitude_advice(cfg, config, best, settings)
+        warnings += recommendation_warnings(rec, cfg, config, best, settings, cons, reaction, sensor,
+                                            hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
+                                            "the recommended point", deferred, hangings)
+        rec.update(point_advice(best, cfg, config, settings, reaction, sensor,
+                                cons.min_separation if deferred else None))
     elif wm_p or hangings:
         raise InputError(rec["binding"] if rec["separation_guard"] == "multi_hanging" else "--hangings",
                          "no recommended point to plan the hangings at: " + rec["reason"])

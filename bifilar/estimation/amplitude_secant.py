@@ -22,6 +22,8 @@ first-order term, bit for bit, and make no run.  SI units (s, rad or m).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..analysis.run_accuracy import FAR_FROM_LINEAR
@@ -32,6 +34,66 @@ from .problem import Problem
 #: 95 % range, so that the interval's upper end, where ``T(A)`` curves up,
 #: is the period of the amplitude at its own 95 % end
 SECANT_SIGMAS = 2.0
+
+
+@dataclass(frozen=True)
+class AmplitudeRange:
+    """A stated amplitude's 95 % range ``A +- SECANT_SIGMAS s_A`` and the
+    mode's last reachable start: ``amplitude`` ``A`` (>= 0), ``std`` ``s_A``,
+    ``limit`` and ``unit`` (rad for a rotation, m for a translation,
+    :func:`~bifilar.analysis.start_states.reachable_amplitude`).  The one
+    reading of the secant's inputs that ``invert``
+    (:func:`far_amplitude_stds`) and a sweep point
+    (:func:`~bifilar.studies.point_far_amplitude.far_amplitude`) share."""
+
+    amplitude: float
+    std: float
+    limit: float
+    unit: str
+
+    @property
+    def hi(self) -> float:
+        """The range's upper end ``A + 2 s_A`` (rad or m)."""
+        return self.amplitude + SECANT_SIGMAS * self.std
+
+    @property
+    def lo(self) -> float:
+        """The range's lower end ``A - 2 s_A`` (rad or m; may be <= 0)."""
+        return self.amplitude - SECANT_SIGMAS * self.std
+
+    @property
+    def reaches_limit(self) -> bool:
+        """Whether the upper end is at or past the mode's last reachable
+        start, where the period has no bound (no std holds)."""
+        return self.hi >= self.limit
+
+    def ends(self) -> list[float]:
+        """The amplitudes (rad or m) of the end runs: the upper end, and the
+        lower one where it is above 0 (below, the linear period stands in
+        for it: r(0) = 1)."""
+        return [self.hi] + ([self.lo] if self.lo > 0 else [])
+
+    def stated(self) -> str:
+        """``A +- s_A unit``, as the messages print it."""
+        return f"{self.amplitude:.4g} +- {self.std:.2g} {self.unit}"
+
+    def secant(self, T0: float, T_ends, T_lin: float) -> float:
+        """The secant (s): ``max |T(end) - T(A)| / SECANT_SIGMAS`` over the
+        end runs' periods ``T_ends`` (s, in :meth:`ends`' order) and, where
+        the lower end is not above 0, the linear period ``T_lin`` (s);
+        ``T0`` the period at ``A`` (s)."""
+        ends = [float(T) for T in T_ends] + ([] if self.lo > 0 else [float(T_lin)])
+        return max(abs(T - T0) for T in ends) / SECANT_SIGMAS
+
+
+def amplitude_range(amplitude: float, std: float, scene, mode) -> AmplitudeRange:
+    """The :class:`AmplitudeRange` of ``mode`` of ``scene`` stated at
+    ``amplitude`` (its magnitude is used) with standard uncertainty ``std``
+    (rad or m, the mode's dominant coordinate)."""
+    from ..analysis.start_states import reachable_amplitude
+
+    limit, unit = reachable_amplitude(scene, mode)
+    return AmplitudeRange(abs(float(amplitude)), float(std), limit, unit)
 
 
 def amplitude_sigma(m, unc: dict) -> float:
@@ -58,14 +120,13 @@ def far_amplitude_stds(pb: Problem, p, T_lin, laws, unc: dict, s_amp: np.ndarray
     makes no run).  Raises :class:`InputError` on the amplitude's field
     where ``A + 2 s_A`` reaches the mode's last reachable start or an end
     run cannot be made."""
-    from ..analysis.start_states import reachable_amplitude
     from .amplitude_runs import measured_factor
 
     for k, m in enumerate(pb.measurements):
         law = laws[k] if laws is not None and k < len(laws) else None
         if law is None or not m.amplitude or not abs(law.factor(law.amplitude) - 1.0) > FAR_FROM_LINEAR:
             continue
-        A, sA = abs(float(m.amplitude)), float(amplitude_sigma(m, unc))
+        sA = float(amplitude_sigma(m, unc))
         if not sA > 0:
             continue
         key = (sA, tuple(np.asarray(p, float)))
@@ -74,28 +135,24 @@ def far_amplitude_stds(pb: Problem, p, T_lin, laws, unc: dict, s_amp: np.ndarray
             s_amp[k] = max(s_amp[k], kept[1])
             continue
         hm = pb.models[m.hanging]
-        limit, unit = reachable_amplitude(hm.scene0, hm.modes0.modes[pb.mode_index[k]])
-        hi, lo = A + SECANT_SIGMAS * sA, A - SECANT_SIGMAS * sA
-        why = (f"mode '{m.label}' stated at {A:.4g} +- {sA:.2g} {unit} runs {law.factor(law.amplitude):.3g} x its "
-               f"linear period")
-        if hi >= limit:
+        rng = amplitude_range(m.amplitude, sA, hm.scene0, hm.modes0.modes[pb.mode_index[k]])
+        why = (f"mode '{m.label}' stated at {rng.stated()} runs {law.factor(law.amplitude):.3g} x its "
+               "linear period")
+        if rng.reaches_limit:
             raise InputError(amplitude_field(m), (
-                f"{why}, and its 95 % range reaches {hi:.4g} {unit}, at or past the mode's last reachable start "
-                f"({limit:.4g} {unit}), towards which the period grows without bound: the motion there is no "
-                "oscillation of that mode, so no std holds; state the amplitude more tightly (A+-SIGMA) or time "
-                "the mode at a smaller amplitude"))
+                f"{why}, and its 95 % range reaches {rng.hi:.4g} {rng.unit}, at or past the mode's last reachable "
+                f"start ({rng.limit:.4g} {rng.unit}), towards which the period grows without bound: the motion "
+                "there is no oscillation of that mode, so no std holds; state the amplitude more tightly (A+-SIGMA) "
+                "or time the mode at a smaller amplitude"))
         T0 = float(T_lin[k]) * float(law.factor(law.amplitude))
-        ends = [hi] + ([lo] if lo > 0 else [])
         try:
-            T_ends = [float(T_lin[k]) * measured_factor(pb, k, p, rtol, a)[0] for a in ends]
+            T_ends = [float(T_lin[k]) * measured_factor(pb, k, p, rtol, a)[0] for a in rng.ends()]
         except InputError:
             raise
         except BifilarError as exc:
             raise InputError(amplitude_field(m), f"{why}, and the run at its 95 % range's end failed ({exc}), so "
                                                  "the amplitude's share of the period cannot be given; state the "
                                                  "amplitude more tightly or time the mode at a smaller amplitude")
-        if lo <= 0:
-            T_ends.append(float(T_lin[k]))  # r(0) = 1: the linear period
-        secant = max(abs(T - T0) for T in T_ends) / SECANT_SIGMAS
+        secant = rng.secant(T0, T_ends, float(T_lin[k]))  # below 0 the linear period: r(0) = 1
         law.secant = (key, secant)
         s_amp[k] = max(s_amp[k], secant)

@@ -373,7 +373,8 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
-    Jp = _unknowns_jacobian(pb, p_hat, cache) * r_hat[:, None]
+    J_lin = _unknowns_jacobian(pb, p_hat, cache)
+    Jp = J_lin * r_hat[:, None]
     sig = np.array([m.std for m in pb.measurements])
     multi = len(pb.models) > 1
     cols, sigmas, degenerate, scenes, rests, modes, matches = input_columns(pb, vals, r_hat, unc, cache)
@@ -416,7 +417,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
                                      if d not in ("mass", "gravity", "stiffness") else d, unc)
     ctx = BudgetContext(in_names + [d for d in degenerate if d not in cols], all_sig, G, T_lin * r_hat,
                         list(degenerate), scenes, rests, modes, matches, cache=cache, factor_shift=shift,
-                        gain=gain)
+                        gain=gain, jacobian=J_lin)
     return budget, degenerate, T_lin, ctx
 
 

@@ -87,33 +87,26 @@ def marginal_fit_warning(pb: Problem, fit: dict, z: np.ndarray) -> str | None:
 UNCHECKED_LEVERAGE = 0.99
 
 
-def leverages(pb: Problem, p) -> np.ndarray | None:
+def leverages(jacobian, stds) -> np.ndarray | None:
     """(K,) leverage ``h_kk`` of each measured period in the timing-weighted
-    fit of the unknowns at ``p``: the diagonal of the hat matrix ``A
-    A^+`` with ``A = J / s`` (``J`` the linear periods' derivatives in the
-    unknowns by central differences, steps 1e-6 of each unknown or 1e-8
-    SI where it is 0; ``s`` the periods' stds).  ``h_kk`` near 1: the
+    fit of the unknowns: the diagonal of the hat matrix ``A A^+`` with ``A
+    = J / s`` (``jacobian`` ``J`` (K, P) the linear periods' derivatives in
+    the unknowns at the estimate, s per SI unit of each unknown: the
+    uncertainty budget's, :attr:`~bifilar.estimation.second_order.BudgetContext.jacobian`;
+    ``stds`` ``s`` (K,) the periods' stds, s).  ``h_kk`` near 1: the
     fitted period follows the measured one whatever its error (the fit
     cannot check it); the ``h_kk`` sum to the fit's rank.  None where a
     period has no derivative (NaN)."""
-    p = np.asarray(p, float)
-    K, P = len(pb.measurements), len(p)
-    J = np.empty((K, P))
-    for i in range(P):
-        h = 1e-6 * abs(p[i]) if p[i] else 1e-8
-        up, dn = p.copy(), p.copy()
-        up[i] += h
-        dn[i] -= h
-        J[:, i] = (labelled_periods(pb, up) - labelled_periods(pb, dn)) / (2.0 * h)
+    J = np.asarray(jacobian, float)
     if not np.all(np.isfinite(J)):
         return None
-    A = J / np.array([m.std for m in pb.measurements])[:, None]
+    A = J / np.asarray(stds, float)[:, None]
     U, sv, _ = np.linalg.svd(A, full_matrices=False)
     U = U[:, sv > 1e-9 * sv[0]] if sv.size and sv[0] > 0 else U[:, :0]
     return np.sum(U * U, axis=1)
 
 
-def unchecked_notes(pb: Problem, p, dof: int) -> list[str]:
+def unchecked_notes(pb: Problem, jacobian, dof: int) -> list[str]:
     """One note per measured period that no other measurement checks (its
     leverage above :data:`UNCHECKED_LEVERAGE`, :func:`leverages`) in an
     overdetermined fit (``dof`` > 0): the chi-square's degrees of freedom
@@ -121,13 +114,12 @@ def unchecked_notes(pb: Problem, p, dof: int) -> list[str]:
     chi2 0 and a wrong answer within its own std (audit19, row A1: the
     drone's torsion 2 % off among torsion, pitch and both swings, solving
     Izz and Iyy: Izz +4 %, chi2 0, "2 degrees of freedom").  None for an
-    exactly determined fit (no check at all, which its ``dof`` 0 says)."""
-    if dof <= 0:
+    exactly determined fit (no check at all, which its ``dof`` 0 says).
+    ``jacobian``: (K, P) the budget's d T_lin / d p at the estimate (s per
+    SI unit), or None (no note)."""
+    if dof <= 0 or jacobian is None:
         return []
-    try:
-        h = leverages(pb, p)
-    except BifilarError:  # a stepped scene that cannot hang or be solved: no note (the answer stands)
-        return []
+    h = leverages(jacobian, [m.std for m in pb.measurements])
     if h is None:
         return []
     labels = pb.term_labels()

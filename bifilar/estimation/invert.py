@@ -354,7 +354,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
     if (w := marginal_fit_warning(pb, fit, _residuals(pb, p_hat, r_hat)[1])) is not None:
         warnings.append(w)
-    notes.extend(unchecked_notes(pb, p_hat, fit["dof"]))
+    notes.extend(unchecked_notes(pb, bctx.jacobian, fit["dof"]))
     if fit.get("chi2_with_inputs") is not None and fit["dof"] == 0:
         notes.append(f"the measured period(s) lie beyond what a physical tensor gives, by up to "
                      f"{fit['max_abs_normalised_residual']:.3g} timing sigma, but within their uncertainty with the "

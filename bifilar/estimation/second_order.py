@@ -89,6 +89,9 @@ class BudgetContext:
     factor_shift: dict = field(default_factory=dict)
     gain: np.ndarray | None = None   # (P, K) the full derivative's gain (nonlinear: with T_lin dr/dp), else G
     prior: object = None             # the components not solved for (prior_inertia.PriorInertia), if computed
+    #: (K, P) d T_lin / d p of the measured modes at the estimate (s per SI unit; before the amplitude
+    #: factor r): the budget's, reused by the fit check's leverages (fit_check.leverages)
+    jacobian: np.ndarray | None = None
 
 
 def scene_key(scene) -> tuple:

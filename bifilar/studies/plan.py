@@ -68,8 +68,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (clashes, identifiability, measurable_components, point_separation, preferences, rank_order,
-                      rel_sigma, tension_range_caution)
+from .ranking import clashes, measurable_components, point_separation, rank_order, rel_sigma, tension_range_caution
+from .recommend import cautioned, choose, identifiability, preference
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -233,7 +233,7 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
     evaluated whose multi-hanging plan is the most accurate is the answer
     (``hangings_objective``; the guard left to that plan, as above, where
     the point's own hanging does not meet it), as a sweep with
-    ``--hangings`` ranks them (:func:`bifilar.studies.ranking.assess`).
+    ``--hangings`` ranks them (:func:`bifilar.studies.recommend.assess`).
 
     Raises :class:`InputError` naming the binding constraint's flag (e.g.
     ``--max-tension``) when no evaluated configuration is feasible.
@@ -281,41 +281,14 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     score = dict(zip([id(p) for p in cands], hangings_objectives(base_cfg, source, [p["params"] for p in cands],
                                                                  settings, min_separation, target)))
     keep = [i for i, p in enumerate(cands) if math.isfinite(score[id(p)])]
-    ranked = rank_order(cands, keep, lambda p: score[id(p)], _cautioned(res.constraints), clashes)
+    ranked = rank_order(cands, keep, lambda p: score[id(p)], cautioned(res.constraints), clashes)
     for r, i in enumerate(ranked):
         p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
         if p.get("valid") and not violations(p, relaxed, target) and math.isfinite(objective(p, target, among)):
-            res.preferred_over, res.preference = _preference(cands, ranked[r:], lambda q: score[id(q)],
+            res.preferred_over, res.preference = preference(cands, ranked[r:], lambda q: score[id(q)],
                                                              res.constraints)
             return {**p, "objective": objective(p, target, among)}, score[id(cands[i])], len(cands)
     return None, None, len(cands)
-
-
-def _choose(full: list[dict], constraints: Constraints, target: str | None, among) -> tuple[dict, list, str | None]:
-    """The optimum of the fully evaluated feasible points ``full``, ranked as
-    the sweep ranks them (:func:`~bifilar.studies.ranking.rank_order`: a
-    point whose dependent wires may carry more than ``--max-tension`` after
-    one without that the figures cannot tell apart, a point whose body
-    reaches the ceiling or whose wires cross at rest after every clean
-    one), with its
-    ``objective``, and (``preferred_over``, ``preference``)."""
-    key = lambda p: objective(p, target, among)  # noqa: E731
-    ranked = rank_order(full, range(len(full)), key, _cautioned(constraints), clashes)
-    best = dict(full[ranked[0]])
-    best["objective"] = key(best)
-    return (best, *_preference(full, ranked, key, constraints))
-
-
-def _cautioned(constraints: Constraints):
-    """A point's test for :func:`~bifilar.studies.ranking.rank_order`: its dependent wires may carry more
-    than ``--max-tension`` (:func:`~bifilar.studies.ranking.tension_range_caution`)."""
-    return lambda p: tension_range_caution(p, constraints) is not None
-
-
-def _preference(points: list[dict], ranked: list[int], key, constraints: Constraints) -> tuple[list, str | None]:
-    """(``preferred_over``, ``preference``) of :class:`PlanResult` for the optimum ``points[ranked[0]]``."""
-    over, lines = preferences(points, ranked, key, _cautioned(constraints))
-    return [{k: v for k, v in o.items() if k != "index"} for o in over], "; ".join(lines) or None
 
 
 def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], settings: SweepSettings,
@@ -431,7 +404,7 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     # answer's candidates
     confirm = [feasible[i] for i in rank_order(feasible, range(len(feasible)),
                                                lambda p: objective(p, target, among, small),
-                                               _cautioned(constraints), clashes)[:CONFIRM]]
+                                               cautioned(constraints), clashes)[:CONFIRM]]
     for p in confirm:
         full = evaluate_point(base_cfg, source, p["params"], settings)
         cache[key_of(p["params"])] = full
@@ -446,7 +419,7 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     if not feasible:
         flag, msg = binding_constraint(evaluated, constraints, target, among)
         raise InputError(flag, msg)
-    best, over, why = _choose([p for p in feasible if not p.get("screen")], constraints, target, among)
+    best, over, why = choose([p for p in feasible if not p.get("screen")], constraints, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
                       among, zip_, preferred_over=over, preference=why)
 

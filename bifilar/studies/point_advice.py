@@ -64,20 +64,6 @@ def point_cautions(cfg: dict, source: str, point: dict, what: str, cons=None, jo
     return out
 
 
-def add_point_remedies(rec: dict, points: list, cfg: dict, source: str, settings) -> None:
-    """Add the remedies of the components no point can measure (and of a
-    target that is not), ``rec["not_measurable"]``, to
-    ``rec["identifiability"]`` (:func:`bifilar.studies.remedy.add_remedies`),
-    evaluated at the recommended point ``points[rec["best"]]`` (else the
-    first valid one; none: nothing is added)."""
-    from .remedy import add_remedies
-
-    need = list(rec.get("not_measurable") or [])
-    ref = points[rec["best"]] if rec.get("best") is not None else next((p for p in points if p.get("valid")), None)
-    if need and ref is not None:
-        add_remedies(rec, cfg, source, ref["params"], settings, need)
-
-
 def timing_advice(point: dict, reaction: float, sensor, min_separation: float | None = None) -> list[dict]:
     """How to time ``point``'s modes to reach its assumed timing sigma
     (:func:`bifilar.studies.timing.how_to_time`; ``reaction`` s, a

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 from ..analysis.run_accuracy import FAR_FROM_LINEAR
 from ..errors import BifilarError
-from ..estimation.amplitude_secant import SECANT_SIGMAS
+from ..estimation.amplitude_secant import amplitude_range
 
 #: the end runs' length in linear periods, times the sweep's ``--periods``:
 #: a mode near its separatrix runs several linear periods a cycle (the
@@ -57,19 +57,17 @@ def far_amplitude(pre, k: int, r: float, T_lin: float, rel: float, st) -> FarAmp
     if not abs(r - 1.0) > FAR_FROM_LINEAR:
         return None
     from ..analysis.batch import simulate_batch
-    from ..analysis.start_states import reachable_amplitude
 
     A = abs(float(pre.amplitude))
-    sA = rel * A
     label = pre.labels[k]
-    limit, unit = reachable_amplitude(pre.scene, pre.ms.modes[k])
-    hi, lo = A + SECANT_SIGMAS * sA, A - SECANT_SIGMAS * sA
-    why = f"mode '{label}' at {A:.4g} +- {sA:.2g} {unit} runs {r:.3g} x its linear period"
-    if hi >= limit:
+    rng = amplitude_range(A, rel * A, pre.scene, pre.ms.modes[k])
+    unit = rng.unit
+    why = f"mode '{label}' at {rng.stated()} runs {r:.3g} x its linear period"
+    if rng.reaches_limit:
         return FarAmplitude(None, None, (
-            f"{why}, and its 95 % range reaches {hi:.4g} {unit}, at or past its last reachable start "
-            f"({limit:.4g} {unit}): invert refuses this amplitude (no std holds), so no sigma"))
-    amps = [A, hi] + ([lo] if lo > 0 else [])
+            f"{why}, and its 95 % range reaches {rng.hi:.4g} {unit}, at or past its last reachable start "
+            f"({rng.limit:.4g} {unit}): invert refuses this amplitude (no std holds), so no sigma"))
+    amps = [A] + rng.ends()
     try:
         runs = simulate_batch([pre.scene] * len(amps), mode=[label] * len(amps), amplitude=amps,
                               periods=END_RUN_PERIODS * st.periods, rtol=st.rtol, rests=[pre.rest] * len(amps),
@@ -80,6 +78,5 @@ def far_amplitude(pre, k: int, r: float, T_lin: float, rel: float, st) -> FarAmp
     if bad:
         return FarAmplitude(None, None, f"{why}, and its run at {bad[0]:.4g} {unit} failed: no sigma")
     T0 = float(runs[0].period)
-    ends = [float(run.period) for run in runs[1:]] + ([] if lo > 0 else [float(T_lin)])
-    secant = max(abs(T - T0) for T in ends) / SECANT_SIGMAS
+    secant = rng.secant(T0, [run.period for run in runs[1:]], T_lin)
     return FarAmplitude(secant / (rel * float(T_lin)), secant, None)

@@ -65,7 +65,7 @@ and for a resumed sweep.
 The sweep is split by concern: :mod:`bifilar.studies.settings` (settings,
 constraints, grid), :mod:`bifilar.studies.point` (one point's figures),
 this module (many points: workers, journal, resume),
-:mod:`bifilar.studies.ranking` (feasibility, ranking, recommendation) and
+:mod:`bifilar.studies.ranking` (feasibility, ranking), :mod:`bifilar.studies.recommend` (recommendation) and
 :mod:`bifilar.studies.sweep_output` (CSV and figures).  Their public names
 are re-exported here.
 """
@@ -85,8 +85,9 @@ from ..errors import InputError
 from .point import (IDENTIFIABLE_MIN, TURN_MAX, _Ladder, _nonlinear_runs, _one_line, _plain,  # noqa: F401
                     evaluate_point, evaluate_points, linear_estimate, point_sensitivity, predicted_budget, rig_of,
                     timed_separation)
-from .ranking import (CONSTRAINT_FLAGS, assess, binding_constraint, explain, measurable_components,  # noqa: F401
-                      objective, pareto_front, point_separation, violations, why_invalid)
+from .ranking import (CONSTRAINT_FLAGS, binding_constraint, measurable_components, objective,  # noqa: F401
+                      pareto_front, point_separation, violations, why_invalid)
+from .recommend import assess, explain  # noqa: F401
 from .settings import (_IDX, DEFAULT_MIN_SEPARATION, PLAN_KEYS, PRINCIPAL, Constraints,  # noqa: F401
                        SweepSettings, build_grid,
                        check_component, plan_block, resolve_constraints, resolve_settings, resolve_target,
