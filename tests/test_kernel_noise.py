@@ -85,3 +85,35 @@ def test_a_scene_in_a_batch_gets_the_values_of_its_own_kernel():
     for y in Y:
         batch = np.array(kb(*[np.array([c, c]) for c in y.tolist()]))[:, 0]
         np.testing.assert_allclose(batch, own(*y.tolist()), rtol=1e-15, atol=1e-15 * np.max(np.abs(batch)))
+
+
+def test_one_scene_values_are_the_batch_values():
+    """The one-scene parameter values (Python floats, ``_one_scene_values``)
+    are the batch code's for that scene: every shipped config, alone and
+    with stated products of inertia or rounding noise added."""
+    import glob
+
+    from bifilar.config import read_yaml, scene_from_dict
+
+    rng = np.random.default_rng(11)
+    scenes = []
+    for path in sorted(glob.glob(str(ROOT / "configs" / "*.yaml"))):
+        try:
+            scenes.append(scene_from_dict(read_yaml(path), warn=False))
+        except Exception:  # noqa: BLE001 - measurement files are not scenes
+            continue
+    more = []
+    for sc in scenes:
+        I = np.array(sc.inertia, float)
+        A = rng.normal(size=(3, 3)) * np.max(np.diag(I))
+        more.append(replace(sc, inertia=I + 0.02 * (A + A.T)))
+        more.append(replace(sc, inertia=I + 1e-17 * (A + A.T),
+                            attachments=np.array(sc.attachments) + rng.normal(0.0, 1e-18, np.shape(sc.attachments))))
+    assert len(scenes) >= 8
+    for sc in scenes + more:
+        one = mx._param_values(mx.params_from_scenes(sc))
+        batch = mx._param_values(mx.params_from_scenes([sc, sc]))
+        assert set(one) == set(batch)
+        for k, v in one.items():
+            assert type(v) is float, k
+            np.testing.assert_allclose(v, batch[k][0], rtol=1e-15, atol=0.0, err_msg=k)
