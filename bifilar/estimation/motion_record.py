@@ -91,7 +91,7 @@ def read_motion(path, n_wires: int) -> MotionRecord:
     T = np.c_[tuple(data[f"tension_{i + 1}"] for i in range(n_wires))]
     # second differences were biased by ~(omega h)^2 / 3, 0.3 % at 64 samples per period, far beyond the
     # estimate's std; local quartic fits over 9 samples (Savitzky-Golay) err by ~1e-5 there and pass less
-    # noise; unevenly sampled records take quintic interpolating splines (as accurate, noisier)
+    # noise; unevenly sampled records take the same fits at their actual times (estimation/local_fits.py)
     conj = q * np.array([1, -1, -1, -1])
 
     def rates(spline):
@@ -114,8 +114,8 @@ SG_WINDOW, SG_ORDER = 9, 4
 def alpha_noise(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray | None, float]:
     """((3, 3) (rad/s^2)^2, the covariance of the noise each sample of the
     body-axes angular acceleration from :func:`derivatives` carries, and the
-    relative standard error of that estimate), or (None, 0) for an unevenly
-    sampled record (its splines' noise gain is not a fixed filter's).
+    relative standard error of that estimate), or (None, 0) for a record
+    of fewer than ``3 SG_WINDOW`` samples.
 
     The attitude's noise is estimated from the record itself: the residual
     of the local fits' smoothing, ``q - S q``, in body axes as a small
@@ -131,43 +131,71 @@ def alpha_noise(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray | None, float]
     ``SG_WINDOW // 2`` samples, fitted off-centre, are left out.  The
     standard error: ``sqrt(2 / n_eff)``, ``n_eff`` the residuals' count
     times ``1 - c_0`` (the local projections' share of free residual
-    directions) per axis."""
+    directions) per axis.  Jittered time stamps (session 20): the fits at
+    the actual times (:mod:`~bifilar.estimation.local_fits`), ``c_0`` and
+    the gain sample by sample, ``C_theta = sum eps eps^T / sum(1 - c_0)``
+    and the gain the interior samples' mean (the corrected normal
+    equations need the noise summed over the samples)."""
     from scipy.signal import savgol_coeffs, savgol_filter
 
     from ..rotations import quat_multiply
     from .design_noise import variance_rse
 
-    dt = np.diff(t)
-    if not np.ptp(dt) <= 1e-6 * np.median(dt) or len(t) < 3 * SG_WINDOW:
+    if len(t) < 3 * SG_WINDOW:
         return None, 0.0
     half = SG_WINDOW // 2
-    eps = 2 * quat_multiply(q * np.array([1, -1, -1, -1]), q - savgol_filter(q, SG_WINDOW, SG_ORDER, axis=0))[:, 1:]
-    eps = eps[half:-half]
-    c0 = float(savgol_coeffs(SG_WINDOW, SG_ORDER)[half])
-    c_theta = eps.T @ eps / (len(eps) * (1 - c0))
-    return c_theta * _second_derivative_gain(t), variance_rse(len(eps) * (1 - c0))
+    if evenly_sampled(t):
+        smooth = savgol_filter(q, SG_WINDOW, SG_ORDER, axis=0)
+        free = np.full(len(t), 1.0 - float(savgol_coeffs(SG_WINDOW, SG_ORDER)[half]))
+    else:  # jittered time stamps: the same fits at the actual times, their weights sample by sample
+        from .local_fits import apply, centre_weight, local_weights
+
+        start, W = local_weights(t, SG_WINDOW, SG_ORDER)
+        smooth, free = apply(start, W, q, 0), 1.0 - centre_weight(start, W)
+    eps = 2 * quat_multiply(q * np.array([1, -1, -1, -1]), q - smooth)[:, 1:]
+    eps, free = eps[half:-half], free[half:-half]
+    c_theta = eps.T @ eps / float(np.sum(free))
+    return c_theta * _second_derivative_gain(t), variance_rse(float(np.sum(free)))
+
+
+def evenly_sampled(t: np.ndarray) -> bool:
+    """Whether the time stamps ``t`` (s) are evenly spaced (to 1e-6 of the
+    median step): the record is then differentiated by fixed filters."""
+    dt = np.diff(t)
+    return bool(np.ptp(dt) <= 1e-6 * np.median(dt))
 
 
 def _second_derivative_gain(t: np.ndarray) -> float:
     """s^-4: the sum of the squared weights of :func:`derivatives`' second
-    derivative at a centred sample of the evenly spaced times ``t`` (s)."""
+    derivative at a centred sample of the evenly spaced times ``t`` (s);
+    for jittered times the mean of that sum over the interior samples
+    (:func:`interior`; the local fits at the actual times,
+    :mod:`~bifilar.estimation.local_fits`)."""
     from scipy.signal import savgol_coeffs
 
+    if not evenly_sampled(t):
+        from .local_fits import local_weights, second_derivative_gain
+
+        half = SG_WINDOW // 2
+        return float(np.mean(second_derivative_gain(local_weights(t, SG_WINDOW, SG_ORDER)[1])[half:-half]))
     h = float(np.mean(np.diff(t)))
     return float(np.sum(savgol_coeffs(SG_WINDOW, SG_ORDER, deriv=2, delta=h) ** 2))
 
 
 def derivatives(t: np.ndarray, x: np.ndarray, spline: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """First and second time derivatives of samples ``x`` (k, m) at times ``t`` (k,), s: local quartic
-    least-squares fits over 9 samples (Savitzky-Golay) when the sampling is even, else (or with
-    ``spline``) quintic interpolating splines."""
-    dt = np.diff(t)
-    if not spline and np.ptp(dt) <= 1e-6 * np.median(dt):
+    least-squares fits over 9 samples (Savitzky-Golay when the sampling is even, else the same fits at the
+    actual times, :mod:`~bifilar.estimation.local_fits`), or with ``spline`` quintic interpolating splines."""
+    if not spline and evenly_sampled(t):
         from scipy.signal import savgol_filter
 
-        h = float(np.mean(dt))
+        h = float(np.mean(np.diff(t)))
         return (savgol_filter(x, SG_WINDOW, SG_ORDER, deriv=1, delta=h, axis=0),
                 savgol_filter(x, SG_WINDOW, SG_ORDER, deriv=2, delta=h, axis=0))
+    if not spline:
+        from .local_fits import derivatives as local_derivatives
+
+        return local_derivatives(t, x)
     from scipy.interpolate import make_interp_spline
 
     s = make_interp_spline(t, x, k=5, axis=0)
@@ -220,7 +248,8 @@ def interior(rec: MotionRecord) -> slice:
     evaluated off their centre (the second derivative's noise gain 6-24
     times the centre's, session 19: with 0.5 mrad of attitude noise those 8
     samples of 513 made the sandwich std range 0.02-0.16 for a spread of
-    0.057 kg m^2); all of an unevenly sampled one (splines)."""
+    0.057 kg m^2), evenly sampled or not; all of a record too short for
+    the noise's estimate (:func:`alpha_noise`)."""
     if rec.alpha_noise is None:
         return slice(0, len(rec.t))
     return slice(SG_WINDOW // 2, len(rec.t) - SG_WINDOW // 2)
@@ -233,8 +262,9 @@ def differentiation_error(rec: MotionRecord) -> float:
     velocity about its mean, rad/s): ``|H(w) / (-w^2) - 1|``, ``H`` the
     second-derivative filter's response, times :data:`DIFFERENTIATION_SAFETY`.
     A systematic error of the inertia of that relative size (alpha scales
-    the design); 0 for an
-    unevenly sampled record (no filter).  It replaces (session 19) the
+    the design); for jittered time stamps the RMS over the interior samples
+    of each one's fit's error at the actual times; 0 for a record too short
+    for the noise's estimate.  It replaces (session 19) the
     difference between the quartic fits' and interpolating quintic
     splines' estimates, which on a noisy record measured the splines' noise
     (0.5 mrad of attitude noise: 83 % of Izz), not the fits' truncation."""
@@ -250,6 +280,12 @@ def differentiation_error(rec: MotionRecord) -> float:
     if spread <= 0 or power <= 0:
         return 0.0
     freq = math.sqrt(power / spread)
+    if not evenly_sampled(rec.t):  # each sample's own fit at its actual times: the RMS of their errors
+        from .local_fits import local_weights, second_derivative_error
+
+        start, W = local_weights(rec.t, SG_WINDOW, SG_ORDER)
+        err = second_derivative_error(rec.t, start, W, freq)[sl]
+        return DIFFERENTIATION_SAFETY * float(np.sqrt(np.mean(err ** 2)))
     c2 = savgol_coeffs(SG_WINDOW, SG_ORDER, deriv=2, delta=h, use="dot")
     H = float(np.sum(c2 * np.cos(freq * h * (np.arange(SG_WINDOW) - SG_WINDOW // 2))))
     return DIFFERENTIATION_SAFETY * abs(H / -freq ** 2 - 1.0)
@@ -274,11 +310,11 @@ class RecordInertia:
     differentiation's systematic part (:func:`differentiation_error`).
     dilution : per component, how far plain least squares would have pulled
     the value toward zero by the poses' noise (``1 - plain / corrected``; 0
-    for an unevenly sampled record, not corrected).  noise_undetermined :
+    for a record too short for the noise's estimate, not corrected).  noise_undetermined :
     components whose design the poses' noise swamps
     (:data:`~bifilar.estimation.design_noise.DILUTION_MAX`).
     attitude_noise : the estimated attitude noise, rad RMS per axis (None
-    unevenly sampled).
+    where not estimated).
     """
 
     est: object
