@@ -115,7 +115,9 @@ def alpha_noise(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray | None, float]
     """((3, 3) (rad/s^2)^2, the covariance of the noise each sample of the
     body-axes angular acceleration from :func:`derivatives` carries, and the
     relative standard error of that estimate), or (None, 0) for a record
-    of fewer than ``3 SG_WINDOW`` samples.
+    of fewer than ``2 SG_WINDOW`` samples (``read_motion`` refuses fewer than
+    20; from 18 on, 10 interior samples, the noise is estimated, session 20:
+    a 26-sample record was left uncorrected and 22 % low).
 
     The attitude's noise is estimated from the record itself: the residual
     of the local fits' smoothing, ``q - S q``, in body axes as a small
@@ -141,7 +143,7 @@ def alpha_noise(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray | None, float]
     from ..rotations import quat_multiply
     from .design_noise import variance_rse
 
-    if len(t) < 3 * SG_WINDOW:
+    if len(t) < 2 * SG_WINDOW:
         return None, 0.0
     half = SG_WINDOW // 2
     if evenly_sampled(t):
