@@ -37,8 +37,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
     from ..config import load_scene
     from ..estimation.from_tensions import inertia_from_tensions
-    from ..estimation.motion_record import (length_mismatch, pose_noise_reason, pose_noise_warnings,
-                                            product_noise_reason, read_motion, record_inertia)
+    from ..estimation.motion_record import (general_noise_warning, general_tension_noise, length_mismatch,
+                                            pose_noise_reason, pose_noise_warnings, product_noise_reason, read_motion,
+                                            record_inertia)
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
@@ -88,6 +89,17 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                        "max_residual": float(resid.max()),
                        "determined": scene.n_wires <= 3},
            "max_wire_length_mismatch": mismatch}
+    # the general tensions rest on the differentiated CoM acceleration: a record's CoM noise passes into them
+    # (session 20: stated, per wire the RMS and the largest std over the samples; 0 for a simulated motion,
+    # whose acceleration is the model's)
+    gen_noise = general_tension_noise(rec, scene.mass, u) if motion is not None else np.zeros_like(F_gen)
+    if gen_noise is not None:
+        doc["general"]["noise_std"] = np.sqrt(np.mean(gen_noise ** 2, axis=0))
+        doc["general"]["noise_std_max"] = gen_noise.max(axis=0)
+        gw = None if motion is None else general_noise_warning(
+            doc["general"]["noise_std"], T_model, math.sqrt(float(np.trace(rec.com_noise)) / 3))
+        if gw:
+            click.echo(f"warning: {gw}", err=True)
     if scene.n_wires > 3:
         doc["general"]["note"] = (f"underdetermined: {scene.n_wires} wires, 3 equations (Newton's law); the minimum-norm "
                                   "tensions balance the forces but are not the wire tensions")

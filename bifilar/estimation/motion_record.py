@@ -29,6 +29,8 @@ class MotionRecord:
     world.  alt : (omega, alpha) the same rates differentiated another way
     (quintic interpolating splines), whose difference is the rates'
     systematic error (:func:`~bifilar.estimation.from_tensions.record_std`).
+    alpha_noise, alpha_noise_rse : :func:`alpha_noise`.  com_noise : (3, 3)
+    m^2, :func:`com_noise` (None for a short record).
     """
 
     t: np.ndarray
@@ -40,6 +42,7 @@ class MotionRecord:
     alt: tuple
     alpha_noise: np.ndarray | None = None
     alpha_noise_rse: float = 0.0
+    com_noise: np.ndarray | None = None
 
 
 def read_motion(path, n_wires: int) -> MotionRecord:
@@ -104,7 +107,7 @@ def read_motion(path, n_wires: int) -> MotionRecord:
     y = np.zeros((len(t), 13))
     y[:, 0:3], y[:, 3:7], y[:, 7:10], y[:, 10:13] = com, q, vel, omega
     noise, rse = alpha_noise(t, q)
-    return MotionRecord(t, y, T, omega, accel, alpha, rates(True), noise, rse)
+    return MotionRecord(t, y, T, omega, accel, alpha, rates(True), noise, rse, com_noise(t, com))
 
 
 SG_WINDOW, SG_ORDER = 9, 4
@@ -145,19 +148,102 @@ def alpha_noise(t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray | None, float]
 
     if len(t) < 2 * SG_WINDOW:
         return None, 0.0
-    half = SG_WINDOW // 2
-    if evenly_sampled(t):
-        smooth = savgol_filter(q, SG_WINDOW, SG_ORDER, axis=0)
-        free = np.full(len(t), 1.0 - float(savgol_coeffs(SG_WINDOW, SG_ORDER)[half]))
-    else:  # jittered time stamps: the same fits at the actual times, their weights sample by sample
-        from .local_fits import apply, centre_weight, local_weights
-
-        start, W = local_weights(t, SG_WINDOW, SG_ORDER)
-        smooth, free = apply(start, W, q, 0), 1.0 - centre_weight(start, W)
+    smooth, free = _smoothed(t, q)
     eps = 2 * quat_multiply(q * np.array([1, -1, -1, -1]), q - smooth)[:, 1:]
+    c_theta = _residual_covariance(eps, free)
+    return c_theta * _second_derivative_gain(t), variance_rse(float(np.sum(free[SG_WINDOW // 2:-(SG_WINDOW // 2)])))
+
+
+def _smoothed(t: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the local fits' smoothed ``x`` (k, m), each sample's ``1 - c_0``
+    (k,), the share of its white noise the residual ``x - S x`` keeps):
+    Savitzky-Golay for evenly spaced ``t`` (s), else the fits at the actual
+    times (:mod:`~bifilar.estimation.local_fits`)."""
+    from scipy.signal import savgol_coeffs, savgol_filter
+
+    if evenly_sampled(t):
+        c0 = float(savgol_coeffs(SG_WINDOW, SG_ORDER)[SG_WINDOW // 2])
+        return savgol_filter(x, SG_WINDOW, SG_ORDER, axis=0), np.full(len(t), 1.0 - c0)
+    from .local_fits import apply, centre_weight, local_weights
+
+    start, W = local_weights(t, SG_WINDOW, SG_ORDER)
+    return apply(start, W, x, 0), 1.0 - centre_weight(start, W)
+
+
+def _residual_covariance(eps: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """(m, m): the white noise's covariance per sample from the smoothing
+    residuals ``eps`` (k, m) and their ``1 - c_0`` ``free`` (k,) of
+    :func:`_smoothed`, over the interior samples (the first and last
+    ``SG_WINDOW // 2``, fitted off centre, left out)."""
+    half = SG_WINDOW // 2
     eps, free = eps[half:-half], free[half:-half]
-    c_theta = eps.T @ eps / float(np.sum(free))
-    return c_theta * _second_derivative_gain(t), variance_rse(float(np.sum(free)))
+    return eps.T @ eps / float(np.sum(free))
+
+
+def com_noise(t: np.ndarray, com: np.ndarray) -> np.ndarray | None:
+    """(3, 3) m^2: the covariance of the white noise each recorded CoM
+    position (world, m) carries, estimated as :func:`alpha_noise` estimates
+    the attitude's (the local fits' residuals, ``C (1 - c_0)``), or None for
+    a record of fewer than ``2 SG_WINDOW`` samples.  A smooth motion leaves
+    the fits' truncation (~1e-5 of the motion at 64 samples a period),
+    which counts as noise (the safe side)."""
+    if len(t) < 2 * SG_WINDOW:
+        return None
+    smooth, free = _smoothed(t, com)
+    return _residual_covariance(com - smooth, free)
+
+
+def general_tension_noise(rec: MotionRecord, mass: float, units: np.ndarray) -> np.ndarray | None:
+    """(k, n) N: the std of each sample's general tensions
+    (:func:`~bifilar.analysis.tensions.general_tensions`) from the record's
+    CoM noise (:func:`com_noise`): the CoM acceleration's noise, covariance
+    ``C_com`` times the second derivative's gain, through each sample's
+    pseudo-inverse of the wire directions ``units`` (k, n, 3) times
+    ``mass`` kg (the directions' own noise, ``C_com / L^2`` of the tension,
+    is 1e-4 of it at 64 samples a period and left out).  None where the
+    noise is not estimated (a record shorter than ``2 SG_WINDOW``)."""
+    from ..analysis.tensions import general_tensions_noise
+
+    if rec.com_noise is None:
+        return None
+    return general_tensions_noise(mass, units, rec.com_noise, _second_derivative_gains(rec.t))
+
+
+def _second_derivative_gains(t: np.ndarray) -> np.ndarray:
+    """(k,) s^-4: each sample's sum of squared second-derivative weights
+    of :func:`derivatives` (the record's end samples, fitted off centre,
+    6-24 times the centre's)."""
+    from .local_fits import local_weights, second_derivative_gain
+
+    if not evenly_sampled(t):
+        return second_derivative_gain(local_weights(t, SG_WINDOW, SG_ORDER)[1])
+    gains = np.full(len(t), _second_derivative_gain(t))
+    half = SG_WINDOW // 2
+    gains[:half] = second_derivative_gain(local_weights(t[:SG_WINDOW], SG_WINDOW, SG_ORDER)[1])[:half]
+    gains[-half:] = second_derivative_gain(local_weights(t[-SG_WINDOW:], SG_WINDOW, SG_ORDER)[1])[-half:]
+    return gains
+
+
+GENERAL_NOISE_WARN = 0.01
+"""The general tensions' noise std (:func:`general_tension_noise`, RMS over
+the samples) above this fraction of a wire's mean tension is said in a
+warning."""
+
+
+def general_noise_warning(noise_std: np.ndarray, tensions: np.ndarray, com_std: float) -> str | None:
+    """One line when some wire's general-tension noise ``noise_std`` (n,) N
+    (RMS over the samples) exceeds :data:`GENERAL_NOISE_WARN` of its mean
+    recorded tension (``tensions`` (k, n) N), else None; ``com_std`` m, the
+    CoM's noise RMS per axis."""
+    mean = np.abs(np.mean(tensions, axis=0))
+    rel = noise_std / np.maximum(mean, 1e-300)
+    worst = int(np.argmax(rel))
+    if not rel[worst] > GENERAL_NOISE_WARN:
+        return None
+    return (f"--motion: the record's CoM noise ({com_std * 1e3:.2g} mm RMS per axis, estimated from the record) "
+            f"passes into the differentiated CoM acceleration: the thesis's general tensions carry a noise of "
+            f"{noise_std[worst]:.3g} N RMS on wire {worst + 1} ({rel[worst]:.1%} of its mean tension; general.noise_std "
+            "per wire); record the CoM more finely or compare them with the load cells over a smoothed motion")
 
 
 def evenly_sampled(t: np.ndarray) -> bool:
