@@ -140,7 +140,7 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
                           components=("Ixx", "Iyy", "Izz"), threshold: float = POORLY_EXCITED,
                           fix_poorly_excited: bool = True, geometry: dict | None = None,
                           alpha_noise: np.ndarray | None = None, alpha_noise_rse: float = 0.0,
-                          hold: tuple = ()) -> TensionInertia:
+                          hold: tuple = (), min_lag: int = 0) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     With ``fix_poorly_excited`` (default) the components the motion does not
@@ -174,6 +174,10 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     ``hold``: components held at the scene's values from the start and
     listed as poorly excited (a caller's reason: the products of a record
     with attitude noise, :func:`~bifilar.estimation.motion_record.record_inertia`).
+
+    ``min_lag``: the least lag window (samples) of the sandwich's scores
+    (:func:`_score_covariance`): a record's rates differentiated by a
+    filter of ``w`` samples carry noise correlated over ``w - 1`` samples.
     """
     if alpha is None:
         alpha = np.gradient(omega, t, axis=0, edge_order=2)
@@ -185,12 +189,13 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     components = tuple(components)
     if hold:  # held from the start (at the config's values), as poorly excited ones
         return _held(scene, components, lambda cs: _solve(scene, t, com, R, omega, tensions, alpha, cs, threshold, B,
-                                                          noise, alpha_noise_rse), [c for c in components if c in hold])
-    first = _solve(scene, t, com, R, omega, tensions, alpha, components, threshold, B, noise, alpha_noise_rse)
+                                                          noise, alpha_noise_rse, min_lag),
+                     [c for c in components if c in hold])
+    first = _solve(scene, t, com, R, omega, tensions, alpha, components, threshold, B, noise, alpha_noise_rse, min_lag)
     if not fix_poorly_excited or not first.poorly_excited:
         return first
     return _held(scene, components, lambda cs: _solve(scene, t, com, R, omega, tensions, alpha, cs, threshold, B, noise,
-                                                      alpha_noise_rse), [], first)
+                                                      alpha_noise_rse, min_lag), [], first)
 
 
 def _held(scene: Scene, components: tuple, solve, poor: list, first: TensionInertia | None = None) -> TensionInertia:
@@ -233,7 +238,8 @@ def _held(scene: Scene, components: tuple, solve, poor: list, first: TensionIner
 
 
 def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold,
-           B: np.ndarray | None = None, noise: np.ndarray | None = None, noise_rse: float = 0.0) -> TensionInertia:
+           B: np.ndarray | None = None, noise: np.ndarray | None = None, noise_rse: float = 0.0,
+           min_lag: int = 0) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     Parameters
@@ -251,6 +257,7 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     noise, noise_rse : the design's per-sample error covariance (6, 6) and
         the relative standard error of that estimate
         (:mod:`~bifilar.estimation.design_noise`), or None: exact rates.
+    min_lag : the least lag window of the sandwich (:func:`_score_covariance`).
 
     The config's geometry enters the torques ``b`` only (the design ``A``
     is the motion's), linearly over its uncertainty: ``b = A theta + B
@@ -287,7 +294,7 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     g = _scores(As3, r3)  # (k, m)
     if eiv is not None:  # the corrected normal equations' scores, less each sample's expected noise product (r = A x - b)
         g = g - eiv[1]
-    meat, lags = _score_covariance(g, len(comps))
+    meat, lags = _score_covariance(g, len(comps), min_lag)
     f = np.sqrt(_leverage_correction(As3, r3, bread, lags, extra, weight))
     cov = f[:, None] * (bread @ meat @ bread) * f[None, :] / np.outer(scale, scale)
     h2 = (g @ bread) ** 2  # each sample's share of each component's error, squared
@@ -539,7 +546,7 @@ def record_std(est: TensionInertia, other: TensionInertia | None = None,
     return std, dict(g), interval, dof
 
 
-def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
+def _score_covariance(g: np.ndarray, m: int, min_lag: int = 0) -> tuple[np.ndarray, int]:
     """Covariance of the least-squares score ``sum_k A_k^T r_k`` (the
     sandwich's meat), robust to what the white-noise ``s^2 A^T A`` assumes
     away: the three torque rows of a sample share the same tension noise and
@@ -553,7 +560,9 @@ def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
     ``sum_{|l| <= W} Gamma(l)`` with ``Gamma(l) = sum_k g_k g_{k+l}^T``,
     the lag window ``W`` chosen as the smallest with ``W >= 5 tau(W)``
     (Sokal's self-consistent window; ``tau`` the largest integrated
-    autocorrelation time of the scores' components) and capped at k / 4,
+    autocorrelation time of the scores' components), at least ``min_lag``
+    (the span of a differentiating filter's noise correlation, which the
+    scores' estimated autocorrelation can miss) and capped at k / 4,
     negative eigenvalues of the truncated sum clipped to zero.  Residuals
     stand in for the errors, so the sum is biased low (for the fitted
     parameters, ``m`` of them): :func:`_leverage_correction` removes that.
@@ -564,7 +573,7 @@ def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
     d0 = np.maximum(np.diag(g0), 1e-300)
     meat, tau, W = g0.copy(), np.ones(m), 0
     for lag in range(1, max(k // 4, 1) + 1):
-        if lag >= 5 * tau.max():
+        if lag >= 5 * tau.max() and lag > min_lag:
             break
         G = g[lag:].T @ g[:-lag]
         meat += G + G.T
