@@ -289,10 +289,15 @@ def test_fixing_the_unexcited_components_is_solving_for_the_excited_one_alone():
     T = r.tensions + np.random.default_rng(7).normal(0, 0.5, r.tensions.shape)
     args = (s, r.t, r.y[:, 0:3], R, r.y[:, 10:13], T)
     six = inertia_from_tensions(*args, components=("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
-    assert set(six.poorly_excited) == {"Ixx", "Iyy", "Ixy", "Ixz", "Iyz"}
-    one = inertia_from_tensions(*args, components=("Izz",))
-    assert six.values["Izz"] == pytest.approx(one.values["Izz"], rel=1e-9)
-    assert six.std["Izz"] == pytest.approx(one.std["Izz"], rel=1e-9)
+    # session 20: a std above 1/1.96 of the scale (sqrt(I_ii I_jj) for a product), not 1 % of the value, so
+    # the torsion's Ixz and Iyz (with alpha_z in the x and y rows) may be determined beside Izz
+    assert {"Ixx", "Iyy", "Ixy"} <= set(six.poorly_excited) and "Izz" not in six.poorly_excited
+    keep = tuple(c for c in six.components if c not in six.poorly_excited)
+    one = inertia_from_tensions(*args, components=keep)
+    assert one.poorly_excited == []
+    for c in keep:
+        assert six.values[c] == pytest.approx(one.values[c], rel=1e-9, abs=1e-12)
+        assert six.std[c] == pytest.approx(one.std[c], rel=1e-9)
     assert np.isnan(six.correlation[0, 2]) and six.correlation[2, 2] == pytest.approx(1.0)
 
 

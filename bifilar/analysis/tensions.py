@@ -57,3 +57,14 @@ def general_tensions(mass: float, gravity: float, accel: np.ndarray, units: np.n
     F = np.einsum("kni,ki->kn", pinv, rhs)
     res = np.linalg.norm(np.einsum("kin,kn->ki", A, F) - rhs, axis=-1)
     return F, res
+
+
+def general_tensions_noise(mass: float, units: np.ndarray, accel_cov: np.ndarray, gain=1.0) -> np.ndarray:
+    """(k, n) N: the std of :func:`general_tensions` at each sample from a
+    noise of covariance ``accel_cov`` (3, 3) (m/s^2)^2 times ``gain`` (a
+    scalar or (k,), per sample) in each sample's CoM acceleration (world):
+    ``mass sqrt(gain diag(P C P^T))``, ``P`` (n, 3) the sample's
+    pseudo-inverse of the wire directions ``units`` (k, n, 3)."""
+    P = np.linalg.pinv(np.swapaxes(units, -1, -2))  # (k, n, 3)
+    var = np.einsum("kni,ij,knj->kn", P, np.asarray(accel_cov, float), P) * np.reshape(gain, (-1, 1))
+    return mass * np.sqrt(np.maximum(var, 0.0))

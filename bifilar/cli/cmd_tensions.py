@@ -37,7 +37,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..analysis.tensions import general_tensions, symmetric_tension, wire_units
     from ..config import load_scene
     from ..estimation.from_tensions import inertia_from_tensions
-    from ..estimation.motion_record import (length_mismatch, pose_noise_reason, pose_noise_warnings, read_motion,
+    from ..estimation.motion_record import (general_noise_warning, general_tension_noise, length_mismatch,
+                                            pose_noise_reason, pose_noise_warnings, product_noise_reason, read_motion,
                                             record_inertia)
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
@@ -88,6 +89,17 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
                        "max_residual": float(resid.max()),
                        "determined": scene.n_wires <= 3},
            "max_wire_length_mismatch": mismatch}
+    # the general tensions rest on the differentiated CoM acceleration: a record's CoM noise passes into them
+    # (session 20: stated, per wire the RMS and the largest std over the samples; 0 for a simulated motion,
+    # whose acceleration is the model's)
+    gen_noise = general_tension_noise(rec, scene.mass, u) if motion is not None else np.zeros_like(F_gen)
+    if gen_noise is not None:
+        doc["general"]["noise_std"] = np.sqrt(np.mean(gen_noise ** 2, axis=0))
+        doc["general"]["noise_std_max"] = gen_noise.max(axis=0)
+        gw = None if motion is None else general_noise_warning(
+            doc["general"]["noise_std"], T_model, math.sqrt(float(np.trace(rec.com_noise)) / 3))
+        if gw:
+            click.echo(f"warning: {gw}", err=True)
     if scene.n_wires > 3:
         doc["general"]["note"] = (f"underdetermined: {scene.n_wires} wires, 3 equations (Newton's law); the minimum-norm "
                                   "tensions balance the forces but are not the wire tensions")
@@ -122,14 +134,15 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
             click.echo(f"warning: {w}", err=True)
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
     # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
-    undetermined = [c for c in comps if not std[c] == std[c]]
+    undetermined = [c for c in comps if not std[c] == std[c] or c in est.poorly_excited]
     doc["inertia_from_tensions"] = {
         c: {"value": None if c in undetermined else est.values[c], "std": std[c],
             "dof": None if c in undetermined else dof.get(c),
             "interval_95": interval[c] if interval else est.interval95(c, std[c]),
             "config": float(scene.inertia[_idx(c)])} for c in comps}
     for c in undetermined:
-        doc["inertia_from_tensions"][c]["reason"] = pose_noise_reason(fit) if c in noisy else NOT_DETERMINED
+        doc["inertia_from_tensions"][c]["reason"] = (pose_noise_reason(fit) if c in noisy else product_noise_reason(fit)
+                                                     if motion is not None and c in fit.products_held else NOT_DETERMINED)
     if std_inputs is not None:  # the config geometry's share of std (record_std)
         for c in comps:
             doc["inertia_from_tensions"][c]["std_geometry"] = std_inputs.get(c) if c not in undetermined else None
@@ -140,9 +153,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         for c in comps:
             doc["inertia_from_tensions"][c].update({"value": None, "std": None, "dof": None, "interval_95": None,
                                                     "reason": slack})
-    # the estimator's rule (relative std above 1 %) applied to the std with the differentiation term
-    poor = list(est.poorly_excited) + [c for c in comps if c not in est.poorly_excited
-                                       and not std[c] <= 0.01 * abs(est.values[c])]
+    # exactly the components that get no value (the estimator's rule, std above 1/1.96 of the component's
+    # scale, also applied to a record's std with the differentiation term by record_inertia)
+    poor = list(undetermined)
     doc["inertia_from_tensions_poorly_excited"] = poor
     doc["inertia_from_tensions_residual_rms"] = est.residual_rms
     if out_p:
@@ -198,9 +211,10 @@ def slack_reason(slack: list) -> str:
 
 
 NOT_DETERMINED = ("not determined: the motion hardly excites this component (its torque is at rounding level "
-                  "or its relative std, with the config geometry's for a record, above 1 % in a first fit), so the record "
-                  "cannot determine it (beside better-excited components the fit holds it at the config's value); "
-                  "excite a mode that turns the body about this axis")
+                  "or its std, with the config geometry's and the differentiation's for a record, above 1/1.96 of its "
+                  "scale, the config's I_ii or sqrt(I_ii I_jj) for a product: its 95 % interval would span more "
+                  "than +-the scale), so the record cannot determine it (beside better-excited components the fit "
+                  "holds it at the config's value); excite a mode that turns the body about this axis")
 """The reason a component's ``value`` is ``null`` in ``inertia_from_tensions``."""
 
 SIM_RTOL = 1e-11

@@ -28,6 +28,7 @@ from .design_noise import design_noise
 from ..scene import Scene
 
 COMPONENTS = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+_INDEX = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}
 
 
 @dataclass(frozen=True)
@@ -36,7 +37,10 @@ class TensionInertia:
 
     values, std : dict component -> value / standard uncertainty.
     correlation : (m, m) correlation matrix of the solved components.
-    poorly_excited : components whose relative std exceeds ``threshold``.
+    poorly_excited : components the motion does not determine (torques at
+    rounding level, or a std above ``threshold`` of the component's scale,
+    :func:`component_scale`): exactly those whose ``std`` is NaN (a single
+    pass of ``_solve``: worst first).
     residual_rms : N m.  condition : condition number of the scaled design matrix.
     lag_window : samples of residual serial correlation the std accounts for
     (0: uncorrelated); see :func:`_score_covariance`.
@@ -86,6 +90,24 @@ class TensionInertia:
         return [self.values[c] - k * s, self.values[c] + k * s]
 
 
+POORLY_EXCITED = 1 / 1.959963984540054
+"""A component whose standard uncertainty exceeds this fraction of its
+scale (:func:`component_scale`) is poorly excited and gets no value: its
+95 % interval would be wider than +-1 scale, so the record cannot tell even
+its size (session 20; before, 1 % of the value, which flagged every product
+of inertia near zero and disagreed with the components the CLI printed)."""
+
+
+def component_scale(scene: Scene, c: str) -> float:
+    """kg m^2: the scale a component's std is judged against
+    (:data:`POORLY_EXCITED`): ``I_ii`` for a moment, ``sqrt(I_ii I_jj)``
+    for a product ``I_ij`` (the bound ``|I_ij| <= sqrt(I_ii I_jj)`` of a
+    positive definite tensor; a product is often zero, so its own value is
+    no scale), from the config's (``scene``'s) moments."""
+    i, j = {"Ixx": (0, 0), "Iyy": (1, 1), "Izz": (2, 2), "Ixy": (0, 1), "Ixz": (0, 2), "Iyz": (1, 2)}[c]
+    return float(math.sqrt(abs(scene.inertia[i, i] * scene.inertia[j, j])))
+
+
 def euler_design(omega: np.ndarray, alpha: np.ndarray, components=COMPONENTS) -> np.ndarray:
     """Design matrix (k, 3, m): (I alpha + w x I w) = A @ [components].
 
@@ -115,19 +137,23 @@ def wire_torque_body(scene: Scene, com: np.ndarray, R: np.ndarray, tensions: np.
 
 def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.ndarray, omega: np.ndarray,
                           tensions: np.ndarray, alpha: np.ndarray | None = None,
-                          components=("Ixx", "Iyy", "Izz"), threshold: float = 0.01,
+                          components=("Ixx", "Iyy", "Izz"), threshold: float = POORLY_EXCITED,
                           fix_poorly_excited: bool = True, geometry: dict | None = None,
-                          alpha_noise: np.ndarray | None = None, alpha_noise_rse: float = 0.0) -> TensionInertia:
+                          alpha_noise: np.ndarray | None = None, alpha_noise_rse: float = 0.0,
+                          hold: tuple = (), min_lag: int = 0) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     With ``fix_poorly_excited`` (default) the components the motion does not
-    excite are fixed at the scene's values and the others re-estimated: an
-    unexcited column otherwise soaks up noise and drags the well-determined
-    components with it.  The fixed ones are listed in ``poorly_excited`` and
-    reported with their first-pass value and no std (NaN): the motion does
-    not determine them, and the first pass's residual std does not bound
-    their error (the Solar Boat's torsion gave Iyy 236 +- 3 kg m^2 for
-    317, its residuals at rounding level).
+    excite (torques at rounding level, or a std above ``threshold`` of the
+    component's scale, :func:`component_scale`) are fixed at the scene's
+    values and the others re-estimated: an unexcited column otherwise soaks
+    up noise and drags the well-determined components with it.  The fixed
+    ones are listed in ``poorly_excited`` and reported with their first-pass
+    value and no std (NaN), also where every requested component is poorly
+    excited (none is then fitted): the motion does not determine them, and
+    the first pass's residual std does not bound their error (the Solar
+    Boat's torsion gave Iyy 236 +- 3 kg m^2 for 317, its residuals at
+    rounding level).
 
     ``geometry``: the standard uncertainties of the config's geometry when
     it is measured (a dict of overrides of
@@ -135,8 +161,7 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     the defaults: ``position`` m, ``com`` m): its part of each component's
     uncertainty is returned as ``std_geometry``, and its share of the
     residuals is removed before their std is taken (see :func:`_solve`);
-    the relative-std rule for ``poorly_excited`` then applies to both in
-    quadrature.  None (default): the geometry is exact.
+    the rule for ``poorly_excited`` then applies to both in quadrature.  None (default): the geometry is exact.
 
     ``alpha_noise`` (3, 3) (rad/s^2)^2: the covariance of the noise each
     sample of ``alpha`` (body axes) carries when it is differentiated from
@@ -145,6 +170,14 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
     least squares are then corrected for the noise in their design
     (:mod:`~bifilar.estimation.design_noise`), which otherwise pulls every
     estimate toward zero.  None (default): the rates are exact.
+
+    ``hold``: components held at the scene's values from the start and
+    listed as poorly excited (a caller's reason: the products of a record
+    with attitude noise, :func:`~bifilar.estimation.motion_record.record_inertia`).
+
+    ``min_lag``: the least lag window (samples) of the sandwich's scores
+    (:func:`_score_covariance`): a record's rates differentiated by a
+    filter of ``w`` samples carry noise correlated over ``w - 1`` samples.
     """
     if alpha is None:
         alpha = np.gradient(omega, t, axis=0, edge_order=2)
@@ -153,36 +186,60 @@ def inertia_from_tensions(scene: Scene, t: np.ndarray, com: np.ndarray, R: np.nd
         B = geometry_jacobian(scene, com, R, _motion_fit(com, R, omega, alpha, tensions), geometry)[1]
         B = B.reshape(3 * len(t), -1)
     noise = None if alpha_noise is None else design_noise(alpha_noise)
-    first = _solve(scene, t, com, R, omega, tensions, alpha, tuple(components), threshold, B, noise, alpha_noise_rse)
+    components = tuple(components)
+    if hold:  # held from the start (at the config's values), as poorly excited ones
+        return _held(scene, components, lambda cs: _solve(scene, t, com, R, omega, tensions, alpha, cs, threshold, B,
+                                                          noise, alpha_noise_rse, min_lag),
+                     [c for c in components if c in hold])
+    first = _solve(scene, t, com, R, omega, tensions, alpha, components, threshold, B, noise, alpha_noise_rse, min_lag)
     if not fix_poorly_excited or not first.poorly_excited:
         return first
-    if len(first.poorly_excited) == len(first.components):
-        # nothing to hold the others at: each keeps its fit and std (poorly excited), but one whose torque is at
-        # the rounding level is not determined at all (the drone's torsion gave Ixx 1e-4 +- 7e9 for 0.0082)
-        A2 = euler_design(omega, alpha, first.components).reshape(-1, len(first.components))
-        dead = ~_excited(scene, com, R, tensions, A2, len(t))
-        if not dead.any():
-            return first
-        nan = {c: math.nan for c, d in zip(first.components, dead) if d}
-        return replace(first, std={**first.std, **nan},
-                       std_geometry=None if first.std_geometry is None else {**first.std_geometry, **nan})
-    components = tuple(components)
-    keep = tuple(c for c in components if c not in first.poorly_excited)
-    second = _solve(scene, t, com, R, omega, tensions, alpha, keep, threshold, B, noise, alpha_noise_rse)
-    values = {**first.values, **second.values}
-    nan = {c: math.nan for c in first.poorly_excited}
-    std = {**nan, **second.std}
+    return _held(scene, components, lambda cs: _solve(scene, t, com, R, omega, tensions, alpha, cs, threshold, B, noise,
+                                                      alpha_noise_rse, min_lag), [], first)
+
+
+def _held(scene: Scene, components: tuple, solve, poor: list, first: TensionInertia | None = None) -> TensionInertia:
+    """The fit of :func:`inertia_from_tensions` with its poorly excited
+    components held at the scene's values: ``poor`` (held from the start)
+    and, one pass at a time, the worst that a pass of ``solve`` (a function
+    of the components to fit) flags; ``first`` the pass on every component
+    when there was one (its values kept for the held components, whose std
+    is NaN); else the held ones carry the scene's values."""
+    if first is not None:
+        poor = [first.poorly_excited[0]]
+    # a poorly excited component gets no value (session 20: the list and the nulls agree); the worst one
+    # (_solve lists them worst first) is held at the config's value and the others re-fitted, until no fitted
+    # one is poorly excited: one unexcited column can make every std of a pass NaN or huge (the drone's torsion
+    # solving Izz, Ixz, Iyz and Ixx), so they are held one at a time (at most m passes)
+    fit = None
+    while True:
+        keep = tuple(c for c in components if c not in poor)
+        if not keep:
+            break
+        fit = solve(keep)
+        if not fit.poorly_excited:
+            break
+        poor.append(fit.poorly_excited[0])
+    keep = tuple(c for c in components if c not in poor)
+    fitted = fit if keep else None
+    ref = fitted or first or solve(components)  # the last for the fit's figures only: every component held
+    values = {c: float(scene.inertia[_INDEX[c]]) for c in components}
+    values.update(first.values if first is not None else {})
+    values.update(fitted.values if fitted else {})
+    nan = {c: math.nan for c in poor}
     idx = [components.index(c) for c in keep]
     corr = np.full((len(components), len(components)), np.nan)
-    corr[np.ix_(idx, idx)] = second.correlation
-    return TensionInertia(tuple(components), values, std, corr, list(first.poorly_excited),
-                          second.residual_rms, second.condition, second.n_samples, second.lag_window,
-                          {**first.dof, **second.dof},
-                          None if second.std_geometry is None else {**nan, **second.std_geometry})
+    if fitted:
+        corr[np.ix_(idx, idx)] = fitted.correlation
+    geo = None if ref.std_geometry is None else {**nan, **(fitted.std_geometry if fitted else {})}
+    return TensionInertia(components, values, {**nan, **(fitted.std if fitted else {})}, corr,
+                          [c for c in components if c in poor], ref.residual_rms, ref.condition, ref.n_samples,
+                          ref.lag_window, {**(first.dof if first else {}), **(fitted.dof if fitted else {})}, geo)
 
 
 def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshold,
-           B: np.ndarray | None = None, noise: np.ndarray | None = None, noise_rse: float = 0.0) -> TensionInertia:
+           B: np.ndarray | None = None, noise: np.ndarray | None = None, noise_rse: float = 0.0,
+           min_lag: int = 0) -> TensionInertia:
     """Estimate inertia components by least squares over all samples of Euler's equations.
 
     Parameters
@@ -192,13 +249,15 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     alpha : (k, 3) body-axes angular acceleration, rad/s^2.
     components : the unknowns (principal moments by default; all six for the
         full tensor).  Components not solved for are taken from ``scene``.
-    threshold : relative std above which a component is flagged poorly excited.
+    threshold : the std, as a fraction of the component's scale
+        (:func:`component_scale`), above which it is flagged poorly excited.
     B : (3k, p) N m, the torques' change per standard uncertainty of each
         geometric input (:func:`geometry_jacobian`, at the tensions of
         :func:`_motion_fit`), None when the geometry is exact.
     noise, noise_rse : the design's per-sample error covariance (6, 6) and
         the relative standard error of that estimate
         (:mod:`~bifilar.estimation.design_noise`), or None: exact rates.
+    min_lag : the least lag window of the sandwich (:func:`_score_covariance`).
 
     The config's geometry enters the torques ``b`` only (the design ``A``
     is the motion's), linearly over its uncertainty: ``b = A theta + B
@@ -235,7 +294,7 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     g = _scores(As3, r3)  # (k, m)
     if eiv is not None:  # the corrected normal equations' scores, less each sample's expected noise product (r = A x - b)
         g = g - eiv[1]
-    meat, lags = _score_covariance(g, len(comps))
+    meat, lags = _score_covariance(g, len(comps), min_lag)
     f = np.sqrt(_leverage_correction(As3, r3, bread, lags, extra, weight))
     cov = f[:, None] * (bread @ meat @ bread) * f[None, :] / np.outer(scale, scale)
     h2 = (g @ bread) ** 2  # each sample's share of each component's error, squared
@@ -253,8 +312,14 @@ def _solve(scene: Scene, t, com, R, omega, tensions, alpha, components, threshol
     # a column at the rounding level of the torques (no motion about that
     # axis) fits rounding noise with a tiny residual: flag it by its size
     excited = _excited(scene, com, R, tensions, A2, len(t))
-    poor = [c for j, c in enumerate(comps) if not excited[j] or not np.isfinite(total[j]) or stds[c] <= 0
-            or total[j] > threshold * max(abs(values[c]), 1e-300)]
+    ratio = np.array([total[j] / max(component_scale(scene, c), 1e-300) for j, c in enumerate(comps)])
+    bad = ~excited | ~np.isfinite(ratio) | (std <= 0)
+    poor = [c for j, c in enumerate(comps) if bad[j] or ratio[j] > threshold]
+    # worst first: a column at rounding level, then the one whose noise share is largest (a column swamped by
+    # the poses' noise makes every corrected std of the pass NaN), then the largest std for its scale
+    share = np.zeros(len(comps)) if eiv is None else np.diag(len(t) * eiv[0]) / np.maximum(np.diag(As.T @ As), 1e-300)
+    poor = sorted(poor, key=lambda c: (bool(excited[comps.index(c)]), -share[comps.index(c)],
+                                       -np.nan_to_num(ratio[comps.index(c)], nan=np.inf)))
     return TensionInertia(comps, values, stds, corr, poor, float(np.sqrt(s2)), cond, int(len(t)), lags,
                           dict(zip(comps, map(float, dof))), None if geo is None else dict(zip(comps, map(float, geo))))
 
@@ -481,7 +546,7 @@ def record_std(est: TensionInertia, other: TensionInertia | None = None,
     return std, dict(g), interval, dof
 
 
-def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
+def _score_covariance(g: np.ndarray, m: int, min_lag: int = 0) -> tuple[np.ndarray, int]:
     """Covariance of the least-squares score ``sum_k A_k^T r_k`` (the
     sandwich's meat), robust to what the white-noise ``s^2 A^T A`` assumes
     away: the three torque rows of a sample share the same tension noise and
@@ -495,7 +560,9 @@ def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
     ``sum_{|l| <= W} Gamma(l)`` with ``Gamma(l) = sum_k g_k g_{k+l}^T``,
     the lag window ``W`` chosen as the smallest with ``W >= 5 tau(W)``
     (Sokal's self-consistent window; ``tau`` the largest integrated
-    autocorrelation time of the scores' components) and capped at k / 4,
+    autocorrelation time of the scores' components), at least ``min_lag``
+    (the span of a differentiating filter's noise correlation, which the
+    scores' estimated autocorrelation can miss) and capped at k / 4,
     negative eigenvalues of the truncated sum clipped to zero.  Residuals
     stand in for the errors, so the sum is biased low (for the fitted
     parameters, ``m`` of them): :func:`_leverage_correction` removes that.
@@ -506,7 +573,7 @@ def _score_covariance(g: np.ndarray, m: int) -> tuple[np.ndarray, int]:
     d0 = np.maximum(np.diag(g0), 1e-300)
     meat, tau, W = g0.copy(), np.ones(m), 0
     for lag in range(1, max(k // 4, 1) + 1):
-        if lag >= 5 * tau.max():
+        if lag >= 5 * tau.max() and lag > min_lag:
             break
         G = g[lag:].T @ g[:-lag]
         meat += G + G.T
@@ -625,14 +692,27 @@ wires' x torques but computed to rounding of their own size, and
 determines Izz to ~1e-16."""
 
 
+ROUNDING_FLOOR = 1e-12
+"""The absolute part of the excitation floor of :func:`_excited`: this
+fraction of the largest gross torque about any axis (rounding, ~1e-16 of
+it, amplified by the differentiation's 1e2-1e3, and a margin of 10).
+Without it an axis about which the wires exert no torque at all had a zero
+floor, and a column of rounding-level accelerations counted as excited
+about it (session 20: the plate of thesis_plate_rest.yaml in torsion,
+whose wires' gross torque about body y is exactly 0, gave Ixx 193.6 +- 5.3
+for 208.3 once the 1 %-of-the-value rule no longer held it)."""
+
+
 def _excited(scene: Scene, com, R, tensions, A2: np.ndarray, k: int) -> np.ndarray:
     """(m,) bool: whether each design column of ``A2`` ((3k, m), 1/s^2)
     carries, about some body axis, a torque above :data:`EXCITATION_FLOOR`
-    of the gross wire torque about that axis (N m, RMS over the k samples)."""
+    of the gross wire torque about that axis (N m, RMS over the k samples)
+    plus :data:`ROUNDING_FLOOR` of the largest axis's."""
     u = wire_units(scene, com, R)  # world, attachment -> anchor
     f_body = np.einsum("kji,knj->kni", R, tensions[..., None] * u)
     gross = np.abs(np.cross(scene.attachments[None, :, :], f_body)).sum(axis=1)  # (k, 3) N m
-    floor = EXCITATION_FLOOR * np.sqrt(np.mean(gross ** 2, axis=0))  # (3,)
+    g = np.sqrt(np.mean(gross ** 2, axis=0))  # (3,)
+    floor = EXCITATION_FLOOR * g + ROUNDING_FLOOR * float(g.max())
     I_scale = float(np.max(np.linalg.eigvalsh(scene.inertia)))  # kg m^2
     A = A2.reshape(k, 3, -1)
     explained = I_scale * np.sqrt(np.mean(A ** 2, axis=0))  # (3, m) RMS over samples, N m
