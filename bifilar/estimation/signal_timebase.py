@@ -360,10 +360,34 @@ def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
     if nf < MIN_STEPS or nb > MAX_BACKWARD_SHARE * nf or not float(fit.residual_rms) >= MIN_RESIDUAL_EXCESS * sig_y:
         return
     from ..errors import InputError
+    from .signal_phasewander import lean_direction, phase_lean
 
-    raise InputError(field, f"the oscillation's phase steps forward by one frame's phase {nf} times and "
-                            f"{'back only ' + str(nb) + ' times' if nb else 'never back'}, and the fit leaves "
-                            f"{float(fit.residual_rms) / sig_y:.2g} x the record's noise: the mark of dropped frames "
-                            f"in a record without a time column, which shorten the period by their unknown share; "
-                            f"the noise hides each frame's step, so they cannot be put back: give the record's time "
-                            f"column in place of --sample-rate")
+    raise InputError(field, hidden_frames_message(nf, nb, float(fit.residual_rms) / sig_y,
+                                                  lean_direction(phase_lean(t, y, fit))))
+
+
+def hidden_frames_message(nf: int, nb: int, excess: float, direction: str | None) -> str:
+    """The refusal's words for frame faults the noise hides (``nf`` steps
+    forward, ``nb`` back, the fit ``excess`` x the white noise): the time
+    base's direction from the skew of the cycles' phase advances
+    (:func:`.signal_phasewander.lean_direction`): ``"forward"`` dropped
+    frames (the period short), ``"back"`` repeated frames (long), None
+    neither named."""
+    steps = f"{'back only ' + str(nb) + ' times' if nb else 'never back'}"
+    if direction == "forward":
+        what = ("the oscillation's phase steps forward by one frame's phase {nf} times and {steps}, and its "
+                "cycle-to-cycle advance leans forward")
+        mark = "dropped frames in a record without a time column, which shorten the period by their unknown share"
+    elif direction == "back":
+        what = ("the oscillation's phase jumps by one frame's phase {nf} times, but its cycle-to-cycle advance "
+                "leans back")
+        mark = ("repeated frames (a frame written twice) in a record without a time column, which lengthen the "
+                "period by their unknown share")
+    else:
+        what = ("the oscillation's phase jumps by one frame's phase {nf} times, its cycle-to-cycle advance "
+                "leaning neither way")
+        mark = ("dropped or repeated frames in a record without a time column, which shift the period by their "
+                "unknown share")
+    return (what.format(nf=nf, steps=steps) + f", and the fit leaves {excess:.2g} x the record's noise: the mark of "
+            f"{mark}; the noise hides each frame's step, so they cannot be put back: give the record's time column "
+            f"in place of --sample-rate")
