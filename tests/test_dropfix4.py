@@ -77,3 +77,60 @@ def test_hidden_drops_are_still_refused_as_dropped_frames():
     msg = str(e.value)
     assert "dropped frames" in msg and "shorten the period" in msg and "leans forward" in msg, msg
     assert "repeated" not in msg
+
+
+def _record(seed, T=1.45, cyc=40, noise=2.9e-3, drop_part=(0.0, 0.0), drop=0.03, rep_at=()):
+    """A 0.1 rad cosine of period ``T`` (s) decaying at 0.01/s, ``cyc``
+    cycles at 30 fps with white noise (rad); a share ``drop`` of the frames
+    between the shares ``drop_part`` of the record dropped; the samples at
+    ``rep_at`` (indices) written twice.  Returns (T, the nominal time base
+    s, y rad)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, cyc * T, 1 / 30.0)
+    y = 0.1 * np.exp(-0.01 * t) * np.cos(2 * np.pi / T * t + 0.3) + noise * rng.standard_normal(t.size)
+    a, b = drop_part
+    y = y[~((t >= a * t[-1]) & (t < b * t[-1]) & (rng.uniform(size=t.size) < drop))]
+    for j in sorted(rep_at, reverse=True):
+        y = np.insert(y, j, y[j - 1])
+    return T, np.arange(y.size) / 30.0, y
+
+
+def test_repeats_outside_the_fit_window_leave_its_period_alone():
+    """Three frames written twice in the first 8 s of a 58 s record whose
+    fit starts at 12 s (--t-start): the window's samples are regular, the
+    fit's period and std stand (no check).  The old code read the whole
+    file, removed them, refitted and warned (the std x1.01, the samples
+    shifted by three frames).  The same repeats inside the window are
+    still found and removed."""
+    T, t, y = _record(1, rep_at=(60, 150, 230))
+    fit, res = _check(t, y, t_start=12.0)
+    assert res is None, res and res["time_base"]
+    _, res = _check(t, y)
+    assert res is not None and res["time_base"]["method"] == "repeats_removed"
+    assert res["time_base"]["repeated_frames"] == 3
+
+
+def test_drops_outside_the_fit_window_leave_its_period_alone():
+    """3 % of the frames dropped in the first 40 % of a record (noise 2.9
+    mrad on 0.1 rad, 1.45 s) whose fit starts after them: the window's
+    period is right within its std (|z| 1.24) and now stands.  The old code
+    read the phase steps of the whole file and widened the std 7x (z
+    0.17: an interval far wider than the window's samples allow) with a
+    dropped-frames warning.  The drops inside the window are still put
+    back (z -4.5 before, within 1 after)."""
+    T, t, y = _record(0, drop_part=(0.0, 0.4))
+    fit, res = _check(t, y, t_start=0.42 * t[-1])
+    assert res is None, res and res["time_base"]
+    assert abs(fit.period - T) <= 2.5 * fit.std
+    fit, res = _check(t, y)
+    assert res is not None and res["time_base"]["method"] == "recovered"
+    assert abs(fit.period - T) > 3 * fit.std and abs(res["fit"].period - T) <= 2.5 * res["fit"].std
+
+
+def test_hidden_drops_inside_a_window_are_still_refused():
+    """Dense drops the noise hides (dropfix's draw 2003, refused on the
+    whole record) fitted from 10 s on: the window's samples carry them, so
+    the answer is still refused."""
+    T, t, y = _draw(2003, drop=0.03)
+    with pytest.raises(InputError):
+        _check(t, y, t_start=10.0)

@@ -122,8 +122,10 @@ def _window_cycles(t, y, fit):
     y = np.asarray(y, float)
     if t.size > MAX_SAMPLES:
         return None
-    sel = (t >= fit.t0) & (t <= fit.t1)
-    t, y = t[sel], y[sel]
+    from .signal_timebase import fit_window
+
+    win = fit_window(t, fit)
+    t, y = t[win], y[win]
     f = float(fit.frequency)
     if t.size < MIN_CYCLES * MIN_SAMPLES_PER_CYCLE or not (np.isfinite(f) and f > 0):
         return None
