@@ -202,7 +202,9 @@ def phase_walk_check(t, y, fit, field: str = "SIGNAL") -> dict | None:
 
     Acts where :func:`cycle_phase`'s phase chi^2 is above ``PHASE_CHI2``
     per cycle and ``PHASE_OVER_AMPLITUDE`` times the amplitude's (or the
-    cycles', where that is more).  The walk's ``D`` frames (``walk``) give
+    cycles', where that is more); ``PHASE_OVER_AMPLITUDE_BACK`` times where
+    the cycles' phase advances lean back beyond chance (:func:`leans_back`:
+    repeated frames, whose mark no beat, chirp or coloured noise leaves).  The walk's ``D`` frames (``walk``) give
     ``D + 2 sqrt(D) + 1`` (a one-sided bound for a count whose estimate
     from a few steps scatters by ~65 %, at least one frame), and the
     period's std gains ``T`` times that over the samples in quadrature
@@ -212,7 +214,8 @@ def phase_walk_check(t, y, fit, field: str = "SIGNAL") -> dict | None:
     returns: ``t``, ``fit``, ``warning`` (one line), ``time_base``
     (``method`` ``"phase_walk"``, ``dropped_frames`` None,
     ``nominal_period``, ``std_added`` s, ``phase_chi2`` and
-    ``amplitude_chi2`` per cycle, ``frames_implied``)."""
+    ``amplitude_chi2`` per cycle, ``frames_implied``, ``lean``: the
+    advances' skew)."""
     from .signal_timebase import widen_std
 
     try:
@@ -239,4 +242,4 @@ def phase_walk_check(t, y, fit, field: str = "SIGNAL") -> dict | None:
     return {"t": np.asarray(t, float), "fit": fit, "warning": msg,
             "time_base": {"method": "phase_walk", "dropped_frames": None, "nominal_period": T, "std_added": extra,
                           "phase_chi2": c["chi2"] / K, "amplitude_chi2": c["chi2_amplitude"] / K,
-                          "frames_implied": frames}}
+                          "frames_implied": frames, "lean": c["lean"]}}
