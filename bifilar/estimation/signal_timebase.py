@@ -75,6 +75,8 @@ def fit_window(t, fit) -> slice:
     start, a stretch cut off by ``--t-start``/``--t-stop``) does not touch
     the period fitted inside it."""
     t = np.asarray(t, float)
+    if getattr(fit, "t0", None) is None or getattr(fit, "t1", None) is None:  # no window stated: the whole record
+        return slice(0, t.size)
     idx = np.flatnonzero((t >= float(fit.t0)) & (t <= float(fit.t1)))
     return slice(int(idx[0]), int(idx[-1]) + 1) if idx.size else slice(0, t.size)
 
