@@ -115,9 +115,9 @@ def resolution(y, ad=None) -> float:
 
 
 def remove_repeats(t, y, fit, refit, field: str = "SIGNAL") -> dict | None:
-    """The record ``(t`` s on the nominal time base, ``y)`` with its
-    repeated frames (:func:`repeated_samples`) removed, or None where it
-    shows none.
+    """The record ``(t`` s on the nominal time base, ``y)`` with the
+    repeated frames (:func:`repeated_samples`) in ``fit``'s window
+    removed, or None where the window shows none.
 
     ``refit(t_new, y_new)`` fits other samples on another time base with the
     caller's options (a PeriodFit).  Returns a dict: ``t`` (s, the nominal
@@ -128,20 +128,22 @@ def remove_repeats(t, y, fit, refit, field: str = "SIGNAL") -> dict | None:
     period by ``1 / n`` of itself on average), ``nominal_period`` (s, the
     fit before), ``warning`` (one line).
     """
-    from .signal_timebase import widen_std
+    from .signal_timebase import fit_window, widen_std
 
     t = np.asarray(t, float)
     y = np.asarray(y, float)
-    idx, blind = repeated_samples(y)
+    win = fit_window(t, fit)  # repeats outside the fit's window do not touch its period
+    idx, blind = repeated_samples(y[win])
     if idx.size == 0:
         return None
+    idx = idx + win.start
     keep = np.ones(y.size, bool)
     keep[idx] = False
     dt = float(np.median(np.diff(t)))
     yc = y[keep]
     tc = t[0] + np.arange(yc.size) * dt
     fit2 = refit(tc, yc)
-    n = yc.size
+    n = win.stop - win.start - idx.size  # the window's samples left
     # repeats where the pair test is blind: the rate seen where it can see, over the blind share
     missed = idx.size / max(n * (1.0 - blind), 1.0) * blind * n
     extra = float(fit2.period) * missed / n

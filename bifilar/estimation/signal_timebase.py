@@ -68,6 +68,19 @@ def uniform_cycles(t, y, frequency: float, min_per_cycle: int, max_samples: int)
     return t, y, dt, W
 
 
+def fit_window(t, fit) -> slice:
+    """The samples of ``t`` (s, increasing) in ``fit``'s window ``[t0,
+    t1]`` (s) as a slice; the whole record where none lies in it.  The time
+    base's checks read only these: a fault outside the window (a held
+    start, a stretch cut off by ``--t-start``/``--t-stop``) does not touch
+    the period fitted inside it."""
+    t = np.asarray(t, float)
+    if getattr(fit, "t0", None) is None or getattr(fit, "t1", None) is None:  # no window stated: the whole record
+        return slice(0, t.size)
+    idx = np.flatnonzero((t >= float(fit.t0)) & (t <= float(fit.t1)))
+    return slice(int(idx[0]), int(idx[-1]) + 1) if idx.size else slice(0, t.size)
+
+
 def detrended(y, W: int):
     """``(k, y[k] - m[k])``: the samples ``k`` where the mean ``m`` over
     exactly one cycle of ``W`` samples centred on them exists, less that
@@ -166,7 +179,8 @@ def dropped_frames_warning(t, y, fit, time_source: str | None, field: str = "SIG
     times are the frames' own)."""
     if time_source != "sample_rate" or fit is None or getattr(fit, "model", "") == "crossings":
         return None
-    w = _flat_level_warning(t, y, fit, field)
+    win = fit_window(t, fit)
+    w = _flat_level_warning(np.asarray(t, float)[win], np.asarray(y, float)[win], fit, field)
     return None if w is None else w[0]
 
 
@@ -278,22 +292,28 @@ def _check_drops(t, y, fit, refit, field: str) -> dict | None:
     from .signal_frames import MAX_RMS_RATIO, correction_std, recover_frames
 
     t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    win = fit_window(t, fit)  # only the fit's samples are read
+    tw, yw = t[win], y[win]
     rec = None
-    if float(fit.residual_rms) >= SEARCH_RESIDUAL_EXCESS * white_noise(y):
+    if float(fit.residual_rms) >= SEARCH_RESIDUAL_EXCESS * white_noise(yw):
         try:
-            rec = recover_frames(t, y, float(fit.frequency))
+            rec = recover_frames(tw, yw, float(fit.frequency))
         except (ValueError, FloatingPointError):
             rec = None
     if rec is not None and rec["resolved"]:
         from .signal import SignalError
 
+        # the window's recovered times; the samples after it later by the frames put back
+        dt = float(np.median(np.diff(tw)))
+        t_rec = np.concatenate([t[:win.start], rec["t"], t[win.stop:] + rec["dropped"] * dt])
         try:
-            fit2 = refit(rec["t"])
+            fit2 = refit(t_rec)
         except SignalError:
             fit2 = None
         if fit2 is not None and fit2.model != "crossings" and fit2.residual_rms <= MAX_RMS_RATIO * fit.residual_rms:
-            W = int(round(1.0 / (fit2.frequency * float(np.median(np.diff(rec["t"]))))))
-            extra = correction_std(float(fit2.period), t.size, rec["dropped"], rec["edge"], W)
+            W = int(round(1.0 / (fit2.frequency * dt)))
+            extra = correction_std(float(fit2.period), tw.size, rec["dropped"], rec["edge"], W)
             widen_std(fit2, extra)
             short = 1.0 - float(fit.period) / float(fit2.period)
             msg = (f"{field}: {rec['dropped']} dropped frames found and put back (the oscillation's phase on the "
@@ -302,12 +322,12 @@ def _check_drops(t, y, fit, refit, field: str) -> dict | None:
                    f"period {float(fit2.period):.6g} s is fitted on the recovered time base (on the nominal one "
                    f"{float(fit.period):.6g} s) and its std holds the recovery's own {extra:.2g} s; give the time "
                    f"column to be sure")
-            return {"t": rec["t"], "fit": fit2, "warning": msg,
+            return {"t": t_rec, "fit": fit2, "warning": msg,
                     "time_base": {"method": "recovered", "dropped_frames": rec["dropped"],
                                   "nominal_period": float(fit.period), "std_added": extra}}
-    w = _flat_level_warning(t, y, fit, field)
+    w = _flat_level_warning(tw, yw, fit, field)
     if w is None:
-        _refuse_hidden_drops(t, y, fit, rec, field)
+        _refuse_hidden_drops(tw, yw, fit, rec, field)
         return None
     msg, T_flat = w
     extra = abs(T_flat - float(fit.period))
@@ -360,10 +380,34 @@ def _refuse_hidden_drops(t, y, fit, rec, field: str) -> None:
     if nf < MIN_STEPS or nb > MAX_BACKWARD_SHARE * nf or not float(fit.residual_rms) >= MIN_RESIDUAL_EXCESS * sig_y:
         return
     from ..errors import InputError
+    from .signal_phasewander import lean_direction, phase_lean
 
-    raise InputError(field, f"the oscillation's phase steps forward by one frame's phase {nf} times and "
-                            f"{'back only ' + str(nb) + ' times' if nb else 'never back'}, and the fit leaves "
-                            f"{float(fit.residual_rms) / sig_y:.2g} x the record's noise: the mark of dropped frames "
-                            f"in a record without a time column, which shorten the period by their unknown share; "
-                            f"the noise hides each frame's step, so they cannot be put back: give the record's time "
-                            f"column in place of --sample-rate")
+    raise InputError(field, hidden_frames_message(nf, nb, float(fit.residual_rms) / sig_y,
+                                                  lean_direction(phase_lean(t, y, fit))))
+
+
+def hidden_frames_message(nf: int, nb: int, excess: float, direction: str | None) -> str:
+    """The refusal's words for frame faults the noise hides (``nf`` steps
+    forward, ``nb`` back, the fit ``excess`` x the white noise): the time
+    base's direction from the skew of the cycles' phase advances
+    (:func:`.signal_phasewander.lean_direction`): ``"forward"`` dropped
+    frames (the period short), ``"back"`` repeated frames (long), None
+    neither named."""
+    steps = f"{'back only ' + str(nb) + ' times' if nb else 'never back'}"
+    if direction == "forward":
+        what = ("the oscillation's phase steps forward by one frame's phase {nf} times and {steps}, and its "
+                "cycle-to-cycle advance leans forward")
+        mark = "dropped frames in a record without a time column, which shorten the period by their unknown share"
+    elif direction == "back":
+        what = ("the oscillation's phase jumps by one frame's phase {nf} times, but its cycle-to-cycle advance "
+                "leans back")
+        mark = ("repeated frames (a frame written twice) in a record without a time column, which lengthen the "
+                "period by their unknown share")
+    else:
+        what = ("the oscillation's phase jumps by one frame's phase {nf} times, its cycle-to-cycle advance "
+                "leaning neither way")
+        mark = ("dropped or repeated frames in a record without a time column, which shift the period by their "
+                "unknown share")
+    return (what.format(nf=nf, steps=steps) + f", and the fit leaves {excess:.2g} x the record's noise: the mark of "
+            f"{mark}; the noise hides each frame's step, so they cannot be put back: give the record's time column "
+            f"in place of --sample-rate")
