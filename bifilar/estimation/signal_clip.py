@@ -97,13 +97,129 @@ def drop_clipped(t, y, osc: dict, notes: list, min_samples: int):
     return t[keep], y[keep], dict(osc, clipped=info)
 
 
+#: soft clipping: the central samples of a period (within this share of its
+#: amplitude of its level) define its sinusoid, and are the ones kept
+SOFT_CENTRAL = 0.5
+#: the samples kept where it fires: within this share of each period's
+#: amplitude of its level (a ``tanh`` law compressing the peak to 70 % of
+#: the true one compresses these by at most ~1.5 %, against ~7 % at 0.5)
+SOFT_KEPT = 0.3
+#: the peaks' samples (the central sinusoid beyond this share of its
+#: amplitude) are compared with it: ``r = sum((y - c) s) / sum(s^2)`` per side
+SOFT_OUTER = 0.8
+#: fires where the peaks' mean ratio ``(r_max + r_min) / 2`` (a quadratic
+#: sensor law, e.g. a laser dot's position, stretches one side as much as it
+#: compresses the other and cancels) falls short of 1 by this much ...
+SOFT_MIN_COMPRESSION = 0.045
+#: ... and by this many of its standard errors over the periods (median and
+#: robust std)
+SOFT_MIN_SIGMAS = 6.0
+#: at least this many one-period windows with peaks on both sides
+SOFT_MIN_PERIODS = 6
+
+
+def _soft_windows(t, y, T: float):
+    """One-period windows of ``t`` (s) from ``t[0]`` (the last one holds the
+    remainder): for each, its sample slice, the sinusoid ``c + p cos + q
+    sin`` at period ``T`` fitted to its central samples (iterated twice) and
+    the peaks' ratios ``(r_max, r_min)`` (None where a side has no peak
+    sample)."""
+    w = 2 * np.pi / T
+    n_win = int((t[-1] - t[0]) // T)
+    bounds = np.searchsorted(t, t[0] + T * np.arange(n_win + 1))
+    if n_win >= 1:
+        bounds[-1] = t.size
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        ts, ys = t[a:b] - t[a], y[a:b]
+        if ts.size < 8:
+            continue
+        B = np.c_[np.ones(ts.size), np.cos(w * ts), np.sin(w * ts)]
+        x = np.linalg.lstsq(B, ys, rcond=None)[0]
+        for _ in range(2):
+            m = np.abs(ys - x[0]) < SOFT_CENTRAL * np.hypot(x[1], x[2])
+            if m.sum() < 5:
+                break
+            x = np.linalg.lstsq(B[m], ys[m], rcond=None)[0]
+        A = float(np.hypot(x[1], x[2]))
+        s = B[:, 1:] @ x[1:]
+        r = []
+        for side in (s > SOFT_OUTER * A, s < -SOFT_OUTER * A):
+            r.append(float(np.sum((ys[side] - x[0]) * s[side]) / np.sum(s[side] ** 2)) if side.any() else None)
+        out.append((a, b, s, A, r))
+    return out
+
+
+def find_soft_clipping(t, y, T: float) -> dict | None:
+    """A sensor that saturates gradually (its output compressed near full
+    scale, ``tanh``-like: a gyro or an amplifier near its range), or None.
+
+    ``t`` (s, increasing), ``y`` ([y]), ``T`` the period (s).  In each
+    one-period window a sinusoid is fitted to the central samples (within
+    :data:`SOFT_CENTRAL` of its amplitude of its level, where a saturating
+    sensor is nearly linear) and its peaks (beyond :data:`SOFT_OUTER`)
+    compared with the samples there: ``r`` per side, 1 for a linear sensor,
+    below 1 where the peaks are compressed.  Fires where the windows' median
+    of ``(r_max + r_min) / 2`` lies :data:`SOFT_MIN_COMPRESSION` and
+    :data:`SOFT_MIN_SIGMAS` standard errors below 1 (a quadratic law
+    stretches one side as it compresses the other: the mean cancels it).
+    Returns ``mask`` (bool, the samples beyond the central band: the
+    compressed ones, left out), ``compression`` (1 - the median mean ratio),
+    ``ratios`` (the median ``r`` of the max and the min side) and
+    ``periods`` (windows used)."""
+    t = np.asarray(t, float)
+    y = np.asarray(y, float)
+    if not (np.isfinite(T) and T > 0) or t.size < 16:
+        return None
+    win = _soft_windows(t, y, T)
+    r = np.array([w[4] for w in win if None not in w[4]], float).reshape(-1, 2)
+    if r.shape[0] < SOFT_MIN_PERIODS:
+        return None
+    mean = r.mean(axis=1)
+    med = float(np.median(mean))
+    se = 1.2533 * 1.4826 * float(np.median(np.abs(mean - med))) / np.sqrt(mean.size)  # of a median
+    comp = 1.0 - med
+    if comp < SOFT_MIN_COMPRESSION or comp < SOFT_MIN_SIGMAS * se:
+        return None
+    mask = np.zeros(t.size, bool)
+    for a, b, s, A, _ in win:
+        mask[a:b] = np.abs(s) > SOFT_KEPT * A
+    return {"mask": mask, "compression": comp, "ratios": [float(np.median(r[:, 0])), float(np.median(r[:, 1]))],
+            "periods": int(r.shape[0]), "samples": int(mask.sum())}
+
+
+def drop_soft_clipped(t, y, osc: dict, notes: list, min_samples: int):
+    """Leave the peaks of a gradually saturating sensor
+    (:func:`find_soft_clipping`) out before the fit: ``(t, y, osc)`` with
+    ``osc["soft_clipped"]`` (``compression``, ``ratios``, ``samples_left_out``,
+    ``line``) and the line in ``notes``; unchanged where nothing is found,
+    where the record is hard-clipped (``osc["clipped"]``) or fewer than
+    ``min_samples`` would be left."""
+    if osc.get("clipped"):
+        return t, y, osc
+    c = find_soft_clipping(t, y, 1.0 / float(osc["frequency"]))
+    if c is None:
+        return t, y, osc
+    keep = ~c["mask"]
+    if int(keep.sum()) < min_samples:
+        return t, y, osc
+    line = (f"the sensor saturates gradually: its peaks come out {c['compression']:.0%} short of the sinusoid "
+            f"through the samples near the level (max side x{c['ratios'][0]:.3f}, min side x{c['ratios'][1]:.3f}, "
+            f"median of {c['periods']} periods: compressed near full scale); the {c['samples']} of {t.size} samples "
+            f"beyond {SOFT_KEPT:.0%} of each period's amplitude are left out of the fit; record with a range "
+            "that holds the motion")
+    notes.append(line)
+    info = {"compression": c["compression"], "ratios": c["ratios"], "samples_left_out": c["samples"], "line": line}
+    return t[keep], y[keep], dict(osc, soft_clipped=info)
+
+
 def take_fault_warnings(fit) -> list[str]:
     """The lines of a sensor's faults the fit dealt with (the clipped samples
     left out, :func:`drop_clipped`; an offset's step taken out,
     :func:`.signal_offset.remove_offset_step`), moved from the fit's notes
     to be returned: the caller lists them as warnings."""
     lines = []
-    for key in ("clipped", "offset_step"):
+    for key in ("clipped", "soft_clipped", "offset_step"):
         c = (fit.oscillation or {}).get(key)
         if c:
             if c["line"] in fit.notes:
