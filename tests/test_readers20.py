@@ -133,3 +133,26 @@ def test_no_sensor_fault_is_found_in_the_real_recordings():
         fit = fit_period(t, y, "viscous", crossing_check=False, split_check=False)
         faults = [k for k in ("clipped", "soft_clipped", "offset_step") if fit.oscillation.get(k)]
         assert not faults, (path, col, faults)
+
+
+def test_a_clip_with_an_offset_step_under_it_is_found_and_both_taken_out():
+    """A gyro clipped at 80 % of its peak whose offset then steps by 10-50 % of it (the flat tops at two
+    levels on one side: neither the record's extreme alone nor the step was found): the old code
+    answered with a std ~28x the period's actual scatter (20 draws, `auto`; 2 of 20 at the half period
+    with a std of 3e-5 s).  Now both levels are clipped and the step taken out: 20 of 20 (harness), the
+    std 0.99x the scatter.  Here 6 draws: both faults named, the period within 2.5 combined stds of the
+    clean twin's and the std under 1.5x its."""
+    for i in range(6):
+        g = np.random.default_rng(7000 + i)
+        share, at = g.uniform(0.1, 0.5), g.uniform(0.2, 0.8)
+        t, r, n = _gyro(i, Q=1e5)
+        P = float(np.abs(r).max())
+        step = share * P * np.sign(g.uniform(-1, 1)) * (np.arange(t.size) >= int(at * t.size))
+        y = np.clip(r + n, -0.8 * P, 0.8 * P) + step
+        clean = fit_period(t, r + n, "viscous", crossing_check=False)
+        fit = fit_period(t, y, "viscous", crossing_check=False)
+        c, st = fit.oscillation["clipped"], fit.oscillation["offset_step"]
+        assert len(c["all_levels"]) == 4, c["all_levels"]  # top and bottom, before and after the step
+        assert st["size"] == pytest.approx(step[-1], rel=0.05)
+        assert fit.std < 1.5 * clean.std
+        assert abs(fit.period - clean.period) < 2.5 * math.hypot(fit.std, clean.std)

@@ -40,15 +40,51 @@ def _runs(mask: np.ndarray) -> np.ndarray:
     return np.nonzero(d == -1)[0] - np.nonzero(d == 1)[0]
 
 
-def find_clipping(y) -> dict | None:
-    """The samples of ``y`` ([y], finite) at a clipped extreme, or None.
+#: at most this many of the most populated values are examined as clipped
+#: levels (an offset stepping under a clip moves one side's level: two per
+#: side; each further step adds one)
+MAX_LEVELS = 8
+#: a clipped level is a turning point: both neighbours of at least this
+#: share of its runs of two or more lie on one side of it
+MIN_TURNING_SHARE = 0.8
 
-    A side (the record's maximum, its minimum) is clipped where the samples
-    exactly equal to it form at least :data:`MIN_RUNS` runs of two or more,
-    and hold, without their longest run, at least :data:`MIN_RATIO` times
-    the samples of any other value of the record.  Returns ``mask`` (bool,
-    the clipped samples), ``levels`` (``{"max": level, "min": level}`` for
-    the clipped sides, [y]), ``runs`` (the number of flat tops) and
+
+def _clip_side(y: np.ndarray, at: np.ndarray, level: float) -> tuple[str | None, int]:
+    """Whether the runs of ``at`` (samples of ``y`` equal to ``level``) are
+    flat tops (``"max"``: both neighbours below), flat bottoms (``"min"``)
+    or neither (None), and how many runs of two or more it holds."""
+    m = np.concatenate([[False], at, [False]]).astype(np.int8)
+    d = np.diff(m)
+    start, stop = np.nonzero(d == 1)[0], np.nonzero(d == -1)[0]  # run [start, stop)
+    multi = (stop - start) >= 2
+    start, stop = start[multi], stop[multi]
+    if start.size < MIN_RUNS:
+        return None, int(start.size)
+    before = np.where(start > 0, y[np.maximum(start - 1, 0)], np.nan)
+    after = np.where(stop < y.size, y[np.minimum(stop, y.size - 1)], np.nan)
+    nb = np.c_[before, after]
+    below = np.all((nb < level) | np.isnan(nb), axis=1)
+    above = np.all((nb > level) | np.isnan(nb), axis=1)
+    for side, ok in (("max", below), ("min", above)):
+        if ok.mean() >= MIN_TURNING_SHARE:
+            return side, int(start.size)
+    return None, int(start.size)
+
+
+def find_clipping(y) -> dict | None:
+    """The samples of ``y`` ([y], finite) at a clipped level, or None.
+
+    A value is a clipped level where the samples exactly equal to it form
+    at least :data:`MIN_RUNS` runs of two or more, both neighbours of most
+    of them (:data:`MIN_TURNING_SHARE`) on one side (flat tops, or flat
+    bottoms), and hold, without their longest run, at least
+    :data:`MIN_RATIO` times the samples of any value that is not such a
+    level.  The record's maximum and minimum are the usual ones; an offset
+    stepping under a sensor's range moves one side's level (flat tops at
+    two values: both found).  Returns ``mask`` (bool, the clipped samples),
+    ``levels`` (``{"max": level, "min": level}`` for the clipped sides, the
+    outermost level of each, [y]), ``all_levels`` (``[[side, level], ...]``
+    every clipped level), ``runs`` (the number of flat tops) and
     ``samples`` (the number clipped)."""
     y = np.asarray(y, float)
     if y.size < 8:
@@ -56,24 +92,36 @@ def find_clipping(y) -> dict | None:
     vals, counts = np.unique(y, return_counts=True)
     if vals.size < 3:
         return None
-    other = int(np.max(counts[1:-1]))  # the most populated value that is neither extreme
-    mask = np.zeros(y.size, bool)
-    levels: dict[str, float] = {}
-    nruns = 0
-    for side, level in (("max", vals[-1]), ("min", vals[0])):
-        at = y == level
-        runs = _runs(at)
-        multi = runs[runs >= 2]
-        if multi.size < MIN_RUNS:
-            continue
-        if int(at.sum()) - int(runs.max()) < MIN_RATIO * other:
-            continue
-        mask |= at
-        levels[side] = float(level)
-        nruns += int(multi.size)
-    if not levels or (~mask).sum() < MIN_KEPT_SHARE * y.size:
+    order = np.argsort(-counts, kind="stable")[:MAX_LEVELS]
+    cand = []  # (value, side, runs, samples less the longest run)
+    for i in order:
+        if counts[i] < 2 * MIN_RUNS:
+            break
+        at = y == vals[i]
+        side, nruns = _clip_side(y, at, float(vals[i]))
+        if side is not None:
+            cand.append((float(vals[i]), side, nruns, int(at.sum()) - int(_runs(at).max()), at))
+    while cand:
+        taken = {c[0] for c in cand}
+        other = int(max((c for v, c in zip(vals, counts) if float(v) not in taken), default=0))
+        keep = [c for c in cand if c[3] >= MIN_RATIO * other]
+        if len(keep) == len(cand):
+            break
+        cand = keep
+    if not cand:
         return None
-    return {"mask": mask, "levels": levels, "runs": nruns, "samples": int(mask.sum())}
+    mask = np.zeros(y.size, bool)
+    for c in cand:
+        mask |= c[4]
+    if (~mask).sum() < MIN_KEPT_SHARE * y.size:
+        return None
+    levels: dict[str, float] = {}
+    for v, side, *_ in cand:
+        if side not in levels or (v > levels[side] if side == "max" else v < levels[side]):
+            levels[side] = v
+    return {"mask": mask, "levels": {s: levels[s] for s in ("max", "min") if s in levels},
+            "all_levels": sorted([[c[1], c[0]] for c in cand], key=lambda x: (x[0], -x[1])),
+            "runs": int(sum(c[2] for c in cand)), "samples": int(mask.sum())}
 
 
 def drop_clipped(t, y, osc: dict, notes: list, min_samples: int):
@@ -87,13 +135,17 @@ def drop_clipped(t, y, osc: dict, notes: list, min_samples: int):
     keep = ~c["mask"]
     if int(keep.sum()) < min_samples:
         return t, y, osc
-    lv = " and ".join(f"{s} {v:.6g}" for s, v in c["levels"].items())
-    line = (f"the sensor saturates: {c['samples']} of {y.size} samples sit exactly at the record's {lv} "
+    if len(c["all_levels"]) == len(c["levels"]):
+        lv = "the record's " + " and ".join(f"{s} {v:.6g}" for s, v in c["levels"].items())
+    else:  # an offset step under the clip: one side flat at two levels
+        lv = "the levels " + ", ".join(f"{v:.6g} ({'top' if s == 'max' else 'bottom'})" for s, v in c["all_levels"])
+    line = (f"the sensor saturates: {c['samples']} of {y.size} samples sit exactly at {lv} "
             f"(flat tops at {c['runs']} turning points: clipped); "
             "they are left out of the fit (the samples between them are the oscillation's own); "
             "record with a range that holds the motion")
     notes.append(line)
-    info = {"levels": c["levels"], "runs": c["runs"], "samples_left_out": c["samples"], "line": line}
+    info = {"levels": c["levels"], "all_levels": c["all_levels"], "runs": c["runs"], "samples_left_out": c["samples"],
+            "line": line}
     return t[keep], y[keep], dict(osc, clipped=info)
 
 
