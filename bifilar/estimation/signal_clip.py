@@ -265,6 +265,39 @@ def drop_soft_clipped(t, y, osc: dict, notes: list, min_samples: int):
     return t[keep], y[keep], dict(osc, soft_clipped=info)
 
 
+#: the fit of the samples kept must find the whole record's spectral peak
+#: within this share of it (those samples lie in bands about the crossings,
+#: every half period: a fit of them alone can take 3f, or a multi-mode fit
+#: put its dominant mode there)
+SOFT_MAX_SHIFT = 0.25
+
+
+def soft_fit_holds(fit, osc: dict) -> bool:
+    """Whether ``fit`` (a :class:`.signal_result.PeriodFit` of the samples
+    :func:`drop_soft_clipped` kept) finds the oscillation of ``osc`` (its
+    ``frequency``, Hz, the whole record's spectral peak) within
+    :data:`SOFT_MAX_SHIFT`."""
+    f, f0 = float(fit.frequency), float(osc["frequency"])
+    return bool(np.isfinite(f) and abs(f / f0 - 1.0) <= SOFT_MAX_SHIFT)
+
+
+def keep_soft_clipped(whole: tuple, osc: dict):
+    """The record as it was before :func:`drop_soft_clipped` (``whole`` =
+    ``(t, y, osc, notes)``), its soft clipping still named (``osc_kept =
+    osc["soft_clipped"]`` with ``kept`` True and the line saying the peaks
+    stay in the fit and the amplitude reads low): where the samples near
+    the level alone do not fix the period (:func:`soft_fit_holds`).
+    Returns ``(t, y, osc, notes)``."""
+    t, y, osc0, notes = whole
+    sc = osc["soft_clipped"]
+    line = sc["line"].split("; the ")[0] + (
+        "; the samples near the level alone do not fix the period (another oscillation with it?), so the peaks "
+        f"are kept in the fit: its amplitude reads up to {sc['compression']:.0%} low; record with a range that "
+        "holds the motion")
+    notes = list(notes) + [line]
+    return t, y, dict(osc0, soft_clipped=dict(sc, kept=True, samples_left_out=0, line=line)), notes
+
+
 def take_fault_warnings(fit) -> list[str]:
     """The lines of a sensor's faults the fit dealt with (the clipped samples
     left out, :func:`drop_clipped`; an offset's step taken out,
