@@ -138,7 +138,7 @@ def test_no_sensor_fault_is_found_in_the_real_recordings():
 def test_a_clip_with_an_offset_step_under_it_is_found_and_both_taken_out():
     """A gyro clipped at 80 % of its peak whose offset then steps by 10-50 % of it (the flat tops at two
     levels on one side: neither the record's extreme alone nor the step was found): the old code
-    answered with a std ~28x the period's actual scatter (20 draws, `auto`; 2 of 20 at the half period
+    answered with a std ~28x the period's actual scatter (20 draws, `auto`; 2 of 20 at a third of the period
     with a std of 3e-5 s).  Now both levels are clipped and the step taken out: 20 of 20 (harness), the
     std 0.99x the scatter.  Here 6 draws: both faults named, the period within 2.5 combined stds of the
     clean twin's and the std under 1.5x its."""
