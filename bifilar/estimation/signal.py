@@ -102,7 +102,7 @@ from .signal_models import _auto_trim, _leading_rest
 from .signal_law import _amplitude_law
 from .signal_quantisation import _quantisation
 from .signal_result import PeriodFit
-from .signal_clip import drop_clipped
+from .signal_clip import drop_clipped, drop_soft_clipped, keep_soft_clipped, soft_fit_holds
 from .signal_offset import remove_offset_step
 from .signal_start import trim_held_end, trim_held_start
 from .signal_windows import AMPLITUDE_LAW_MODEL, _fit_window, _residual_peaks, _stationarity  # noqa: F401 (the model's name)
@@ -267,10 +267,17 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     if t_stop is None:  # the body caught and held, or stopped, before the record ends
         t, y, osc = trim_held_end(t, y, osc, notes)
     t, y, osc = drop_clipped(t, y, osc, notes, MIN_SAMPLES)  # a saturated sensor's flat tops: left out
-    t, y, osc = remove_offset_step(t, y, osc, notes)  # the sensor's offset stepping once: taken out
+    whole = (t, y, osc, list(notes))  # before the compressed peaks are left out
+    t, y, osc = drop_soft_clipped(t, y, osc, notes, MIN_SAMPLES)  # ... or its compressed peaks
+    t, y, osc = remove_offset_step(t, y, osc, notes)  # the sensor's offset stepping: taken out
     try:
         fit = _fit_period(t, y, model, trim, trim_k, drift, freq_guess, tuple(candidates),
                           criterion.upper(), crossing_check, split_check, notes)
+        if osc.get("soft_clipped") and not soft_fit_holds(fit, osc):
+            t, y, osc, notes = keep_soft_clipped(whole, osc)
+            t, y, osc = remove_offset_step(t, y, osc, notes)
+            fit = _fit_period(t, y, model, trim, trim_k, drift, freq_guess, tuple(candidates),
+                              criterion.upper(), crossing_check, split_check, notes)
     except SignalError:
         raise
     except (ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError) as exc:

@@ -1,4 +1,4 @@
-"""A sensor whose offset steps once: the step found, named and taken out.
+"""A sensor whose offset steps (up to three times): the steps found, named and taken out.
 
 A gyro re-zeroed mid-record, a camera knocked on its mount or a marker
 slipping leaves the record's level (its offset) one value before a moment
@@ -42,11 +42,28 @@ def _robust_std(x: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(x - np.median(x))))
 
 
+#: at most this many steps in one record (each further one is searched
+#: among the jumps the others leave)
+MAX_STEPS = 3
+
+
 def find_offset_step(t, y, T: float) -> dict | None:
-    """One step of the level of ``y`` ([y]; ``t`` s; ``T`` the period, s),
-    or None.  Returns ``index`` (the first sample after the step), ``time``
-    (s, that sample's), ``size`` ([y], after minus before) and ``share``
-    (the size over the median one-period amplitude)."""
+    """The steps of the level of ``y`` ([y]; ``t`` s; ``T`` the period, s),
+    or None.  Returns the largest step's ``index`` (the first sample after
+    the step), ``time`` (s, that sample's), ``size`` ([y], after minus
+    before) and ``share`` (the size over the median one-period amplitude),
+    and ``steps``: every step found (up to :data:`MAX_STEPS`), in time
+    order, each with those four keys.
+
+    A step is a jump of the disjoint one-period levels across one period
+    beyond :data:`MIN_SIGMAS` robust stds of the record's jumps and of
+    those of the :data:`LOCAL_PERIODS` periods either side (the other
+    steps' periods left out) and :data:`MIN_SHARE` of the amplitude; the
+    jumps are taken largest first.  The levels are then fitted with a line
+    and a step at each (the periods holding one left out): every step must
+    keep its sign, :data:`MIN_SHARE` of the amplitude and
+    :data:`MIN_CONFIRM` times the fit's residual scatter (one failing is
+    dropped, the rest refitted)."""
     from .signal_start import STEPS, local_sinusoids
 
     t = np.asarray(t, float)
@@ -63,26 +80,44 @@ def find_offset_step(t, y, T: float) -> dict | None:
     D = c[2:] - c[:-2]  # D[j - 1]: the jump across window j
     dev = D - np.median(D)
     s = _robust_std(D)
-    j = int(np.argmax(np.abs(dev))) + 1
-    if not (2 <= j <= N - 3) or abs(dev[j - 1]) <= max(MIN_SIGMAS * s, MIN_SHARE * amp):
+    js: list[int] = []
+    free = np.ones(D.size, bool)  # the jumps no step found so far touches
+    for _ in range(MAX_STEPS):
+        cand = np.where(free, np.abs(dev), -np.inf)
+        j = int(np.argmax(cand)) + 1
+        if not np.isfinite(cand[j - 1]) or not (2 <= j <= N - 3) \
+                or abs(dev[j - 1]) <= max(MIN_SIGMAS * s, MIN_SHARE * amp):
+            break
+        free[max(j - 2, 0):j + 1] = False  # a step moves the jumps across its window and the two beside it
+        # beyond the jumps of the periods around it (a fast decay's level wanders early, where the
+        # amplitude is large, and the quiet tail sets the record's scatter); other steps' jumps left out
+        idx = np.r_[max(j - 1 - LOCAL_PERIODS, 0):max(j - 2, 0), j + 1:min(j + 1 + LOCAL_PERIODS, D.size)]
+        idx = idx[free[idx]]
+        near = D[idx]
+        if near.size >= 4 and abs(D[j - 1] - np.median(near)) <= MIN_SIGMAS * _robust_std(near):
+            continue
+        js.append(j)
+    # confirm: the levels (the windows holding a step left out) as a line with a step after each
+    while js:
+        k = np.delete(np.arange(N), js)
+        X = np.c_[np.ones(k.size), k - 0.5 * N, *[(k > j).astype(float) for j in js]]
+        coef, *_ = np.linalg.lstsq(X, c[k], rcond=None)
+        r = _robust_std(c[k] - X @ coef)
+        h = coef[2:]
+        bad = [i for i, j in enumerate(js) if np.sign(h[i]) != np.sign(dev[j - 1]) or abs(h[i]) < MIN_SHARE * amp
+               or abs(h[i]) < MIN_CONFIRM * r]
+        if not bad:
+            break
+        js.pop(min(bad, key=lambda i: abs(h[i])))
+    steps = []
+    for j in sorted(js):
+        i = _step_sample(t, y, T, t_start[j - 1], t_start[j + 1] if j + 1 < N else t[-1])
+        if i is not None:
+            steps.append({"index": i["index"], "time": float(t[i["index"]]), "size": i["size"],
+                          "share": abs(i["size"]) / amp})
+    if not steps:
         return None
-    # and beyond the jumps of the periods around it (a fast decay's level wanders early, where the
-    # amplitude is large, and the quiet tail sets the record's scatter)
-    near = np.r_[D[max(j - 1 - LOCAL_PERIODS, 0):max(j - 2, 0)], D[j + 1:j + 1 + LOCAL_PERIODS]]
-    if near.size >= 4 and abs(D[j - 1] - np.median(near)) <= MIN_SIGMAS * _robust_std(near):
-        return None
-    # confirm: the levels (window j, which holds the step, left out) as a line with a step after j
-    k = np.delete(np.arange(N), j)
-    X = np.c_[np.ones(k.size), k - 0.5 * N, (k > j).astype(float)]
-    coef, *_ = np.linalg.lstsq(X, c[k], rcond=None)
-    h = float(coef[2])
-    r = _robust_std(c[k] - X @ coef)
-    if np.sign(h) != np.sign(dev[j - 1]) or abs(h) < MIN_SHARE * amp or abs(h) < MIN_CONFIRM * r:
-        return None
-    i = _step_sample(t, y, T, t_start[j - 1], t_start[j + 1] if j + 1 < N else t[-1])
-    if i is None:
-        return None
-    return {"index": i["index"], "time": float(t[i["index"]]), "size": i["size"], "share": abs(i["size"]) / amp}
+    return dict(max(steps, key=lambda x: abs(x["size"])), steps=steps)
 
 
 def _step_sample(t, y, T: float, t0: float, t1: float) -> dict | None:
@@ -107,17 +142,25 @@ def _step_sample(t, y, T: float, t0: float, t1: float) -> dict | None:
 
 
 def remove_offset_step(t, y, osc: dict, notes: list):
-    """Take a step of the level (:func:`find_offset_step`) out of ``y``
-    before the fit: ``(t, y, osc)``, the samples after the step less its
-    size, ``osc["offset_step"]`` (``time`` s, ``size`` [y], ``share``,
-    ``line``) and the line in ``notes``; unchanged where none is found."""
+    """Take the steps of the level (:func:`find_offset_step`) out of ``y``
+    before the fit: ``(t, y, osc)``, the samples after each step less its
+    size, ``osc["offset_step"]`` (the largest step's ``time`` s, ``size``
+    [y], ``share``; ``steps``, every one's; ``line``) and the line in
+    ``notes``; unchanged where none is found."""
     st = find_offset_step(t, y, 1.0 / float(osc["frequency"]))
     if st is None:
         return t, y, osc
     y = np.array(y, float)
-    y[st["index"]:] -= st["size"]
-    line = (f"the record's level steps by {st['size']:+.3g} ({st['share']:.0%} of the amplitude) at t = "
-            f"{st['time']:.4g} s (the sensor's offset jumping: re-zeroed, knocked, a marker slipping?); the step "
-            "is taken out before the fit")
+    for x in st["steps"]:
+        y[x["index"]:] -= x["size"]
+    each = [f"by {x['size']:+.3g} ({x['share']:.0%} of the amplitude) at t = {x['time']:.4g} s" for x in st["steps"]]
+    if len(each) == 1:
+        line = (f"the record's level steps {each[0]} (the sensor's offset jumping: re-zeroed, knocked, a marker "
+                "slipping?); the step is taken out before the fit")
+    else:
+        line = (f"the record's level steps {len(each)} times: {', '.join(each)} (the sensor's offset jumping: "
+                "re-zeroed, knocked, a marker slipping?); the steps are taken out before the fit")
     notes.append(line)
-    return t, y, dict(osc, offset_step={"time": st["time"], "size": st["size"], "share": st["share"], "line": line})
+    steps = [{k: x[k] for k in ("time", "size", "share")} for x in st["steps"]]
+    return t, y, dict(osc, offset_step={"time": st["time"], "size": st["size"], "share": st["share"],
+                                        "steps": steps, "line": line})
