@@ -84,6 +84,7 @@ from .montecarlo import (  # noqa: F401
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
+from .birge import birge_factor, birge_note, widen_timing
 from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_periods, marginal_fit_warning,
                         prior_fit_hint, unchecked_notes)
 from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
@@ -352,6 +353,11 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                      "their configs: measured once, one error for all of them in the budget and the Monte Carlo; "
                      "--rig separate if each hanging's were measured again)")
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
+    # periods scattering beyond their stated timing stds: the timing terms widened (birge.py)
+    fit["birge_factor"] = birge_factor(fit)
+    if fit["birge_factor"] > 1.0:
+        budget = widen_timing(budget, fit["birge_factor"])
+        warnings.append(birge_note(fit["birge_factor"], fit))
     if (w := marginal_fit_warning(pb, fit, _residuals(pb, p_hat, r_hat)[1])) is not None:
         warnings.append(w)
     notes.extend(unchecked_notes(pb, bctx.jacobian, fit["dof"]))
