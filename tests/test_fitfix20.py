@@ -118,3 +118,46 @@ def test_birge_factor_in_the_json_and_on_stderr(tmp_path, capsys):
     expect = math.sqrt((T0 * 0.002 / 1e-3) ** 2 / 2)
     assert doc["fit"]["birge_factor"] == pytest.approx(expect, rel=1e-3)
     assert "Birge factor" in r.stderr
+
+
+# -- parts prior ------------------------------------------------------------------------------------------------
+
+def test_parts_prior_threshold_follows_its_definition():
+    """Warned at >= 3 times or <= 1/3 of the described moment, not between; components without a
+    description (null) or not principal are not compared."""
+    from bifilar.estimation.parts_prior import FACTOR, parts_prior_warnings
+
+    d = {"Izz": 10.0, "Ixx": 4.0}
+    assert FACTOR == 3.0
+    assert parts_prior_warnings(d, ["Izz"], [30.0]) and parts_prior_warnings(d, ["Izz"], [3.33])
+    assert not parts_prior_warnings(d, ["Izz"], [29.9]) and not parts_prior_warnings(d, ["Izz"], [3.34])
+    assert not parts_prior_warnings(d, ["Iyy", "Ixy"], [100.0, 100.0])
+    w = parts_prior_warnings(d, ["Izz", "Ixx"], [40.0, 1.0])
+    assert len(w) == 2 and "double" in w[0] and "half" in w[1]
+
+
+@pytest.mark.parametrize("factor", [2.0, 0.5])
+def test_a_roll_period_counted_double_or_half_is_warned(factor):
+    """The Solar Boat's roll period doubled (two swings counted as one) gives Ixx ~3.2 times the parts
+    model's 83.14 kg m^2; halved, ~0.23 times: both answered (a physical Ixx gives them) and warned."""
+    boat = load_scene(CONFIGS / "solar_boat.yaml")
+    T = _modes(boat).get("roll").period * factor
+    res = invert(_ms(boat, [("roll", T)]), solve_for=["Ixx"], ladder=False)
+    ratio = res.values[0] / boat.inertia[0, 0]
+    assert (ratio >= 3.0) if factor > 1 else (ratio <= 1 / 3)
+    assert sum("body description" in w and ("double" if factor > 1 else "half") in w for w in res.warnings) == 1
+
+
+def test_honest_draws_are_not_warned_by_the_parts_prior():
+    """Honest experiments (the inputs off by their stated stds, 1 ms timing) never come near a factor 3:
+    12 draws each of the boat's Ixx from roll and Izz from torsion; none warned (593 draws before, none)."""
+    boat = load_scene(CONFIGS / "solar_boat.yaml")
+    unc = default_uncertainty()
+    modes = _modes(boat)
+    rng = np.random.default_rng(20)
+    for lab, comp in (("roll", "Ixx"), ("torsion", "Izz")):
+        for _ in range(12):
+            written = measured_scene(boat, rng, unc)
+            T = modes.get(lab).period + rng.normal(0.0, unc["timing"])
+            res = invert(_ms(written, [(lab, T)]), solve_for=[comp], unc=unc, ladder=False)
+            assert not any("body description" in w for w in res.warnings), res.warnings

@@ -85,6 +85,7 @@ from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
 from .birge import birge_factor, birge_note, widen_timing
+from .parts_prior import described_moments, parts_prior_warnings
 from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_periods, marginal_fit_warning,
                         prior_fit_hint, unchecked_notes)
 from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
@@ -162,6 +163,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if "release" in {**ms.uncertainty, **(unc or {})} and not any(m.source == "signal" for m in ms.measurements):
         warnings.append("uncertainty release is budgeted for recordings (--signal) only: a period's "
                         "second modes are not modelled, so the stated bound is not in this answer's std")
+    described = described_moments(ms)  # the config's own moments, before nulls get start guesses (parts_prior)
     try:
         ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
         pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
@@ -353,6 +355,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                      "their configs: measured once, one error for all of them in the budget and the Monte Carlo; "
                      "--rig separate if each hanging's were measured again)")
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
+    warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
     # periods scattering beyond their stated timing stds: the timing terms widened (birge.py)
     fit["birge_factor"] = birge_factor(fit)
     if fit["birge_factor"] > 1.0:
