@@ -161,3 +161,53 @@ def test_honest_draws_are_not_warned_by_the_parts_prior():
             T = modes.get(lab).period + rng.normal(0.0, unc["timing"])
             res = invert(_ms(written, [(lab, T)]), solve_for=[comp], unc=unc, ladder=False)
             assert not any("body description" in w for w in res.warnings), res.warnings
+
+
+# -- close modes ------------------------------------------------------------------------------------------------
+
+class _M:
+    def __init__(self, label, period):
+        self.label, self.period = label, period
+
+
+def test_close_pairs_follow_their_definition():
+    """Within 0.1 % of the longer period: a pair; just beyond, or a neutral mode (no period): none."""
+    assert CLOSE_REL == 1e-3
+    assert close_pairs([_M("a", 1.0), _M("b", 1.0009), _M("c", 2.0)]) == [(0, 1)]
+    assert close_pairs([_M("a", 1.0), _M("b", 1.0011)]) == []
+    assert close_pairs([_M("a", None), _M("b", None)]) == []
+    assert close_mode_warnings([_M("a", 1.0), _M("b", 1.0009)], timed={"c"}) == []
+    assert "'b'" in close_mode_warnings([_M("a", 1.0), _M("b", 1.0009)], timed={"b"})[0]
+
+
+def test_modes_warns_of_a_symmetric_trifilars_equal_swings(tmp_path):
+    """The symmetric trifilar's two swings have equal periods (by symmetry: an independent fact): one
+    stderr line and a JSON warnings list; the thesis plate (no close pair) has no warnings key."""
+    from click.testing import CliRunner
+    from conftest import TRIFILAR
+
+    from bifilar.cli import main
+
+    cfg = tmp_path / "tri.yaml"
+    cfg.write_text(TRIFILAR)
+    r = CliRunner().invoke(main, ["modes", str(cfg), "--json"])
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    close = [w for w in doc.get("warnings", []) if "have periods within" in w]
+    assert len(close) == 1 and "swing-x" in close[0] and "swing-y" in close[0]
+    assert sum("have periods within" in line for line in r.stderr.splitlines()) == 1
+    r = CliRunner().invoke(main, ["modes", str(CONFIGS / "thesis_plate_rest.yaml"), "--json"])
+    assert r.exit_code == 0 and "warnings" not in json.loads(r.stdout)
+
+
+def test_invert_warns_where_a_timed_mode_has_a_close_neighbour():
+    """Vertical wires with the CoM 1 cm below the attachments: the swings along and across the attachment
+    line differ by 1e-4 (both ~2 pi sqrt(L / g)); timing swing-y is warned, timing torsion alone is not."""
+    scene = trapezoid(b=5.0, bp=5.0, h=0.01)
+    modes = _modes(scene)
+    T_t, T_y = modes.get("torsion").period, modes.get("swing-y").period
+    res = invert(_ms(scene, [("torsion", T_t), ("swing-y", T_y)]), solve_for=["Izz"], ladder=False)
+    w = [x for x in res.warnings if "have periods within" in x]
+    assert len(w) == 1 and "timed as 'swing-y'" in w[0]
+    res = invert(_ms(scene, [("torsion", T_t)]), solve_for=["Izz"], ladder=False)
+    assert not any("have periods within" in x for x in res.warnings)

@@ -356,6 +356,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                      "--rig separate if each hanging's were measured again)")
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
     warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
+    warnings += _close_timed_modes(pb, p_hat)
     # periods scattering beyond their stated timing stds: the timing terms widened (birge.py)
     fit["birge_factor"] = birge_factor(fit)
     if fit["birge_factor"] > 1.0:
@@ -462,6 +463,21 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                             "the model is not linear over the input uncertainties; quote the Monte Carlo interval")
     res.runtime = time.perf_counter() - t0
     return res
+
+
+def _close_timed_modes(pb: Problem, p) -> list[str]:
+    """The warnings of :func:`~bifilar.analysis.close_modes.close_mode_warnings`
+    for the timed modes of each hanging at the unknowns ``p``."""
+    from ..analysis.close_modes import close_mode_warnings
+
+    out = []
+    vals = pb.values(p)
+    for h, hm in enumerate(pb.models):
+        timed = {m.label for m in pb.measurements if m.hanging == h}
+        if timed:
+            where = f"hanging '{hm.hanging.name}': " if len(pb.models) > 1 else ""
+            out += close_mode_warnings(hm.locate(hm.scene(vals))[1].modes, timed, where)
+    return out
 
 
 def _with_start_guesses(ms: MeasurementSet, solve_for) -> tuple[MeasurementSet, list]:
