@@ -326,7 +326,8 @@ def test_rig_in_centimetres_beside_a_body_in_metres_warns(tmp_path):
     p.write_text(yaml.safe_dump(_readme_config()))
     for cfg_path in (p, CONFIGS / "solar_boat.yaml", CONFIGS / "trifilar_kth.yaml", PLATE):
         code, _, err = run(["modes", cfg_path, "--json"])
-        assert code == 0 and "warning" not in err, (cfg_path, err)
+        # (a symmetric trifilar's equal swings are warned as close modes, session 20; no other warning)
+        assert code == 0 and "warning" not in "".join(l for l in err.splitlines() if "have periods within" not in l), (cfg_path, err)
 
 
 def test_inertia_from_tensions_of_a_body_at_rest_claims_nothing():

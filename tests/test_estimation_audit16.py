@@ -126,7 +126,9 @@ def test_the_config_warning_reaches_the_json_warnings(tmp_path):
         assert r.exit_code == 0, r.stderr
         doc = json.loads(r.stdout)
         mine = [w for w in doc.get("warnings", []) if w.startswith("rig.stiffness")]
-        assert len(mine) == (1 if warned else 0) and ("warnings" in doc) == warned, doc.get("warnings")
+        # (the symmetric trifilar's equal swings are warned as close modes, session 20: not the config's)
+        others = [w for w in doc.get("warnings", []) if "have periods within" not in w]
+        assert len(mine) == (1 if warned else 0) and bool(others) == warned, doc.get("warnings")
         # still logged as it arises (the config's warning; session 17's stretch-coupling warning of the modes is
         # the computation's, on stderr for the quiet rig too: its swings' elastic periods differ by 5e-6)
         assert ("warning: rig.stiffness: at an equal share" in r.stderr) == warned

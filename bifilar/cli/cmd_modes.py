@@ -60,11 +60,19 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
     warn_at_rest(scene, rest, ms.modes)
+    from ..analysis.close_modes import close_mode_warnings
+
+    close = close_mode_warnings(ms.modes)
+    for w in close:
+        click.echo(f"warning: {w}", err=True)
     if out_p:
         rows = [[k + 1, m.period if m.period else float("nan"), *m.shape] for k, m in enumerate(ms.modes)]
         write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)
     if as_json:
-        emit_json(modes_document(scene, rest, ms))
+        doc = modes_document(scene, rest, ms)
+        if close:
+            doc["warnings"] = close
+        emit_json(doc)
         return
     from rich.table import Table
 

@@ -84,6 +84,8 @@ from .montecarlo import (  # noqa: F401
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
+from .birge import birge_factor, birge_note, widen_timing
+from .parts_prior import described_moments, parts_prior_warnings
 from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_periods, marginal_fit_warning,
                         prior_fit_hint, unchecked_notes)
 from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
@@ -161,6 +163,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     if "release" in {**ms.uncertainty, **(unc or {})} and not any(m.source == "signal" for m in ms.measurements):
         warnings.append("uncertainty release is budgeted for recordings (--signal) only: a period's "
                         "second modes are not modelled, so the stated bound is not in this answer's std")
+    described = described_moments(ms)  # the config's own moments, before nulls get start guesses (parts_prior)
     try:
         ms, start_notes = _with_start_guesses(ms, solve_for or ms.solve_for)
         pb = build_problem(ms, solve_for or ms.solve_for, unc_all)
@@ -352,6 +355,13 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                      "their configs: measured once, one error for all of them in the budget and the Monte Carlo; "
                      "--rig separate if each hanging's were measured again)")
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
+    warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
+    warnings += _close_timed_modes(pb, p_hat)
+    # periods scattering beyond their stated timing stds: the timing terms widened (birge.py)
+    fit["birge_factor"] = birge_factor(fit)
+    if fit["birge_factor"] > 1.0:
+        budget = widen_timing(budget, fit["birge_factor"])
+        warnings.append(birge_note(fit["birge_factor"], fit))
     if (w := marginal_fit_warning(pb, fit, _residuals(pb, p_hat, r_hat)[1])) is not None:
         warnings.append(w)
     notes.extend(unchecked_notes(pb, bctx.jacobian, fit["dof"]))
@@ -453,6 +463,21 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                             "the model is not linear over the input uncertainties; quote the Monte Carlo interval")
     res.runtime = time.perf_counter() - t0
     return res
+
+
+def _close_timed_modes(pb: Problem, p) -> list[str]:
+    """The warnings of :func:`~bifilar.analysis.close_modes.close_mode_warnings`
+    for the timed modes of each hanging at the unknowns ``p``."""
+    from ..analysis.close_modes import close_mode_warnings
+
+    out = []
+    vals = pb.values(p)
+    for h, hm in enumerate(pb.models):
+        timed = {m.label for m in pb.measurements if m.hanging == h}
+        if timed:
+            where = f"hanging '{hm.hanging.name}': " if len(pb.models) > 1 else ""
+            out += close_mode_warnings(hm.locate(hm.scene(vals))[1].modes, timed, where)
+    return out
 
 
 def _with_start_guesses(ms: MeasurementSet, solve_for) -> tuple[MeasurementSet, list]:
