@@ -1,5 +1,5 @@
 """Rounding-level parameters are exact zeros for the compiled kernel
-(``maximal._denoised``, perf14, session 20): the KTH trifilar's inertia,
+(``kernel_values._denoised``, perf14, session 20): the KTH trifilar's inertia,
 summed from three rotated beams, carries products of inertia of ~1e-17 of
 its moments and an attachment coordinate of 3e-18 m; with them its kernel
 took the general-axes path (~25 % more operations a call).  Dropped, the
