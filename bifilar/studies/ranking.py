@@ -171,7 +171,7 @@ def _tie_order(a: dict, b: dict) -> int:
 def measurable_components(points: list[dict]) -> list[str]:
     """Components identifiable at one valid point at least (config order)."""
     out = []
-    for c in _components(points):
+    for c in point_components(points):
         if any(p.get("valid") and p["components"][c].get("identifiable") for p in points):
             out.append(c)
     return out
@@ -274,7 +274,7 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
     finite = [p for p in valid if math.isfinite(objective(p, target, among))]
     if not finite:
         # identifiable, but no std anywhere (a knife edge, dependent wires): say why, as invert does
-        sel = [target] if target else list(among if among is not None else _components(points))
+        sel = [target] if target else list(among if among is not None else point_components(points))
         why = [(c, p["components"][c]["sigma_unavailable"]) for p in valid for c in sel
                if p["components"].get(c, {}).get("sigma_unavailable")]
         if why:
@@ -324,7 +324,8 @@ def pareto_front(points: list[dict], target: str | None, among=None) -> list[int
     return front
 
 
-def _components(points: list[dict]) -> list[str]:
+def point_components(points: list[dict]) -> list[str]:
+    """The inertia components (names such as "Izz") the first valid point estimates; [] when none is valid."""
     for p in points:
         if p.get("valid"):
             return list(p["components"])

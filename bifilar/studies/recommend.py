@@ -18,8 +18,9 @@ import math
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
-from .ranking import (CONSTRAINT_FLAGS, _components, binding_constraint, clashes, measurable_components, objective,
-                      pareto_front, point_separation, preferences, rank_order, tension_range_caution, violations)
+from .ranking import (CONSTRAINT_FLAGS, binding_constraint, clashes, measurable_components, objective,
+                      pareto_front, point_components, point_separation, preferences, rank_order,
+                      tension_range_caution, violations)
 from .settings import Constraints
 
 
@@ -130,7 +131,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     for r, i in enumerate(ranked):
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
-    comps = _components(points)
+    comps = point_components(points)
     doc: dict = {"target": target or "worst relative of " + ", ".join(among or comps),
                  "measurable": among, "not_measurable": [c for c in comps if c not in among],
                  "constraints": constraints.describe(), "pareto_front": front,
