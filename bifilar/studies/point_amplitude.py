@@ -170,7 +170,7 @@ def _amplitude_laws(pre: "_Prepared", sims: dict, st: SweepSettings) -> dict:
     runs = law.runs
     if runs is None:
         try:
-            runs = _runs_at(law, st)
+            runs = _runs_at(law, st, own_runs=list(sims.values()))
         except BifilarError:
             return {}
     out = {}
@@ -224,7 +224,62 @@ def _refine_dr_dI(out: dict, pre: "_Prepared", law: _LawRuns, comps: list, st: S
         out[c] = (out[c][0], dr)
 
 
-def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
+LAW_SAMPLES = 64
+"""Samples a period on which the one-scene LSODA engine evaluates a run
+(:mod:`bifilar.analysis.batch_lsoda`: ``max(64, spp)``, 64 for a point's
+runs, which keep no samples): a run's upward crossings are located on the
+8 samples about each, 3 before its left sample and 4 after
+(:func:`~bifilar.integrators.sampled_crossings`)."""
+
+LAW_TAIL = 10 / LAW_SAMPLES
+"""How far past the point's own runs' last timed crossing (in linear
+periods, scaled to the slower side of the amplitude factor) its amplitude
+laws' runs are integrated (:func:`_law_length`): the crossing stencil's 4
+samples after its left sample, one for the rounding of the crossing's
+sample index, and ~0.08 of a period for the law runs' crossings to fall
+later than the point's (a law run's amplitude factor lies between 1 and the
+point's, the stepped scenes' by ~1e-6 of it)."""
+
+
+def _law_length(own_runs, periods: float) -> float:
+    """Periods (in each run's linear period) to integrate a point's amplitude
+    laws' runs for, of ``periods`` (the point's own, :class:`SweepSettings`):
+    a multiple of 1 / :data:`LAW_SAMPLES`, :data:`LAW_TAIL` past the last
+    upward crossing of the point's own runs ``own_runs`` (SceneRuns of the
+    same scene and amplitude), divided by their amplitude factor where it
+    is below 1; ``periods`` where a run has no crossings or the end would
+    not come before it.  The laws' runs read only their periods, i.e.
+    their crossings up to ``periods``: integrating past the last one (the
+    last ~quarter period of three, after the release from the mode's
+    extreme) changes none of them (LSODA's steps do not depend on where its
+    output stops; :func:`_runs_at` checks each run and runs it in full
+    otherwise)."""
+    last = 0.0
+    for r in own_runs:
+        if r is None or r.error or len(r.crossings) < 2 or not r.period or not r.linear_period:
+            return periods
+        last = max(last, float(r.crossings[-1]) / r.linear_period / min(1.0, r.period / r.linear_period))
+    end = math.ceil((last + LAW_TAIL) * LAW_SAMPLES) / LAW_SAMPLES
+    return end if end < periods else periods
+
+
+def _trimmed_complete(run, end: float, periods: float) -> bool:
+    """Whether a law run integrated to ``end`` (< ``periods``, linear
+    periods) has every crossing the run to ``periods`` has, located on the
+    same samples: at least two (a period), the last one's 8-sample stencil
+    inside the shortened record with a sample to spare, cycles regular
+    within 10 %, and the next upward crossing, three quarters of the
+    shortest cycle after the last at the earliest, past ``periods``."""
+    if run.error or not run.period or not run.linear_period or len(run.crossings) < 2:
+        return False
+    tau = np.asarray(run.crossings, float) / run.linear_period
+    cyc = np.diff(tau)
+    if not (tau[-1] <= end - 6 / LAW_SAMPLES and cyc.min() > 0 and cyc.max() <= 1.1 * cyc.min()):
+        return False
+    return bool(tau[-1] + 0.75 * cyc.min() > periods)
+
+
+def _runs_at(law: _LawRuns, st: SweepSettings, own=None, own_runs=None) -> list:
     """The runs of ``law`` (errors returned per run, from ``law.starts`` if
     solved), then only their periods read: run without the health figures
     (``simulate_batch(..., health=False)``: the same steps and samples, so
@@ -238,10 +293,10 @@ def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
     returns the point's runs, then the law's."""
     from ..analysis.batch import simulate_batch
 
-    def call(scenes, labels, amps, rests, mss, starts, health):
+    def call(scenes, labels, amps, rests, mss, starts, health, periods=st.periods):
         if not scenes:
             return []
-        return simulate_batch(scenes, mode=labels, amplitude=amps, periods=st.periods, rtol=st.rtol, rests=rests,
+        return simulate_batch(scenes, mode=labels, amplitude=amps, periods=periods, rtol=st.rtol, rests=rests,
                               modes=mss, errors="return", starts=starts, health=health)
 
     first = []
@@ -249,7 +304,18 @@ def _runs_at(law: _LawRuns, st: SweepSettings, own=None) -> list:
         scene, rest, ms, own_labels, amplitude, own_starts = own
         n = len(own_labels)
         first = call([scene] * n, list(own_labels), [amplitude] * n, [rest] * n, [ms] * n, own_starts, True)
-    return first + call(law.scenes, law.labels, law.amplitudes, law.rests, law.mode_sets, law.starts, False)
+        own_runs = first
+    args = (law.scenes, law.labels, law.amplitudes, law.rests, law.mode_sets)
+    end = _law_length(own_runs, st.periods) if own_runs else st.periods
+    runs = call(*args, law.starts, False, end)
+    if end < st.periods:
+        redo = [i for i, r in enumerate(runs) if not _trimmed_complete(r, end, st.periods)]
+        if redo:  # in full, as they were run before (each run's figures are its own, whatever its batch)
+            starts = None if law.starts is None else law.starts.take(redo)
+            full = call(*[[a[i] for i in redo] for a in args], starts, False)
+            for i, r in zip(redo, full):
+                runs[i] = r
+    return first + runs
 
 
 def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings, screen: bool = False) -> None:
