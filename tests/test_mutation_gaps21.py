@@ -8,11 +8,13 @@ formulation, never from the code's own output."""
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from bifilar.estimation.birge import birge_factor, widen_timing
+from bifilar.estimation.parts_prior import described_moments, parts_prior_warnings
 from bifilar.estimation.uncertainty import LinearBudget
 
 # ---------------------------------------------------------------- birge
@@ -49,3 +51,59 @@ def test_widening_by_a_factor_between_one_and_two_scales_the_timing_sigmas_only(
     assert w.contributions["length.1"][0] == 2e-3
     b = _budget()
     assert widen_timing(b, 1.0) is b and widen_timing(b, 0.5) is b
+
+
+# ---------------------------------------------------------------- parts_prior
+
+
+def _rot(axis, angle):
+    """Rotation matrix about a unit ``axis`` by ``angle`` rad (Rodrigues)."""
+    k = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _ms(I_h, R, inertia_spec=None):
+    """A stand-in measurement set: one hanging whose scene carries ``I_h`` (its own body axes) and the
+    config's ``body.inertia`` spec; ``R`` maps reference body axes to the hanging's (``v_h = R v_ref``)."""
+    cfg = {"body": {"inertia": inertia_spec}} if inertia_spec is not None else {}
+    scene = SimpleNamespace(inertia=np.asarray(I_h, float), config=cfg)
+    return SimpleNamespace(hangings=[SimpleNamespace(scene=scene, rotation=R)])
+
+
+def test_described_moments_are_the_quadratic_form_along_the_reference_axes():
+    """The moment about reference axis ``e_k`` is ``(R e_k) . I_h (R e_k)`` (the hanging's axes carry
+    ``R e_k``): computed here one axis at a time, for a general rotation and a full tensor."""
+    I_h = np.array([[5.0, 0.4, -0.3], [0.4, 7.0, 0.2], [-0.3, 0.2, 9.0]])
+    R = _rot([1.0, 2.0, -0.5], 0.7)
+    got = described_moments(_ms(I_h, R))
+    for k, n in enumerate(("Ixx", "Iyy", "Izz")):
+        u = R[:, k]
+        assert got[n] == pytest.approx(float(u @ I_h @ u), rel=1e-12)
+    assert set(got) == {"Ixx", "Iyy", "Izz"}
+
+
+def test_described_moments_leave_out_the_null_and_the_unknown():
+    """A component the config marks null is left out although the scene carries a start value for it."""
+    got = described_moments(_ms(np.diag([1.0, 2.0, 3.0]), np.eye(3), {"principal": [1.0, 2.0, None]}))
+    assert got == {"Ixx": 1.0, "Iyy": 2.0}
+    got = described_moments(_ms(np.diag([1.0, 2.0, 3.0]), np.eye(3), {"tensor": [[1, 0, 0], [0, None, 0], [0, 0, 3]]}))
+    assert got == {"Ixx": 1.0, "Izz": 3.0}
+
+
+def test_parts_prior_compares_small_bodies_and_the_exact_third():
+    """A body under 1 kg m^2 is compared like any other (0.02 described, 0.07 solved: 3.5 times); exactly a
+    third (1.0 of 3.0, the float 1/3 itself) is "at most 1 / FACTOR": warned, 'half'."""
+    assert len(parts_prior_warnings({"Izz": 0.02}, ["Izz"], [0.07])) == 1
+    assert len(parts_prior_warnings({"Izz": 0.5}, ["Izz"], [0.1])) == 1
+    w = parts_prior_warnings({"Iyy": 3.0}, ["Iyy"], [1.0])
+    assert len(w) == 1 and "half" in w[0]
+
+
+@pytest.mark.parametrize("described, value", [({"Izz": 0.0}, 5.0), ({"Izz": -1.0}, 5.0), ({}, 5.0),
+                                              ({"Izz": 2.0}, 0.0), ({"Izz": 2.0}, -7.0),
+                                              ({"Izz": 2.0}, math.nan), ({"Izz": 2.0}, math.inf)])
+def test_parts_prior_skips_what_it_cannot_compare(described, value):
+    """No ratio exists for a described moment that is zero, negative or absent, nor for a solved moment
+    that is not a positive finite number (unphysical answers are another check's): no warning, no error."""
+    assert parts_prior_warnings(described, ["Izz"], [value]) == []
