@@ -107,3 +107,26 @@ def test_parts_prior_skips_what_it_cannot_compare(described, value):
     """No ratio exists for a described moment that is zero, negative or absent, nor for a solved moment
     that is not a positive finite number (unphysical answers are another check's): no warning, no error."""
     assert parts_prior_warnings(described, ["Izz"], [value]) == []
+
+
+# ---------------------------------------------------------------- close_modes
+
+
+def test_periods_exactly_rel_apart_are_a_close_pair():
+    """"differ by at most ``rel`` of the longer" includes the tie: 1 s and 1 - 2^-10 s with rel = 2^-10
+    (every number exact in binary) are a pair; 1 - 2^-9 s is not."""
+    from bifilar.analysis.close_modes import close_pairs
+
+    M = SimpleNamespace
+    assert close_pairs([M(period=1.0), M(period=1.0 - 2.0 ** -10)], rel=2.0 ** -10) == [(0, 1)]
+    assert close_pairs([M(period=1.0), M(period=1.0 - 2.0 ** -9)], rel=2.0 ** -10) == []
+
+
+def test_close_mode_warning_states_the_difference_in_percent_of_the_longer():
+    """2 s and 2.0018 s differ by 0.0018 / 2.0018 = 0.0899 % of the longer: the warning says "within
+    0.09 %" (two digits; 0.0909 % would print 0.091, the difference times the period 0.36)."""
+    from bifilar.analysis.close_modes import close_mode_warnings
+
+    M = SimpleNamespace
+    w = close_mode_warnings([M(label="a", period=2.0), M(label="b", period=2.0018)])
+    assert len(w) == 1 and "within 0.09 % of each other" in w[0], w
