@@ -169,3 +169,101 @@ def test_second_derivative_error_is_the_fits_response_to_a_complex_sinusoid():
     got = second_derivative_error(t, start, W, w)
     assert np.allclose(got, expect, rtol=1e-9, atol=1e-12)
     assert 1e-4 < np.median(got) < 0.1  # a real, small error at 20 samples a period: the check has teeth
+
+
+# ---------------------------------------------------------------- phase_lean (signal_phasewander)
+
+
+def _stepped_cosine(K, W, jumps, fs=30.0, offset=0.0):
+    """``K`` cycles of exactly ``W`` samples at ``fs`` Hz whose phase steps by ``jumps[k]`` rad at the
+    start of cycle ``k`` (the frequency fs / W): each cycle is a pure cosine of its own phase."""
+    f = fs / W
+    t = np.arange(K * W) / fs
+    phi = np.repeat(np.cumsum(jumps), W)
+    return t, offset + np.cos(2 * np.pi * f * t + phi), SimpleNamespace(t0=float(t[0]), t1=float(t[-1]), frequency=f)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_phase_lean_is_the_skew_of_the_cycles_phase_advances(sign):
+    """Phase steps of 0.2 rad at every 4th of 40 cycle boundaries: the advances are 0.2 with probability
+    exactly 1/4, else 0, whose skew is a Bernoulli's ``(1 - 2p) / sqrt(p (1 - p))`` = 2 / sqrt(3); steps
+    back, ``-2 / sqrt(3)``.  Each cycle holds a whole period, so its demodulated phase is its own
+    exactly."""
+    from bifilar.estimation.signal_phasewander import phase_lean
+
+    jumps = np.zeros(41)
+    jumps[4::4] = 0.2 * sign
+    t, y, fit = _stepped_cosine(41, 10, jumps)
+    assert phase_lean(t, y, fit) == pytest.approx(sign * 2 / math.sqrt(3), rel=1e-9)
+
+
+def test_phase_lean_is_blind_to_an_offset():
+    """Each cycle's mean is taken out before demodulating: an offset 1000 times the amplitude leaves the
+    lean as it is, here where a cycle is not a whole number of samples (1 / (f dt) = 10.4, W = 10, so the
+    demodulator does not sum to zero over a row and an offset left in would leak into the phases)."""
+    from bifilar.estimation.signal_phasewander import phase_lean
+
+    rng = np.random.default_rng(5)
+    fs, f = 30.0, 30.0 / 10.4
+    t = np.arange(400) / fs
+    y = np.cos(2 * np.pi * f * t) + 0.05 * rng.normal(size=t.size)
+    fit = SimpleNamespace(t0=float(t[0]), t1=float(t[-1]), frequency=f)
+    a, b = phase_lean(t, y, fit), phase_lean(t, y + 1000.0, fit)
+    assert a is not None and b == pytest.approx(a, abs=1e-6)
+
+
+def test_phase_lean_reads_records_of_six_cycles_of_eight_samples_and_not_fewer():
+    """The documented minimum: 6 cycles of 8 samples (48 samples, W = 8 exactly) are read; 5 cycles, or
+    7 samples a cycle (however many cycles), are not; nor a frequency that is zero, NaN or negative."""
+    from bifilar.estimation.signal_phasewander import phase_lean
+
+    rng = np.random.default_rng(3)
+    jumps = rng.normal(0.0, 0.05, 60)
+    t, y, fit = _stepped_cosine(6, 8, jumps[:6])
+    assert phase_lean(t, y, fit) is not None
+    assert phase_lean(*_stepped_cosine(5, 8, jumps[:5])) is None
+    assert phase_lean(*_stepped_cosine(40, 7, jumps[:40])) is None
+    assert phase_lean(*_stepped_cosine(5, 20, jumps[:5])) is None
+    t, y, fit = _stepped_cosine(40, 10, jumps[:40])
+    for f in (0.0, math.nan, -3.0):
+        assert phase_lean(t, y, SimpleNamespace(t0=fit.t0, t1=fit.t1, frequency=f)) is None
+
+
+def test_phase_lean_reads_up_to_max_samples():
+    """``MAX_SAMPLES`` (12 000) samples are read, one more is not (a record over it is another check's)."""
+    from bifilar.estimation.signal_phasewander import MAX_SAMPLES, phase_lean
+
+    jumps = np.random.default_rng(4).normal(0.0, 0.05, 1201)
+    t, y, fit = _stepped_cosine(1200, 10, jumps[:1200])
+    assert t.size == MAX_SAMPLES == 12_000 and phase_lean(t, y, fit) is not None
+    t = np.append(t, t[-1] + 1 / 30.0)
+    y = np.append(y, y[-1])
+    assert phase_lean(t, y, fit) is None
+
+
+def test_a_skew_of_advances_that_do_not_vary_is_none():
+    """Every cycle at the same phase: the advances are all exactly 0 and have no skew (None, not 0 / 0)."""
+    from bifilar.estimation.signal_phasewander import _advance_skew
+
+    assert _advance_skew(np.full(12, 0.3 + 0.4j)) is None
+
+
+def test_leans_back_threshold_is_the_larger_of_the_fixed_bound_and_its_chance_scatter():
+    """11 cycles: 10 advances, white noise's skew scatter sqrt(6 / 10) = 0.7746, 2.5 of it 1.936 (beyond
+    LEAN_BACK's 0.3): -1.95 leans back, -1.90 does not (sqrt(6 / 11) or 12 / 10 in place of 6 / 10 would
+    move the bound to 1.846 or 2.74).  1000 cycles: the bound is LEAN_BACK, strictly below it."""
+    from bifilar.estimation.signal_phasewander import LEAN_BACK, leans_back
+
+    assert 2.5 * math.sqrt(0.6) == pytest.approx(1.9365, abs=1e-4)
+    assert leans_back(-1.95, 11) and not leans_back(-1.90, 11)
+    assert leans_back(LEAN_BACK - 1e-9, 1000) and not leans_back(LEAN_BACK, 1000)
+    assert not leans_back(None, 50)
+
+
+def test_lean_direction_names_only_leans_strictly_beyond_its_bounds():
+    """"above LEAN_FORWARD" and "below LEAN_BACK": the bounds themselves name no direction."""
+    from bifilar.estimation.signal_phasewander import LEAN_BACK, LEAN_FORWARD, lean_direction
+
+    assert lean_direction(LEAN_FORWARD) is None and lean_direction(LEAN_BACK) is None
+    assert lean_direction(LEAN_FORWARD + 1e-9) == "forward" and lean_direction(LEAN_BACK - 1e-9) == "back"
+    assert lean_direction(None) is None
