@@ -267,3 +267,23 @@ def test_lean_direction_names_only_leans_strictly_beyond_its_bounds():
     assert lean_direction(LEAN_FORWARD) is None and lean_direction(LEAN_BACK) is None
     assert lean_direction(LEAN_FORWARD + 1e-9) == "forward" and lean_direction(LEAN_BACK - 1e-9) == "back"
     assert lean_direction(None) is None
+
+
+# ---------------------------------------------------------------- fit_window (signal_timebase)
+
+
+def test_fit_window_is_the_slice_of_the_samples_inside_the_closed_window():
+    """Samples every 0.5 s from 0 to 4.5 s; the window [1, 3] s holds samples 2..6 (its ends are sample
+    times, included: closed), the slice 2:7; [1.2, 2.9] holds 3..5; a window holding no sample, or a fit
+    without a window (or half of one), reads the whole record 0:10."""
+    from bifilar.estimation.signal_timebase import fit_window
+
+    t = 0.5 * np.arange(10)
+    W = SimpleNamespace
+    assert fit_window(t, W(t0=1.0, t1=3.0)) == slice(2, 7)
+    assert fit_window(t, W(t0=1.2, t1=2.9)) == slice(3, 6)
+    assert fit_window(t, W(t0=0.0, t1=4.5)) == slice(0, 10)
+    assert fit_window(t, W(t0=1.1, t1=1.3)) == slice(0, 10)
+    assert fit_window(t, W(t0=1.0, t1=None)) == slice(0, 10)
+    assert fit_window(t, W(t0=None, t1=3.0)) == slice(0, 10)
+    assert fit_window(t, W(frequency=1.0)) == slice(0, 10)
