@@ -171,6 +171,122 @@ def test_second_derivative_error_is_the_fits_response_to_a_complex_sinusoid():
     assert 1e-4 < np.median(got) < 0.1  # a real, small error at 20 samples a period: the check has teeth
 
 
+# ---------------------------------------------------------------- kernel_values
+
+_SYM = {"xx": (0, 0), "yy": (1, 1), "zz": (2, 2), "xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+
+
+def _rig(seed, n=3):
+    """RigParams of an arbitrary (non-physical is fine) rig: a full symmetric positive definite inertia,
+    general anchors and attachments, distinct Baumgarte alpha and beta."""
+    from bifilar.models.maximal import RigParams
+
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(3, 3))
+    I = A @ A.T + 3 * np.eye(3)
+    return RigParams(mass=np.array(2.5 + seed), gravity=np.array(9.81), inertia=I, inertia_inv=np.linalg.inv(I),
+                     anchors=rng.normal(size=(n, 3)), attachments=rng.normal(size=(n, 3)),
+                     lengths=1.0 + rng.uniform(size=n), baumgarte=np.array([1.3, 2.7 + seed]))
+
+
+def _expected_values(P) -> dict:
+    """Each kernel parameter from its documented definition, one at a time."""
+    al, be = (float(x) for x in P.baumgarte)
+    I, N = np.asarray(P.inertia), np.asarray(P.inertia_inv)
+    m = float(P.mass)
+    out = {"mass": m, "g": float(P.gravity), "bga": 2 * al, "hb": be ** 2 / 2}
+    for k, (i, j) in _SYM.items():
+        out["I" + k], out["N" + k], out["M" + k] = I[i, j], N[i, j], m * N[i, j]
+    Ix, Iy, Iz = np.diag(I)
+    out.update(Ex=(Iy - Iz) / Ix, Ey=(Iz - Ix) / Iy, Ez=(Ix - Iy) / Iz)
+    for i, L in enumerate(P.lengths):
+        out[f"L2{i}"], out[f"hbL{i}"] = L ** 2, be ** 2 * L ** 2 / 2
+        for k, a in enumerate("xyz"):
+            out[f"a{a}{i}"], out[f"p{a}{i}"] = P.anchors[i, k], P.attachments[i, k]
+            if i:
+                out[f"Da{a}{i}"] = P.anchors[0, k] - P.anchors[i, k]
+                out[f"Dp{a}{i}"] = P.attachments[i, k] - P.attachments[0, k]
+    return out
+
+
+def test_kernel_values_follow_their_definitions_for_one_scene_and_a_batch():
+    """The kernel's named values (mass, g, 2 alpha, beta^2 / 2, the inertia, its inverse and mass x
+    inverse, Euler's coefficients, anchors, attachments, L^2, beta^2 L^2 / 2, wire i less wire 0) written
+    out from the docstring for a general three-wire rig, alone and as scene 1 of a batch of two."""
+    from bifilar.models.kernel_values import param_values
+    from bifilar.models.maximal import RigParams
+
+    P0, P1 = _rig(1), _rig(2)
+    exp = _expected_values(P1)
+    one = param_values(P1)
+    batch = param_values(RigParams(**{k: np.stack([getattr(P0, k), getattr(P1, k)])
+                                      for k in P1.__dataclass_fields__}))
+    assert set(one) == set(exp) == set(batch)
+    for name, v in exp.items():
+        assert one[name] == pytest.approx(v, rel=1e-13, abs=1e-15), name
+        assert batch[name].shape == (2,) and batch[name][1] == pytest.approx(v, rel=1e-13, abs=1e-15), name
+        assert batch[name][0] == pytest.approx(_expected_values(P0)[name], rel=1e-13, abs=1e-15), name
+
+
+def test_kernel_values_keep_a_two_dimensional_batch_shape():
+    """A (2, 2) batch of four rigs (the batch shape is any leading shape): each value an array of shape
+    (2, 2) whose entry [i, j] is that rig's own, by definition."""
+    from bifilar.models.kernel_values import param_values
+    from bifilar.models.maximal import RigParams
+
+    rigs = [_rig(s) for s in range(4)]
+    P = RigParams(**{k: np.stack([getattr(r, k) for r in rigs]).reshape((2, 2) + np.shape(getattr(rigs[0], k)))
+                     for k in rigs[0].__dataclass_fields__})
+    vals = param_values(P)
+    for s, r in enumerate(rigs):
+        for name, v in _expected_values(r).items():
+            assert vals[name].shape == (2, 2), name
+            assert vals[name][s // 2, s % 2] == pytest.approx(v, rel=1e-13, abs=1e-15), (name, s)
+
+
+def _noisy_rig(scale):
+    """A two-wire rig of size ``scale`` with a product of inertia 8 eps of its largest moment and one 32
+    eps of it, an attachment coordinate 8 eps of its largest coordinate or length (its 3 * scale m wire)
+    and one 32 eps of it."""
+    from bifilar.models.maximal import RigParams
+
+    eps = np.finfo(float).eps
+    I = np.diag([1.0, 2.0, 10.0]) * scale ** 3
+    I[0, 1] = I[1, 0] = 8 * eps * 10.0 * scale ** 3
+    I[0, 2] = I[2, 0] = 32 * eps * 10.0 * scale ** 3
+    anchors = np.array([[0.5, 0.0, 0.0], [-0.5, 0.0, 0.0]]) * scale
+    att = np.array([[0.2, 8 * eps * 3.0, 32 * eps * 3.0], [-0.2, 0.0, 0.0]]) * scale
+    return RigParams(mass=np.array(scale), gravity=np.array(9.81), inertia=I, inertia_inv=np.linalg.inv(I),
+                     anchors=anchors, attachments=att, lengths=np.array([3.0, 2.0]) * scale,
+                     baumgarte=np.array([1.0, 1.0]))
+
+
+@pytest.mark.parametrize("shape", [(), (1,), (2, 2)])
+def test_rounding_level_entries_are_zeroed_relative_to_their_own_scenes_scale(shape):
+    """A product of inertia 8 eps of the largest moment and a coordinate 8 eps of the rig's largest
+    coordinate or length are rounding noise (under 16 eps): exact zeros; 32 eps of them is kept.  The
+    scale is each scene's own (a batch of rigs 1, 10, 100 and 1000 times as large: the same decisions in
+    each) and its largest entry (8 eps of the largest moment is 80 eps of the smallest: still dropped)."""
+    from bifilar.models.kernel_values import param_values
+    from bifilar.models.maximal import RigParams
+
+    eps = np.finfo(float).eps
+    scales = [10.0 ** k for k in range(int(np.prod(shape)))]
+    rigs = [_noisy_rig(sc) for sc in scales]
+    if shape == ():
+        P = rigs[0]
+    else:
+        P = RigParams(**{k: np.stack([getattr(r, k) for r in rigs]).reshape(shape + np.shape(getattr(rigs[0], k)))
+                         for k in rigs[0].__dataclass_fields__})
+    vals = {k: np.ravel(v) for k, v in param_values(P).items()}
+    for n, sc in enumerate(scales):
+        v = {k: float(x[n]) for k, x in vals.items()}
+        assert v["Ixy"] == 0.0 and v["Ixz"] == 32 * eps * 10.0 * sc ** 3, sc
+        assert v["py0"] == 0.0 and v["pz0"] == 32 * eps * 3.0 * sc, sc
+        assert v["Dpy1"] == 0.0 and v["Dpz1"] == -32 * eps * 3.0 * sc, sc
+        assert v["Nxz"] != 0.0 and v["Mxz"] != 0.0 and v["Izz"] == 10.0 * sc ** 3
+
+
 # ---------------------------------------------------------------- phase_lean (signal_phasewander)
 
 
