@@ -403,3 +403,175 @@ def test_fit_window_is_the_slice_of_the_samples_inside_the_closed_window():
     assert fit_window(t, W(t0=1.0, t1=None)) == slice(0, 10)
     assert fit_window(t, W(t0=None, t1=3.0)) == slice(0, 10)
     assert fit_window(t, W(frequency=1.0)) == slice(0, 10)
+
+
+# ---------------------------------------------------------------- find_soft_clipping (signal_clip)
+
+
+def _knee(x, A):
+    """A sensor law linear up to 0.6 of the amplitude ``A`` and of slope 1/2 beyond (a compressing knee):
+    every sample within 0.6 A of the level is the truth, so the central fit (within 0.5 of its amplitude)
+    recovers the true sinusoid exactly."""
+    k = 0.6 * A
+    return np.where(np.abs(x) <= k, x, np.sign(x) * (k + 0.5 * (np.abs(x) - k)))
+
+
+def _knee_record(periods, t0=100.0, fs=200.0, T=1.0, A=2.0, c=5.0, phase=0.0):
+    """``t`` from ``t0`` (s) over ``periods`` periods of ``T`` s at ``fs`` Hz; the true sinusoid
+    ``A cos(2 pi (t - t0) / T + phase)`` and the record ``c + knee(it)``."""
+    t = t0 + np.arange(int(round(periods * T * fs)) + 1) / fs
+    x = A * np.cos(2 * np.pi * (t - t0) / T + phase)
+    return t, x, c + _knee(x, A)
+
+
+def _expected_ratios(t, x, y, c, A, T):
+    """Per one-period window from ``t[0]`` (the last holding the remainder), ``r`` of each side computed
+    from the TRUE sinusoid ``x`` (the documented ``r = sum((y - c) s) / sum(s^2)`` over ``|s| > 0.8 A``)."""
+    n = int((t[-1] - t[0]) // T)
+    edges = [int(np.searchsorted(t, t[0] + k * T)) for k in range(n)] + [t.size]
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        s, d = x[a:b], y[a:b] - c
+        out.append([np.sum(d[m] * s[m]) / np.sum(s[m] ** 2) for m in (s > 0.8 * A, s < -0.8 * A)])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("periods", [10.5, 10.0, 6.5])
+def test_soft_clipping_of_a_knee_law_is_measured_from_the_true_sinusoid(periods):
+    """A knee law (linear to 0.6 A, slope 1/2 beyond) on a sinusoid with an offset (5, against A = 2),
+    starting at t = 100 s: one window per whole period (10 of 10.5 or of exactly 10; 6 of 6.5, the
+    documented minimum),
+    each side's ratio that of the TRUE sinusoid (the central fit recovers it exactly), the compression
+    1 - their median mean -- near the continuous 1 - (0.5 + 0.3 * 2 sin(a) / (a + sin(a) cos(a))) =
+    0.180, a = acos(0.8) -- and the samples left out exactly those beyond 0.3 A of the truth."""
+    from bifilar.estimation.signal_clip import find_soft_clipping
+
+    A, c = 2.0, 5.0
+    t, x, y = _knee_record(periods, A=A, c=c)
+    got = find_soft_clipping(t, y, 1.0)
+    r = _expected_ratios(t, x, y, c, A, 1.0)
+    assert got is not None and got["periods"] == int(periods) == len(r)
+    assert got["compression"] == pytest.approx(1 - np.median(r.mean(axis=1)), abs=1e-9)
+    assert got["ratios"] == pytest.approx(np.median(r, axis=0).tolist(), abs=1e-9)
+    a = math.acos(0.8)
+    assert got["compression"] == pytest.approx(1 - (0.5 + 0.6 * math.sin(a) / (a + math.sin(a) * math.cos(a))), abs=0.01)
+    assert np.array_equal(got["mask"], np.abs(x) > 0.3 * A) and got["samples"] == int(np.sum(np.abs(x) > 0.3 * A))
+
+
+def test_five_periods_are_too_few_and_a_linear_sensor_is_not_soft_clipped():
+    """5.5 periods of the knee law: fewer than SOFT_MIN_PERIODS (6) windows, None; 10.5 periods of a
+    linear sensor (gain 0.7, offset 5): every ratio exactly 1, no compression, None."""
+    from bifilar.estimation.signal_clip import find_soft_clipping
+
+    t, x, y = _knee_record(5.5)
+    assert find_soft_clipping(t, y, 1.0) is None
+    t, x, _ = _knee_record(10.5)
+    assert find_soft_clipping(t, 5.0 + 0.7 * x, 1.0) is None
+
+
+def test_soft_clipping_reads_periods_under_a_second_and_refuses_no_period():
+    """A period of 0.4 s (a fast swing) is read like any other: the knee law over 10.5 of them is found
+    with 10 windows; a period that is zero, negative, NaN or infinite reads nothing (None, no error)."""
+    from bifilar.estimation.signal_clip import find_soft_clipping
+
+    t, x, y = _knee_record(10.5, T=0.4, fs=500.0)
+    got = find_soft_clipping(t, y, 0.4)
+    assert got is not None and got["periods"] == 10
+    for T in (0.0, -1.0, math.nan, math.inf):
+        assert find_soft_clipping(t, y, T) is None
+
+
+def _alternating_knee(h):
+    """10 whole periods (A = 2, offset 5) whose knee slope alternates window by window so that the
+    peaks' ratio is about 0.82 + h in even windows and 0.82 - h in odd ones (``r = sl + (1 - sl) g``,
+    ``g`` = 0.6 A sum(s) / sum(s^2) ~ 0.641 over the peaks: linear in the slope ``sl``)."""
+    A, c, g = 2.0, 5.0, 0.641
+    t, x, _ = _knee_record(10.0, A=A, c=c)
+    win = np.minimum(np.arange(t.size) // 200, 9)
+    sl = np.where(win % 2 == 0, (0.82 + h - g) / (1 - g), (0.82 - h - g) / (1 - g))
+    k = 0.6 * A
+    y = c + np.where(np.abs(x) <= k, x, np.sign(x) * (k + sl * (np.abs(x) - k)))
+    return t, x, y, A, c
+
+
+@pytest.mark.parametrize("h, q_lo, q_hi", [(0.064, 0.7, 0.9), (0.041, 1.15, 1.4)])
+def test_soft_clipping_needs_six_standard_errors_of_the_median(h, q_lo, q_hi):
+    """Window means scattering by +-h about their median: the documented standard error of a median,
+    1.2533 x the robust std 1.4826 MAD over sqrt(n), computed here from the TRUE sinusoid's ratios; the
+    compression (~0.18) is 0.8 of 6 standard errors in the first record (not fired) and 1.25 of them in
+    the second (fired).  A robust std without the 1.4826 (or 1.2533 / 1.4826) would fire both."""
+    from bifilar.estimation.signal_clip import find_soft_clipping
+
+    t, x, y, A, c = _alternating_knee(h)
+    r = _expected_ratios(t, x, y, c, A, 1.0).mean(axis=1)
+    med = np.median(r)
+    se = 1.2533 * 1.4826 * np.median(np.abs(r - med)) / math.sqrt(r.size)
+    q = (1 - med) / (6 * se)
+    assert q_lo < q < q_hi and 1 - med > 0.045
+    got = find_soft_clipping(t, y, 1.0)
+    assert (got is not None) == (q > 1)
+    if got is not None:
+        assert got["compression"] == pytest.approx(1 - med, abs=1e-9) and got["periods"] == 10
+
+
+def test_a_one_sided_knee_compresses_the_max_side_only():
+    """The knee on the positive side only: the min side's ratio is exactly 1, the max side's that of the
+    true sinusoid; the compression half the max side's shortfall (~0.09: fired)."""
+    from bifilar.estimation.signal_clip import find_soft_clipping
+
+    A, c = 2.0, 5.0
+    t, x, _ = _knee_record(10.5, A=A, c=c)
+    y = c + np.where(x > 0, _knee(x, A), x)
+    r = _expected_ratios(t, x, y, c, A, 1.0)
+    assert np.allclose(r[:, 1], 1.0, rtol=0, atol=1e-12) and np.all(r[:, 0] < 0.9)
+    got = find_soft_clipping(t, y, 1.0)
+    assert got is not None and got["periods"] == 10
+    assert got["ratios"] == pytest.approx([float(np.median(r[:, 0])), 1.0], abs=1e-9)
+    assert got["compression"] == pytest.approx(1 - np.median(r.mean(axis=1)), abs=1e-9)
+
+
+def test_drop_soft_clipped_leaves_out_the_peaks_unless_too_few_samples_stay():
+    """The samples kept are those within 0.3 A of the true sinusoid (counted here from it); exactly that
+    many samples required still drops the peaks ("fewer than min_samples" is not met), one more leaves
+    the record whole.  A hard-clipped record is left to the hard clip's rule."""
+    from bifilar.estimation.signal_clip import drop_soft_clipped
+
+    A, c = 2.0, 5.0
+    t, x, y = _knee_record(10.5, A=A, c=c)
+    inner = np.abs(x) <= 0.3 * A
+    notes = []
+    t2, y2, osc = drop_soft_clipped(t, y, {"frequency": 1.0}, notes, int(inner.sum()))
+    assert np.array_equal(t2, t[inner]) and np.array_equal(y2, y[inner])
+    assert osc["soft_clipped"]["samples_left_out"] == int((~inner).sum()) and notes == [osc["soft_clipped"]["line"]]
+    notes = []
+    t3, y3, osc = drop_soft_clipped(t, y, {"frequency": 1.0}, notes, int(inner.sum()) + 1)
+    assert t3 is t and "soft_clipped" not in osc and notes == []
+    t4, _, osc = drop_soft_clipped(t, y, {"frequency": 1.0, "clipped": {"line": "x"}}, [], 10)
+    assert t4 is t and "soft_clipped" not in osc
+
+
+def test_keeping_the_peaks_keeps_the_finding_and_says_the_peaks_stay():
+    """keep_soft_clipped: the whole record back, its line the finding's (up to "; the ") followed by the
+    peaks kept; none of the samples left out."""
+    from bifilar.estimation.signal_clip import drop_soft_clipped, keep_soft_clipped
+
+    t, x, y = _knee_record(10.5)
+    whole = (t, y, {"frequency": 1.0}, ["earlier note"])
+    _, _, osc = drop_soft_clipped(t, y, {"frequency": 1.0}, [], 10)
+    first = osc["soft_clipped"]["line"]
+    t2, y2, osc2, notes = keep_soft_clipped(whole, osc)
+    sc = osc2["soft_clipped"]
+    assert t2 is t and y2 is y and sc["kept"] and sc["samples_left_out"] == 0
+    assert sc["line"].startswith(first[:first.index("; the ")] + "; the samples near the level alone")
+    assert "left out of the fit" not in sc["line"] and notes == ["earlier note", sc["line"]]
+
+
+def test_a_soft_fit_holds_within_a_quarter_of_the_whole_records_frequency_inclusive():
+    """|f / f0 - 1| <= SOFT_MAX_SHIFT (0.25): 1.25 and 0.75 of f0 (binary-exact) hold, 1.26 does not;
+    a NaN frequency does not."""
+    from bifilar.estimation.signal_clip import soft_fit_holds
+
+    osc = {"frequency": 2.0}
+    assert soft_fit_holds(SimpleNamespace(frequency=2.5), osc) and soft_fit_holds(SimpleNamespace(frequency=1.5), osc)
+    assert not soft_fit_holds(SimpleNamespace(frequency=2.52), osc)
+    assert not soft_fit_holds(SimpleNamespace(frequency=math.nan), osc)
