@@ -123,13 +123,14 @@ def test_periods_exactly_rel_apart_are_a_close_pair():
 
 
 def test_close_mode_warning_states_the_difference_in_percent_of_the_longer():
-    """2 s and 2.0018 s differ by 0.0018 / 2.0018 = 0.0899 % of the longer: the warning says "within
-    0.09 %" (two digits; 0.0909 % would print 0.091, the difference times the period 0.36)."""
+    """2 s and 2.0018 s differ by 0.0018 / 2.0018 = 0.0899 % of the longer: the warning states
+    "0.09 %" (two digits; 0.0909 % would print 0.091, the difference times the period 0.36), whatever
+    the sentence around it (trust22 rewords it)."""
     from bifilar.analysis.close_modes import close_mode_warnings
 
     M = SimpleNamespace
     w = close_mode_warnings([M(label="a", period=2.0), M(label="b", period=2.0018)])
-    assert len(w) == 1 and "within 0.09 % of each other" in w[0], w
+    assert len(w) == 1 and "0.09 %" in w[0], w
 
 
 # ---------------------------------------------------------------- local_fits
