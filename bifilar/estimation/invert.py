@@ -674,7 +674,7 @@ def _root_entry(pb: Problem, p, r, budget, edge: bool, fit: dict) -> dict:
                                               "measured": m.period, "model": float(t),
                                               "normalised_residual": float(zk)}
                                              for m, t, zk in zip(pb.measurements, T, z)],
-           "chi2": fit["chi2"], "edge": bool(edge)}
+           "chi2": fit["chi2"], "birge_factor": float(fit.get("birge_factor", 1.0)), "edge": bool(edge)}
     if com:
         out["com"] = com
     return out
@@ -693,4 +693,7 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
                          laws=est.laws if method == "nonlinear" else None, prior_stated=True)[0]
     T, z = _residuals(pb, p, r)
     ok, chi2, test = fit_statistics(z, len(pb.unknowns))
-    return _root_entry(pb, p, r, budget, root.edge, {"chi2": chi2})
+    # its own periods' scatter widens its timing terms as the answer's do (birge.py)
+    fit = {"passed": ok, "chi2": chi2, "dof": max(K - len(pb.unknowns), 0), "chi2_with_inputs": None}
+    fit["birge_factor"] = birge_factor(fit)
+    return _root_entry(pb, p, r, widen_timing(budget, fit["birge_factor"]), root.edge, fit)
