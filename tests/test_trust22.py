@@ -11,6 +11,7 @@ import pytest
 from conftest import CONFIGS
 from test_fitfix20 import EXACT, _modes
 
+from bifilar.analysis.close_modes import close_mode_warnings
 from bifilar.config import load_scene
 from bifilar.estimation.invert import invert
 from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
@@ -72,3 +73,39 @@ def test_a_further_root_gets_its_own_birge_factor(boat):
     assert entry["birge_factor"] == pytest.approx(res.fit["birge_factor"], rel=1e-9)
     assert res.roots[0]["birge_factor"] == pytest.approx(res.fit["birge_factor"], rel=1e-12)
     assert entry["inertia"]["Izz"]["std"] == pytest.approx(res.std[0], rel=1e-6)
+
+
+# -- close modes: the wording of their difference ---------------------------------------------------------------
+
+class _M:
+    def __init__(self, label, period):
+        self.label, self.period = label, period
+
+
+@pytest.mark.parametrize("T, said, unsaid", [
+    (1.0, "equal", "differ"),  # exactly equal: no "0 %"
+    (1.0009, "differ by 0.09 %: ", "equal"),  # 9e-4: in %, a beat every 1/9e-4 = 1111 -> 1100 periods
+    (1.00005, "differ by 5e-05 of the longer", " %:"),  # below 1e-4: scientific, not "0.005 %" or "0 %"
+    (1.0 + 3e-12, "differ by 3e-12 of the longer", "equal"),  # rounding level: said, not rounded to "0"
+])
+def test_close_modes_say_how_their_periods_differ(T, said, unsaid):
+    (w,) = close_mode_warnings([_M("a", 1.0), _M("b", T)])
+    assert said in w and unsaid not in w and " 0 %" not in w, w
+    if T == 1.0009:
+        assert "a beat every 1100 periods" in w
+
+
+def test_modes_calls_a_symmetric_trifilars_swings_equal(tmp_path):
+    """The symmetric trifilar's two swings have equal periods by symmetry (computed equal to the last bit):
+    `modes` says "equal" where it printed "within 0 %"."""
+    from click.testing import CliRunner
+    from conftest import TRIFILAR
+
+    from bifilar.cli import main
+
+    cfg = tmp_path / "tri.yaml"
+    cfg.write_text(TRIFILAR)
+    r = CliRunner().invoke(main, ["modes", str(cfg)])
+    assert r.exit_code == 0
+    (line,) = [x for x in r.stderr.splitlines() if "have periods within" in x]
+    assert "(equal: " in line and "within 0 %" not in line
