@@ -26,6 +26,20 @@ def close_pairs(modes, rel: float = CLOSE_REL) -> list[tuple[int, int]]:
     return out
 
 
+def difference_text(Ta: float, Tb: float) -> str:
+    """How two periods ``Ta``, ``Tb`` (s) differ, in words: ``equal`` (to
+    the last bit: a degenerate pair, e.g. a symmetric rig's two swings, which
+    do not beat) or their relative difference ``d`` (of the longer; in % from
+    1e-4 up, else in scientific notation, so a rounding-level difference
+    does not print as "0 %") and the beat, one in ``1 / d`` periods."""
+    d = abs(Ta - Tb) / max(Ta, Tb)
+    if d == 0:
+        return "equal: a release excites both, and with equal periods they do not beat: the motion keeps the mix the release gave"
+    size = f"{100 * d:.2g} %" if d >= 1e-4 else f"{d:.2g} of the longer"
+    beat = f"{float(f'{1 / d:.2g}'):.0f}" if d >= 1e-6 else f"{1 / d:.2g}"  # two digits, no exponent below 1e6
+    return f"they differ by {size}: a release excites both and they beat slowly, a beat every {beat} periods"
+
+
 def close_mode_warnings(modes, timed=None, where: str = "") -> list[str]:
     """One warning per pair of :func:`close_pairs` of ``modes`` (with
     ``label``, ``period`` s); ``timed``: only pairs with a mode of these
@@ -36,10 +50,9 @@ def close_mode_warnings(modes, timed=None, where: str = "") -> list[str]:
         a, b = modes[i], modes[j]
         if timed is not None and a.label not in timed and b.label not in timed:
             continue
-        pct = 100 * abs(a.period - b.period) / max(a.period, b.period)
         text = (f"{where}modes '{a.label}' ({a.period:.6g} s) and '{b.label}' ({b.period:.6g} s) have periods within "
-                f"{pct:.2g} % of each other (closer than {100 * CLOSE_REL:g} %): a release excites both and they beat "
-                "slowly, so a timing reads either")
+                f"{100 * CLOSE_REL:g} % of each other ({difference_text(a.period, b.period)}), so a timing reads "
+                "either")
         if timed is not None:
             which = [lab for lab in (a.label, b.label) if lab in timed]
             text += (f"; the period timed as '{which[0]}' cannot tell which was measured: time a mode whose period "

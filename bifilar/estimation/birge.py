@@ -38,6 +38,16 @@ def birge_factor(fit: dict) -> float:
     return max(1.0, math.sqrt(chi2 / dof))
 
 
+def timing_scale(res) -> float:
+    """The factor an inversion result ``res`` widened its timing terms by:
+    its fit check's ``birge_factor`` (1.0 where it has none).  The Monte
+    Carlo (:func:`~bifilar.estimation.montecarlo.draw_monte_carlo`) draws
+    each period with this times its stated std, so that it checks the
+    widened budget."""
+    fit = getattr(res, "fit", None) or {}
+    return float(fit.get("birge_factor", 1.0))
+
+
 def widen_timing(budget: LinearBudget, factor: float) -> LinearBudget:
     """``budget`` with each timing contribution (group ``timing``) times
     ``factor`` and the covariance summed again; the same budget where
@@ -52,6 +62,20 @@ def widen_timing(budget: LinearBudget, factor: float) -> LinearBudget:
     for c in contrib.values():
         cov += np.outer(c, c)
     return replace(budget, covariance=cov, contributions=contrib, sigmas=sigmas)
+
+
+def widen_std(budget: LinearBudget, std, factor: float) -> np.ndarray:
+    """(P,) the std ``std`` (SI, e.g. a budget's linear std before its
+    second-order terms) with the timing variance of ``budget`` widened by
+    ``factor`` as :func:`widen_timing` widens it: ``sqrt(std^2 + (factor^2
+    - 1) v_t)``, ``v_t`` the sum of the timing contributions' squares;
+    ``std`` where ``factor`` is 1."""
+    std = np.asarray(std, float)
+    if not factor > 1.0:
+        return std
+    v_t = sum((np.asarray(c, float) ** 2 for n, c in budget.contributions.items() if group_of(n) == "timing"),
+              np.zeros_like(std))
+    return np.sqrt(std ** 2 + (factor ** 2 - 1.0) * v_t)
 
 
 def birge_note(factor: float, fit: dict) -> str:

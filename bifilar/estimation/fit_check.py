@@ -77,8 +77,8 @@ def marginal_fit_warning(pb: Problem, fit: dict, z: np.ndarray) -> str | None:
     k = int(np.argmax(np.abs(z)))
     return (f"the measured periods agree only at p = {p:.2g} (chi2 {fit['chi2']:.3g} for {fit['dof']} "
             f"degree{'s' if fit['dof'] > 1 else ''} of freedom; refused below p = {CHI2_P:g}), the largest residual mode '{pb.term_labels()[k]}' at "
-            f"{z[k]:+.3g} sigma: is a period mistyped, or timed on another mode? The std assumes every period "
-            "right within its stated std")
+            f"{z[k]:+.3g} sigma: is a period mistyped, or timed on another mode? The std, widened by the Birge "
+            "factor, assumes the periods scatter alike, not one of them wrong")
 
 
 #: a measurement whose leverage in the weighted fit exceeds this is all but

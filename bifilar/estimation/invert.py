@@ -84,7 +84,7 @@ from .montecarlo import (  # noqa: F401
 from .problem import _IDX, HangingModel, Problem, basis, build_problem, physical_interval  # noqa: F401
 from .problem import (admissible, admissible_interval, problem_at, refuse_stretching_amplitudes, refuse_unmeasured,
                       start_guesses)
-from .birge import birge_factor, birge_note, widen_timing
+from .birge import birge_factor, birge_note, widen_std, widen_timing
 from .parts_prior import described_moments, parts_prior_warnings
 from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_periods, marginal_fit_warning,
                         prior_fit_hint, unchecked_notes)
@@ -300,6 +300,11 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         if changed:
             budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(
                 pb, p_hat, r_hat, method, rungs, best, unc_all, rtol, laws=laws, prior_stated=stated)
+    # periods scattering beyond their stated timing stds: the timing terms widened (birge.py) before any std
+    # is printed or used (the warnings below, the ladder's differences in std, the interval, the Monte Carlo)
+    fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
+    fit["birge_factor"] = birge_factor(fit)
+    budget, std_lin = widen_timing(budget, fit["birge_factor"]), widen_std(budget, std_lin, fit["birge_factor"])
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
         # the shift in % of |value| so that its sign is the shift's, as the std's is (a negative product
@@ -328,6 +333,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                         "(curvature or a vanishing derivative): those inputs are propagated to second order "
                         "(sigma points at +-sqrt(3) sigma, re-solved), std " + ", ".join(
                             f"{n} {budget.std[i]:.3g} (linear {std_lin[i]:.3g})" for i, n in enumerate(pb.unknowns)))
+    warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
+    warnings += _close_timed_modes(pb, p_hat)
+    if fit["birge_factor"] > 1.0:
+        warnings.append(birge_note(fit["birge_factor"], fit))
     # -- ladder rows ------------------------------------------------------
     p_best = rungs[best]["p"]
     std = budget.std
@@ -354,14 +363,6 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         notes.append(f"hangings {', '.join(repr(n) for n in g['hangings'])} share {g['inputs']} (the same entries in "
                      "their configs: measured once, one error for all of them in the budget and the Monte Carlo; "
                      "--rig separate if each hanging's were measured again)")
-    fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
-    warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
-    warnings += _close_timed_modes(pb, p_hat)
-    # periods scattering beyond their stated timing stds: the timing terms widened (birge.py)
-    fit["birge_factor"] = birge_factor(fit)
-    if fit["birge_factor"] > 1.0:
-        budget = widen_timing(budget, fit["birge_factor"])
-        warnings.append(birge_note(fit["birge_factor"], fit))
     if (w := marginal_fit_warning(pb, fit, _residuals(pb, p_hat, r_hat)[1])) is not None:
         warnings.append(w)
     notes.extend(unchecked_notes(pb, bctx.jacobian, fit["dof"]))
@@ -457,6 +458,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
             what = "95 % interval differs from the budget's"
         else:
             ratio, what = mc.ratio, "spread differs from the linear std"
+        if mc.timing_scale > 1.0:
+            res.notes.append(f"the Monte Carlo drew each period with its timing std widened by the Birge factor "
+                         f"{mc.timing_scale:.3g}, as the budget's timing terms are")
         bad = [n for i, n in enumerate(res.names) if np.isfinite(ratio[i]) and not 0.8 < ratio[i] < 1.25]
         if bad:
             warnings.append(f"Monte Carlo {what} by more than 20 % for {', '.join(bad)}: "
@@ -670,7 +674,7 @@ def _root_entry(pb: Problem, p, r, budget, edge: bool, fit: dict) -> dict:
                                               "measured": m.period, "model": float(t),
                                               "normalised_residual": float(zk)}
                                              for m, t, zk in zip(pb.measurements, T, z)],
-           "chi2": fit["chi2"], "edge": bool(edge)}
+           "chi2": fit["chi2"], "birge_factor": float(fit.get("birge_factor", 1.0)), "edge": bool(edge)}
     if com:
         out["com"] = com
     return out
@@ -689,4 +693,7 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
                          laws=est.laws if method == "nonlinear" else None, prior_stated=True)[0]
     T, z = _residuals(pb, p, r)
     ok, chi2, test = fit_statistics(z, len(pb.unknowns))
-    return _root_entry(pb, p, r, budget, root.edge, {"chi2": chi2})
+    # its own periods' scatter widens its timing terms as the answer's do (birge.py)
+    fit = {"passed": ok, "chi2": chi2, "dof": max(K - len(pb.unknowns), 0), "chi2_with_inputs": None}
+    fit["birge_factor"] = birge_factor(fit)
+    return _root_entry(pb, p, r, widen_timing(budget, fit["birge_factor"]), root.edge, fit)

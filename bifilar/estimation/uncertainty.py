@@ -443,6 +443,9 @@ class MonteCarloSummary:
     mean, std, low, high (2.5 % and 97.5 % quantiles) : (P,).
     linear_std : (P,) the linear propagation's std, for comparison;
     ratio = std / linear_std.  failed : draws whose inversion failed.
+    timing_scale : the factor the periods' stated timing stds were drawn
+    with (the Birge factor, :mod:`~bifilar.estimation.birge`; 1 where the
+    periods scatter no more than stated).
     """
 
     names: list[str]
@@ -455,6 +458,7 @@ class MonteCarloSummary:
     linear_std: np.ndarray
     failed: int
     samples: np.ndarray = field(repr=False, default=None)
+    timing_scale: float = 1.0
 
     @property
     def ratio(self) -> np.ndarray:
@@ -463,7 +467,7 @@ class MonteCarloSummary:
 
     def to_json(self) -> dict:
         return {
-            "draws": self.n, "ok": self.n_ok, "failed": self.failed,
+            "draws": self.n, "ok": self.n_ok, "failed": self.failed, "timing_std_scale": float(self.timing_scale),
             "estimates": {n: {"mean": float(self.mean[i]), "std": float(self.std[i]),
                               "interval_95": [float(self.low[i]), float(self.high[i])],
                               "std_ratio_to_linear": float(self.ratio[i])}
@@ -471,14 +475,17 @@ class MonteCarloSummary:
         }
 
 
-def summarise(names: list[str], samples: np.ndarray, linear_std: np.ndarray, n: int) -> MonteCarloSummary:
-    """Summary statistics of Monte Carlo re-estimates ``samples`` (n_ok, P)."""
+def summarise(names: list[str], samples: np.ndarray, linear_std: np.ndarray, n: int,
+              timing_scale: float = 1.0) -> MonteCarloSummary:
+    """Summary statistics of Monte Carlo re-estimates ``samples`` (n_ok, P);
+    ``timing_scale`` the factor their periods' timing stds were drawn with."""
     S = np.asarray(samples, float).reshape(-1, len(names))
     if S.shape[0] < 2:
         nan = np.full(len(names), np.nan)
-        return MonteCarloSummary(list(names), n, S.shape[0], nan, nan, nan, nan, np.asarray(linear_std), n - S.shape[0], S)
+        return MonteCarloSummary(list(names), n, S.shape[0], nan, nan, nan, nan, np.asarray(linear_std), n - S.shape[0], S,
+                                 timing_scale)
     return MonteCarloSummary(
         list(names), n, S.shape[0], S.mean(axis=0), S.std(axis=0, ddof=1),
         np.quantile(S, 0.025, axis=0), np.quantile(S, 0.975, axis=0), np.asarray(linear_std, float),
-        n - S.shape[0], S,
+        n - S.shape[0], S, timing_scale,
     )
