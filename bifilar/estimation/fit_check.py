@@ -256,6 +256,25 @@ def unstated_amplitude_variance(pb: Problem, p, rtol: float = 1e-10, shift: bool
     return out
 
 
+def period_covariance(pb: Problem, p, r=None, amp_var=None, extra_var=None) -> tuple[np.ndarray, np.ndarray, list]:
+    """(C, C_pri, prior names): the measured periods' (K, K) covariance (s^2)
+    at the unknowns ``p`` (amplitude factors ``r``): timing, ``amp_var`` and
+    ``extra_var`` ((K,) s^2 or None) on the diagonal, the measured inputs'
+    (:func:`input_period_covariance`) and, where ``inertia`` is stated, the
+    priors' of the components not solved for (``C_pri``, also returned
+    alone, and the names of those components): their errors shift the
+    periods together, as an input's."""
+    K = len(pb.measurements)
+    sig = np.array([m.std for m in pb.measurements])
+    C = np.diag(sig ** 2 + (np.zeros(K) if amp_var is None else np.asarray(amp_var, float))) \
+        + input_period_covariance(pb, p, r)
+    if extra_var is not None:
+        C += np.diag(np.asarray(extra_var, float))
+    pri_names, Jq, sq = prior_period_columns(pb, p, r)
+    C_pri = (Jq * sq ** 2) @ Jq.T
+    return C + C_pri, C_pri, pri_names
+
+
 def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> tuple[bool, float, float, str]:
     """The fit check with the measured inputs' uncertainty counted: (passes,
     chi2 of the fit, distance of ``p`` from the fit, description).
@@ -321,14 +340,7 @@ def input_fit_check(pb: Problem, p, z, r=None, extra_var=None, amp_var=None) -> 
         end = unstated_amplitude_variance(pb, p, shift=True)
         res = res + np.clip(-res, np.minimum(end, 0.0), np.maximum(end, 0.0))
         amp_var, released = np.zeros(K), True
-    C = np.diag(sig ** 2 + amp_var) + input_period_covariance(pb, p, r)
-    if extra_var is not None:
-        C += np.diag(np.asarray(extra_var, float))
-    # the components not solved for, where their uncertainty is stated (inertia=REL): their priors' errors
-    # shift the periods together, as an input's
-    pri_names, Jq, sq = prior_period_columns(pb, p, r)
-    C_pri = (Jq * sq ** 2) @ Jq.T
-    C += C_pri
+    C, C_pri, pri_names = period_covariance(pb, p, r, amp_var, extra_var)
     if pri_names:
         test += (f"; counting the stated uncertainty of the components not solved for (inertia="
                  f"{float(pb.unc['inertia']):g}: {', '.join(pri_names)})")
