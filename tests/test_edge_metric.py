@@ -1,6 +1,8 @@
 """Session 23 (trust23, docs/design.md "trust23, session 23"): an answer moved to the edge of the physical set
 (as many periods as unknowns, the unconstrained estimate outside the triangle inequality) is the projection
-in the metric of the periods' full covariance (timing and the measured inputs), not of the timing alone.
+in the metric of the periods' full covariance (timing and the measured inputs), not of the timing alone; and
+the full model's check that the inputs explain such an edge's residuals iterates past its first linear step
+where the linearisation holds.
 
 The case: the thesis-style thin plate (`conftest.trapezoid`, CoM 0.3 m below the attachments, Izz = Ixx + Iyy)
 written down with its CoM 2 mm too low, Iyy and Izz solved from its torsion and pitch periods at 0.3 ms, the
@@ -95,3 +97,30 @@ def test_an_edge_answer_is_the_projection_in_the_periods_full_covariance():
     timing = _edge_projection(written, T, np.diag([SIG ** 2] * len(LABELS)))
     assert abs(diagonal - full) > 0.02 and abs(timing - full) > 0.1  # the case separates the three metrics
     assert abs(iyy - full) < 0.005, (iyy, full, diagonal, timing)
+
+
+@pytest.mark.parametrize("dz", [3e-3, -4e-3])
+def test_a_known_input_error_explains_the_periods_past_the_linear_step(dz):
+    """``fit_check.inputs_explain`` with the full model: the plate's periods with its CoM ``dz`` off (1.5 and
+    2 stds of the stated 2 mm; only the CoM stated uncertain) against the plate as written, 0.1 ms timing.
+    The known error explains them at the cost ``k = (dz / 2 mm)^2`` (model term 0), and no smaller error
+    can (only com.z moves the pitch period, monotonically), so the check passes at a limit k + 0.5 and fails
+    at k - 0.5.  The conditional mean alone (one linear step, the code before session 23) leaves the pitch
+    period's curvature over dz, 0.17 ms at 4 mm (1.7 timing stds), and refused at k + 0.5 (misfit 6.9 for
+    k = 4): fails (ran); the chord steps reach 4.0006.  ~1 s."""
+    from bifilar.estimation import fit_check
+
+    sig = 1e-4
+    truth = trapezoid(h=0.3)
+    unc = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 2e-3, "gravity": 0.0, "timing": sig}
+    ms = MeasurementSet([Hanging("ref", truth, np.eye(3))],
+                        [Measurement(lab, float(t), sig, "period", "--period", amplitude=0.0)
+                         for lab, t in zip(LABELS, _periods(truth))])
+    res = invert(ms, solve_for=["Iyy", "Izz"], unc=unc, ladder=False)
+    pb, p = res.problem, np.asarray(res.values)
+    written = replace(truth, inertia=np.diag([truth.inertia[0, 0], *p]))
+    r = _periods(replace(written, attachments=written.attachments - np.array([0.0, 0.0, dz]))) - _periods(written)
+    k = (dz / 2e-3) ** 2
+    var = np.full(2, sig ** 2)
+    assert fit_check.inputs_explain(pb, p, r, var, k + 0.5)
+    assert not fit_check.inputs_explain(pb, p, r, var, k - 0.5)
