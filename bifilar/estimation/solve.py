@@ -247,14 +247,16 @@ def admissible_margin(pb: Problem, p) -> float:
     return float(min(ev[0], ev.sum() / (2.0 - TRIANGLE_SLACK) - ev[-1]) / scale)
 
 
-def _edge_minimum(pb: Problem, cost, p, c, sc, iters: int = 30):
+def _edge_minimum(pb: Problem, cost, p, c, sc, iters: int = 30, W=None):
     """The least-squares point of ``cost`` (misfit, residuals) along the edge
     of the physical set from ``p``, where Gauss-Newton stopped at it:
     Gauss-Newton steps in the edge's tangent plane (the normal ``n`` the
     gradient of :func:`admissible_margin`, in units of the scales ``sc``),
     each pulled back into the (convex) set along ``n`` and halved until the
-    misfit drops.  None when no lower physical point is found."""
-    sig = np.array([m.std for m in pb.measurements])
+    misfit drops.  None when no lower physical point is found.  ``W``:
+    (K, K) the whitening matrix (1/s) of ``cost``'s residuals, ``W (T(p) -
+    target)``; default ``diag(1 / sigma_timing)``."""
+    W = np.diag(1.0 / np.array([m.std for m in pb.measurements])) if W is None else np.asarray(W, float)
     p = np.asarray(p, float)
     best = None
     for _ in range(iters):
@@ -262,7 +264,7 @@ def _edge_minimum(pb: Problem, cost, p, c, sc, iters: int = 30):
         if n is None:
             break
         N = np.linalg.svd(n[None, :])[2][1:].T  # (P, P - 1) tangent basis
-        J = pb.jacobian(p) / sig[:, None] * sc[None, :]
+        J = W @ pb.jacobian(p) * sc[None, :]
         res = cost(p)[1]
         if res is None or N.shape[1] == 0:
             break
