@@ -167,7 +167,7 @@ def test_the_nonlinear_models_period_at_a_records_amplitude_is_the_true_one(trif
 
 def test_invert_on_the_record_is_as_unbiased_as_the_records_period(trifilar, draws):
     """``invert --signal torsion=REC --signal-quantity angle --solve-for
-    Izz`` with every other input exact, on the first 3 of the noise draws
+    Izz`` with every other input exact, on the first 2 of the noise draws
     above.  In period units the record's error ``e_rec = T - T_true(A)``
     and Izz's ``e_izz = (Izz - I_true) dT/dIzz`` (the linear model's slope,
     0.47 s / kg m^2; the amplitude factor's own slope moves it by ~1e-3 of
@@ -190,14 +190,22 @@ def test_invert_on_the_record_is_as_unbiased_as_the_records_period(trifilar, dra
     In seconds the difference is deterministic, so each draw checks it
     alone; the record's own bias over the 12 draws is the first test's
     (mean z within 0.58), and Izz's bias in its std is that one's plus
-    3.7e-7 s over Izz's std in seconds (6.1e-6 s): 0.06."""
+    3.7e-7 s over Izz's std in seconds (6.1e-6 s): 0.06.
+
+    Test economy, session 23: 2 draws (was 3; each a nonlinear invert).
+    The bias band is checked by each draw alone (the bug's -2.7e-6 s in
+    every draw, the band 1.1e-6 s), and two draws still test that the
+    difference is the same in each (1e-8 s; the 12 draws spread by +-5e-10
+    s).  The amplitude factor from the run's crossings again
+    (amplitude_runs.amplitude_factor with fundamental=False) fails
+    (checked, session 23)."""
     _, _, truth, _, scene = trifilar
     I_true = float(np.asarray(scene.inertia)[2, 2])
     pb = build_problem(mm.MeasurementSet([mm.Hanging("reference", scene, np.eye(3))], [draws[0]]), ["Izz"])
     h = 1e-6 * I_true
     dT_dI = float(pb.linear_periods(np.array([I_true + h]))[0] - pb.linear_periods(np.array([I_true - h]))[0]) / (2 * h)
     diff = []
-    for m in draws[:3]:
+    for m in draws[:2]:
         T_true, _ = _true_period(truth, m.amplitude)
         ms = mm.MeasurementSet([mm.Hanging("reference", scene, np.eye(3))], [m])
         ms.uncertainty = {**ms.uncertainty, **EXACT}

@@ -184,19 +184,33 @@ CLOSURE_RUNS = [(n, "torsion") for n in SCENES] + [("thesis_lin2_pitch", "pitch"
                                                    ("thesis_cylinder_6_4", "pitch"), ("thesis_lin3_roll", "swing-x")]
 
 
+RECORD_PERIODS = 10
+
+
 @pytest.fixture(scope="module")
 def simulated_record(tmp_path_factory):
-    """``simulate --amplitude 0.05 --periods 20 --out run.csv --json`` of a
-    (config, mode), run once per module: (JSON, record path).  Test economy,
-    session 18: the two tests below ran this same command for the Solar
-    Boat's roll and the pitch rig's torsion each (a simulate run with its
-    checks, ~0.5-1 s of CPU each); neither writes to the record."""
+    """``simulate --amplitude 0.05 --periods RECORD_PERIODS --out run.csv
+    --json`` of a (config, mode), run once per module: (JSON, record path).
+    Test economy, session 18: the two tests below ran this same command for
+    the Solar Boat's roll and the pitch rig's torsion each (a simulate run
+    with its checks, ~0.5-1 s of CPU each); neither writes to the record.
+
+    Test economy, session 23: 10 periods (was 20).  `invert` simulates
+    ``--cycles`` = the record's cycles for its amplitude factor, so its cost
+    halves (0.52-1.35 -> 0.28-0.67 s of CPU per invert, 24 of them).  What
+    the tests can see does not shrink: over the twelve runs the inverted
+    estimate sits 1e-8 - 5.5e-3 std from the config's (20 periods: 2e-8 -
+    3.0e-3) against the 3-std band, and the period check's tolerance grows
+    from 1.9e-10 - 5.9e-6 to 3.9e-10 - 1.3e-5 of the period (the fit's std
+    ~ cycles^-1.5, the window term ~ 1/cycles), still 300x below the
+    smallest error invert's band can see (~1e-3 of I, 5e-4 of T): a period
+    scaled by 1 + 1e-5 in the fit fails 11 of the 12 runs (checked)."""
     done = {}
 
     def get(name: str, label: str):
         if (name, label) not in done:
             out = tmp_path_factory.mktemp(f"{name}-{label}") / "run.csv"
-            sim = ok_json(run("simulate", cfg(name), "--mode", label, "--amplitude", 0.05, "--periods", 20,
+            sim = ok_json(run("simulate", cfg(name), "--mode", label, "--amplitude", 0.05, "--periods", RECORD_PERIODS,
                               "--out", out, "--json"))
             done[name, label] = sim, out
         return done[name, label]
@@ -205,11 +219,11 @@ def simulated_record(tmp_path_factory):
 
 @pytest.mark.parametrize("name, label", CLOSURE_RUNS)
 def test_simulated_record_gives_back_period_and_inertia(name, label, tmp_path, simulated_record):
-    """A simulated record (amplitude 0.05, 20 periods) through `period`
+    """A simulated record (amplitude 0.05, 10 periods) through `period`
     agrees with `simulate`'s period; inverted at the stated amplitude, its
     period brackets the config's inertia (from a config with the solved
     component null where the body is given as moments)."""
-    A = 0.05  # the fixture's amplitude (20 periods)
+    A = 0.05  # the fixture's amplitude (RECORD_PERIODS periods)
     sim, out = simulated_record(name, label)
     col = COLUMN[sim["timed_coordinate"]]
     per = ok_json(run("period", out, "--column", col, "--json"))
@@ -240,7 +254,7 @@ def test_simulated_record_inverted_directly(name, label, simulated_record):
     """The record itself (`invert --signal`, its amplitude taken from the
     fit of the mode's angle): the interval brackets the config's inertia.
     The Solar Boat's roll beats with its swing (the fit's two-mode case)."""
-    sim, out = simulated_record(name, label)  # amplitude 0.05, 20 periods
+    sim, out = simulated_record(name, label)  # amplitude 0.05, RECORD_PERIODS periods
     inv = ok_json(run("invert", cfg(name), "--signal", f"{label}={out}", "--column", COLUMN[sim["timed_coordinate"]],
                       "--signal-quantity", "angle", "--json"))
     # the fitted amplitude is the one simulated (the fit's amplitude: 1e-3 relative allows for the

@@ -588,12 +588,19 @@ def test_real_trifilar_recordings_give_the_test_mass():
     # I0 + m_t r^2 (1 - m_t/M): fit the estimates against r^2; the slope must
     # match m_t (1 - m_t/M) within 3 std of the fit (timing std only: the
     # geometry errors are common to all r and move the intercept, not the slope).
+    # Test economy, session 23: every other recording, r = 0.25, 0.35 .. 0.75
+    # (6 of the 11; each costs ~1 s of CPU, nearly all the fit of the 240 Hz
+    # record).  Slope 4.85 % below m_t (1 - m_t/M) (all 11: 4.94 %), band
+    # 8.3 % of it (8.0 %), s_slope 0.0037 m_t (0.0029): a scale k on Izz
+    # fails outside k in [0.965, 1.139] (all 11: [0.968, 1.136]).  Every
+    # period read 10 % long (I ~ T^2: k = 1.21, 11 cycles counted as 10)
+    # fails (checked, session 23).
     Mp, mt = 0.848, 20.94e-3
     M = Mp + mt
     ang = np.radians([0, 120, 240])
     ring = np.column_stack([np.cos(ang), np.sin(ang), np.zeros(3)])
     rs, Is, sd = [], [], []
-    for r in np.arange(0.25, 0.751, 0.05):
+    for r in np.arange(0.25, 0.751, 0.1):
         d = mt * r / M
         # Ixx, Iyy: guesses of a disc-like platform; with [0.1, 0.1, ...] no
         # Izz above 0.2 would be physical (triangle inequality) and the

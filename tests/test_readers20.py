@@ -89,10 +89,15 @@ def test_a_soft_clipped_gyro_is_fitted_on_its_samples_near_the_level(tmp_path):
     low, the period's std 1.5-4x the clean one's) without a word, and `invert --signal-quantity rate`
     took the low amplitude: Izz +1.4 of its std above the clean record's (10 draws, mean).  Now one
     warning, the peaks left out: the amplitude within 3 % of the clean record's, the period within 2.5
-    combined stds, and Izz within 0.5 std of the clean record's (mean of 3 draws; measured +0.16 over 10)."""
+    combined stds (3 draws), and Izz within 0.5 std of the clean record's (draw 0).
+
+    Test economy, session 23: Izz was compared on all 3 draws (six nonlinear inverts, ~4 s of CPU) and
+    their mean held to the band.  The shift is nearly the same in every draw, so one separates: fixed,
+    +0.138 .. +0.172 over draws 0-7 (draw 0: +0.160); the old code (soft clipping not looked for, as in a
+    copy with ``find_soft_clipping``'s call replaced by None) +1.443, +1.443, +1.445 on draws 0-2 (it
+    also fails the amplitude check)."""
     exact = ["--uncertainty", "length=0", "--uncertainty", "position=0", "--uncertainty", "mass=0",
              "--uncertainty", "com=0"]
-    shifts = []
     for i in range(3):
         t, r, n = _gyro(i, Q=1e5)  # no decay: the period at one amplitude, as invert's law expects
         clean = fit_period(t, r + n, "viscous", crossing_check=False)
@@ -101,19 +106,20 @@ def test_a_soft_clipped_gyro_is_fitted_on_its_samples_near_the_level(tmp_path):
         assert "saturates gradually" in sc["line"] and "\n" not in sc["line"]
         assert fit.amplitude_period == pytest.approx(clean.amplitude_period, rel=0.03)
         assert abs(fit.period - clean.period) < 2.5 * math.hypot(fit.std, clean.std)
-        izz = []
-        for name, y in (("clean", r + n), ("soft", _soft(r, 0.8) + n)):
-            p = tmp_path / f"{name}{i}.csv"
-            np.savetxt(p, np.c_[t, y], delimiter=",", header="t,rate", comments="", fmt="%.10g")
-            res = CliRunner().invoke(main, ["invert", str(DRONE), "--signal", f"torsion={p}", "--solve-for", "Izz",
-                                            "--signal-quantity", "rate", *exact, "--json"])
-            assert res.exit_code == 0, res.stderr
-            doc = json.loads(res.stdout)
-            izz.append(doc["inertia"]["Izz"])
-            if name == "soft":
-                assert sum("saturates gradually" in x for x in doc["warnings"]) == 1, doc["warnings"]
-        shifts.append((izz[1]["value"] - izz[0]["value"]) / izz[0]["std"])
-    assert abs(float(np.mean(shifts))) < 0.5, shifts
+    t, r, n = _gyro(0, Q=1e5)
+    izz = []
+    for name, y in (("clean", r + n), ("soft", _soft(r, 0.8) + n)):
+        p = tmp_path / f"{name}.csv"
+        np.savetxt(p, np.c_[t, y], delimiter=",", header="t,rate", comments="", fmt="%.10g")
+        res = CliRunner().invoke(main, ["invert", str(DRONE), "--signal", f"torsion={p}", "--solve-for", "Izz",
+                                        "--signal-quantity", "rate", *exact, "--json"])
+        assert res.exit_code == 0, res.stderr
+        doc = json.loads(res.stdout)
+        izz.append(doc["inertia"]["Izz"])
+        if name == "soft":
+            assert sum("saturates gradually" in x for x in doc["warnings"]) == 1, doc["warnings"]
+    shift = (izz[1]["value"] - izz[0]["value"]) / izz[0]["std"]
+    assert abs(shift) < 0.5, shift
 
 
 def _real_records():

@@ -354,13 +354,27 @@ def two_params(cfg):
 SCENE_CONFIGS = sorted(p.stem for p in CONFIGS.glob("*.yaml") if "rig" in (read_yaml(p) or {}))  # not measurement files
 
 
+#: the configs whose sweep above is also drawn (``--plot``), one of each kind of grid figure plot_sweep
+#: branches on: every sigma missing (the plate at rest: its uncertainty panels "n/a" as well as the tension
+#: and depth ones every --no-tensions sweep leaves "n/a"; thesis_lin1_torsion is the same kind),
+#: a feasible region's edge without a recommendation (the drone; the KTH trifilar is the same kind), that edge
+#: with the recommendation's marker (the pitch rig), all feasible with the marker (the Solar Boat; the
+#: cylinder and thesis_lin3_roll are the same kind).  Test economy, session 23: drawing is ~0.7 s of CPU
+#: beside a ~0.1-0.35 s sweep; all eight were drawn before.  Broken on purpose (a raise in the branch),
+#: the "n/a" text fails all four drawn, the feasible edge's contour the drone and the pitch rig, the
+#: recommendation's marker the boat and the pitch rig.
+PLOTTED = {"thesis_plate_rest", "drone_parallel", "thesis_lin2_pitch", "solar_boat"}
+
+
 @pytest.mark.parametrize("name", SCENE_CONFIGS)
 def test_cli_two_dimensional_sweep_on_every_example_config(name, tmp_path):
     path = CONFIGS / f"{name}.yaml"
     a, b = two_params(read_yaml(path))
     out, plot = tmp_path / "s.csv", tmp_path / "s.png"
+    assert PLOTTED <= set(SCENE_CONFIGS)
+    drawn = name in PLOTTED
     code, stdout, err = run(["sweep", str(path), "--param", a, "--param", b, "--no-tensions",
-                             "--json", "--out", str(out), "--plot", str(plot)])
+                             "--json", "--out", str(out), *(["--plot", str(plot)] if drawn else [])])
     assert code == 0, err
     doc = json.loads(stdout)
     assert len(doc["points"]) == 4
@@ -373,7 +387,7 @@ def test_cli_two_dimensional_sweep_on_every_example_config(name, tmp_path):
     assert any(p["valid"] for p in doc["points"])
     rows = list(csv.DictReader(open(out)))
     assert len(rows) == 4 and "Izz_rel_sigma" in rows[0]
-    assert plot.stat().st_size > 10_000
+    assert plot.stat().st_size > 10_000 if drawn else not plot.exists()
     assert not (tmp_path / "s.csv.partial.jsonl").exists()  # the journal goes once the CSV is written
 
 
