@@ -403,7 +403,8 @@ class RecordInertia:
     (:data:`~bifilar.estimation.design_noise.DILUTION_MAX`).
     attitude_noise : the estimated attitude noise, rad RMS per axis (None
     where not estimated).  products_held : the products of inertia held
-    for that noise (:data:`PRODUCT_NOISE_MAX`), listed as poorly excited.
+    for that noise (:data:`PRODUCT_NOISE_MAX`), listed as held, not as poorly
+    excited (unless the noise swamps their column: ``noise_undetermined``).
     """
 
     est: object
@@ -470,7 +471,9 @@ def record_inertia(scene: Scene, rec: MotionRecord, components: tuple, geometry:
         S = np.diag(design_noise(rec.alpha_noise))
         # the noise is named only where a plain fit would have determined the component (a clean record's
         # barely moved axis, its "noise" the fits' truncation, keeps the not-excited reason and no warning)
-        swamped = [c for j, c in enumerate(components) if c not in plain.poorly_excited
+        # a held product counts as determined here: its hold is not excitation (session 23: a torsion's Ixy, a
+        # column of noise alone, was held and then printed as 'not excited' and as held for the noise)
+        swamped = [c for j, c in enumerate(components) if (c not in plain.poorly_excited or c in hold)
                    and len(y) * S[COMPONENTS.index(c)] > DILUTION_MAX * max(power[j], 1e-300)]
     return RecordInertia(est, std, geo, interval, dof, diff, dilution, swamped, noise_rms, list(hold))
 
@@ -501,10 +504,22 @@ record, whose fits' truncation reads as ~7e-9 rad)."""
 
 def product_noise_reason(fit: RecordInertia) -> str:
     """The ``reason`` of a product of inertia held for the record's attitude noise (:data:`PRODUCT_NOISE_MAX`)."""
-    return (f"not determined: the record's attitude noise ({fit.attitude_noise * 1e3:.2g} mrad RMS per axis, above "
-            f"{PRODUCT_NOISE_MAX * 1e3:.2g} mrad) tilts the recorded wire directions, and the torques it puts about x "
-            "and y correlate with its noise in this product's accelerations, which the fit does not correct; held "
-            "at the config's value: record the attitude more finely (or filter it) to solve for the products")
+    return (f"{product_noise_cause(fit)}: the product is held at the config's value because the noise tilts the "
+            "recorded wire directions, and the torques it puts about x and y correlate with its noise in this "
+            "product's accelerations, which the fit does not correct; record the attitude more finely (or filter "
+            "it) to solve for the products")
+
+
+def product_noise_cause(fit: RecordInertia) -> str:
+    """The short cause (a table cell) of a product held for the record's
+    attitude noise: the noise and :data:`PRODUCT_NOISE_MAX` in urad RMS per axis."""
+    return f"held: attitude noise {_urad(fit.attitude_noise)} urad RMS above {_urad(PRODUCT_NOISE_MAX)} urad"
+
+
+def _urad(rad: float) -> str:
+    """``rad`` in urad, to 3 significant figures (no exponent below 1e7 urad)."""
+    x = float(f"{rad * 1e6:.3g}")
+    return f"{x:.0f}" if x >= 100 or x == int(x) else f"{x:g}"
 
 
 DILUTION_WARN = 0.01
