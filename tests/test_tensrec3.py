@@ -6,7 +6,7 @@ excited)' / POORLY and listed in `inertia_from_tensions_poorly_excited`,
 though the drone's torsion excites Ixz and Iyz (alpha_z in the x and y
 rows of Euler's equations: a clean record determines them).  Records as
 tests/test_tensrec2.py makes them (the drone's 0.1 rad torsion, 64 samples
-a period, 0.3 % load cells), one draw each: ~2 s."""
+a period, 0.3 % load cells), one draw each: ~3 s."""
 
 from __future__ import annotations
 
@@ -47,7 +47,10 @@ def test_a_product_held_for_attitude_noise_says_so_not_that_it_is_unexcited(tmp_
     X the record's estimated noise, within 10 % of the 1000 urad drawn (the
     estimate's relative se over ~380 samples of 3 axes ~2 %); they are not
     in the poorly-excited list.  Ixx and Ixy, columns of noise alone here,
-    say the noise swamps them.  On the clean twin (0.3 % load cells only)
+    say the noise swamps them.  At 20 urad the plain fit's std finds them
+    not excited, the held Ixy too (judged by a plain fit without the hold:
+    it was called swamped, as held it had skipped that judgement), while
+    Ixz and Iyz are held at ~20 urad.  On the clean twin (0.3 % load cells only)
     the same products have values, and 'not excited' is said of exactly
     the components a torsion cannot move, Ixx and Ixy (no alpha_x,
     alpha_y, omega_x, omega_y).  Old wording ('not determined (not
@@ -65,6 +68,15 @@ def test_a_product_held_for_attitude_noise_says_so_not_that_it_is_unexcited(tmp_
         assert why[c] == "attitude noise swamps the motion" and "attitude noise" in est[c]["reason"], (why[c], est[c])
         assert why[c] in rows[c] and "excited" not in rows[c] and "POORLY" not in rows[c], rows[c]
     assert est["Izz"]["value"] is not None and "POORLY" not in rows["Izz"]
+
+    # 20 urad: Ixx and Ixy are judged by the plain fit's std (not excited), the held Ixy as the unheld Ixx
+    d, rows = _tensions(tmp_path, 0.02, 43)
+    why = d["inertia_from_tensions_not_determined"]
+    assert d["inertia_from_tensions_poorly_excited"] == ["Ixx", "Ixy"], why
+    assert [c for c in COMPS if "not excited" in rows[c] and "POORLY" in rows[c]] == ["Ixx", "Ixy"], rows
+    for c in ("Ixz", "Iyz"):
+        m = re.fullmatch(r"held: attitude noise ([0-9.]+) urad RMS above 1 urad", why[c])
+        assert m and 18 <= float(m.group(1)) <= 22 and why[c] in rows[c], (why[c], rows[c])
 
     d, rows = _tensions(tmp_path, 0.0, 42)
     est, why = d["inertia_from_tensions"], d["inertia_from_tensions_not_determined"]

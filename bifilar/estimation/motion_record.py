@@ -403,8 +403,10 @@ class RecordInertia:
     (:data:`~bifilar.estimation.design_noise.DILUTION_MAX`).
     attitude_noise : the estimated attitude noise, rad RMS per axis (None
     where not estimated).  products_held : the products of inertia held
-    for that noise (:data:`PRODUCT_NOISE_MAX`), listed as held, not as poorly
-    excited (unless the noise swamps their column: ``noise_undetermined``).
+    for that noise (:data:`PRODUCT_NOISE_MAX`) which a plain fit without the
+    hold would not find poorly excited (those are not excited), listed as
+    held, not as poorly excited (a column the noise swamps is in
+    ``noise_undetermined`` too, which the CLI names first).
     """
 
     est: object
@@ -471,10 +473,14 @@ def record_inertia(scene: Scene, rec: MotionRecord, components: tuple, geometry:
         S = np.diag(design_noise(rec.alpha_noise))
         # the noise is named only where a plain fit would have determined the component (a clean record's
         # barely moved axis, its "noise" the fits' truncation, keeps the not-excited reason and no warning)
-        # a held product counts as determined here: its hold is not excitation (session 23: a torsion's Ixy, a
-        # column of noise alone, was held and then printed as 'not excited' and as held for the noise)
-        swamped = [c for j, c in enumerate(components) if (c not in plain.poorly_excited or c in hold)
+        # a held product is judged as a plain fit without the hold judges it (session 23: held, it was "poorly
+        # excited" in the plain fit whatever its motion, and the CLI printed every held product 'not excited')
+        free = inertia_from_tensions(*args, alpha=rec.alpha[sl], components=components, geometry=geometry,
+                                     min_lag=MIN_LAG) if hold else plain
+        unexcited = [c for c in components if c in (free if c in hold else plain).poorly_excited]
+        swamped = [c for j, c in enumerate(components) if c not in unexcited
                    and len(y) * S[COMPONENTS.index(c)] > DILUTION_MAX * max(power[j], 1e-300)]
+        hold = tuple(c for c in hold if c not in unexcited)
     return RecordInertia(est, std, geo, interval, dof, diff, dilution, swamped, noise_rms, list(hold))
 
 
