@@ -166,7 +166,9 @@ def test_poorly_excited_lists_exactly_the_components_without_a_value(tmp_path):
     for _ in range(3):
         d = _cli_tensions(tmp_path, _record(rng, mrad=1.0), comps + ("Ixx",))
         est = d["inertia_from_tensions"]
-        assert d["inertia_from_tensions_poorly_excited"] == [c for c in comps + ("Ixx",) if est[c]["value"] is None]
+        # session 23: the list names the unexcited only; a held product and a noise-swamped axis are not
+        assert sorted(d["inertia_from_tensions_not_determined"]) == sorted(c for c in comps + ("Ixx",)
+                                                                           if est[c]["value"] is None)
         assert est["Izz"]["value"] is not None and est["Ixx"]["value"] is None
         for c in ("Ixz", "Iyz"):
             assert est[c]["value"] is None and "attitude noise" in est[c]["reason"], est[c]

@@ -38,8 +38,8 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     from ..config import load_scene
     from ..estimation.from_tensions import inertia_from_tensions
     from ..estimation.motion_record import (general_noise_warning, general_tension_noise, length_mismatch,
-                                            pose_noise_reason, pose_noise_warnings, product_noise_reason, read_motion,
-                                            record_inertia)
+                                            pose_noise_reason, pose_noise_warnings, product_noise_cause,
+                                            product_noise_reason, read_motion, record_inertia)
     from ..models import maximal as mx
     from ..rotations import quat_to_matrix
 
@@ -140,9 +140,14 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
             "dof": None if c in undetermined else dof.get(c),
             "interval_95": interval[c] if interval else est.interval95(c, std[c]),
             "config": float(scene.inertia[_idx(c)])} for c in comps}
+    # why each is null, the order record_inertia decides it in: the attitude noise swamping the column, a product
+    # held for the attitude noise, else not excited (session 23: the table said 'not excited' for all three)
+    held = [] if motion is None else fit.products_held
+    cause = {c: NOISE_SWAMPS if c in noisy else product_noise_cause(fit) if c in held else NOT_EXCITED
+             for c in undetermined}
     for c in undetermined:
         doc["inertia_from_tensions"][c]["reason"] = (pose_noise_reason(fit) if c in noisy else product_noise_reason(fit)
-                                                     if motion is not None and c in fit.products_held else NOT_DETERMINED)
+                                                     if c in held else NOT_DETERMINED)
     if std_inputs is not None:  # the config geometry's share of std (record_std)
         for c in comps:
             doc["inertia_from_tensions"][c]["std_geometry"] = std_inputs.get(c) if c not in undetermined else None
@@ -153,10 +158,12 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         for c in comps:
             doc["inertia_from_tensions"][c].update({"value": None, "std": None, "dof": None, "interval_95": None,
                                                     "reason": slack})
-    # exactly the components that get no value (the estimator's rule, std above 1/1.96 of the component's
-    # scale, also applied to a record's std with the differentiation term by record_inertia)
-    poor = list(undetermined)
+    # the components without a value for want of excitation (the estimator's rule, std above 1/1.96 of the
+    # component's scale, also applied to a record's std with the differentiation term by record_inertia);
+    # inertia_from_tensions_not_determined names every component without a value and its cause
+    poor = [c for c in undetermined if cause[c] == NOT_EXCITED]
     doc["inertia_from_tensions_poorly_excited"] = poor
+    doc["inertia_from_tensions_not_determined"] = {c: "a wire went slack" for c in comps} if slack else cause
     doc["inertia_from_tensions_residual_rms"] = est.residual_rms
     if out_p:
         cols = [t, *T_model.T, *F_gen.T] + ([F_sym] if F_sym is not None else [])
@@ -193,9 +200,9 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         span = f"{lo:.6g} .. {hi:.6g} ({nu:.2g})" if c not in undetermined else "n/a"
         if c not in undetermined and nu is None:
             span = f"{lo:.6g} .. {hi:.6g} (normal)"
-        it.add_row(c, "not determined (not excited)" if c in undetermined else f"{est.values[c]:.8g}",
-                   f"{std[c]:.2g}" if c not in undetermined else "n/a", span,
-                   f"{scene.inertia[_idx(c)]:.8g}", "POORLY" if c in poor else "yes")
+        it.add_row(c, f"not determined ({cause[c]})" if c in undetermined else f"{est.values[c]:.8g}",
+                   f"{std[c]:.2g}" if c not in undetermined else "n/a", span, f"{scene.inertia[_idx(c)]:.8g}",
+                   "POORLY" if c in poor else "yes" if c not in undetermined else "held" if c in held else "swamped")
     con.print(it)
     if slack:
         con.print(f"inertia from tensions: {esc(slack)}")
@@ -216,6 +223,12 @@ NOT_DETERMINED = ("not determined: the motion hardly excites this component (its
                   "than +-the scale), so the record cannot determine it (beside better-excited components the fit "
                   "holds it at the config's value); excite a mode that turns the body about this axis")
 """The reason a component's ``value`` is ``null`` in ``inertia_from_tensions``."""
+
+NOT_EXCITED = "not excited"
+"""The short cause (``inertia_from_tensions_not_determined``, the table) of :data:`NOT_DETERMINED`."""
+
+NOISE_SWAMPS = "attitude noise swamps the motion"
+"""The short cause of :func:`~bifilar.estimation.motion_record.pose_noise_reason`."""
 
 SIM_RTOL = 1e-11
 """Integrator tolerance of the simulated motion (relative; also the floor of

@@ -403,7 +403,10 @@ class RecordInertia:
     (:data:`~bifilar.estimation.design_noise.DILUTION_MAX`).
     attitude_noise : the estimated attitude noise, rad RMS per axis (None
     where not estimated).  products_held : the products of inertia held
-    for that noise (:data:`PRODUCT_NOISE_MAX`), listed as poorly excited.
+    for that noise (:data:`PRODUCT_NOISE_MAX`) which a plain fit without the
+    hold would not find poorly excited (those are not excited), listed as
+    held, not as poorly excited (a column the noise swamps is in
+    ``noise_undetermined`` too, which the CLI names first).
     """
 
     est: object
@@ -470,8 +473,14 @@ def record_inertia(scene: Scene, rec: MotionRecord, components: tuple, geometry:
         S = np.diag(design_noise(rec.alpha_noise))
         # the noise is named only where a plain fit would have determined the component (a clean record's
         # barely moved axis, its "noise" the fits' truncation, keeps the not-excited reason and no warning)
-        swamped = [c for j, c in enumerate(components) if c not in plain.poorly_excited
+        # a held product is judged as a plain fit without the hold judges it (session 23: held, it was "poorly
+        # excited" in the plain fit whatever its motion, and the CLI printed every held product 'not excited')
+        free = inertia_from_tensions(*args, alpha=rec.alpha[sl], components=components, geometry=geometry,
+                                     min_lag=MIN_LAG) if hold else plain
+        unexcited = [c for c in components if c in (free if c in hold else plain).poorly_excited]
+        swamped = [c for j, c in enumerate(components) if c not in unexcited
                    and len(y) * S[COMPONENTS.index(c)] > DILUTION_MAX * max(power[j], 1e-300)]
+        hold = tuple(c for c in hold if c not in unexcited)
     return RecordInertia(est, std, geo, interval, dof, diff, dilution, swamped, noise_rms, list(hold))
 
 
@@ -501,10 +510,22 @@ record, whose fits' truncation reads as ~7e-9 rad)."""
 
 def product_noise_reason(fit: RecordInertia) -> str:
     """The ``reason`` of a product of inertia held for the record's attitude noise (:data:`PRODUCT_NOISE_MAX`)."""
-    return (f"not determined: the record's attitude noise ({fit.attitude_noise * 1e3:.2g} mrad RMS per axis, above "
-            f"{PRODUCT_NOISE_MAX * 1e3:.2g} mrad) tilts the recorded wire directions, and the torques it puts about x "
-            "and y correlate with its noise in this product's accelerations, which the fit does not correct; held "
-            "at the config's value: record the attitude more finely (or filter it) to solve for the products")
+    return (f"{product_noise_cause(fit)}: the product is held at the config's value because the noise tilts the "
+            "recorded wire directions, and the torques it puts about x and y correlate with its noise in this "
+            "product's accelerations, which the fit does not correct; record the attitude more finely (or filter "
+            "it) to solve for the products")
+
+
+def product_noise_cause(fit: RecordInertia) -> str:
+    """The short cause (a table cell) of a product held for the record's
+    attitude noise: the noise and :data:`PRODUCT_NOISE_MAX` in urad RMS per axis."""
+    return f"held: attitude noise {_urad(fit.attitude_noise)} urad RMS above {_urad(PRODUCT_NOISE_MAX)} urad"
+
+
+def _urad(rad: float) -> str:
+    """``rad`` in urad, to 3 significant figures (no exponent below 1e7 urad)."""
+    x = float(f"{rad * 1e6:.3g}")
+    return f"{x:.0f}" if x >= 100 or x == int(x) else f"{x:g}"
 
 
 DILUTION_WARN = 0.01
