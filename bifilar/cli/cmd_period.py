@@ -154,7 +154,9 @@ def period(signal, column, sample_rate, model, t_start, t_stop, trim, timed, tar
     tb.add_row("r^2", fmt(fit.r_squared, 7))
     rc = fit.residual_check
     if rc:
-        peaks = ", ".join(f"{p['frequency']:.4g} Hz" + (f" ({p['harmonic']}f)" if p["harmonic"] else "")
+        # harmonic 1: within 1.5/T_record of a fitted mode, unresolved from it (not "1f": see the notes)
+        peaks = ", ".join(f"{p['frequency']:.4g} Hz" + ((" (beside a fitted mode)" if p["harmonic"] == 1 else
+                                                          f" ({p['harmonic']}f)") if p["harmonic"] else "")
                           for p in rc.get("peaks", [])) or "none"
         tb.add_row("residuals", f"{'white' if rc.get('white') else 'not white'} (Ljung-Box p = {rc['p']:.2g}); "
                                 f"peaks left: {peaks}")

@@ -176,16 +176,25 @@ def _residual_peaks(fit: PeriodFit):
     except (ValueError, np.linalg.LinAlgError):
         return
     known = [m["frequency"] for m in fit.modes]
+    band = 1.5 / (fit.t1 - fit.t0)
     for pk in peaks:
-        if pk["harmonic"] is None and any(abs(pk["frequency"] - f) <= 1.5 / (fit.t1 - fit.t0) for f in known):
+        if pk["harmonic"] is None and any(abs(pk["frequency"] - f) <= band for f in known):
             pk["harmonic"] = 1
     fit.residual_check["peaks"] = peaks
     other = [pk for pk in peaks if pk["harmonic"] is None]
-    harm = sorted({pk["harmonic"] for pk in peaks if pk["harmonic"] is not None})
+    harm = sorted({pk["harmonic"] for pk in peaks if pk["harmonic"] is not None and pk["harmonic"] >= 2})
     if harm:
         fit.notes.append("residuals keep harmonics " + ", ".join(f"{h}f" for h in harm)
                          + " of the oscillation (a sensor or motion not linear in the angle); orthogonal "
                            "to the fundamental, they hardly bias the period")
+    for pk in (pk for pk in peaks if pk["harmonic"] == 1):
+        # within 1.5/T_record of a fitted mode: unresolved from it over the record, so NOT
+        # orthogonal to it (e.g. another mode's 2nd harmonic beside the torsion, camera23)
+        near = min(known + [fit.frequency], key=lambda f: abs(pk["frequency"] - f))
+        fit.notes.append(f"residuals keep an oscillation at {pk['frequency']:.4g} Hz "
+                         f"({pk['ratio']:.0f} x the noise level) within 1.5/T_record = {band:.3g} Hz of the "
+                         f"fitted mode at {near:.4g} Hz: unresolved from it over the record and not orthogonal "
+                         f"to it, it can bias that mode's period beyond the stated std")
     for pk in other:
         fit.notes.append(f"residuals keep an unmodelled oscillation at {pk['frequency']:.4g} Hz "
                          f"(period {1 / pk['frequency']:.4g} s, {pk['ratio']:.0f} x the noise level)")
