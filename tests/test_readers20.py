@@ -204,13 +204,14 @@ def test_several_offset_steps_are_found_and_taken_out(nsteps):
     assert exact >= 7, exact
 
 
-def _camera_like(i: int):
+def _camera_like(i: int, dur: float | None = None):
     """A record like the KTH laser dot's (docs/real_data.md): 240 fps, 5/10/20 s, torsion 1.04-1.07 s at
     70-140 px with 2nd and 3rd harmonics of 1-4 px, the swing (1.97-2.0 s) leaking 2-10 px with its own
     2nd harmonic, smooth (AR(1) 0.9) and white noise of a few tenths of a px, a level near 620 px with a
-    drift.  Returns (t, x, the torsion's period)."""
+    drift.  ``dur`` (s) fixes the duration (the draws are the same).  Returns (t, x, the torsion's period)."""
     g = np.random.default_rng(20000 + i)
-    dur = float(g.choice([5.0, 10.0, 20.0]))
+    drawn = float(g.choice([5.0, 10.0, 20.0]))
+    dur = drawn if dur is None else float(dur)
     t = np.arange(0, dur, 1 / 240.0)
     T1, A1, Q1 = g.uniform(1.04, 1.07), g.uniform(70, 140), g.uniform(300, 1500)
     w1 = 2 * math.pi / T1

@@ -101,6 +101,7 @@ from .signal_io import (
 from .signal_models import _auto_trim, _leading_rest
 from .signal_law import _amplitude_law
 from .signal_quantisation import _quantisation
+from .signal_harmonic2 import second_harmonic_term
 from .signal_result import PeriodFit
 from .signal_clip import drop_clipped, drop_soft_clipped, keep_soft_clipped, soft_fit_holds
 from .signal_offset import remove_offset_step
@@ -381,12 +382,14 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
         _stationarity(fit, t, y)
         fit = _amplitude_law(fit, t, y, criterion, len(notes))
     _quantisation(fit, t, y, criterion)
-    _compose_std(fit)
+    _compose_std(fit, second_harmonic_term(fit))
     return fit
 
 
-def _compose_std(fit: PeriodFit):
-    """Headline std from the three terms; which one dominates.  When the
+def _compose_std(fit: PeriodFit, harmonic2: float = 0.0):
+    """Headline std from the terms; which one dominates.  ``harmonic2`` (s):
+    :func:`second_harmonic_term`, a further mode's 2nd harmonic beside the
+    dominant frequency, added in quadrature (``uncertainty["second_harmonic"]``).  When the
     quantisation check found the record's noise term among its copies'
     (``quantisation_test.replaces_noise``), the copies' spread, which holds
     the noise as well, stands for noise, serial correlation and
@@ -405,20 +408,21 @@ def _compose_std(fit: PeriodFit):
         quant = float(fit.std_quantisation)
     else:
         quant = max(float(fit.std_quantisation), serial)  # the simulated spread includes the noise
-    total = math.hypot(quant, ns)
+    total = math.hypot(quant, ns, harmonic2)
     terms = {"noise": noise, "serial_correlation": math.sqrt(max(serial ** 2 - noise ** 2, 0.0)),
              "quantisation": quant if replaced else math.sqrt(max(quant ** 2 - serial ** 2, 0.0)),
-             "nonstationarity": ns}
+             "nonstationarity": ns, "second_harmonic": harmonic2}
     if replaced:
         fit.uncertainty["noise_replaced_by_quantisation"] = True
-    dom = max(("quantisation", "nonstationarity") if replaced else terms, key=terms.get)
+    dom = max(("quantisation", "nonstationarity", "second_harmonic") if replaced else terms, key=terms.get)
     # the copies' rms spread about the fitted period, from m copies, has m
     # dof (m sq^2 / sigma^2 ~ chi^2_m); the other terms count as normal
     dof = math.inf
     if replaced:
         from .uncertainty import combined_dof
 
-        dof = combined_dof([(quant, float(fit.uncertainty["quantisation_test"]["draws"])), (ns, math.inf)])
+        dof = combined_dof([(quant, float(fit.uncertainty["quantisation_test"]["draws"])), (ns, math.inf),
+                            (harmonic2, math.inf)])
     fit.uncertainty = dict(terms, total=total, dominant=dom, serial_factor=float(fit.std_inflation),
                            dof=dof if math.isfinite(dof) else None, **fit.uncertainty)
     fit.std = total
