@@ -11,6 +11,13 @@ inertia kg m^2."""
 
 from __future__ import annotations
 
+import copy
+import functools
+import io
+import pickle
+import types
+from contextvars import ContextVar
+
 import numpy as np
 
 from ..analysis.run_accuracy import TIMING_SHARE
@@ -39,6 +46,73 @@ def _stiff_message(scene, label: str) -> str:
             "cannot be simulated there; where the fit put it (the estimate at a corner of the physical set) the periods barely "
             "determine the components: add modes or hangings that time them, solve for fewer components, or "
             "give the amplitude as 0 to answer with the linear model")
+
+
+#: the amplitude runs already made within the current :func:`per_call_runs` call
+#: (pickled exact inputs -> (r, SimulationResult)); None outside one
+_RUNS: ContextVar[dict | None] = ContextVar("bifilar_amplitude_runs", default=None)
+
+
+def per_call_runs(f):
+    """``f`` (``invert``) with an amplitude-run memo for the length of one call:
+    :func:`amplitude_factor` with the same inputs, bit for bit (scene, rest
+    pose, mode set, mode, amplitude, cycles, rtol, timing, read, second
+    mode), is run once and its result handed out as a copy.  The budget, the
+    fit check and the edge roots each ask for the unstated amplitude's law at
+    the same estimate (test_invert_roots' thin plate 3 stds beyond its edge:
+    14 runs of 4 distinct inputs), and the first fixed-point step may repeat
+    the prior's run (docs/design.md "invfast, session 23").  The memo ends with the call
+    (a nested call shares its caller's): nothing outlives it."""
+
+    @functools.wraps(f)
+    def g(*args, **kwargs):
+        if _RUNS.get() is not None:
+            return f(*args, **kwargs)
+        token = _RUNS.set({})
+        try:
+            return f(*args, **kwargs)
+        finally:
+            _RUNS.reset(token)
+
+    return g
+
+
+def _remembered(key_parts: tuple, run):
+    """``run()``'s result, made once per :func:`per_call_runs` call for the
+    exact inputs ``key_parts`` (pickled, a function by its identity: equal
+    bytes, equal inputs; inputs that cannot be pickled, or no call open: run
+    every time).  Every caller,
+    the first too, gets a deep copy of the stored result, so a caller that
+    edits its result (a run's warnings) edits its own."""
+    memo = _RUNS.get()
+    if memo is None:
+        return run()
+    held: list = []
+    buf = io.BytesIO()
+    try:
+        _KeyPickler(buf, held).dump(key_parts)
+    except Exception:  # inputs pickle cannot write: no memo
+        return run()
+    key = buf.getvalue()
+    if key not in memo:
+        memo[key] = (run(), held)
+    return copy.deepcopy(memo[key][0])
+
+
+class _KeyPickler(pickle.Pickler):
+    """Pickles a memo key; a function in it (a scene's ``support``, often a
+    closure pickle cannot write) is written as its identity, and held in
+    ``held`` (kept with the memo's entry, so no other object takes its id)."""
+
+    def __init__(self, buf, held: list):
+        super().__init__(buf, protocol=pickle.HIGHEST_PROTOCOL)
+        self.held = held
+
+    def persistent_id(self, obj):
+        if isinstance(obj, (types.FunctionType, types.MethodType, functools.partial)):
+            self.held.append(obj)
+            return ("function", id(obj))
+        return None
 
 
 def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude: float, cycles: float,
@@ -77,16 +151,27 @@ def amplitude_factor(hm: HangingModel, values: dict, mode_index: int, amplitude:
     started (a recording's, :class:`~bifilar.estimation.signal_swing.Secondary`):
     the run starts with it moving too
     (:func:`~bifilar.analysis.simulate.two_mode_state`), as the record's body did."""
+    scene = hm.scene(values)
+    rest, ms, match = hm.locate(scene)
+    k = int(match[mode_index])
+    other = (int(match[second[0]]), second[1]) if second is not None and second[1] else None
+    return _remembered((scene, rest, ms, k, amplitude, cycles, rtol, timing, fundamental, other),
+                       lambda: _factor_run(scene, rest, ms, k, amplitude, cycles, rtol, timing, fundamental, other))
+
+
+def _factor_run(scene, rest, ms, k: int, amplitude: float, cycles: float, rtol: float, timing: float | None,
+                fundamental: bool, other: tuple | None):
+    """:func:`amplitude_factor`'s run of mode ``k`` of the mode set ``ms``
+    about ``rest`` (``scene``'s, as the hanging model located them), with
+    ``other`` (index into ``ms``, amplitude) the second mode started (None:
+    none); the other arguments as there."""
     from ..analysis.fundamental import mode_fundamental
     from ..analysis.run_accuracy import check_matters, check_period
     from ..analysis.simulate import simulate, two_mode_state
 
-    scene = hm.scene(values)
-    rest, ms, match = hm.locate(scene)
-    k = int(match[mode_index])
     y0 = t_end = None
-    if second is not None and second[1]:
-        y0 = two_mode_state(scene, rest, ms.modes[k], amplitude, ms.modes[int(match[second[0]])], second[1])
+    if other is not None:
+        y0 = two_mode_state(scene, rest, ms.modes[k], amplitude, ms.modes[other[0]], other[1])
         t_end = cycles * ms.modes[k].period
 
     def run(method: str = "DOP853", rtol: float = rtol, atol=None):

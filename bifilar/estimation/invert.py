@@ -97,6 +97,7 @@ from .signal_alias import check_signal_aliases
 from .solve import (GAIN_RANGE, amplitude_factor, factor_gains, gauss_newton,  # noqa: F401
                     solve_linear, solve_nonlinear, solve_scalar)
 from .solve import measured_factor
+from .amplitude_runs import per_call_runs
 from .answer_checks import (AMPLITUDE_CONTRADICTION_RATIO, AMPLITUDE_CONTRADICTION_Z,  # noqa: F401
                             irregular_warnings, monotonic_warnings, refuse_amplitude_the_record_contradicts,
                             refuse_unreachable_record_amplitudes)
@@ -106,6 +107,7 @@ from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
 from .inversion_result import InversionResult, _assumed, std_unavailable_text  # noqa: F401 (callers import them here)
 
 
+@per_call_runs
 def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | None = None,
            unc: dict | None = None, monte_carlo: int | None = None, seed: int | None = None,
            ladder: bool = True, rtol: float = 1e-10, progress=None, journal=None,
