@@ -140,6 +140,7 @@ def _compiled(build: str):
 
     modules: dict = {}
     built: list = []
+    failed: list = []
 
     def kernel(P, stabilise=True, extras=False, signature="args", physical=False, derivatives=True, ticks=None):
         n = int(P.lengths.shape[-1])
@@ -161,8 +162,12 @@ def _compiled(build: str):
                 ffi = FFI()
                 ffi.cdef("void kern(const double *y, double *o, const double *p);")
                 ffi.set_source(name, src, extra_compile_args=["-O2", "-ffp-contract=off", "-w"])
-                ffi.compile(tmpdir=build)
-                modules[n, zero] = (importlib.import_module(name), params)
+                try:
+                    ffi.compile(tmpdir=build)
+                    modules[n, zero] = (importlib.import_module(name), params)
+                except Exception as exc:  # evaluate_point reports a point's error as an invalid point: kept here
+                    failed.append(exc)
+                    raise
                 built.append(time.perf_counter() - t0)
             mod, params = modules[n, zero]
             pv, out = np.array([vals[p] for p in params], float), np.empty(13)
@@ -173,7 +178,7 @@ def _compiled(build: str):
                 return out
             cache["C"] = f
         return cache["C"]
-    kernel.built = built
+    kernel.built, kernel.failed = built, failed
     return kernel
 
 
@@ -257,6 +262,8 @@ def main(argv=None) -> int:
             sys.path.insert(0, build)
             kern = _compiled(build)
             _points({"kernel": kern})  # builds every pattern once (fails here without cffi or a compiler)
+            if kern.failed:
+                raise kern.failed[0]
             variants.append(("compiled C kernel", {"kernel": kern}))
         except Exception as exc:  # noqa: BLE001 - a probe: cffi or the compiler missing is a result
             print(f"compiled C kernel: not available here ({type(exc).__name__}: {exc})")
