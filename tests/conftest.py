@@ -3,13 +3,23 @@ example files, which have their own tests)."""
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-import pytest
+# One BLAS thread per test process, set before numpy is first imported (no plugin imports it earlier;
+# the xdist workers and sweep's process pool inherit it; a value already in the environment is kept).
+# `-n 2` runs two workers on the two cores: OpenBLAS's default of a thread per core put four threads on
+# them, and its threads cost more than they gain on the signal fits' tall least-squares problems.
+# Measured (suite24, session 24; CPU user+sys of one file, 1 thread / default, back to back at load 6-8):
+# test_period_coverage 6.6 / 11.9 s, test_signal_quantisation 26.0 / 36.6 s, test_invert_roots 20.0 /
+# 20.3 s; `bifilar period` of a KTH record: the same JSON bit for bit.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from bifilar.config import scene_from_dict
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from bifilar.config import scene_from_dict  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"
