@@ -131,14 +131,15 @@ def _perturbed_scene(pb: Problem, h: int, scene, moves):
 
 def _hanging_periods(scenes, rest, base_modes) -> list:
     """(periods, scene, rest, modes, col) of each scene, ``col`` the index of
-    each of ``base_modes`` in its modes (MAC), rest poses from ``rest``
-    (global search where Newton fails); None where the scene cannot hang.
-    Batched engine."""
+    each of ``base_modes`` in its modes (MAC); rest poses by the batched
+    Newton from the start pose, where that is not accepted from ``rest``
+    (the base scene's pose: ``rest_poses``' ``near``), the global search
+    where neither is; None where the scene cannot hang.  Batched engine."""
     from ..analysis.batch import modes_batch, rest_poses
     from .montecarlo import _modes_or_none
 
     geo: list = []  # the batch's final-pose arrays, handed to modes_batch (the same numbers, computed once)
-    rests = rest_poses(scenes, rest, errors="return", geometry=geo)
+    rests = rest_poses(scenes, rest, errors="return", geometry=geo, near=rest)
     good = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
     out: list = [None] * len(scenes)
     if not good:
