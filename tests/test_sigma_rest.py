@@ -108,3 +108,94 @@ def test_near_is_only_a_fallback_and_needs_a_pose_of_the_branch(turned, monkeypa
     assert len(calls) == 2
     assert np.max(np.abs(got[0].R - rest_pose(sigma[0]).R)) <= 1e-12
 
+
+# a four-wire rig (tests/test_invert_roots.py's random_scene, seed 4002, rounded; the lengths those of the
+# pose with the body frame on the world's, so that it hangs on all four wires): a sigma point of a wire's
+# length or end leaves one wire slack (either sign), rest_pose's verdict
+FOUR = {"body": {"mass": 38.352, "inertia": {"tensor": [[0.86539, -0.38382, -0.07823], [-0.38382, 1.04141, -0.12847],
+                                                         [-0.07823, -0.12847, 1.13014]]}},
+        "rig": {"anchors": [[0.1873, -0.6237, 1.6939], [0.6052, 0.2403, 1.6292], [-0.3582, 0.5438, 1.6276],
+                            [-0.5687, -0.3172, 1.7553]],
+                "attachments": [[0.1302, -0.4335, 0.1836], [0.4207, 0.167, 0.1836], [-0.249, 0.378, 0.1836],
+                                [-0.3953, -0.2205, 0.1836]]}}
+FOUR["rig"]["lengths"] = np.linalg.norm(np.subtract(FOUR["rig"]["anchors"], FOUR["rig"]["attachments"]), axis=1).tolist()
+
+
+def _settle_all(points, jobs, rests, res):
+    """second_order._settle's path before (session 24): every deferred rest pose decided."""
+    from bifilar.analysis.batch_rest import Deferred
+
+    for rs in rests.values():
+        for q, r in enumerate(rs):
+            if isinstance(r, Deferred):
+                rs[q] = r.settle("return")
+
+
+def test_a_sigma_point_whose_other_one_cannot_hang_is_not_searched(monkeypatch):
+    """second_order fails an input when either sigma point cannot hang, so the
+    other's global search (rest_pose, ~7 ms) is skipped when the first is
+    known to fail; against deciding every one (the path before): the same
+    budgets bit for bit and the same failed inputs, with fewer searches."""
+    import bifilar.estimation.second_order as so
+    from bifilar.estimation.honest import honest_stds
+
+    scene = scene_from_dict(FOUR, warn=False)
+    seen: list = []
+    real = so.second_order
+
+    def recording(*a, **k):
+        budget, failed = real(*a, **k)
+        seen.append((budget.covariance.tobytes(), sorted(budget.contributions), list(failed)))
+        return budget, failed
+
+    monkeypatch.setattr(so, "second_order", recording)
+    import bifilar.estimation.invert as inv
+    monkeypatch.setattr(inv, "second_order", recording)
+    calls = _counting(monkeypatch)
+    requests = [("Izz", "torsion"), ("Ixx", 2)]
+    got = honest_stds(scene, requests, {}, fallbacks=[1.0, 1.0])
+    got_seen, n_got = list(seen), len(calls)
+    seen.clear(), calls.clear()
+    monkeypatch.setattr(so, "_settle", _settle_all)
+    ref = honest_stds(scene, requests, {}, fallbacks=[1.0, 1.0])
+    assert got == ref and got_seen == seen
+    failed = seen[0][2]
+    assert any(k.startswith("length") for k in failed) and "mass" not in failed  # some inputs fail, some not
+    assert n_got + len(failed) // 2 <= len(calls)  # measured: 27 searches against 53
+
+
+def test_settle_decides_exactly_the_verdicts_that_are_read():
+    """_settle on stubs: a deferred sigma point is searched unless its point
+    already fails (a hanging of it, or its cached result) or its input's
+    other sigma point does; other points (a pair's corner) only by the
+    first rule; in the order of the points."""
+    import bifilar.estimation.second_order as so
+    from bifilar.analysis.batch_rest import Deferred
+
+    order: list = []
+
+    class Stub(Deferred):
+        def __init__(self, name, hangs):
+            self.name, self.hangs = name, hangs
+
+        def settle(self, errors="raise"):
+            order.append(self.name)
+            return self.name if self.hangs else SlackWireError("rig.lengths", "slack")
+
+    pose = object()
+    points = {pid: None for pid in [("a", 1), ("a", -1), ("b", 1), ("b", -1), ("c", 1), ("c", -1), ("d", 1),
+                                    ("d", -1), ("a", "b", 1, 1), ("a", "b", -1, 1)]}
+    jobs = {0: [(pid, None, None) for pid in [("b", -1), ("a", 1), ("a", -1), ("b", 1), ("a", "b", 1, 1),
+                                              ("a", "b", -1, 1)]],
+            1: [(pid, None, None) for pid in [("c", 1), ("c", -1), ("d", -1), ("a", "b", -1, 1)]]}
+    rests = {0: [Stub("b-", False), Stub("a+", False), Stub("a-", True), Stub("b+", True), Stub("ab++", True),
+                 Stub("ab-+", True)],
+             1: [SlackWireError("rig.lengths", "slack"), Stub("c-", True), Stub("d-", True), pose]}
+    res = {pid: {} for pid in points}
+    res[("d", 1)] = {1: None}  # cached: cannot hang
+    res[("a", "b", -1, 1)] = {2: None}
+    so._settle(points, jobs, rests, res)
+    assert order == ["a+", "b+", "b-", "ab++"]
+    assert rests[0][2] is so.SKIPPED and rests[1][1] is so.SKIPPED and rests[1][2] is so.SKIPPED
+    assert rests[0][5] is so.SKIPPED and rests[1][3] is pose
+    assert rests[0][3] == "b+" and isinstance(rests[0][0], SlackWireError)

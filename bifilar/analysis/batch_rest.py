@@ -40,7 +40,7 @@ from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, 
                           line_turns, multiplier_matrix, near_dependent, rest_pose, start_coms)
 from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
-__all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry"]
+__all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry", "Deferred"]
 
 
 # --------------------------------------------------------------------------
@@ -257,7 +257,7 @@ def _from_near(near: RestPose, which: np.ndarray, stacked, com, kkt, arrays) -> 
 
 def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | None = None, *,
                errors: str = "raise", geometry: list | None = None,
-               near: RestPose | None = None) -> list:
+               near: RestPose | None = None, defer: bool = False) -> list:
     """Rest poses of many scenes (same number of wires), vectorised.
 
     Parameters
@@ -293,6 +293,11 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     tolerance (measured on the 444 such scenes of tests/test_invert_roots.py:
     CoM <= 4.3e-16 m, each entry of R <= 1.6e-15, tensions <= 5e-16
     relative; tests/test_sigma_rest.py).
+
+    ``defer``: a scene left to :func:`rest_pose` (or the elastic statics)
+    gets a :class:`Deferred` entry instead, whose :meth:`~Deferred.settle`
+    runs it: for a caller that may not need every such verdict (the
+    sigma points of a key whose other sigma point cannot hang).
     """
     scenes = list(scenes)
     if not scenes:
@@ -329,10 +334,9 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
         if ok[k]:
             out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), tensions=T[k].copy(),
                                     wire_vectors=d[k].copy(), kkt_residual=float(kkt[k]))
-        elif from_rigid[k]:
-            out[k] = _rest_or_error(s, errors, (com[k].copy(), R[k].copy()))
         else:
-            out[k] = _rest_or_error(s, errors)
+            dk = Deferred(s, (com[k].copy(), R[k].copy()) if from_rigid[k] else None)
+            out[k] = dk if defer else dk.settle(errors)
     if geometry is not None:
         geometry.append(BatchGeometry(scenes, out, ok, (a, p, L, m, g, I), R, d, w, G, dn, N, full))
     return out
@@ -412,6 +416,19 @@ class _LazyDepthRest(RestPose):
 
     def __reduce__(self):
         return (_plain_rest, ({f: getattr(self, f) for f in RestPose.__dataclass_fields__},))
+
+
+class Deferred:
+    """A scene :func:`rest_poses` (``defer=True``) left to :func:`rest_pose`:
+    :meth:`settle` gives what its entry would have been."""
+
+    def __init__(self, scene: Scene, rigid=None):  # noqa: D107 - rigid: _rest_or_error's
+        self.scene, self.rigid = scene, rigid
+
+    def settle(self, errors: str = "raise"):
+        """The scene's :func:`rest_pose` (its elastic rest from the rigid pose
+        on 2-3 stiff wires), or its error with ``errors="return"``."""
+        return _rest_or_error(self.scene, errors, self.rigid)
 
 
 def _plain_rest(fields: dict) -> RestPose:
