@@ -211,9 +211,12 @@ def bench_engines() -> dict:
 #: the parts of a point timed by ``--parts``: (label, module, attribute); nested parts are inside the outer ones
 PARTS = [("sensitivity", "bifilar.studies.point", "point_sensitivity"),
          ("honest sigma (all components)", "bifilar.estimation.honest", "honest_stds"),
-         ("  of which sigma-point scenes' rest poses + modes", "bifilar.estimation.budget", "_hanging_periods"),
-         ("  of which sigma points re-solved", "bifilar.estimation.budget", "_resolve"),
-         ("  of which sigma points re-solved", "bifilar.estimation.budget", "_one_step"),  # their first steps, batched
+         # (module second_order, where the budget calls them since session 16's split: patched on budget, which
+         # only re-exports them, these rows read 0; the rest poses are taken in _solve_points since session 24)
+         ("  of which sigma points: rest poses, modes, re-solve", "bifilar.estimation.second_order", "_solve_points"),
+         ("    of which their modes", "bifilar.estimation.second_order", "_hanging_periods"),
+         ("    of which re-solved", "bifilar.estimation.second_order", "_resolve"),
+         ("    of which re-solved", "bifilar.estimation.second_order", "_one_step"),  # their first steps, batched
          ("start poses of the runs (checked)", "bifilar.analysis.simulate", "checked_start_poses"),
          ("amplitude laws' stepped scenes and their modes", "bifilar.studies.point", "_law_runs"),
          ("nonlinear runs (the point's and its amplitude laws')", "bifilar.studies.point", "_runs_at"),

@@ -9,10 +9,15 @@
   where ``rest_pose``'s Newton start would be accepted (a taut, stable
   equilibrium turned by at most its 0.5 rad from the start orientation, a
   two-wire rig's CoM straight below its attachment line) falls back to
-  ``rest_pose`` (global search and its one-line errors); a knife edge's
+  ``rest_pose`` (global search and its one-line errors), or, where the
+  caller gives the pose of the scene they are all small changes of
+  (``near``: the sigma points' base), first to Newton from that pose; a knife edge's
   pose is turned to the canonical member of its neutral circle, as
   ``rest_pose`` does.  So the batch order, its first scene and a guess
-  change no scene's pose or verdict.
+  change no scene's pose or verdict (``near`` changes a fallback scene's
+  pose by rounding, ~1e-15, where it lies on ``near``'s branch; a Newton
+  end it does not accept goes to ``rest_pose``, and on the 1009 fallback
+  scenes of tests/test_invert_roots.py no verdict differed).
 * :func:`modes_batch`: null space of the constraint Jacobian, reduced
   stiffness and mass, and the generalised eigenproblem by batched Cholesky
   and ``eigh``; labels as :func:`~bifilar.analysis.modes.linear_modes`.
@@ -31,11 +36,11 @@ from ..errors import BifilarError
 from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions
 from ..rotations import cross, matrix_to_quat, rotvec_to_matrix, skew_of
 from ..scene import Scene, lowest_point_z
-from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, RestPose, canonical_attitude, knife_edge_axes,
+from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, START_BOX, RestPose, canonical_attitude, knife_edge_axes,
                           line_turns, multiplier_matrix, near_dependent, rest_pose, start_coms)
 from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
-__all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry"]
+__all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry", "Deferred"]
 
 
 # --------------------------------------------------------------------------
@@ -180,8 +185,79 @@ def _mass_matrix(m, I, R):
     return M
 
 
+def _accepted(a, p, L, m, g, I, com, R, lam, kkt):
+    """What :func:`_newton_batch`'s ends (com, R, lam, kkt of scenes with the
+    stacked arrays a, p, L, m, g, I; SI, world frame) give a rest pose, and
+    which pass the checks :func:`~bifilar.analysis.equilibrium.rest_pose`
+    applies to its Newton start's end (converged, every wire taut, full
+    rank, stable, a two-wire rig's CoM below its attachment line, not every
+    wire straight across), without the turn rule, which depends on where
+    Newton started.  A knife edge (CoM on the attachment line) rests
+    anywhere on a neutral circle, Newton's end there depends on rounding:
+    its canonical member is taken, as ``rest_pose`` does.  Returns R (turned
+    in place), d, w, G, |d|, tensions T, null space N, full rank, ok (B,)."""
+    axis = knife_edge_axes(p)
+    edge = np.all(np.isfinite(axis), axis=1)
+    if edge.any():
+        R[edge] = canonical_attitude(R[edge], axis[edge])
+    d, w, G = _jacobian(a, p, com, R)
+    dn = np.linalg.norm(d, axis=2)
+    T = lam * dn
+    ok = (kkt < 1e-9) & np.all(T > 1e-9 * (m * g)[:, None], axis=1)
+    # stability: reduced stiffness positive semi-definite (as rest_pose checks)
+    N, full = _null_space(G, m, I, R)
+    ok &= full
+    if G.shape[1] > MAX_ELIMINATION_WIRES:
+        # Newton's multipliers are the run's (rest_multipliers) only where its cut-off weighs every direction
+        # 1 to within 1e-12 (eigenvalue ratios above 1e3 x MIN_NORM_RCOND): the blend below goes to rest_pose
+        ok &= ~near_dependent(np.linalg.svd(G, compute_uv=False)) | np.all(
+            held_directions(np.linalg.eigvalsh(multiplier_matrix(m, I, R, G)), margin=1e3), axis=1)
+    if N.shape[2]:
+        Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
+        ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
+        ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
+    ok &= ~(np.abs(line_turns(p, R, edge_axes=axis)[0]) > LINE_TURN_TOL)
+    ok &= np.max(np.abs(d[..., 2]) / dn, axis=1) >= MIN_WIRE_SLOPE
+    return R, d, w, G, dn, T, N, full, ok
+
+
+#: largest turn (rad) of a scene's Newton end from the ``near`` pose of :func:`rest_poses` at which that end
+#: is taken (rest_pose's local start from a neighbour's pose allows the same: equilibrium._from_guess)
+NEAR_MAX_TURN = 0.05
+
+
+def _from_near(near: RestPose, which: np.ndarray, stacked, com, kkt, arrays) -> None:
+    """Newton from ``near``'s pose and multipliers for the scenes ``which``
+    (B,) bool of a batch (``stacked``: its a, p, L, m, g, I; ``com``, ``kkt``
+    and ``arrays`` = (R, d, w, G, |d|, T, N, full, ok) of
+    :func:`rest_poses`' first pass, overwritten in place for each scene
+    whose end passes :func:`_accepted`, turned from ``near`` by at most
+    :data:`NEAR_MAX_TURN` and from the start orientation by at most the
+    start box (``rest_pose``'s refusal beyond it is left to ``rest_pose``)."""
+    ii = np.nonzero(which)[0]
+    a, p, L, m, g, I = (x[ii] for x in stacked)
+    n = len(ii)
+    c0 = np.broadcast_to(np.asarray(near.com, float), (n, 3)).copy()
+    R0 = np.broadcast_to(np.asarray(near.R, float), (n, 3, 3)).copy()
+    lam0 = np.asarray(near.tensions, float) / np.linalg.norm(np.asarray(near.wire_vectors, float), axis=1)
+    if lam0.shape[0] != L.shape[1]:
+        return
+    c, R, lam, res = _newton_batch(a, p, L, m, g, c0, R0, np.broadcast_to(lam0, (n, len(lam0))).copy())
+    got = _accepted(a, p, L, m, g, I, c, R, lam, res)
+    acc = got[-1] & _within_turn(got[0] @ np.asarray(near.R, float).T, np.cos(NEAR_MAX_TURN / 2))
+    acc &= (got[0][:, 0, 0] + got[0][:, 1, 1] + got[0][:, 2, 2] - 1) / 2 >= np.cos(START_BOX)
+    if not acc.any():
+        return
+    jj = ii[acc]
+    com[jj], kkt[jj] = c[acc], res[acc]
+    for full_arr, part in zip(arrays[:-1], got[:-1]):
+        full_arr[jj] = part[acc]
+    arrays[-1][jj] = True
+
+
 def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | None = None, *,
-               errors: str = "raise", geometry: list | None = None) -> list:
+               errors: str = "raise", geometry: list | None = None,
+               near: RestPose | None = None, defer: bool = False) -> list:
     """Rest poses of many scenes (same number of wires), vectorised.
 
     Parameters
@@ -203,6 +279,25 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     ``geometry``: a list to which the batch's :class:`BatchGeometry` is
     appended (scenes of one wire count only), for :func:`modes_batch` of
     the same scenes and poses.
+
+    ``near``: the rest pose of a scene every scene is a small change of (a
+    sigma point's base, :mod:`bifilar.estimation.second_order`): a scene
+    whose Newton run from the start pose is not accepted (it ends turned by
+    more than 0.5 rad, or at a slack or unstable equilibrium: ~45 % of the
+    sigma points of tests/test_invert_roots.py's random rigs) gets a second
+    batched Newton run from ``near`` (:func:`_from_near`), its end taken
+    where it passes the same checks and is turned from ``near`` by at most
+    :data:`NEAR_MAX_TURN`; only the others go to :func:`rest_pose` (its
+    global search, ~5 ms a scene).  Where ``rest_pose`` reaches the
+    equilibrium on ``near``'s branch, the two ends agree to the KKT
+    tolerance (measured on the 444 such scenes of tests/test_invert_roots.py:
+    CoM <= 4.3e-16 m, each entry of R <= 1.6e-15, tensions <= 5e-16
+    relative; tests/test_sigma_rest.py).
+
+    ``defer``: a scene left to :func:`rest_pose` (or the elastic statics)
+    gets a :class:`Deferred` entry instead, whose :meth:`~Deferred.settle`
+    runs it: for a caller that may not need every such verdict (the
+    sigma points of a key whose other sigma point cannot hang).
     """
     scenes = list(scenes)
     if not scenes:
@@ -220,51 +315,28 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     gradV[:, 2] = m * g
     lam = -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)  # least squares, as _newton_kkt
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
-    # a knife edge (CoM on the attachment line) rests anywhere on a neutral circle; Newton's end
-    # there depends on rounding: take the canonical member, as rest_pose does
-    axis = knife_edge_axes(p)
-    edge = np.all(np.isfinite(axis), axis=1)
-    if edge.any():
-        R[edge] = canonical_attitude(R[edge], axis[edge])
-    d, w, G = _jacobian(a, p, com, R)
-    dn = np.linalg.norm(d, axis=2)
-    T = lam * dn
-    ok = (kkt < 1e-9) & np.all(T > 1e-9 * (m * g)[:, None], axis=1)
-    # stability: reduced stiffness positive semi-definite (as rest_pose checks)
-    N, full = _null_space(G, m, I, R)
-    ok &= full
-    if G.shape[1] > MAX_ELIMINATION_WIRES:
-        # Newton's multipliers are the run's (rest_multipliers) only where its cut-off weighs every direction
-        # 1 to within 1e-12 (eigenvalue ratios above 1e3 x MIN_NORM_RCOND): the blend below goes to rest_pose
-        ok &= ~near_dependent(np.linalg.svd(G, compute_uv=False)) | np.all(
-            held_directions(np.linalg.eigvalsh(multiplier_matrix(m, I, R, G)), margin=1e3), axis=1)
-    if N.shape[2]:
-        Kr = np.swapaxes(N, 1, 2) @ _hessian(d, w, lam) @ N
-        ev = np.linalg.eigvalsh(0.5 * (Kr + np.swapaxes(Kr, 1, 2)))
-        ok &= ~(ev[:, 0] < -1e-9 * np.maximum(np.abs(ev[:, -1]), 1e-300))
-    # the single path's acceptance rules for its Newton start (rest_pose's stage 2): a two-wire rig's CoM
-    # straight below its attachment line, a turn of at most NEWTON_START_MAX_TURN from the start orientation
-    # (inside the 90-degree box; farther, another stable equilibrium may be the one its global search finds),
-    # and not every wire straight across; a scene failing any goes to rest_pose, which turns it about the
-    # line, searches or refuses it
-    ok &= ~(np.abs(line_turns(p, R, edge_axes=axis)[0]) > LINE_TURN_TOL)
+    R, d, w, G, dn, T, N, full, ok = _accepted(a, p, L, m, g, I, com, R, lam, kkt)
+    # the single path's acceptance rule for its Newton start (rest_pose's stage 2) beside _accepted's: a turn of
+    # at most NEWTON_START_MAX_TURN from the start orientation (inside the 90-degree box; farther, another
+    # stable equilibrium may be the one its global search finds); a scene failing goes to rest_pose, which
+    # turns it about the line, searches or refuses it
     ok &= _within_turn(R, np.cos(NEWTON_START_MAX_TURN / 2))
-    ok &= np.max(np.abs(d[..., 2]) / dn, axis=1) >= MIN_WIRE_SLOPE
     # elastic wires (rig.stiffness): rest_pose's elastic statics; on 2-3 wires from this rigid pose where it is
     # rest_pose's (what rest_pose starts them from, without its search: session 18, ~2 ms a sigma point)
     stiff = np.array([s.stiffness is not None for s in scenes])
     from_rigid = ok & stiff & (G.shape[1] <= MAX_ELIMINATION_WIRES)
     ok &= ~stiff
+    if near is not None and not ok.all():
+        _from_near(near, ~ok & ~stiff, (a, p, L, m, g, I), com, kkt, (R, d, w, G, dn, T, N, full, ok))
     for k, s in enumerate(scenes):
         if out[k] is not None:
             continue
         if ok[k]:
             out[k] = _LazyDepthRest(s, com=com[k].copy(), R=R[k].copy(), tensions=T[k].copy(),
                                     wire_vectors=d[k].copy(), kkt_residual=float(kkt[k]))
-        elif from_rigid[k]:
-            out[k] = _rest_or_error(s, errors, (com[k].copy(), R[k].copy()))
         else:
-            out[k] = _rest_or_error(s, errors)
+            dk = Deferred(s, (com[k].copy(), R[k].copy()) if from_rigid[k] else None)
+            out[k] = dk if defer else dk.settle(errors)
     if geometry is not None:
         geometry.append(BatchGeometry(scenes, out, ok, (a, p, L, m, g, I), R, d, w, G, dn, N, full))
     return out
@@ -344,6 +416,19 @@ class _LazyDepthRest(RestPose):
 
     def __reduce__(self):
         return (_plain_rest, ({f: getattr(self, f) for f in RestPose.__dataclass_fields__},))
+
+
+class Deferred:
+    """A scene :func:`rest_poses` (``defer=True``) left to :func:`rest_pose`:
+    :meth:`settle` gives what its entry would have been."""
+
+    def __init__(self, scene: Scene, rigid=None):  # noqa: D107 - rigid: _rest_or_error's
+        self.scene, self.rigid = scene, rigid
+
+    def settle(self, errors: str = "raise"):
+        """The scene's :func:`rest_pose` (its elastic rest from the rigid pose
+        on 2-3 stiff wires), or its error with ``errors="return"``."""
+        return _rest_or_error(self.scene, errors, self.rigid)
 
 
 def _plain_rest(fields: dict) -> RestPose:

@@ -129,17 +129,22 @@ def _perturbed_scene(pb: Problem, h: int, scene, moves):
     return scene
 
 
-def _hanging_periods(scenes, rest, base_modes) -> list:
+def _hanging_periods(scenes, rest, base_modes, rests=None, geo=None) -> list:
     """(periods, scene, rest, modes, col) of each scene, ``col`` the index of
-    each of ``base_modes`` in its modes (MAC), rest poses from ``rest``
-    (global search where Newton fails); None where the scene cannot hang.
-    Batched engine."""
+    each of ``base_modes`` in its modes (MAC); rest poses by the batched
+    Newton from the start pose, where that is not accepted from ``rest``
+    (the base scene's pose: ``rest_poses``' ``near``), the global search
+    where neither is; None where the scene cannot hang.  Batched engine.
+    ``rests``, ``geo``: the scenes' rest poses (a pose, an exception, or
+    :data:`SKIPPED`: not needed, None here) and batch geometry if already
+    computed (:func:`_solve_points`)."""
     from ..analysis.batch import modes_batch, rest_poses
     from .montecarlo import _modes_or_none
 
-    geo: list = []  # the batch's final-pose arrays, handed to modes_batch (the same numbers, computed once)
-    rests = rest_poses(scenes, rest, errors="return", geometry=geo)
-    good = [q for q, r in enumerate(rests) if not isinstance(r, BaseException)]
+    if rests is None:
+        geo = []  # the batch's final-pose arrays, handed to modes_batch (the same numbers, computed once)
+        rests = rest_poses(scenes, rest, errors="return", geometry=geo, near=rest)
+    good = [q for q, r in enumerate(rests) if r is not SKIPPED and not isinstance(r, BaseException)]
     out: list = [None] * len(scenes)
     if not good:
         return out
@@ -152,6 +157,39 @@ def _hanging_periods(scenes, rest, base_modes) -> list:
         T = P[col] if P is not None else np.array([ms.modes[c].period or np.nan for c in col])
         out[q] = (T, scenes[q], rests[q], ms, col)
     return out
+
+
+#: a sigma point's rest pose :func:`_settle` did not decide: its point fails whatever it is
+SKIPPED = object()
+
+
+def _settle(points: dict, jobs: dict, rests: dict, res: dict) -> None:
+    """Decide the rest poses ``rest_poses(..., defer=True)`` left to
+    ``rest_pose`` (its global search, ~7 ms each), ``rests`` {hanging:
+    entries of ``jobs[hanging]``} in place, in the order of ``points``;
+    except that of a point already known to fail (a hanging of it cannot
+    hang, here or in ``res``, the cached results) or the other sigma point
+    of its input, ``(key, -s)`` of ``(key, s)``: :func:`second_order` fails
+    the input whichever that verdict is, so it is never read (:data:`SKIPPED`)."""
+    from ..analysis.batch_rest import Deferred
+
+    failed = {pid for pid, hits in res.items() if any(v is None for v in hits.values())}
+    pending = []
+    order = {pid: n for n, pid in enumerate(points)}
+    for h, rs in rests.items():
+        for q, ((pid, _, _), r) in enumerate(zip(jobs[h], rs)):
+            if isinstance(r, BaseException):
+                failed.add(pid)
+            elif isinstance(r, Deferred):
+                pending.append((order[pid], h, q, pid))
+    for _, h, q, pid in sorted(pending):
+        sib = (pid[0], -pid[1]) if len(pid) == 2 and pid[1] in (1, -1) and (pid[0], -pid[1]) in points else None
+        if pid in failed or sib in failed:
+            rests[h][q] = SKIPPED
+            continue
+        rests[h][q] = rests[h][q].settle("return")
+        if isinstance(rests[h][q], BaseException):
+            failed.add(pid)
 
 
 def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
@@ -203,7 +241,9 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
 def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -> dict:
     """Re-solved unknowns (P,) at each point {id: [(key, d), ...]} of moved
     inputs (:func:`_resolve`), None where a hanging cannot hang or a period
-    is lost; the perturbed scenes of each hanging in one batch."""
+    is lost; the perturbed scenes of each hanging in one batch, the rest
+    poses it leaves to the global search only where their verdict is read
+    (:func:`_settle`)."""
     jobs: dict[int, list] = {h: [] for h in range(len(pb.models))}
     res: dict = {pid: {} for pid in points}
     cache = ctx.cache
@@ -220,12 +260,22 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
                 res[pid][h] = cache[ck]
             else:
                 jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
+    from ..analysis.batch import rest_poses
+
+    rests, geos = {}, {}
     for h, jl in jobs.items():
         if jl:
-            for (pid, _, ck), o in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h])):
-                res[pid][h] = o
-                if ck is not None:
-                    cache[ck] = o
+            geos[h] = []
+            rests[h] = rest_poses([j[1] for j in jl], ctx.rests[h], errors="return", geometry=geos[h],
+                                  near=ctx.rests[h], defer=True)
+    _settle(points, jobs, rests, res)
+    for h, rs in rests.items():
+        jl = jobs[h]
+        for (pid, _, ck), o, r in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h], rs, geos[h]),
+                                      rs):
+            res[pid][h] = o
+            if ck is not None and r is not SKIPPED:
+                cache[ck] = o
     whole = {pid: hits for pid, hits in res.items() if all(v is not None for v in hits.values())}
     done = _one_step(pb, ctx, p_hat, r_hat, whole)
     return {pid: (done[pid] if pid in done else _resolve(pb, ctx, p_hat, r_hat, points[pid], hits))
