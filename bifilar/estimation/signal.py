@@ -284,7 +284,11 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     except (ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError) as exc:
         if not fallback:
             raise SignalError("signal", f"nonlinear fit failed: {exc}") from exc
-        cr = period_from_crossings(t, y)
+        try:
+            cr = period_from_crossings(t, y)
+        except SignalError as exc2:  # one line saying both
+            raise SignalError("signal", f"nonlinear fit failed ({exc}); crossing fallback refused: "
+                                        f"{exc2.message}") from exc
         fit = _from_crossings(cr, t, y, notes + [f"nonlinear fit failed ({exc}); period from crossings"])
     fit.oscillation = osc
     _require_fit(fit)
