@@ -122,3 +122,20 @@ def test_no_real_record_is_refused_for_lost_cycles():
             fpk = _spectral_peaks(*_spectrum(t, y), k=1)[0]
             worst = max(worst, (fpk - 1 / cp.period) * (tc.max() - tc.min()))
     assert 0.5 < worst < MAX_LOST_CYCLES
+
+
+def test_further_modes_follow_the_parameter_names():
+    """The one parameter layout (``signal_models.FURTHER_FROM``, used by the
+    model, its names, the harmonic term, the re-quantised copies and the
+    result's modes) agrees with the names table written out by hand: each
+    further damped cosine's ``a`` starts a block ``a<k>, b<k>, omega<k>,
+    sigma<k>``; a chirp's others follow its eight own parameters."""
+    from bifilar.estimation.signal_models import _NAMES, _names, further_modes
+
+    for kind, n in (("viscous", 6), ("quadratic", 7), ("chirp", 8), ("chirp", 16), ("two_mode", 10),
+                    ("three_mode", 14)):
+        names = _NAMES[kind] if kind != "chirp" else _names(kind, n)
+        starts = list(further_modes(kind, n))
+        expect = [i for i, nm in enumerate(names) if nm in ("a2", "a3", "a4")]
+        assert starts == expect, (kind, starts, expect)
+    assert list(further_modes("chirp", 16)) == [8, 12] and _names("chirp", 16)[8:12] == ("a2", "b2", "omega2", "sigma2")
