@@ -373,7 +373,7 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
         raise ValueError("non-finite period or std")
     if crossing_check:
         try:
-            fit.crossing = period_from_crossings(t, y)
+            fit.crossing = period_from_crossings(t, y, frequency=fit.frequency)  # the fit counts the cycles
             cr = fit.crossing
             comb = math.hypot(cr.std, fit.std)
             if np.isfinite(comb) and abs(cr.period - fit.period) > 4 * comb:
