@@ -78,6 +78,24 @@ def test_std_below_the_limits_unless_the_record_shows_a_drift(kth):
     assert within >= 29
 
 
+def test_period_increases_with_radius(kth):
+    """I = I_platform + m r^2 grows with the test mass's radius r, so the
+    torsion period must increase monotonically along each series; every fit
+    explains over 99 % of the variance and carries the ~2 s swing the laser
+    dot also sees among its other modes.  (Moved from test_signal.py, which
+    fitted all 33 records a second time; the files hold only the x, y
+    pixels, x read by default.)"""
+    meta = read_signal(KTH / "10s" / "0.50.csv", sample_rate=240)[2]
+    assert meta["columns"] == ["x", "y"] and meta["column"] == "x"
+    for s in SERIES:
+        periods = [kth[s, r][0].period for r in RADII]
+        assert np.all(np.diff(periods) > 0), (s, np.round(periods, 5))
+        for r in RADII:
+            fit = kth[s, r][0]
+            assert fit.r_squared > 0.99, (s, r)
+            assert any(1.8 < m["period"] < 2.2 for m in fit.modes[1:]), (s, r)
+
+
 def test_series_differences_follow_the_amplitude(kth):
     """The 10 s and 20 s periods of a position differ (beyond their stds at
     some positions) because the recordings have different amplitudes: a

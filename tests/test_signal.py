@@ -27,8 +27,6 @@ from bifilar.estimation.signal import (
     read_signal,
 )
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-
 
 def damped(t, T=1.3, zeta=0.01, A=1.0, phi=0.3, c0=0.5, c1=0.01, tm=10.0):
     """Viscous damped cosine with damped period T (s) plus offset and drift."""
@@ -400,26 +398,5 @@ def test_reader_errors_name_the_field(tmp_path, case, field, fragment):
 # real recordings (skipped when ../shared/data is absent)
 # ---------------------------------------------------------------------------
 
-KTH = DATA / "trifilar-kth-2014"
-RADII = (0.25, 0.30, 0.35, 0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75)
-
-
-# the gyro trial's read and fit: tests/test_period_real.py (one CLI run for three tests' checks)
-
-
-@pytest.mark.parametrize("series", ["5s", "10s", "20s"])
-def test_real_trifilar_period_increases_with_radius(series):
-    if not KTH.exists():
-        pytest.skip(f"real data not found at {KTH}")
-    periods = []
-    for r in RADII:
-        path = KTH / series / f"{r:.2f}.csv"
-        t, y, meta = read_signal(path, sample_rate=240)  # files hold only x, y pixels
-        assert meta["columns"] == ["x", "y"] and meta["column"] == "x"
-        # the laser dot also carries a ~2 s swing mode: two_mode separates it
-        fit = fit_period(t, y, model="two_mode", crossing_check=False, split_check=False)
-        assert fit.r_squared > 0.99
-        assert 1.8 < fit.modes[1]["period"] < 2.2  # the swing mode
-        periods.append(fit.period)
-    # I = I_platform + m r^2 grows with r, so T must increase monotonically
-    assert np.all(np.diff(periods) > 0), np.round(periods, 5)
+# the KTH series' period against the radius, and the gyro trial's read and
+# fit: tests/test_period_real.py (one fit per record for all its checks)

@@ -284,7 +284,11 @@ def fit_period(t, y, model: str = "viscous", *, trim: str | None = None, trim_k:
     except (ValueError, RuntimeError, np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError) as exc:
         if not fallback:
             raise SignalError("signal", f"nonlinear fit failed: {exc}") from exc
-        cr = period_from_crossings(t, y)
+        try:
+            cr = period_from_crossings(t, y)
+        except SignalError as exc2:  # one line saying both
+            raise SignalError("signal", f"nonlinear fit failed ({exc}); crossing fallback refused: "
+                                        f"{exc2.message}") from exc
         fit = _from_crossings(cr, t, y, notes + [f"nonlinear fit failed ({exc}); period from crossings"])
     fit.oscillation = osc
     _require_fit(fit)
@@ -369,7 +373,7 @@ def _fit_period(t, y, model, trim, trim_k, drift, freq_guess, candidates, criter
         raise ValueError("non-finite period or std")
     if crossing_check:
         try:
-            fit.crossing = period_from_crossings(t, y)
+            fit.crossing = period_from_crossings(t, y, frequency=fit.frequency)  # the fit counts the cycles
             cr = fit.crossing
             comb = math.hypot(cr.std, fit.std)
             if np.isfinite(comb) and abs(cr.period - fit.period) > 4 * comb:

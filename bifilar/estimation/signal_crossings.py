@@ -10,7 +10,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .signal_io import SignalError, _validate, _window
-from .signal_models import _noise_sigma
+from .signal_models import _noise_sigma, _spectral_peaks, _spectrum
+
+#: the crossings may count at most this many cycles fewer, over their span,
+#: than the record's strongest spectral peak: more are cycles lost inside
+#: the hysteresis band (:func:`_require_cycles_counted`)
+MAX_LOST_CYCLES = 1.0
 
 @dataclass
 class CrossingPeriod:
@@ -101,8 +106,41 @@ def _merge_glitches(t, spans):
     return out
 
 
+def _require_cycles_counted(t, y, period: float, t_cross, h: float, frequency: float | None = None):
+    """Refuse (``SignalError`` on ``signal``) crossings that time a multiple
+    of the period: cycles whose swing stays inside the hysteresis band (half-
+    width ``h``, [y]) make no crossings, and when they are half the
+    same-direction intervals or more, the median interval that numbers the
+    cycles is two or three periods, so two or three cycles count as one
+    (a 1 s sine losing two-thirds of its cycles: 3.16 +- 0.18 s).  An
+    independent frequency (Hz) counts the cycles: ``frequency`` where given
+    (the fit's, when the crossings cross-check it), else the strongest
+    spectral peak of the window (``t`` s, ``y`` [y];
+    :func:`.signal_models._spectral_peaks`, which sees a cycle under the
+    band).  Over the crossings' span (``t_cross``, s) the crossings'
+    ``period`` (s) may give at most ``MAX_LOST_CYCLES`` fewer cycles than
+    it.  Only fewer: crossings counting more cycles time a faster
+    oscillation beside it (a second mode of comparable amplitude), which the
+    fit's cross-check notes."""
+    what = "the fit's frequency"
+    if frequency is None:
+        peaks = _spectral_peaks(*_spectrum(t, y), k=1)
+        frequency = peaks[0] if peaks else math.nan
+        what = "the record's spectral peak"
+    if not period > 0 or not frequency > 0:
+        return
+    span = float(np.max(t_cross) - np.min(t_cross))
+    lost = (frequency - 1.0 / period) * span
+    if lost > MAX_LOST_CYCLES:
+        raise SignalError("signal", f"the crossings count {span / period:.1f} cycles in {span:.4g} s (period "
+                                    f"{period:.4g} s) where {what} at {frequency:.4g} Hz has "
+                                    f"{span * frequency:.1f}: cycles lost inside the hysteresis band +-{h:.3g} "
+                                    "about the level; no period from crossings")
+
+
 def period_from_crossings(t, y, level: float | None = None, hysteresis: float | None = None,
-                          t_start: float | None = None, t_stop: float | None = None) -> CrossingPeriod:
+                          t_start: float | None = None, t_stop: float | None = None,
+                          frequency: float | None = None) -> CrossingPeriod:
     """Period from successive same-direction crossings of the mean level.
 
     Parameters
@@ -119,6 +157,10 @@ def period_from_crossings(t, y, level: float | None = None, hysteresis: float | 
         so noise near the level does not create spurious crossings.
     t_start, t_stop : float, optional
         Analysis window, s.
+    frequency : float, optional
+        Hz, an independent estimate of the oscillation's frequency that
+        counts its cycles (the fit's); default the window's strongest
+        spectral peak.
 
     Returns
     -------
@@ -128,7 +170,10 @@ def period_from_crossings(t, y, level: float | None = None, hysteresis: float | 
     Raises
     ------
     SignalError
-        ``signal`` if fewer than two full periods are found.
+        ``signal`` if fewer than two full periods are found, or if the
+        crossings count more than ``MAX_LOST_CYCLES`` cycles fewer than
+        ``frequency`` (or the spectral peak) over their span (cycles lost inside the
+        hysteresis band: :func:`_require_cycles_counted`).
     """
     t, y = _validate(t, y)
     t, y = _window(t, y, t_start, t_stop)
@@ -170,6 +215,7 @@ def period_from_crossings(t, y, level: float | None = None, hysteresis: float | 
         std = float(math.sqrt(cov[1, 1]))
     else:
         std = float("nan")
+    _require_cycles_counted(t, y, float(coef[1]), t_all, h, frequency)
     return CrossingPeriod(
         period=float(coef[1]), std=std, mean_period=float(periods.mean()),
         scatter=float(periods.std(ddof=1)), n_periods=int(periods.size), level=lvl,

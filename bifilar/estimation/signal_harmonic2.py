@@ -34,10 +34,8 @@ import math
 
 import numpy as np
 
-from .signal_models import THIRD_MODE_BAND, _model
+from .signal_models import THIRD_MODE_BAND, _model, further_modes
 from .signal_result import PeriodFit
-
-FIRST_FURTHER = {"two_mode": 6, "three_mode": 6, "chirp": 8}  # index of the 2nd mode's first parameter
 
 
 def second_harmonic_term(fit: PeriodFit) -> float:
@@ -46,9 +44,8 @@ def second_harmonic_term(fit: PeriodFit) -> float:
     largest bias estimate (s) over the further modes whose 2nd harmonic
     lies near the dominant frequency; 0 when there is none.  Records it in
     ``fit.uncertainty["second_harmonic_fit"]`` and a note."""
-    first = FIRST_FURTHER.get(getattr(fit, "_kind", ""))
     p, t, r = fit.params, fit.t_used, fit.residuals
-    if first is None or p is None or t is None or r is None or p.size <= first:
+    if p is None or t is None or r is None or not further_modes(getattr(fit, "_kind", ""), p.size):
         return 0.0
     w1 = abs(float(p[4]))
     free = np.diag(fit.covariance) > 0
@@ -58,7 +55,7 @@ def second_harmonic_term(fit: PeriodFit) -> float:
     iw = int(np.sum(free[:4]))  # omega1's column among the free ones
     tau = t - fit.t0
     best, found = 0.0, None
-    for k in range(first, p.size, 4):
+    for k in further_modes(fit._kind, p.size):
         wh, sh = 2.0 * abs(float(p[k + 2])), 2.0 * float(p[k + 3])
         if not abs(wh - w1) <= THIRD_MODE_BAND * w1:
             continue

@@ -87,6 +87,20 @@ def _lag1(r) -> float:
 # (a, b) with A cos(w tau + phi) = a cos(w tau) + b sin(w tau), i.e.
 # A = hypot(a, b), phi = atan2(-b, a).
 
+#: the parameter layout of every model: (c0, c1) the line at 0 and 1, the
+#: first (dominant) oscillation's parameters from 2 (_NAMES), then further
+#: damped cosines (a, b, omega, sigma), 4 each, from this index on; a kind
+#: not listed has none
+FURTHER_FROM = {"two_mode": 6, "three_mode": 6, "chirp": 8}
+
+
+def further_modes(kind: str, n: int) -> range:
+    """Index of each further damped cosine's ``a`` (its ``a, b, omega,
+    sigma`` at ``i .. i + 3``) among the ``n`` parameters of a ``kind``
+    model (:data:`FURTHER_FROM`); empty for a kind without any."""
+    return range(FURTHER_FROM.get(kind, n), n, 4)
+
+
 _NAMES = {
     "viscous": ("c0", "c1", "a", "b", "omega_d", "sigma"),
     "quadratic": ("c0", "c1", "a", "b", "omega", "kappa", "sigma"),
@@ -134,11 +148,8 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
         J[:, 0] = 1.0
         J[:, 1] = s
     y = p[0] + p[1] * s
-    if kind == "viscous":
+    if kind in ("viscous", "two_mode", "three_mode"):
         y = y + _damped(p[2], p[3], p[4], p[5], tau, J, 2)
-    elif kind in ("two_mode", "three_mode"):
-        for col in range(2, len(p), 4):
-            y = y + _damped(p[col], p[col + 1], p[col + 2], p[col + 3], tau, J, col)
     elif kind == "quadratic":
         a, b, w, kap, sg = p[2:7]
         E, dE = _E(sg, tau)
@@ -173,12 +184,12 @@ def _model(kind: str, p, t, t0, tm, want_jac=False):
             J[:, 5] = -tau * e * osc + dth * (beta * 2.0 * dE2 + beta2 * 4.0 * dE4)
             J[:, 6] = dth * E2
             J[:, 7] = dth * E4
-        # other oscillations the record carries (a coupled swing the
-        # release excites), plain damped cosines: (a, b, omega, sigma) each
-        for col in range(8, len(p), 4):
-            y = y + _damped(p[col], p[col + 1], p[col + 2], p[col + 3], tau, J, col)
     else:  # pragma: no cover - guarded by fit_period
         raise ValueError(kind)
+    # further modes, and the other oscillations a chirp's record carries (a
+    # coupled swing the release excites): plain damped cosines
+    for col in further_modes(kind, len(p)):
+        y = y + _damped(p[col], p[col + 1], p[col + 2], p[col + 3], tau, J, col)
     return (y, J) if want_jac else y
 
 
@@ -187,7 +198,8 @@ def _names(kind: str, n: int) -> tuple:
     ``chirp`` may carry other oscillations after its eight)."""
     names = _NAMES[kind]
     if kind == "chirp":
-        names = names + tuple(f"{nm}{k}" for k in range(2, 2 + (n - 8) // 4) for nm in ("a", "b", "omega", "sigma"))
+        names = names + tuple(f"{nm}{k}" for k in range(2, 2 + len(further_modes(kind, n)))
+                              for nm in ("a", "b", "omega", "sigma"))
     return names
 
 

@@ -14,7 +14,7 @@ from scipy import stats
 
 from .signal_checks import quantisation_levels
 from .signal_io import SignalError
-from .signal_models import _model
+from .signal_models import _model, further_modes
 from .signal_result import PeriodFit
 from .signal_windows import _KIND, _fit_window
 
@@ -32,9 +32,7 @@ def _turned(p, kind: str, dphi: float) -> np.ndarray:
     """Parameters ``p`` of a ``kind`` model with every oscillation's phase
     advanced by ``dphi`` (rad): each ``(a, b)`` pair turned."""
     pb = np.array(p, dtype=float)
-    pairs = range(2, pb.size, 4) if kind in ("viscous", "two_mode", "three_mode") else \
-        [2] + list(range(8, pb.size, 4)) if kind == "chirp" else [2]
-    for i in pairs:
+    for i in [2, *further_modes(kind, pb.size)]:
         a, b = pb[i], pb[i + 1]
         pb[i], pb[i + 1] = a * math.cos(dphi) - b * math.sin(dphi), a * math.sin(dphi) + b * math.cos(dphi)
     return pb

@@ -13,7 +13,7 @@ import numpy as np
 
 from .signal_checks import LB_ALPHA, ljung_box, serial_factor
 from .signal_crossings import CrossingPeriod
-from .signal_models import _Raw, _names, _envelope, _lag1, _mode_rank, _model, _noise_sigma
+from .signal_models import _Raw, _names, _envelope, _lag1, _mode_rank, _model, _noise_sigma, further_modes
 
 # ---------------------------------------------------------------------------
 # result
@@ -377,7 +377,7 @@ def _build(raw: _Raw, t, y, model_name: str, notes: list[str]) -> PeriodFit:
         if white and not roundoff:
             sd_w = max(sd_w, _hc_lin_std(raw, covf, s2, r, dof, grad))
         modes = [mode(2, 3, 4, 5, w=w + beta * u + beta2 * u * u, sd_w=sd_w)]
-        modes += [mode(i, i + 1, i + 2, i + 3) for i in range(8, p.size, 4)]  # other oscillations
+        modes += [mode(i, i + 1, i + 2, i + 3) for i in further_modes(raw.kind, p.size)]  # other oscillations
         m = modes[0]
         bstd = _std(cov, 6) * infl
         damping = {"sigma": m["sigma"], "sigma_std": m["sigma_std"],
