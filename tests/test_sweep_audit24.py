@@ -9,6 +9,11 @@ builds them; each answer worked out from the documented rule.
 
 from __future__ import annotations
 
+import math
+from pathlib import Path
+
+import pytest
+
 from bifilar.studies import sweep as sw
 from bifilar.studies.ranking import binding_constraint
 
@@ -45,3 +50,40 @@ def test_a_point_meeting_every_limit_without_a_component_is_named():
     assert rec["best"] is None and rec["n_feasible"] == 1 and rec["reason"] == msg
     flag, msg = binding_constraint(pts[::2], c, None, ["Ixx", "Iyy", "Izz"])
     assert msg == "no configuration meets --min-separation 0.02: the best mode separation found is 0.0118", msg
+
+
+DATA = Path(__file__).parent / "data" / "audit24"
+
+
+def test_shares_are_of_the_printed_sigma_where_it_is_second_order():
+    """Row S13: a 1 kg bifilar, wires 1 m and 0.2 m apart, the CoM 1 cm
+    below the attachments (std 2 mm: the body tilts up to ~0.2 rad).  Izz
+    from the torsion, I = m g r^2 T^2 / (4 pi^2 L) (vertical wires; Jardin &
+    Mueller 2009, eq. 1): the linear relative variance by hand is
+    (0.1 %)^2 mass + 2 (0.5 x 1 mm / 1 m)^2 lengths + 4 (1 mm / (2 x 0.1 m))^2
+    anchors and attachments + (2 x 1 ms / T)^2 timing, the anchors' part
+    2 x (5e-3)^2 = 5e-5.  The printed sigma is the second-order one (invert's
+    std, about 2x the linear: the tilt the CoM's y error gives); the shares
+    must be of it: anchors 5e-5 / rel_sigma^2 (0.124), the rest of the
+    linear terms likewise, and ``second_order`` the remainder (0.75).  Before,
+    the shares were the linear budget's alone (anchors 0.49, none second
+    order) and the recommendation said "its variance is 45 % anchors" of a
+    sigma three quarters of which no input's linear term makes."""
+    from bifilar.config import read_yaml
+    from bifilar.studies.recommend import explain
+
+    path = str(DATA / "c13_shallow.yaml")
+    cfg = read_yaml(path)
+    st = sw.resolve_settings(cfg, tensions=False, components=["Izz"])
+    p = sw.evaluate_point(cfg, path, {}, st)
+    e = p["components"]["Izz"]
+    rel = e["rel_sigma"]
+    T = e["period"]
+    lin = 1e-6 + 2 * (0.5e-3) ** 2 + 4 * (5e-3) ** 2 + (2e-3 / T) ** 2
+    assert rel > 1.5 * math.sqrt(lin), (rel, math.sqrt(lin))  # the case: second order matters
+    sh = e["shares"]
+    assert sh["anchors"] == pytest.approx(2 * (5e-3) ** 2 / rel ** 2, rel=1e-3), sh
+    assert sh["attachments"] == pytest.approx(2 * (5e-3) ** 2 / rel ** 2, rel=1e-3), sh
+    assert sh["second_order"] == pytest.approx(1 - lin / rel ** 2, rel=1e-3), sh
+    assert sum(sh.values()) == pytest.approx(1.0, abs=1e-12)
+    assert "its variance is 75 % second-order terms" in explain(p, sw.Constraints(), "Izz")[1]
