@@ -87,3 +87,27 @@ def test_shares_are_of_the_printed_sigma_where_it_is_second_order():
     assert sh["second_order"] == pytest.approx(1 - lin / rel ** 2, rel=1e-3), sh
     assert sum(sh.values()) == pytest.approx(1.0, abs=1e-12)
     assert "its variance is 75 % second-order terms" in explain(p, sw.Constraints(), "Izz")[1]
+
+
+def test_a_slack_wire_of_an_elastic_four_wire_rig_is_refused_not_an_internal_error():
+    """c07t: four vertical wires with EA 20 kN, the CoM 4 cm off towards
+    wire 2, wire 4 1.3 mm long, and an uncertainty block (so the refusal
+    asks whether the slack lies within the inputs' uncertainty: the rest
+    pose of the rig without wire 4).  That rig kept its four-wire stiffness
+    against three wires: `modes` and `invert` exited 1 ("internal error
+    (ValueError: operands could not be broadcast ...)"), a sweep point's
+    reason was the same text.  Now exit 2, one line naming rig.lengths and
+    wire 4, with the words that its slack lies within the uncertainty (the
+    gap against the std both printed: the gap must be the smaller)."""
+    import re
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    r = CliRunner().invoke(main, ["modes", str(DATA / "c07t.yaml"), "--json"])
+    err = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and r.stdout == "" and len(err) == 1, (r.exit_code, r.stderr)
+    assert err[0].startswith("error: rig.lengths: wire 4 is slack at rest by "), err
+    m = re.search(r"wire 4's ([\d.]+) mm against a standard uncertainty of ([\d.]+) mm", err[0])
+    assert m and 0 < float(m.group(1)) < 3 * float(m.group(2)), err
