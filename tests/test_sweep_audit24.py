@@ -111,3 +111,45 @@ def test_a_slack_wire_of_an_elastic_four_wire_rig_is_refused_not_an_internal_err
     assert err[0].startswith("error: rig.lengths: wire 4 is slack at rest by "), err
     m = re.search(r"wire 4's ([\d.]+) mm against a standard uncertainty of ([\d.]+) mm", err[0])
     assert m and 0 < float(m.group(1)) < 3 * float(m.group(2)), err
+
+
+def test_the_elastic_rest_from_a_start_where_every_wire_is_slack():
+    """A sigma point of `invert` on a drawn four-wire rig with EA 20 kN
+    (c07 drawn with the default input stds, `--amplitude 0`): its elastic
+    rest pose started from a neighbour's pose 1.06 m below the anchors
+    (every 1.2 m wire slack by ~0.15 m) and a half turn; the start's shift
+    (0.3 mm) left every wire slack, the Newton Hessian was 0 and
+    `np.linalg.solve` raised "Singular matrix" (exit 1, internal error).
+    Now the step goes straight down past the largest slack.  Checked against
+    the pose from the rigid rest (the independent start) and the force and
+    moment balance of the printed tensions (to 1e-9 N and N m, the weight
+    19.6 N)."""
+    import numpy as np
+
+    from bifilar.analysis.elastic_rest import elastic_rest, elastic_rest_pose
+    from bifilar.config import scene_from_dict
+
+    cfg = {"body": {"mass": 1.9972364571935657, "inertia": {"principal": [0.03, 0.03, 0.06]}},
+           "rig": {"anchors": [[0.20128401601248422, 0.2001056811354616, 1.1987682115928584],
+                               [-0.2004639504339187, 0.20150619853521762, 1.1997329346509191],
+                               [-0.20182645883866113, -0.2003632313286665, 1.1992046032130204],
+                               [0.20022360055105878, -0.20009184532757987, 1.198159680276484]],
+                   "attachments": [[0.1985206366662088, 0.19875563612938843, 0.011701775742874435],
+                                   [-0.20130907102211376, 0.19970572665889583, 0.011798997233305837],
+                                   [-0.2008373888583764, -0.20057046663788916, 0.007867957646714987],
+                                   [0.19966458861407804, -0.20064916017492632, 0.010296586503443384]],
+                   "lengths": [1.1999839307996232, 1.1984126301178566, 1.199560817042567, 1.1975147398153339],
+                   "stiffness": 20000}}
+    scene = scene_from_dict(cfg, warn=False)
+    c0 = [-0.06327796379126034, 0.0629924080528484, 0.13535704717697813]
+    R0 = [[-0.9939960076404915, -0.0074606374538815105, 0.10916169512949725],
+          [-0.006226465862648822, -0.9921990497068796, -0.12450813982879368],
+          [0.10923904026319911, -0.1244402854767977, 0.986195440788908]]
+    c, R, T, _ = elastic_rest(scene, scene.stiffness, c0, R0)
+    ref = elastic_rest_pose(scene, None)
+    assert np.allclose(c, ref.com, atol=1e-9) and np.allclose(R, ref.R, atol=1e-9), (c, ref.com)
+    d = scene.anchors - (c + scene.attachments @ R.T)
+    f = T[:, None] * d / np.linalg.norm(d, axis=1)[:, None]
+    assert np.all(T > 0)
+    assert np.abs(f.sum(0) - [0.0, 0.0, scene.mass * scene.gravity]).max() < 1e-9
+    assert np.abs(np.cross(scene.attachments @ R.T, f).sum(0)).max() < 1e-9
