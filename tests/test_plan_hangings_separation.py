@@ -93,21 +93,20 @@ def test_plan_hangings_times_only_separated_modes(tmp_path):
     code, out, err = run("invert", "--measurements", wm, "--json")
     assert code == 0, err
     assert sorted(json.loads(out)["inertia"]) == ["Ixx", "Iyy", "Izz"]
+    _ranked_by_the_multi_hanging_plan(doc)
 
 
-def test_plan_hangings_ranks_by_the_multi_hanging_plan():
+def _ranked_by_the_multi_hanging_plan(doc):
     """The points are ranked by the plan that is timed: the multi-hanging
     plan at the planned point is at least as accurate as at every point of
     the coarse grid (9 points over the range), where the planned hanging's
     own (swing) figures picked spacing 0.8, whose hangings plan is 1.7x
-    worse (0.41 % against 0.23 %)."""
+    worse (0.41 % against 0.23 %).  (Its own test before session 24, the
+    same `plan` run made a second time: audit24 took it out for its tests.)"""
     from bifilar.config import read_yaml
     from bifilar.studies import sweep as sw
     from bifilar.studies.hangings import hangings_objective
 
-    code, out, err = run("plan", *ARGS, "--param", "spacing=0.8:1.6", "--hangings", "--json")
-    assert code == 0, err
-    doc = json.loads(out)
     worst = max(a["rel_sigma"] for a in doc["multi_hanging"]["accuracy"].values())  # --no-tensions: small amplitude
     assert doc["optimum"]["hangings_objective"] == pytest.approx(worst, rel=1e-9)
     cfg = read_yaml(KTH)

@@ -122,9 +122,14 @@ def elastic_rest(scene: Scene, ea, com0: np.ndarray, R0: np.ndarray, iters: int 
             - np.einsum("i,ij,ik->jk", lam, Gn, Gn)
         H = 0.5 * (H + H.T)
         ev = np.linalg.eigvalsh(H)
-        if ev[0] <= 1e-12 * ev[-1]:  # not convex here (a wire slack, a neutral turn): shift to a descent step
-            H = H + (1e-12 * ev[-1] - ev[0]) * np.eye(6)
-        x = -np.linalg.solve(H, g)
+        if ev[-1] <= 0.0:  # no wire taut (a step from a pose that overloads one wire lands above every length;
+            # H = 0: the potential is W z there): straight down by the largest slack and the start's stretch
+            # (a sigma point of four elastic wires, audit24: LinAlgError "Singular matrix", exit 1)
+            x = np.array([0.0, 0.0, -(float(np.max(L - ln)) + (W / scene.n_wires) / float(np.min(k))), 0.0, 0.0, 0.0])
+        else:
+            if ev[0] <= 1e-12 * ev[-1]:  # not convex here (a wire slack, a neutral turn): shift to a descent step
+                H = H + (1e-12 * ev[-1] - ev[0]) * np.eye(6)
+            x = -np.linalg.solve(H, g)
         if np.max(np.abs(x) * xscale) < 1e-13 and np.max(np.abs(g * scale)) < 1e-12:
             break  # the step is rounding (the bifilar's floor 1.3e-14 of the weight sat above the 1e-14 aim: 60
             # rounding-sized steps, 20-50 ms, before session 18); nearly dependent wires take tiny steps at 1e-10

@@ -439,13 +439,33 @@ def inertia_budget(sens: Sensitivity, scene: Scene, component: str, mode_index: 
     return Budget(component, sens.modes.modes[k].label, float(np.sqrt(var)), contrib, shares, float(1 / sI), float(rel))
 
 
-def grouped_shares(b: Budget) -> dict:
-    """Variance shares grouped by kind: timing, lengths, anchors, attachments, mass, com, other."""
+def grouped_shares(b: Budget, sigma: float | None = None, linear_var: float | None = None) -> dict:
+    """Variance shares grouped by kind: timing, lengths, anchors, attachments, mass, com, other.
+
+    ``sigma`` (kg m^2): the std the shares are of, where it is not the
+    linear budget's (the second-order std invert prints, ``linear_var`` the
+    linear budget's variance, kg^2 m^4 (default: of ``b.contributions``)).
+    Where ``sigma`` exceeds the linear std by more than
+    :data:`~bifilar.estimation.second_order.LINEAR_ENOUGH` the linear shares
+    are scaled to the linear variance's part of ``sigma^2`` and the rest is
+    the group ``second_order`` (a 1 cm deep CoM's tilt from its 2 mm std:
+    75 % of a bifilar's Izz variance, none of it in the linear shares;
+    docs/design.md, "Sweep and plan audit, session 24")."""
     out: dict[str, float] = {}
     for name, sh in b.shares.items():
         head = name.split(".")[0]
         key = {"length": "lengths", "anchor": "anchors", "attachment": "attachments"}.get(head, head)
         out[key] = out.get(key, 0.0) + sh
+    if sigma is None or not np.isfinite(sigma) or sigma <= 0:
+        return out
+    from .second_order import LINEAR_ENOUGH
+
+    lin = sum(float(c) ** 2 for c in b.contributions.values()) if linear_var is None else float(linear_var)
+    if sigma * sigma <= lin * (1.0 + LINEAR_ENOUGH) ** 2:
+        return out
+    part = lin / (sigma * sigma)
+    out = {k: v * part for k, v in out.items()}
+    out["second_order"] = 1.0 - part
     return out
 
 

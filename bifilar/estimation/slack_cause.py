@@ -29,10 +29,13 @@ WITHIN_Z = 3.0
 
 
 def _without(scene: Scene, idx) -> Scene:
-    """``scene`` without wires ``idx`` (0-based)."""
+    """``scene`` without wires ``idx`` (0-based), each per-wire field cut
+    alike (the stiffness too: an elastic rig's (n,) EA against n - 1 wires
+    was an internal error, audit24)."""
     keep = [i for i in range(scene.n_wires) if i not in set(idx)]
+    ea = None if scene.stiffness is None else np.asarray(scene.stiffness)[keep]
     return scene_with(scene, anchors=scene.anchors[keep], attachments=scene.attachments[keep],
-                      lengths=scene.lengths[keep])
+                      lengths=scene.lengths[keep], stiffness=ea)
 
 
 def slack_gaps(scene: Scene, idx, rest=None) -> tuple[np.ndarray, object]:

@@ -578,7 +578,7 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             sigma=b.value_sigma, rel_sigma=b.value_sigma / scale if scale else math.inf,
             rel_sensitivity_period=b.rel_sensitivity,
             dlnI_dx={n: v / scale for n, v in dI_dx.items()} if scale else dI_dx,
-            shares=grouped_shares(b), separation=sep,
+            shares=grouped_shares(b, b.value_sigma), separation=sep,
             axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
         )
         entry.update(physical_limits(scene.inertia, comp, b))

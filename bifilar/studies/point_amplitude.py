@@ -395,8 +395,10 @@ def _stated_amplitude(res: dict, pre: "_Prepared", sims: dict, st: SweepSettings
             info["note"] = ("no dr/dx measured for " + ", ".join(measured[k][1]) + ": their terms take the factor "
                             "to depend on them as on the unknown")
         scale = component_scale(pre.scene.inertia, comp)
+        # the linear terms' variance: the small-amplitude budget's second-order excess is carried unchanged
+        lin_var = sd * sd - (b.value_sigma ** 2 - sum(float(c) ** 2 for c in b.contributions.values()))
         e.update(sigma=sd, rel_sigma=sd / scale if scale else math.inf,
-                 shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity)))
+                 shares=grouped_shares(Budget(comp, b.mode, sd, {}, shares, b.dI_dT, b.rel_sensitivity), sd, lin_var))
         e.pop("physical_limit", None)
         e.update(physical_limits(pre.scene.inertia, comp, Budget(comp, b.mode, sd, {"timing": c_t}, shares,
                                                                  b.dI_dT, b.rel_sensitivity),

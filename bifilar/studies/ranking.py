@@ -307,7 +307,30 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
     others = [CONSTRAINT_FLAGS[n] for n in names if n != best]
     if others:
         msg += f" (also limiting: {', '.join(others)})"
-    return flag, msg
+    return flag, _unmeasured_feasible(msg, valid, c, target, among)
+
+
+def _unmeasured_feasible(msg: str, valid: list[dict], c: Constraints, target: str | None, among) -> str:
+    """The clause a binding-limit message needs where some valid point meets
+    every limit but has no sigma for a component the objective asks for (a
+    vertical bifilar's Iyy, measurable only where the wires lean: a light
+    part's Iyy from a swing at +- 944 %, every such point 0.3-1.2 % from
+    another mode, docs/design.md "Sweep and plan audit, session 24"): the
+    limit alone does not leave "no configuration" then.  ``msg`` (the binding
+    limit's line) is returned with "configuration" narrowed to those that
+    measure the components, and which points meet every limit without them
+    and what to do; unchanged where no point does."""
+    sel = [target] if target else list(among if among is not None else point_components(valid))
+    meet = [p for p in valid if not violations(p, c, target)]
+    miss: list[str] = []
+    for p in meet:
+        miss += [k for k in sel if k in p["components"] and rel_sigma(p["components"][k]) is None and k not in miss]
+    if not meet or not miss:
+        return msg
+    at = ", ".join(f"{k} = {v:.6g}" for k, v in meet[0].get("params", {}).items())
+    return (msg.replace("configuration", f"configuration that measures {', '.join(sel)}", 1)
+            + f"; {len(meet)} point(s) meet every limit but give no uncertainty for {', '.join(miss)}"
+            + (f" (e.g. at {at})" if at else "") + f": leave {', '.join(miss)} out of --component, or add --hangings")
 
 
 def pareto_front(points: list[dict], target: str | None, among=None) -> list[int]:

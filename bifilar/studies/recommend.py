@@ -178,7 +178,9 @@ def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str
                  f"{worst} +- {100 * e['rel_sigma']:.3g} % (from the {e['mode']} mode)")
     if e.get("shares"):
         top = max(e["shares"], key=e["shares"].get)
-        lines.append(f"its variance is {100 * e['shares'][top]:.0f} % {top}")
+        what = ("second-order terms (inputs whose effect is not linear over their uncertainty)"
+                if top == "second_order" else top)
+        lines.append(f"its variance is {100 * e['shares'][top]:.0f} % {what}")
     sep = point_separation(p)
     if sep is not None:
         lines.append(f"mode separation {100 * sep:.3g} % (smallest gap between a timed mode and any other)"

@@ -1,0 +1,155 @@
+"""Sweep and plan audit, session 24 (docs/design.md, "Sweep and plan audit,
+session 24"): the figures and messages of ``sweep`` / ``plan`` on rigs
+nobody here wrote.
+
+Hand-made points (the dicts of :func:`bifilar.studies.point.evaluate_point`,
+only the fields the ranking reads), as tests/test_mutation_gaps_ranking.py
+builds them; each answer worked out from the documented rule.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from bifilar.studies import sweep as sw
+from bifilar.studies.ranking import binding_constraint
+
+
+def _point(x, sep, comps):
+    return {"params": {"spacing": x}, "valid": True, "error": None,
+            "components": {k: {"identifiable": v is not None, "rel_sigma": v, "mode": "m" if v else None,
+                               "shares": {"timing": 1.0}} for k, v in comps.items()},
+            "separation": sep,
+            "tension": {"rest": [1.0], "peak": 1.0, "min": [0.5], "max": [1.0], "slack": False, "slack_wires": []},
+            "depth": {"rest": 1.0, "max": 1.0}}
+
+
+def test_a_point_meeting_every_limit_without_a_component_is_named():
+    """The 30 g part of row S4 on a bifilar: Iyy has a sigma only where the
+    wires lean (its swing then 0.3-1.2 % from the other swing, below the 2 %
+    guard); the vertical point meets every limit but has no Iyy.  The
+    binding message said "no configuration meets --min-separation 0.02",
+    false of the vertical point the same document marks feasible; it now
+    narrows the claim to the points that measure Ixx, Iyy, Izz and names
+    the point and the way out.  Where every point measures every component
+    the message is unchanged (the second case)."""
+    c = sw.Constraints(min_separation=0.02)
+    pts = [_point(0.04, 0.0118, {"Ixx": 0.43, "Iyy": 14.9, "Izz": 0.25}),
+           _point(0.06, 0.299, {"Ixx": 0.43, "Iyy": None, "Izz": 0.25}),
+           _point(0.08, 0.0033, {"Ixx": 0.43, "Iyy": 27.3, "Izz": 0.25})]
+    flag, msg = binding_constraint(pts, c, None, ["Ixx", "Iyy", "Izz"])
+    assert flag == "--min-separation", msg
+    assert msg.startswith("no configuration that measures Ixx, Iyy, Izz meets --min-separation 0.02: "
+                          "the best mode separation found is 0.0118"), msg
+    assert msg.endswith("; 1 point(s) meet every limit but give no uncertainty for Iyy (e.g. at spacing = 0.06): "
+                        "leave Iyy out of --component, or add --hangings"), msg
+    rec = sw.assess(pts, c, None)
+    assert rec["best"] is None and rec["n_feasible"] == 1 and rec["reason"] == msg
+    flag, msg = binding_constraint(pts[::2], c, None, ["Ixx", "Iyy", "Izz"])
+    assert msg == "no configuration meets --min-separation 0.02: the best mode separation found is 0.0118", msg
+
+
+DATA = Path(__file__).parent / "data" / "audit24"
+
+
+def test_shares_are_of_the_printed_sigma_where_it_is_second_order():
+    """Row S13: a 1 kg bifilar, wires 1 m and 0.2 m apart, the CoM 1 cm
+    below the attachments (std 2 mm: the body tilts up to ~0.2 rad).  Izz
+    from the torsion, I = m g r^2 T^2 / (4 pi^2 L) (vertical wires; Jardin &
+    Mueller 2009, eq. 1): the linear relative variance by hand is
+    (0.1 %)^2 mass + 2 (0.5 x 1 mm / 1 m)^2 lengths + 4 (1 mm / (2 x 0.1 m))^2
+    anchors and attachments + (2 x 1 ms / T)^2 timing, the anchors' part
+    2 x (5e-3)^2 = 5e-5.  The printed sigma is the second-order one (invert's
+    std, about 2x the linear: the tilt the CoM's y error gives); the shares
+    must be of it: anchors 5e-5 / rel_sigma^2 (0.124), the rest of the
+    linear terms likewise, and ``second_order`` the remainder (0.75).  Before,
+    the shares were the linear budget's alone (anchors 0.49, none second
+    order) and the recommendation said "its variance is 45 % anchors" of a
+    sigma three quarters of which no input's linear term makes."""
+    from bifilar.config import read_yaml
+    from bifilar.studies.recommend import explain
+
+    path = str(DATA / "c13_shallow.yaml")
+    cfg = read_yaml(path)
+    st = sw.resolve_settings(cfg, tensions=False, components=["Izz"])
+    p = sw.evaluate_point(cfg, path, {}, st)
+    e = p["components"]["Izz"]
+    rel = e["rel_sigma"]
+    T = e["period"]
+    lin = 1e-6 + 2 * (0.5e-3) ** 2 + 4 * (5e-3) ** 2 + (2e-3 / T) ** 2
+    assert rel > 1.5 * math.sqrt(lin), (rel, math.sqrt(lin))  # the case: second order matters
+    sh = e["shares"]
+    assert sh["anchors"] == pytest.approx(2 * (5e-3) ** 2 / rel ** 2, rel=1e-3), sh
+    assert sh["attachments"] == pytest.approx(2 * (5e-3) ** 2 / rel ** 2, rel=1e-3), sh
+    assert sh["second_order"] == pytest.approx(1 - lin / rel ** 2, rel=1e-3), sh
+    assert sum(sh.values()) == pytest.approx(1.0, abs=1e-12)
+    assert "its variance is 75 % second-order terms" in explain(p, sw.Constraints(), "Izz")[1]
+
+
+def test_a_slack_wire_of_an_elastic_four_wire_rig_is_refused_not_an_internal_error():
+    """c07t: four vertical wires with EA 20 kN, the CoM 4 cm off towards
+    wire 2, wire 4 1.3 mm long, and an uncertainty block (so the refusal
+    asks whether the slack lies within the inputs' uncertainty: the rest
+    pose of the rig without wire 4).  That rig kept its four-wire stiffness
+    against three wires: `modes` and `invert` exited 1 ("internal error
+    (ValueError: operands could not be broadcast ...)"), a sweep point's
+    reason was the same text.  Now exit 2, one line naming rig.lengths and
+    wire 4, with the words that its slack lies within the uncertainty (the
+    gap against the std both printed: the gap must be the smaller)."""
+    import re
+
+    from click.testing import CliRunner
+
+    from bifilar.cli import main
+
+    r = CliRunner().invoke(main, ["modes", str(DATA / "c07t.yaml"), "--json"])
+    err = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and r.stdout == "" and len(err) == 1, (r.exit_code, r.stderr)
+    assert err[0].startswith("error: rig.lengths: wire 4 is slack at rest by "), err
+    m = re.search(r"wire 4's ([\d.]+) mm against a standard uncertainty of ([\d.]+) mm", err[0])
+    assert m and 0 < float(m.group(1)) < 3 * float(m.group(2)), err
+
+
+def test_the_elastic_rest_from_a_start_where_every_wire_is_slack():
+    """A sigma point of `invert` on a drawn four-wire rig with EA 20 kN
+    (c07 drawn with the default input stds, `--amplitude 0`): its elastic
+    rest pose started from a neighbour's pose 1.06 m below the anchors
+    (every 1.2 m wire slack by ~0.15 m) and a half turn; the start's shift
+    (0.3 mm) left every wire slack, the Newton Hessian was 0 and
+    `np.linalg.solve` raised "Singular matrix" (exit 1, internal error).
+    Now the step goes straight down past the largest slack.  Checked against
+    the pose from the rigid rest (the independent start) and the force and
+    moment balance of the printed tensions (to 1e-9 N and N m, the weight
+    19.6 N)."""
+    import numpy as np
+
+    from bifilar.analysis.elastic_rest import elastic_rest, elastic_rest_pose
+    from bifilar.config import scene_from_dict
+
+    cfg = {"body": {"mass": 1.9972364571935657, "inertia": {"principal": [0.03, 0.03, 0.06]}},
+           "rig": {"anchors": [[0.20128401601248422, 0.2001056811354616, 1.1987682115928584],
+                               [-0.2004639504339187, 0.20150619853521762, 1.1997329346509191],
+                               [-0.20182645883866113, -0.2003632313286665, 1.1992046032130204],
+                               [0.20022360055105878, -0.20009184532757987, 1.198159680276484]],
+                   "attachments": [[0.1985206366662088, 0.19875563612938843, 0.011701775742874435],
+                                   [-0.20130907102211376, 0.19970572665889583, 0.011798997233305837],
+                                   [-0.2008373888583764, -0.20057046663788916, 0.007867957646714987],
+                                   [0.19966458861407804, -0.20064916017492632, 0.010296586503443384]],
+                   "lengths": [1.1999839307996232, 1.1984126301178566, 1.199560817042567, 1.1975147398153339],
+                   "stiffness": 20000}}
+    scene = scene_from_dict(cfg, warn=False)
+    c0 = [-0.06327796379126034, 0.0629924080528484, 0.13535704717697813]
+    R0 = [[-0.9939960076404915, -0.0074606374538815105, 0.10916169512949725],
+          [-0.006226465862648822, -0.9921990497068796, -0.12450813982879368],
+          [0.10923904026319911, -0.1244402854767977, 0.986195440788908]]
+    c, R, T, _ = elastic_rest(scene, scene.stiffness, c0, R0)
+    ref = elastic_rest_pose(scene, None)
+    assert np.allclose(c, ref.com, atol=1e-9) and np.allclose(R, ref.R, atol=1e-9), (c, ref.com)
+    d = scene.anchors - (c + scene.attachments @ R.T)
+    f = T[:, None] * d / np.linalg.norm(d, axis=1)[:, None]
+    assert np.all(T > 0)
+    assert np.abs(f.sum(0) - [0.0, 0.0, scene.mass * scene.gravity]).max() < 1e-9
+    assert np.abs(np.cross(scene.attachments @ R.T, f).sum(0)).max() < 1e-9
