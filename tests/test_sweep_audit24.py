@@ -182,3 +182,7 @@ def test_elastic_dependent_wires_mark_their_sigmas_as_lower_bounds():
     assert math.isfinite(got["quad EA"]["components"]["Izz"]["rel_sigma"])  # the figures are kept, marked
     assert ELASTIC_DEPENDENT_WARNING not in got["quad"]["warnings"]
     assert ELASTIC_DEPENDENT_WARNING not in got["plate EA"]["warnings"]
+    from bifilar.studies.point_advice import point_cautions
+
+    said = point_cautions(quad_ea, "x.yaml", got["quad EA"], "the recommended point")
+    assert f"the recommended point: {ELASTIC_DEPENDENT_WARNING}" in said  # where a user reads it: the sweep's warnings
