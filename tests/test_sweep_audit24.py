@@ -186,3 +186,5 @@ def test_elastic_dependent_wires_mark_their_sigmas_as_lower_bounds():
 
     said = point_cautions(quad_ea, "x.yaml", got["quad EA"], "the recommended point")
     assert f"the recommended point: {ELASTIC_DEPENDENT_WARNING}" in said  # where a user reads it: the sweep's warnings
+    # the rigid quad's components have no sigma (null: dependent wires); its cautions were a TypeError
+    assert not any(ELASTIC_DEPENDENT_WARNING in w for w in point_cautions(quad, "x.yaml", got["quad"], "p"))

@@ -150,7 +150,7 @@ def prior_cautions(base_cfg: dict, source: str, point: dict) -> list[str]:
     from .shorthands import apply_params
 
     todo = {c: e for c, e in point.get("components", {}).items()
-            if e.get("mode") and math.isfinite(e.get("sigma", math.inf)) and e.get("sigma", 0) > 0}
+            if e.get("mode") and e.get("sigma") is not None and math.isfinite(e["sigma"]) and e["sigma"] > 0}
     if not todo:
         return []
     cfg, _ = apply_params(base_cfg, point["params"], source)
