@@ -1,5 +1,5 @@
-"""Sweep and plan audit, session 24 (docs/design.md, "Sweep and plan audit,
-session 24"): the figures and messages of ``sweep`` / ``plan`` on rigs
+"""Sweep and plan audit, session 24 (docs/design.md, "audit24, session
+24"): the figures and messages of ``sweep`` / ``plan`` on rigs
 nobody here wrote.
 
 Hand-made points (the dicts of :func:`bifilar.studies.point.evaluate_point`,

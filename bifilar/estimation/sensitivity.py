@@ -450,7 +450,7 @@ def grouped_shares(b: Budget, sigma: float | None = None, linear_var: float | No
     are scaled to the linear variance's part of ``sigma^2`` and the rest is
     the group ``second_order`` (a 1 cm deep CoM's tilt from its 2 mm std:
     75 % of a bifilar's Izz variance, none of it in the linear shares;
-    docs/design.md, "Sweep and plan audit, session 24")."""
+    docs/design.md, "audit24, session 24")."""
     out: dict[str, float] = {}
     for name, sh in b.shares.items():
         head = name.split(".")[0]

@@ -315,7 +315,7 @@ def _unmeasured_feasible(msg: str, valid: list[dict], c: Constraints, target: st
     every limit but has no sigma for a component the objective asks for (a
     vertical bifilar's Iyy, measurable only where the wires lean: a light
     part's Iyy from a swing at +- 944 %, every such point 0.3-1.2 % from
-    another mode, docs/design.md "Sweep and plan audit, session 24"): the
+    another mode, docs/design.md "audit24, session 24"): the
     limit alone does not leave "no configuration" then.  ``msg`` (the binding
     limit's line) is returned with "configuration" narrowed to those that
     measure the components, and which points meet every limit without them
