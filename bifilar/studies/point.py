@@ -639,14 +639,18 @@ def _clearance(res: dict, scene, rest) -> None:
     with the warnings `modes` gives (:mod:`bifilar.analysis.clearance`;
     geometry of the rest pose, ~0.1 ms): the model sees neither, so its
     figures hold for a rig that cannot be built as described; the ranking
-    puts such points after every clean one (:func:`~bifilar.studies.ranking.rank_order`)."""
+    puts such points after every clean one (:func:`~bifilar.studies.ranking.rank_order`).
+    Then a body hanging far turned (:func:`~bifilar.analysis.rest_warnings.turn_warning`),
+    unflagged: a rig may be meant so; the recommended point repeats it."""
     from ..analysis.clearance import ceiling_warning, crossing_warning
+    from ..analysis.rest_warnings import turn_warning
 
     for flag, check in (("ceiling_clash", ceiling_warning), ("wires_cross", crossing_warning)):
         w = check(scene, rest)
         res[flag] = w is not None
         if w is not None:
             res["warnings"].append(w)
+    res["warnings"] += [w for w in [turn_warning(scene, rest)] if w is not None]
 
 
 def _stiffness(scene, rest):
