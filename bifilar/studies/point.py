@@ -584,10 +584,10 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         )
         entry.update(physical_limits(scene.inertia, comp, b))
         if not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
-            from ..estimation.invert import std_unavailable_text
+            from ..estimation.inversion_result import rigid_dependent, std_unavailable_text
 
             bad = [n for j, n in enumerate(sens.names) if n not in _IDX and not np.isfinite(sens.jacobian[k, j])]
-            entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE")
+            entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE", rigid_dependent([(scene, rest)]))
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at, budgets=budgets)
