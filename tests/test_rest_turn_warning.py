@@ -25,6 +25,8 @@ from bifilar.analysis.rest_warnings import TURN_WARN, turn_warning
 from bifilar.cli import main
 from bifilar.config import scene_from_dict
 from bifilar.errors import BifilarError
+from bifilar.studies import sweep as sw
+from bifilar.studies.point_advice import point_cautions
 from conftest import CONFIGS, ROOT
 
 M5 = {"name": "audit24 M5: trifilar, wire 3 0.3 m longer",
@@ -119,8 +121,8 @@ def test_modes_and_sweep_say_it(tmp_path: Path):
     r = CliRunner().invoke(main, ["modes", str(cfg), "--json"])
     assert r.exit_code == 0, r.output
     assert "warning: at rest the body hangs turned 74.13 deg" in r.stderr
-    r = CliRunner().invoke(main, ["sweep", str(cfg), "--param", "rig.lengths.2=1.3", "--no-tensions", "--json"])
-    assert r.exit_code == 0, r.output
-    doc = json.loads(r.stdout)
-    assert any(w.startswith("at rest the body hangs turned 74.13 deg") for w in doc["points"][0]["warnings"])
-    assert "warning: the recommended point: at rest the body hangs turned 74.13 deg" in r.stderr
+    # a sweep point's warnings, and the recommended point's cautions the sweep and plan print
+    p = sw.evaluate_point(M5, "t", {}, sw.resolve_settings(M5, tensions=False))
+    assert any(w.startswith("at rest the body hangs turned 74.13 deg") for w in p["warnings"])
+    assert any(c.startswith("the recommended point: at rest the body hangs turned 74.13 deg")
+               for c in point_cautions(M5, "t", p, "the recommended point"))
