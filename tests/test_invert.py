@@ -360,6 +360,8 @@ def test_degenerate_scene_reports_inputs_without_derivative():
     assert any("degenerate" in w for w in res.warnings)
     # issue 10: a budget without those inputs was 50x too small; no std is printed instead
     assert res.std_unavailable and "cannot be given" in res.std_unavailable
+    # its remedy, not dependent wires' (three wires, rig.stiffness: tests/test_dependent_advice.py)
+    assert "CoM clearly below the attachment line" in res.std_unavailable and "rig.stiffness" not in res.std_unavailable
     assert np.isnan(res.sigma("Izz")) and np.all(np.isnan(res.interval))
     doc = to_jsonable(res.to_json())
     assert doc["inertia"]["Izz"]["std"] is None and doc["inertia"]["Izz"]["interval_95"] == [None, None]

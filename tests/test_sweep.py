@@ -265,6 +265,8 @@ def test_edge_of_stability_plate_budget_is_exact_or_not_given():
     p = point(cfg, tensions=False)
     assert p["components"]["Izz"]["sigma"] is None and p["components"]["Izz"]["rel_sigma"] is None
     assert "attachment.1.x" in p["components"]["Izz"]["sigma_unavailable"]
+    assert "CoM clearly below the attachment line" in p["components"]["Izz"]["sigma_unavailable"]
+    assert "three wires" not in p["components"]["Izz"]["sigma_unavailable"]  # dependent wires' remedy
 
 
 # --------------------------------------------------------------------------

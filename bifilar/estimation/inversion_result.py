@@ -163,16 +163,41 @@ class InversionResult:
         return doc
 
 
-def std_unavailable_text(inputs, option: str) -> str:
+def std_unavailable_text(inputs, option: str, dependent: bool | None = None) -> str:
     """Why no std can be given (``invert``'s ``std_unavailable``, a sweep
     point's ``sigma_unavailable``): ``inputs`` have no derivative; ``option``
-    is the flag that states their uncertainty."""
-    return ("the uncertainty cannot be given: these inputs have no derivative here (the scene is degenerate: a "
-            "neutral mode, e.g. the CoM on the line through two attachment points; or four or five dependent "
-            "wires, where a change of one wire leaves a wire slack or removes a mode), so within their stated "
-            "uncertainty the hanging changes qualitatively (it cannot hang, tilts far, or loses a mode): "
-            + ", ".join(inputs) + ". Hang the body with its CoM clearly below the attachment line, state "
-            f"those inputs' uncertainty ({option}) if it is smaller")
+    is the flag that states their uncertainty.  ``dependent``: True where
+    the rig's wires are rigid and dependent at rest (four or five taut
+    wires: :func:`rigid_dependent`), whose remedy is three wires or the
+    wires' stiffness; False where they are not (a neutral mode, e.g. the
+    CoM on the attachment line: hang it lower); None (not known): both
+    causes, the latter's remedy."""
+    if dependent:
+        return ("the uncertainty cannot be given: these inputs have no derivative here: the rig's wires are "
+                "dependent at rest (four or five taut wires whose tensions statics does not fix), and on rigid "
+                "wires any change of one of them, however small, leaves a wire slack or removes a mode: "
+                + ", ".join(inputs) + ". Hang the body on three wires (or two), or state the wires' stiffness "
+                "(rig.stiffness, N: the tensions then follow from the wires' stretch; the sigma of dependent elastic "
+                "wires is a lower bound, docs/design.md \"audit24, session 24\"); a smaller uncertainty "
+                f"({option}) does not help unless it is 0, which takes those inputs as exact")
+    why = ("a neutral mode, e.g. the CoM on the line through two attachment points" if dependent is False else
+           "a neutral mode, e.g. the CoM on the line through two attachment points; or four or five dependent "
+           "wires, where a change of one wire leaves a wire slack or removes a mode")
+    return (f"the uncertainty cannot be given: these inputs have no derivative here (the scene is degenerate: {why}), "
+            "so within their stated uncertainty the hanging changes qualitatively (it cannot hang, tilts far, or "
+            "loses a mode): " + ", ".join(inputs) + ". Hang the body with its CoM clearly below the attachment line, "
+            f"state those inputs' uncertainty ({option}) if it is smaller")
+
+
+def rigid_dependent(pairs) -> bool:
+    """Whether any of the (scene, rest pose) ``pairs`` has rigid wires
+    (no ``rig.stiffness``) that are dependent as constraints at its rest
+    pose (com m, R body -> world): four or five taut wires whose tensions
+    statics does not fix (:func:`bifilar.analysis.equilibrium._wires_dependent`)."""
+    from ..analysis.equilibrium import _wires_dependent
+
+    return any(scene.stiffness is None and scene.n_wires > 3 and _wires_dependent(scene, rest.com, rest.R)
+               for scene, rest in pairs)
 
 
 def _assumed(unc: dict) -> dict:

@@ -402,7 +402,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         # uncertainty the scene changes qualitatively, and a budget without
         # them is far too small (50x on the thesis plate with its CoM on the
         # attachment line).  No std is better than a wrong one.
-        res.std_unavailable = std_unavailable_text(degenerate, "--uncertainty KEY=VALUE") + (
+        from .inversion_result import rigid_dependent
+
+        dep = rigid_dependent((m.scene0, m.rest0) for m in pb.models)
+        res.std_unavailable = std_unavailable_text(degenerate, "--uncertainty KEY=VALUE", dep) + (
             ", or run --monte-carlo N to see the spread")
         warnings.append(res.std_unavailable)
     res.interval = interval_95(p_hat, res.budget, bctx)

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import BifilarError, InputError
-from ..estimation.invert import std_unavailable_text
+from ..estimation.inversion_result import rigid_dependent, std_unavailable_text
 from ..estimation.sensitivity import input_sigma
 from .limits import component_scale, physical_limits
 from .point import IDENTIFIABLE_MIN, point_uncertainty
@@ -133,8 +133,8 @@ class HangingPlan:
                              for h in self.hangings],
                 "measurements": self.measurements, "uncertainty": self.unc, "not_identified": self.missing,
                 "min_separation": self.min_separation, "rig": self.rig, **self.factor,
-                "sigma_unavailable": (std_unavailable_text(self.undefined, "--sigma KEY=VALUE")
-                                      if self.undefined else None)}
+                "sigma_unavailable": (std_unavailable_text(self.undefined, "--sigma KEY=VALUE", rigid_dependent(
+                    (h.scene, h.sens.rest) for h in self.hangings)) if self.undefined else None)}
 
 
 def _separations(T: np.ndarray) -> np.ndarray:

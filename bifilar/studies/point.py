@@ -584,10 +584,10 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         )
         entry.update(physical_limits(scene.inertia, comp, b))
         if not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
-            from ..estimation.invert import std_unavailable_text
+            from ..estimation.inversion_result import rigid_dependent, std_unavailable_text
 
             bad = [n for j, n in enumerate(sens.names) if n not in _IDX and not np.isfinite(sens.jacobian[k, j])]
-            entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE")
+            entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE", rigid_dependent([(scene, rest)]))
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at, budgets=budgets)
@@ -639,14 +639,18 @@ def _clearance(res: dict, scene, rest) -> None:
     with the warnings `modes` gives (:mod:`bifilar.analysis.clearance`;
     geometry of the rest pose, ~0.1 ms): the model sees neither, so its
     figures hold for a rig that cannot be built as described; the ranking
-    puts such points after every clean one (:func:`~bifilar.studies.ranking.rank_order`)."""
+    puts such points after every clean one (:func:`~bifilar.studies.ranking.rank_order`).
+    Then a body hanging far turned (:func:`~bifilar.analysis.rest_warnings.turn_warning`),
+    unflagged: a rig may be meant so; the recommended point repeats it."""
     from ..analysis.clearance import ceiling_warning, crossing_warning
+    from ..analysis.rest_warnings import turn_warning
 
     for flag, check in (("ceiling_clash", ceiling_warning), ("wires_cross", crossing_warning)):
         w = check(scene, rest)
         res[flag] = w is not None
         if w is not None:
             res["warnings"].append(w)
+    res["warnings"] += [w for w in [turn_warning(scene, rest)] if w is not None]
 
 
 def _stiffness(scene, rest):
