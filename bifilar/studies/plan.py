@@ -373,23 +373,30 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
             raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
                              + _remedy_text(base_cfg, source, pts, settings, target))
 
-        def evaluator(st: SweepSettings):
+        def evaluator(st: SweepSettings, into: dict):
             def evaluate(params: dict) -> dict:
                 key = key_of(params)
-                if key not in cache:
-                    cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, st,
-                                                screen=screen)
+                if key not in into:
+                    into[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, st,
+                                               screen=screen)
                     tick()
-                return cache[key]
+                return into[key]
             return evaluate
 
         # a component the grid would set aside (its best sigma above USEFUL_REL) may reach it between the
-        # grid points: its own sigma searched first (no limits: the sweep's rule takes every valid point),
-        # the rule then applied to every point evaluated
+        # grid points: its own sigma searched first (no limits: the sweep's rule takes every valid point;
+        # without the nonlinear runs), the best point found evaluated as the grid is, and the rule applied
+        # to the grid and those points (kept out of the answer's candidates: not searched for the
+        # objective, and each would cost a hangings plan with --hangings)
+        seen, full = list(pts), dict(cache)
         for a in set_aside(pts, target) if d else []:
-            _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluator(settings),
-                          lambda p, c=a["component"]: _penalty(p, Constraints(), c))
-        seen = list(cache.values())
+            def own(p, c=a["component"]):
+                return _penalty(p, Constraints(), c)
+
+            side = dict(cache)
+            _local_search(cont, combos, expand, unit, ng, local_budget, side,
+                          evaluator(replace(settings, tensions=False), side), own)
+            seen.append(evaluator(settings, full)(min(side.values(), key=own)["params"]))
         among, aside = measurable_components(seen, target), set_aside(seen, target)
 
         local = settings
@@ -404,7 +411,7 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
             return _penalty(p, constraints, target, among, small)
 
         if d:
-            _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluator(local), score)
+            _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluator(local, cache), score)
         return cache, among, small, aside
 
     # the search on screens (linear sigmas, no biases), then the best feasible
