@@ -41,7 +41,11 @@ sigma, the stated amplitude's uncertainty included.
 
 The objective is the relative standard uncertainty of ``target`` (or the
 worst of the *measurable* components: those identifiable at some point of
-the coarse grid) at a point, exactly as the sweep ranks points; a target
+the coarse grid and not set aside, :func:`~bifilar.studies.ranking.set_aside`:
+a component whose best relative sigma exceeds
+:data:`~bifilar.studies.ranking.USEFUL_REL` on the grid first gets a search
+of its own sigma, and is set aside only where that too stays above) at a
+point, exactly as the sweep ranks points; a target
 no point can measure is refused with its remedy
 (:mod:`bifilar.studies.remedy`).  With ``zip_`` the parameters move
 together, each the same fraction of its range (one search variable).

@@ -5,7 +5,10 @@ Operates on the point dicts of :func:`bifilar.studies.point.evaluate_point`;
 the objective is the predicted relative standard uncertainty (of the target
 component, or the worst of the *measurable* components: those identifiable
 at some valid point of the range; the others get a remedy, see
-:mod:`bifilar.studies.remedy`, instead of blocking every recommendation).
+:mod:`bifilar.studies.remedy`, instead of blocking every recommendation;
+those identifiable but whose best relative sigma over the range exceeds
+:data:`USEFUL_REL` are set aside with their best figure and point,
+:func:`set_aside`, instead of deciding it).
 
 The mode-separation guard is one figure per point, ``separation``: the
 smallest relative gap between any timed mode (the mode each measurable
