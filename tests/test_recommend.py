@@ -58,10 +58,58 @@ def test_a_component_no_point_measures_does_not_block_the_others():
     assert doc["best"] == 1 and doc["measurable"] == ["Ixx", "Izz"] and doc["not_measurable"] == ["Iyy"]
     assert doc["target"] == "worst relative of Ixx, Izz"
     assert doc["identifiability"]["Iyy"] == {"identifiable": False, "from_modes": {}, "mode": "swing", "remedy": None,
-                                             "rel_sigma": None}
+                                             "rel_sigma": None, "set_aside": None}
     # the target Iyy: no point gives it, nothing recommended, --target named
     doc = assess(pts, Constraints(), "Iyy")
     assert doc["best"] is None and doc["binding"] == "--target"
+
+
+@pytest.mark.parametrize("scale, best", [(0.98, 0), (1.0, 0), (1.02, 2)])
+def test_a_component_whose_best_sigma_is_above_the_threshold_is_set_aside(scale, best):
+    # Iyy's best relative sigma over the range is P0's, scale x USEFUL_REL (50 %); P1 gives it 90 %, P2 none.
+    # Within the threshold (0.98 x, and exactly at it: "exceeds" is strict) Iyy counts: the worst components
+    # are P0 49-50 %, P1 90 %, P2 inf (no Iyy), P0 recommended.  Above it (1.02 x: 51 %) Iyy is set aside and
+    # the worst of Ixx, Izz decides: P0 10 %, P1 5 %, P2 2 %, P2 recommended.  The threshold applied to Iyy's
+    # worst point (90 %) would set it aside in every case, the comparison inverted only in the first two.
+    from bifilar.studies.ranking import USEFUL_REL
+
+    rel = scale * USEFUL_REL
+    pts = [pt(1.0, {"Ixx": 0.10, "Iyy": rel, "Izz": 0.10}), pt(2.0, {"Ixx": 0.05, "Iyy": 0.90, "Izz": 0.05}),
+           pt(3.0, {"Ixx": 0.02, "Iyy": None, "Izz": 0.02})]
+    doc = assess(pts, Constraints(), None)
+    assert doc["best"] == best, doc
+    aside = doc["set_aside"]
+    if best == 0:
+        assert aside == [] and doc["measurable"] == ["Ixx", "Iyy", "Izz"] and doc["objective"] == rel
+        assert doc["identifiability"]["Iyy"]["set_aside"] is None
+    else:
+        assert doc["measurable"] == ["Ixx", "Izz"] and doc["not_measurable"] == [] and doc["objective"] == 0.02
+        assert [(a["component"], a["best_rel_sigma"], a["params"]) for a in aside] == [("Iyy", rel, {"spacing": 1.0})]
+        assert aside[0]["reason"] == (
+            "Iyy is not measurable in this range: its smallest uncertainty is +- 51 % (at spacing = 1), above the "
+            "50 % a measurement must beat to say more than a guess; it is left out of the ranking: leave Iyy out "
+            "of --component, add --hangings, or rank by it with --target Iyy")
+        assert doc["identifiability"]["Iyy"]["set_aside"] == aside[0] and doc["identifiability"]["Iyy"]["identifiable"]
+        from rich.console import Console
+
+        from bifilar.cli.cmd_sweep import render_identifiability
+
+        con = Console(record=True, width=400)
+        render_identifiability(con, doc["identifiability"])  # the table's lines (sweep and plan)
+        assert con.export_text().splitlines()[1] == "  Iyy: set aside: " + aside[0]["reason"].split(": ", 1)[1]
+        # plan answers by the same rule (choose, on the components the search found measurable)
+        assert choose([pts[1], pts[2]], Constraints(), None, doc["measurable"])[0]["params"] == {"spacing": 3.0}
+    # a target is ranked by itself, never set aside: Iyy P0 (scale x 50 %) before P1 (90 %)
+    doc = assess(pts, Constraints(), "Iyy")
+    assert doc["best"] == 0 and doc["set_aside"] == []
+    # every component set aside (--component Iyy alone): nothing recommended, --component named with the reason
+    only = [pt(x, {"Iyy": p["components"]["Iyy"]["rel_sigma"]}) for x, p in zip((1.0, 2.0, 3.0), pts)]
+    doc = assess(only, Constraints(), None)
+    if best == 0:
+        assert doc["best"] == 0
+    else:
+        assert doc["best"] is None and doc["binding"] == "--component"
+        assert doc["reason"] == "no component is measurable in this range: " + aside[0]["reason"]
 
 
 @pytest.mark.parametrize("rival, best", [(0.0101, 1), (0.0103, 0)])

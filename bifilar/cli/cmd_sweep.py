@@ -144,9 +144,11 @@ def render_timing(con, rows: list[dict]) -> None:
 
 
 def render_identifiability(con, ident: dict) -> None:
-    """Per component: measurable, from which modes; else its remedy."""
+    """Per component: measurable, from which modes; set aside, why; else its remedy."""
     for c, e in ident.items():
-        if e["identifiable"]:
+        if e.get("set_aside"):
+            con.print(f"  [yellow]{c}: set aside[/yellow]: {esc(e['set_aside']['reason'].split(': ', 1)[1])}")
+        elif e["identifiable"]:
             modes = ", ".join(f"{m} ({v:.2g})" for m, v in list(e.get("from_modes", {}).items())[:3])
             con.print(f"  {c}: measurable" + (f" from {modes} (|d ln T / d ln I|)" if modes else ""))
         else:

@@ -41,7 +41,11 @@ sigma, the stated amplitude's uncertainty included.
 
 The objective is the relative standard uncertainty of ``target`` (or the
 worst of the *measurable* components: those identifiable at some point of
-the coarse grid) at a point, exactly as the sweep ranks points; a target
+the coarse grid and not set aside, :func:`~bifilar.studies.ranking.set_aside`:
+a component whose best relative sigma exceeds
+:data:`~bifilar.studies.ranking.USEFUL_REL` on the grid first gets a search
+of its own sigma, and is set aside only where that too stays above) at a
+point, exactly as the sweep ranks points; a target
 no point can measure is refused with its remedy
 (:mod:`bifilar.studies.remedy`).  With ``zip_`` the parameters move
 together, each the same fraction of its range (one search variable).
@@ -68,8 +72,9 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import clashes, measurable_components, point_separation, rank_order, rel_sigma, tension_range_caution
-from .recommend import cautioned, choose, identifiability, preference
+from .ranking import (clashes, identifiable_components, measurable_components, point_separation, rank_order, rel_sigma,
+                      set_aside, tension_range_caution)
+from .recommend import cautioned, choose, identifiabilities, preference
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -120,6 +125,7 @@ class PlanResult:
     active: list[str] = field(default_factory=list)
     among: list[str] = field(default_factory=list)
     zip: bool = False
+    set_aside: list[dict] = field(default_factory=list)
     separation_guard: str = "planned_hanging"
     hangings_objective: float | None = None
     hangings_ranked: int | None = None
@@ -162,6 +168,7 @@ class PlanResult:
                         "preferred_over": self.preferred_over, "preference": self.preference},
             "target": self.target or "worst relative of " + ", ".join(self.among),
             "identifiability": self.identifiability(),
+            "set_aside": self.set_aside,
             "constraints": self.constraints.describe(),
             "bounds": {n: [lo, hi] for n, lo, hi in self.bounds},
             "zip": self.zip,
@@ -171,7 +178,7 @@ class PlanResult:
 
     def identifiability(self) -> dict:
         """Per component: measurable in the range, modes at the optimum."""
-        return {c: identifiability(c, self.best, c in self.among) for c in self.best["components"]}
+        return identifiabilities(list(self.best["components"]), self.best, self.among, self.set_aside)
 
 
 def _is_length(name: str) -> bool:
@@ -352,11 +359,13 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     def key_of(params: dict) -> tuple:
         return tuple(float(params[n]) for n in names)
 
-    def search(screen: bool) -> tuple[dict, list]:
+    def search(screen: bool) -> tuple[dict, list, bool, list]:
         """Grid, then the local search (module docstring), every point
         evaluated as a screen (:func:`evaluate_point` ``screen=True``) or
         in full; returns ({params key: point}, the measurable components,
-        whether the search ranked the small-amplitude sigmas)."""
+        whether the search ranked the small-amplitude sigmas, the
+        components set aside: :func:`~bifilar.studies.ranking.set_aside`
+        of the grid and of each one's own search)."""
         cache: dict[tuple, dict] = {}
         done[0] = 0
         pts = run_sweep(base_cfg, source, grid, settings, workers=workers, screen=screen,
@@ -364,10 +373,35 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
         done[0] = len(grid)
         for g, p in zip(grid, pts):
             cache[key_of(g)] = p
-        among = measurable_components(pts)
-        if target is not None and target not in among:
+        if target is not None and target not in identifiable_components(pts):
             raise InputError("--target", f"{target} is not identifiable from any mode anywhere in the range"
                              + _remedy_text(base_cfg, source, pts, settings, target))
+
+        def evaluator(st: SweepSettings, into: dict):
+            def evaluate(params: dict) -> dict:
+                key = key_of(params)
+                if key not in into:
+                    into[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, st,
+                                               screen=screen)
+                    tick()
+                return into[key]
+            return evaluate
+
+        # a component the grid would set aside (its best sigma above USEFUL_REL) may reach it between the
+        # grid points: its own sigma searched first (no limits: the sweep's rule takes every valid point;
+        # without the nonlinear runs), the best point found evaluated as the grid is, and the rule applied
+        # to the grid and those points (kept out of the answer's candidates: not searched for the
+        # objective, and each would cost a hangings plan with --hangings)
+        seen, full = list(pts), dict(cache)
+        for a in set_aside(pts, target) if d else []:
+            def own(p, c=a["component"]):
+                return _penalty(p, Constraints(), c)
+
+            side = dict(cache)
+            _local_search(cont, combos, expand, unit, ng, local_budget, side,
+                          evaluator(replace(settings, tensions=False), side), own)
+            seen.append(evaluator(settings, full)(min(side.values(), key=own)["params"]))
+        among, aside = measurable_components(seen, target), set_aside(seen, target)
 
         local = settings
         if (screen and settings.tensions and _far_from_limits(pts, constraints)
@@ -377,25 +411,17 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
         # small-amplitude figures (within AMPLITUDE_ENOUGH of the full ones on the grid)
         small = not local.tensions
 
-        def evaluate(params: dict) -> dict:
-            key = key_of(params)
-            if key not in cache:
-                cache[key] = evaluate_point(base_cfg, source, {n: float(params[n]) for n in names}, local,
-                                            screen=screen)
-                tick()
-            return cache[key]
-
         def score(p):
             return _penalty(p, constraints, target, among, small)
 
         if d:
-            _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluate, score)
-        return cache, among, small
+            _local_search(cont, combos, expand, unit, ng, local_budget, cache, evaluator(local, cache), score)
+        return cache, among, small, aside
 
     # the search on screens (linear sigmas, no biases), then the best feasible
     # screen confirmed in full; where the full figure differs (second order
     # matters in this range: a shallow CoM) the whole search again in full
-    cache, among, small = search(screen=True)
+    cache, among, small, aside = search(screen=True)
     feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
                        and math.isfinite(objective(p, target, among))),
                       key=lambda p: objective(p, target, among, small))
@@ -411,7 +437,7 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
         if not (full.get("valid") and objective(full, target, among, small_amplitude=True)
                 == objective(p, target, among, small_amplitude=True)
                 and not violations(full, constraints, target)):
-            cache, among, _ = search(screen=False)
+            cache, among, _, aside = search(screen=False)
             break
     evaluated = list(cache.values())
     feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target)
@@ -421,7 +447,7 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
         raise InputError(flag, msg)
     best, over, why = choose([p for p in feasible if not p.get("screen")], constraints, target, among)
     return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
-                      among, zip_, preferred_over=over, preference=why)
+                      among, zip_, preferred_over=over, preference=why, set_aside=aside)
 
 
 #: the local search may run without nonlinear runs (and so rank the small-amplitude sigmas) only when on

@@ -5,7 +5,10 @@ Operates on the point dicts of :func:`bifilar.studies.point.evaluate_point`;
 the objective is the predicted relative standard uncertainty (of the target
 component, or the worst of the *measurable* components: those identifiable
 at some valid point of the range; the others get a remedy, see
-:mod:`bifilar.studies.remedy`, instead of blocking every recommendation).
+:mod:`bifilar.studies.remedy`, instead of blocking every recommendation;
+those identifiable but whose best relative sigma over the range exceeds
+:data:`USEFUL_REL` are set aside with their best figure and point,
+:func:`set_aside`, instead of deciding it).
 
 The mode-separation guard is one figure per point, ``separation``: the
 smallest relative gap between any timed mode (the mode each measurable
@@ -168,13 +171,59 @@ def _tie_order(a: dict, b: dict) -> int:
     return (pa > pb) - (pa < pb)
 
 
-def measurable_components(points: list[dict]) -> list[str]:
+#: a component whose *smallest* relative standard uncertainty over the range (of all its valid points) exceeds
+#: this is not measurable in the range (:func:`set_aside`): at 50 % its 95 % interval (+- 98 %) reaches from
+#: about zero to twice the value, no better than a guess.  Left out of the objective, it can no longer decide
+#: the recommendation: a bifilar with wires 0.8 / 1.2 m was recommended at a point measuring Iyy at +- 195 %
+#: (86 % of experiments unphysical) and Ixx 11 %, Izz 3.1 %, over the point giving Ixx 7.3 %, Izz 0.54 % without
+#: Iyy; a 30 g part got no recommendation for an Iyy at best +- 944 % (docs/design.md, "audit24, session 24",
+#: item 6, and "rank25, session 25")
+USEFUL_REL = 0.5
+
+
+def identifiable_components(points: list[dict]) -> list[str]:
     """Components identifiable at one valid point at least (config order)."""
+    return [c for c in point_components(points)
+            if any(p.get("valid") and p["components"][c].get("identifiable") for p in points)]
+
+
+def set_aside(points: list[dict], target: str | None = None, max_rel: float = USEFUL_REL) -> list[dict]:
+    """The components not measurable in the range although identifiable:
+    those some valid point gives a sigma, the smallest of whose relative
+    sigmas (:func:`rel_sigma`, the stated amplitude's) exceeds ``max_rel``
+    (:data:`USEFUL_REL`; strictly: a best of exactly ``max_rel`` is kept).
+    ``target`` (ranked by itself, as the user asked) is never set aside.
+    One dict each, config order: ``component``, ``best_rel_sigma`` (1),
+    ``params`` (the point giving it), ``reason`` (one line with the remedy:
+    leave it out of --component, add --hangings, or rank by it with --target)."""
     out = []
-    for c in point_components(points):
-        if any(p.get("valid") and p["components"][c].get("identifiable") for p in points):
-            out.append(c)
+    for c in identifiable_components(points):
+        if c == target:
+            continue
+        figs = [(rel_sigma(p["components"][c]), i) for i, p in enumerate(points)
+                if p.get("valid") and p["components"][c].get("identifiable")]
+        figs = [(float(v), i) for v, i in figs if v is not None and math.isfinite(v)]
+        if not figs:
+            continue  # no sigma anywhere: binding_constraint says why (as invert does)
+        best, i = min(figs)
+        if best > max_rel:
+            at = ", ".join(f"{k} = {v:.6g}" for k, v in points[i].get("params", {}).items())
+            out.append({"component": c, "best_rel_sigma": best, "params": points[i].get("params", {}),
+                        "reason": (f"{c} is not measurable in this range: its smallest uncertainty is "
+                                   f"+- {100 * best:.3g} %" + (f" (at {at})" if at else "") + ", above the "
+                                   f"{100 * max_rel:g} % a measurement must beat to say more than a guess; it is "
+                                   f"left out of the ranking: leave {c} out of --component, add --hangings, or "
+                                   f"rank by it with --target {c}")})
     return out
+
+
+def measurable_components(points: list[dict], target: str | None = None, max_rel: float = USEFUL_REL) -> list[str]:
+    """Components the objective ranks by (config order): identifiable at one
+    valid point at least (:func:`identifiable_components`) and not set aside
+    (:func:`set_aside`: a best relative sigma over the range above
+    ``max_rel``; ``target`` never is)."""
+    aside = {a["component"] for a in set_aside(points, target, max_rel)}
+    return [c for c in identifiable_components(points) if c not in aside]
 
 
 def point_separation(point: dict) -> float | None:
@@ -272,6 +321,8 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
     if not valid:
         return "--param", "no valid configuration in the range: " + why_invalid(points)
     finite = [p for p in valid if math.isfinite(objective(p, target, among))]
+    if not finite and not target and among is not None and not among and (aside := set_aside(points)):
+        return "--component", "no component is measurable in this range: " + "; ".join(a["reason"] for a in aside)
     if not finite:
         # identifiable, but no std anywhere (a knife edge, dependent wires): say why, as invert does
         sel = [target] if target else list(among if among is not None else point_components(points))

@@ -19,7 +19,7 @@ from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
 from .ranking import (CONSTRAINT_FLAGS, binding_constraint, clashes, measurable_components, objective,
-                      pareto_front, point_components, point_separation, preferences, rank_order,
+                      pareto_front, point_components, point_separation, preferences, rank_order, set_aside,
                       tension_range_caution, violations)
 from .settings import Constraints
 
@@ -108,11 +108,15 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     multi-hanging plan gives no sigma left out.
 
     Without a target the objective is the worst of the measurable components
-    (:func:`measurable_components`); ``identifiability`` says per component
-    whether it is measurable and from which modes at the recommended point
-    (``remedy`` entries are added by :func:`add_point_remedies`).
+    (:func:`measurable_components`); ``set_aside`` lists those identifiable
+    but not measurable in the range, each with its best relative sigma, the
+    point and why (:func:`~bifilar.studies.ranking.set_aside`);
+    ``identifiability`` says per component whether it is measurable and from
+    which modes at the recommended point (``remedy`` entries are added by
+    :func:`add_point_remedies`).
     """
-    among = measurable_components(points)
+    among = measurable_components(points, target)
+    aside = set_aside(points, target)
     for p in points:
         v = violations(p, constraints, target)
         p["objective"] = _plain(objective(p, target, among))
@@ -133,7 +137,8 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     front = pareto_front(points, target, among)
     comps = point_components(points)
     doc: dict = {"target": target or "worst relative of " + ", ".join(among or comps),
-                 "measurable": among, "not_measurable": [c for c in comps if c not in among],
+                 "measurable": among, "set_aside": aside,
+                 "not_measurable": [c for c in comps if c not in among and c not in _names(aside)],
                  "constraints": constraints.describe(), "pareto_front": front,
                  "n_valid": sum(bool(p.get("valid")) for p in points),
                  "n_feasible": sum(bool(p["feasible"]) for p in points)}
@@ -152,15 +157,29 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
                    rig=points[i].get("rig"), separation=point_separation(points[i]), preferred_over=over)
         doc["why"][1:1] = lines
     ref = points[doc["best"]] if doc.get("best") is not None else None
-    doc["identifiability"] = {c: identifiability(c, ref, c in among) for c in comps}
+    doc["identifiability"] = identifiabilities(comps, ref, among, aside)
     return doc
 
 
-def identifiability(comp: str, point: dict | None, measurable: bool) -> dict:
-    """Per component: measurable in the range, and at ``point`` (the
+def _names(aside: list[dict]) -> list[str]:
+    return [a["component"] for a in aside]
+
+
+def identifiabilities(comps, point: dict | None, among: list[str], aside: list[dict]) -> dict:
+    """:func:`identifiability` of each of ``comps`` at ``point``: measurable
+    where in ``among``, identifiable but set aside where in ``aside``
+    (:func:`~bifilar.studies.ranking.set_aside` entries)."""
+    why = {a["component"]: a for a in aside}
+    return {c: identifiability(c, point, c in among or c in why, why.get(c)) for c in comps}
+
+
+def identifiability(comp: str, point: dict | None, measurable: bool, aside: dict | None = None) -> dict:
+    """Per component: identifiable in the range, and at ``point`` (the
     recommended one) the modes whose period depends on it (``|d ln T / d ln I|``)
-    and the mode it is estimated from."""
-    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None}
+    and the mode it is estimated from; ``set_aside``: None, or the
+    :func:`~bifilar.studies.ranking.set_aside` entry of a component
+    identifiable but not measurable in the range (left out of the ranking)."""
+    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None, "set_aside": aside}
     if point is not None and point.get("valid"):
         e = point["components"].get(comp, {})
         d.update(from_modes=e.get("from_modes", {}), mode=e.get("mode"), rel_sigma=e.get("rel_sigma"))
