@@ -42,9 +42,7 @@ def point_cautions(cfg: dict, source: str, point: dict, what: str, cons=None, jo
     (:func:`bifilar.studies.sweep.prior_cautions`), its components'
     ``physical_limit`` (an estimate often outside what a real body can
     have) and, under the constraints ``cons``, its dependent wires' range
-    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`)
-    and, on elastic dependent wires, that its sigmas are lower bounds
-    (:data:`bifilar.studies.point.ELASTIC_DEPENDENT_WARNING`).
+    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`).
     ``joint``: the multi-hanging plan's ``accuracy`` when that plan is the
     experiment (``--hangings``): its components' limits are those of the
     joint sigma, not of the point's own hanging (whose Ixx from a swing, a
@@ -63,9 +61,6 @@ def point_cautions(cfg: dict, source: str, point: dict, what: str, cons=None, jo
             if e.get("physical_limit")]
     if cons is not None and (w := tension_range_caution(point, cons)) is not None:
         out.append(f"{what}: {w}")
-    from .point import ELASTIC_DEPENDENT_WARNING  # its sigmas are lower bounds: say so where it is recommended
-
-    out += [f"{what}: {w}" for w in point.get("warnings") or () if w == ELASTIC_DEPENDENT_WARNING]
     return out
 
 
