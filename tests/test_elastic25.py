@@ -1,21 +1,38 @@
-"""Four elastic wires, session 25 (docs/design.md "elastic25, session 25"):
-the rest pose of a config drawn 0.1 mm off a square's four vertical wires."""
+"""Four or five elastic wires, session 25 (docs/design.md "elastic25,
+session 25"): the rest pose of configs drawn 0.1 mm off vertical wires."""
 
 from __future__ import annotations
 
 import numpy as np
 
 
-def test_a_drawn_four_wire_elastic_config_hangs_level_not_upside_down():
+PENTAGON = {"body": {"mass": 2.5010052185257203, "inertia": {"principal": [0.04, 0.055, 0.075]}},
+            "rig": {"anchors": [[0.24982231281951875, -0.00016210097789624581, 0.9999449484270453],
+                                [0.07735720468932562, 0.23778151667573721, 0.9999401453390465],
+                                [-0.20236118555930155, 0.14689341143486695, 0.9999596333614603],
+                                [-0.20231070993908992, -0.14708955443207428, 0.9999524192178878],
+                                [0.0773559136133379, -0.23798156089415956, 0.9999759391327555]],
+                    "attachments": [[0.2508386844459531, -0.0017178340897464018, 0.0016693949964952347],
+                                    [0.07809645051462709, 0.23603803136818916, 0.0019258844709413043],
+                                    [-0.20119249156522842, 0.14532634029757405, 0.0017369934953691743],
+                                    [-0.20141913980137985, -0.1486333905017418, 0.001702316004904844],
+                                    [0.07815881078866906, -0.2394217551834119, 0.001772829692131448]],
+                    "lengths": [1.0005952837251832, 1.0000299382281772, 1.0011105661982487, 0.9992710411288943,
+                                0.9985638785043733], "stiffness": 2000.0}}
+
+
+def test_drawn_elastic_configs_hang_level_not_upside_down_or_slack():
     """A 2 kg plate (CoM 7.7 mm below the attachments) on four vertical
     1.2 m wires of EA 2 kN, every point drawn 0.1 mm off the square, the
     lengths 1 mm: the rigid all-taut pose the elastic Newton started from
     lay turned 49 deg with the CoM 1.2 m aside, and the elastic rest from
     there upside down, so the config was refused ('cannot hang in its start
     orientation'; 7 of 200 such configs in a closed loop, where the planner
-    predicted none refused).  Checked against statics written here: the
-    body hangs level (the wires' 1 mm length differences tilt it by ~3
-    mrad), each wire's tension is Hooke's ``EA / L (|d| - L)`` of its own
+    predicted none refused).  Five wires of EA 2 kN on a 0.25 m pentagon,
+    1 m long, the CoM 1.7 mm below the attachments, drawn the same way:
+    refused with a wire 162 mm slack (14 of 200).  Checked against statics
+    written here: the body hangs level (the wires' 1 mm length differences
+    tilt it by mrad), each wire's tension is Hooke's ``EA / L (|d| - L)`` of its own
     stretch at the pose, and the tensions along the wires balance the
     weight and its moment about the CoM."""
     from bifilar.analysis.equilibrium import rest_pose
@@ -32,12 +49,17 @@ def test_a_drawn_four_wire_elastic_config_hangs_level_not_upside_down():
                                    [0.19462900527000224, -0.2031446201839474, 0.00754849547575631]],
                    "lengths": [1.2003535763406965, 1.2010507660876273, 1.1999823963770013, 1.1992399024151745],
                    "stiffness": 2000.0}}
-    scene = scene_from_dict(cfg, "drawn.yaml", warn=False)
+    for cfg in (cfg, PENTAGON):
+        _hangs_level(scene_from_dict(cfg, "drawn.yaml", warn=False), rest_pose)
+
+
+def _hangs_level(scene, rest_pose):
+    """The checks of the test above on ``scene``'s rest pose."""
     r = rest_pose(scene)
     assert np.degrees(np.arccos(np.clip(r.R[2, 2], -1, 1))) < 1.0, r.R  # level, not turned over
     d = r.com + scene.attachments @ r.R.T - scene.anchors  # anchor -> attachment
     ln = np.linalg.norm(d, axis=1)
-    hooke = 2000.0 / scene.lengths * (ln - scene.lengths)
+    hooke = scene.stiffness / scene.lengths * (ln - scene.lengths)
     assert np.all(hooke > 0) and np.allclose(r.tensions, hooke, rtol=1e-9, atol=1e-9), (r.tensions, hooke)
     f = -hooke[:, None] * d / ln[:, None]  # on the body, towards the anchors
     W = scene.mass * scene.gravity
