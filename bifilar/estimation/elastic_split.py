@@ -118,9 +118,9 @@ def drawn_rig_risks(scene, rest, unc: dict, draws: int = DRAWS, seed: int = 0) -
     rng = np.random.default_rng(seed)
     z = rng.standard_normal((draws, len(names)))
     slack = np.any(rest.tensions + z @ dT < 0, axis=1)
-    w, V = np.linalg.eigh(dT.T @ dT)  # the tensions' covariance (n, n), N^2
-    u = rng.standard_normal((SLACK_DRAWS, len(w)))
-    p_slack = float(np.mean(np.any(rest.tensions + (u * np.sqrt(np.maximum(w, 0.0))) @ V.T < 0, axis=1)))
+    ev, V = np.linalg.eigh(dT.T @ dT)  # the tensions' covariance (n, n), N^2
+    u = rng.standard_normal((SLACK_DRAWS, len(ev)))
+    p_slack = float(np.mean(np.any(rest.tensions + (u * np.sqrt(np.maximum(ev, 0.0))) @ V.T < 0, axis=1)))
     geo = [j for j, n in enumerate(names) if n != "stiffness"]  # EA's factor moves no point
     dirs = input_directions(scene, [names[j] for j in geo])
     A = scene.anchors + np.einsum("dj,jnk->dnk", z[:, geo] * sd[geo], dirs["anchors"])
@@ -134,8 +134,8 @@ def drawn_rig_risks(scene, rest, unc: dict, draws: int = DRAWS, seed: int = 0) -
     Rs = rest.R + np.cross(th[:, None, :], rest.R.T).transpose(0, 2, 1)  # (1 + [th]x) R0, column by column
     G0 = constraint_jacobian(scene, rest.com, rest.R)[2]
     held0 = int(_held(scene.mass, scene.inertia, rest.R, G0))
-    # near a change either way: a drawn count at the cut-off's HELD_MARGIN above the config's, or one at the
-    # cut-off / HELD_MARGIN below it
+    # near a change either way: the drawn count with the cut-off scaled by HELD_MARGIN (more held) or by its
+    # inverse (fewer held) differs from the config's
     held = _held(scene.mass, scene.inertia, Rs, G) != held0
     near = held | (_held(scene.mass, scene.inertia, Rs, G, HELD_MARGIN) != held0) | (
         _held(scene.mass, scene.inertia, Rs, G, 1.0 / HELD_MARGIN) != held0)
@@ -155,7 +155,7 @@ def risks_or_none(scene, rest, unc: dict) -> DrawnRigRisks | None:
         return None
     try:
         return drawn_rig_risks(scene, rest, unc)
-    except BifilarError:
+    except (BifilarError, np.linalg.LinAlgError):
         return None
 
 
