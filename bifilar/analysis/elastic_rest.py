@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ConvergenceError, StiffnessNeededError
+from ..errors import BifilarError, ConvergenceError, SlackWireError, StiffnessNeededError, UnstableRestError
 from ..rotations import rotvec_to_matrix
 from ..scene import Scene, scene_with
 from ..models.maximal import MAX_ELIMINATION_WIRES
@@ -218,6 +218,24 @@ def elastic_rest_pose(scene: Scene, guess: RestPose | None) -> RestPose:
             kkt = np.inf
         if not kkt < 1e-9:
             c, R, _, _ = _slsqp(scene, *_initial_pose(scene))
+    try:
+        return _elastic_finish(scene, c, R)
+    except (UnstableRestError, SlackWireError) as err:
+        if guess is not None or scene.n_wires <= MAX_ELIMINATION_WIRES:
+            raise
+        # the rigid all-taut pose of four or five nearly dependent wires can lie far off (a config 0.1 mm off a
+        # square's four vertical 1.2 m wires: turned 49 deg, the CoM 1.2 m aside, the elastic rest from there
+        # upside down, 'cannot hang in its start orientation', 3.5 % of such configs; on a pentagon's five a
+        # wire 160 mm slack, 7 %: elastic25): the elastic Newton again from the start pose itself, which lowers
+        # the body until every wire is taut; where that fails too, the first refusal (a real slack: the same)
+        try:
+            return _elastic_finish(scene, *_initial_pose(scene))
+        except BifilarError:
+            raise err from None
+
+
+def _elastic_finish(scene: Scene, c: np.ndarray, R: np.ndarray) -> RestPose:
+    """:func:`elastic_rest_pose` from the pose (``c`` m, ``R`` body -> world): the elastic rest and its checks."""
     c, R, T, res = elastic_rest(scene, scene.stiffness, c, R)
     d = c + scene.attachments @ R.T - scene.anchors
     ln = np.linalg.norm(d, axis=1)

@@ -177,8 +177,8 @@ def std_unavailable_text(inputs, option: str, dependent: bool | None = None) -> 
                 "dependent at rest (four or five taut wires whose tensions statics does not fix), and on rigid "
                 "wires any change of one of them, however small, leaves a wire slack or removes a mode: "
                 + ", ".join(inputs) + ". Hang the body on three wires (or two), or state the wires' stiffness "
-                "(rig.stiffness, N: the tensions then follow from the wires' stretch; the sigma of dependent elastic "
-                "wires is a lower bound, docs/design.md \"audit24, session 24\"); a smaller uncertainty "
+                "(rig.stiffness, N: the tensions then follow from the wires' stretch; a sweep then says how often "
+                "drawn configs leave a wire slack, docs/design.md \"elastic25, session 25\"); a smaller uncertainty "
                 f"({option}) does not help unless it is 0, which takes those inputs as exact")
     why = ("a neutral mode, e.g. the CoM on the line through two attachment points" if dependent is False else
            "a neutral mode, e.g. the CoM on the line through two attachment points; or four or five dependent "

@@ -547,7 +547,6 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
         "warnings": [],
     }
     _clearance(res, scene, rest)
-    _elastic_dependent(res, scene, rest)
     chosen: dict[str, int] = {}
     for comp in st.components:
         I = float(scene.inertia[_IDX[comp]])
@@ -564,7 +563,16 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             continue
         chosen[comp] = best_mode_for(sens, comp)
         res["components"][comp] = entry
-    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc, honest=not screen, at=at)))
+    from ..estimation.elastic_split import point_risks
+
+    risks, refusal = point_risks(res, scene, rest, unc)  # four or five elastic wires: what drawn configs do
+    # a refused sigma needs no second-order pass (its linear budget keeps the shares)
+    budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc,
+                                                 honest=not screen and refusal is None, at=at)))
+    if refusal is not None:
+        from dataclasses import replace
+
+        budgets = {comp: replace(b, value_sigma=math.inf) for comp, b in budgets.items()}
     for comp, k in chosen.items():
         entry = res["components"][comp]
         scale = component_scale(scene.inertia, comp)
@@ -583,11 +591,17 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
         )
         entry.update(physical_limits(scene.inertia, comp, b))
-        if not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
+        if refusal is not None:  # four or five elastic wires whose drawn configs the model cannot answer for
+            entry["sigma_unavailable"] = refusal
+        elif not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
             from ..estimation.inversion_result import rigid_dependent, std_unavailable_text
 
             bad = [n for j, n in enumerate(sens.names) if n not in _IDX and not np.isfinite(sens.jacobian[k, j])]
             entry["sigma_unavailable"] = std_unavailable_text(bad, "--sigma KEY=VALUE", rigid_dependent([(scene, rest)]))
+        elif risks is not None:  # the drawn configs left slack (or, never here, held otherwise) are refused too
+            from ..estimation.elastic_split import combined_refusal
+
+            entry["p_refused"] = combined_refusal(entry["p_refused"], risks.p_model)
         res["components"][comp] = entry
     res["separation"] = timed_separation(periods, set(chosen.values()))
     pre = _Prepared(scene, rest, ms, labels, periods, sens, chosen, amplitude, [], at=at, budgets=budgets)
@@ -609,28 +623,6 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             n = len(pre.runs)
             pre.starts, law.starts = sp.take(np.arange(n)), sp.take(np.arange(n, len(sp.feasible)))
     return res, pre
-
-
-ELASTIC_DEPENDENT_WARNING = (
-    "the wires' tensions at rest are fixed by their stiffness, not by statics (elastic dependent wires): "
-    "each sigma and p_refused here leaves out the cross term of the wire lengths' spread with the CoM's offset; "
-    "measured on four wires of EA 20 kN, 160 of 200 simulated experiments left a wire slack against 2.1 % "
-    "predicted and the rest scattered 10.7x the sigma (docs/design.md, audit24 5.): treat them as lower bounds")
-
-
-def _elastic_dependent(res: dict, scene, rest) -> None:
-    """Warn on the point ``res`` whose rig is elastic (``scene.stiffness``
-    set, N) with wires dependent as constraints at rest (the pose ``rest``:
-    com m, R body -> world), e.g. four vertical wires: its predicted sigmas
-    and refusal probability are known to be far too small there (the
-    lengths x CoM cross term, docs/design.md "audit24" item 5), so the
-    figures are kept but marked as lower bounds."""
-    if scene.stiffness is None:
-        return
-    from ..analysis.equilibrium import _wires_dependent
-
-    if _wires_dependent(scene, rest.com, rest.R):
-        res["warnings"].append(ELASTIC_DEPENDENT_WARNING)
 
 
 def _clearance(res: dict, scene, rest) -> None:

@@ -42,10 +42,9 @@ def point_cautions(cfg: dict, source: str, point: dict, what: str, cons=None, jo
     (:func:`bifilar.studies.sweep.prior_cautions`), its components'
     ``physical_limit`` (an estimate often outside what a real body can
     have) and, under the constraints ``cons``, its dependent wires' range
-    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`),
-    on elastic dependent wires, that its sigmas are lower bounds
-    (:data:`bifilar.studies.point.ELASTIC_DEPENDENT_WARNING`), and a body
-    hanging far turned at rest (:func:`bifilar.analysis.rest_warnings.turn_warning`).
+    above ``--max-tension`` (:func:`bifilar.studies.ranking.tension_range_caution`)
+    and a body hanging far turned at rest
+    (:func:`bifilar.analysis.rest_warnings.turn_warning`).
     ``joint``: the multi-hanging plan's ``accuracy`` when that plan is the
     experiment (``--hangings``): its components' limits are those of the
     joint sigma, not of the point's own hanging (whose Ixx from a swing, a
@@ -65,10 +64,8 @@ def point_cautions(cfg: dict, source: str, point: dict, what: str, cons=None, jo
     if cons is not None and (w := tension_range_caution(point, cons)) is not None:
         out.append(f"{what}: {w}")
     from ..analysis.rest_warnings import TURN_WARNING_HEAD
-    from .point import ELASTIC_DEPENDENT_WARNING  # its sigmas are lower bounds: say so where it is recommended
 
-    out += [f"{what}: {w}" for w in point.get("warnings") or ()
-            if w == ELASTIC_DEPENDENT_WARNING or w.startswith(TURN_WARNING_HEAD)]
+    out += [f"{what}: {w}" for w in point.get("warnings") or () if w.startswith(TURN_WARNING_HEAD)]
     return out
 
 

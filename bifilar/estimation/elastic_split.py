@@ -1,0 +1,209 @@
+"""Four or five elastic wires (``rig.stiffness``): what the measured inputs'
+stated uncertainties do to the rig the experimenter writes down.  SI units
+(N, m, kg), world frame; poses as (com m, R body -> world).
+
+On such a rig the split of the weight between the wires is set by the
+wires' lengths to within their stretch (EA / L: 16.7 N a mm of length on
+1.2 m wires of EA 20 kN, against ~5 N a wire), and the modes the model
+gives depend on how many wire directions it holds
+(:func:`~bifilar.analysis.equilibrium.constraint_rank`, the run's rule: an
+eigenvalue of ``G M^-1 G^T`` at or above 1e-6 of the largest), which on
+near-parallel wires turns on splays of ~1e-3 rad, i.e. on the anchors' and
+attachments' own millimetre.  Neither is a derivative the one-input-at-a-time
+budget sees: a drawn config leaves a wire slack (refused), or the model of
+it holds one direction more or fewer and loses or mixes the timed mode (the
+answer off by tens of sigma).  Measured in closed loops (docs/design.md
+"elastic25, session 25"): a 2 kg plate on four 1.2 m wires, 1 mm stds,
+EA 2 kN: 22 % of drawn configs held a fourth direction, the answered
+scattered 26x the sigma; EA 20 kN: 73 % slack.
+
+:func:`drawn_rig_risks` estimates both probabilities from fixed-seed
+normal draws of every budgeted input: the rest pose and the tensions
+linear in the inputs (forward differences of the elastic rest pose, one
+per input), the held-direction count evaluated at each drawn geometry and
+that pose (~0.1 s of CPU on four wires).  Checked against a hand model of
+the tensions (tests/test_sweep_audit24.py) and closed loops (design.md).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BifilarError
+from ..rotations import matrix_to_rotvec
+from .sensitivity import input_sigma, perturb
+
+#: normal draws of the inputs (fixed seed: the same figures on every run); a
+#: probability's binomial std is at most 0.5 / sqrt(DRAWS) = 0.008
+DRAWS = 4000
+#: draws of the tensions alone (n normal deviates each, the tensions' covariance factored): p_slack's
+#: binomial std at most 0.5 / sqrt(SLACK_DRAWS) = 0.0016
+SLACK_DRAWS = 100_000
+#: a drawn config counts as near a change of the held directions where an
+#: eigenvalue lies on the other side of this fraction of the run's cut-off
+#: than at the config (the eigenvalue grows as the splay squared: a factor 10
+#: is the splay's factor 3.2, so a point just clear of the cut-off in the
+#: draws is still refused its sigma)
+HELD_MARGIN = 0.1
+#: the sigma is not given where a drawn config leaves a wire slack this
+#: often or more (the answered experiments are then a selection by the
+#: lengths' errors, which the sigma does not describe)
+SLACK_MAX = 0.05
+
+
+@dataclass(frozen=True)
+class DrawnRigRisks:
+    """What :func:`drawn_rig_risks` found (probabilities over the drawn configs).
+
+    p_slack: a wire slack at the drawn config's rest (its tensions, linear
+    in the inputs, below 0 N); p_held: the model holds another number of
+    wire directions at the drawn config than at the config's; p_near: an
+    eigenvalue of the drawn config on the other side of the cut-off scaled
+    by :data:`HELD_MARGIN` (or its inverse) than the config's count (a
+    superset of p_held's); p_model: slack or held; tension_sd (n,) N: each wire's
+    tension's std from the inputs; tensions (n,) N at rest; held: the
+    config's held directions."""
+
+    p_slack: float
+    p_held: float
+    p_near: float
+    p_model: float
+    tension_sd: np.ndarray
+    tensions: np.ndarray
+    held: int
+
+
+def _inputs(scene, unc: dict) -> tuple[list, np.ndarray]:
+    """The budgeted inputs with a nonzero std and their stds (SI)."""
+    from .sensitivity import measured_inputs, stiff_inputs
+
+    names = measured_inputs(scene) + stiff_inputs(scene, unc) + ["gravity"]
+    sd = np.array([input_sigma(scene, n, unc) for n in names], float)
+    keep = sd > 0
+    return [n for n, k in zip(names, keep) if k], sd[keep]
+
+
+def _held(mass, inertia, R, G, margin: float = 1.0) -> np.ndarray:
+    """The run's held-direction count(s) of Jacobian(s) ``G`` (..., n, 6) at attitude(s) ``R``."""
+    from ..analysis.equilibrium import multiplier_matrix
+    from ..models.dependent_wires import held_directions
+
+    w = np.linalg.eigvalsh(multiplier_matrix(mass, inertia, R, G))
+    return held_directions(w, margin).sum(-1)
+
+
+def drawn_rig_risks(scene, rest, unc: dict, draws: int = DRAWS, seed: int = 0) -> DrawnRigRisks:
+    """:class:`DrawnRigRisks` of ``scene`` (elastic, more than three wires)
+    at its rest pose ``rest``, for configs drawn with the stated standard
+    uncertainties ``unc`` (as :func:`~bifilar.estimation.sensitivity.input_sigma`
+    reads them): ``draws`` normal draws (``seed``) of every input, the rest
+    pose (com, rotation vector) and tensions moved linearly (forward
+    differences at 1e-6 of each input's std), the drawn anchors,
+    attachments and CoM exact.  Raises :class:`~bifilar.errors.BifilarError`
+    where a neighbour's rest pose is not found."""
+    from ..analysis.derivatives import input_directions
+    from ..analysis.equilibrium import constraint_jacobian, rest_pose
+
+    names, sd = _inputs(scene, unc)
+    dc, dth, dT = (np.zeros((len(names), 3)), np.zeros((len(names), 3)), np.zeros((len(names), scene.n_wires)))
+    for j, (name, s) in enumerate(zip(names, sd)):
+        h = 1e-6 * s
+        rp = rest_pose(perturb(scene, name, h), guess=rest, local_only=True)
+        dc[j] = (rp.com - rest.com) / h * s
+        dth[j] = matrix_to_rotvec(rp.R @ rest.R.T) / h * s
+        dT[j] = (rp.tensions - rest.tensions) / h * s
+    rng = np.random.default_rng(seed)
+    z = rng.standard_normal((draws, len(names)))
+    slack = np.any(rest.tensions + z @ dT < 0, axis=1)
+    ev, V = np.linalg.eigh(dT.T @ dT)  # the tensions' covariance (n, n), N^2
+    u = rng.standard_normal((SLACK_DRAWS, len(ev)))
+    p_slack = float(np.mean(np.any(rest.tensions + (u * np.sqrt(np.maximum(ev, 0.0))) @ V.T < 0, axis=1)))
+    geo = [j for j, n in enumerate(names) if n != "stiffness"]  # EA's factor moves no point
+    dirs = input_directions(scene, [names[j] for j in geo])
+    A = scene.anchors + np.einsum("dj,jnk->dnk", z[:, geo] * sd[geo], dirs["anchors"])
+    P = scene.attachments + np.einsum("dj,jnk->dnk", z[:, geo] * sd[geo], dirs["attachments"])
+    # the drawn poses to first order, as the tensions: com + dc, R = (1 + [th]x) R0 (th ~ mrad)
+    th = z @ dth
+    w0 = P @ rest.R.T
+    w = w0 + np.cross(th[:, None, :], w0)
+    d = (rest.com + z @ dc)[:, None, :] + w - A
+    G = np.concatenate([d, np.cross(w, d)], axis=2)  # (draws, n, 6): constraint_jacobian's [d, w x d]
+    Rs = rest.R + np.cross(th[:, None, :], rest.R.T).transpose(0, 2, 1)  # (1 + [th]x) R0, column by column
+    G0 = constraint_jacobian(scene, rest.com, rest.R)[2]
+    held0 = int(_held(scene.mass, scene.inertia, rest.R, G0))
+    # near a change either way: the drawn count with the cut-off scaled by HELD_MARGIN (more held) or by its
+    # inverse (fewer held) differs from the config's
+    held = _held(scene.mass, scene.inertia, Rs, G) != held0
+    near = held | (_held(scene.mass, scene.inertia, Rs, G, HELD_MARGIN) != held0) | (
+        _held(scene.mass, scene.inertia, Rs, G, 1.0 / HELD_MARGIN) != held0)
+    # slack or held: the slack's finer figure where none is held (the only case a sigma is given)
+    p_model = float((slack | held).mean()) if held.any() else p_slack
+    return DrawnRigRisks(p_slack, float(held.mean()), float(near.mean()), p_model,
+                         np.sqrt(np.sum(dT ** 2, axis=0)), np.asarray(rest.tensions, float), held0)
+
+
+def risks_or_none(scene, rest, unc: dict) -> DrawnRigRisks | None:
+    """:func:`drawn_rig_risks` where ``scene`` has more than three elastic
+    wires, else None (or where a neighbour's rest is not found: None too,
+    the point's own figures then stand as they were)."""
+    from ..models.maximal import MAX_ELIMINATION_WIRES
+
+    if scene.stiffness is None or scene.n_wires <= MAX_ELIMINATION_WIRES:
+        return None
+    try:
+        return drawn_rig_risks(scene, rest, unc)
+    except (BifilarError, np.linalg.LinAlgError):
+        return None
+
+
+def sigma_refusal(risks: DrawnRigRisks) -> str | None:
+    """Why a sigma cannot be given for the rig of ``risks``, or None where it
+    can (no drawn config near a change of the held directions, fewer than
+    :data:`SLACK_MAX` slack)."""
+    parts = []
+    if risks.p_near > 0:
+        parts.append(
+            f"in {100 * risks.p_held:.2g} % of the configs the measured inputs' stated uncertainties allow "
+            f"(and within a factor {1 / HELD_MARGIN:g} of it in {100 * risks.p_near:.2g} %), the model holds another "
+            f"number of the near-parallel elastic wires' directions than the {risks.held} it holds here (a splay of "
+            "about a millimetre decides it), so it loses or mixes the timed mode and the answer is off by tens of "
+            "sigma")
+    if risks.p_slack >= SLACK_MAX:
+        i = int(np.argmax(risks.tension_sd / np.maximum(risks.tensions, 1e-300)))
+        parts.append(
+            f"the inputs' stated uncertainties spread each wire's tension by up to {risks.tension_sd[i]:.3g} N "
+            f"(wire {i + 1}, which carries {risks.tensions[i]:.3g} N: the split of elastic wires is set by their "
+            f"lengths to within their stretch), so {100 * risks.p_slack:.2g} % of the configs leave a wire slack")
+    if not parts:
+        return None
+    return ("the uncertainty cannot be given on these four or five elastic wires: " + "; and ".join(parts)
+            + ": state the lengths and points to a fraction of a millimetre (their uncertainty block), "
+            "or hang the body on three wires")
+
+
+def combined_refusal(p_limit, p_model: float) -> float:
+    """The probability that ``invert`` refuses a drawn config: at the
+    physical limit (``p_limit``, None: 0) or a drawn config the model cannot
+    answer for (``p_model``), taken as independent."""
+    p = 0.0 if p_limit is None or not math.isfinite(p_limit) else float(p_limit)
+    return 1.0 - (1.0 - p) * (1.0 - float(p_model))
+
+
+def point_risks(res: dict, scene, rest, unc: dict):
+    """(risks, refusal) of a sweep or plan point ``res`` (its dict, to which
+    ``drawn_rig`` is added: ``p_slack``, ``p_held``, ``p_near``,
+    ``tension_sd`` N, ``held_directions``) on four or five elastic wires
+    (:func:`risks_or_none`; rest pose ``rest``, stated uncertainties
+    ``unc``), else (None, None); ``refusal`` (:func:`sigma_refusal`) the
+    reason its sigmas are not given, or None.  Before session 25 those
+    sigmas were printed, 18-26x too small in closed loops (docs/design.md
+    "elastic25")."""
+    risks = risks_or_none(scene, rest, unc)
+    if risks is None:
+        return None, None
+    res["drawn_rig"] = {"p_slack": risks.p_slack, "p_held": risks.p_held, "p_near": risks.p_near,
+                        "tension_sd": risks.tension_sd, "held_directions": risks.held}
+    return risks, sigma_refusal(risks)
