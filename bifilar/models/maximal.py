@@ -407,6 +407,46 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
     (``R^T v + w x p``: a sparse ``p`` costs fewer terms than ``(R w) x (R
     p)``).
     """
+    if ticks and signature != "odeint":
+        raise ValueError("ticks are for the 'odeint' signature")
+    if signature not in SIGNATURES:
+        raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
+    lines, out, params = kernel_statements(n, zero, stabilise, extras, physical, derivatives)
+    if signature == "odeint":
+        # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
+        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
+        # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
+        # without the closure's cell indirection (~1-2 % of a call)
+        local = [f"{p}={p}" for p in _read(params, lines + out) + ["_pack", "_buf", "_out"]
+                 + (["_at", "_tick"] if ticks else [])]
+        head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
+                f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
+                f"    def f(y, t, {', '.join(local)}):\n"
+                + ("        if t >= _at[0]:\n            _tick(t)\n" if ticks else "")
+                + f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
+        tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
+    else:
+        head = f"    def f({', '.join(_STATE_NAMES)}):\n"
+        tail = f"        return ({', '.join(out)},)\n"
+    body = "\n".join("        " + ln for ln in lines)
+    src = f"def make({', '.join(params + (['_at', '_tick'] if ticks else []))}):\n{head}{body}\n{tail}    return f\n"
+    return src, params
+
+
+def kernel_statements(n: int, zero: frozenset, stabilise: bool, extras: bool, physical: bool = False,
+                      derivatives: bool = True) -> tuple[list, list, list]:
+    """The kernel's straight-line statements, rendered by :func:`_kernel_source`
+    as Python and by :mod:`bifilar.models.native_kernel` as C.
+
+    Returns ``(lines, out, params)``: ``lines`` the statements ``"name =
+    expr"`` (a name may be assigned again: the elimination's updates; four
+    or more wires add a tuple assignment from ``_min_norm``), ``out`` the
+    output expressions (13 derivative components in the state's layout,
+    SI units, then the extras of :func:`_kernel_source`), ``params`` the
+    parameter names (:func:`_param_names` less the zero set ``zero``) the
+    statements read by name.  Every expression is names, float literals
+    and ``+ - * /`` with parentheses, evaluated left to right as written
+    (Python's and C's precedence and associativity are the same)."""
     C = _Code(zero)
     L = C.lines
     # rotation body -> world from the (not necessarily unit) quaternion
@@ -533,29 +573,7 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
             out += [f"mass*muu{i}" for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
     lines, out = _inline_single_use(C.lines, out)
-    if signature == "odeint":
-        # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
-        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
-        # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
-        # without the closure's cell indirection (~1-2 % of a call)
-        local = [f"{p}={p}" for p in _read(params, lines + out) + ["_pack", "_buf", "_out"]
-                 + (["_at", "_tick"] if ticks else [])]
-        head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
-                f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
-                f"    def f(y, t, {', '.join(local)}):\n"
-                + ("        if t >= _at[0]:\n            _tick(t)\n" if ticks else "")
-                + f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
-        tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
-    elif ticks:
-        raise ValueError("ticks are for the 'odeint' signature")
-    elif signature == "args":
-        head = f"    def f({', '.join(_STATE_NAMES)}):\n"
-        tail = f"        return ({', '.join(out)},)\n"
-    else:
-        raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
-    body = "\n".join("        " + ln for ln in lines)
-    src = f"def make({', '.join(params + (['_at', '_tick'] if ticks else []))}):\n{head}{body}\n{tail}    return f\n"
-    return src, params
+    return lines, out, params
 
 
 _TOKEN = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
