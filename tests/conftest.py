@@ -15,6 +15,13 @@ from pathlib import Path
 # test_period_coverage 6.6 / 11.9 s, test_signal_quantisation 26.0 / 36.6 s, test_invert_roots 20.0 /
 # 20.3 s; `bifilar period` of a KTH record: the same JSON bit for bit.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# odeint's C kernels (bifilar.models.native_kernel) built in a directory of this run's own, never the user's
+# ~/.cache: every run starts cold, so its cost does not depend on earlier runs (xdist workers and CLI subprocesses
+# inherit it; one build a pattern a run; ckern, session 25: 4 test files' CPU with builds -0.1 to +0.4 s).
+if "BIFILAR_CACHE_DIR" not in os.environ:
+    import atexit, shutil, tempfile  # noqa: E401
+    os.environ["BIFILAR_CACHE_DIR"] = tempfile.mkdtemp(prefix="bifilar-tests-native-")
+    atexit.register(shutil.rmtree, os.environ["BIFILAR_CACHE_DIR"], True)
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

@@ -655,7 +655,8 @@ def _zero_set(vals: dict) -> frozenset:
 
 
 def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
-                    physical: bool = False, derivatives: bool = True, ticks: tuple | None = None):
+                    physical: bool = False, derivatives: bool = True, ticks: tuple | None = None,
+                    native: bool = True):
     """The model's right-hand side compiled for the parameters ``P``.
 
     Returns ``f(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz) -> tuple``
@@ -679,6 +680,10 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     (a progress bar's ticks without a wrapper's extra Python call per
     right-hand side: +3.6 % of a run's time with the wrapper, ~+0.5 %
     this way); the same numbers; a new function each call, not cached.
+    ``native`` (``signature="odeint"``, stabilised, no extras, up to
+    :data:`MAX_ELIMINATION_WIRES` wires): the same statements compiled as
+    C when :mod:`.native_kernel` has the library (the same numbers bit for
+    bit; ``BIFILAR_NATIVE=0`` or ``native=False``: the Python kernel).
     """
     if ticks is not None and signature != "odeint":
         raise ValueError("ticks are for the 'odeint' signature")
@@ -694,6 +699,11 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
         object.__setattr__(P, "_kernels", cache)
     key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ()) + \
         (() if derivatives else ("no derivatives",)) + (() if ticks is None else ("ticks",))
+    native = native and signature == "odeint" and stabilise and not extras and not physical
+    if native:
+        f = (cache.get(key + ("native",)) if ticks is None else None) or _native_odeint(P, cache, key, ticks)
+        if f is not None:
+            return f
     if key not in cache or ticks is not None:
         if "values" not in cache:  # the parameters' values and zero set, once for every kernel of P
             vals = _param_values(P)
@@ -712,6 +722,29 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
             return make(*[vals[p] for p in params], *ticks)
         cache[key] = make(*[vals[p] for p in params])
     return cache[key]
+
+
+def _native_odeint(P: "RigParams", cache: dict, key: tuple, ticks):
+    """odeint's kernel of ``P`` compiled as C (:mod:`.native_kernel`), or None
+    (not built yet, disabled, unavailable, more than MAX_ELIMINATION_WIRES
+    wires): the Python kernel's numbers bit for bit.  Cached on ``P`` as
+    the Python kernel is, the ``ticks`` one excepted."""
+    if "values" not in cache:
+        vals = _param_values(P)
+        cache["values"] = (vals, _zero_set(vals))
+    vals, zero = cache["values"]
+    n = int(P.lengths.shape[-1])
+    if n > MAX_ELIMINATION_WIRES:
+        return None
+    from . import native_kernel
+
+    params = [p for p in _param_names(n) if p not in zero]
+    f = native_kernel.odeint_kernel((n, zero), lambda: kernel_statements(n, zero, True, False),
+                                    [vals[p] for p in params], ticks,
+                                    reference=lambda: compiled_kernel(P, signature="odeint", native=False))
+    if f is not None and ticks is None:
+        cache[key + ("native",)] = f
+    return f
 
 
 def kernel_source(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
