@@ -29,6 +29,7 @@ def _fresh(monkeypatch, cache, mode="sync"):
     """The module's process state emptied, its cache ``cache``, ``BIFILAR_NATIVE=mode``."""
     monkeypatch.setattr(nk, "_patterns", {})
     monkeypatch.setattr(nk, "_env", {})
+    monkeypatch.setattr(nk, "_running", [])
     monkeypatch.setenv("BIFILAR_CACHE_DIR", str(cache))
     monkeypatch.setenv("BIFILAR_NATIVE", mode)
     monkeypatch.delenv("CC", raising=False)
