@@ -738,9 +738,8 @@ def _native_odeint(P: "RigParams", cache: dict, key: tuple, ticks):
         return None
     from . import native_kernel
 
-    params = [p for p in _param_names(n) if p not in zero]
     f = native_kernel.odeint_kernel((n, zero), lambda: kernel_statements(n, zero, True, False),
-                                    [vals[p] for p in params], ticks,
+                                    lambda: [vals[p] for p in _param_names(n) if p not in zero], ticks,
                                     reference=lambda: compiled_kernel(P, signature="odeint", native=False))
     if f is not None and ticks is None:
         cache[key + ("native",)] = f

@@ -158,8 +158,8 @@ def odeint_kernel(key: tuple, statements, values: list, ticks=None, reference=No
 
     ``key``: the pattern (wire count, zero set), ``statements()`` ->
     ``(lines, out, params)`` (called once a pattern and process),
-    ``values``: the parameters' values in the order of ``params`` (floats,
-    SI units), ``ticks``: ``(at, tick)`` as the Python kernel's (the tick
+    ``values()`` -> the parameters' values in the order of ``params``
+    (floats, SI units; asked only when the library is there), ``ticks``: ``(at, tick)`` as the Python kernel's (the tick
     check runs in Python before the C call: the same calls and times),
     ``reference()`` -> the Python ``f(y, t)`` with the same values, the
     check a newly loaded library must pass bit for bit.  The returned
@@ -188,11 +188,11 @@ def _odeint_kernel(key, statements, values, ticks, reference):
         return None
     if not pat.checked:
         pat.checked = True
-        if reference is None or not _agrees(pat.func, values, reference):
+        if reference is None or not _agrees(pat.func, values(), reference):
             log.debug("native kernel %s disagrees with the Python kernel: not used", pat.path)
             pat.state, pat.func = "failed", None
             return None
-    return _wrap(pat.func, values, ticks)
+    return _wrap(pat.func, values(), ticks)
 
 
 def _start(key, statements, m: str) -> _Pattern:
