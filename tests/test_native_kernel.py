@@ -254,6 +254,17 @@ def test_background_build_python_first_then_c(monkeypatch, tmp_path, capfd):
     assert sorted(p.suffix for p in tmp_path.iterdir()) == [".so"]
 
 
+def test_cache_directory_others_can_write_is_not_used(monkeypatch, tmp_path):
+    # a library from a directory another user could write to could be anyone's: not loaded, not built
+    d = tmp_path / "shared"
+    d.mkdir()
+    d.chmod(0o777)
+    _fresh(monkeypatch, d)
+    monkeypatch.setattr(nk, "_build", lambda *a: pytest.fail("built in a shared directory"))
+    assert not _is_native(mx.compiled_kernel(mx.params_from_scenes(trapezoid()), signature="odeint"))
+    assert not any(d.iterdir())
+
+
 def test_disabled_by_environment(monkeypatch, tmp_path):
     _fresh(monkeypatch, tmp_path, mode="0")
     monkeypatch.setattr(nk, "_start", lambda *a: pytest.fail("looked for a library"))

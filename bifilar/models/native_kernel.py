@@ -214,8 +214,13 @@ def _start(key, statements, m: str) -> _Pattern:
         return pat
     ident = "\n".join([ABI, cc[1], " ".join(FLAGS), sys.platform, os.uname().machine, src])
     name = "kern_" + hashlib.sha256(ident.encode()).hexdigest()[:32] + ".so"
-    pat = _Pattern(os.path.join(cache_dir(), name))
+    d = cache_dir()
+    pat = _Pattern(os.path.join(d, name))
     pat.src = src
+    if not _private(d):
+        log.debug("native kernel: %s is not this user's alone: not used", d)
+        pat.state = "failed"
+        return pat
     if _load(pat):
         return pat
     if os.path.exists(pat.path + ".failed"):
@@ -224,6 +229,18 @@ def _start(key, statements, m: str) -> _Pattern:
         return pat
     _build(pat, cc[0], m == "sync")
     return pat
+
+
+def _private(d: str) -> bool:
+    """``d`` is absent (it will be made 0700) or owned by this user and not
+    writable by group or others: a library loaded from it is one of ours."""
+    try:
+        st = os.stat(d)
+    except FileNotFoundError:
+        return True
+    except OSError:
+        return False
+    return st.st_uid == os.getuid() and not st.st_mode & 0o022
 
 
 def _load(pat: _Pattern) -> bool:
@@ -263,6 +280,7 @@ def _build(pat: _Pattern, cc: list, sync: bool) -> None:
     d = os.path.dirname(pat.path)
     lock = pat.path + ".lock"
     pat.state, pat.lock = "building", lock
+    fd = src_path = None
     try:
         os.makedirs(d, mode=0o700, exist_ok=True)
         try:
@@ -290,6 +308,12 @@ def _build(pat: _Pattern, cc: list, sync: bool) -> None:
     except OSError as exc:
         log.debug("native kernel: cannot build in %s (%s)", d, exc)
         pat.state = "failed"
+        if pat.proc is None and fd is not None:  # our lock, no child to remove it
+            for leftover in (lock, src_path):
+                try:
+                    os.unlink(leftover)
+                except (OSError, TypeError):
+                    pass
         return
     _running.append(pat.proc)
     if sync:
