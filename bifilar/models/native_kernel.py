@@ -91,7 +91,10 @@ def cache_dir() -> str:
 def c_source(lines: list, out: list, params: list) -> str:
     """The statements ``lines`` (``"name = expr"``), outputs ``out`` (13
     expressions) and parameter names ``params`` as the C function
-    ``void kern(const double *y, double *o, const double *p)``.
+    ``void kern(const double *y, double *o, const double *p)``: ``y`` the
+    state (13,) and ``o`` its time derivative (13,) in the layout of
+    :mod:`bifilar.models.maximal` (SI units, world frame, angular velocity
+    in body axes), ``p`` the parameters' values (SI) in ``params``' order.
     ValueError for anything that is not names, float literals (with a
     point: no integer division) and ``+ - * /`` with parentheses (no
     call: ``sqrt`` or ``_min_norm`` would not be Python's)."""
@@ -155,6 +158,10 @@ class _Pattern:
 
 def odeint_kernel(key: tuple, statements, values: list, ticks=None, reference=None):
     """A C ``f(y, t)`` for odeint, or None (then the caller runs its Python kernel).
+
+    ``f(y, t)``: ``y`` the state (13,) (SI units, world frame, angular
+    velocity in body axes), ``t`` the time (s, unused but for ``ticks``);
+    returns its time derivative (13,), the same bits as the Python kernel.
 
     ``key``: the pattern (wire count, zero set), ``statements()`` ->
     ``(lines, out, params)`` (called once a pattern and process),
