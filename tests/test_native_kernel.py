@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 
 import numpy as np
 import pytest
@@ -252,6 +253,37 @@ def test_background_build_python_first_then_c(monkeypatch, tmp_path, capfd):
     assert np.array_equal(_bits(f(y, 0.0)), _bits(mx.compiled_kernel(P, signature="odeint", native=False)(y, 0.0)))
     assert capfd.readouterr() == ("", "")
     assert sorted(p.suffix for p in tmp_path.iterdir()) == [".so"]
+
+
+@needs_cc
+def test_another_process_build_is_waited_for_and_a_stale_lock_taken_over(monkeypatch, shared_cache, tmp_path):
+    # a fresh lock (another process building the pattern): no second build, the Python kernel until the
+    # library appears under its name (here: copied in, the lock removed), then the C kernel; a lock older
+    # than STALE_LOCK_S (a dead build's): taken over and built here
+    import shutil
+
+    scene = _scene("trifilar_kth")
+    _fresh(monkeypatch, shared_cache)
+    assert _is_native(mx.compiled_kernel(mx.params_from_scenes(scene), signature="odeint"))
+    (built,) = [p.path for p in nk._patterns.values()]
+    name = os.path.basename(built)
+    lock = tmp_path / (name + ".lock")
+    lock.touch()
+    _fresh(monkeypatch, tmp_path, mode="async")
+    assert not _is_native(mx.compiled_kernel(mx.params_from_scenes(scene), signature="odeint"))
+    (pat,) = nk._patterns.values()
+    assert pat.state == "building" and pat.proc is None and not nk._running
+    assert not _is_native(mx.compiled_kernel(mx.params_from_scenes(scene), signature="odeint"))
+    shutil.copy(built, tmp_path / (name + ".part"))
+    os.replace(tmp_path / (name + ".part"), tmp_path / name)
+    lock.unlink()
+    assert _is_native(mx.compiled_kernel(mx.params_from_scenes(scene), signature="odeint"))
+    (tmp_path / name).unlink()
+    lock.touch()
+    os.utime(lock, (time.time() - nk.STALE_LOCK_S - 1,) * 2)
+    _fresh(monkeypatch, tmp_path)
+    assert _is_native(mx.compiled_kernel(mx.params_from_scenes(scene), signature="odeint"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
 
 
 def test_cache_directory_others_can_write_is_not_used(monkeypatch, tmp_path):
