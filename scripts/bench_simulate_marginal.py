@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
 import time
@@ -44,6 +45,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+# odeint's C kernel (bifilar.models.native_kernel) built in the foreground on the warm-up, so the timed
+# repeats measure the steady state; BIFILAR_NATIVE=0 in the environment measures the Python kernel
+os.environ.setdefault("BIFILAR_NATIVE", "sync")
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from bench_work_precision import scipy_run  # noqa: E402

@@ -39,6 +39,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+# odeint's C kernel (bifilar.models.native_kernel) built in the foreground on the warm-up, so the timed
+# repeats measure the steady state; BIFILAR_NATIVE=0 in the environment measures the Python kernel
+os.environ.setdefault("BIFILAR_NATIVE", "sync")
 
 from bifilar.analysis.equilibrium import rest_pose  # noqa: E402
 from bifilar.analysis.modes import linear_modes  # noqa: E402
@@ -274,6 +277,7 @@ def main(argv=None) -> int:
     ap.add_argument("--parts", action="store_true", help="also time the parts of one point")
     args = ap.parse_args(argv)
     res = bench(args.repeats)
+    print(f"BIFILAR_NATIVE={os.environ['BIFILAR_NATIVE']} (odeint's C kernel: 0 = off)")
     for name, r in res.items():
         print(f"{name}: {1e3 * r['point_cpu_s']:.0f} ms CPU a point ({r['points_per_s_cpu']:.2f} points/s; "
               f"{1e3 * r['point_without_nonlinear_cpu_s']:.0f} ms without the nonlinear runs); one rest pose + modes "

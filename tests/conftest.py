@@ -4,6 +4,7 @@ example files, which have their own tests)."""
 from __future__ import annotations
 
 import os
+import tempfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -15,6 +16,10 @@ from pathlib import Path
 # test_period_coverage 6.6 / 11.9 s, test_signal_quantisation 26.0 / 36.6 s, test_invert_roots 20.0 /
 # 20.3 s; `bifilar period` of a KTH record: the same JSON bit for bit.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# odeint's C kernels (bifilar.models.native_kernel) built in the system's temporary directory, one per user, never
+# the user's ~/.cache; kept between runs: a cold run builds ~0.06 s CPU a wire count and zero pattern (13 for
+# test_point_cost.py: +0.9 s; warm -0.3 s), the same numbers bit for bit either way (ckern, session 25)
+os.environ.setdefault("BIFILAR_CACHE_DIR", os.path.join(tempfile.gettempdir(), f"bifilar-tests-native-{os.getuid()}"))
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

@@ -407,6 +407,46 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
     (``R^T v + w x p``: a sparse ``p`` costs fewer terms than ``(R w) x (R
     p)``).
     """
+    if ticks and signature != "odeint":
+        raise ValueError("ticks are for the 'odeint' signature")
+    if signature not in SIGNATURES:
+        raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
+    lines, out, params = kernel_statements(n, zero, stabilise, extras, physical, derivatives)
+    if signature == "odeint":
+        # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
+        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
+        # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
+        # without the closure's cell indirection (~1-2 % of a call)
+        local = [f"{p}={p}" for p in _read(params, lines + out) + ["_pack", "_buf", "_out"]
+                 + (["_at", "_tick"] if ticks else [])]
+        head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
+                f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
+                f"    def f(y, t, {', '.join(local)}):\n"
+                + ("        if t >= _at[0]:\n            _tick(t)\n" if ticks else "")
+                + f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
+        tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
+    else:
+        head = f"    def f({', '.join(_STATE_NAMES)}):\n"
+        tail = f"        return ({', '.join(out)},)\n"
+    body = "\n".join("        " + ln for ln in lines)
+    src = f"def make({', '.join(params + (['_at', '_tick'] if ticks else []))}):\n{head}{body}\n{tail}    return f\n"
+    return src, params
+
+
+def kernel_statements(n: int, zero: frozenset, stabilise: bool, extras: bool, physical: bool = False,
+                      derivatives: bool = True) -> tuple[list, list, list]:
+    """The kernel's straight-line statements, rendered by :func:`_kernel_source`
+    as Python and by :mod:`bifilar.models.native_kernel` as C.
+
+    Returns ``(lines, out, params)``: ``lines`` the statements ``"name =
+    expr"`` (a name may be assigned again: the elimination's updates; four
+    or more wires add a tuple assignment from ``_min_norm``), ``out`` the
+    output expressions (13 derivative components in the state's layout,
+    SI units, then the extras of :func:`_kernel_source`), ``params`` the
+    parameter names (:func:`_param_names` less the zero set ``zero``) the
+    statements read by name.  Every expression is names, float literals
+    and ``+ - * /`` with parentheses, evaluated left to right as written
+    (Python's and C's precedence and associativity are the same)."""
     C = _Code(zero)
     L = C.lines
     # rotation body -> world from the (not necessarily unit) quaternion
@@ -533,29 +573,7 @@ def _kernel_source(n: int, zero: frozenset, stabilise: bool, extras: bool,
             out += [f"mass*muu{i}" for i in range(n)]
     params = [p for p in _param_names(n) if p not in zero]
     lines, out = _inline_single_use(C.lines, out)
-    if signature == "odeint":
-        # the derivatives packed into one buffer viewed by one array: odeint copies the array it is
-        # handed at once, and turning a 13-tuple into an array costs ~20 % of a kernel call; the
-        # parameters are default arguments, i.e. locals of f (odeint passes only y and t), read
-        # without the closure's cell indirection (~1-2 % of a call)
-        local = [f"{p}={p}" for p in _read(params, lines + out) + ["_pack", "_buf", "_out"]
-                 + (["_at", "_tick"] if ticks else [])]
-        head = (f"    _buf = bytearray({8 * len(out)})\n    _out = _np.frombuffer(_buf)\n"
-                f"    _pack = _struct.Struct('{len(out)}d').pack_into\n"
-                f"    def f(y, t, {', '.join(local)}):\n"
-                + ("        if t >= _at[0]:\n            _tick(t)\n" if ticks else "")
-                + f"        {', '.join(_STATE_NAMES)} = y.tolist()\n")
-        tail = f"        _pack(_buf, 0, {', '.join(out)})\n        return _out\n"
-    elif ticks:
-        raise ValueError("ticks are for the 'odeint' signature")
-    elif signature == "args":
-        head = f"    def f({', '.join(_STATE_NAMES)}):\n"
-        tail = f"        return ({', '.join(out)},)\n"
-    else:
-        raise ValueError(f"signature must be one of {SIGNATURES}, got {signature!r}")
-    body = "\n".join("        " + ln for ln in lines)
-    src = f"def make({', '.join(params + (['_at', '_tick'] if ticks else []))}):\n{head}{body}\n{tail}    return f\n"
-    return src, params
+    return lines, out, params
 
 
 _TOKEN = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
@@ -637,7 +655,8 @@ def _zero_set(vals: dict) -> frozenset:
 
 
 def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
-                    physical: bool = False, derivatives: bool = True, ticks: tuple | None = None):
+                    physical: bool = False, derivatives: bool = True, ticks: tuple | None = None,
+                    native: bool = True):
     """The model's right-hand side compiled for the parameters ``P``.
 
     Returns ``f(rx, ry, rz, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz) -> tuple``
@@ -661,6 +680,10 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     (a progress bar's ticks without a wrapper's extra Python call per
     right-hand side: +3.6 % of a run's time with the wrapper, ~+0.5 %
     this way); the same numbers; a new function each call, not cached.
+    ``native`` (``signature="odeint"``, stabilised, no extras, up to
+    :data:`MAX_ELIMINATION_WIRES` wires): the same statements compiled as
+    C when :mod:`.native_kernel` has the library (the same numbers bit for
+    bit; ``BIFILAR_NATIVE=0`` or ``native=False``: the Python kernel).
     """
     if ticks is not None and signature != "odeint":
         raise ValueError("ticks are for the 'odeint' signature")
@@ -676,6 +699,11 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
         object.__setattr__(P, "_kernels", cache)
     key = (bool(stabilise), bool(extras), signature) + (("physical",) if physical else ()) + \
         (() if derivatives else ("no derivatives",)) + (() if ticks is None else ("ticks",))
+    native = native and signature == "odeint" and stabilise and not extras and not physical
+    if native:
+        f = (cache.get(key + ("native",)) if ticks is None else None) or _native_odeint(P, cache, key, ticks)
+        if f is not None:
+            return f
     if key not in cache or ticks is not None:
         if "values" not in cache:  # the parameters' values and zero set, once for every kernel of P
             vals = _param_values(P)
@@ -694,6 +722,28 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
             return make(*[vals[p] for p in params], *ticks)
         cache[key] = make(*[vals[p] for p in params])
     return cache[key]
+
+
+def _native_odeint(P: "RigParams", cache: dict, key: tuple, ticks):
+    """odeint's kernel of ``P`` compiled as C (:mod:`.native_kernel`), or None
+    (not built yet, disabled, unavailable, more than MAX_ELIMINATION_WIRES
+    wires): the Python kernel's numbers bit for bit.  Cached on ``P`` as
+    the Python kernel is, the ``ticks`` one excepted."""
+    if "values" not in cache:
+        vals = _param_values(P)
+        cache["values"] = (vals, _zero_set(vals))
+    vals, zero = cache["values"]
+    n = int(P.lengths.shape[-1])
+    if n > MAX_ELIMINATION_WIRES:
+        return None
+    from . import native_kernel
+
+    f = native_kernel.odeint_kernel((n, zero), lambda: kernel_statements(n, zero, True, False),
+                                    lambda: [vals[p] for p in _param_names(n) if p not in zero], ticks,
+                                    reference=lambda: compiled_kernel(P, signature="odeint", native=False))
+    if f is not None and ticks is None:
+        cache[key + ("native",)] = f
+    return f
 
 
 def kernel_source(P: "RigParams", stabilise: bool = True, extras: bool = False, signature: str = "args",
