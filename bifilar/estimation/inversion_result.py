@@ -173,8 +173,8 @@ def std_unavailable_text(inputs, option: str, dependent: bool | None = None) -> 
     CoM on the attachment line: hang it lower); None (not known): both
     causes, the latter's remedy."""
     if dependent:
-        return ("the uncertainty cannot be given: these inputs have no derivative here: the rig's wires are "
-                "dependent at rest (four or five taut wires whose tensions statics does not fix), and on rigid "
+        return ("the uncertainty cannot be given: these inputs have no derivative here: the rig has four "
+                "or five dependent wires (taut at rest, their tensions not fixed by statics), and on rigid "
                 "wires any change of one of them, however small, leaves a wire slack or removes a mode: "
                 + ", ".join(inputs) + ". Hang the body on three wires (or two), or state the wires' stiffness "
                 "(rig.stiffness, N: the tensions then follow from the wires' stretch; a sweep then says how often "
