@@ -59,7 +59,7 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
     scene = load_scene(config)
     rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
-    warn_at_rest(scene, rest, ms.modes)
+    at_rest = warn_at_rest(scene, rest, ms.modes)
     from ..analysis.close_modes import close_mode_warnings
 
     close = close_mode_warnings(ms.modes)
@@ -70,8 +70,8 @@ def modes(config: str, as_json: bool, out: str | None, force: bool) -> None:
         write_csv(out_p, ["index", "period_s", *[f"shape_{c}" for c in COMPONENTS]], rows)
     if as_json:
         doc = modes_document(scene, rest, ms)
-        if close:
-            doc["warnings"] = close
+        if at_rest or close:  # every warning printed on stderr, the rest pose's first
+            doc["warnings"] = at_rest + close
         emit_json(doc)
         return
     from rich.table import Table

@@ -58,7 +58,7 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
     timing = stated_timing(cfg)  # the period's numerical error is held against a tenth of it
     rest = config_rest_pose(scene, config)
     ms = linear_modes(scene, rest)
-    warn_at_rest(scene, rest, ms.modes, only=ms.pick(mode).label)
+    at_rest = warn_at_rest(scene, rest, ms.modes, only=ms.pick(mode).label)
     if model == "kane":
         from ..analysis.kane_run import simulate_kane
 
@@ -88,7 +88,9 @@ def simulate(config, mode, amplitude, periods, model, theta, method, rtol, on_sl
 
         plot_simulation(plot_p, res, scene.name)
     if as_json:
-        emit_json(res.to_json())
+        doc = res.to_json()
+        doc["warnings"] = at_rest + doc["warnings"]  # the rest pose's, printed above, then the run's
+        emit_json(doc)
         for w in res.warnings:
             click.echo(f"warning: {w}", err=True)
         return

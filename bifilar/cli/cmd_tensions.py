@@ -53,17 +53,23 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     out_p = check_output_path(out, force, [config, motion], "--out")
     scene = load_scene(config)
     comps = tuple(solve_for) or ("Ixx", "Iyy", "Izz")
+    warns: list[str] = []  # every warning printed on stderr, in order: the JSON's "warnings"
+
+    def say(w: str) -> None:
+        click.echo(f"warning: {w}", err=True)
+        warns.append(w)
+
     if motion is None:
         rest = config_rest_pose(scene, config)
         ms = linear_modes(scene, rest)
         mode = ms.pick(mode).label
-        warn_at_rest(scene, rest, ms.modes, only=mode)  # as simulate's run
+        warns += warn_at_rest(scene, rest, ms.modes, only=mode)  # as simulate's run
         with progress_bar("simulating", enabled=True) as upd:
             res = simulate(scene, mode, amplitude, periods, rest=rest, modes=ms, rtol=SIM_RTOL,
                            samples_per_period=200, progress=upd)
         t, y, T_model = res.t, res.y, res.tensions
         for w in res.warnings:  # a wire going slack: the 'tensions' after it are not physical
-            click.echo(f"warning: {w}", err=True)
+            say(w)
         from ..analysis.elastic_rest import loaded_scene
 
         P = mx.params_from_scenes(loaded_scene(scene, rest))  # the run's wires (loaded where rig.stiffness is stated)
@@ -80,7 +86,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
     u = wire_units(scene, y[:, 0:3], R)
     mismatch, mismatch_warning = length_mismatch(scene, y[:, 0:3], R, rest)
     if mismatch_warning:
-        click.echo(f"warning: {mismatch_warning}", err=True)
+        say(mismatch_warning)
     F_gen, resid = general_tensions(scene.mass, scene.gravity, accel, u)
     doc = {"source": source, "samples": int(len(t)),
            "model": {"min": T_model.min(axis=0), "max": T_model.max(axis=0)},
@@ -99,7 +105,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         gw = None if motion is None else general_noise_warning(
             doc["general"]["noise_std"], T_model, math.sqrt(float(np.trace(rec.com_noise)) / 3))
         if gw:
-            click.echo(f"warning: {gw}", err=True)
+            say(gw)
     if scene.n_wires > 3:
         doc["general"]["note"] = (f"underdetermined: {scene.n_wires} wires, 3 equations (Newton's law); the minimum-norm "
                                   "tensions balance the forces but are not the wire tensions")
@@ -131,7 +137,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         est, std, std_inputs, interval, noisy = fit.est, fit.std, fit.std_geometry, fit.interval, fit.noise_undetermined
         dof = {c: (v if math.isfinite(v) else None) for c, v in fit.dof.items()}
         for w in pose_noise_warnings(fit):
-            click.echo(f"warning: {w}", err=True)
+            say(w)
     # a component the motion does not excite was fixed at the config's value in the fit: its first-pass
     # number is not determined (a vertical bifilar's Iyy came out 20.3 for 30), so none is printed
     undetermined = [c for c in comps if not std[c] == std[c] or c in est.poorly_excited]
@@ -171,7 +177,7 @@ def tensions(config, mode, amplitude, periods, motion, solve_for, as_json, out, 
         hdr += ["symmetric"] if F_sym is not None else []
         write_csv(out_p, hdr, np.column_stack(cols))
     if as_json:
-        emit_json(doc)
+        emit_json({**doc, "warnings": warns})
         return
     from rich.table import Table
 

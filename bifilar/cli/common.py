@@ -321,14 +321,17 @@ def config_rest_pose(scene, config):
     return rest_of_config(scene, config)
 
 
-def warn_at_rest(scene, rest, modes, only: str | None = None) -> None:
+def warn_at_rest(scene, rest, modes, only: str | None = None) -> list[str]:
     """Log the rest pose's warnings to stderr (``warning: ...``), as
     ``modes``, ``simulate`` and ``tensions`` give them
-    (:func:`bifilar.analysis.rest_warnings.rest_warnings`)."""
+    (:func:`bifilar.analysis.rest_warnings.rest_warnings`), and return them
+    (one line each, no prefix) for the command's JSON ``warnings``."""
     from ..analysis.rest_warnings import rest_warnings
 
-    for w in rest_warnings(scene, rest, modes, only=only):
+    ws = rest_warnings(scene, rest, modes, only=only)
+    for w in ws:
         click.echo(f"warning: {w}", err=True)
+    return ws
 
 
 def emit_json(doc: Any) -> None:

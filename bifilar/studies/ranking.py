@@ -363,7 +363,8 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
 
 def _unmeasured_feasible(msg: str, valid: list[dict], c: Constraints, target: str | None, among) -> str:
     """The clause a binding-limit message needs where some valid point meets
-    every limit but has no sigma for a component the objective asks for (a
+    every limit but has no sigma (None, or inf: ``sigma_unavailable``) for a
+    component the objective asks for (a
     vertical bifilar's Iyy, measurable only where the wires lean: a light
     part's Iyy from a swing at +- 944 %, every such point 0.3-1.2 % from
     another mode, docs/design.md "audit24, session 24"): the
@@ -374,8 +375,8 @@ def _unmeasured_feasible(msg: str, valid: list[dict], c: Constraints, target: st
     sel = [target] if target else list(among if among is not None else point_components(valid))
     meet = [p for p in valid if not violations(p, c, target)]
     miss: list[str] = []
-    for p in meet:
-        miss += [k for k in sel if k in p["components"] and rel_sigma(p["components"][k]) is None and k not in miss]
+    for p in meet:  # no sigma: None, or inf (a stated amplitude whose range reaches the half turn, json25)
+        miss += [k for k in sel if k in p["components"] and not math.isfinite(objective(p, k)) and k not in miss]
     if not meet or not miss:
         return msg
     at = ", ".join(f"{k} = {v:.6g}" for k, v in meet[0].get("params", {}).items())
