@@ -78,3 +78,13 @@ def test_invert_on_four_elastic_wires_gives_the_sweep_points_refusal_or_its_sigm
     assert len(note) == 1, res.notes
     got = float(re.search(r"slack in ([0-9.e+-]+) %", note[0]).group(1)) / 100
     assert abs(got - hand) < 4 * math.sqrt(hand * (1 - hand) / 1e5) + 2e-3 + 5e-4, (got, hand)
+
+
+def test_the_refusals_shares_read_as_percentages_near_all_configs():
+    """A drawn-rig share near 1 printed '1e+02 %' (a pentagon of EA 2 kN at 1 mm: 99.8 % near the cut-off)."""
+    from bifilar.estimation.elastic_split import DrawnRigRisks, sigma_refusal
+
+    r = DrawnRigRisks(p_slack=0.9995, p_held=0.56, p_near=0.998, p_model=1.0, tension_sd=np.array([9.0, 1.0]),
+                      tensions=np.array([4.9, 4.9]), held=3)
+    text = sigma_refusal(r)
+    assert "in 56 % of the configs" in text and "in 99.8 %)" in text and "so 100 % of the configs" in text, text

@@ -169,8 +169,8 @@ def sigma_refusal(risks: DrawnRigRisks) -> str | None:
     parts = []
     if risks.p_near > 0:
         parts.append(
-            f"in {100 * risks.p_held:.2g} % of the configs the measured inputs' stated uncertainties allow "
-            f"(and within a factor {1 / HELD_MARGIN:g} of it in {100 * risks.p_near:.2g} %), the model holds another "
+            f"in {100 * risks.p_held:.3g} % of the configs the measured inputs' stated uncertainties allow "
+            f"(and within a factor {1 / HELD_MARGIN:g} of it in {100 * risks.p_near:.3g} %), the model holds another "
             f"number of the near-parallel elastic wires' directions than the {risks.held} it holds here (a splay of "
             "about a millimetre decides it), so it loses or mixes the timed mode and the answer is off by tens of "
             "sigma")
@@ -179,7 +179,7 @@ def sigma_refusal(risks: DrawnRigRisks) -> str | None:
         parts.append(
             f"the inputs' stated uncertainties spread each wire's tension by up to {risks.tension_sd[i]:.3g} N "
             f"(wire {i + 1}, which carries {risks.tensions[i]:.3g} N: the split of elastic wires is set by their "
-            f"lengths to within their stretch), so {100 * risks.p_slack:.2g} % of the configs leave a wire slack")
+            f"lengths to within their stretch), so {100 * risks.p_slack:.3g} % of the configs leave a wire slack")
     if not parts:
         return None
     return ("the uncertainty cannot be given on these four or five elastic wires: " + "; and ".join(parts)
@@ -201,7 +201,7 @@ def slack_note(risks: DrawnRigRisks) -> str | None:
     :data:`SLACK_MAX`), else None."""
     if not SLACK_NOTE <= risks.p_slack < SLACK_MAX:
         return None
-    return (f"the measured inputs' stated uncertainties leave a wire slack in {100 * risks.p_slack:.2g} % of the "
+    return (f"the measured inputs' stated uncertainties leave a wire slack in {100 * risks.p_slack:.3g} % of the "
             "configs they allow (the split of elastic wires is set by their lengths to within their stretch): "
             "this answer takes every wire as taut, as the config's are; a wire that hangs slack on the rig is a "
             "rig this config does not describe (the std, the budget's over all configs, held for the answered "
