@@ -289,11 +289,18 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                 warnings.append("the nonlinear estimate lies on the edge of the physical set (triangle inequality "
                                 "I1 + I2 = I3, a thin flat body)")
     # -- the budget -------------------------------------------------------
+    from .elastic_split import hangings_check
+
+    # four or five elastic wires: the sweep point's rule on each hanging's config (drawn configs that leave a
+    # wire slack or that the model holds otherwise; docs/design.md "inv25, session 25"); a refused std needs
+    # no second-order pass
+    elastic_refusal, slack_notes = hangings_check(((m.hanging.name, m.scene0, m.rest0) for m in pb.models), unc_all)
     laws = est_nl.laws if method == "nonlinear" else None
     stated = "inertia" in {**ms.uncertainty, **(unc or {})}
     budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(pb, p_hat, r_hat, method, rungs, best,
                                                                             unc_all, rtol, laws=laws,
-                                                                            prior_stated=stated)
+                                                                            prior_stated=stated,
+                                                                            linear_only=elastic_refusal is not None)
     if laws:  # the local slope against the secant over the estimate's std (a period that wiggles in the unknown)
         from .slope_check import secant_check
 
@@ -301,7 +308,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         warnings += rough
         if changed:
             budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(
-                pb, p_hat, r_hat, method, rungs, best, unc_all, rtol, laws=laws, prior_stated=stated)
+                pb, p_hat, r_hat, method, rungs, best, unc_all, rtol, laws=laws, prior_stated=stated,
+                linear_only=elastic_refusal is not None)
     # periods scattering beyond their stated timing stds: the timing terms widened (birge.py) before any std
     # is printed or used (the warnings below, the ladder's differences in std, the interval, the Monte Carlo)
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
@@ -397,7 +405,11 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           sims=(est_nl.sims if est_nl is not None else []), amplitude_laws=list(laws or []))
     res.input_factor_shift = dict(bctx.factor_shift)
     res.prior_inertia = bctx.prior
-    if degenerate:
+    res.notes += slack_notes
+    if elastic_refusal is not None:
+        res.std_unavailable = elastic_refusal
+        warnings.append(res.std_unavailable)
+    elif degenerate:
         # inputs with no derivative (a knife edge): within their stated
         # uncertainty the scene changes qualitatively, and a budget without
         # them is far too small (50x on the thesis plate with its CoM on the
@@ -637,7 +649,7 @@ def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndar
 
 
 def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float,
-                cache: dict | None = None, laws=None, prior_stated: bool | None = None):
+                cache: dict | None = None, laws=None, prior_stated: bool | None = None, linear_only: bool = False):
     """The budget every answer (the chosen root and any further one) gets:
     the linear budget (:func:`~bifilar.estimation.budget._budget`), the
     systematic term of an unstated amplitude, and second-order propagation
@@ -648,14 +660,15 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
     ``laws``: the amplitude laws of the nonlinear method (``Estimate.laws``).
     ``prior_stated``: not None, the components not solved for are budgeted
     (``bctx.prior``, :mod:`~bifilar.estimation.prior_inertia`; whether the
-    user stated ``inertia``); None (a planner's std): left out."""
+    user stated ``inertia``); None (a planner's std): left out.
+    ``linear_only``: no second-order pass (no std is given: a drawn-rig refusal, elastic_split)."""
     budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws, rtol)
     if prior_stated is not None:
         bctx.prior = prior_terms(pb, p, r, T_lin, bctx, unc, prior_stated, laws, rtol)
         budget = with_prior(budget, bctx.prior)
     std_lin = budget.std
     amp_default = amplitude_systematic(pb, p, r, bctx, rtol)
-    if any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):
+    if linear_only or any(bctx.sigmas.get(d, 0) > 0 for d in degenerate):
         # no std can be given anyway (InversionResult.std_unavailable): skip
         # the sigma points, each a global rest-pose search on such a scene
         return budget, std_lin, [d for d in degenerate if bctx.sigmas.get(d, 0) > 0], T_lin, bctx, amp_default
