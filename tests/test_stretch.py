@@ -138,7 +138,16 @@ def test_invert_closes_the_loop_with_the_default_stds(n, amplitude):
         r = runner.invoke(main, ["invert", "h.yaml", "--period", f"torsion={T!r}", "--amplitude", str(amplitude),
                                  "--json"])
     assert r.exit_code == 0, r.stderr
-    iz = json.loads(r.stdout)["inertia"]["Izz"]
+    doc = json.loads(r.stdout)
+    iz = doc["inertia"]["Izz"]
+    if n == 4:
+        # inv25 (session 25): on four elastic wires at the default 1 mm stds, 3.2 % of the configs those stds
+        # allow make the model hold another number of the near-parallel wires' directions (82 % come within a
+        # factor 10 of its cut-off), where the answer is off by tens of sigma (elastic25's closed loops): the
+        # std is refused with that reason, as the sweep refuses the sigma; the value is still the truth's
+        assert iz["std"] is None and "four or five elastic wires" in doc["std_unavailable"], doc["std_unavailable"]
+        assert abs(iz["value"] - 20.0) < 1e-9 * 20.0, iz
+        return
     assert iz["std"] is not None and iz["std"] > 0
     assert abs(iz["value"] - 20.0) < 1e-3 * iz["std"], iz
 
