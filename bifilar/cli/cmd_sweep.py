@@ -345,9 +345,11 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         if p["violations"]:
             notes.append(f"{i}: " + esc("; ".join(p["violations"])))
         unavailable = [c for c in comps if p["components"][c].get("sigma_unavailable")]
-        if unavailable:  # not ranked: say why (the inputs are in the JSON's sigma_unavailable)
-            notes.append(f"{i}: no uncertainty for {', '.join(unavailable)}: an input has no derivative here "
-                         "(the CoM on the attachment line, or dependent wires); see --json")
+        if unavailable:  # not ranked: say why, in the point's own words (whole in the JSON's sigma_unavailable)
+            why = p["components"][unavailable[0]]["sigma_unavailable"]
+            why = why.removeprefix("the uncertainty cannot be given")
+            why = why if len(why) <= 160 else why[:157].rstrip() + "..."
+            notes.append(f"{i}: no uncertainty for {', '.join(unavailable)}" + esc(why) + "; see --json")
         t.add_row(*row)
     con.print(t)
     for line in notes[:20]:
