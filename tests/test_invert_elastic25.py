@@ -88,3 +88,16 @@ def test_the_refusals_shares_read_as_percentages_near_all_configs():
                       tensions=np.array([4.9, 4.9]), held=3)
     text = sigma_refusal(r)
     assert "in 56 % of the configs" in text and "in 99.8 %)" in text and "so 100 % of the configs" in text, text
+
+
+def test_a_refusal_near_the_cut_off_only_does_not_say_zero_percent_cross_it():
+    """test_elastic25's pentagon at 0.1 mm: no drawn config crossed the held-direction cut-off, 0.3 % came
+    within its factor 10; the reason read 'in 0 % of the configs ... the model holds another number'."""
+    from bifilar.estimation.elastic_split import DrawnRigRisks, sigma_refusal
+
+    r = DrawnRigRisks(p_slack=0.0, p_held=0.0, p_near=0.003, p_model=0.0, tension_sd=np.array([1.0, 1.0]),
+                      tensions=np.array([4.9, 4.9]), held=3)
+    text = sigma_refusal(r)
+    assert "in 0.3 % of the configs" in text and "comes within a factor 10 of holding" in text, text
+    assert "in 0 %" not in text and "none of the configs drawn crossed it" in text, text
+    assert "off by tens of sigma" in text
