@@ -126,3 +126,24 @@ def test_modes_and_sweep_say_it(tmp_path: Path):
     assert any(w.startswith("at rest the body hangs turned 74.13 deg") for w in p["warnings"])
     assert any(c.startswith("the recommended point: at rest the body hangs turned 74.13 deg")
                for c in point_cautions(M5, "t", p, "the recommended point"))
+
+
+def test_invert_says_it_too():
+    """`invert` of the M5 rig (its torsion at the model's own period, so the answer is the config's Izz) warns of
+    the turn as `modes` does; a level rig's invert does not (the thesis plate: its period from `modes`)."""
+    from bifilar.analysis.modes import linear_modes
+    from bifilar.estimation.invert import invert
+    from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet
+    from bifilar.config import read_yaml
+
+    for cfg, turned in ((M5, True), (read_yaml(CONFIGS / "thesis_plate_rest.yaml"), False)):
+        scene = scene_from_dict(cfg, warn=False)
+        rest = rest_pose(scene)
+        T = linear_modes(scene, rest).get("torsion").period
+        ms = MeasurementSet([Hanging("ref", scene, np.eye(3))],
+                            [Measurement("torsion", T, 1e-4, "period", "--period", amplitude=0.0, cycles=10)])
+        res = invert(ms, solve_for=["Izz"], ladder=False)
+        got = [w for w in res.warnings if "hangs turned" in w]
+        assert len(got) == (1 if turned else 0), res.warnings
+        if turned:
+            assert got[0] == turn_warning(scene, rest)

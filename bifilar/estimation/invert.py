@@ -344,7 +344,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                         "(sigma points at +-sqrt(3) sigma, re-solved), std " + ", ".join(
                             f"{n} {budget.std[i]:.3g} (linear {std_lin[i]:.3g})" for i, n in enumerate(pb.unknowns)))
     warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
-    warnings += _close_timed_modes(pb, p_hat)
+    warnings += _close_timed_modes(pb, p_hat) + _turned_hangings(pb)
     if fit["birge_factor"] > 1.0:
         warnings.append(birge_note(fit["birge_factor"], fit))
     # -- ladder rows ------------------------------------------------------
@@ -498,6 +498,23 @@ def _close_timed_modes(pb: Problem, p) -> list[str]:
         if timed:
             where = f"hanging '{hm.hanging.name}': " if len(pb.models) > 1 else ""
             out += close_mode_warnings(hm.locate(hm.scene(vals))[1].modes, timed, where)
+    return out
+
+
+def _turned_hangings(pb: Problem) -> list[str]:
+    """:func:`~bifilar.analysis.rest_warnings.turn_warning` of each hanging's
+    rest pose (a body hanging far turned from its configured orientation:
+    more often a mistyped wire length or attachment than a rig meant so),
+    as ``modes`` and each sweep point say it.  The rest pose's orientation
+    depends on the mass and CoM, not on the unknown inertia: the config's
+    rest pose is the answer's."""
+    from ..analysis.rest_warnings import turn_warning
+
+    out = []
+    for hm in pb.models:
+        w = turn_warning(hm.scene0, hm.rest0)
+        if w is not None:
+            out.append((f"hanging '{hm.hanging.name}': " if len(pb.models) > 1 else "") + w)
     return out
 
 
