@@ -214,6 +214,15 @@ def test_failed_build_is_marked_and_not_retried(monkeypatch, tmp_path, capfd):
     monkeypatch.setattr(nk, "_build", lambda *a: pytest.fail("rebuilt"))
     assert not _is_native(mx.compiled_kernel(mx.params_from_scenes(trapezoid()), signature="odeint"))
     assert capfd.readouterr() == ("", "")
+    # a marker older than FAILED_RETRY_S (a transient failure a day ago) is removed and the build tried again
+    (marker,) = tmp_path.iterdir()
+    old = marker.stat().st_mtime - nk.FAILED_RETRY_S - 1.0
+    os.utime(marker, (old, old))
+    tried = []
+    monkeypatch.setattr(nk, "_patterns", {})
+    monkeypatch.setattr(nk, "_build", lambda pat, *a: tried.append(pat.path))
+    mx.compiled_kernel(mx.params_from_scenes(trapezoid()), signature="odeint")
+    assert tried == [str(marker)[:-len(".failed")]] and not marker.exists()
 
 
 @needs_cc

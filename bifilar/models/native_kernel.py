@@ -29,7 +29,8 @@ under the final name and an exit mid-build still publishes it) while the
 Python kernel runs; later requests of the pattern switch to it once it is
 published.  One build a pattern at a time across processes (a lock file;
 a lock older than :data:`STALE_LOCK_S` is taken over).  No compiler, an
-unwritable directory, a failed build (a ``.failed`` marker: not retried),
+unwritable directory, a failed build (a ``.failed`` marker: not retried for
+:data:`FAILED_RETRY_S`),
 a library that does not load or disagrees: the Python kernel, a
 debug-level log record (``bifilar.native``), nothing printed.
 
@@ -59,6 +60,12 @@ as CPython's floats do)."""
 
 STALE_LOCK_S = 120.0
 """A build lock older than this (s) is a dead build's and is taken over."""
+
+FAILED_RETRY_S = 86400.0
+"""A failed build's ``.failed`` marker (s) is honoured this long, then the
+build is tried again (a transient failure, e.g. a full disk or a build
+killed mid-way, does not keep the pattern on Python for good; a compiler
+that always fails costs one attempt a day)."""
 
 SYNC_TIMEOUT_S = 120.0
 """Longest wait (s) for a foreground build (``BIFILAR_NATIVE=sync``)."""
@@ -230,12 +237,25 @@ def _start(key, statements, m: str) -> _Pattern:
         return pat
     if _load(pat):
         return pat
-    if os.path.exists(pat.path + ".failed"):
+    if _failed_recently(pat.path + ".failed"):
         log.debug("native kernel: %s failed to build before: not retried", pat.path)
         pat.state = "failed"
         return pat
     _build(pat, cc[0], m == "sync")
     return pat
+
+
+def _failed_recently(marker: str) -> bool:
+    """A ``.failed`` marker younger than :data:`FAILED_RETRY_S`; an older
+    one is removed (the build is tried again)."""
+    import time
+    try:
+        if time.time() - os.stat(marker).st_mtime < FAILED_RETRY_S:
+            return True
+        os.unlink(marker)
+    except OSError:
+        pass
+    return False
 
 
 def _private(d: str) -> bool:
