@@ -101,3 +101,34 @@ def test_a_refusal_near_the_cut_off_only_does_not_say_zero_percent_cross_it():
     assert "in 0.3 % of the configs" in text and "comes within a factor 10 of holding" in text, text
     assert "in 0 %" not in text and "none of the configs drawn crossed it" in text, text
     assert "off by tens of sigma" in text
+
+
+def test_draws_that_cannot_be_made_refuse_the_sigma(monkeypatch):
+    """Where a neighbour's rest pose is not found the drawn-config check used to return None, and the point's
+    and invert's own figures (the lower bounds the check exists to catch) stood unchecked; now the sigma is
+    refused with that reason."""
+    from bifilar.analysis.equilibrium import rest_pose
+    from bifilar.config import scene_from_dict
+    from bifilar.errors import BifilarError
+    from bifilar.estimation import elastic_split as es
+
+    cfg = {"body": {"mass": 2.0, "inertia": {"principal": [0.03, 0.045, 0.06]}},
+           "rig": {"anchors": [[0.2, 0.2, 1.2], [-0.2, 0.2, 1.2], [-0.2, -0.2, 1.2], [0.2, -0.2, 1.2]],
+                   "attachments": [[0.2, 0.2, 0.01], [-0.2, 0.2, 0.01], [-0.2, -0.2, 0.01], [0.2, -0.2, 0.01]],
+                   "lengths": [1.2] * 4, "stiffness": 2000.0}}
+    scene = scene_from_dict(cfg, warn=False)
+    rest = rest_pose(scene)
+
+    def fail(*a, **k):
+        raise BifilarError("no rest pose near the neighbour's")
+
+    monkeypatch.setattr(es, "drawn_rig_risks", fail)
+    risks = es.risks_or_none(scene, rest, {})
+    assert risks is not None and risks.failed == "no rest pose near the neighbour's"
+    text = es.sigma_refusal(risks)
+    assert text is not None and "could not be drawn (no rest pose near the neighbour's)" in text
+    assert es.slack_note(risks) is None
+    refusal, notes = es.hangings_check([("ref", scene, rest)], {})
+    assert refusal == text and notes == []
+    res = {}
+    assert es.point_risks(res, scene, rest, {})[1] == text and res["drawn_rig"] == {"failed": risks.failed}

@@ -68,7 +68,7 @@ class DrawnRigRisks:
     by :data:`HELD_MARGIN` (or its inverse) than the config's count (a
     superset of p_held's); p_model: slack or held; tension_sd (n,) N: each wire's
     tension's std from the inputs; tensions (n,) N at rest; held: the
-    config's held directions."""
+    config's held directions (-1 where ``failed``)."""
 
     p_slack: float
     p_held: float
@@ -77,6 +77,9 @@ class DrawnRigRisks:
     tension_sd: np.ndarray
     tensions: np.ndarray
     held: int
+    #: why the draws could not be made (a neighbour's rest pose not found), else None: then no figure above
+    #: is known (NaN) and :func:`sigma_refusal` refuses the sigma, as where the draws are risky
+    failed: str | None = None
 
 
 def _inputs(scene, unc: dict) -> tuple[list, np.ndarray]:
@@ -150,22 +153,32 @@ def drawn_rig_risks(scene, rest, unc: dict, draws: int = DRAWS, seed: int = 0) -
 
 def risks_or_none(scene, rest, unc: dict) -> DrawnRigRisks | None:
     """:func:`drawn_rig_risks` where ``scene`` has more than three elastic
-    wires, else None (or where a neighbour's rest is not found: None too,
-    the point's own figures then stand as they were)."""
+    wires, else None.  Where the draws cannot be made (a neighbour's rest
+    pose not found), risks whose ``failed`` says why, every figure NaN: the
+    sigma is then refused too (before, the point's own figures stood,
+    unchecked: the lower bounds the draws exist to catch)."""
     from ..models.maximal import MAX_ELIMINATION_WIRES
 
     if scene.stiffness is None or scene.n_wires <= MAX_ELIMINATION_WIRES:
         return None
     try:
         return drawn_rig_risks(scene, rest, unc)
-    except (BifilarError, np.linalg.LinAlgError):
-        return None
+    except (BifilarError, np.linalg.LinAlgError) as exc:
+        nan = float("nan")
+        return DrawnRigRisks(nan, nan, nan, nan, np.full(scene.n_wires, nan), np.asarray(rest.tensions, float), -1,
+                             failed=str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
 
 
 def sigma_refusal(risks: DrawnRigRisks) -> str | None:
     """Why a sigma cannot be given for the rig of ``risks``, or None where it
     can (no drawn config near a change of the held directions, fewer than
     :data:`SLACK_MAX` slack)."""
+    if risks.failed is not None:
+        return ("the uncertainty cannot be given on these four or five elastic wires: the configs the measured "
+                "inputs' stated uncertainties allow could not be drawn (" + risks.failed + "), so whether they "
+                "leave a wire slack or change the wire directions the model holds is not known (either puts the "
+                "answer off by tens of sigma): state the lengths and points to a fraction of a millimetre (their "
+                "uncertainty block), or hang the body on three wires")
     parts = []
     if risks.p_near > 0 and risks.p_held == 0:  # near the cut-off only: say that, not "in 0 % ... holds another"
         parts.append(
@@ -254,4 +267,6 @@ def point_risks(res: dict, scene, rest, unc: dict):
         return None, None
     res["drawn_rig"] = {"p_slack": risks.p_slack, "p_held": risks.p_held, "p_near": risks.p_near,
                         "tension_sd": risks.tension_sd, "held_directions": risks.held}
+    if risks.failed is not None:
+        res["drawn_rig"] = {"failed": risks.failed}
     return risks, sigma_refusal(risks)
