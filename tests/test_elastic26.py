@@ -1,9 +1,9 @@
 """Four elastic wires near parallel: the model's modes against the body on springs (elastic26, session 26).
 
-The independent formulation here has no constraint at all: the rigid body hangs on four springs
-(``T = EA / L max(|d| - L, 0)``), its rest by Newton on the potential's hand-written gradient with a
-central-difference Hessian, its modes the eigenproblem of that Hessian (differenced again) against the
-body's mass (kinetic-energy metric, world rotation vector).  The rig is audit24's c07 (2 kg plate on four
+The independent formulation (scripts/elastic_spring_check.py's ``spring_periods``) has no constraint at
+all: the rigid body hangs on four springs (``T = EA / L max(|d| - L, 0)``), its rest by Newton on the
+potential's hand-written gradient with a central-difference Hessian, its modes the eigenproblem of that
+Hessian (differenced again) against the body's mass (kinetic-energy metric, world rotation vector).  The rig is audit24's c07 (2 kg plate on four
 vertical 1.2 m wires on a 0.4 m square, CoM 1 cm below the attachments) with anchors 1 and 3 splayed
 outwards along x by ``eps``.  The model held a fourth wire direction rigidly where the multiplier matrix's
 eigenvalue reached 1e-6 of the largest (eps ~ 3.5 mm here; a 1 mm draw of every input reaches it in 17 %
@@ -15,6 +15,8 @@ springs.
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -22,7 +24,10 @@ from bifilar.analysis.equilibrium import constraint_jacobian, rest_pose, stretch
 from bifilar.analysis.modes import linear_modes
 from bifilar.analysis.stretch_held import STRETCH_HOLD, geometric_stiffness, held_mask
 from bifilar.config import scene_from_dict
-from bifilar.rotations import rotvec_to_matrix
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "scripts"))
+from elastic_spring_check import spring_periods  # noqa: E402  (the independent formulation, also a script)
 
 INERTIA = [0.03, 0.045, 0.06]
 P = [[0.2, 0.2, 0.01], [-0.2, 0.2, 0.01], [-0.2, -0.2, 0.01], [0.2, -0.2, 0.01]]
@@ -33,45 +38,6 @@ def _c07(eps: float, ea: float):
     cfg = {"name": "c07", "body": {"mass": 2.0, "inertia": {"principal": INERTIA}},
            "rig": {"anchors": anchors, "attachments": P, "lengths": [1.2] * 4, "stiffness": ea}}
     return scene_from_dict(cfg, "test", warn=False)
-
-
-def _spring_periods(sc, com0, R0) -> np.ndarray:
-    """The six periods (s, slowest first) of the body on springs EA / L (no constraint), from its rest."""
-    a, p, L = np.asarray(sc.anchors), np.asarray(sc.attachments), np.asarray(sc.lengths)
-    k = np.asarray(sc.stiffness, float) / L
-    m, g = sc.mass, sc.gravity
-
-    def grad(c, R):
-        w = p @ R.T
-        d = c + w - a
-        ln = np.linalg.norm(d, axis=1)
-        u = d / ln[:, None]
-        T = k * np.maximum(ln - L, 0.0)
-        return np.concatenate([[0.0, 0.0, m * g] + T @ u, np.cross(w, u).T @ T])
-
-    def move(c, R, x):
-        return c + x[:3], rotvec_to_matrix(x[3:]) @ R
-
-    def hess(c, R, h=1e-7):
-        H = np.empty((6, 6))
-        for j in range(6):
-            e = np.zeros(6)
-            e[j] = h
-            H[:, j] = (grad(*move(c, R, e)) - grad(*move(c, R, -e))) / (2 * h)
-        return 0.5 * (H + H.T)
-
-    c, R = np.asarray(com0, float) - [0.0, 0.0, 1e-3], np.asarray(R0, float)  # 1 mm below: every wire taut
-    for _ in range(30):
-        x = -np.linalg.solve(hess(c, R), grad(c, R))
-        c, R = move(c, R, x)
-        if np.max(np.abs(x)) < 1e-14:
-            break
-    assert np.max(np.abs(grad(c, R))) < 1e-9 * m * g  # the springs' equilibrium reached
-    M = np.zeros((6, 6))
-    M[:3, :3] = m * np.eye(3)
-    M[3:, 3:] = R @ sc.inertia @ R.T
-    w2 = np.linalg.eigvals(np.linalg.solve(M, hess(c, R))).real
-    return np.sort(2 * np.pi / np.sqrt(w2))[::-1]
 
 
 # eps 1 mm: below the old eigenvalue cut-off (ratio 8.6e-8), 5 mm: above it (2.1e-6; the old model had no
@@ -85,7 +51,7 @@ def test_model_periods_follow_the_body_on_springs_across_the_old_cut_off(eps, ea
     sc = _c07(eps, ea)
     rest = rest_pose(sc)
     modes = {m.label: m.period for m in linear_modes(sc, rest).modes}
-    springs = _spring_periods(sc, rest.com, rest.R)
+    springs = spring_periods(sc, rest.com, rest.R)
     assert sorted(modes) == ["swing-x", "swing-y", "torsion"]  # the old rule at 5 mm: no torsion
     assert springs[3] < 0.2 * springs[2]  # three pendulum modes, the other three the wires' stretch
     assert modes["torsion"] == pytest.approx(springs[2], rel=1e-6)
