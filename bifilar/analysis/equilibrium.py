@@ -129,10 +129,12 @@ def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray |
     before, the run's eigenvalue rule, which held it where a millimetre
     splayed the wires)."""
     if G.shape[0] > MAX_ELIMINATION_WIRES and scene.stiffness is not None:
-        return int(np.sum(held_mask(*stretch_split(scene, R, G)[:2])))
+        mu, kappa, _, _ = stretch_split(scene, R, G)
+        if mu[0] > 0:  # (a pose with no wire stretched, the rigid all-taut start: the eigenvalue rule, below)
+            return int(np.sum(held_mask(mu, kappa)))
     if sv is None:
         sv = np.linalg.svd(G, compute_uv=False)
-    if G.shape[0] > MAX_ELIMINATION_WIRES and near_dependent(sv):
+    if G.shape[0] > MAX_ELIMINATION_WIRES and (near_dependent(sv) or scene.stiffness is not None):
         return int(np.sum(held_directions(np.linalg.eigvalsh(multiplier_matrix(scene.mass, scene.inertia, R, G)))))
     return int(np.sum(sv > 1e-12 * sv[0]))
 
@@ -378,7 +380,6 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     rank = constraint_rank(scene, R, G, s)
     N = vt[rank:].T
     return N, N.T @ K @ N, N.T @ M @ N, rank
-
 
 
 def tensions_determined(scene: Scene, rest: RestPose) -> bool:
