@@ -50,6 +50,12 @@ def _c07(eps: float, ea: float):
 def test_model_periods_follow_the_body_on_springs_across_the_old_cut_off(eps, ea):
     sc = _c07(eps, ea)
     rest = rest_pose(sc)
+    # the directions the wires resist are >= 300x stiffer by stretch than by their geometry (held) or <= 1e-2x
+    # (carried as springs): the count does not turn on a millimetre (the old eigenvalue rule held 3 or 4)
+    mu, kappa, _, _ = stretch_split(sc, rest.R, constraint_jacobian(sc, rest.com, rest.R)[2])
+    ratio = mu / np.abs(kappa)
+    assert np.sum(held_mask(mu, kappa)) == 3
+    assert np.all((ratio[:3] > 30 * STRETCH_HOLD) & (ratio[3:] < 1e-3 * STRETCH_HOLD))
     modes = {m.label: m.period for m in linear_modes(sc, rest).modes}
     springs = spring_periods(sc, rest.com, rest.R)
     assert sorted(modes) == ["swing-x", "swing-y", "torsion"]  # the old rule at 5 mm: no torsion
@@ -57,21 +63,6 @@ def test_model_periods_follow_the_body_on_springs_across_the_old_cut_off(eps, ea
     assert modes["torsion"] == pytest.approx(springs[2], rel=1e-6)
     if ea == 20000.0:
         assert sorted([modes["swing-x"], modes["swing-y"]]) == pytest.approx(sorted(springs[:2]), rel=1e-6)
-
-
-def test_the_held_directions_are_the_stiff_stretches_with_a_wide_gap():
-    # every direction the wires resist is either >= 300x stiffer by stretch than by its geometry (held) or
-    # <= 1e-2x (carried as a spring) on the c07 rigs up to 5 mm of splay and EA 2 .. 20 kN: the count does
-    # not turn on a millimetre (the old eigenvalue rule held 3 or 4 within it)
-    for ea in (2000.0, 20000.0):
-        for eps in (0.0, 1e-3, 5e-3):
-            sc = _c07(eps, ea)
-            rest = rest_pose(sc)
-            G = constraint_jacobian(sc, rest.com, rest.R)[2]
-            mu, kappa, _, _ = stretch_split(sc, rest.R, G)
-            ratio = mu / np.abs(kappa)
-            assert np.sum(held_mask(mu, kappa)) == 3
-            assert np.all((ratio[:3] > 30 * STRETCH_HOLD) & (ratio[3:] < 1e-3 * STRETCH_HOLD))
 
 
 def test_geometric_stiffness_is_the_sum_of_the_constraint_hessians():
@@ -86,8 +77,8 @@ def test_geometric_stiffness_is_the_sum_of_the_constraint_hessians():
 
 
 def test_configs_drawn_one_millimetre_off_hold_the_same_directions_and_keep_the_sigma():
-    # c07 at EA 2 kN with the 1 mm default stds: under the eigenvalue rule 17 % of 4000 drawn configs held a
-    # fourth direction (91 % within its factor 10) and the sigma was refused (the answered scattered 26x it);
+    # c07 at EA 2 kN with the 1 mm default stds: under the eigenvalue rule 17 % of drawn configs held a fourth
+    # direction (91 % within its factor 10; none of 1000 held by chance: 0.83^1000) and the sigma was refused (the answered scattered 26x it);
     # now none changes the count or comes within a factor 10 of the rule, 0.08 % leave a wire slack (< 5 %),
     # and the sigma is given (closed loops, 200 draws, seeds 1 and 2: realised sd 1.072x and 0.994x it,
     # inside chi^2's 0.902..1.098; docs/design.md "elastic26, session 26")
@@ -95,6 +86,6 @@ def test_configs_drawn_one_millimetre_off_hold_the_same_directions_and_keep_the_
     from bifilar.estimation.uncertainty import default_uncertainty
 
     sc = _c07(0.0, 2000.0)
-    risks = drawn_rig_risks(sc, rest_pose(sc), default_uncertainty())
+    risks = drawn_rig_risks(sc, rest_pose(sc), default_uncertainty(), draws=1000)  # old rule: 17 % of them
     assert (risks.held, risks.p_held, risks.p_near) == (3, 0.0, 0.0)
     assert 0 < risks.p_slack < 0.01 and sigma_refusal(risks) is None
