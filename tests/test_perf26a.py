@@ -127,3 +127,26 @@ def test_edge_ratio_with_the_rest_given_equals_it_alone(rows):
     d, w, _ = rig.wires(z)
     at_rest = [d, w, rig.jacobian(z, d, w)]
     assert np.array_equal(_bits(spm.edge_ratio(rig, x, hold, at_rest)), _bits(spm.edge_ratio(rig, x, hold)))
+
+
+def test_measured_period_equals_numpy_std_and_diff():
+    # a run's single-cycle std by numpy's _var ufunc calls (sample_std) and the cycles by np.diff's
+    # subtraction: against np.diff and ndarray.std(ddof=1), bit for bit, over 2 .. 1000 crossings (numpy's
+    # pairwise sums from 8 and 128 terms on), nearly equal cycles (a run's) and spread ones, 1e-9 .. 1e6 s
+    from bifilar.analysis.simulate import measured_period, sample_std
+
+    rng = np.random.default_rng(261)
+    n = 0
+    for k in list(range(2, 12)) + [17, 129, 1000]:
+        for scale in (1e-9, 1.0, 1e6):
+            for spread in (1e-9, 0.3):
+                tc = np.cumsum(scale * (1.0 + spread * rng.normal(size=k)))
+                per = np.diff(tc)
+                period, std = measured_period(tc)
+                assert period == float((tc[-1] - tc[0]) / (k - 1))
+                assert std is None if k == 2 else std == float(per.std(ddof=1))
+                if k > 2:
+                    assert np.array_equal(_bits(sample_std(per)), _bits(per.std(ddof=1)))
+                n += 1
+    assert measured_period(list(tc[:4])) == measured_period(tc[:4]) and measured_period(tc[:1]) == (None, None)
+    assert n == 78
