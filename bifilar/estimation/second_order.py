@@ -229,7 +229,10 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
         for h, (_, _, rest, ms0, col) in hits.items():
             scene = _perturbed_scene(pb, h, pb.models[h].scene(vals), moves)
             try:
-                r = rest_pose(scene, guess=rest) if com_unknown else rest
+                # a moved CoM moves the rest pose: found from rest_pose's start pose (a guess is read only with
+                # local_only, which would follow this step's branch instead; none of test_invert.py's 70
+                # re-solves nor any sweep point, whose unknowns are inertias, comes here: perf26b)
+                r = rest_pose(scene) if com_unknown else rest
                 ms = linear_modes(scene, r)
             except (BifilarError, np.linalg.LinAlgError):  # a step past definiteness (a body near its limit)
                 return None
