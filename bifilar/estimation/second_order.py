@@ -50,7 +50,7 @@ from ..scene import scene_with
 from .measurements import COM_UNKNOWNS
 from .problem import Problem
 from .sensitivity import mac_match, mac_matches, n_modes, perturb
-from .uncertainty import LinearBudget
+from .uncertainty import LinearBudget, covariance_of
 
 
 #: sigma points at +- sqrt(3) standard uncertainties (3-point Gauss-Hermite)
@@ -423,9 +423,7 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
         offset = offset + D * mean_w
     if np.any(offset):
         contrib["offset"] = offset
-    cov = np.zeros_like(lin.covariance)
-    for c in contrib.values():
-        cov += np.outer(c, c)
+    cov = covariance_of(contrib, len(lin.names))
     return LinearBudget(list(lin.names), cov, contrib, dict(lin.sigmas), dict(lin.dof)), failed
 
 
