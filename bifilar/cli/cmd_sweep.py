@@ -243,7 +243,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     names = [s.name for s in specs]
 
     def write_out() -> None:
-        sw.write_points_csv(out_p, points, names, list(settings.components))
+        sw.write_points_csv(out_p, points, names, list(settings.components), rec.get("measurable"))
         journal.unlink(missing_ok=True)
 
     from ..studies.hangings import hangings_objectives
@@ -308,7 +308,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
 
     from rich.table import Table
 
-    from ..studies.ranking import point_separation
+    from ..studies.ranking import no_sigma_reason, point_separation
 
     con = console()
     comps = list(settings.components)
@@ -336,7 +336,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
                 row.append("[yellow]n/a[/yellow]")
             else:
                 row.append(f"{_pct(e['rel_sigma'])} {_ABBR.get(e['mode'], e['mode'])}")
-        row.append(_pct(point_separation(p)))
+        row.append(_pct(point_separation(p, rec.get("measurable"))))
         pk = p["tension"]["peak"] if settings.tensions else max(p["tension"]["rest"])
         row.append("-" if pk is None else f"{pk:.4g}")
         d = p["depth"]["max"] if p["depth"]["max"] is not None else p["depth"]["rest"]
@@ -346,9 +346,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
             notes.append(f"{i}: " + esc("; ".join(p["violations"])))
         unavailable = [c for c in comps if p["components"][c].get("sigma_unavailable")]
         if unavailable:  # not ranked: say why, in the point's own words (whole in the JSON's sigma_unavailable)
-            why = p["components"][unavailable[0]]["sigma_unavailable"]
-            why = why.removeprefix("the uncertainty cannot be given")
-            why = why if len(why) <= 160 else why[:157].rstrip() + "..."
+            why = no_sigma_reason(p["components"][unavailable[0]])
             notes.append(f"{i}: no uncertainty for {', '.join(unavailable)}" + esc(why) + "; see --json")
         t.add_row(*row)
     con.print(t)
@@ -356,8 +354,8 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         con.print(f"  [yellow]x[/yellow] {line}")
     if len(notes) > 20:
         con.print(f"  ... {len(notes) - 20} more (see --json or --out)")
-    con.print("(n/a: no mode's period depends on that component; sep: smallest gap between a timed mode and any "
-              "other mode; modes: " + ", ".join(f"{v} = {k}" for k, v in _ABBR.items()) + ")")
+    con.print("(n/a: no mode's period depends on that component; sep: smallest gap between a timed mode (a "
+              "ranked component's) and any other mode; modes: " + ", ".join(f"{v} = {k}" for k, v in _ABBR.items()) + ")")
     con.print("identifiability" + (" at the recommended point:" if rec.get("best") is not None else ":"))
     render_identifiability(con, rec["identifiability"])
     unc = settings.unc

@@ -82,7 +82,7 @@ def assess(points: list[dict], constraints: Constraints, target: str | None, han
     doc = _assess(points, replace(constraints, min_separation=None), target, hangings)
     doc["constraints"] = constraints.describe()
     if doc.get("best") is not None:
-        separated = not violations(points[doc["best"]], constraints, target)
+        separated = not violations(points[doc["best"]], constraints, target, doc["measurable"])
         doc["separation_guard"] = "planned_hanging" if separated else "multi_hanging"
         why = ("--hangings" if separated else
                f"--hangings; its own hanging does not meet --min-separation {constraints.min_separation:g}")
@@ -118,8 +118,9 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     among = measurable_components(points, target)
     aside = set_aside(points, target)
     for p in points:
-        v = violations(p, constraints, target)
+        v = violations(p, constraints, target, among)
         p["objective"] = _plain(objective(p, target, among))
+        p["guard_separation"] = _plain(point_separation(p, among)) if p.get("valid") else None
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
@@ -154,7 +155,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         over, lines = preferences(points, ranked, key, cautioned(constraints))
         doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
                    why=explain(points[i], constraints, target, among), ranking=ranked[:10],
-                   rig=points[i].get("rig"), separation=point_separation(points[i]), preferred_over=over)
+                   rig=points[i].get("rig"), separation=point_separation(points[i], among), preferred_over=over)
         doc["why"][1:1] = lines
     ref = points[doc["best"]] if doc.get("best") is not None else None
     doc["identifiability"] = identifiabilities(comps, ref, among, aside)
@@ -200,7 +201,7 @@ def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str
         what = ("second-order terms (inputs whose effect is not linear over their uncertainty)"
                 if top == "second_order" else top)
         lines.append(f"its variance is {100 * e['shares'][top]:.0f} % {what}")
-    sep = point_separation(p)
+    sep = point_separation(p, among)
     if sep is not None:
         lines.append(f"mode separation {100 * sep:.3g} % (smallest gap between a timed mode and any other)"
                      + (f", >= {100 * c.min_separation:g} % required" if c.min_separation is not None else ""))

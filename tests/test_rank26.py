@@ -1,0 +1,124 @@
+"""The sweep / plan ranking's gaps rank25 left (docs/design.md, "rank26,
+session 26"): a set-aside component's mode and the separation guard, and
+the reason quoted in the binding message.
+
+The real points are audit24's c04 (a 30 g part on a bifilar) on screens, as
+tests/test_sweep_audit24.py evaluates them (linear sigmas: the same ranking
+code); the others are hand-made, as that file and
+tests/test_mutation_gaps25.py build them.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from bifilar.studies import sweep as sw
+from bifilar.studies.ranking import binding_constraint, point_separation
+
+DATA = Path(__file__).parent / "data" / "audit24"
+
+
+@pytest.fixture(scope="module")
+def c04():
+    """c04 at spacing 0.04 (Iyy from a swing 1.2 % from the other swing, +- 1490 %)
+    and 0.06 (wires vertical: no Iyy): screens, --no-tensions."""
+    from bifilar.config import read_yaml
+
+    path = str(DATA / "c04_dronepart.yaml")
+    cfg = read_yaml(path)
+    st = sw.resolve_settings(cfg, tensions=False)
+    return cfg, path, st, sw.run_sweep(cfg, path, [{"spacing": v} for v in (0.04, 0.06)], st, screen=True)
+
+
+def _gap(p, comps):
+    """The smallest |T_k - T_j| / T_k over the modes k of ``comps`` at point ``p`` and every other mode j,
+    worked out from the point's periods (not from the figures the guard reads)."""
+    T = p["periods"]
+    ks = {p["components"][c]["mode"] for c in comps if p["components"][c].get("mode")}
+    return min(abs(T[k] - T[j]) / T[k] for k in ks for j in T if j != k)
+
+
+def test_the_guard_leaves_out_the_mode_only_a_set_aside_component_needs(c04):
+    """Item 1.  Iyy is set aside (best 1490 % > 50 %), so nobody times its
+    swing: the guard is over Ixx's roll and Izz's torsion only, and 0.04,
+    ruled out for Iyy's swing (1.18 % < 2 %), is feasible (guard 5.4 %).
+    Fails with the guard over every component's mode (main), in the sweep's
+    assessment or in plan's search penalty."""
+    _, _, _, pts = c04
+    rec = sw.assess(pts, sw.Constraints(min_separation=0.02), None)
+    assert rec["measurable"] == ["Ixx", "Izz"] and [a["component"] for a in rec["set_aside"]] == ["Iyy"]
+    for p in pts:
+        assert p["guard_separation"] == pytest.approx(_gap(p, ["Ixx", "Izz"]), rel=1e-12)
+    assert [p["feasible"] for p in pts] == [True, True], [p["violations"] for p in pts]
+    # the old guard's figure (every timed mode, Iyy's swing included) is below the limit at 0.04
+    assert _gap(pts[0], ["Ixx", "Iyy", "Izz"]) < 0.02 < pts[0]["guard_separation"]
+    # the ranking is the measurable components' worst, unchanged: 0.06 first by a hair (Ixx 42.9 % everywhere)
+    assert rec["params"] == {"spacing": 0.06} and rec["separation"] == pytest.approx(_gap(pts[1], ["Ixx", "Izz"]))
+    # plan's search penalty counts the same modes: no excess at 0.04 with the ranked components, a penalty with all
+    from bifilar.studies.plan import _penalty
+
+    c = sw.Constraints(min_separation=0.02)
+    ob = sum(pts[0]["components"][k]["rel_sigma"] ** 16 for k in ("Ixx", "Izz")) ** (1 / 16)  # its 16-norm
+    assert _penalty(pts[0], c, None, ["Ixx", "Izz"]) == pytest.approx(ob, rel=1e-12)
+    assert _penalty(pts[0], c, None, None) > 2 * _penalty(pts[0], c, None, ["Ixx", "Izz"])
+
+
+def _point(x, comps):
+    """A hand-made point: ``comps`` {name: (rel_sigma, mode, its separation)}."""
+    return {"params": {"spacing": x}, "valid": True, "error": None,
+            "components": {k: {"identifiable": True, "rel_sigma": r, "mode": m, "separation": s,
+                               "shares": {"timing": 1.0}} for k, (r, m, s) in comps.items()},
+            "separation": min(s for _, _, s in comps.values()),
+            "tension": {"rest": [1.0], "peak": 1.0, "min": [0.5], "max": [1.0], "slack": False, "slack_wires": []},
+            "depth": {"rest": 1.0, "max": 1.0}}
+
+
+def test_a_mode_a_ranked_component_shares_with_a_set_aside_one_stays_guarded():
+    """Item 1's other half: Ixx and the set-aside Iyy (90 %, 80 %) from one
+    swing 1 % from another mode: the swing is timed for Ixx, so both points
+    break --min-separation 0.02 and the message gives 1 %; with Ixx from the
+    roll (5 %) and only Iyy on the close swing, both are feasible.  Fails
+    with the guard over every mode, and where it drops every mode a
+    set-aside component is estimated from."""
+    c = sw.Constraints(min_separation=0.02)
+    shared = [_point(x, {"Ixx": (0.1, "swing", 0.01), "Iyy": (r, "swing", 0.01), "Izz": (0.05, "torsion", 0.3)})
+              for x, r in ((1.0, 0.9), (2.0, 0.8))]
+    rec = sw.assess(shared, c, None)
+    assert rec["measurable"] == ["Ixx", "Izz"] and rec["n_feasible"] == 0, rec
+    assert rec["reason"] == "no configuration meets --min-separation 0.02: the best mode separation found is 0.01"
+    own = [_point(x, {"Ixx": (0.1, "roll", 0.05), "Iyy": (r, "swing", 0.01), "Izz": (0.05, "torsion", 0.3)})
+           for x, r in ((1.0, 0.9), (2.0, 0.8))]
+    rec = sw.assess(own, c, None)
+    assert rec["n_feasible"] == 2 and rec["separation"] == 0.05, rec
+    assert point_separation(own[0]) == 0.01 and point_separation(own[0], ["Ixx", "Izz"]) == 0.05
+
+
+def test_the_binding_message_quotes_the_points_reason_as_the_table_cuts_it():
+    """Item 3: json25's points (the middle one meets every limit, Izz without a
+    sigma); the message quotes that point's own reason, without "the
+    uncertainty cannot be given", cut at 160 characters with "..." as the
+    sweep table's note is: the dependent-wire text (592 characters) and the
+    knife edge's whole (short) one; a point not identifiable quotes its
+    ``reason``.  Fails without the quote or with another cut."""
+    from bifilar.estimation.inversion_result import std_unavailable_text
+
+    c = sw.Constraints(min_separation=0.02)
+    long_ = std_unavailable_text(["rig.anchors.0.x"], "--sigma KEY=VALUE", True)
+    for entry, quoted in (
+            ({"sigma_unavailable": long_}, long_.removeprefix("the uncertainty cannot be given")[:157].rstrip() + "..."),
+            ({"sigma_unavailable": "mode 'torsion' at 2.5 rad runs 3 x its linear period: no sigma"},
+             ": mode 'torsion' at 2.5 rad runs 3 x its linear period: no sigma"),
+            ({"reason": "no mode's period depends on Izz (max |d ln T / d ln Izz| = 1.0e-12)"},
+             ": no mode's period depends on Izz (max |d ln T / d ln Izz| = 1.0e-12)")):
+        pts = [_point(0.04, {"Ixx": (0.004, "roll", 0.0118), "Izz": (0.003, "torsion", 0.5)}),
+               _point(0.06, {"Ixx": (0.004, "roll", 0.299), "Izz": (math.inf, "torsion", 0.5)}),
+               _point(0.08, {"Ixx": (0.004, "roll", 0.0033), "Izz": (0.003, "torsion", 0.5)})]
+        pts[1]["components"]["Izz"].update(entry)
+        flag, msg = binding_constraint(pts, c, None, ["Ixx", "Izz"])
+        assert flag == "--min-separation"
+        assert msg.endswith(f"give no uncertainty for Izz (e.g. at spacing = 0.06; Izz{quoted}): leave Izz out of "
+                            "--component, or add --hangings"), msg
+    assert len(quoted) < 160 and len(long_) > 500
