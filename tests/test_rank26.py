@@ -1,6 +1,7 @@
 """The sweep / plan ranking's gaps rank25 left (docs/design.md, "rank26,
-session 26"): a set-aside component's mode and the separation guard, and
-the reason quoted in the binding message.
+session 26"): a set-aside component's mode and the separation guard, the
+reason quoted in the binding message, and the components ranked or set
+aside close to the 50 % line.
 
 The real points are audit24's c04 (a 30 g part on a bifilar) on screens, as
 tests/test_sweep_audit24.py evaluates them (linear sigmas: the same ranking
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from bifilar.studies import sweep as sw
-from bifilar.studies.ranking import binding_constraint, point_separation
+from bifilar.studies.ranking import binding_constraint, marginal, point_separation
 
 DATA = Path(__file__).parent / "data" / "audit24"
 
@@ -122,3 +123,33 @@ def test_the_binding_message_quotes_the_points_reason_as_the_table_cuts_it():
         assert msg.endswith(f"give no uncertainty for Izz (e.g. at spacing = 0.06; Izz{quoted}): leave Izz out of "
                             "--component, or add --hangings"), msg
     assert len(quoted) < 160 and len(long_) > 500
+
+
+def _best(**rels):
+    return {"params": {"spacing": 1.0}, "components": {k: {"rel_sigma": v} for k, v in rels.items()}}
+
+
+def test_a_component_ranked_or_set_aside_near_the_line_is_marginal():
+    """Item 4: within 20 % of the 50 % line (40-60 %, ends included): a ranked
+    component by its figure at the recommended point (c11's plan: Iyy 49.3 %
+    there), a set-aside one by its best.  Ranked: 0.399 no, 0.4 and 0.493
+    yes, the target never; set aside: 0.6 yes, 0.601 no.  Fails with a band
+    of 10 % or a strict end (either side)."""
+    aside = [{"component": "Ixz", "best_rel_sigma": 0.6, "params": {"spacing": 2.0}},
+             {"component": "Iyz", "best_rel_sigma": 0.601, "params": {"spacing": 3.0}}]
+    best = _best(Ixx=0.399, Iyy=0.493, Izz=0.4, Ixy=0.45)
+    m = marginal(best, ["Ixx", "Iyy", "Izz", "Ixy"], aside, target="Ixy")
+    assert [(e["component"], e["ranked"], e["rel_sigma"], e["params"]) for e in m] == [
+        ("Iyy", True, 0.493, {"spacing": 1.0}), ("Izz", True, 0.4, {"spacing": 1.0}),
+        ("Ixz", False, 0.6, {"spacing": 2.0})]
+    assert m[0]["reason"].startswith("Iyy is marginal: its uncertainty at the recommended point, +- 49.3 %, is within "
+                                     "20 % of the 50 % line")
+    assert "(at spacing = 2)" in m[2]["reason"] and "--target Ixz" in m[2]["reason"]
+    # in the sweep's document, beside an unchanged ranking: Iyy's best is 0.3 elsewhere, 0.45 at the best point
+    pts = [_point(x, {"Ixx": (0.1, "roll", 0.5), "Iyy": (r, "swing", 0.5)}) for x, r in ((1.0, 0.45), (2.0, 0.3))]
+    pts[1]["components"]["Ixx"]["rel_sigma"] = 0.5
+    rec = sw.assess(pts, sw.Constraints(), None)
+    assert rec["best"] == 0 and rec["measurable"] == ["Ixx", "Iyy"] and rec["set_aside"] == []
+    assert [e["component"] for e in rec["marginal"]] == ["Iyy"] and rec["marginal"][0]["rel_sigma"] == 0.45
+    assert rec["identifiability"]["Iyy"]["marginal"] == rec["marginal"][0]
+    assert rec["identifiability"]["Ixx"]["marginal"] is None

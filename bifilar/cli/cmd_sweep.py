@@ -144,7 +144,8 @@ def render_timing(con, rows: list[dict]) -> None:
 
 
 def render_identifiability(con, ident: dict) -> None:
-    """Per component: measurable, from which modes; set aside, why; else its remedy."""
+    """Per component: measurable, from which modes; set aside, why; else its
+    remedy; and a marginal one's line (ranked or set aside near the line)."""
     for c, e in ident.items():
         if e.get("set_aside"):
             con.print(f"  [yellow]{c}: set aside[/yellow]: {esc(e['set_aside']['reason'].split(': ', 1)[1])}")
@@ -155,6 +156,8 @@ def render_identifiability(con, ident: dict) -> None:
             r = e.get("remedy")
             con.print(f"  [yellow]{c}: not identifiable[/yellow] (no mode's period depends on it)"
                       + (f"; remedy: {r['text']}" if r else "; the model found no remedy among the changes tried"))
+        if e.get("marginal"):
+            con.print(f"    [yellow]marginal[/yellow]: {esc(e['marginal']['reason'].split(': ', 1)[1])}")
 
 
 def render_rig(con, rig: dict, title: str = "the rig to build") -> None:

@@ -72,8 +72,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (clashes, identifiable_components, measurable_components, point_separation, rank_order, rel_sigma,
-                      set_aside, tension_range_caution)
+from .ranking import (clashes, identifiable_components, marginal, measurable_components, point_separation, rank_order,
+                      rel_sigma, set_aside, tension_range_caution)
 from .recommend import cautioned, choose, identifiabilities, preference
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
@@ -169,6 +169,7 @@ class PlanResult:
             "target": self.target or "worst relative of " + ", ".join(self.among),
             "identifiability": self.identifiability(),
             "set_aside": self.set_aside,
+            "marginal": self.marginal(),
             "constraints": self.constraints.describe(),
             "bounds": {n: [lo, hi] for n, lo, hi in self.bounds},
             "zip": self.zip,
@@ -178,7 +179,12 @@ class PlanResult:
 
     def identifiability(self) -> dict:
         """Per component: measurable in the range, modes at the optimum."""
-        return identifiabilities(list(self.best["components"]), self.best, self.among, self.set_aside)
+        return identifiabilities(list(self.best["components"]), self.best, self.among, self.set_aside, self.marginal())
+
+    def marginal(self) -> list[dict]:
+        """The components ranked or set aside by a line they are close to
+        (:func:`~bifilar.studies.ranking.marginal`, at the optimum)."""
+        return marginal(self.best, self.among, self.set_aside, self.target)
 
 
 def _is_length(name: str) -> bool:

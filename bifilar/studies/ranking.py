@@ -187,6 +187,44 @@ def identifiable_components(points: list[dict]) -> list[str]:
             if any(p.get("valid") and p["components"][c].get("identifiable") for p in points)]
 
 
+#: a ranked component whose relative sigma at the recommended point, or a set-aside one whose best, lies within
+#: this fraction of :data:`USEFUL_REL` of it (40-60 %) is reported as ``marginal`` (:func:`marginal`): c11's plan
+#: over length_offset -0.5:0.5 ranks Iyy at 49.3 % there (its best 35 %; the answer's Ixx 11.5 % where leaving
+#: Iyy out gives 4.7 %, docs/design.md "rank25, session 25", left item 2)
+MARGINAL_BAND = 0.2
+
+
+def marginal(best: dict | None, among, aside: list[dict], target: str | None = None, max_rel: float = USEFUL_REL,
+             band: float = MARGINAL_BAND) -> list[dict]:
+    """The components ranked or set aside by a line they are close to (with
+    the defaults, 40-60 %, both ends included; nothing changes which are
+    ranked): a component ranked (``among``, not ``target``, which the user
+    asked for) whose relative sigma (:func:`rel_sigma`) at the recommended
+    point ``best`` lies within ``band`` x ``max_rel`` of ``max_rel``, and
+    one set aside (``aside``: :func:`set_aside` entries) whose best does.
+    One dict each (the ranked first, config order): ``component``,
+    ``rel_sigma`` (1: at ``best``, or the set-aside one's best), ``params``
+    (that point's), ``ranked`` (bool), ``reason`` (one line)."""
+    lo, hi = (1 - band) * max_rel, (1 + band) * max_rel
+    near = []
+    comps = (best or {}).get("components") or {}
+    for c in among or ():
+        v = rel_sigma(comps[c]) if c != target and c in comps else None
+        if v is not None and lo <= v <= hi:
+            near.append((c, float(v), best.get("params", {}), True))
+    near += [(a["component"], a["best_rel_sigma"], a["params"], False) for a in aside if a["best_rel_sigma"] <= hi]
+    out = []
+    for c, v, params, ranked in near:
+        at = ", ".join(f"{k} = {x:.6g}" for k, x in params.items())
+        out.append({"component": c, "rel_sigma": v, "params": params, "ranked": ranked, "reason": (
+            f"{c} is marginal: its " + ("uncertainty at the recommended point" if ranked else "smallest uncertainty")
+            + f", +- {100 * v:.3g} %" + (f" (at {at})" if at and not ranked else "") + f", is within {100 * band:g} % "
+            f"of the {100 * max_rel:g} % line above which a component is set aside (its best over the range); "
+            + (f"it is ranked at a figure little better than a guess: leave {c} out of --component to rank by the "
+               "others" if ranked else f"it is set aside: rank by it with --target {c} if it is wanted"))})
+    return out
+
+
 def set_aside(points: list[dict], target: str | None = None, max_rel: float = USEFUL_REL) -> list[dict]:
     """The components not measurable in the range although identifiable:
     those some valid point gives a sigma, the smallest of whose relative

@@ -18,7 +18,7 @@ import math
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
-from .ranking import (CONSTRAINT_FLAGS, binding_constraint, clashes, measurable_components, objective,
+from .ranking import (CONSTRAINT_FLAGS, binding_constraint, clashes, marginal, measurable_components, objective,
                       pareto_front, point_components, point_separation, preferences, rank_order, set_aside,
                       tension_range_caution, violations)
 from .settings import Constraints
@@ -110,7 +110,9 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     Without a target the objective is the worst of the measurable components
     (:func:`measurable_components`); ``set_aside`` lists those identifiable
     but not measurable in the range, each with its best relative sigma, the
-    point and why (:func:`~bifilar.studies.ranking.set_aside`);
+    point and why (:func:`~bifilar.studies.ranking.set_aside`); ``marginal``
+    those ranked or set aside by a line they are close to (within 20 %,
+    :func:`~bifilar.studies.ranking.marginal`; nothing else changes);
     ``identifiability`` says per component whether it is measurable and from
     which modes at the recommended point (``remedy`` entries are added by
     :func:`add_point_remedies`).
@@ -158,7 +160,8 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
                    rig=points[i].get("rig"), separation=point_separation(points[i], among), preferred_over=over)
         doc["why"][1:1] = lines
     ref = points[doc["best"]] if doc.get("best") is not None else None
-    doc["identifiability"] = identifiabilities(comps, ref, among, aside)
+    doc["marginal"] = marginal(ref, among, aside, target)
+    doc["identifiability"] = identifiabilities(comps, ref, among, aside, doc["marginal"])
     return doc
 
 
@@ -166,21 +169,27 @@ def _names(aside: list[dict]) -> list[str]:
     return [a["component"] for a in aside]
 
 
-def identifiabilities(comps, point: dict | None, among: list[str], aside: list[dict]) -> dict:
+def identifiabilities(comps, point: dict | None, among: list[str], aside: list[dict], near=()) -> dict:
     """:func:`identifiability` of each of ``comps`` at ``point``: measurable
     where in ``among``, identifiable but set aside where in ``aside``
-    (:func:`~bifilar.studies.ranking.set_aside` entries)."""
+    (:func:`~bifilar.studies.ranking.set_aside` entries), marginal where in
+    ``near`` (:func:`~bifilar.studies.ranking.marginal` entries)."""
     why = {a["component"]: a for a in aside}
-    return {c: identifiability(c, point, c in among or c in why, why.get(c)) for c in comps}
+    close = {m["component"]: m for m in near}
+    return {c: identifiability(c, point, c in among or c in why, why.get(c), close.get(c)) for c in comps}
 
 
-def identifiability(comp: str, point: dict | None, measurable: bool, aside: dict | None = None) -> dict:
+def identifiability(comp: str, point: dict | None, measurable: bool, aside: dict | None = None,
+                    near: dict | None = None) -> dict:
     """Per component: identifiable in the range, and at ``point`` (the
     recommended one) the modes whose period depends on it (``|d ln T / d ln I|``)
     and the mode it is estimated from; ``set_aside``: None, or the
     :func:`~bifilar.studies.ranking.set_aside` entry of a component
-    identifiable but not measurable in the range (left out of the ranking)."""
-    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None, "set_aside": aside}
+    identifiable but not measurable in the range (left out of the ranking);
+    ``marginal``: None, or the :func:`~bifilar.studies.ranking.marginal`
+    entry of one whose best sigma lies close to that line, either side."""
+    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None, "set_aside": aside,
+               "marginal": near}
     if point is not None and point.get("valid"):
         e = point["components"].get(comp, {})
         d.update(from_modes=e.get("from_modes", {}), mode=e.get("mode"), rel_sigma=e.get("rel_sigma"))
