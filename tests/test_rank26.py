@@ -1,7 +1,7 @@
 """The sweep / plan ranking's gaps rank25 left (docs/design.md, "rank26,
-session 26"): a set-aside component's mode and the separation guard, the
-reason quoted in the binding message, and the components ranked or set
-aside close to the 50 % line.
+session 26"): a set-aside component's mode and the separation guard, its
+advice, the reason quoted in the binding message, and the components ranked
+or set aside close to the 50 % line.
 
 The real points are audit24's c04 (a 30 g part on a bifilar) on screens, as
 tests/test_sweep_audit24.py evaluates them (linear sigmas: the same ranking
@@ -17,7 +17,8 @@ from pathlib import Path
 import pytest
 
 from bifilar.studies import sweep as sw
-from bifilar.studies.ranking import binding_constraint, marginal, point_separation
+from bifilar.studies.ranking import USEFUL_REL, binding_constraint, marginal, point_separation
+from bifilar.studies.recommend import remedy_clause, unmeasured
 
 DATA = Path(__file__).parent / "data" / "audit24"
 
@@ -153,3 +154,33 @@ def test_a_component_ranked_or_set_aside_near_the_line_is_marginal():
     assert [e["component"] for e in rec["marginal"]] == ["Iyy"] and rec["marginal"][0]["rel_sigma"] == 0.45
     assert rec["identifiability"]["Iyy"]["marginal"] == rec["marginal"][0]
     assert rec["identifiability"]["Ixx"]["marginal"] is None
+
+
+def test_a_set_aside_component_gets_the_advice_a_non_identifiable_one_gets(c04):
+    """Item 2: the components the point cannot measure in its own hanging (their
+    remedies and the multi-hanging plan at the point, which the CLI starts
+    for them) are the non-identifiable and the set-aside ones.  c04's Iyy
+    (set aside) at the recommended spacing 0.06: the remedies find the body
+    turned 90 deg about x, whose torsion measures it (+- 3.3 %), and the
+    line says so; a set-aside component whose best remedy stays above 50 %
+    is told that no change tried measures it.  Fails with unmeasured() as
+    on main (non-identifiable only)."""
+    cfg, path, st, pts = c04
+    rec = sw.assess(pts, sw.Constraints(min_separation=0.02), None)
+    assert unmeasured(rec) == ["Iyy"] and rec["not_measurable"] == []
+    from bifilar.studies.recommend import add_point_remedies
+
+    add_point_remedies(rec, unmeasured(rec), pts[rec["best"]], cfg, path, st)
+    e = rec["identifiability"]["Iyy"]
+    r = e["remedy"]
+    assert r["kind"] == "hanging" and r["mode"] == "torsion" and r["rel_sigma"] < 0.05, r
+    assert remedy_clause(e) == f"; remedy: {r['text']}"
+    worse = {**e, "remedy": {**r, "rel_sigma": 1.01 * USEFUL_REL, "text": "T"}}
+    assert remedy_clause(worse) == "; none of the changes tried measures it to 50 % (the best: T)"
+    # a non-identifiable one keeps its words; a set-aside one whose remedies were not looked for gets none
+    assert remedy_clause({"identifiable": False, "remedy": None}) == "; the model found no remedy among the changes tried"
+    assert remedy_clause({"identifiable": True, "set_aside": {"component": "Iyy"}, "remedy": None}) == ""
+    doc = {"identifiability": {"Ixx": {"identifiable": True, "set_aside": None},
+                               "Iyy": {"identifiable": True, "set_aside": {"component": "Iyy"}},
+                               "Izz": {"identifiable": False, "set_aside": None}}}
+    assert unmeasured(doc) == ["Iyy", "Izz"]

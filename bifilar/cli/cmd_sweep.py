@@ -146,16 +146,17 @@ def render_timing(con, rows: list[dict]) -> None:
 def render_identifiability(con, ident: dict) -> None:
     """Per component: measurable, from which modes; set aside, why; else its
     remedy; and a marginal one's line (ranked or set aside near the line)."""
+    from ..studies.recommend import remedy_clause
+
     for c, e in ident.items():
         if e.get("set_aside"):
-            con.print(f"  [yellow]{c}: set aside[/yellow]: {esc(e['set_aside']['reason'].split(': ', 1)[1])}")
+            con.print(f"  [yellow]{c}: set aside[/yellow]: {esc(e['set_aside']['reason'].split(': ', 1)[1])}"
+                      + esc(remedy_clause(e)))
         elif e["identifiable"]:
             modes = ", ".join(f"{m} ({v:.2g})" for m, v in list(e.get("from_modes", {}).items())[:3])
             con.print(f"  {c}: measurable" + (f" from {modes} (|d ln T / d ln I|)" if modes else ""))
         else:
-            r = e.get("remedy")
-            con.print(f"  [yellow]{c}: not identifiable[/yellow] (no mode's period depends on it)"
-                      + (f"; remedy: {r['text']}" if r else "; the model found no remedy among the changes tried"))
+            con.print(f"  [yellow]{c}: not identifiable[/yellow] (no mode's period depends on it)" + esc(remedy_clause(e)))
         if e.get("marginal"):
             con.print(f"    [yellow]marginal[/yellow]: {esc(e['marginal']['reason'].split(': ', 1)[1])}")
 
@@ -201,7 +202,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, overlap_warnings, parse_param
     from ..studies.point_advice import write_point_config
-    from ..studies.recommend import add_point_remedies, point_advice, reference_point
+    from ..studies.recommend import add_point_remedies, point_advice, reference_point, unmeasured
     from ..studies.study_inputs import resolve_study
     from ..studies.timing import check_reaction, parse_sensor
 
@@ -259,7 +260,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
             write_out()
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
-    add_point_remedies(rec, rec.get("not_measurable") or [], reference_point(rec, points), cfg, config, settings)
+    need = unmeasured(rec)  # not identifiable, or set aside: their remedies and the multi-hanging plan
+    add_point_remedies(rec, need, reference_point(rec, points), cfg, config, settings)
     warnings = list(pre)
     if (w := sw.stretching_summary(points)) is not None:
         click.echo(f"warning: {w}", err=True)
@@ -269,7 +271,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         deferred = rec["separation_guard"] == "multi_hanging"  # --min-separation left to the hangings plan
         # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
         warnings += recommendation_warnings(rec, cfg, config, best, settings, cons, reaction, sensor,
-                                            hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
+                                            hangings or bool(need), wm_p, "bifilar sweep",
                                             "the recommended point", deferred, hangings)
         rec.update(point_advice(best, cfg, config, settings, reaction, sensor,
                                 cons.min_separation if deferred else None))

@@ -248,6 +248,38 @@ def point_advice(point: dict, cfg: dict, source: str, settings, reaction: float,
             "amplitude_advice": amplitude_advice(cfg, source, point, settings)}
 
 
+def unmeasured(doc: dict) -> list[str]:
+    """The components a study's recommended (``sweep``) or planned (``plan``)
+    point cannot measure in its own hanging, from ``doc["identifiability"]``
+    (:func:`identifiabilities`): those no mode anywhere in the range depends
+    on and those set aside (:func:`~bifilar.studies.ranking.set_aside`: best
+    relative sigma above :data:`~bifilar.studies.ranking.USEFUL_REL`).  Both
+    get the same advice: their remedies (:func:`add_point_remedies`) and the
+    multi-hanging plan at the point, which says what the other hangings
+    measure them to."""
+    return [c for c, e in doc["identifiability"].items() if not e["identifiable"] or e.get("set_aside")]
+
+
+def remedy_clause(entry: dict) -> str:
+    """The end of a component's identifiability line (``entry``: an
+    :func:`identifiability` dict with its remedies added): "; remedy: ..."
+    (:func:`bifilar.studies.remedy.describe`), or for a component set aside
+    whose best remedy still leaves it above
+    :data:`~bifilar.studies.ranking.USEFUL_REL` that no change tried
+    measures it to that (the best quoted), or that none was found; "" for
+    a component set aside whose remedies were not looked for."""
+    from .ranking import USEFUL_REL
+
+    r = entry.get("remedy")
+    if r is None and entry.get("set_aside") and "alternatives" not in entry and "remedy_error" not in entry:
+        return ""
+    if r is None:
+        return "; the model found no remedy among the changes tried"
+    if entry.get("set_aside") and not r["rel_sigma"] <= USEFUL_REL:
+        return (f"; none of the changes tried measures it to {100 * USEFUL_REL:g} % (the best: {r['text']})")
+    return f"; remedy: {r['text']}"
+
+
 def add_point_remedies(doc: dict, need: list, ref: dict | None, cfg: dict, source: str, settings) -> None:
     """Add the remedies of the components ``need`` (those no point can
     measure, and a target that is not) to ``doc["identifiability"]``
