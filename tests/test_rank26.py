@@ -184,3 +184,32 @@ def test_a_set_aside_component_gets_the_advice_a_non_identifiable_one_gets(c04):
                                "Iyy": {"identifiable": True, "set_aside": {"component": "Iyy"}},
                                "Izz": {"identifiable": False, "set_aside": None}}}
     assert unmeasured(doc) == ["Iyy", "Izz"]
+
+
+def test_the_multi_hanging_plan_cautions_where_the_points_sigma_is_second_order(c04):
+    """The plan the set-aside advice starts has linear sigmas (hangings.py has
+    no second-order check): c04's full point at 0.06 gives Izz +- 25.1 %,
+    98.2 % of its variance second order, 3.34 % linear, and the plan 3.34 %.
+    The caution names the component with the largest factor
+    1 / sqrt(1 - second_order share): 0.17 gives 1.098 (no caution, the
+    limit 1.1), 0.18 gives 1.104; a component the plan does not predict is
+    passed over.  hangings_at_point gives it for its point.  Fails without
+    the call or with the share taken as the linear part."""
+    from bifilar.studies.point_hangings import LINEAR_CAUTION, hangings_at_point, linear_caution
+
+    def pt(**shares):
+        return {"components": {c: {"rel_sigma": 0.25, "shares": {"timing": 1 - s, "second_order": s}}
+                               for c, s in shares.items()}}
+
+    doc = {"accuracy": {"Ixx": {}, "Izz": {}}}
+    assert linear_caution(pt(Izz=0.17), doc, "P") is None and 1 / math.sqrt(0.83) < LINEAR_CAUTION
+    w = linear_caution(pt(Ixx=0.18, Izz=0.9823, Iyy=0.999), doc, "P")
+    assert w.startswith("P: the multi-hanging plan's sigmas are linear") and "98.2 % of Izz's variance" in w, w
+    assert w.endswith(f"+- 25 % against +- {25 * math.sqrt(1 - 0.9823):.3g} % linear (7.52x); the plan's figures "
+                      "can be as optimistic"), w
+    assert "Ixx's variance" in linear_caution(pt(Ixx=0.18, Iyy=0.9823), doc, "P")
+    cfg, path, st, _ = c04
+    ph = hangings_at_point(cfg, path, {"spacing": 0.06}, st, sw.Constraints(min_separation=0.02), 0.1, None,
+                           "bifilar plan", point=pt(Izz=0.9823))
+    assert "Izz" in ph.document["accuracy"]
+    assert ph.warnings == [linear_caution(pt(Izz=0.9823), ph.document, "the planned point")]

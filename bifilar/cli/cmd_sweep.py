@@ -73,15 +73,16 @@ def log_warnings(ws: list[str]) -> list[str]:
 
 
 def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
-                  wm_p, who: str, deferred: dict | None = None) -> list[str]:
-    """Add the multi-hanging plan at ``params`` (:func:`bifilar.studies.point_hangings.hangings_at_point`)
-    to ``doc`` when ``wanted`` or a measurements file ``wm_p`` is asked
-    for, write that file, and log and return the plan's warnings."""
+                  wm_p, who: str, deferred: dict | None = None, point: dict | None = None) -> list[str]:
+    """Add the multi-hanging plan at ``params`` (:func:`bifilar.studies.point_hangings.hangings_at_point`;
+    ``point`` the point there) to ``doc`` when ``wanted`` or a measurements
+    file ``wm_p`` is asked for, write that file, and log and return the
+    plan's warnings."""
     if not (wanted or wm_p):
         return []
     from ..studies.point_hangings import hangings_at_point
 
-    ph = hangings_at_point(cfg, config, params, settings, cons, reaction, sensor, who, deferred)
+    ph = hangings_at_point(cfg, config, params, settings, cons, reaction, sensor, who, deferred, point)
     warnings = log_warnings(list(ph.warnings))
     doc["multi_hanging"] = ph.document
     if wm_p:
@@ -105,7 +106,7 @@ def recommendation_warnings(doc: dict, cfg: dict, config: str, point: dict, sett
     from ..studies.point_advice import point_cautions
 
     mh_warnings = multi_hanging(doc, cfg, config, point["params"], settings, cons, reaction, sensor, wanted, wm_p,
-                                who, point if deferred else None)
+                                who, point if deferred else None, point)
     joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
     return log_warnings(point_cautions(cfg, config, point, what, cons, joint)) + mh_warnings
 
