@@ -18,8 +18,8 @@ import math
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
-from .ranking import (CONSTRAINT_FLAGS, binding_constraint, clashes, marginal, measurable_components, objective,
-                      pareto_front, point_components, point_separation, preferences, rank_order, set_aside,
+from .ranking import (CONSTRAINT_FLAGS, USEFUL_REL, binding_constraint, clashes, marginal, measurable_components,
+                      objective, pareto_front, point_components, point_separation, preferences, rank_order, set_aside,
                       tension_range_caution, violations)
 from .settings import Constraints
 
@@ -187,7 +187,8 @@ def identifiability(comp: str, point: dict | None, measurable: bool, aside: dict
     :func:`~bifilar.studies.ranking.set_aside` entry of a component
     identifiable but not measurable in the range (left out of the ranking);
     ``marginal``: None, or the :func:`~bifilar.studies.ranking.marginal`
-    entry of one whose best sigma lies close to that line, either side."""
+    entry of one ranked (by its figure at ``point``) or set aside (by its
+    best) close to that line."""
     d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None, "set_aside": aside,
                "marginal": near}
     if point is not None and point.get("valid"):
@@ -268,8 +269,6 @@ def remedy_clause(entry: dict) -> str:
     :data:`~bifilar.studies.ranking.USEFUL_REL` that no change tried
     measures it to that (the best quoted), or that none was found; "" for
     a component set aside whose remedies were not looked for."""
-    from .ranking import USEFUL_REL
-
     r = entry.get("remedy")
     if r is None and entry.get("set_aside") and "alternatives" not in entry and "remedy_error" not in entry:
         return ""
