@@ -72,9 +72,9 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (clashes, identifiable_components, marginal, measurable_components, point_separation, rank_order,
-                      rel_sigma, set_aside, tension_range_caution)
-from .recommend import cautioned, choose, identifiabilities, preference
+from .ranking import (aside_under_hangings, clashes, identifiable_components, marginal, measurable_components,
+                      point_separation, rank_order, rel_sigma, set_aside, tension_range_caution)
+from .recommend import cautioned, choose, identifiabilities, preference, target_label
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -166,7 +166,7 @@ class PlanResult:
                         "active_constraints": self.active, "hangings_objective": self.hangings_objective,
                         "hangings_ranked": self.hangings_ranked, "hangings_note": self.hangings_note(),
                         "preferred_over": self.preferred_over, "preference": self.preference},
-            "target": self.target or "worst relative of " + ", ".join(self.among),
+            "target": target_label(self.target, self.among, list(b["components"]), self.hangings_objective is not None),
             "identifiability": self.identifiability(),
             "set_aside": self.set_aside,
             "marginal": self.marginal(),
@@ -266,13 +266,14 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
             return res
         guard = "multi_hanging" if violations(best, constraints, res.target, res.among) else "planned_hanging"
         return replace(res, best=best, separation_guard=guard, active=_active(best, relaxed, bounds, res.among),
-                       hangings_objective=hob, hangings_ranked=n)
+                       hangings_objective=hob, hangings_ranked=n, set_aside=aside_under_hangings(res.set_aside))
     relaxed = replace(constraints, min_separation=None)
     res = _plan(base_cfg, source, bounds, settings, relaxed, target, **kw)
     best, hob, n = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
     best = best or res.best
     return replace(res, best=best, constraints=constraints, separation_guard="multi_hanging",
-                   active=_active(best, relaxed, bounds, res.among), hangings_objective=hob, hangings_ranked=n)
+                   active=_active(best, relaxed, bounds, res.among), hangings_objective=hob, hangings_ranked=n,
+                   set_aside=aside_under_hangings(res.set_aside) if hob is not None else res.set_aside)
 
 
 def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: SweepSettings,

@@ -255,6 +255,16 @@ def set_aside(points: list[dict], target: str | None = None, max_rel: float = US
     return out
 
 
+def aside_under_hangings(aside: list[dict]) -> list[dict]:
+    """:func:`set_aside`'s entries (new dicts) where the points are ranked by
+    their multi-hanging plan (``--hangings``): that plan's joint sigma, the
+    ranking figure, covers a set-aside component too, so its reason says so
+    instead of naming --hangings as the way out."""
+    return [{**a, "reason": a["reason"].split("; it is left out of the ranking")[0]
+             + "; it is left out of the point's own figure, but --hangings ranks by the multi-hanging plan's "
+             "joint sigma, which includes it"} for a in aside]
+
+
 def measurable_components(points: list[dict], target: str | None = None, max_rel: float = USEFUL_REL) -> list[str]:
     """Components the objective ranks by (config order): identifiable at one
     valid point at least (:func:`identifiable_components`) and not set aside

@@ -18,9 +18,9 @@ import math
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
-from .ranking import (CONSTRAINT_FLAGS, USEFUL_REL, binding_constraint, clashes, marginal, measurable_components,
-                      objective, pareto_front, point_components, point_separation, preferences, rank_order, set_aside,
-                      tension_range_caution, violations)
+from .ranking import (CONSTRAINT_FLAGS, USEFUL_REL, aside_under_hangings, binding_constraint, clashes, marginal,
+                      measurable_components, objective, pareto_front, point_components, point_separation, preferences,
+                      rank_order, set_aside, tension_range_caution, violations)
 from .settings import Constraints
 
 
@@ -119,6 +119,8 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     """
     among = measurable_components(points, target)
     aside = set_aside(points, target)
+    if hangings is not None:
+        aside = aside_under_hangings(aside)
     for p in points:
         v = violations(p, constraints, target, among)
         p["objective"] = _plain(objective(p, target, among))
@@ -139,7 +141,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
     comps = point_components(points)
-    doc: dict = {"target": target or "worst relative of " + ", ".join(among or comps),
+    doc: dict = {"target": target_label(target, among or comps, comps, hangings is not None),
                  "measurable": among, "set_aside": aside,
                  "not_measurable": [c for c in comps if c not in among and c not in _names(aside)],
                  "constraints": constraints.describe(), "pareto_front": front,
@@ -163,6 +165,19 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     doc["marginal"] = marginal(ref, among, aside, target)
     doc["identifiability"] = identifiabilities(comps, ref, among, aside, doc["marginal"])
     return doc
+
+
+def target_label(target: str | None, among, comps, hangings: bool = False) -> str:
+    """A study document's ``target``: the ``target`` asked for, else "worst
+    relative of" the components the ranking figure covers: the measurable
+    ones ``among``, or, where the points are ranked by their multi-hanging
+    plan (``hangings``), every component ``comps`` (that plan's sigma,
+    :func:`~bifilar.studies.hangings.hangings_objective`, is the worst of
+    them all, a set-aside one included: rank25's left item 4)."""
+    if target:
+        return target
+    return ("worst relative of " + ", ".join(comps) + " by the multi-hanging plan" if hangings
+            else "worst relative of " + ", ".join(among))
 
 
 def _names(aside: list[dict]) -> list[str]:
