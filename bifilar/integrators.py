@@ -194,12 +194,15 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
     return x
 
 
-SCALAR_ROOTS = 16
+SCALAR_ROOTS = 28
 """Up to this many roots :func:`poly_root_unit` iterates on Python floats,
 root by root (:func:`_root_unit_scalar`): the same IEEE operations in the
 same order as the vectorised iteration (a root's bits do not depend on the
 path), without ~15 numpy calls an iteration on a few elements (a sweep
-point's 2-3 runs of 3 periods have ~6-10 crossings; break-even ~10-20)."""
+point's 2-3 runs of 3 periods have ~6-10 crossings, its 6 law runs on the
+Solar Boat 18).  Measured on a boat point's roots (session 26, perf26a):
+vectorised ~100 us whatever the count from 9 to 54, floats ~3.4 us a root
+(9: 34 / 34 us, 18: 101 / 62, 36: 102 / 119): break-even ~30."""
 
 
 def _root_unit_scalar(p: list, dp: list, v0: float, v1: float, iters: int) -> float:

@@ -51,6 +51,8 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
         m = _quat_to_matrix_few(q)
         if m is not None:
             return m
+    if q.size <= 4 * _STACKED:
+        return _quat_to_matrix_stacked(q)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     out = np.empty(q.shape[:-1] + (3, 3))  # filled entry by entry: the numpy calls of nested stacks cost more
@@ -68,6 +70,33 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
 
 #: up to this many quaternions :func:`quat_to_matrix` works on Python floats (a start-pose solve's 2-3)
 _FEW = 8
+
+
+#: up to this many quaternions (above :data:`_FEW`) :func:`quat_to_matrix` takes the entries' products from one
+#: outer product (:func:`_quat_to_matrix_stacked`); beyond it the entry-by-entry path is faster
+_STACKED = 256
+
+# the nine entries as 1 - 2 (a + b) (diagonal) or 2 (a + s b), a and b products q_i q_j (flat index 4 i + j of
+# the outer product, in the operand order of the entry-by-entry path), s = -1 where that path subtracts
+_ENTRY_A = np.array([10, 6, 7, 6, 5, 11, 7, 11, 5])
+_ENTRY_B = np.array([15, 3, 2, 3, 15, 1, 2, 1, 10])
+_ENTRY_SIGN = np.array([1.0, -1.0, 1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0])
+_ENTRY_DIAGONAL = np.array([True, False, False, False, True, False, False, False, True])
+
+
+def _quat_to_matrix_stacked(q: np.ndarray) -> np.ndarray:
+    """:func:`quat_to_matrix` of ``q`` (..., 4) in ~10 numpy calls instead of
+    ~50: the products q_i q_j from one outer product (x y and y x are the
+    same double), each entry's sum as ``a + s b`` (``a + (-b)`` is ``a -
+    b`` in IEEE arithmetic, signed zeros, inf and NaN included), then ``2
+    S`` or ``1 - 2 S``: the entry-by-entry path's operations on the same
+    doubles, so the same bits (tests/test_perf26a.py).  Faster from ~9
+    quaternions (a start-pose solve's 9-row batches: 23 -> 12 us) up to
+    ~300 (docs/performance.md, "Session 26, perf26a")."""
+    q = q / np.sqrt(np.add.reduce(q * q, axis=-1, keepdims=True))  # np.linalg.norm's operations
+    P = (q[..., :, None] * q[..., None, :]).reshape(q.shape[:-1] + (16,))
+    S2 = 2 * (P[..., _ENTRY_A] + _ENTRY_SIGN * P[..., _ENTRY_B])
+    return np.where(_ENTRY_DIAGONAL, 1 - S2, S2).reshape(q.shape[:-1] + (3, 3))
 
 
 def _quat_to_matrix_few(q: np.ndarray):

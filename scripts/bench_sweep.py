@@ -28,6 +28,7 @@ Deterministic points, so every repeat does the same work.
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
 import resource
@@ -259,6 +260,10 @@ def bench_parts(repeats: int = 5) -> dict:
             st = sw.resolve_settings(cfg)
             sw.evaluate_point(cfg, str(path), params, st)
             spent.clear()
+            # the objects the runs before left pending (this script's earlier results) collected here, not by a
+            # full collection inside a timed part (~23 ms: it read as the trifilar's sigma points' modes 4.7 ms a
+            # point where they cost 1.9, perf26b); a point itself triggers none in a 84-point sweep
+            gc.collect()
             total = timed(lambda: sw.evaluate_point(cfg, str(path), params, st), repeats)[0]
             n = repeats
             out[case] = {"point_cpu_s": total, **{k: v / n for k, v in spent.items()}}

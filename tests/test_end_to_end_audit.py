@@ -11,30 +11,20 @@ a stated ``--amplitude`` (the release one, as the plan advises) as the
 amplitude the whole record had.  The truths here are independent of the
 code under test: a chirp with a known amplitude law, and the nonlinear
 motion of a damped trifilar integrated with the naive right-hand side of
-``scripts/bench_work_precision.py``.
+``scripts/bench_work_precision.py`` (that rig is defined here; its closed
+loop runs in tests/test_chirp_coupled_swing.py, which integrates the same
+motion).
 """
 
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
-from bifilar.analysis.equilibrium import rest_pose
-from bifilar.analysis.modes import linear_modes
-from bifilar.analysis.simulate import initial_state, relative_pose
-from bifilar.config import scene_from_dict
 from bifilar.estimation import measurements as mm
 from bifilar.estimation import period_specs as ps
-from bifilar.estimation.invert import invert
-
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-from bench_work_precision import atol_vector, naive_rhs_factory  # noqa: E402
 
 # --------------------------------------------------------------------------- a chirp with a known law
 
@@ -123,52 +113,6 @@ TRIFILAR = {  # leaning, unequal wires; principal axes turned (products of inert
 }
 
 
-@pytest.fixture(scope="module")
-def damped_record(tmp_path_factory):
-    """The torsion released at 0.15 rad, Q = 100, 40 cycles at 60 Hz (to
-    0.28 of the release), noise 0.1 % of the release: the true motion by
-    the naive right-hand side with viscous damping (not the library's
-    model, which has none)."""
-    scene = scene_from_dict(TRIFILAR, warn=False)
-    rest = rest_pose(scene)
-    md = next(m for m in linear_modes(scene, rest).modes if m.label == "torsion")
-    A, Qf, cycles = 0.15, 100.0, 40
-    T = md.period
-    y0 = initial_state(scene, rest, md, A)
-    y0[:3] -= rest.com
-    f = naive_rhs_factory(scene, rest.com, damping=(2 * math.pi / T) / Qf)
-    sol = solve_ivp(f, (0.0, cycles * T), y0, method="DOP853", rtol=1e-9, atol=atol_vector(scene, T, A, 1e-9),
-                    dense_output=True)
-    assert sol.success
-    t = np.arange(0.0, cycles * T, 1 / 60.0)
-    Y = sol.sol(t).T
-    Y[:, :3] += rest.com
-    y = relative_pose(Y, rest, md.dominant) + 1e-3 * A * np.random.default_rng(11).standard_normal(t.size)
-    path = tmp_path_factory.mktemp("trifilar") / "torsion.csv"
-    np.savetxt(path, np.c_[t, y], delimiter=",", header="t,angle", comments="", fmt="%.12g")
-    return scene, path, A
-
-
-def test_a_damped_trifilars_izz_from_its_release_amplitude_is_within_its_std(damped_record):
-    """``invert --signal torsion=REC --amplitude 0.15 --solve-for Izz`` with
-    the inputs exact and stated so (the std is the record's and the
-    amplitude's alone).  That std (0.0024 kg m^2) is nearly all the
-    record's split-half term, which here measures the period's own fall
-    with the decaying amplitude, the effect the model now accounts for:
-    the noise (0.1 % of the release) and the amplitude rule (1 % in A^2,
-    above) leave errors of a few 1e-2 of it, so the estimate must lie well
-    inside it, |z| < 0.5.  Before the fix the stated release amplitude gave
-    z = -1.67 (its nonlinear lengthening removed from a period that had
-    decayed past it); after it, and with the fitted amplitude
-    (``--signal-quantity angle``, z = -0.43 with the energy-weighted
-    amplitude), |z| ~ 1e-3."""
-    scene, path, A = damped_record
-    truth = float(np.asarray(scene.inertia)[2, 2])
-    exact = {"length": 0.0, "position": 0.0, "mass": 0.0, "com": 0.0}
-    for kw in ({"amplitude": A}, {"quantity": "angle"}):
-        m = mm.signal_measurement("torsion", path, "--signal", **kw)
-        ms = mm.MeasurementSet([mm.Hanging("reference", scene, np.eye(3))], [m])
-        ms.uncertainty = {**ms.uncertainty, **exact}
-        r = invert(ms, solve_for=["Izz"])
-        z = (r.value("Izz") - truth) / r.sigma("Izz")
-        assert abs(z) < 0.5, (kw, z, r.value("Izz"), truth, r.sigma("Izz"))
+# the closed loop on this trifilar's damped record (``invert --signal`` at its release amplitude, and with
+# the fitted one) is tests/test_chirp_coupled_swing.py's test_a_damped_trifilars_izz_from_its_release_
+# amplitude_is_within_its_std: that file integrates the same motion (test economy, session 26)

@@ -58,11 +58,14 @@ def test_an_irregular_factor_is_refused_not_estimated():
     assert "not a regular motion" in lines[0] and "fewer cycles" in lines[0]
 
 
-def test_a_regular_beating_factor_is_checked_and_left_alone(monkeypatch):
-    """The pitch rig's pitch at 0.05 rad beats (single-cycle periods span
-    4e-5 s): timed to 1e-5 s that span could matter, so its runs are checked;
-    they agree within the error model, and the estimate and its std are the
-    unchecked ones.  Before: invert never checked (no call)."""
+PITCH_ARGS = [str(PITCH_RIG), "--period", "pitch=1.9136+-0.00001", "--amplitude", "0.05", "--solve-for", "Iyy"]
+
+
+@pytest.fixture(scope="module")
+def pitch_inverted():
+    """``invert PITCH_ARGS --no-ladder --json`` unpatched, counting the calls of ``run_accuracy.check_period``
+    (a counter that returns what the real one does): (calls, result, JSON).  One run for the module (test
+    economy, session 26: the two tests below each ran it, ~0.6 s of CPU)."""
     calls = []
     real = ra.check_period
 
@@ -70,9 +73,19 @@ def test_a_regular_beating_factor_is_checked_and_left_alone(monkeypatch):
         calls.append(1)
         return real(*a, **k)
 
-    args = [str(PITCH_RIG), "--period", "pitch=1.9136+-0.00001", "--amplitude", "0.05", "--solve-for", "Iyy"]
-    monkeypatch.setattr(ra, "check_period", counted)
-    r, doc = invert_json(args)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(ra, "check_period", counted)
+        r, doc = invert_json(PITCH_ARGS)
+    return calls, r, doc
+
+
+def test_a_regular_beating_factor_is_checked_and_left_alone(monkeypatch, pitch_inverted):
+    """The pitch rig's pitch at 0.05 rad beats (single-cycle periods span
+    4e-5 s): timed to 1e-5 s that span could matter, so its runs are checked;
+    they agree within the error model, and the estimate and its std are the
+    unchecked ones.  Before: invert never checked (no call)."""
+    calls, r, doc = pitch_inverted
+    args = PITCH_ARGS
     assert r.exit_code == 0, r.stderr
     assert len(calls) >= 3  # the factor, the law's 0.9 A run, the derivative's run
     assert "integration" not in doc["budget"]["Iyy"]["groups"]
@@ -98,15 +111,12 @@ def with_check_off_by(monkeypatch, delta):
     monkeypatch.setattr(sim, "simulate", fake)
 
 
-PITCH_ARGS = [str(PITCH_RIG), "--period", "pitch=1.9136+-0.00001", "--amplitude", "0.05", "--solve-for", "Iyy"]
-
-
-def test_a_small_irregularity_is_a_budget_term_of_its_own_size(monkeypatch):
+def test_a_small_irregularity_is_a_budget_term_of_its_own_size(monkeypatch, pitch_inverted):
     """A check 5e-7 s off (250x the error bound, 0.05 of the 1e-5 s timing):
     the estimate stays, the std gains integration[pitch], the period error
     through the timing term's own gain (timing std x 5e-7 / 1e-5), and a
     warning says the motion is not regular."""
-    _, base = invert_json(PITCH_ARGS)
+    base = pitch_inverted[2]
     with_check_off_by(monkeypatch, 5e-7)
     r, doc = invert_json(PITCH_ARGS)
     assert r.exit_code == 0, r.stderr

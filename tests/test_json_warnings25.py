@@ -60,7 +60,8 @@ def test_a_feasible_point_with_an_inf_sigma_is_named_as_a_none_one_is():
     --min-separation 0.02.  audit24's rule, written for a None sigma, left
     the message "no configuration meets --min-separation 0.02" of a point
     the same document counts feasible; an inf is now named as a None is,
-    word for word as tests/test_sweep_audit24.py's None case.  A component
+    word for word as tests/test_sweep_audit24.py's None case, and (rank26)
+    with the point's own reason for it.  A component
     set aside by rank25's rule (best relative sigma 0.9 > 50 %, inf at the
     feasible point) stays out of the message."""
     import math
@@ -75,7 +76,8 @@ def test_a_feasible_point_with_an_inf_sigma_is_named_as_a_none_one_is():
            _point(0.06, 0.299, {"Ixx": 0.004, "Izz": math.inf}, half),
            _point(0.08, 0.0033, {"Ixx": 0.004, "Izz": 0.003})]
     want = ("no configuration that measures Ixx, Izz meets --min-separation 0.02: the best mode separation found is "
-            "0.0118; 1 point(s) meet every limit but give no uncertainty for Izz (e.g. at spacing = 0.06): leave Izz "
+            "0.0118; 1 point(s) meet every limit but give no uncertainty for Izz (e.g. at spacing = 0.06; Izz: the "
+            "amplitude range reaches the half turn): leave Izz "
             "out of --component, or add --hangings")
     assert binding_constraint(pts, c, None, ["Ixx", "Izz"]) == ("--min-separation", want)
     rec = sw.assess(pts, c, None)  # the document: the point feasible, no recommendation, that reason

@@ -58,7 +58,7 @@ def test_a_component_no_point_measures_does_not_block_the_others():
     assert doc["best"] == 1 and doc["measurable"] == ["Ixx", "Izz"] and doc["not_measurable"] == ["Iyy"]
     assert doc["target"] == "worst relative of Ixx, Izz"
     assert doc["identifiability"]["Iyy"] == {"identifiable": False, "from_modes": {}, "mode": "swing", "remedy": None,
-                                             "rel_sigma": None, "set_aside": None}
+                                             "rel_sigma": None, "set_aside": None, "marginal": None}
     # the target Iyy: no point gives it, nothing recommended, --target named
     doc = assess(pts, Constraints(), "Iyy")
     assert doc["best"] is None and doc["binding"] == "--target"

@@ -630,7 +630,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                            else np.concatenate(obs.sample_tensions[b]))
         if obs.viol[b] > 1e-6 * Lmax[b]:
             # judged at the state of the largest error, the last one and the samples where the run kept them
-            seen = np.stack([obs.y_viol[b], obs.y_final[b]]) + np.r_[com0[b], np.zeros(10)]
+            seen = np.stack([obs.y_viol[b], obs.y_final[b]]) + np.concatenate([com0[b], np.zeros(10)])
             seen = seen if y_s is None else np.concatenate([seen, y_s])
             warnings.insert(len(warnings) - (period is None), violation_warning(scenes[b], seen, float(obs.viol[b])))
         out.append(SceneRun(
@@ -640,7 +640,7 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
             lowest_z_min=float(lz[b]), depth_max=float(scenes[b].ceiling_z - lz[b]),
             mode=mds[b].label, amplitude=float(amps[b]), coordinate_name=COMPONENTS[mds[b].dominant],
             rtol=float(rt[b]), nfev=int(nfev[b]), nsteps=int(nsteps[b]), runtime=runtime, t=t_s, y=y_s, tensions=T_s,
-            t_final=float(obs.t_final[b]), y_final=obs.y_final[b] + np.r_[com0[b], np.zeros(10)],
+            t_final=float(obs.t_final[b]), y_final=obs.y_final[b] + np.concatenate([com0[b], np.zeros(10)]),
             warnings=warnings, method=_METHOD_NAME[method], energy_drift_resolution=res_, period_error=perr,
         ))
     return out

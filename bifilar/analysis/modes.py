@@ -359,35 +359,40 @@ def mode_sets(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, mass: np.ndarray, M:
     axis B: ``N`` (B, 6, k), ``Y`` (B, k, k), ``w2`` (B, k) ascending,
     ``mass`` (B,) kg, ``M`` (B, 6, 6), ``K`` (B, k, k)), the same mode
     sets bit for bit with less numpy call overhead: each scene's
-    resolution, clusters, ``N @ Y`` and energy-share sums are the very
-    calls :func:`mode_set` makes on it; only elementwise operations and
+    resolution, clusters and energy-share sums are the very calls
+    :func:`mode_set` makes on it, ``N @ Y`` a stacked product (each slice
+    the same call); only elementwise operations and
     maxima, exact in any order, run on the whole batch.  A scene with a
-    degenerate cluster has its cluster aligned (:func:`_align_degenerate`)
-    and its eigenvalues set to the cluster means scene by scene, as
-    :func:`mode_set` does, and joins the batch from there.  ``which``:
+    degenerate cluster has its cluster aligned and its eigenvalues set to
+    the cluster means as :func:`mode_set` does, the scenes of one cluster
+    structure together (:func:`_align_degenerate_batch`, each scene's
+    numbers those of :func:`_align_degenerate` alone).  ``which``:
     the scenes to do (indices; the others' entries are None), default all.
     Each ModeSet holds ``N[b]`` and ``M[b]`` (views) as :func:`mode_set`
     given them does."""
     B = len(w2)
     out: list = [None] * B
-    rows, S, tols, ws = [], [], [], []
-    for b in (range(B) if which is None else which):
-        wb, Yb = np.array(w2[b], float), np.array(Y[b], float)
-        tol = _noise(wb, Yb, K[b])
-        groups = _cluster_ranges(wb.tolist(), tol.tolist())  # clusters(wb, tol)
-        if len(groups) < len(wb):  # mode_set's steps before N @ Y, on this scene alone
-            Yb = _align_degenerate(N[b], Yb, wb, tol, groups)
-            for a, j in groups:
-                if j - a > 1:
-                    wb[a:j] = np.mean(wb[a:j])
-        rows.append(b)
-        S.append(N[b] @ Yb)
-        tols.append(tol)
-        ws.append(wb)
+    rows = [int(b) for b in (range(B) if which is None else which)]
     if not rows:
         return out
-    S = np.array(S)  # (R, 6, k)
-    w2r = np.array(ws)
+    w2r = np.array(np.asarray(w2)[rows], float)  # (R, k): each scene's eigenvalues (set to cluster means below)
+    Yr = np.array(np.asarray(Y)[rows], float)  # (R, k, k)
+    Nr = np.asarray(N)[rows]
+    tols, by_groups = [], {}
+    for q, b in enumerate(rows):
+        tol = _noise(w2r[q], Yr[q], K[b])
+        groups = _cluster_ranges(w2r[q].tolist(), tol.tolist())  # clusters(w2[b], tol)
+        if len(groups) < w2r.shape[1]:  # a cluster of two or more
+            by_groups.setdefault(tuple(groups), []).append(q)
+        tols.append(tol)
+    # mode_set's steps before N @ Y (a cluster aligned, its eigenvalues set to their mean), for the scenes of one
+    # cluster structure at once (_align_degenerate_batch: each scene's numbers as _align_degenerate's alone)
+    for groups, qs in by_groups.items():
+        Yr[qs] = _align_degenerate_batch(Nr[qs], Yr[qs], groups)
+        for a, j in groups:
+            if j - a > 1:
+                w2r[np.ix_(qs, range(a, j))] = np.mean(w2r[qs, a:j], axis=1)[:, None]
+    S = Nr @ Yr  # (R, 6, k): the stacked product, each scene's N @ Y (the same bits)
     tol = np.array(tols)
     S, i = unit_shapes(S)  # (R, 6, k), (R, k)
     diagM = np.diagonal(np.asarray(M)[rows], axis1=1, axis2=2)[:, 3:]
@@ -410,7 +415,9 @@ def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol, groups=
     with the largest remaining norm, ties within 1e-6 going to the first
     component), then the basis that is the identity on those components.
     Deterministic: the same choice on every machine.  ``groups``:
-    :func:`clusters` of ``w2`` and ``tol`` if already known."""
+    :func:`clusters` of ``w2`` and ``tol`` if already known.  One scene's
+    steps; :func:`_align_degenerate_batch` the same on many scenes at once
+    (without this function's ~25 us of indexing overhead on one scene)."""
     Y = Y.copy()
     for k, j in (groups if groups is not None else clusters(w2, tol)):
         if j - k < 2:
@@ -428,6 +435,38 @@ def _align_degenerate(N: np.ndarray, Y: np.ndarray, w2: np.ndarray, tol, groups=
                 v = t / np.sqrt(t.dot(t))  # np.linalg.norm(t): its operations
                 T = T - (T @ v)[:, None] * v[None, :]  # np.outer's product
         Y[:, k:j] = Y[:, k:j] @ np.linalg.inv(S[rows, :])
+    return Y
+
+
+def _align_degenerate_batch(N: np.ndarray, Y: np.ndarray, groups) -> np.ndarray:
+    """:func:`_align_degenerate` of many scenes whose eigenvalues form the
+    same clusters ``groups`` (``N`` (B, 6, k), ``Y`` (B, k, k)), on the
+    stacked arrays: each scene's numbers are those of
+    :func:`_align_degenerate` on it alone, bit for bit (the products are
+    stacked matrix products, each slice the same BLAS call as one scene's;
+    the reductions run along the same contiguous axis; a pick's own
+    squared norm is taken scene by scene, ``t.dot(t)`` as there;
+    tests/test_perf26b.py).  Returns the aligned Y (a copy)."""
+    Y = Y.copy()
+    B = len(Y)
+    at = np.arange(B)
+    for k, j in groups:
+        if j - k < 2:
+            continue
+        S = N @ Y[:, :, k:j]  # (B, 6, c)
+        T = S
+        rows = np.empty((B, j - k), int)
+        for step in range(j - k):
+            norms = np.sqrt(np.add.reduce(T * T, axis=2))  # (B, 6)
+            if step:
+                norms[at[:, None], rows[:, :step]] = -1.0
+            r = np.argmax(norms >= (1 - 1e-6) * norms.max(axis=1)[:, None], axis=1)
+            rows[:, step] = r
+            if step < j - k - 1:  # (the last pick's projection is never read)
+                t = T[at, r]  # (B, c)
+                v = t / np.array([np.sqrt(x.dot(x)) for x in t])[:, None]
+                T = T - (T @ v[:, :, None]) * v[:, None, :]
+        Y[:, :, k:j] = Y[:, :, k:j] @ np.linalg.inv(S[at[:, None], rows, :])
     return Y
 
 

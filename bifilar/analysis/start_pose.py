@@ -213,7 +213,7 @@ def _scale(rig: _Rig) -> np.ndarray:
 
 
 def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int,
-              worst: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+              worst: np.ndarray | None = None, geometry: list | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Gauss-Newton onto the wires from poses x (B, 6): each step the
     minimum-W-norm correction of the linearised constraints (the held
     coordinate has Winv = 0, so it never moves), shortened by backtracking
@@ -222,7 +222,10 @@ def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int,
     system inconsistent) falls (Armijo) and the pose stays inside the chart.
     Returns (x, on the wires: max |phi| / L_max^2 < 1e-15); ``worst`` (B, n),
     if given, is lowered in place to the worst conditioning of the steps'
-    systems (:func:`_pinv_solve`)."""
+    systems (:func:`_pinv_solve`); ``geometry`` (a list), if given, is set
+    to ``[d, w, phi]`` of :meth:`_Rig.wires` at the returned poses (kept
+    with every accepted step: the same rows' values, which the closest-pose
+    Newton then needs not compute again)."""
     x = x.copy()
     L2 = rig.Lmax**2
     d, w, phi = rig.wires(x)
@@ -263,15 +266,18 @@ def _to_wires(rig: _Rig, x: np.ndarray, Winv: np.ndarray, iters: int,
         # system it falls quadratically, by a factor 4 a step at a fold, and by 0.2-3 % a step while dependent
         # wires make the system nearly singular: a four-wire rectangle's torsion, tests/test_audit_cases.py)
         active[ii[todo | (res[ii] < _RES_DONE) | (weak[ii] >= 8)]] = False
+    if geometry is not None:
+        geometry[:] = [d, w, phi]
     return x, res < _RES_DONE
 
 
-def _kkt(rig: _Rig, x0: np.ndarray, x: np.ndarray, mu: np.ndarray, Winv: np.ndarray):
+def _kkt(rig: _Rig, x0: np.ndarray, x: np.ndarray, mu: np.ndarray, Winv: np.ndarray, at: tuple | None = None):
     """Residuals of the closest-pose conditions at (x, mu): F1 (B, 6) =
     W (x - x0) + G^T mu on the free coordinates (0 on the held one), phi (B, n),
-    and G (B, n, 6)."""
-    d, w, phi = rig.wires(x)
-    G = rig.jacobian(x, d, w)
+    and G (B, n, 6).  ``at``: (d, w, phi) of :meth:`_Rig.wires` at x, and
+    G, if already known (the same values)."""
+    d, w, phi = rig.wires(x) if at is None else at[:3]
+    G = rig.jacobian(x, d, w) if at is None or len(at) < 4 else at[3]
     free = Winv > 0
     F1 = np.where(free, (x - x0) / np.where(free, Winv, 1.0) + np.einsum("bnj,bn->bj", G, mu), 0.0)
     return F1, phi, G
@@ -309,20 +315,26 @@ def _mu_hessian(rig: _Rig, x: np.ndarray, mu: np.ndarray, scale: np.ndarray) -> 
     return H
 
 
-def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: int) -> tuple[np.ndarray, np.ndarray]:
+def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: int,
+             at: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Newton's method on the first-order conditions of the closest pose
     (module doc) from poses x on the wires; constraint Hessians by central
     differences of the analytic Jacobian (their error, ~1e-10, slows the
     convergence a little and does not move the solution, whose residuals are
-    analytic).  Returns (x, converged)."""
+    analytic).  ``at``: (d, w, phi) of :meth:`_Rig.wires` at x if known
+    (:func:`_to_wires`' ``geometry``).  Each row's wires at its pose are
+    kept from where they were computed (the start, :func:`_to_wires` after
+    each step), not computed again for the next step's conditions: row by
+    row the same values (tests/test_perf26a.py).  Returns (x, converged)."""
     B = len(x)
     x = x.copy()
     scale = _scale(rig)
     free = Winv > 0
     Wd = np.where(free, 1.0 / np.where(free, Winv, 1.0), 0.0)
     # multipliers from the stationarity condition in the least-squares sense
-    d, w, phi = rig.wires(x)
+    d, w, phi = rig.wires(x) if at is None else (a.copy() for a in at)
     G = rig.jacobian(x, d, w)
+    first = (d, w, phi, G)  # the first step's conditions are at these poses
     GW = G * Winv[:, None, :]
     mu = -_pinv_solve(GW @ np.swapaxes(G, 1, 2), np.einsum("bnj,bj->bn", G * free[:, None, :], x - x0))
     n = mu.shape[1]
@@ -333,7 +345,9 @@ def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: 
         if not len(ii):
             break
         sub = rig.take(ii)
-        F1, phi, G = _kkt(sub, x0[ii], x[ii], mu[ii], Winv[ii])
+        F1, phi_i, G = _kkt(sub, x0[ii], x[ii], mu[ii], Winv[ii],
+                            first if first is not None else (d[ii], w[ii], phi[ii]))
+        first = None
         H = _mu_hessian(sub, x[ii], mu[ii], scale[ii])
         H = 0.5 * (H + np.swapaxes(H, 1, 2)) + Wd[ii][:, :, None] * np.eye(6)
         fr = free[ii]
@@ -343,35 +357,43 @@ def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: 
         K[:, :6, :6] = H
         K[:, :6, 6:] = np.swapaxes(Gf, 1, 2)
         K[:, 6:, :6] = Gf
-        rhs = -np.concatenate([F1, phi], axis=1)
+        rhs = -np.concatenate([F1, phi_i], axis=1)
         step = np.einsum("bij,bj->bi", np.linalg.pinv(K, rcond=1e-13), rhs)
         # back onto the wires after each step (dependent wires curve the constraints at second order where
         # the linearised ones cannot follow: a four-wire rectangle's torsion)
-        xt, on = _to_wires(sub, x[ii] + step[:, :6], Winv[ii], ITERATIONS)
+        geo: list = []
+        xt, on = _to_wires(sub, x[ii] + step[:, :6], Winv[ii], ITERATIONS, geometry=geo)
         on &= np.all(np.isfinite(xt), axis=1)
         small = on & (np.max(np.abs(xt - x[ii]) / scale[ii], axis=1) < _STEP_DONE)
         x[ii[on]] = xt[on]
+        d[ii[on]], w[ii[on]], phi[ii[on]] = (a[on] for a in geo)
         mu[ii[on]] = mu[ii[on]] + step[on, 6:]
         conv[ii[small]] = True
         active[ii[small | ~on]] = False
     return x, conv
 
 
-def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, worst: np.ndarray | None = None):
+def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, worst: np.ndarray | None = None,
+           residual: list | None = None):
     """Closest poses to x0 on the wires, from x: onto the wires, then Newton.
     Returns (x, converged, on the wires within :data:`FEASIBLE_TOL`: where
     dependent wires make the constraints singular, Gauss-Newton can stop a
     hair off them, e.g. 2e-11 of the length for a four-wire rectangle
     twisted by 0.01 rad); ``worst`` as in :func:`_to_wires` (the path onto
-    the wires from x)."""
-    x, on = _to_wires(rig, x, Winv, ITERATIONS, worst)
+    the wires from x); ``residual`` (a list), if given, is set to ``[the
+    residual (B,) of :meth:`_Rig.residual` at the returned poses]``."""
+    geo: list = []
+    x, on = _to_wires(rig, x, Winv, ITERATIONS, worst, geo)
     out = x.copy()
     conv = np.zeros(len(x), bool)
     ii = np.nonzero(on)[0]
     if len(ii):
-        xc, cc = _closest(rig.take(ii), x0[ii], x[ii], Winv[ii], ITERATIONS)
+        xc, cc = _closest(rig.take(ii), x0[ii], x[ii], Winv[ii], ITERATIONS, tuple(a[ii] for a in geo))
         out[ii], conv[ii] = xc, cc
-    return out, conv, rig.residual(out) <= FEASIBLE_TOL
+    res = rig.residual(out)
+    if residual is not None:
+        residual[:] = [res]
+    return out, conv, res <= FEASIBLE_TOL
 
 
 _JUMP = 0.25
@@ -464,20 +486,27 @@ def _continuation(rig: _Rig, x0: np.ndarray, Winv: np.ndarray) -> tuple[np.ndarr
     return x, reached
 
 
-def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray,
+                      at_rest: list | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Chart poses x (B, 6) of the start problem for displaced poses x0 (B, 6)
     with coordinate ``hold`` (B,) fixed; returns (x, residual (B,) relative,
     gap (B,) m: where no start is on the wires, the least-squares minimum of
-    max_i | |d_i| - L_i | near the end of the branch, else 0)."""
+    max_i | |d_i| - L_i | near the end of the branch, else 0).  ``at_rest``
+    (a list), if given, is set to ``[d, w, G]`` at rest (x = 0), what
+    :func:`edge_ratio` needs too."""
     B = len(x0)
     Winv = 1.0 / rig.W
     Winv[np.arange(B), hold] = 0.0
     worst = np.ones(rig.L.shape)
-    x, conv, on = _solve(rig, x0, x0, Winv, worst)
+    got: list = []
+    x, conv, on = _solve(rig, x0, x0, Winv, worst, got)
+    res = got[0]
     # read past the eigenvalues of wires dependent at rest (four vertical ones: one at rounding there, ~1e-10 a
     # little way off; RANK_TOL as in edge_ratio)
     d, w, _ = rig.wires(np.zeros_like(x0))
     G = rig.jacobian(np.zeros_like(x0), d, w)
+    if at_rest is not None:
+        at_rest[:] = [d, w, G]
     ev = np.linalg.eigvalsh((G * Winv[:, None, :]) @ np.swapaxes(G, 1, 2))
     worst = worst[np.arange(B), np.sum(ev <= RANK_TOL * ev[:, -1:], axis=1)]
     gap = np.zeros(B)
@@ -508,7 +537,7 @@ def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray) -> tuple[np.n
                 near = np.max(np.abs(xl - xe[j]) / _scale(one)[0]) <= _NEAR
                 gap[b] = (res if near else float(one.residual(xe[j][None, :])[0])) * float(rig.Lmax[b])
                 gap[b] = max(gap[b], 2.0 * FEASIBLE_TOL * float(rig.Lmax[b]))
-    res = rig.residual(x)
+        res = rig.residual(x)  # (else x is _solve's: its residual as it gave it)
     feasible = (gap == 0.0) & (res <= FEASIBLE_TOL)
     return x, res, np.where(feasible, 0.0, np.where(gap > 0.0, gap, res * rig.Lmax))
 
@@ -526,7 +555,8 @@ def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, ampli
     hold = np.array([md.dominant for md in modes], int)
     x0 = amp[:, None] * S
     x0[np.arange(B), hold] = amp * S[np.arange(B), hold]  # the held value, exactly amplitude x shape
-    x, res, gap = solve_start_poses(rig, x0, hold)
+    rest_geometry: list = []
+    x, res, gap = solve_start_poses(rig, x0, hold, rest_geometry)
     held = np.full(B, np.nan)
     if B and scenes[0].n_wires > MAX_ELIMINATION_WIRES:
         # nearly dependent wires: a start the solver left off the wires is put on the lengths the run holds; it
@@ -537,7 +567,7 @@ def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, ampli
             x[b], held[b] = _onto_held(scenes[b], one, x[b], int(hold[b]))
             res[b] = float(one.residual(x[b][None])[0])
         gap = np.where((held <= FEASIBLE_TOL * rig.Lmax) & (res <= FREE_TOL), 0.0, gap)
-    edge = edge_ratio(rig, x, hold)
+    edge = edge_ratio(rig, x, hold, rest_geometry)
     com, R = rig.pose(x)
     q = _quaternion(rig, x)
     return StartPoses(com=com, R=R, q=q, x=x, residual=res, feasible=(gap == 0.0) & ~(edge < EDGE_TOL), gap=gap,
@@ -626,7 +656,7 @@ by exactly 5 cm (the multipliers then singular: +-1.6e7 N for a 1 kg body),
 at 1e-8 rad short of it, 1.6e-4 at 1e-9 m short of the 5 cm swing's."""
 
 
-def edge_ratio(rig: "_Rig", x: np.ndarray, hold: np.ndarray) -> np.ndarray:
+def edge_ratio(rig: "_Rig", x: np.ndarray, hold: np.ndarray, at_rest: list | None = None) -> np.ndarray:
     """(B,) how far starts x (B, 6, chart) are from the end of their reach: the
     r-th singular value of the wires' unit constraint gradients together
     with the held coordinate's (rows [d_i / |d_i|, (w_i x d_i) / (|d_i| l)],
@@ -635,23 +665,34 @@ def edge_ratio(rig: "_Rig", x: np.ndarray, hold: np.ndarray) -> np.ndarray:
     for dependent wires).  The held coordinate cannot move further where that matrix
     is singular: the wires are horizontal (a swing on parallel wires) or the
     held direction lies in the wires' span, and the start's tensions are not
-    determined (the multipliers' matrix is singular)."""
+    determined (the multipliers' matrix is singular).  ``at_rest``: [d, w,
+    G] at rest (x = 0) if known (:func:`solve_start_poses`' ``at_rest``);
+    the rest's and the starts' matrices then go through one SVD call (each
+    matrix's singular values its own: the same values)."""
     B = len(x)
     lever = np.maximum(np.max(np.linalg.norm(rig.p, axis=2), axis=1), 1e-300)  # (B,)
 
-    def singular(xx):
+    def singular(xx, geo=None):
         d, w, _ = rig.wires(xx)
-        G = rig.jacobian(xx, d, w) / np.linalg.norm(d, axis=2)[:, :, None]
-        G[:, :, 3:] /= lever[:, None, None]
-        e = np.zeros((B, 1, 6))
-        e[np.arange(B), 0, hold] = 1.0
+        G = rig.jacobian(xx, d, w)
+        k = 1
+        if geo is not None:  # rest rows first
+            d, G, k = np.concatenate([geo[0], d]), np.concatenate([geo[2], G]), 2
+        G = G / np.linalg.norm(d, axis=2)[:, :, None]
+        G[:, :, 3:] /= np.tile(lever, k)[:, None, None]
+        e = np.zeros((k * B, 1, 6))
+        e[np.arange(k * B), 0, np.tile(hold, k)] = 1.0
         return np.linalg.svd(np.concatenate([G, e], axis=1), compute_uv=False)
 
-    at_rest = singular(np.zeros_like(x))
+    if at_rest:
+        both = singular(x, at_rest)
+        at_rest, at_x = both[:B], both[B:]
+    else:
+        at_rest, at_x = singular(np.zeros_like(x)), None
     # the rank at rest: dependent wires (four parallel ones) leave one singular value at rounding there
     r = np.sum(at_rest > RANK_TOL * at_rest[:, :1], axis=1)
     k = np.arange(B), r - 1
-    return singular(x)[k] / at_rest[k]
+    return (singular(x) if at_x is None else at_x)[k] / at_rest[k]
 
 
 RANK_TOL = 1e-8

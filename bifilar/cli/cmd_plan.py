@@ -33,7 +33,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
     from ..studies.plan import plan as run_plan
     from ..studies.shorthands import check_param, overlap_warnings, parse_bounds
     from ..studies.point_advice import write_point_config
-    from ..studies.recommend import add_point_remedies, point_advice
+    from ..studies.recommend import add_point_remedies, point_advice, unmeasured
     from ..studies.study_inputs import resolve_study
 
     check_workers(workers)
@@ -62,7 +62,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
                        hangings=hangings)
     doc = res.to_json()
     deferred = res.separation_guard == "multi_hanging"  # --min-separation left to the hangings plan
-    need = [c for c, e in doc["identifiability"].items() if not e["identifiable"]]
+    need = unmeasured(doc)  # not identifiable, or set aside: their remedies and the multi-hanging plan
     # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
     doc["warnings"] = pre + recommendation_warnings(doc, cfg, config, res.best, settings, cons, reaction, sensor,
                                                     hangings or bool(need), wm_p, "bifilar plan", "the planned point",

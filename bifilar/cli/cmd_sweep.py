@@ -73,15 +73,16 @@ def log_warnings(ws: list[str]) -> list[str]:
 
 
 def multi_hanging(doc: dict, cfg: dict, config: str, params: dict, settings, cons, reaction, sensor, wanted: bool,
-                  wm_p, who: str, deferred: dict | None = None) -> list[str]:
-    """Add the multi-hanging plan at ``params`` (:func:`bifilar.studies.point_hangings.hangings_at_point`)
-    to ``doc`` when ``wanted`` or a measurements file ``wm_p`` is asked
-    for, write that file, and log and return the plan's warnings."""
+                  wm_p, who: str, deferred: dict | None = None, point: dict | None = None) -> list[str]:
+    """Add the multi-hanging plan at ``params`` (:func:`bifilar.studies.point_hangings.hangings_at_point`;
+    ``point`` the point there) to ``doc`` when ``wanted`` or a measurements
+    file ``wm_p`` is asked for, write that file, and log and return the
+    plan's warnings."""
     if not (wanted or wm_p):
         return []
     from ..studies.point_hangings import hangings_at_point
 
-    ph = hangings_at_point(cfg, config, params, settings, cons, reaction, sensor, who, deferred)
+    ph = hangings_at_point(cfg, config, params, settings, cons, reaction, sensor, who, deferred, point)
     warnings = log_warnings(list(ph.warnings))
     doc["multi_hanging"] = ph.document
     if wm_p:
@@ -105,7 +106,7 @@ def recommendation_warnings(doc: dict, cfg: dict, config: str, point: dict, sett
     from ..studies.point_advice import point_cautions
 
     mh_warnings = multi_hanging(doc, cfg, config, point["params"], settings, cons, reaction, sensor, wanted, wm_p,
-                                who, point if deferred else None)
+                                who, point if deferred else None, point)
     joint = doc["multi_hanging"]["accuracy"] if hangings and "multi_hanging" in doc else None
     return log_warnings(point_cautions(cfg, config, point, what, cons, joint)) + mh_warnings
 
@@ -144,17 +145,21 @@ def render_timing(con, rows: list[dict]) -> None:
 
 
 def render_identifiability(con, ident: dict) -> None:
-    """Per component: measurable, from which modes; set aside, why; else its remedy."""
+    """Per component: measurable, from which modes; set aside, why; else its
+    remedy; and a marginal one's line (ranked or set aside near the line)."""
+    from ..studies.recommend import remedy_clause
+
     for c, e in ident.items():
         if e.get("set_aside"):
-            con.print(f"  [yellow]{c}: set aside[/yellow]: {esc(e['set_aside']['reason'].split(': ', 1)[1])}")
+            con.print(f"  [yellow]{c}: set aside[/yellow]: {esc(e['set_aside']['reason'].split(': ', 1)[1])}"
+                      + esc(remedy_clause(e)))
         elif e["identifiable"]:
             modes = ", ".join(f"{m} ({v:.2g})" for m, v in list(e.get("from_modes", {}).items())[:3])
             con.print(f"  {c}: measurable" + (f" from {modes} (|d ln T / d ln I|)" if modes else ""))
         else:
-            r = e.get("remedy")
-            con.print(f"  [yellow]{c}: not identifiable[/yellow] (no mode's period depends on it)"
-                      + (f"; remedy: {r['text']}" if r else "; the model found no remedy among the changes tried"))
+            con.print(f"  [yellow]{c}: not identifiable[/yellow] (no mode's period depends on it)" + esc(remedy_clause(e)))
+        if e.get("marginal"):
+            con.print(f"    [yellow]marginal[/yellow]: {esc(e['marginal']['reason'].split(': ', 1)[1])}")
 
 
 def render_rig(con, rig: dict, title: str = "the rig to build") -> None:
@@ -198,7 +203,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     from ..studies import sweep as sw
     from ..studies.shorthands import check_param, overlap_warnings, parse_param
     from ..studies.point_advice import write_point_config
-    from ..studies.recommend import add_point_remedies, point_advice, reference_point
+    from ..studies.recommend import add_point_remedies, point_advice, reference_point, unmeasured
     from ..studies.study_inputs import resolve_study
     from ..studies.timing import check_reaction, parse_sensor
 
@@ -243,7 +248,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
     names = [s.name for s in specs]
 
     def write_out() -> None:
-        sw.write_points_csv(out_p, points, names, list(settings.components))
+        sw.write_points_csv(out_p, points, names, list(settings.components), rec.get("measurable"))
         journal.unlink(missing_ok=True)
 
     from ..studies.hangings import hangings_objectives
@@ -256,7 +261,8 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
             write_out()
         raise InputError("--param", "no point of the sweep is valid: " + sw.why_invalid(points)
                          + (f"; every point's reason is in {out_p}" if out_p else ""))
-    add_point_remedies(rec, rec.get("not_measurable") or [], reference_point(rec, points), cfg, config, settings)
+    need = unmeasured(rec)  # not identifiable, or set aside: their remedies and the multi-hanging plan
+    add_point_remedies(rec, need, reference_point(rec, points), cfg, config, settings)
     warnings = list(pre)
     if (w := sw.stretching_summary(points)) is not None:
         click.echo(f"warning: {w}", err=True)
@@ -266,7 +272,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
         deferred = rec["separation_guard"] == "multi_hanging"  # --min-separation left to the hangings plan
         # the hangings first: a plan that cannot meet --min-separation exits 2 before any warning or file
         warnings += recommendation_warnings(rec, cfg, config, best, settings, cons, reaction, sensor,
-                                            hangings or bool(rec["not_measurable"]), wm_p, "bifilar sweep",
+                                            hangings or bool(need), wm_p, "bifilar sweep",
                                             "the recommended point", deferred, hangings)
         rec.update(point_advice(best, cfg, config, settings, reaction, sensor,
                                 cons.min_separation if deferred else None))
@@ -308,7 +314,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
 
     from rich.table import Table
 
-    from ..studies.ranking import point_separation
+    from ..studies.ranking import no_sigma_reason, point_separation
 
     con = console()
     comps = list(settings.components)
@@ -336,7 +342,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
                 row.append("[yellow]n/a[/yellow]")
             else:
                 row.append(f"{_pct(e['rel_sigma'])} {_ABBR.get(e['mode'], e['mode'])}")
-        row.append(_pct(point_separation(p)))
+        row.append(_pct(point_separation(p, rec.get("measurable"))))
         pk = p["tension"]["peak"] if settings.tensions else max(p["tension"]["rest"])
         row.append("-" if pk is None else f"{pk:.4g}")
         d = p["depth"]["max"] if p["depth"]["max"] is not None else p["depth"]["rest"]
@@ -346,9 +352,7 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
             notes.append(f"{i}: " + esc("; ".join(p["violations"])))
         unavailable = [c for c in comps if p["components"][c].get("sigma_unavailable")]
         if unavailable:  # not ranked: say why, in the point's own words (whole in the JSON's sigma_unavailable)
-            why = p["components"][unavailable[0]]["sigma_unavailable"]
-            why = why.removeprefix("the uncertainty cannot be given")
-            why = why if len(why) <= 160 else why[:157].rstrip() + "..."
+            why = no_sigma_reason(p["components"][unavailable[0]])
             notes.append(f"{i}: no uncertainty for {', '.join(unavailable)}" + esc(why) + "; see --json")
         t.add_row(*row)
     con.print(t)
@@ -356,8 +360,8 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
         con.print(f"  [yellow]x[/yellow] {line}")
     if len(notes) > 20:
         con.print(f"  ... {len(notes) - 20} more (see --json or --out)")
-    con.print("(n/a: no mode's period depends on that component; sep: smallest gap between a timed mode and any "
-              "other mode; modes: " + ", ".join(f"{v} = {k}" for k, v in _ABBR.items()) + ")")
+    con.print("(n/a: no mode's period depends on that component; sep: smallest gap between a timed mode (a "
+              "ranked component's) and any other mode; modes: " + ", ".join(f"{v} = {k}" for k, v in _ABBR.items()) + ")")
     con.print("identifiability" + (" at the recommended point:" if rec.get("best") is not None else ":"))
     render_identifiability(con, rec["identifiability"])
     unc = settings.unc

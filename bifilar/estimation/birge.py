@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .uncertainty import LinearBudget, group_of
+from .uncertainty import LinearBudget, covariance_of, group_of
 
 
 def birge_factor(fit: dict) -> float:
@@ -57,10 +57,7 @@ def widen_timing(budget: LinearBudget, factor: float) -> LinearBudget:
     contrib = {n: (np.asarray(c, float) * factor if group_of(n) == "timing" else c)
                for n, c in budget.contributions.items()}
     sigmas = {n: (s * factor if group_of(n) == "timing" else s) for n, s in budget.sigmas.items()}
-    P = len(budget.names)
-    cov = np.zeros((P, P))
-    for c in contrib.values():
-        cov += np.outer(c, c)
+    cov = covariance_of(contrib, len(budget.names))
     return replace(budget, covariance=cov, contributions=contrib, sigmas=sigmas)
 
 

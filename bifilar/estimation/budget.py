@@ -20,7 +20,7 @@ from .amplitude_secant import amplitude_sigma, far_amplitude_stds
 from .measurements import COM_UNKNOWNS
 from .problem import _IDX, Problem, physical_limits
 from .sensitivity import input_sigma, measured_inputs, stiff_inputs
-from .uncertainty import LinearBudget, gain_matrix, propagate, robust_sensitivity
+from .uncertainty import LinearBudget, covariance_of, gain_matrix, propagate, robust_sensitivity
 from .second_order import (LINEAR_ENOUGH, OFFSET_ENOUGH, SIGMA_POINT, BudgetContext,  # noqa: F401 (re-exported)
                            _coefs3, _hanging_periods, _key_hanging, _one_step, _pair_terms, _perturbed_scene,
                            _release_moments, _resolve, _solve_points, scene_key, second_order)
@@ -355,9 +355,7 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
                 contrib[f"hidden_second_mode[{lab}]"] = Gf[:, k] * laws[k].hidden_std
             if laws[k] is not None and laws[k].reading_std > 0:  # the tone's other reading (several modes)
                 contrib[f"tone_reading[{lab}]"] = Gf[:, k] * laws[k].reading_std
-    cov = np.zeros_like(budget.covariance)
-    for c in contrib.values():
-        cov += np.outer(c, c)
+    cov = covariance_of(contrib, len(budget.names))
     return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof)), shift, Gf
 
 

@@ -354,15 +354,13 @@ def prior_terms(pb: Problem, p_hat, r_hat, T_lin, ctx, unc: dict, stated: bool, 
 def with_prior(budget, pri: PriorInertia):
     """``budget`` (:class:`~bifilar.estimation.uncertainty.LinearBudget`)
     with the priors' terms added (itself where there are none)."""
-    from .uncertainty import LinearBudget
+    from .uncertainty import LinearBudget, covariance_of
 
     extra = pri.contributions()
     if not extra:
         return budget
     contrib = {**budget.contributions, **extra}
-    cov = np.zeros_like(budget.covariance)
-    for c in contrib.values():
-        cov += np.outer(c, c)
+    cov = covariance_of(contrib, len(budget.names))
     sig = {**budget.sigmas, **{f"prior_inertia[{c}]": float(pri.sigmas[q]) for q, c in enumerate(pri.names)
                                if f"prior_inertia[{c}]" in extra}}
     return LinearBudget(list(budget.names), cov, contrib, sig, dict(budget.dof))
@@ -379,7 +377,7 @@ def with_prior_curvature(budget, pri: PriorInertia):
     is kept, the interval is the quadratic's, :func:`~bifilar.estimation.budget.interval_95`).
     Sets ``pri.budgeted``; itself where nothing is added."""
     from .budget import LINEAR_ENOUGH, OFFSET_ENOUGH
-    from .uncertainty import LinearBudget
+    from .uncertainty import LinearBudget, covariance_of
 
     if not pri.quadratic:
         return budget
@@ -394,9 +392,7 @@ def with_prior_curvature(budget, pri: PriorInertia):
         pri.budgeted = False
         return budget
     contrib = {**budget.contributions, **terms, "offset": old_off + off}
-    cov = np.zeros_like(budget.covariance)
-    for c in contrib.values():
-        cov += np.outer(c, c)
+    cov = covariance_of(contrib, len(budget.names))
     return LinearBudget(list(budget.names), cov, contrib, dict(budget.sigmas), dict(budget.dof))
 
 

@@ -50,7 +50,7 @@ from ..scene import scene_with
 from .measurements import COM_UNKNOWNS
 from .problem import Problem
 from .sensitivity import mac_match, mac_matches, n_modes, perturb
-from .uncertainty import LinearBudget
+from .uncertainty import LinearBudget, covariance_of
 
 
 #: sigma points at +- sqrt(3) standard uncertainties (3-point Gauss-Hermite)
@@ -229,7 +229,10 @@ def _resolve(pb: Problem, ctx: BudgetContext, p_hat, r_hat, moves, hits: dict):
         for h, (_, _, rest, ms0, col) in hits.items():
             scene = _perturbed_scene(pb, h, pb.models[h].scene(vals), moves)
             try:
-                r = rest_pose(scene, guess=rest) if com_unknown else rest
+                # a moved CoM moves the rest pose: found from rest_pose's start pose (a guess is read only with
+                # local_only, which would follow this step's branch instead; none of test_invert.py's 70
+                # re-solves nor any sweep point, whose unknowns are inertias, comes here: perf26b)
+                r = rest_pose(scene) if com_unknown else rest
                 ms = linear_modes(scene, r)
             except (BifilarError, np.linalg.LinAlgError):  # a step past definiteness (a body near its limit)
                 return None
@@ -420,9 +423,7 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
         offset = offset + D * mean_w
     if np.any(offset):
         contrib["offset"] = offset
-    cov = np.zeros_like(lin.covariance)
-    for c in contrib.values():
-        cov += np.outer(c, c)
+    cov = covariance_of(contrib, len(lin.names))
     return LinearBudget(list(lin.names), cov, contrib, dict(lin.sigmas), dict(lin.dof)), failed
 
 

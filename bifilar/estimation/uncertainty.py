@@ -403,18 +403,34 @@ def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np
         sigmas[tn[k]] = float(sig[k])
         if timing_dof is not None and math.isfinite(timing_dof[k]):
             dof[tn[k]] = float(timing_dof[k])
+    # one period (K = 1, a planner's honest sigma): each input's G @ Jx[:, j] is one product per unknown, exactly
+    # rounded however it is computed, so every input's column at once is the same numbers (tests/test_perf26b.py)
+    cols = -(G @ Jx) if K == 1 else None
     for j, n in enumerate(input_names):
         s = float(input_sigmas[j])
         if s > 0:
-            contrib[n] = -(G @ Jx[:, j]) * s
+            contrib[n] = (cols[:, j] if cols is not None else -(G @ Jx[:, j])) * s
             sigmas[n] = s
     for n, c in (extra or {}).items():
         contrib[n] = np.asarray(c, float).reshape(len(names))
-    P = len(names)
+    return LinearBudget(list(names), covariance_of(contrib, len(names)), contrib, sigmas, dof)
+
+
+def covariance_of(contrib: dict, P: int) -> np.ndarray:
+    """(P, P) sum of ``outer(c, c)`` over the (P,) contributions ``c`` of
+    ``contrib`` (units of the unknowns squared), added in the dict's order;
+    one unknown on Python floats (the same products and sums, ~1 us a term
+    instead of ~4)."""
+    if P == 1:
+        acc = 0.0
+        for c in contrib.values():
+            x = float(c[0] if np.ndim(c) else c)
+            acc += x * x
+        return np.array([[acc]])
     cov = np.zeros((P, P))
     for c in contrib.values():
         cov += np.outer(c, c)
-    return LinearBudget(list(names), cov, contrib, sigmas, dof)
+    return cov
 
 
 # ---------------------------------------------------------------------------

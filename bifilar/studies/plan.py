@@ -72,9 +72,9 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (clashes, identifiable_components, measurable_components, point_separation, rank_order, rel_sigma,
-                      set_aside, tension_range_caution)
-from .recommend import cautioned, choose, identifiabilities, preference
+from .ranking import (aside_under_hangings, clashes, identifiable_components, marginal, measurable_components,
+                      point_separation, rank_order, rel_sigma, set_aside, tension_range_caution)
+from .recommend import cautioned, choose, identifiabilities, preference, target_label
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
 
@@ -161,14 +161,15 @@ class PlanResult:
         return {
             "optimum": {"params": b["params"], "objective": b["objective"], "accuracy": self.accuracy(),
                         "tension": b["tension"], "depth": b["depth"], "periods": b["periods"],
-                        "rig": b.get("rig"), "separation": point_separation(b),
+                        "rig": b.get("rig"), "separation": point_separation(b, self.among),
                         "tension_range_caution": tension_range_caution(b, self.constraints),
                         "active_constraints": self.active, "hangings_objective": self.hangings_objective,
                         "hangings_ranked": self.hangings_ranked, "hangings_note": self.hangings_note(),
                         "preferred_over": self.preferred_over, "preference": self.preference},
-            "target": self.target or "worst relative of " + ", ".join(self.among),
+            "target": target_label(self.target, self.among, list(b["components"]), self.hangings_objective is not None),
             "identifiability": self.identifiability(),
             "set_aside": self.set_aside,
+            "marginal": self.marginal(),
             "constraints": self.constraints.describe(),
             "bounds": {n: [lo, hi] for n, lo, hi in self.bounds},
             "zip": self.zip,
@@ -178,7 +179,12 @@ class PlanResult:
 
     def identifiability(self) -> dict:
         """Per component: measurable in the range, modes at the optimum."""
-        return identifiabilities(list(self.best["components"]), self.best, self.among, self.set_aside)
+        return identifiabilities(list(self.best["components"]), self.best, self.among, self.set_aside, self.marginal())
+
+    def marginal(self) -> list[dict]:
+        """The components ranked or set aside by a line they are close to
+        (:func:`~bifilar.studies.ranking.marginal`, at the optimum)."""
+        return marginal(self.best, self.among, self.set_aside, self.target)
 
 
 def _is_length(name: str) -> bool:
@@ -202,7 +208,7 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
         sel = among if among is not None else list(p["components"])
         rel = np.array([rel_sigma(p["components"][k], small_amplitude) for k in sel], float)
         ob = float(np.sum(rel**16) ** (1 / 16))
-    v = dict(violations(p, c, target))
+    v = dict(violations(p, c, target, among))
     clash = clashes(p)  # ranked after every clean point (ranking.rank_order): the search is steered off it too
     if not v and not clash:
         return ob
@@ -212,7 +218,7 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
     if "max_depth" in v and p["depth"].get("max") is not None:
         excess += p["depth"]["max"] / c.max_depth - 1
     if "min_separation" in v and c.min_separation:
-        excess += 1 - point_separation(p) / c.min_separation
+        excess += 1 - point_separation(p, among) / c.min_separation
     excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v) + 1.0 * clash
     return ob * (1 + 100 * max(excess, 1e-6))
 
@@ -258,15 +264,16 @@ def plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], se
         best, hob, n = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
         if best is None:
             return res
-        guard = "multi_hanging" if violations(best, constraints, res.target) else "planned_hanging"
-        return replace(res, best=best, separation_guard=guard, active=_active(best, relaxed, bounds),
-                       hangings_objective=hob, hangings_ranked=n)
+        guard = "multi_hanging" if violations(best, constraints, res.target, res.among) else "planned_hanging"
+        return replace(res, best=best, separation_guard=guard, active=_active(best, relaxed, bounds, res.among),
+                       hangings_objective=hob, hangings_ranked=n, set_aside=aside_under_hangings(res.set_aside))
     relaxed = replace(constraints, min_separation=None)
     res = _plan(base_cfg, source, bounds, settings, relaxed, target, **kw)
     best, hob, n = _best_for_hangings(base_cfg, source, res, settings, relaxed, constraints.min_separation)
     best = best or res.best
     return replace(res, best=best, constraints=constraints, separation_guard="multi_hanging",
-                   active=_active(best, relaxed, bounds), hangings_objective=hob, hangings_ranked=n)
+                   active=_active(best, relaxed, bounds, res.among), hangings_objective=hob, hangings_ranked=n,
+                   set_aside=aside_under_hangings(res.set_aside) if hob is not None else res.set_aside)
 
 
 def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: SweepSettings,
@@ -281,7 +288,7 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     (:func:`bifilar.studies.hangings.check_separated` then says why at
     ``res.best``)."""
     target, among = res.target, res.among
-    cands = [p for p in res.evaluated if p.get("valid") and not violations(p, relaxed, target)
+    cands = [p for p in res.evaluated if p.get("valid") and not violations(p, relaxed, target, among)
              and math.isfinite(objective(p, target, among))]
     from .hangings import hangings_objectives
 
@@ -291,7 +298,7 @@ def _best_for_hangings(base_cfg: dict, source: str, res: PlanResult, settings: S
     ranked = rank_order(cands, keep, lambda p: score[id(p)], cautioned(res.constraints), clashes)
     for r, i in enumerate(ranked):
         p = cands[i] if not cands[i].get("screen") else evaluate_point(base_cfg, source, cands[i]["params"], settings)
-        if p.get("valid") and not violations(p, relaxed, target) and math.isfinite(objective(p, target, among)):
+        if p.get("valid") and not violations(p, relaxed, target, among) and math.isfinite(objective(p, target, among)):
             res.preferred_over, res.preference = preference(cands, ranked[r:], lambda q: score[id(q)],
                                                              res.constraints)
             return {**p, "objective": objective(p, target, among)}, score[id(cands[i])], len(cands)
@@ -422,7 +429,7 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
     # screen confirmed in full; where the full figure differs (second order
     # matters in this range: a shallow CoM) the whole search again in full
     cache, among, small, aside = search(screen=True)
-    feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target)
+    feasible = sorted((p for p in cache.values() if p.get("valid") and not violations(p, constraints, target, among)
                        and math.isfinite(objective(p, target, among))),
                       key=lambda p: objective(p, target, among, small))
     # ranked as the answer will be (a cautioned point after an uncautioned one within EQUAL_REL, points whose
@@ -436,17 +443,17 @@ def _plan(base_cfg: dict, source: str, bounds: list[tuple[str, float, float]], s
         cache[key_of(p["params"])] = full
         if not (full.get("valid") and objective(full, target, among, small_amplitude=True)
                 == objective(p, target, among, small_amplitude=True)
-                and not violations(full, constraints, target)):
+                and not violations(full, constraints, target, among)):
             cache, among, _, aside = search(screen=False)
             break
     evaluated = list(cache.values())
-    feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target)
+    feasible = [p for p in evaluated if p.get("valid") and not violations(p, constraints, target, among)
                 and math.isfinite(objective(p, target, among))]
     if not feasible:
         flag, msg = binding_constraint(evaluated, constraints, target, among)
         raise InputError(flag, msg)
     best, over, why = choose([p for p in feasible if not p.get("screen")], constraints, target, among)
-    return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds),
+    return PlanResult(best, evaluated, target, constraints, list(bounds), _active(best, constraints, bounds, among),
                       among, zip_, preferred_over=over, preference=why, set_aside=aside)
 
 
@@ -557,15 +564,17 @@ def _product(lists):
     return itertools.product(*lists) if lists else [()]
 
 
-def _active(p: dict, c: Constraints, bounds) -> list[str]:
-    """Constraints (and parameter bounds) the optimum sits on (within 1 %)."""
+def _active(p: dict, c: Constraints, bounds, among=None) -> list[str]:
+    """Constraints (and parameter bounds) the optimum sits on (within 1 %);
+    ``among``: the components ranked (the separation guard's modes,
+    :func:`~bifilar.studies.ranking.point_separation`)."""
     out = []
     t, dpt = p["tension"].get("peak"), p["depth"].get("max")
     if c.max_tension is not None and t is not None and t >= 0.99 * c.max_tension:
         out.append(f"max tension ({t:.4g} of {c.max_tension:g} N)")
     if c.max_depth is not None and dpt is not None and dpt >= 0.99 * c.max_depth:
         out.append(f"max depth ({dpt:.4g} of {c.max_depth:g} m)")
-    sep = point_separation(p)
+    sep = point_separation(p, among)
     if c.min_separation is not None and sep is not None and sep <= 1.01 * c.min_separation:
         out.append(f"min separation ({sep:.3g} vs {c.min_separation:g})")
     for n, lo, hi in bounds:

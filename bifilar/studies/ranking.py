@@ -10,11 +10,11 @@ those identifiable but whose best relative sigma over the range exceeds
 :data:`USEFUL_REL` are set aside with their best figure and point,
 :func:`set_aside`, instead of deciding it).
 
-The mode-separation guard is one figure per point, ``separation``: the
-smallest relative gap between any timed mode (the mode each measurable
-component is estimated from) and any other mode
-(:func:`bifilar.studies.point.timed_separation`); it is what the table,
-the text and the plot show and what ``min_separation`` limits.
+The mode-separation guard is one figure per point, :func:`point_separation`:
+the smallest relative gap between any timed mode (the mode each measurable
+component is estimated from, a set-aside component's mode not counted) and
+any other mode (:func:`bifilar.studies.point.timed_separation`); it is what
+the table, the text and the plot show and what ``min_separation`` limits.
 """
 
 from __future__ import annotations
@@ -187,6 +187,44 @@ def identifiable_components(points: list[dict]) -> list[str]:
             if any(p.get("valid") and p["components"][c].get("identifiable") for p in points)]
 
 
+#: a ranked component whose relative sigma at the recommended point, or a set-aside one whose best, lies within
+#: this fraction of :data:`USEFUL_REL` of it (40-60 %) is reported as ``marginal`` (:func:`marginal`): c11's plan
+#: over length_offset -0.5:0.5 ranks Iyy at 49.3 % there (its best 35 %; the answer's Ixx 11.5 % where leaving
+#: Iyy out gives 4.7 %, docs/design.md "rank25, session 25", left item 2)
+MARGINAL_BAND = 0.2
+
+
+def marginal(best: dict | None, among, aside: list[dict], target: str | None = None, max_rel: float = USEFUL_REL,
+             band: float = MARGINAL_BAND) -> list[dict]:
+    """The components ranked or set aside by a line they are close to (with
+    the defaults, 40-60 %, both ends included; nothing changes which are
+    ranked): a component ranked (``among``, not ``target``, which the user
+    asked for) whose relative sigma (:func:`rel_sigma`) at the recommended
+    point ``best`` lies within ``band`` x ``max_rel`` of ``max_rel``, and
+    one set aside (``aside``: :func:`set_aside` entries) whose best does.
+    One dict each (the ranked first, config order): ``component``,
+    ``rel_sigma`` (1: at ``best``, or the set-aside one's best), ``params``
+    (that point's), ``ranked`` (bool), ``reason`` (one line)."""
+    lo, hi = (1 - band) * max_rel, (1 + band) * max_rel
+    near = []
+    comps = (best or {}).get("components") or {}
+    for c in among or ():
+        v = rel_sigma(comps[c]) if c != target and c in comps else None
+        if v is not None and lo <= v <= hi:
+            near.append((c, float(v), best.get("params", {}), True))
+    near += [(a["component"], a["best_rel_sigma"], a["params"], False) for a in aside if a["best_rel_sigma"] <= hi]
+    out = []
+    for c, v, params, ranked in near:
+        at = ", ".join(f"{k} = {x:.6g}" for k, x in params.items())
+        out.append({"component": c, "rel_sigma": v, "params": params, "ranked": ranked, "reason": (
+            f"{c} is marginal: its " + ("uncertainty at the recommended point" if ranked else "smallest uncertainty")
+            + f", +- {100 * v:.3g} %" + (f" (at {at})" if at and not ranked else "") + f", is within {100 * band:g} % "
+            f"of the {100 * max_rel:g} % line above which a component is set aside (its best over the range); "
+            + (f"it is ranked at a figure little better than a guess: leave {c} out of --component to rank by the "
+               "others" if ranked else f"it is set aside: rank by it with --target {c} if it is wanted"))})
+    return out
+
+
 def set_aside(points: list[dict], target: str | None = None, max_rel: float = USEFUL_REL) -> list[dict]:
     """The components not measurable in the range although identifiable:
     those some valid point gives a sigma, the smallest of whose relative
@@ -217,6 +255,16 @@ def set_aside(points: list[dict], target: str | None = None, max_rel: float = US
     return out
 
 
+def aside_under_hangings(aside: list[dict]) -> list[dict]:
+    """:func:`set_aside`'s entries (new dicts) where the points are ranked by
+    their multi-hanging plan (``--hangings``): that plan's joint sigma, the
+    ranking figure, covers a set-aside component too, so its reason says so
+    instead of naming --hangings as the way out."""
+    return [{**a, "reason": a["reason"].split("; it is left out of the ranking")[0]
+             + "; it is left out of the point's own figure, but --hangings ranks by the multi-hanging plan's "
+             "joint sigma, which includes it"} for a in aside]
+
+
 def measurable_components(points: list[dict], target: str | None = None, max_rel: float = USEFUL_REL) -> list[str]:
     """Components the objective ranks by (config order): identifiable at one
     valid point at least (:func:`identifiable_components`) and not set aside
@@ -226,17 +274,36 @@ def measurable_components(points: list[dict], target: str | None = None, max_rel
     return [c for c in identifiable_components(points) if c not in aside]
 
 
-def point_separation(point: dict) -> float | None:
-    """The point's mode-separation guard (see the module docstring)."""
+def point_separation(point: dict, among=None) -> float | None:
+    """The point's mode-separation guard (see the module docstring), relative:
+    the smallest gap between the mode of a component ``among`` (the
+    components the ranking counts, :func:`measurable_components`; default:
+    every component of the point) and any other mode.  A component set aside
+    (:func:`set_aside`) is not timed, so its mode alone is not guarded: c04's
+    Iyy swing 1.18 % from another mode ruled out spacing 0.04 where Izz's
+    torsion was 5.4 % and Ixx's roll 235 % from any (docs/design.md,
+    "rank26, session 26"); a mode
+    a counted component is estimated from stays guarded, and so does every
+    gap between a counted mode and the set-aside one (the modes still beat).
+    Each component's own figure is its entry's ``separation``
+    (:func:`bifilar.studies.point.timed_separation` of its mode); inf where
+    no counted component has a mode at the point; a point without the
+    components' figures (a hand-made one) gives its ``separation``."""
+    comps = point.get("components") or {}
+    own = {k: e["separation"] for k, e in comps.items() if isinstance(e, dict) and e.get("separation") is not None}
     sep = point.get("separation")
+    if among is not None and own:
+        seps = [own[k] for k in among if k in own]
+        return min(seps) if seps else math.inf
     if sep is None:  # a point from before the guard had its own field
-        seps = [e["separation"] for e in point["components"].values() if e.get("separation") is not None]
-        sep = min(seps) if seps else None
+        sep = min(own.values()) if own else None
     return sep
 
 
-def violations(point: dict, c: Constraints, target: str | None = None) -> list[tuple[str, str]]:
-    """(constraint, message) for every limit the point breaks."""
+def violations(point: dict, c: Constraints, target: str | None = None, among=None) -> list[tuple[str, str]]:
+    """(constraint, message) for every limit the point breaks; ``among``:
+    the components the ranking counts (the mode-separation guard's modes,
+    :func:`point_separation`; default every component's)."""
     out: list[tuple[str, str]] = []
     if not point.get("valid"):
         return [("valid", point.get("error") or "invalid")]
@@ -260,7 +327,7 @@ def violations(point: dict, c: Constraints, target: str | None = None) -> list[t
             out.append(("lengths_available", f"wire lengths {', '.join(f'{x:g}' for x in L)} m not all in "
                                              f"{', '.join(f'{a:g}' for a in c.lengths_available)}"))
     if c.min_separation is not None:
-        sep = point_separation(point)
+        sep = point_separation(point, among)
         if sep is not None and sep < c.min_separation:
             out.append(("min_separation", f"mode separation {100 * sep:.3g} % < {100 * c.min_separation:g} %"))
     return out
@@ -334,7 +401,7 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
         what = target or "no component"
         verb = "is not" if target else "is"
         return "--target", f"{what} {verb} identifiable from any mode anywhere in the range"
-    viol = [dict(violations(p, c, target)) for p in finite]
+    viol = [dict(violations(p, c, target, among)) for p in finite]
     names = [n for n in ("slack", "max_tension", "max_depth", "lengths_available", "min_separation")
              if any(n in v for v in viol)]
     # the constraint that no point satisfies, else the one whose removal frees the most points
@@ -348,7 +415,7 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
         lo = min(p["depth"]["max"] for p in finite if p["depth"].get("max") is not None)
         msg = f"no configuration meets --max-depth {c.max_depth:g} m: the smallest depth found is {lo:.4g} m"
     elif best == "min_separation":
-        hi = max(point_separation(p) for p in finite)
+        hi = max(point_separation(p, among) for p in finite)
         msg = (f"no configuration meets --min-separation {c.min_separation:g}: the best mode separation "
                f"found is {hi:.3g}")
     elif best == "slack":
@@ -373,16 +440,43 @@ def _unmeasured_feasible(msg: str, valid: list[dict], c: Constraints, target: st
     measure the components, and which points meet every limit without them
     and what to do; unchanged where no point does."""
     sel = [target] if target else list(among if among is not None else point_components(valid))
-    meet = [p for p in valid if not violations(p, c, target)]
+    meet = [p for p in valid if not violations(p, c, target, among)]
     miss: list[str] = []
+    first = None  # the first such point and the first component it gives no sigma for
     for p in meet:  # no sigma: None, or inf (a stated amplitude whose range reaches the half turn, json25)
-        miss += [k for k in sel if k in p["components"] and not math.isfinite(objective(p, k)) and k not in miss]
+        lack = [k for k in sel if k in p["components"] and not math.isfinite(objective(p, k))]
+        first = first or ((p, lack[0]) if lack else None)
+        miss += [k for k in lack if k not in miss]
     if not meet or not miss:
         return msg
-    at = ", ".join(f"{k} = {v:.6g}" for k, v in meet[0].get("params", {}).items())
+    p, k = first
+    at = ", ".join(f"{n} = {v:.6g}" for n, v in p.get("params", {}).items())
+    why = no_sigma_reason(p["components"][k])
+    eg = "; ".join(x for x in (f"at {at}" if at else "", f"{k}{why}" if why else "") if x)
     return (msg.replace("configuration", f"configuration that measures {', '.join(sel)}", 1)
             + f"; {len(meet)} point(s) meet every limit but give no uncertainty for {', '.join(miss)}"
-            + (f" (e.g. at {at})" if at else "") + f": leave {', '.join(miss)} out of --component, or add --hangings")
+            + (f" (e.g. {eg})" if eg else "") + f": leave {', '.join(miss)} out of --component, or add --hangings")
+
+
+#: a point's reason quoted in a one-line note or message is cut to this many characters (whole in the JSON)
+NOTE_CHARS = 160
+
+
+def no_sigma_reason(entry: dict) -> str:
+    """Why a point's component ``entry`` has no sigma, in its own words,
+    for one line after the component's name: its ``sigma_unavailable``
+    (a knife edge, dependent or elastic wires, a stated amplitude whose
+    range reaches the half turn) or, not identifiable there, its
+    ``reason``; without the leading "the uncertainty cannot be given",
+    starting with ": " unless it goes on with a phrase (" on these four
+    or five elastic wires: ..."), cut at :data:`NOTE_CHARS` characters
+    with "..." (the sweep table's note and the binding message); "" where
+    the entry holds no reason."""
+    why = entry.get("sigma_unavailable") or entry.get("reason") or ""
+    why = why.removeprefix("the uncertainty cannot be given")
+    if why and not why.startswith((":", " ")):
+        why = ": " + why
+    return why if len(why) <= NOTE_CHARS else why[:NOTE_CHARS - 3].rstrip() + "..."
 
 
 def pareto_front(points: list[dict], target: str | None, among=None) -> list[int]:

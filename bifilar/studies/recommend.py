@@ -18,9 +18,9 @@ import math
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
-from .ranking import (CONSTRAINT_FLAGS, binding_constraint, clashes, measurable_components, objective,
-                      pareto_front, point_components, point_separation, preferences, rank_order, set_aside,
-                      tension_range_caution, violations)
+from .ranking import (CONSTRAINT_FLAGS, USEFUL_REL, aside_under_hangings, binding_constraint, clashes, marginal,
+                      measurable_components, objective, pareto_front, point_components, point_separation, preferences,
+                      rank_order, set_aside, tension_range_caution, violations)
 from .settings import Constraints
 
 
@@ -82,7 +82,7 @@ def assess(points: list[dict], constraints: Constraints, target: str | None, han
     doc = _assess(points, replace(constraints, min_separation=None), target, hangings)
     doc["constraints"] = constraints.describe()
     if doc.get("best") is not None:
-        separated = not violations(points[doc["best"]], constraints, target)
+        separated = not violations(points[doc["best"]], constraints, target, doc["measurable"])
         doc["separation_guard"] = "planned_hanging" if separated else "multi_hanging"
         why = ("--hangings" if separated else
                f"--hangings; its own hanging does not meet --min-separation {constraints.min_separation:g}")
@@ -110,16 +110,21 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
     Without a target the objective is the worst of the measurable components
     (:func:`measurable_components`); ``set_aside`` lists those identifiable
     but not measurable in the range, each with its best relative sigma, the
-    point and why (:func:`~bifilar.studies.ranking.set_aside`);
+    point and why (:func:`~bifilar.studies.ranking.set_aside`); ``marginal``
+    those ranked or set aside by a line they are close to (within 20 %,
+    :func:`~bifilar.studies.ranking.marginal`; nothing else changes);
     ``identifiability`` says per component whether it is measurable and from
     which modes at the recommended point (``remedy`` entries are added by
     :func:`add_point_remedies`).
     """
     among = measurable_components(points, target)
     aside = set_aside(points, target)
+    if hangings is not None:
+        aside = aside_under_hangings(aside)
     for p in points:
-        v = violations(p, constraints, target)
+        v = violations(p, constraints, target, among)
         p["objective"] = _plain(objective(p, target, among))
+        p["guard_separation"] = _plain(point_separation(p, among)) if p.get("valid") else None
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
@@ -136,7 +141,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         points[i]["rank"] = r + 1
     front = pareto_front(points, target, among)
     comps = point_components(points)
-    doc: dict = {"target": target or "worst relative of " + ", ".join(among or comps),
+    doc: dict = {"target": target_label(target, among or comps, comps, hangings is not None),
                  "measurable": among, "set_aside": aside,
                  "not_measurable": [c for c in comps if c not in among and c not in _names(aside)],
                  "constraints": constraints.describe(), "pareto_front": front,
@@ -154,32 +159,53 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         over, lines = preferences(points, ranked, key, cautioned(constraints))
         doc.update(best=i, params=points[i]["params"], objective=points[i]["objective"],
                    why=explain(points[i], constraints, target, among), ranking=ranked[:10],
-                   rig=points[i].get("rig"), separation=point_separation(points[i]), preferred_over=over)
+                   rig=points[i].get("rig"), separation=point_separation(points[i], among), preferred_over=over)
         doc["why"][1:1] = lines
     ref = points[doc["best"]] if doc.get("best") is not None else None
-    doc["identifiability"] = identifiabilities(comps, ref, among, aside)
+    doc["marginal"] = marginal(ref, among, aside, target)
+    doc["identifiability"] = identifiabilities(comps, ref, among, aside, doc["marginal"])
     return doc
+
+
+def target_label(target: str | None, among, comps, hangings: bool = False) -> str:
+    """A study document's ``target``: the ``target`` asked for, else "worst
+    relative of" the components the ranking figure covers: the measurable
+    ones ``among``, or, where the points are ranked by their multi-hanging
+    plan (``hangings``), every component ``comps`` (that plan's sigma,
+    :func:`~bifilar.studies.hangings.hangings_objective`, is the worst of
+    them all, a set-aside one included: rank25's left item 4)."""
+    if target:
+        return target
+    return ("worst relative of " + ", ".join(comps) + " by the multi-hanging plan" if hangings
+            else "worst relative of " + ", ".join(among))
 
 
 def _names(aside: list[dict]) -> list[str]:
     return [a["component"] for a in aside]
 
 
-def identifiabilities(comps, point: dict | None, among: list[str], aside: list[dict]) -> dict:
+def identifiabilities(comps, point: dict | None, among: list[str], aside: list[dict], near=()) -> dict:
     """:func:`identifiability` of each of ``comps`` at ``point``: measurable
     where in ``among``, identifiable but set aside where in ``aside``
-    (:func:`~bifilar.studies.ranking.set_aside` entries)."""
+    (:func:`~bifilar.studies.ranking.set_aside` entries), marginal where in
+    ``near`` (:func:`~bifilar.studies.ranking.marginal` entries)."""
     why = {a["component"]: a for a in aside}
-    return {c: identifiability(c, point, c in among or c in why, why.get(c)) for c in comps}
+    close = {m["component"]: m for m in near}
+    return {c: identifiability(c, point, c in among or c in why, why.get(c), close.get(c)) for c in comps}
 
 
-def identifiability(comp: str, point: dict | None, measurable: bool, aside: dict | None = None) -> dict:
+def identifiability(comp: str, point: dict | None, measurable: bool, aside: dict | None = None,
+                    near: dict | None = None) -> dict:
     """Per component: identifiable in the range, and at ``point`` (the
     recommended one) the modes whose period depends on it (``|d ln T / d ln I|``)
     and the mode it is estimated from; ``set_aside``: None, or the
     :func:`~bifilar.studies.ranking.set_aside` entry of a component
-    identifiable but not measurable in the range (left out of the ranking)."""
-    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None, "set_aside": aside}
+    identifiable but not measurable in the range (left out of the ranking);
+    ``marginal``: None, or the :func:`~bifilar.studies.ranking.marginal`
+    entry of one ranked (by its figure at ``point``) or set aside (by its
+    best) close to that line."""
+    d: dict = {"identifiable": measurable, "from_modes": {}, "mode": None, "remedy": None, "set_aside": aside,
+               "marginal": near}
     if point is not None and point.get("valid"):
         e = point["components"].get(comp, {})
         d.update(from_modes=e.get("from_modes", {}), mode=e.get("mode"), rel_sigma=e.get("rel_sigma"))
@@ -200,7 +226,7 @@ def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str
         what = ("second-order terms (inputs whose effect is not linear over their uncertainty)"
                 if top == "second_order" else top)
         lines.append(f"its variance is {100 * e['shares'][top]:.0f} % {what}")
-    sep = point_separation(p)
+    sep = point_separation(p, among)
     if sep is not None:
         lines.append(f"mode separation {100 * sep:.3g} % (smallest gap between a timed mode and any other)"
                      + (f", >= {100 * c.min_separation:g} % required" if c.min_separation is not None else ""))
@@ -236,6 +262,36 @@ def point_advice(point: dict, cfg: dict, source: str, settings, reaction: float,
 
     return {"how_to_time": timing_advice(point, reaction, sensor, min_separation),
             "amplitude_advice": amplitude_advice(cfg, source, point, settings)}
+
+
+def unmeasured(doc: dict) -> list[str]:
+    """The components a study's recommended (``sweep``) or planned (``plan``)
+    point cannot measure in its own hanging, from ``doc["identifiability"]``
+    (:func:`identifiabilities`): those no mode anywhere in the range depends
+    on and those set aside (:func:`~bifilar.studies.ranking.set_aside`: best
+    relative sigma above :data:`~bifilar.studies.ranking.USEFUL_REL`).  Both
+    get the same advice: their remedies (:func:`add_point_remedies`) and the
+    multi-hanging plan at the point, which says what the other hangings
+    measure them to."""
+    return [c for c, e in doc["identifiability"].items() if not e["identifiable"] or e.get("set_aside")]
+
+
+def remedy_clause(entry: dict) -> str:
+    """The end of a component's identifiability line (``entry``: an
+    :func:`identifiability` dict with its remedies added): "; remedy: ..."
+    (:func:`bifilar.studies.remedy.describe`), or for a component set aside
+    whose best remedy still leaves it above
+    :data:`~bifilar.studies.ranking.USEFUL_REL` that no change tried
+    measures it to that (the best quoted), or that none was found; "" for
+    a component set aside whose remedies were not looked for."""
+    r = entry.get("remedy")
+    if r is None and entry.get("set_aside") and "alternatives" not in entry and "remedy_error" not in entry:
+        return ""
+    if r is None:
+        return "; the model found no remedy among the changes tried"
+    if entry.get("set_aside") and not r["rel_sigma"] <= USEFUL_REL:
+        return (f"; none of the changes tried measures it to {100 * USEFUL_REL:g} % (the best: {r['text']})")
+    return f"; remedy: {r['text']}"
 
 
 def add_point_remedies(doc: dict, need: list, ref: dict | None, cfg: dict, source: str, settings) -> None:

@@ -13,8 +13,12 @@ from .shorthands import ParamSpec
 
 
 
-def csv_rows(points: list[dict], param_names: list[str], components: list[str]) -> tuple[list[str], list[list]]:
+def csv_rows(points: list[dict], param_names: list[str], components: list[str],
+             among=None) -> tuple[list[str], list[list]]:
     """Flat table: one row per point (header, rows); strings for labels and reasons.
+    ``separation``: the mode-separation guard over the modes of the ranked
+    components ``among`` (the recommendation's ``measurable``; default every
+    component's: :func:`~bifilar.studies.ranking.point_separation`).
     ``tension_range_peak`` (N) and its wire: the most a wire of 4-5
     dependent wires may carry in the runs under statics (empty where the
     tensions are determined), the figure ``--max-tension``'s caution uses;
@@ -48,18 +52,19 @@ def csv_rows(points: list[dict], param_names: list[str], components: list[str]) 
             vals = t.get(key) or [None] * n_w
             row += list(vals) + [None] * (n_w - len(vals))
         row += [t.get("slack"), t.get("range_peak"), t.get("range_peak_wire"), p.get("ceiling_clash"),
-                p.get("wires_cross"), p["depth"]["rest"], p["depth"]["max"], point_separation(p),
+                p.get("wires_cross"), p["depth"]["rest"], p["depth"]["max"], point_separation(p, among),
                 ";".join(f"{k}={v:.10g}" if v is not None else f"{k}=" for k, v in p["periods"].items()),
                 "; ".join(p.get("violations", []))]
         rows.append(row)
     return header, rows
 
 
-def write_points_csv(path: Path, points: list[dict], param_names: list[str], components: list[str]) -> None:
+def write_points_csv(path: Path, points: list[dict], param_names: list[str], components: list[str],
+                     among=None) -> None:
     """CSV (header row) of :func:`csv_rows`, written atomically; empty cells for missing values."""
     from ..output import write_table_csv
 
-    write_table_csv(path, *csv_rows(points, param_names, components))
+    write_table_csv(path, *csv_rows(points, param_names, components, among))
 
 
 # --------------------------------------------------------------------------
@@ -88,7 +93,7 @@ def sweep_figure_data(points: list[dict], params: list[ParamSpec], zip_: bool, c
     ``components``, ``rel_sigma`` (component -> relative std, 1),
     ``bias`` (component -> estimator -> relative bias vs the full model, 1;
     estimators small_angle, thesis, linear), ``separation`` (the point's
-    mode-separation guard, 1), ``tension_rest`` (largest wire at rest, N),
+    mode-separation guard over the modes of ``rec``'s ranked components, 1), ``tension_rest`` (largest wire at rest, N),
     ``tension_peak``, ``tension_min`` (during the excitation, N),
     ``depth_rest``, ``depth_max`` (below the ceiling, m; the rest depth
     where no run gave a swing), ``objective`` (the ranked relative std, 1),
@@ -108,7 +113,7 @@ def sweep_figure_data(points: list[dict], params: list[ParamSpec], zip_: bool, c
         "rel_sigma": {c: comp(c, "rel_sigma") for c in components},
         "bias": {c: {m: _series(points, lambda p, c=c, m=m: p["components"][c]["bias"][m])
                      for m in ("small_angle", "thesis", "linear")} for c in components},
-        "separation": _series(points, point_separation),
+        "separation": _series(points, lambda p: point_separation(p, rec.get("measurable"))),
         "tension_rest": _series(points, lambda p: max(p["tension"]["rest"])),
         "tension_peak": _series(points, lambda p: p["tension"]["peak"]),
         "tension_min": _series(points, lambda p: min(p["tension"]["min"]) if p["tension"]["min"] else None),
