@@ -5,10 +5,13 @@ config.
 audit24's c07 (a plate on four vertical 1.2 m wires on a 0.4 m square, here
 not flat, principal moments 0.03 / 0.045 / 0.06 kg m^2, so that Izz lies
 off its triangle limit) with EA 2 kN.  At the 1 mm default stds a drawn
-config's splay of ~1e-3 rad puts a fourth wire direction at the model's
-held-direction cut-off (17 % of drawn configs hold it; closed loop, 200
+config's splay of ~1e-3 rad put a fourth wire direction at the model's old
+held-direction cut-off (17 % of drawn configs held it; closed loop, 200
 draws: the answers scattered 26x the sigma), and ``invert`` printed a std
-1.034x the sweep's sigma; now it gives none and the sweep's reason.  With
+1.034x the sweep's sigma; session 25 gave none and the sweep's reason
+(session 26's stretch rule holds no direction differently there: the std
+is kept, tests/test_elastic26.py; the refusal is tested at EA 20 kN, where
+drawn configs leave a wire slack).  With
 the points stated to 0.1 mm and the lengths to 2.5 mm no drawn config comes
 near the cut-off and 2 % leave a wire slack: the std is kept, the planner's
 linear sigma (closed loops there: invert's std 1.003-1.004x the sigma, the
@@ -55,11 +58,14 @@ def _invert(cfg, unc):
 
 def test_invert_on_four_elastic_wires_gives_the_sweep_points_refusal_or_its_sigma():
     cfg = _config()
-    res = _invert(cfg, None)  # the 1 mm defaults
+    cfg["rig"]["stiffness"] = 20000.0  # the 1 mm defaults: 74 % of drawn configs leave a wire slack
+    res = _invert(cfg, None)
     assert math.isnan(res.sigma("Izz")) and np.all(np.isnan(res.interval))
     assert res.std_unavailable.startswith("the uncertainty cannot be given on these four or five elastic wires")
-    assert "holds another number of the near-parallel elastic wires' directions" in res.std_unavailable
+    assert "leave a wire slack" in res.std_unavailable  # (EA 2 kN at 1 mm was refused for the held directions
+    # until session 26; elastic26's rule holds none differently there: its closed loop 1.07x, tests/test_elastic26)
     assert res.std_unavailable in res.warnings and math.isnan(res.to_json()["inertia"]["Izz"]["std"])  # null
+    cfg["rig"]["stiffness"] = 2000.0
     # the points and lengths stated finely: the std kept, the sweep point's sigma
     cfg["uncertainty"] = dict(FINE)
     res = _invert(cfg, FINE)
@@ -100,7 +106,7 @@ def test_a_refusal_near_the_cut_off_only_does_not_say_zero_percent_cross_it():
     text = sigma_refusal(r)
     assert "in 0.3 % of the configs" in text and "comes within a factor 10 of holding" in text, text
     assert "in 0 %" not in text and "none of the configs drawn crossed it" in text, text
-    assert "off by tens of sigma" in text
+    assert "a mode appears or goes" in text  # (until session 26 "off by tens of sigma": the eigenvalue rule's)
 
 
 def test_draws_that_cannot_be_made_refuse_the_sigma(monkeypatch):

@@ -253,8 +253,8 @@ def test_elastic_dependent_wires_give_no_sigma_where_drawn_configs_cannot_be_ans
     ``2 Phi(-(m g / 4) / (k s_e / 2))``.
 
     EA 20 kN: 14.4 N against 4.9 N a wire, 73 % slack (closed loop, 200
-    draws: 146 slack) and the model of 17 % of the configs holds a fourth
-    direction (a splay of ~1 mm): before, sigma 0.31 % and p_refused 2.1 %,
+    draws: 146 slack) and (before session 26) the model of 17 % of the
+    configs held a fourth direction: before, sigma 0.31 % and p_refused 2.1 %,
     the answered 19x the sigma; now no sigma, the reason given.  EA 2 kN
     with the points stated to 0.1 mm and the lengths to 2.5 mm: no drawn
     config near the held-direction cut-off, 2 % slack, the sigma kept and
@@ -295,9 +295,11 @@ def test_elastic_dependent_wires_give_no_sigma_where_drawn_configs_cannot_be_ans
         # 100,000 draws: 4 binomial stds; the hand sd's 0.3 % at EA 2 kN moves p by < 2e-3
         assert abs(d["p_slack"] - p) < 4 * math.sqrt(p * (1 - p) / 1e5) + 2e-3, (name, d["p_slack"], p)
     e = got["quad EA"]["components"]["Izz"]
-    assert e["sigma"] is None and got["quad EA"]["drawn_rig"]["p_held"] > 0.1
+    # (the held directions: 17 % of configs held a fourth under the eigenvalue rule before session 26; the
+    # stretch rule holds none differently, elastic26)
+    assert e["sigma"] is None and got["quad EA"]["drawn_rig"]["p_held"] == 0
     assert e["sigma_unavailable"].startswith("the uncertainty cannot be given on these four or five elastic wires")
-    assert "leave a wire slack" in e["sigma_unavailable"] and "off by tens of sigma" in e["sigma_unavailable"]
+    assert "leave a wire slack" in e["sigma_unavailable"] and "holds another" not in e["sigma_unavailable"]
     e = got["soft"]["components"]["Izz"]
     assert got["soft"]["drawn_rig"]["p_near"] == 0 and "sigma_unavailable" not in e
     assert math.isfinite(e["sigma"]) and e["p_refused"] == pytest.approx(got["soft"]["drawn_rig"]["p_slack"], abs=1e-12)

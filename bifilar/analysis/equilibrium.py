@@ -41,6 +41,7 @@ from ..errors import ConvergenceError, InputError, SlackWireError, UnstableRestE
 from ..rotations import cross, matrix_to_quat, matrix_to_rotvec, rotvec_to_matrix, skew
 from ..models.maximal import MAX_ELIMINATION_WIRES, held_directions, min_norm_multipliers
 from ..scene import Scene, lowest_point_z
+from .stretch_held import held_mask, soft_reduction, stretch_split
 
 
 @dataclass(frozen=True)
@@ -118,11 +119,19 @@ def constraint_rank(scene: Scene, R: np.ndarray, G: np.ndarray, sv: np.ndarray |
     largest), so that a rig whose wires are only nearly dependent (anchors
     splayed by less than a length tolerance) is dependent at rest as in the
     run (docs/design.md "restrank, session 14").  Elastic wires
-    (``rig.stiffness``) always take the run's rule: a direction the wires
-    hold only by their stretch (a splay of 1 mm on 2 m wires: a stiffness
-    ~1e-4 of gravity's) is a mode, as in the run, and the mode count then
-    does not jump within a length's uncertainty (docs/design.md "stretch,
-    session 17")."""
+    (``rig.stiffness``) on 4 or 5: the directions whose stretch stiffness is
+    at least :data:`~bifilar.analysis.stretch_held.STRETCH_HOLD` times their
+    geometric one (:func:`~bifilar.analysis.stretch_held.held_mask`); a
+    direction the wires resist only by a little stretch (a splay of 1 mm on
+    1.2 m wires: 3.5e-5 .. 3.5e-4 of its geometric stiffness at EA 2 .. 20
+    kN) is a pendulum direction, its stretch carried elastically by
+    :func:`reduced_stiffness` (docs/design.md "elastic26, session 26";
+    before, the run's eigenvalue rule, which held it where a millimetre
+    splayed the wires)."""
+    if G.shape[0] > MAX_ELIMINATION_WIRES and scene.stiffness is not None:
+        mu, kappa, _, _ = stretch_split(scene, R, G)
+        if mu[0] > 0:  # (a pose with no wire stretched, the rigid all-taut start: the eigenvalue rule, below)
+            return int(np.sum(held_mask(mu, kappa)))
     if sv is None:
         sv = np.linalg.svd(G, compute_uv=False)
     if G.shape[0] > MAX_ELIMINATION_WIRES and (near_dependent(sv) or scene.stiffness is not None):
@@ -359,12 +368,17 @@ def reduced_stiffness(scene: Scene, com: np.ndarray, R: np.ndarray, lam: np.ndar
     (dr, dtheta) world chart; K is the Hessian of the Lagrangian V + lam.phi."""
     d, w, G = constraint_jacobian(scene, com, R)
     K = np.einsum("i,ijk->jk", lam, constraint_hessians(d, w))
-    _, s, vt = np.linalg.svd(G)
-    rank = constraint_rank(scene, R, G, s)
-    N = vt[rank:].T
     M = np.zeros((6, 6))
     M[:3, :3] = scene.mass * np.eye(3)
     M[3:, 3:] = R @ scene.inertia @ R.T
+    if G.shape[0] > MAX_ELIMINATION_WIRES and scene.stiffness is not None:
+        soft = soft_reduction(scene, R, G, lam, K)
+        if soft is not None:  # held rigidly: the strong stretches; the others' springs in K
+            N, K, rank = soft
+            return N, N.T @ K @ N, N.T @ M @ N, rank
+    _, s, vt = np.linalg.svd(G)
+    rank = constraint_rank(scene, R, G, s)
+    N = vt[rank:].T
     return N, N.T @ K @ N, N.T @ M @ N, rank
 
 

@@ -6,23 +6,28 @@ On such a rig the split of the weight between the wires is set by the
 wires' lengths to within their stretch (EA / L: 16.7 N a mm of length on
 1.2 m wires of EA 20 kN, against ~5 N a wire), and the modes the model
 gives depend on how many wire directions it holds
-(:func:`~bifilar.analysis.equilibrium.constraint_rank`, the run's rule: an
-eigenvalue of ``G M^-1 G^T`` at or above 1e-6 of the largest), which on
-near-parallel wires turns on splays of ~1e-3 rad, i.e. on the anchors' and
-attachments' own millimetre.  Neither is a derivative the one-input-at-a-time
-budget sees: a drawn config leaves a wire slack (refused), or the model of
-it holds one direction more or fewer and loses or mixes the timed mode (the
-answer off by tens of sigma).  Measured in closed loops (docs/design.md
-"elastic25, session 25"): a 2 kg plate on four 1.2 m wires, 1 mm stds,
-EA 2 kN: 22 % of drawn configs held a fourth direction, the answered
-scattered 26x the sigma; EA 20 kN: 73 % slack.
+(:func:`~bifilar.analysis.equilibrium.constraint_rank`: since session 26
+a direction whose stretch stiffness is at least
+:data:`~bifilar.analysis.stretch_held.STRETCH_HOLD` times its geometric
+one; the others carry their springs).  Neither is a derivative the
+one-input-at-a-time budget sees: a drawn config leaves a wire slack
+(refused), or the model of it holds one direction more or fewer.  Measured
+in closed loops (docs/design.md "elastic25, session 25"): a 2 kg plate on
+four 1.2 m wires, 1 mm stds, EA 20 kN: 73 % slack; EA 2 kN: under the
+eigenvalue rule of before session 26 (1e-6 of the largest eigenvalue of
+``G M^-1 G^T``, which a millimetre's splay crossed) 22 % of drawn configs
+held a fourth direction and the answered scattered 26x the sigma; under the
+stretch rule no drawn config changes the count (its directions are 300x
+stiffer by stretch than by geometry, or 1e-2x and less: docs/design.md
+"elastic26, session 26").
 
 :func:`drawn_rig_risks` estimates both probabilities from fixed-seed
 normal draws of every budgeted input: the rest pose and the tensions
 linear in the inputs (forward differences of the elastic rest pose, one
-per input), the held-direction count evaluated at each drawn geometry and
-that pose (~0.1 s of CPU on four wires).  Checked against a hand model of
-the tensions (tests/test_sweep_audit24.py) and closed loops (design.md).
+per input), the held-direction count evaluated at each drawn geometry,
+that pose and those tensions (~0.15 s of CPU on four wires).  Checked
+against a hand model of the tensions (tests/test_sweep_audit24.py) and
+closed loops (design.md).
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..analysis.stretch_held import STRETCH_HOLD
 from ..errors import BifilarError
 from ..rotations import matrix_to_rotvec
 from .sensitivity import input_sigma, perturb
@@ -42,11 +48,11 @@ DRAWS = 4000
 #: draws of the tensions alone (n normal deviates each, the tensions' covariance factored): p_slack's
 #: binomial std at most 0.5 / sqrt(SLACK_DRAWS) = 0.0016
 SLACK_DRAWS = 100_000
-#: a drawn config counts as near a change of the held directions where an
-#: eigenvalue lies on the other side of this fraction of the run's cut-off
-#: than at the config (the eigenvalue grows as the splay squared: a factor 10
-#: is the splay's factor 3.2, so a point just clear of the cut-off in the
-#: draws is still refused its sigma)
+#: a drawn config counts as near a change of the held directions where a
+#: direction's stretch over geometric stiffness lies between this fraction
+#: and its inverse of the rule's factor (a splay's stretch stiffness grows
+#: as its square: a factor 10 is the splay's factor 3.2; a direction held
+#: at 10-100x is off by up to a tenth .. a hundredth of its coupling)
 HELD_MARGIN = 0.1
 #: the sigma is not given where a drawn config leaves a wire slack this
 #: often or more (the answered experiments are then a selection by the
@@ -63,10 +69,9 @@ class DrawnRigRisks:
 
     p_slack: a wire slack at the drawn config's rest (its tensions, linear
     in the inputs, below 0 N); p_held: the model holds another number of
-    wire directions at the drawn config than at the config's; p_near: an
-    eigenvalue of the drawn config on the other side of the cut-off scaled
-    by :data:`HELD_MARGIN` (or its inverse) than the config's count (a
-    superset of p_held's); p_model: slack or held; tension_sd (n,) N: each wire's
+    wire directions at the drawn config than at the config's; p_near: a
+    direction of the drawn config within a factor 1 / :data:`HELD_MARGIN`
+    of the rule either way, or p_held (a superset of p_held's); p_model: slack or held; tension_sd (n,) N: each wire's
     tension's std from the inputs; tensions (n,) N at rest; held: the
     config's held directions (-1 where ``failed``)."""
 
@@ -92,13 +97,30 @@ def _inputs(scene, unc: dict) -> tuple[list, np.ndarray]:
     return [n for n, k in zip(names, keep) if k], sd[keep]
 
 
-def _held(mass, inertia, R, G, margin: float = 1.0) -> np.ndarray:
-    """The run's held-direction count(s) of Jacobian(s) ``G`` (..., n, 6) at attitude(s) ``R``."""
-    from ..analysis.equilibrium import multiplier_matrix
-    from ..models.dependent_wires import held_directions
+def _stretch(scene, R, G, w, tensions):
+    """The stretch and geometric stiffnesses (mu, kappa) of
+    :func:`~bifilar.analysis.stretch_held.stretch_directions` of an elastic
+    ``scene`` at pose(s) with attitude(s) ``R`` (..., 3, 3), Jacobian(s)
+    ``G`` (..., n, 6), lever arms ``w`` (..., n, 3) m and wire tensions
+    (..., n) N (a wire at or below 0 N has no spring)."""
+    from ..analysis.stretch_held import stretch_directions
 
-    w = np.linalg.eigvalsh(multiplier_matrix(mass, inertia, R, G))
-    return held_directions(w, margin).sum(-1)
+    d = G[..., :3]
+    L = np.asarray(scene.lengths, float)
+    taut = tensions > 0
+    k = np.broadcast_to(np.asarray(scene.stiffness, float), L.shape) / L * taut
+    M = np.zeros(np.shape(R)[:-2] + (6, 6))
+    M[..., :3, :3] = scene.mass * np.eye(3)
+    M[..., 3:, 3:] = R @ np.asarray(scene.inertia, float) @ np.swapaxes(R, -1, -2)
+    return stretch_directions(k, np.where(taut, tensions, 0.0) / np.linalg.norm(d, axis=-1), d, w, G, M)[:2]
+
+
+def _held(mu, kappa, margin: float = 1.0) -> np.ndarray:
+    """The model's held-direction count(s) of :func:`_stretch`'s stiffnesses
+    (:func:`~bifilar.analysis.stretch_held.held_mask`, its factor scaled by ``margin``)."""
+    from ..analysis.stretch_held import held_mask
+
+    return held_mask(mu, kappa, margin).sum(-1)
 
 
 def drawn_rig_risks(scene, rest, unc: dict, draws: int = DRAWS, seed: int = 0) -> DrawnRigRisks:
@@ -138,13 +160,15 @@ def drawn_rig_risks(scene, rest, unc: dict, draws: int = DRAWS, seed: int = 0) -
     d = (rest.com + z @ dc)[:, None, :] + w - A
     G = np.concatenate([d, np.cross(w, d)], axis=2)  # (draws, n, 6): constraint_jacobian's [d, w x d]
     Rs = rest.R + np.cross(th[:, None, :], rest.R.T).transpose(0, 2, 1)  # (1 + [th]x) R0, column by column
-    G0 = constraint_jacobian(scene, rest.com, rest.R)[2]
-    held0 = int(_held(scene.mass, scene.inertia, rest.R, G0))
-    # near a change either way: the drawn count with the cut-off scaled by HELD_MARGIN (more held) or by its
-    # inverse (fewer held) differs from the config's
-    held = _held(scene.mass, scene.inertia, Rs, G) != held0
-    near = held | (_held(scene.mass, scene.inertia, Rs, G, HELD_MARGIN) != held0) | (
-        _held(scene.mass, scene.inertia, Rs, G, 1.0 / HELD_MARGIN) != held0)
+    _, w_0, G0 = constraint_jacobian(scene, rest.com, rest.R)
+    held0 = int(_held(*_stretch(scene, rest.R, G0, w_0, np.asarray(rest.tensions, float))))
+    # near a change: a direction of the drawn config within a factor 1 / HELD_MARGIN of the rule either way
+    # (the counts at the rule's factor scaled by HELD_MARGIN and by its inverse differ): held rigidly there, it
+    # is off by up to about its geometric over its stretch stiffness (1.5 % of a leaning rig's torsion at 15x)
+    mu, kappa = _stretch(scene, Rs, G, w, rest.tensions + z @ dT)
+    # (a draw with a wire slack has that wire's spring gone, so another count: counted as slack only)
+    held = (_held(mu, kappa) != held0) & ~slack
+    near = held | ~slack & (_held(mu, kappa, HELD_MARGIN) != _held(mu, kappa, 1.0 / HELD_MARGIN))
     # slack or held: the slack's finer figure where none is held (the only case a sigma is given)
     p_model = float((slack | held).mean()) if held.any() else p_slack
     return DrawnRigRisks(p_slack, float(held.mean()), float(near.mean()), p_model,
@@ -169,6 +193,12 @@ def risks_or_none(scene, rest, unc: dict) -> DrawnRigRisks | None:
                              failed=str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
 
 
+_RULE = (f"it holds a direction rigidly where the wires' stretch resists it at least {STRETCH_HOLD:g} times as stiffly "
+         "as the tensions' turning does, and carries the stretch of the others as springs")
+_WHERE = ("a mode appears or goes and the other periods move by up to about a tenth of that direction's share "
+          "(1.5 % of a torsion period on a leaning four-wire rig)")
+
+
 def sigma_refusal(risks: DrawnRigRisks) -> str | None:
     """Why a sigma cannot be given for the rig of ``risks``, or None where it
     can (no drawn config near a change of the held directions, fewer than
@@ -183,17 +213,14 @@ def sigma_refusal(risks: DrawnRigRisks) -> str | None:
     if risks.p_near > 0 and risks.p_held == 0:  # near the cut-off only: say that, not "in 0 % ... holds another"
         parts.append(
             f"in {100 * risks.p_near:.3g} % of the configs the measured inputs' stated uncertainties allow, the model "
-            f"comes within a factor {1 / HELD_MARGIN:g} of holding another number of the near-parallel elastic "
-            f"wires' directions than the {risks.held} it holds here (none of the configs drawn crossed it; a splay "
-            "of about a millimetre decides it), and where it does it loses or mixes the timed mode and the answer "
-            "is off by tens of sigma")
+            f"comes within a factor {1 / HELD_MARGIN:g} of holding another number of the elastic wires' "
+            f"directions than the {risks.held} it holds here (none of the configs drawn crossed it; {_RULE}), and "
+            f"where it does {_WHERE}")
     elif risks.p_near > 0:
         parts.append(
             f"in {100 * risks.p_held:.3g} % of the configs the measured inputs' stated uncertainties allow "
             f"(and within a factor {1 / HELD_MARGIN:g} of it in {100 * risks.p_near:.3g} %), the model holds another "
-            f"number of the near-parallel elastic wires' directions than the {risks.held} it holds here (a splay of "
-            "about a millimetre decides it), so it loses or mixes the timed mode and the answer is off by tens of "
-            "sigma")
+            f"number of the elastic wires' directions than the {risks.held} it holds here ({_RULE}), so {_WHERE}")
     if risks.p_slack >= SLACK_MAX:
         i = int(np.argmax(risks.tension_sd / np.maximum(risks.tensions, 1e-300)))
         parts.append(
@@ -202,9 +229,10 @@ def sigma_refusal(risks: DrawnRigRisks) -> str | None:
             f"lengths to within their stretch), so {100 * risks.p_slack:.3g} % of the configs leave a wire slack")
     if not parts:
         return None
+    stiffer = ", stiffer wires (the stretch's share grows with EA)" if risks.p_near > 0 else ""
     return ("the uncertainty cannot be given on these four or five elastic wires: " + "; and ".join(parts)
-            + ": state the lengths and points to a fraction of a millimetre (their uncertainty block), "
-            "or hang the body on three wires")
+            + ": state the lengths and points to a fraction of a millimetre (their uncertainty block)" + stiffer
+            + ", or hang the body on three wires")
 
 
 def combined_refusal(p_limit, p_model: float) -> float:
