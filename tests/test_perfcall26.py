@@ -76,9 +76,10 @@ def test_callable_equals_ctypes_and_python_bit_for_bit(ext, scene):
     # 150 random states (unnormalised quaternions, rates up to ~30 rad/s): the callable's 13 derivatives
     # have the ctypes f's and the Python kernel's 64 bits, in one array it returns every call (as theirs).
     # States that are not one C-contiguous row of doubles (a list, a strided view, float32, a big-endian
-    # array) go through the ctypes f's numpy conversion: the same bits (the Python kernel takes arrays only).  Broken on purpose in
-    # _CALL_SOURCE: one element copied from the wrong place (ybuf[3] = ybuf[4] after the memcpy) ->
-    # the load-time check refuses the extension (not _is_ext here); with that check off -> mismatches
+    # array) go through the ctypes f's numpy conversion: the same bits (the Python kernel takes arrays
+    # only).  Broken on purpose in _CALL_SOURCE: one element copied from the wrong place (ybuf[3] =
+    # ybuf[4] after the memcpy) -> the load-time check refuses the extension (not _is_ext here); with
+    # that check off too -> mismatches
     P = mx.params_from_scenes(scene())
     f, c, g = _three_ways(P)
     rng = np.random.default_rng(26)
@@ -126,7 +127,7 @@ def test_run_samples_and_point_json_equal_three_ways(ext, monkeypatch):
     # simulate's samples (with a progress callback: the ticks variant) and a whole Solar Boat sweep point's
     # JSON the same bits with the extension's callable, the ctypes f and the Python kernel; the callable is
     # what the extension runs used.  Broken on purpose: the load-time check off and the wrong element
-    # copied -> the samples and JSON differ
+    # copied -> the extension's trifilar run fails in LSODA (excess work)
     from bifilar.analysis.simulate import simulate
     from bifilar.studies import sweep as sw
 
