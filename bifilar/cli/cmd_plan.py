@@ -74,7 +74,7 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
         doc["warnings"].append(w)
     doc["settings"] = settings.describe()
     doc.update(point_advice(res.best, cfg, config, settings, reaction, sensor,
-                            cons.min_separation if deferred else None))
+                            cons.min_separation if deferred else None, res.among))
     add_point_remedies(doc, need, res.best, cfg, config, settings)
     if wc_p:
         write_point_config(wc_p, cfg, config, res.best, "configuration planned by bifilar plan")
@@ -87,6 +87,8 @@ def plan(config, params, zip_, components, target, amplitude, sigmas, max_tensio
 
 def _render(cfg, res, settings, doc) -> None:
     from rich.table import Table
+
+    from ..studies.ranking import guarded_limits
 
     con = console()
     b = res.best
@@ -129,6 +131,9 @@ def _render(cfg, res, settings, doc) -> None:
     if tn.get("peak") is not None:
         con.print(f"wire tension: rest {', '.join(f'{x:.4g}' for x in tn['rest'])} N, peak {tn['peak']:.4g} N, "
                   f"minimum {min(tn['min']):.4g} N; depth below the ceiling {b['depth']['max']:.4g} m with the swing")
+        if (g := guarded_limits(b, res.among))["left_out"]:  # a set-aside component's run, not timed
+            con.print(f"  the limits without the {', '.join(g['left_out'])} run (only a set-aside component's mode, "
+                      f"not timed): peak {g['peak']:.4g} N, depth {g['depth']:.4g} m")
     else:
         con.print(f"wire tension at rest {', '.join(f'{x:.4g}' for x in tn['rest'])} N; depth at rest {b['depth']['rest']:.4g} m")
     con.print("measurement uncertainties: " + ", ".join(f"{k} {v:g}" for k, v in settings.unc.items())

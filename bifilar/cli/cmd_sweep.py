@@ -275,7 +275,7 @@ def sweep(config, params, zip_, components, target, amplitude, sigmas, max_tensi
                                             hangings or bool(need), wm_p, "bifilar sweep",
                                             "the recommended point", deferred, hangings)
         rec.update(point_advice(best, cfg, config, settings, reaction, sensor,
-                                cons.min_separation if deferred else None))
+                                cons.min_separation if deferred else None, rec["measurable"]))
     elif wm_p or hangings:
         raise InputError(rec["binding"] if rec["separation_guard"] == "multi_hanging" else "--hangings",
                          "no recommended point to plan the hangings at: " + rec["reason"])
@@ -343,9 +343,10 @@ def render(cfg, config, points, names, settings, cons, rec, runtime) -> None:
             else:
                 row.append(f"{_pct(e['rel_sigma'])} {_ABBR.get(e['mode'], e['mode'])}")
         row.append(_pct(point_separation(p, rec.get("measurable"))))
-        pk = p["tension"]["peak"] if settings.tensions else max(p["tension"]["rest"])
+        g = p.get("guard_limits") or {"peak": p["tension"]["peak"], "depth": p["depth"]["max"]}  # the limits' figures
+        pk = g["peak"] if settings.tensions else max(p["tension"]["rest"])
         row.append("-" if pk is None else f"{pk:.4g}")
-        d = p["depth"]["max"] if p["depth"]["max"] is not None else p["depth"]["rest"]
+        d = g["depth"] if g["depth"] is not None else p["depth"]["rest"]
         row.append(f"{d:.4g}")
         row.append(str(p["rank"]) if p["rank"] is not None else "[yellow]x[/yellow]" if p["violations"] else "-")
         if p["violations"]:

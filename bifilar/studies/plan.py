@@ -72,8 +72,8 @@ from typing import Callable
 import numpy as np
 
 from ..errors import InputError
-from .ranking import (aside_under_hangings, clashes, identifiable_components, marginal, measurable_components,
-                      point_separation, rank_order, rel_sigma, set_aside, tension_range_caution)
+from .ranking import (aside_under_hangings, clashes, guard_limits, guarded_limits, identifiable_components, marginal,
+                      measurable_components, point_separation, rank_order, rel_sigma, set_aside, tension_range_caution)
 from .recommend import cautioned, choose, identifiabilities, preference, target_label
 from .sweep import (Constraints, SweepSettings, binding_constraint, evaluate_point, objective, run_sweep,
                     violations)
@@ -165,7 +165,8 @@ class PlanResult:
                         "tension_range_caution": tension_range_caution(b, self.constraints),
                         "active_constraints": self.active, "hangings_objective": self.hangings_objective,
                         "hangings_ranked": self.hangings_ranked, "hangings_note": self.hangings_note(),
-                        "preferred_over": self.preferred_over, "preference": self.preference},
+                        "preferred_over": self.preferred_over, "preference": self.preference,
+                        **guard_limits(b, self.among)},
             "target": target_label(self.target, self.among, list(b["components"]), self.hangings_objective is not None),
             "identifiability": self.identifiability(),
             "set_aside": self.set_aside,
@@ -213,10 +214,11 @@ def _penalty(p: dict, c: Constraints, target: str | None, among=None, small_ampl
     if not v and not clash:
         return ob
     excess = 0.0
-    if "max_tension" in v and p["tension"].get("peak") is not None:
-        excess += p["tension"]["peak"] / c.max_tension - 1
-    if "max_depth" in v and p["depth"].get("max") is not None:
-        excess += p["depth"]["max"] / c.max_depth - 1
+    g = guarded_limits(p, among)  # the runs of the counted modes (violations' figures)
+    if "max_tension" in v and g["peak"] is not None:
+        excess += g["peak"] / c.max_tension - 1
+    if "max_depth" in v and g["depth"] is not None:
+        excess += g["depth"] / c.max_depth - 1
     if "min_separation" in v and c.min_separation:
         excess += 1 - point_separation(p, among) / c.min_separation
     excess += 1.0 * ("slack" in v) + 1.0 * ("lengths_available" in v) + 1.0 * clash
@@ -569,7 +571,7 @@ def _active(p: dict, c: Constraints, bounds, among=None) -> list[str]:
     ``among``: the components ranked (the separation guard's modes,
     :func:`~bifilar.studies.ranking.point_separation`)."""
     out = []
-    t, dpt = p["tension"].get("peak"), p["depth"].get("max")
+    t, dpt = (g := guarded_limits(p, among))["peak"], g["depth"]
     if c.max_tension is not None and t is not None and t >= 0.99 * c.max_tension:
         out.append(f"max tension ({t:.4g} of {c.max_tension:g} N)")
     if c.max_depth is not None and dpt is not None and dpt >= 0.99 * c.max_depth:

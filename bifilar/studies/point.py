@@ -777,10 +777,11 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
         slack = sorted({w for s in sims.values() for w, _ in s.slack})
         res["tension"] = {"rest": rest.tensions, "max": tmax, "min": tmin, "peak": float(np.max(tmax)),
                           "slack": bool(slack), "slack_wires": slack, "by_mode": {
-                              labels[k]: {"max": s.tension_max, "min": s.tension_min} for k, s in sims.items()},
+                              labels[k]: {"max": s.tension_max, "min": s.tension_min,  # ranking.guarded_limits
+                                          "slack_wires": sorted({w for w, _ in s.slack})} for k, s in sims.items()},
                           **statics_range(scene, rest, tmax)}
-        depth_max = max([rest.depth] + [s.depth_max for s in sims.values()])
-        res["depth"] = {"rest": rest.depth, "max": depth_max}
+        res["depth"] = {"rest": rest.depth, "max": max([rest.depth] + [s.depth_max for s in sims.values()]),
+                        "by_mode": {labels[k]: s.depth_max for k, s in sims.items()}}
         res["runs"] = {labels[k]: run_health(s) for k, s in sims.items()}
         for s in sims.values():
             res["warnings"] += [f"{s.mode}: {w}" for w in s.warnings]

@@ -274,6 +274,22 @@ def measurable_components(points: list[dict], target: str | None = None, max_rel
     return [c for c in identifiable_components(points) if c not in aside]
 
 
+def counted_components(point: dict, among=None) -> dict | None:
+    """The one rule of which of the point's modes the guards count: {name:
+    entry} of the components ``among`` (the components the ranking counts,
+    :func:`measurable_components`) that have a mode and their ``separation``
+    at the point; None (every mode counts) where ``among`` is None or no
+    component of the point has that figure (a hand-made point).  A component
+    set aside (:func:`set_aside`) is not timed, so its mode counts only where
+    a counted component is estimated from it too.  Used by
+    :func:`point_separation` and :func:`guarded_limits`."""
+    comps = point.get("components") or {}
+    own = {k: e for k, e in comps.items() if isinstance(e, dict) and e.get("separation") is not None}
+    if among is None or not own:
+        return None
+    return {k: own[k] for k in among if k in own}
+
+
 def point_separation(point: dict, among=None) -> float | None:
     """The point's mode-separation guard (see the module docstring), relative:
     the smallest gap between the mode of a component ``among`` (the
@@ -289,15 +305,51 @@ def point_separation(point: dict, among=None) -> float | None:
     (:func:`bifilar.studies.point.timed_separation` of its mode); inf where
     no counted component has a mode at the point; a point without the
     components' figures (a hand-made one) gives its ``separation``."""
-    comps = point.get("components") or {}
-    own = {k: e["separation"] for k, e in comps.items() if isinstance(e, dict) and e.get("separation") is not None}
+    counted = counted_components(point, among)
+    if counted is not None:
+        return min(e["separation"] for e in counted.values()) if counted else math.inf
     sep = point.get("separation")
-    if among is not None and own:
-        seps = [own[k] for k in among if k in own]
-        return min(seps) if seps else math.inf
     if sep is None:  # a point from before the guard had its own field
-        sep = min(own.values()) if own else None
+        own = [e["separation"] for e in (point.get("components") or {}).values()
+               if isinstance(e, dict) and e.get("separation") is not None]
+        sep = min(own) if own else None
     return sep
+
+
+def guarded_limits(point: dict, among=None) -> dict:
+    """The point's figures the physical limits are applied to, over the
+    nonlinear runs of the modes the guards count (:func:`counted_components`):
+    ``peak`` (N, the largest wire tension in those runs; the greatest at rest
+    where none is counted), ``depth`` (m below the ceiling, at rest or in
+    those runs), ``slack_wires`` (1-based) and ``left_out``, the runs not
+    counted (their labels).  A set-aside component is not timed, so its
+    mode's run is not excited: c04 at spacing 0.04 (docs/design.md, "plan26,
+    session 26").  The point's own ``tension`` / ``depth`` figures (every
+    run) where every run counts, ``among`` is None, tensions are off or the
+    point has no per-run figures (``tension.by_mode``'s ``slack_wires``,
+    ``depth.by_mode``: a point from before them)."""
+    t, d = point.get("tension") or {}, point.get("depth") or {}
+    out = {"peak": t.get("peak"), "depth": d.get("max"), "slack_wires": list(t.get("slack_wires") or []),
+           "left_out": []}
+    counted, by_t, by_d = counted_components(point, among), t.get("by_mode") or {}, d.get("by_mode")
+    if counted is None or t.get("peak") is None or by_d is None:
+        return out
+    modes = {e.get("mode") for e in counted.values()}
+    runs = [m for m in by_t if m in modes]
+    if len(runs) == len(by_t) or any("slack_wires" not in by_t[m] for m in by_t):
+        return out
+    return {"peak": float(max(max(by_t[m]["max"]) for m in runs) if runs else max(t["rest"])),
+            "depth": max([d["rest"]] + [by_d[m] for m in runs]),
+            "slack_wires": sorted({w for m in runs for w in by_t[m]["slack_wires"]}),
+            "left_out": [m for m in by_t if m not in modes]}
+
+
+def guard_limits(point: dict, among) -> dict:
+    """{"guard_limits": :func:`guarded_limits`} where a run is left out of the
+    point's limits (a set-aside component's mode), else {}: the JSON's
+    additive field, absent (the document as before) where every run counts."""
+    g = guarded_limits(point, among)
+    return {"guard_limits": g} if g["left_out"] else {}
 
 
 def violations(point: dict, c: Constraints, target: str | None = None, among=None) -> list[tuple[str, str]]:
@@ -307,16 +359,16 @@ def violations(point: dict, c: Constraints, target: str | None = None, among=Non
     out: list[tuple[str, str]] = []
     if not point.get("valid"):
         return [("valid", point.get("error") or "invalid")]
-    t = point["tension"]
-    if t.get("slack"):
-        out.append(("slack", f"wire(s) {', '.join(map(str, t['slack_wires']))} go slack during the excitation"))
+    g = guarded_limits(point, among)  # a set-aside component's run left out
+    if g["slack_wires"]:
+        out.append(("slack", f"wire(s) {', '.join(map(str, g['slack_wires']))} go slack during the excitation"))
     if c.max_tension is not None:
-        if t.get("peak") is None:
+        if g["peak"] is None:
             out.append(("max_tension", "no nonlinear run (tensions off)"))
-        elif t["peak"] > c.max_tension:
-            out.append(("max_tension", f"peak tension {t['peak']:.4g} N > {c.max_tension:g} N"))
+        elif g["peak"] > c.max_tension:
+            out.append(("max_tension", f"peak tension {g['peak']:.4g} N > {c.max_tension:g} N"))
     if c.max_depth is not None:
-        d = point["depth"].get("max")
+        d = g["depth"]
         if d is None:
             out.append(("max_depth", "no nonlinear run (tensions off)"))
         elif d > c.max_depth:
@@ -409,10 +461,10 @@ def binding_constraint(points: list[dict], c: Constraints, target: str | None, a
     best = never[0] if never else max(names, key=lambda n: sum(set(v) == {n} for v in viol))
     flag = CONSTRAINT_FLAGS[best]
     if best == "max_tension":
-        lo = min(p["tension"]["peak"] for p in finite if p["tension"].get("peak") is not None)
+        lo = min(g for p in finite if (g := guarded_limits(p, among)["peak"]) is not None)
         msg = f"no configuration meets --max-tension {c.max_tension:g} N: the lowest peak tension found is {lo:.4g} N"
     elif best == "max_depth":
-        lo = min(p["depth"]["max"] for p in finite if p["depth"].get("max") is not None)
+        lo = min(g for p in finite if (g := guarded_limits(p, among)["depth"]) is not None)
         msg = f"no configuration meets --max-depth {c.max_depth:g} m: the smallest depth found is {lo:.4g} m"
     elif best == "min_separation":
         hi = max(point_separation(p, among) for p in finite)
@@ -482,7 +534,7 @@ def no_sigma_reason(entry: dict) -> str:
 def pareto_front(points: list[dict], target: str | None, among=None) -> list[int]:
     """Indices of the valid points not dominated in (peak tension, objective),
     sorted by increasing peak tension (empty without the nonlinear runs)."""
-    cand = [(p["tension"]["peak"], objective(p, target, among), i) for i, p in enumerate(points)
+    cand = [(guarded_limits(p, among)["peak"], objective(p, target, among), i) for i, p in enumerate(points)
             if p.get("valid") and p["tension"].get("peak") is not None and math.isfinite(objective(p, target, among))]
     cand.sort()
     front, best = [], math.inf

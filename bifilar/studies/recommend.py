@@ -18,9 +18,9 @@ import math
 from dataclasses import replace
 
 from ..jsonable import to_jsonable as _plain
-from .ranking import (CONSTRAINT_FLAGS, USEFUL_REL, aside_under_hangings, binding_constraint, clashes, marginal,
-                      measurable_components, objective, pareto_front, point_components, point_separation, preferences,
-                      rank_order, set_aside, tension_range_caution, violations)
+from .ranking import (CONSTRAINT_FLAGS, USEFUL_REL, aside_under_hangings, binding_constraint, clashes, guard_limits,
+                      guarded_limits, marginal, measurable_components, objective, pareto_front, point_components,
+                      point_separation, preferences, rank_order, set_aside, tension_range_caution, violations)
 from .settings import Constraints
 
 
@@ -125,6 +125,7 @@ def _assess(points: list[dict], constraints: Constraints, target: str | None, ha
         v = violations(p, constraints, target, among)
         p["objective"] = _plain(objective(p, target, among))
         p["guard_separation"] = _plain(point_separation(p, among)) if p.get("valid") else None
+        p.update(guard_limits(p, among) if p.get("valid") else {})
         p["violations"] = [m for _, m in v]
         p["feasible"] = not v
         p["rank"] = None
@@ -230,13 +231,17 @@ def explain(p: dict, c: Constraints, target: str | None, among=None) -> list[str
     if sep is not None:
         lines.append(f"mode separation {100 * sep:.3g} % (smallest gap between a timed mode and any other)"
                      + (f", >= {100 * c.min_separation:g} % required" if c.min_separation is not None else ""))
-    t = p["tension"]
-    if t.get("peak") is not None:
-        lines.append(f"peak wire tension {t['peak']:.4g} N" + (f" (<= {c.max_tension:g} N)" if c.max_tension else "")
+    t, g = p["tension"], guarded_limits(p, among)
+    out = (f" (the {', '.join(g['left_out'])} run left out: only a set-aside component's mode, not timed)"
+           if g["left_out"] else "")
+    if g["peak"] is not None:
+        lines.append(f"peak wire tension {g['peak']:.4g} N" + out
+                     + (f" (<= {c.max_tension:g} N)" if c.max_tension else "")
                      + (f"; the model's split of dependent wires: statics lets a wire reach {t['range_peak']:.4g} N"
-                        if t.get("range_peak") is not None and t["range_peak"] > t["peak"] else ""))
-    if p["depth"].get("max") is not None:
-        lines.append(f"needs {p['depth']['max']:.4g} m below the ceiling" + (f" (<= {c.max_depth:g} m)" if c.max_depth else ""))
+                        if t.get("range_peak") is not None and t["range_peak"] > g["peak"] else ""))
+    if g["depth"] is not None:
+        lines.append(f"needs {g['depth']:.4g} m below the ceiling" + out
+                     + (f" (<= {c.max_depth:g} m)" if c.max_depth else ""))
     return lines
 
 
@@ -249,16 +254,25 @@ def reference_point(rec: dict, points: list[dict]) -> dict | None:
 
 
 def point_advice(point: dict, cfg: dict, source: str, settings, reaction: float, sensor,
-                 min_separation: float | None = None) -> dict:
+                 min_separation: float | None = None, among=None) -> dict:
     """What a recommended (``sweep``) or planned (``plan``) ``point`` says
     about the experiment: ``how_to_time`` (:func:`~bifilar.studies.point_advice.timing_advice`;
     ``reaction`` s, a stopwatch trial's std; ``sensor`` (noise relative to
     the amplitude, rate Hz) or None; ``min_separation`` relative, only the
     modes that far from the others, where the guard was left to the
     multi-hanging plan) and ``amplitude_advice``
-    (:func:`~bifilar.studies.amplitude.amplitude_advice`)."""
+    (:func:`~bifilar.studies.amplitude.amplitude_advice`), each of the
+    components the ranking counts, ``among`` (the document's ``measurable``;
+    None: every one): a set-aside component is not timed, so its mode is
+    advised only where a counted component is estimated from it too
+    (:func:`~bifilar.studies.ranking.counted_components`; c04 at spacing 0.04
+    had "swing-x ... for Iyy, 50 cycles per trial" for an Iyy at +- 944 %)."""
     from .amplitude import amplitude_advice
     from .point_advice import timing_advice
+    from .ranking import counted_components
+
+    if (counted := counted_components(point, among)) is not None:
+        point = {**point, "components": {k: e for k, e in point["components"].items() if k in counted}}
 
     return {"how_to_time": timing_advice(point, reaction, sensor, min_separation),
             "amplitude_advice": amplitude_advice(cfg, source, point, settings)}

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .ranking import point_separation
+from .ranking import guarded_limits, point_separation
 from .settings import Constraints
 from .shorthands import ParamSpec
 
@@ -115,10 +115,10 @@ def sweep_figure_data(points: list[dict], params: list[ParamSpec], zip_: bool, c
                      for m in ("small_angle", "thesis", "linear")} for c in components},
         "separation": _series(points, lambda p: point_separation(p, rec.get("measurable"))),
         "tension_rest": _series(points, lambda p: max(p["tension"]["rest"])),
-        "tension_peak": _series(points, lambda p: p["tension"]["peak"]),
+        "tension_peak": _series(points, lambda p: guarded_limits(p, rec.get("measurable"))["peak"]),
         "tension_min": _series(points, lambda p: min(p["tension"]["min"]) if p["tension"]["min"] else None),
         "depth_rest": _series(points, lambda p: p["depth"]["rest"]),
-        "depth_max": _series(points, lambda p: p["depth"]["max"] if p["depth"]["max"] is not None
+        "depth_max": _series(points, lambda p: d if (d := guarded_limits(p, rec.get("measurable"))["depth"]) is not None
                              else p["depth"]["rest"]),
         "objective": _series(points, lambda p: p["objective"]),
         "feasible": np.array([bool(p.get("feasible")) for p in points]),
