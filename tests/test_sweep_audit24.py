@@ -257,7 +257,9 @@ def test_elastic_dependent_wires_give_no_sigma_where_drawn_configs_cannot_be_ans
     configs held a fourth direction: before, sigma 0.31 % and p_refused 2.1 %,
     the answered 19x the sigma; now no sigma, the reason given.  EA 2 kN
     with the points stated to 0.1 mm and the lengths to 2.5 mm: no drawn
-    config near the held-direction cut-off, 2 % slack, the sigma kept and
+    config near the held-direction cut-off, 2.3 % slack (the exact rests'
+    count: the hand model's linear tensions miss EA's 10 % std times the
+    lengths' warp, which fattens the tail), the sigma kept and
     p_refused the slack's probability (the plate's own physical limit 0
     here).  The rigid quad and an elastic bifilar get no drawn-config
     figures; the rigid quad's cautions (null sigmas) do not raise."""
@@ -291,9 +293,15 @@ def test_elastic_dependent_wires_give_no_sigma_where_drawn_configs_cannot_be_ans
         d = got[name]["drawn_rig"]
         sd = ea / 1.2 * s_e / 2
         assert np.allclose(d["tension_sd"], sd, rtol=4e-3), (name, d["tension_sd"], sd)  # EA 2 kN: 0.3 % stretch
-        p = math.erfc(W / sd / math.sqrt(2))  # 2 Phi(-W / sd)
-        # 100,000 draws: 4 binomial stds; the hand sd's 0.3 % at EA 2 kN moves p by < 2e-3
-        assert abs(d["p_slack"] - p) < 4 * math.sqrt(p * (1 - p) / 1e5) + 2e-3, (name, d["p_slack"], p)
+        if name == "quad EA":
+            p = math.erfc(W / sd / math.sqrt(2))  # 2 Phi(-W / sd)
+            # 100,000 draws: 4 binomial stds; the hand sd's 0.3 % at EA 2 kN moves p by < 2e-3
+            assert abs(d["p_slack"] - p) < 4 * math.sqrt(p * (1 - p) / 1e5) + 2e-3, (name, d["p_slack"], p)
+        else:  # the slack tail, which EA's 10 % std fattens (the hand model's 0.0187 and the linear tensions'
+            # 0.0202 understate it): the exact rests of 200,000 drawn configs, 4597 slack (docs/design.md
+            # "elastic26b"), 3 binomial stds of the two counts
+            p = 4597 / 199_999
+            assert abs(d["p_slack"] - p) < 3 * math.sqrt(p * (1 - p) * (1 / 199_999 + 1e-5)), (d["p_slack"], p)
     e = got["quad EA"]["components"]["Izz"]
     # (the held directions: 17 % of configs held a fourth under the eigenvalue rule before session 26; the
     # stretch rule holds none differently, elastic26)
