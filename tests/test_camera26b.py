@@ -8,7 +8,7 @@ it cannot sit on that harmonic: it takes a fast growth or decay to reach over
 it, and the period errs by 0.5-1.6 of the tied term's shift noise ``g``.  With
 camera26's floors (0 where that mode is within 1/(2 T_record) of the harmonic,
 else 0.3 g) those fits covered 16 of 21 and 7 of 10 (seeds 0-299, 1000-1299;
-95 %: a binomial P(X <= 23 | 31, 0.95) of 2e-4); with the stand-in floor (g)
+95 %: a binomial P(X <= 23 | 31, 0.95) of 1.1e-4); with the stand-in floor (g)
 20 of 21 and 10 of 10 (scripts/camera_coverage.py --rows).
 
 Seed 148 is a miss of the first kind (third mode 0.46 / T_record off the
