@@ -27,7 +27,18 @@ mode whose 2nd harmonic is already a fitted mode (within ``1/(2 T_record)``,
 their phases part by less than half a cycle over the record: the KTH 20 s
 three_mode fits, within a third) gets no floor, only the unbiased estimate:
 the fit models the harmonic, and the tied term beside that mode mostly
-measures their collinearity (``g`` 4.3e-4 s on KTH 20s/0.35).  Always applied,
+measures their collinearity (``g`` 4.3e-4 s on KTH 20s/0.35).  But a fit's
+third oscillation (a further mode within ``THIRD_MODE_BAND`` of the dominant
+frequency) is kept ``1/T_record`` from it, so where the harmonic lies nearer
+than ``STAND_IN_RESOLUTION / T_record`` (0.75: the mode then sits more than a
+quarter cycle over the record off the harmonic) that mode cannot model the
+harmonic; it stands in for it, with a fast growth or decay to reach over it,
+and the period's error is of the order of ``g`` (camera26b: 10 s three_mode
+fits missed 8 of 31, 7 of them by 0.6-1.6 ``g``): there the floor is
+``STAND_IN_FLOOR`` (1: the collinear pair's ``sqrt(max(shift^2, g^2))``,
+>= 95 % at every amplitude of the harmonic).  No real KTH record has such a
+fit (their 5 s and 10 s fits are two_mode; the 20 s three_mode fits have the
+harmonic at 0.93-1.28 / T_record).  Always applied,
 not only when the term is significant: unresolved from ``f1`` its
 amplitudes are hardly detectable (chi^2, 2 dof) while they bias the period
 by several stds (gated at the chi^2 median, 10 s coverage 0.85).
@@ -63,6 +74,16 @@ from .signal_result import PeriodFit
 #: the std term's floor, a fraction of the shift's noise ``g`` (module docstring; camera26)
 NOISE_FLOOR = 0.3
 
+#: the floor where a fit's third oscillation stands in for an unresolved 2nd harmonic
+#: (module docstring; camera26b): the whole noise ``g``, the collinear pair's rule
+#: ``sqrt(max(shift^2, g^2))`` that covers 95 % at every amplitude of the harmonic
+STAND_IN_FLOOR = 1.0
+
+#: a third oscillation kept ``1/T_record`` from the dominant frequency models a 2nd harmonic
+#: only where that harmonic lies at least this fraction of ``1/T_record`` from it: nearer, the
+#: mode sits over a quarter cycle (over the record) off the harmonic (camera26b)
+STAND_IN_RESOLUTION = 0.75
+
 
 def second_harmonic_term(fit: PeriodFit) -> float:
     """Std term (s) for the unmodelled 2nd harmonic of a further mode of a
@@ -89,8 +110,16 @@ def second_harmonic_term(fit: PeriodFit) -> float:
         wh, sh = 2.0 * abs(float(p[k + 2])), 2.0 * float(p[k + 3])
         if not abs(wh - w1) <= THIRD_MODE_BAND * w1:
             continue
-        # a fitted mode already at that harmonic models it: no floor, the shift alone says what it leaves
-        floor = 0.0 if any(abs(abs(float(p[j + 2])) - wh) < half for j in ks if j != k) else NOISE_FLOOR
+        third = any(abs(abs(float(p[j + 2])) - w1) <= THIRD_MODE_BAND * w1 for j in ks if j != k)
+        if third and abs(wh - w1) < STAND_IN_RESOLUTION * 2 * half:
+            # the fit's third oscillation, kept 1/T_record from w1, cannot sit on this harmonic: it
+            # stands in for it, and the period's error is of the order of the shift's noise (camera26b)
+            floor = STAND_IN_FLOOR
+        elif any(abs(abs(float(p[j + 2])) - wh) < half for j in ks if j != k):
+            # a fitted mode already at that harmonic models it: no floor, the shift alone says what it leaves
+            floor = 0.0
+        else:
+            floor = NOISE_FLOOR
         e = np.exp(-sh * tau)
         X = np.column_stack([J, e * np.cos(wh * tau), e * np.sin(wh * tau)])
         sc = np.sqrt(np.einsum("ij,ij->j", X, X))
@@ -115,6 +144,8 @@ def second_harmonic_term(fit: PeriodFit) -> float:
                          f"{found['mode_frequency']:.4g} Hz, {abs(found['frequency'] - w1 / (2 * math.pi)):.3g} Hz "
                          f"from the dominant one: fitted with it the period moves {found['period_shift']:+.2g} s "
                          f"(its noise {found['shift_noise']:.2g} s); {best:.2g} s added to the std"
-                         + (f" (the floor, {NOISE_FLOOR:g} of that noise: a bias of that order cannot be told from none)"
+                         + (f" (the floor, {found['floor']:g} of that noise: a bias of that order cannot be told from none"
+                            + ("; the fit's third oscillation, kept 1/T_record from the dominant frequency, stands in "
+                               "for this unresolved harmonic" if found["floor"] == STAND_IN_FLOOR else "") + ")"
                             if 0 < best <= found["floor"] * found["shift_noise"] else ""))
     return best
