@@ -189,16 +189,27 @@ def stiff_inputs(scene: Scene, unc: dict | None) -> list[str]:
     return ["stiffness"] if input_sigma(scene, "stiffness", unc) > 0 else []
 
 
-def _mac_assignment(base: ModeSet, other: ModeSet) -> tuple[np.ndarray, np.ndarray]:
-    """(rows into ``base.modes``, columns into ``other.modes``) of the best
-    one-to-one MAC matching; every mode of the smaller set is matched."""
-    from scipy.optimize import linear_sum_assignment
-
+def _mac_base(base: ModeSet) -> tuple:
+    """The base side of :func:`_mac_assignment`'s MAC matrix: (A @ M, the
+    diagonal A M A^T, M) of ``base``'s shapes A (k, 6) and mass matrix M
+    (6, 6, world chart); one tuple serves every ``other`` matched to
+    ``base`` (:func:`period_matcher`), with the same products as computed
+    per call (``A @ M @ B.T`` is ``(A @ M) @ B.T``)."""
     M = base.mass_matrix
     A = np.array([m.shape for m in base.modes])
+    return A @ M, np.einsum("ij,jk,ik->i", A, M, A), M
+
+
+def _mac_assignment(base: ModeSet, other: ModeSet, side: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(rows into ``base.modes``, columns into ``other.modes``) of the best
+    one-to-one MAC matching; every mode of the smaller set is matched.
+    ``side``: :func:`_mac_base` of ``base`` if already computed."""
+    from scipy.optimize import linear_sum_assignment
+
+    AM, da, M = _mac_base(base) if side is None else side
     B = np.array(_shapes(other))
-    num = (A @ M @ B.T) ** 2
-    den = np.outer(np.einsum("ij,jk,ik->i", A, M, A), np.einsum("ij,jk,ik->i", B, M, B))
+    num = (AM @ B.T) ** 2
+    den = np.outer(da, np.einsum("ij,jk,ik->i", B, M, B))
     mac = num / np.maximum(den, 1e-300)
     return linear_sum_assignment(-mac)
 
@@ -234,11 +245,10 @@ def mac_matches(base: ModeSet, others: list) -> list:
     same = [q for q, o in enumerate(others) if n_modes(o) == k]
     out = [None] * len(others)
     if same and k:
-        M = base.mass_matrix
-        A = np.array([m.shape for m in base.modes])
+        AM, da, M = _mac_base(base)
         B = np.array([_shapes(others[q]) for q in same])  # (S, k, 6)
-        num = ((A @ M) @ np.swapaxes(B, 1, 2)) ** 2
-        den = np.einsum("ij,jk,ik->i", A, M, A)[None, :, None] * np.einsum("sij,jk,sik->si", B, M, B)[:, None, :]
+        num = (AM @ np.swapaxes(B, 1, 2)) ** 2
+        den = da[None, :, None] * np.einsum("sij,jk,sik->si", B, M, B)[:, None, :]
         mac = num / np.maximum(den, 1e-300)
         for q, m in zip(same, mac):
             out[q] = linear_sum_assignment(-m)[1]
@@ -248,19 +258,29 @@ def mac_matches(base: ModeSet, others: list) -> list:
     return out
 
 
-def matched_periods(base: ModeSet, other: ModeSet) -> np.ndarray:
+def matched_periods(base: ModeSet, other: ModeSet, side: tuple | None = None) -> np.ndarray:
     """Periods (s) of ``other``'s modes in the order of ``base``'s (MAC
     matching), NaN for a neutral mode and for a base mode that ``other`` does
     not have.  The second happens on a rig with four or five wires all taut
     and dependent (a symmetric rig: the rest pose has fewer independent
     constraints than wires): changing one wire's length or point makes the
     wires independent and, with inextensible wires, removes a mode, so that
-    mode's period has no derivative with respect to that input."""
+    mode's period has no derivative with respect to that input.  ``side``:
+    :func:`_mac_base` of ``base`` if already computed (:func:`period_matcher`)."""
     out = np.full(len(base.modes), np.nan)
     P = getattr(other, "periods", None)  # a LazyModeSet's, without building its modes (all finite)
-    for r, i in zip(*_mac_assignment(base, other)):
+    for r, i in zip(*_mac_assignment(base, other, side)):
         out[r] = P[i] if P is not None else (other.modes[i].period if other.modes[i].period else np.nan)
     return out
+
+
+def period_matcher(base: ModeSet):
+    """``f(other)`` = :func:`matched_periods` ``(base, other)`` (s), the MAC's
+    base-side products computed once for every call: the same numbers.
+    Kept by the caller (not on ``base``: a ModeSet's attributes are in
+    invert's pickled run-memo keys)."""
+    side = _mac_base(base)
+    return lambda other: matched_periods(base, other, side)
 
 
 def periods_of(scene: Scene, base: ModeSet | None = None, guess: RestPose | None = None) -> np.ndarray:

@@ -184,16 +184,17 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
     sweep point)."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import modes_of_inertia
-    from ..estimation.sensitivity import matched_periods, perturb
+    from ..estimation.sensitivity import perturb, period_matcher
 
     I0 = float(scene.inertia[_IDX[comp]])
+    matched = period_matcher(modes)
     try:
         if at is None:
             at = modes_of_inertia(scene, rest_pose(scene, guess=rest, local_only=True))
 
         def period(x):  # the linear period of mode k with comp changed by x (kg m^2); only periods and shapes read
             inertia = perturb(scene, comp, x).inertia if x else scene.inertia
-            return float(matched_periods(modes, at(inertia, lazy=True))[k])
+            return float(matched(at(inertia, lazy=True))[k])
 
         if T0 is None:
             T0 = period(0.0)
