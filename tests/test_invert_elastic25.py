@@ -102,14 +102,15 @@ def test_the_refusals_shares_read_as_percentages_near_all_configs():
 def test_a_refusal_near_the_cut_off_only_does_not_say_zero_percent_cross_it():
     """test_elastic25's pentagon at 0.1 mm: no drawn config crossed the held-direction cut-off, 0.3 % came
     within its factor 10; the reason read 'in 0 % of the configs ... the model holds another number'."""
-    from bifilar.estimation.elastic_split import DrawnRigRisks, sigma_refusal
+    from bifilar.estimation.elastic_split import DrawnRigRisks, near_hold_refusal, sigma_refusal
 
     r = DrawnRigRisks(p_slack=0.0, p_held=0.0, p_near=0.003, p_model=0.0, tension_sd=np.array([1.0, 1.0]),
                       tensions=np.array([4.9, 4.9]), held=3)
-    text = sigma_refusal(r)
+    assert sigma_refusal(r) is None  # twin26: near the rule only, each component by its mode's bias
+    text = near_hold_refusal(r, "Izz", 2e-3, 1e-2)  # a bias of 0.2 sigma
     assert "in 0.3 % of the configs" in text and "comes within a factor 10 of holding" in text, text
     assert "in 0 %" not in text and "none of the configs drawn crossed it" in text, text
-    assert "a mode appears or goes" in text  # (until session 26 "off by tens of sigma": the eigenvalue rule's)
+    assert "moves Izz by 0.002" in text and "0.2 of its sigma" in text, text
 
 
 def test_draws_that_cannot_be_made_refuse_the_sigma(monkeypatch):

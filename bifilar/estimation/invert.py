@@ -294,7 +294,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     # four or five elastic wires: the sweep point's rule on each hanging's config (drawn configs that leave a
     # wire slack or that the model holds otherwise; docs/design.md "inv25, session 25"); a refused std needs
     # no second-order pass
-    elastic_refusal, slack_notes = hangings_check(((m.hanging.name, m.scene0, m.rest0) for m in pb.models), unc_all)
+    near: dict = {}  # hangings near the held-direction rule only: each unknown by its bias, below (twin26)
+    elastic_refusal, slack_notes = hangings_check(((m.hanging.name, m.scene0, m.rest0) for m in pb.models), unc_all,
+                                                  near)
     laws = est_nl.laws if method == "nonlinear" else None
     stated = "inertia" in {**ms.uncertainty, **(unc or {})}
     budget, std_lin, degenerate, T_lin_hat, bctx, amp_default = full_budget(pb, p_hat, r_hat, method, rungs, best,
@@ -315,6 +317,8 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     fit = _fit_check(pb, p_hat, r_hat, method, edge=edge, laws=laws)
     fit["birge_factor"] = birge_factor(fit)
     budget, std_lin = widen_timing(budget, fit["birge_factor"]), widen_std(budget, std_lin, fit["birge_factor"])
+    if near and elastic_refusal is None:
+        elastic_refusal = _near_hold_refusal(pb, near, bctx.G, budget.std)
     for lab, (A_max, r_max) in amp_default.items():
         D = bctx.amplitude[lab]
         # the shift in % of |value| so that its sign is the shift's, as the std's is (a negative product
@@ -732,3 +736,27 @@ def _other_root(pb: Problem, root, method: str, unc: dict, rtol: float) -> dict:
     fit = {"passed": ok, "chi2": chi2, "dof": max(K - len(pb.unknowns), 0), "chi2_with_inputs": None}
     fit["birge_factor"] = birge_factor(fit)
     return _root_entry(pb, p, r, widen_timing(budget, fit["birge_factor"]), root.edge, fit)
+
+
+def _near_hold_refusal(pb, near: dict, gain: np.ndarray, std: np.ndarray) -> str | None:
+    """The first unknown's :func:`~bifilar.estimation.elastic_split.near_hold_refusal`
+    (hangings ``near`` {index: risks}): each measured period of those hangings
+    biased by its mode's :func:`~bifilar.estimation.elastic_split.near_hold_biases`
+    (s), carried into the unknowns by the gain ``gain`` (P, K; dp = G dT) and
+    set against their stds ``std`` (SI); None where none exceeds its share."""
+    from .elastic_split import near_hold_biases, near_hold_refusal
+
+    dT = np.zeros(len(pb.measurements))
+    for h, hm in enumerate(pb.models):
+        if h in near:
+            b = near_hold_biases(hm.scene0, hm.rest0, hm.modes0)
+            for k, m in enumerate(pb.measurements):
+                if m.hanging == h:
+                    dT[k] = b[pb.mode_index[k]]
+    bias = gain @ dT
+    where = len(pb.models) > 1
+    for i, name in enumerate(pb.unknowns):
+        text = near_hold_refusal(next(iter(near.values())), name, float(bias[i]), float(std[i]))
+        if text is not None:
+            return (f"hanging '{pb.models[next(iter(near))].hanging.name}': " if where else "") + text
+    return None

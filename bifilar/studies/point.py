@@ -564,16 +564,19 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             continue
         chosen[comp] = best_mode_for(sens, comp)
         res["components"][comp] = entry
-    from ..estimation.elastic_split import point_risks
+    from ..estimation.elastic_split import component_refusals, point_risks
 
     risks, refusal = point_risks(res, scene, rest, unc)  # four or five elastic wires: what drawn configs do
     # a refused sigma needs no second-order pass (its linear budget keeps the shares)
     budgets = dict(zip(chosen, predicted_budgets(sens, scene, list(chosen.items()), unc,
                                                  honest=not screen and refusal is None, at=at)))
-    if refusal is not None:
+    # near the held-direction rule only: each component by its mode's bias from the rigid hold (twin26)
+    refused = {c: refusal for c in budgets} if refusal is not None else component_refusals(
+        risks, scene, rest, ms, chosen, budgets)
+    if refused:
         from dataclasses import replace
 
-        budgets = {comp: replace(b, value_sigma=math.inf) for comp, b in budgets.items()}
+        budgets = {comp: replace(b, value_sigma=math.inf) if comp in refused else b for comp, b in budgets.items()}
     for comp, k in chosen.items():
         entry = res["components"][comp]
         scale = component_scale(scene.inertia, comp)
@@ -592,8 +595,8 @@ def _prepare(base_cfg: dict, source: str, params: dict, st: SweepSettings, scree
             axis_vertical=bool(axis is not None and abs(rest.R[2, axis]) > 0.99),
         )
         entry.update(physical_limits(scene.inertia, comp, b))
-        if refusal is not None:  # four or five elastic wires whose drawn configs the model cannot answer for
-            entry["sigma_unavailable"] = refusal
+        if comp in refused:  # four or five elastic wires whose drawn configs the model cannot answer for
+            entry["sigma_unavailable"] = refused[comp]
         elif not math.isfinite(b.value_sigma):  # an input without a derivative (a knife edge, dependent wires)
             from ..estimation.inversion_result import rigid_dependent, std_unavailable_text
 
