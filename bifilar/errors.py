@@ -116,3 +116,15 @@ class NotApplicable(Exception):
     """A method (a rung of the estimator ladder, a coordinate chart) does not
     apply to this scene or mode; the message says why.  Not an error of the
     input: callers report it beside the methods that do apply."""
+
+
+def one_line(exc: BaseException) -> str:
+    """The first line of an exception's message (of its first error, with
+    "(+N more)", for an exception carrying ``errors``), or its type's name
+    where the message is empty: how a sweep point's refusal is worded."""
+    errs = getattr(exc, "errors", None)
+    if errs:
+        more = f" (+{len(errs) - 1} more)" if len(errs) > 1 else ""
+        return str(errs[0]).splitlines()[0] + more
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
