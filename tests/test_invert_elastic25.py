@@ -138,7 +138,7 @@ def test_draws_that_cannot_be_made_refuse_the_sigma(monkeypatch):
     text = es.sigma_refusal(risks)
     assert text is not None and "could not be drawn (no rest pose near the neighbour's)" in text
     assert es.slack_note(risks) is None
-    refusal, notes = es.hangings_check([("ref", scene, rest)], {})
+    refusal, notes = es.hangings_check([("ref", scene, rest)], {}, {})
     assert refusal == text and notes == []
     res = {}
     assert es.point_risks(res, scene, rest, {})[1] == text and res["drawn_rig"] == {"failed": risks.failed}

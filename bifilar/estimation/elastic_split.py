@@ -332,7 +332,7 @@ def slack_note(risks: DrawnRigRisks) -> str | None:
             "ones in closed loops at 2 % slack: docs/design.md \"elastic25, session 25\")")
 
 
-def hangings_check(hangings, unc: dict, near: dict | None = None) -> tuple[str | None, list]:
+def hangings_check(hangings, unc: dict, near: dict) -> tuple[str | None, list]:
     """``invert``'s check of its hangings ``(name, scene, rest pose)``
     (SI, world frame; stated uncertainties ``unc``), the sweep point's rule
     (:func:`risks_or_none`, :func:`sigma_refusal`) on each that has four or
@@ -343,14 +343,15 @@ def hangings_check(hangings, unc: dict, near: dict | None = None) -> tuple[str |
     scattered 26x (docs/design.md "inv25").  ``near``: a dict that gets
     {hanging's index: its risks} where :func:`per_mode` leaves the std to
     each unknown (:func:`near_hold_refusal`, the caller's: it needs the
-    answer's gain), as the sweep's point does for each component."""
+    answer's gain), as the sweep's point does for each component; required,
+    so that no caller can take such a hanging's std unchecked."""
     hangings = list(hangings)
     notes = []
     for h, (name, scene, rest) in enumerate(hangings):
         risks = risks_or_none(scene, rest, unc)
         if risks is None:
             continue
-        if near is not None and per_mode(risks):
+        if per_mode(risks):
             near[h] = risks
         where = f"hanging '{name}': " if len(hangings) > 1 else ""
         refusal = sigma_refusal(risks)
