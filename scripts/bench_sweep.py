@@ -87,20 +87,53 @@ PLAN_ARGS = ["plan", str(ROOT / "configs" / "solar_boat.yaml"), "--param", "spac
              "--json"]
 
 
-def bench_plan(repeats: int = 3) -> dict:
-    """(median CPU s of the child process, median wall s, evaluations) of the issue-14 plan."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+def _child(args: list[str], tree: Path | None = None) -> tuple[float, float, str]:
+    """(CPU s, wall s, stdout) of ``python -m bifilar ARGS`` in a fresh process run
+    from the configs of ``tree`` (default this checkout) with ``tree`` first on
+    PYTHONPATH, so that a ``git archive`` of another revision measures that
+    revision (the installed copy is never the one timed)."""
+    tree = Path(tree or ROOT)
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    w0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-m", "bifilar", *args], env=env, capture_output=True, text=True,
+                         check=True, cwd=tree).stdout
+    wall = time.perf_counter() - w0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime), wall, out
+
+
+def bench_plan(repeats: int = 3, tree: Path | None = None) -> dict:
+    """(median CPU s of the child process, median wall s, evaluations) of the
+    issue-14 plan, run from ``tree`` (default this checkout)."""
     cpu, wall, evals = [], [], None
+    args = ["plan", "configs/solar_boat.yaml", *PLAN_ARGS[2:]]
     for _ in range(repeats):
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        w0 = time.perf_counter()
-        out = subprocess.run([sys.executable, "-m", "bifilar", *PLAN_ARGS], env=env, capture_output=True,
-                             text=True, check=True).stdout
-        wall.append(time.perf_counter() - w0)
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu.append((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime))
+        c, w, out = _child(args, tree)
+        cpu.append(c)
+        wall.append(w)
         evals = json.loads(out)["evaluations"]
     return {"plan_cpu_s": statistics.median(cpu), "plan_wall_s": statistics.median(wall), "evaluations": evals}
+
+
+def bench_sweep_cli(repeats: int = 3, tree: Path | None = None) -> dict:
+    """CPU s a point of ``bifilar sweep configs/solar_boat.yaml`` over :data:`GRID`
+    (28 points) as a user runs it, in fresh processes from ``tree`` (default this
+    checkout): (CPU of the 28-point sweep - CPU of the 1-point sweep
+    ``--param spacing=3``) / 27, so that start-up and the journal's set-up cancel;
+    medians over ``repeats`` alternating pairs.  Any revision whose ``sweep``
+    takes ``--param`` and ``--json`` can be measured, so the figure before issue
+    14 is the same measurement."""
+    grid = ["sweep", "configs/solar_boat.yaml", *[a for p in GRID for a in ("--param", p)], "--json"]
+    one = ["sweep", "configs/solar_boat.yaml", "--param", "spacing=3", "--json"]
+    per_point, points = [], None
+    for _ in range(repeats):
+        c28, _, out = _child(grid, tree)
+        c1, _, _ = _child(one, tree)
+        points = len(json.loads(out)["points"])
+        per_point.append((c28 - c1) / (points - 1))
+    return {"sweep_cli_points": points, "sweep_cli_point_cpu_s": statistics.median(per_point),
+            "sweep_cli_points_per_s_cpu": 1 / statistics.median(per_point)}
 
 
 GRID = ["spacing=1:4:7", "length=2:5:4"]

@@ -4,9 +4,10 @@ Usage::
 
     python scripts/run_benchmarks.py            # full run, ~2 min on 2 cores
     python scripts/run_benchmarks.py --quick    # smoke run (fewer tolerances, repeats, scenes)
+    python scripts/run_benchmarks.py --issue14-only   # only the issue-14 section, the rest kept
 
 Runs scripts/bench_work_precision.py, scripts/bench_targets.py, scripts/bench_monte_carlo.py and the
-issue-14 benchmarks (bench_startup, bench_batch_memory, bench_simulate_marginal, bench_sensitivity; the
+issue-14 benchmarks (bench_startup, bench_batch_memory, bench_simulate_marginal, bench_sensitivity, bench_sweep; the
 'before' figures from ``--before REV``, default the commit before that work) in this process, draws the work-precision plots (CPU time, the load-robust measure) and writes the report (``--json
 FILE`` also keeps the raw results).  Every time is a median of
 repeated runs (wall clock; CPU time alongside, since other work on the
@@ -105,6 +106,9 @@ def plot_scaling(tg: dict, path: Path) -> None:
 
 
 HAND_OPEN, HAND_CLOSE = "<!-- hand-written -->", "<!-- /hand-written -->"
+I14_HEADING = "## Start-up, large batches, cost per simulated period, sensitivities, sweep points (issue 14)"
+#: the heading this section had before the sweep figures were generated (its hand-written blocks follow it)
+I14_OLD_HEADINGS = ("## Start-up, large batches, cost per simulated period, sensitivities (issue 14)",)
 
 
 def keep_hand_written(old: str, new: str) -> str:
@@ -180,8 +184,16 @@ def issue14(quick: bool, before: str | None) -> dict:
     import bench_sensitivity
     import bench_simulate_marginal
     import bench_startup
+    import bench_sweep
 
-    out: dict = {"before_rev": before}
+    import datetime
+
+    cpu = next((ln.split(":", 1)[1].strip() for ln in Path("/proc/cpuinfo").read_text().splitlines()
+                if ln.startswith("model name")), None) if Path("/proc/cpuinfo").exists() else None
+    out: dict = {"before_rev": before,
+                 "machine": f"{datetime.date.today().isoformat()} on {os.cpu_count()} cores "
+                            f"({cpu or platform.processor() or platform.machine()}), load average "
+                            f"{os.getloadavg()[0]:.1f} at the start"}
     tmp = None
     if before:
         tmp = tempfile.TemporaryDirectory(prefix="bifilar_before_")
@@ -198,14 +210,22 @@ def issue14(quick: bool, before: str | None) -> dict:
     out["batch_before"] = bench_batch_memory.measure(sizes, brep, pkg) if pkg else None
     out["simulate"] = bench_simulate_marginal.measure(quick)
     out["sensitivity"] = bench_sensitivity.measure(2 if quick else 5)
+    srep = 1 if quick else 3
+    out["sweep_points"] = bench_sweep.bench(5 if quick else 15)
+    out["sweep_cli"] = bench_sweep.bench_sweep_cli(srep)
+    out["sweep_cli_before"] = bench_sweep.bench_sweep_cli(srep, Path(pkg)) if pkg else None
+    out["plan"] = bench_sweep.bench_plan(srep)
+    out["plan_before"] = bench_sweep.bench_plan(srep, Path(pkg)) if pkg else None
     if tmp:
         tmp.cleanup()
     return out
 
 
 def _issue14_section(i: dict) -> list[str]:
-    L = ["## Start-up, large batches, cost per simulated period, sensitivities (issue 14)\n"]
+    L = [I14_HEADING + "\n"]
     rev = i["before_rev"]
+    if i.get("machine"):
+        L.append(f"Measured {i['machine']}.\n")
     L.append(f"Each figure beside the same measurement of revision `{rev}` (before the work of issue 14, extracted "
              "with `git archive` and run from there) or of the method it replaced; medians.\n")
     s, sb = i["startup"], i["startup_before"]
@@ -235,8 +255,9 @@ def _issue14_section(i: dict) -> list[str]:
             L.append(f"| {name} | {r['scenes']} | {r['wall_ms_per_scene']:.2f} / {r['cpu_ms_per_scene']:.2f} | "
                      f"{r['peak_mb']:.0f} ({r['baseline_mb']:.0f}) |")
     L.append("\nThe engine kept every accepted state for the lowest point; it now keeps a running minimum "
-             "(bifilar/analysis/batch_health.py) and runs groups above 2000 scenes in chunks (larger working arrays "
-             "fall out of the cache).\n")
+             "(bifilar/analysis/batch_health.py) and runs groups above `CHUNK` = 1500 scenes in chunks (larger "
+             "working arrays fall out of the cache; 2000 until session 27, when the 10 000-scene peak reached "
+             "244-247 MB).\n")
     sm = i["simulate"]
     L.append("### Cost per simulated period\n")
     L.append("`python scripts/bench_simulate_marginal.py`: thesis plate, torsion, amplitude 0.05; (210-period run - "
@@ -263,6 +284,37 @@ def _issue14_section(i: dict) -> list[str]:
     L.append("\nThe difference is the finite differences' truncation error (it falls 100-fold per 10-fold smaller "
              "step).  The thesis plate's analytic time includes the finite differences of the inputs that move its "
              "CoM off the attachment line (no derivative there: the plate turns over).\n")
+    if i.get("sweep_cli"):
+        L += _sweep_section(i)
+    return L
+
+
+def _sweep_section(i: dict) -> list[str]:
+    """Sweep points per second and the plan's time, beside the same
+    measurement of the revision before issue 14."""
+    L = ["### Sweep points per second and the plan (generated)\n"]
+    L.append("`python scripts/bench_sweep.py`: one sweep point with all default outputs (sensitivities, honest "
+             "uncertainty budget, nonlinear runs, estimator biases), in one process, CPU median; beside one rest "
+             "pose + linear modes solve of the same scene.  Target: a point about 10-15 ms (issue 14: \"at most 3x "
+             "one naive rest-pose + modes solve\", ~5 ms when it was filed).\n")
+    L.append("| case | ms a point (CPU) | points/s | rest pose + modes (ms) | ratio |")
+    L.append("| --- | --- | --- | --- | --- |")
+    for case, r in i["sweep_points"].items():
+        L.append(f"| {case} | {1e3 * r['point_cpu_s']:.1f} | {r['points_per_s_cpu']:.0f} | "
+                 f"{1e3 * r['rest_and_modes_cpu_s']:.2f} | {r['ratio_to_rest_and_modes']:.0f}x |")
+    L.append("\nAs a user runs them, fresh processes of each tree (`bench_sweep.bench_sweep_cli`, `bench_plan`): "
+             "`bifilar sweep configs/solar_boat.yaml --param spacing=1:4:7 --param length=2:5:4 --json` (28 "
+             "points; CPU a point = (28-point sweep - 1-point sweep) / 27, start-up cancelled) and "
+             "`bifilar plan configs/solar_boat.yaml --param spacing=1:4 --param length=2:5 --json` (start-up "
+             "included); medians.  Target: the plan under 3 s.\n")
+    L.append("| tree | sweep ms a point (CPU) | points/s | plan CPU / wall (s) | plan evaluations |")
+    L.append("| --- | --- | --- | --- | --- |")
+    for name, sc, pl in (("before", i.get("sweep_cli_before"), i.get("plan_before")),
+                         ("now", i["sweep_cli"], i["plan"])):
+        if sc and pl:
+            L.append(f"| {name} | {1e3 * sc['sweep_cli_point_cpu_s']:.1f} | {sc['sweep_cli_points_per_s_cpu']:.0f} | "
+                     f"{pl['plan_cpu_s']:.2f} / {pl['plan_wall_s']:.2f} | {pl['evaluations']} |")
+    L.append("")
     return L
 
 
@@ -415,6 +467,32 @@ def write_report(wp: dict, tg: dict, elapsed: float, quick: bool, mc: list | Non
     return "\n".join(L) + "\n"
 
 
+def splice_issue14(old: str, section: list[str]) -> str:
+    """The page ``old`` with its issue-14 section (from its heading to the
+    next ``## `` heading) replaced by ``section``'s lines, the hand-written
+    blocks kept where they were (:func:`keep_hand_written`); every other
+    section stays as the last full run wrote it.  Raises ValueError where the
+    page has no issue-14 section."""
+    heads = (I14_HEADING, *I14_OLD_HEADINGS)
+    renamed = "\n".join(I14_HEADING if ln.strip() in heads else ln for ln in old.splitlines()) + "\n"
+    generated, inside = [], False
+    for line in renamed.splitlines():  # the page without its hand-written blocks: what the script wrote
+        tag = line.strip()
+        if tag == HAND_OPEN:
+            inside = True
+        elif tag == HAND_CLOSE:
+            inside = False
+        elif not inside:
+            generated.append(line)
+    try:
+        start = generated.index(I14_HEADING)
+    except ValueError:
+        raise ValueError(f"{DOC.name} has no section '{I14_HEADING}': run the full script") from None
+    end = next((k for k in range(start + 1, len(generated)) if generated[k].startswith("## ")), len(generated))
+    new = "\n".join(generated[:start] + section + generated[end:]) + "\n"
+    return keep_hand_written(renamed, new)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smoke run")
@@ -424,7 +502,17 @@ def main(argv=None) -> None:
                          "and measure only the issue-14 figures again")
     ap.add_argument("--before", default="b53fe28",
                     help="git revision for the 'before' figures of issue 14 ('' to skip)")
+    ap.add_argument("--issue14-only", action="store_true",
+                    help="measure only the issue-14 figures (start-up, batches, simulate, sensitivities, sweep "
+                         "points, plan) and replace that section of the page, keeping the rest (~5 min)")
     args = ap.parse_args(argv)
+    if args.issue14_only:
+        i14 = issue14(args.quick, args.before or None)
+        if args.json:
+            Path(args.json).write_text(json.dumps({"issue14": i14}, indent=1, default=float))
+        DOC.write_text(splice_issue14(DOC.read_text(), _issue14_section(i14)))
+        print(f"rewrote the issue-14 section of {DOC}", file=sys.stderr)
+        return
     import bench_monte_carlo
     import bench_targets
     import bench_work_precision

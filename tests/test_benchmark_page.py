@@ -12,7 +12,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from run_benchmarks import HAND_CLOSE, HAND_OPEN, keep_hand_written  # noqa: E402
+from run_benchmarks import HAND_CLOSE, HAND_OPEN, I14_HEADING, I14_OLD_HEADINGS, keep_hand_written, splice_issue14  # noqa: E402,E501
 
 NEW = "# Page\n\nnew intro\n\n## A\n\nnew a\n\n### A1\n\nnew a1\n\n## B\n\nnew b\n\n## Reproduce\n\nrun it\n"
 
@@ -77,3 +77,34 @@ def test_the_shipped_page_keeps_every_session_record():
     for ln in page.splitlines():
         if ln.startswith("**Session"):
             assert ln in out, ln[:60]
+
+
+def test_issue14_only_replaces_that_section_and_keeps_the_rest():
+    """``--issue14-only`` re-measures one section: the other sections stay as
+    the last full run wrote them, every hand-written block stays where it was
+    (also under the section's heading as the page had it before the sweep
+    figures were added), and the section's old generated text is gone."""
+    old = (f"# Page\n\nintro kept\n\n## A\n\na kept\n\n{_block('record a')}\n\n"
+           f"{I14_OLD_HEADINGS[0]}\n\nold i14 text\n\n### Start-up\n\nold start\n\n{_block('record start')}\n\n"
+           f"### Cost\n\nold cost\n\n{_block('record cost')}\n\n## Reproduce\n\nrun it\n")
+    section = [I14_HEADING + "\n", "new i14 text\n", "### Start-up\n", "new start\n", "### Cost\n", "new cost\n"]
+    out = splice_issue14(old, section)
+    assert "old " not in out
+    for text in ("intro kept", "a kept", "record a", "new i14 text", "new start", "record start", "new cost",
+                 "record cost", "run it", I14_HEADING):
+        assert out.count(text) == 1, text
+    order = ["intro kept", "a kept", "record a", I14_HEADING, "new i14 text", "new start", "record start",
+             "new cost", "record cost", "## Reproduce"]
+    assert [out.index(t) for t in order] == sorted(out.index(t) for t in order)
+    assert I14_OLD_HEADINGS[0] not in out
+    with pytest.raises(ValueError):
+        splice_issue14("# Page\n\n## A\n\nx\n", section)
+
+
+def test_issue14_only_keeps_every_record_of_the_shipped_page():
+    page = (ROOT / "docs" / "performance.md").read_text()
+    out = splice_issue14(page, [I14_HEADING + "\n", "regenerated\n"])
+    blocks = [ln for ln in page.splitlines() if ln.startswith("**")]
+    for ln in blocks:
+        assert ln in out, ln[:60]
+    assert out.count(HAND_OPEN) == page.count(HAND_OPEN)
