@@ -405,11 +405,16 @@ calls on arrays of a few elements cost more than the float arithmetic
 LARGE_BATCH = 300
 """From this many scenes ``method="auto"`` uses the per-scene-step DOP853
 engine, below it LSODA on the stacked system (measured crossover)."""
-CHUNK = 2000
+CHUNK = 1500
 """Larger groups run in chunks of this many scenes: the vectorised engines'
 numpy overhead is amortised by then, while larger working arrays fall out of
 the processor's cache and cost more per scene (docs/performance.md,
-``scripts/bench_batch_memory.py``); memory stays bounded too."""
+``scripts/bench_batch_memory.py``); memory stays bounded too.  1500, not
+session 6's 2000: a chunk's DOP853 working set is ~39 kB a scene (10 torsion
+periods of the thesis plate at rtol 1e-9), and at 2000 the 10 000-scene
+benchmark peaked at 244-247 MB on an AMD EPYC (issue 14's limit 250 MB),
+at 1500 at 222 MB, with the per-scene CPU within the load's noise
+(session 27, docs/performance.md)."""
 
 
 HEALTH_SAMPLES = 64
