@@ -1,0 +1,247 @@
+"""Session 27 (runs27): a sweep point's runs with less Python around odeint,
+every shortcut against the path it replaces, bit for bit (docs/design.md,
+"runs27, session 27"):
+
+* the runs' crossings up to each run's end, sorted and scaled in one pass
+  (``batch_lsoda._close``) against the run-by-run loop it replaced;
+* a run's figures from Python floats (``batch._run_group``'s per-run loop:
+  ``tolist`` once, each scene's ceiling once) on a batch of distinct scenes
+  against each scene run alone;
+* the body's support function taking the directions into each part frame
+  once per distinct rotation (``parts.support``) against part by part;
+* the lowest point's fold of runs of one body without ``np.isin``
+  (``LowestPoint.fold``) against each run's own fold;
+* a scene's float parameters (and so its compiled kernels) shared by the
+  calls of one point (``batch._scene_params``) against fresh ones, and not
+  kept past the scene.
+
+The degree-7 roots written out (``integrators._root_unit_scalar``) are held
+by tests/test_run_cost.py's roots test (floats against the vectorised
+iteration), ``maximal._zero_set``'s reordered test by
+tests/test_point_cost.py's (against the old function).
+"""
+
+from __future__ import annotations
+
+import gc
+
+import numpy as np
+import pytest
+
+import bifilar.analysis.batch as batch
+import bifilar.models.maximal as mx
+from bifilar import parts as P
+from bifilar.analysis.batch import simulate_batch
+from bifilar.analysis.batch_health import LowestPoint
+from bifilar.analysis.batch_lsoda import _close
+from bifilar.analysis.equilibrium import rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.config import read_yaml, scene_from_dict
+from bifilar.studies.shorthands import apply_params
+
+from conftest import CONFIGS
+
+
+def _scene(name, params=None):
+    cfg, _ = apply_params(read_yaml(CONFIGS / f"{name}.yaml"), params or {}, name)
+    return scene_from_dict(cfg, name, warn=False)
+
+
+class _Obs:
+    def __init__(self, Bn):
+        self.t_final, self.y_final, self.cross = np.zeros(Bn), np.zeros((Bn, 13)), [[] for _ in range(Bn)]
+
+
+def _close_run_by_run(obs, tt, y_last, stop_tau, T_ref, pers, status, cross_cols, cross_t):
+    """``_close`` as it was before session 27 (a run at a time)."""
+    obs.t_final[:] = np.minimum(tt[-1], stop_tau) * T_ref
+    obs.y_final[:] = y_last
+    cols = np.concatenate(cross_cols) if cross_cols else np.zeros(0, int)
+    tcs = np.concatenate(cross_t) if cross_t else np.zeros(0)
+    for b in range(len(T_ref)):
+        sel = tcs[cols == b]
+        obs.cross[b] = list(np.sort(sel[sel <= stop_tau[b] + 1e-12]) * T_ref[b])
+        if stop_tau[b] < pers[b] - 1e-12 and status[b] == 0:
+            status[b] = 1
+
+
+def test_crossings_closed_in_one_pass_equal_run_by_run():
+    rng = np.random.default_rng(27)
+    for trial in range(60):
+        Bn = int(rng.integers(1, 7))
+        nwin = int(rng.integers(0, 4))
+        cols, ts = [], []
+        for w in range(nwin):  # windows: each sorted by run then time, as sampled_crossings gives them
+            k = int(rng.integers(0, 12))
+            c = rng.integers(0, Bn, size=k)
+            t = w * 4.0 + rng.uniform(0, 4.0, size=k)
+            if k and trial % 5 == 0:
+                t[0] = np.nan  # (no crossing time is NaN; dropped either way)
+            if k > 1 and trial % 7 == 0:
+                t[1] = t[0]  # a tie
+            o = np.lexsort((t, c))
+            cols.append(c[o])
+            ts.append(t[o])
+        if trial % 3 == 0 and nwin > 1:  # windows out of order too
+            cols, ts = cols[::-1], ts[::-1]
+        pers = rng.uniform(2.0, 4.0 * max(nwin, 1), size=Bn)
+        stop_tau = np.where(rng.random(Bn) < 0.3, pers * rng.uniform(0.2, 1.0, size=Bn), pers)
+        stop_tau[0] = pers[0] + 1e-13 if trial % 4 == 0 else stop_tau[0]  # within the 1e-12 slack
+        T_ref = rng.uniform(0.5, 3.0, size=Bn)
+        tt = np.linspace(0.0, float(np.max(pers)), 9)
+        y = rng.normal(size=(Bn, 13))
+        a, b = _Obs(Bn), _Obs(Bn)
+        sa, sb = np.zeros(Bn, int), np.zeros(Bn, int)
+        sa[-1] = sb[-1] = -1  # a failed run keeps its status
+        _close(a, tt, y, stop_tau, T_ref, pers, sa, list(cols), list(ts))
+        _close_run_by_run(b, tt, y, stop_tau, T_ref, pers, sb, list(cols), list(ts))
+        assert np.array_equal(sa, sb)
+        assert np.array_equal(a.t_final, b.t_final) and np.array_equal(a.y_final, b.y_final)
+        for x, ref in zip(a.cross, b.cross):
+            x = np.asarray(x)
+            assert x.dtype == float and np.array_equal(x.view(np.int64), np.array(ref, float).view(np.int64))
+
+
+def _figures(r):
+    """Every figure of a run, as text (NaN equal to NaN; floats by their repr: their bits)."""
+    return repr((r.period, r.period_std, r.crossings.tobytes(), r.tension_min.tobytes(), r.tension_max.tobytes(),
+            r.slack, r.depth_max, r.lowest_z_min, r.max_constraint_violation, r.energy_drift,
+            r.energy_drift_resolution, r.period_error, r.nfev, r.nsteps, r.warnings, r.t_final, r.y_final.tobytes(),
+            r.linear_period, r.amplitude, r.rtol, r.mode, r.coordinate_name))
+
+
+def test_run_figures_from_floats_across_distinct_scenes_equal_each_scene_alone():
+    """``independent=True`` runs every scene through one vectorised engine
+    whose figures do not depend on the batch: a batch of three scenes with
+    different ceilings, rest CoMs and modes gives each scene's figures as
+    that scene alone, so the per-run loop reads each run's own row (a
+    ceiling, a CoM, a float) -- and its types are JSON's (float, int)."""
+    scenes = [_scene("thesis_plate_rest"), _scene("thesis_plate_rest", {"length": 3.0}),
+              _scene("trifilar_kth")]
+    scenes[1] = scenes[1].__class__(**{**{k: getattr(scenes[1], k) for k in scenes[1].__dataclass_fields__},
+                                       "anchors": np.asarray(scenes[1].anchors) + [0.0, 0.0, 0.7]})
+    rests = [rest_pose(s) for s in scenes]
+    mss = [linear_modes(s, r) for s, r in zip(scenes, rests)]
+    labels = [[m.label for m in ms.modes if m.period][k] for ms, k in zip(mss, (0, 2, 1))]
+    assert len({s.ceiling_z for s in scenes}) == 3 and len({r.com.tobytes() for r in rests}) == 3
+    amps = [0.05, 0.02, 0.08]
+    runs = simulate_batch(scenes, mode=labels, amplitude=amps, periods=2.0, rtol=1e-8, rests=rests, modes=mss,
+                          independent=True)
+    for j, (s, r, ms, lab, a) in enumerate(zip(scenes, rests, mss, labels, amps)):
+        alone = simulate_batch([s], mode=lab, amplitude=a, periods=2.0, rtol=1e-8, rests=[r], modes=[ms],
+                               independent=True)[0]
+        assert _figures(runs[j]) == _figures(alone)
+        assert runs[j].depth_max == s.ceiling_z - runs[j].lowest_z_min
+        for f in ("period", "max_constraint_violation", "energy_drift", "depth_max", "lowest_z_min", "t_final",
+                  "linear_period", "amplitude", "rtol"):
+            assert type(getattr(runs[j], f)) is float, f
+        assert type(runs[j].nfev) is int and type(runs[j].nsteps) is int
+    # the shipped point path too: its law runs (several scenes, no health) as each run alone
+    boat = _scene("solar_boat")
+    rest = rest_pose(boat)
+    ms = linear_modes(boat, rest)
+    lab = [m.label for m in ms.modes if m.period][:2]
+    heavier = boat.__class__(**{**{k: getattr(boat, k) for k in boat.__dataclass_fields__},
+                                "inertia": np.asarray(boat.inertia) * 1.001})
+    mh = linear_modes(heavier, rest)
+    runs = simulate_batch([boat, heavier, boat], mode=[lab[0], lab[0], lab[1]], amplitude=[0.05, 0.05, 0.025],
+                          periods=2.0, rtol=1e-8, rests=[rest] * 3, modes=[ms, mh, ms], health=False)
+    for r, s, m, lb, a in zip(runs, [boat, heavier, boat], [ms, mh, ms], [lab[0], lab[0], lab[1]], [0.05, 0.05, 0.025]):
+        alone = simulate_batch([s], mode=lb, amplitude=a, periods=2.0, rtol=1e-8, rests=[rest], modes=[m],
+                               health=False)[0]
+        assert _figures(r) == _figures(alone) and r.period is not None
+
+
+def _support_part_by_part(parts, D):
+    """``parts.support`` as it was before session 27 (each part's frame its own)."""
+    best = np.full(D.shape[0], -np.inf)
+    for p in parts:
+        h = D @ p.position_array + p.geometry.local_support(D @ p.rotation_matrix)
+        best = np.maximum(best, h)
+    return best
+
+
+def test_support_with_shared_part_frames_equals_part_by_part():
+    cfg = read_yaml(CONFIGS / "solar_boat.yaml")
+    boat = [P.part_from_dict(spec) for spec in cfg["body"]["parts"]]
+    assert len({p.rotation for p in boat}) < len(boat)  # parts that share a frame
+    rng = np.random.default_rng(5)
+    extra = [P.part_from_dict({"name": "tilted", "shape": "box", "mass": 1.0, "size": [0.3, 0.2, 0.1],
+                          "position": [0.1, -0.2, 0.3], "rotation": [0.3, -0.2, 0.5]}),
+             P.part_from_dict({"name": "tilted too", "shape": "solid_sphere", "mass": 1.0, "radius": 0.2,
+                          "position": [0.5, 0.2, -0.3], "rotation": [0.3, -0.2, 0.5]})]
+    for parts in (boat, boat + extra, extra, boat[:1]):
+        for k in (1, 7, 579):
+            D = rng.normal(size=(k, 3))
+            D[0] = [0.0, -0.0, -1.0]  # signed zeros
+            assert np.array_equal(P.support(parts, D), _support_part_by_part(parts, D))
+        assert P.support(parts, np.array([0.0, 0.0, -1.0])) == _support_part_by_part(parts, np.array([[0.0, 0.0, -1.0]]))[0]
+
+
+def test_lowest_point_of_runs_of_one_body_without_isin_equals_each_run_alone():
+    rng = np.random.default_rng(8)
+    boat = _scene("solar_boat")
+    plate = _scene("thesis_plate_rest")
+    com = np.array([0.1, -0.2, -4.0])
+    for scenes in ([boat] * 3, [boat, boat, plate], [plate, boat]):
+        Bn = len(scenes)
+        low = LowestPoint(scenes, np.tile(com, (Bn, 1)))
+        assert [g[2] for g in low.groups] == ([True] if len({id(s) for s in scenes}) == 1 else [False] * 2)
+        kb = 50
+        q = rng.normal(size=(kb * Bn, 4)) * [1.0, 0.05, 0.05, 0.05] + [1.0, 0.0, 0.0, 0.0]
+        z = rng.normal(size=kb * Bn) * 1e-3 - 4.0
+        idx = np.tile(np.arange(Bn), kb)
+        low.add(idx, z, q)
+        got = low.z
+        for b, s in enumerate(scenes):
+            own = LowestPoint([s], com[None, :])
+            own.add(np.zeros(kb, int), z[idx == b], q[idx == b])
+            assert got[b].tobytes() == own.z[0].tobytes()
+
+
+def test_a_scenes_parameters_shared_by_a_points_calls_and_not_kept_past_it(monkeypatch):
+    """The point's own runs and then its amplitude laws' runs of the same
+    scene (one call each, as ``point_amplitude._runs_at`` makes them): the
+    second call builds no parameter values for that scene; every figure as
+    with fresh parameters; a new scene object (the next point) shares
+    nothing; the entry goes with the scene."""
+    boat = _scene("solar_boat")
+    rest = rest_pose(boat)
+    ms = linear_modes(boat, rest)
+    lab = [m.label for m in ms.modes if m.period][:2]
+    builds = []
+    real = mx._param_values
+
+    def counted(Pr):
+        builds.append(1)
+        return real(Pr)
+
+    monkeypatch.setattr(mx, "_param_values", counted)
+    n0 = len(batch._SCENE_PARAMS)
+    own = simulate_batch([boat] * 2, mode=lab, amplitude=0.05, periods=2.0, rtol=1e-8, rests=[rest] * 2, modes=[ms] * 2)
+    assert len(builds) == 1
+    heavier = boat.__class__(**{**{k: getattr(boat, k) for k in boat.__dataclass_fields__},
+                                "inertia": np.asarray(boat.inertia) * 1.001})
+    mh = linear_modes(heavier, rest)
+    law = simulate_batch([boat, heavier], mode=[lab[0]] * 2, amplitude=[0.03, 0.05], periods=2.0, rtol=1e-8,
+                         rests=[rest] * 2, modes=[ms, mh], health=False)
+    assert len(builds) == 2  # the heavier scene's only
+    batch._SCENE_PARAMS.clear()  # fresh parameters: the same figures
+    builds.clear()
+    own2 = simulate_batch([boat] * 2, mode=lab, amplitude=0.05, periods=2.0, rtol=1e-8, rests=[rest] * 2,
+                          modes=[ms] * 2)
+    batch._SCENE_PARAMS.clear()
+    law2 = simulate_batch([boat, heavier], mode=[lab[0]] * 2, amplitude=[0.03, 0.05], periods=2.0, rtol=1e-8,
+                          rests=[rest] * 2, modes=[ms, mh], health=False)
+    assert len(builds) == 3
+    assert [_figures(r) for r in own + law] == [_figures(r) for r in own2 + law2]
+    # another scene object (a point builds its scene anew), the same values: nothing shared
+    builds.clear()
+    again = _scene("solar_boat")
+    simulate_batch([again] * 2, mode=lab, amplitude=0.05, periods=2.0, rtol=1e-8, rests=[rest] * 2, modes=[ms] * 2)
+    assert len(builds) == 1
+    keys = set(batch._SCENE_PARAMS)
+    assert id(again) in keys and id(boat) in keys
+    del boat, again, heavier, own, law, own2, law2
+    gc.collect()
+    assert len(batch._SCENE_PARAMS) <= n0
