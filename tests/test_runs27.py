@@ -24,6 +24,7 @@ tests/test_point_cost.py's (against the old function).
 from __future__ import annotations
 
 import gc
+import weakref
 
 import numpy as np
 import pytest
@@ -86,7 +87,9 @@ def test_crossings_closed_in_one_pass_equal_run_by_run():
             cols, ts = cols[::-1], ts[::-1]
         pers = rng.uniform(2.0, 4.0 * max(nwin, 1), size=Bn)
         stop_tau = np.where(rng.random(Bn) < 0.3, pers * rng.uniform(0.2, 1.0, size=Bn), pers)
-        stop_tau[0] = pers[0] + 1e-13 if trial % 4 == 0 else stop_tau[0]  # within the 1e-12 slack
+        if trial % 2 == 0:  # crossings just past run 0's end: one within _close's 1e-12 slack, one beyond it
+            cols.append(np.array([0, 0]))
+            ts.append(stop_tau[0] + np.array([5e-13, 3e-12]))
         T_ref = rng.uniform(0.5, 3.0, size=Bn)
         tt = np.linspace(0.0, float(np.max(pers)), 9)
         y = rng.normal(size=(Bn, 13))
@@ -166,10 +169,11 @@ def test_support_with_shared_part_frames_equals_part_by_part():
     boat = [P.part_from_dict(spec) for spec in cfg["body"]["parts"]]
     assert len({p.rotation for p in boat}) < len(boat)  # parts that share a frame
     rng = np.random.default_rng(5)
-    extra = [P.part_from_dict({"name": "tilted", "shape": "box", "mass": 1.0, "size": [0.3, 0.2, 0.1],
-                          "position": [0.1, -0.2, 0.3], "rotation": [0.3, -0.2, 0.5]}),
-             P.part_from_dict({"name": "tilted too", "shape": "solid_sphere", "mass": 1.0, "radius": 0.2,
-                          "position": [0.5, 0.2, -0.3], "rotation": [0.3, -0.2, 0.5]})]
+    # two parts in one tilted frame, far out (each the extreme part in many directions)
+    extra = [P.part_from_dict({"name": "tilted", "shape": "box", "mass": 1.0, "size": [3.0, 2.0, 0.5],
+                               "position": [6.0, -4.0, -5.0], "rotation": [0.3, -0.2, 0.5]}),
+             P.part_from_dict({"name": "tilted too", "shape": "solid_cylinder", "mass": 1.0, "radius": 1.0,
+                               "length": 4.0, "position": [-6.0, 4.0, 5.0], "rotation": [0.3, -0.2, 0.5]})]
     for parts in (boat, boat + extra, extra, boat[:1]):
         for k in (1, 7, 579):
             D = rng.normal(size=(k, 3))
@@ -242,6 +246,12 @@ def test_a_scenes_parameters_shared_by_a_points_calls_and_not_kept_past_it(monke
     assert len(builds) == 1
     keys = set(batch._SCENE_PARAMS)
     assert id(again) in keys and id(boat) in keys
-    del boat, again, heavier, own, law, own2, law2
+    # an entry under an id that is now another scene's (an id reused) is not taken
+    builds.clear()
+    third = _scene("solar_boat")
+    batch._SCENE_PARAMS[id(third)] = (weakref.ref(boat), {np.asarray(rest.com, float).tobytes(): "stale"})
+    simulate_batch([third] * 2, mode=lab, amplitude=0.05, periods=2.0, rtol=1e-8, rests=[rest] * 2, modes=[ms] * 2)
+    assert len(builds) == 1 and batch._SCENE_PARAMS[id(third)][0]() is third
+    del boat, again, third, heavier, own, law, own2, law2
     gc.collect()
     assert len(batch._SCENE_PARAMS) <= n0
