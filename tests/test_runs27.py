@@ -255,3 +255,49 @@ def test_a_scenes_parameters_shared_by_a_points_calls_and_not_kept_past_it(monke
     del boat, again, third, heavier, own, law, own2, law2
     gc.collect()
     assert len(batch._SCENE_PARAMS) <= n0
+
+
+def _trimmed_complete_numpy(run, end, periods):
+    """``point_amplitude._trimmed_complete`` as it was before session 27 (numpy calls)."""
+    from bifilar.studies.point_amplitude import LAW_SAMPLES
+
+    if run.error or not run.period or not run.linear_period or len(run.crossings) < 2:
+        return False
+    tau = np.asarray(run.crossings, float) / run.linear_period
+    cyc = np.diff(tau)
+    if not (tau[-1] <= end - 6 / LAW_SAMPLES and cyc.min() > 0 and cyc.max() <= 1.1 * cyc.min()):
+        return False
+    return bool(tau[-1] + 0.75 * cyc.min() > periods)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's inf - inf and all-NaN minima in the cases
+def test_trimmed_law_run_check_on_floats_equals_numpys():
+    """The law runs' completeness check on Python floats against numpy's,
+    on cycles at and about each of its thresholds (the end's 6 samples,
+    10 % irregular, the next crossing at 0.75 of a cycle past ``periods``),
+    non-positive and NaN cycles, too few crossings."""
+    from types import SimpleNamespace
+
+    from bifilar.studies.point_amplitude import LAW_SAMPLES, _trimmed_complete
+
+    rng = np.random.default_rng(3)
+    periods = 3.0
+    cases = 0
+    for trial in range(3000):
+        T = float(rng.uniform(0.5, 3.0))
+        k = int(rng.integers(0, 5))
+        cyc = rng.uniform(0.9, 1.12, size=max(k - 1, 0))
+        if trial % 11 == 0 and len(cyc):
+            cyc[0] = [0.0, -0.1, np.nan, np.inf][trial % 4]
+        t0 = float(rng.uniform(0.1, 0.5))
+        tau = t0 + np.concatenate([[0.0], np.cumsum(cyc)])[:k]
+        if trial % 5 == 0 and k >= 2:  # the last crossing exactly at a threshold
+            tau[-1] = periods - 0.75 * np.nanmin(np.diff(tau)) if trial % 2 else tau[-1]
+        end = float(tau[-1] + 6 / LAW_SAMPLES + rng.choice([-1e-12, 0.0, 1e-12, 0.05])) if k else periods
+        run = SimpleNamespace(error=None if trial % 97 else "failed", period=T if trial % 89 else None,
+                              linear_period=T, crossings=tau * T)
+        ref = _trimmed_complete_numpy(run, end, periods)
+        got = _trimmed_complete(run, end, periods)
+        assert got == ref and type(got) is bool
+        cases += got
+    assert 100 < cases < 2900  # both answers reached
