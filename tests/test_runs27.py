@@ -301,3 +301,35 @@ def test_trimmed_law_run_check_on_floats_equals_numpys():
         assert got == ref and type(got) is bool
         cases += got
     assert 100 < cases < 2900  # both answers reached
+
+
+def test_joint_runs_with_a_non_finite_run_fall_back_to_run_by_run(monkeypatch):
+    """``_lsoda_joint`` checks every run's samples for NaN or inf once,
+    after the integrations: a run whose odeint samples are not finite still
+    sends the point's runs back to one by one (before anything is
+    recorded), where that run fails with LSODA's message and the others
+    give their figures as without it."""
+    import scipy.integrate as si
+
+    boat = _scene("solar_boat")
+    rest = rest_pose(boat)
+    ms = linear_modes(boat, rest)
+    lab = [m.label for m in ms.modes if m.period][:3]
+    kw = dict(mode=lab, amplitude=0.05, periods=2.0, rtol=1e-8, rests=[rest] * 3, modes=[ms] * 3)
+    clean = simulate_batch([boat] * 3, **kw)
+    real = si.odeint
+    calls = []
+
+    def poisoned(f, y0, t, **k):  # the second mode's run: a NaN at its last sample
+        Y, info = real(f, y0, t, **k)
+        calls.append(len(t))
+        if abs(float(t[-1]) - 2.0 * clean[1].linear_period) < 1e-9 * clean[1].linear_period:
+            Y = Y.copy()
+            Y[-1, 5] = np.nan
+        return Y, info
+
+    monkeypatch.setattr(si, "odeint", poisoned)
+    runs = simulate_batch([boat] * 3, **kw)
+    assert len(calls) == 6  # three joint, then three alone
+    assert any("not finite" in w for w in runs[1].warnings), runs[1].warnings
+    assert _figures(runs[0]) == _figures(clean[0]) and _figures(runs[2]) == _figures(clean[2])

@@ -241,14 +241,17 @@ def _lsoda_joint(P1, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, c
         fs = [f] * Bn
     Ys = np.empty((K_total + 1, Bn, 13))
     nfe, nst = np.zeros(Bn, int), np.zeros(Bn, int)
-    for b, f in enumerate(fs):
-        Y, info = odeint(f, ys0[b].copy(), taus * float(T_ref[b]), rtol=rtol, atol=np.ascontiguousarray(at[:, b]),
-                         full_output=True, mxstep=100000, ml=12, mu=12)
-        if info["message"] != "Integration successful." or not np.all(np.isfinite(Y)):
+    atT = np.ascontiguousarray(at.T)  # each run's tolerances, a contiguous row (the column's values)
+    for b, f in enumerate(fs):  # (odeint copies the start state)
+        Y, info = odeint(f, ys0[b], taus * float(T_ref[b]), rtol=rtol, atol=atT[b], full_output=True, mxstep=100000,
+                         ml=12, mu=12)
+        if info["message"] != "Integration successful.":
             raise _NotJoint
         Ys[:, b] = Y
         nfe[b] = int(info["nfe"][-1]) if len(info["nfe"]) else 0
         nst[b] = int(info["nst"][-1]) if len(info["nst"]) else 0
+    if not np.all(np.isfinite(Ys)):  # every run's samples at once (nothing is recorded before this)
+        raise _NotJoint
     stop_tau = pers.astype(float).copy()
     cross_cols: list = []
     cross_t: list = []
