@@ -107,10 +107,12 @@ def test_crossings_closed_in_one_pass_equal_run_by_run():
 
 def _figures(r):
     """Every figure of a run, as text (NaN equal to NaN; floats by their repr: their bits)."""
-    return repr((r.period, r.period_std, r.crossings.tobytes(), r.tension_min.tobytes(), r.tension_max.tobytes(),
-            r.slack, r.depth_max, r.lowest_z_min, r.max_constraint_violation, r.energy_drift,
-            r.energy_drift_resolution, r.period_error, r.nfev, r.nsteps, r.warnings, r.t_final, r.y_final.tobytes(),
-            r.linear_period, r.amplitude, r.rtol, r.mode, r.coordinate_name))
+    def b(x):
+        return None if x is None else np.asarray(x).tobytes()
+    return repr((r.period, r.period_std, b(r.crossings), b(r.tension_min), b(r.tension_max), r.slack, r.depth_max,
+                 r.lowest_z_min, r.max_constraint_violation, r.energy_drift, r.energy_drift_resolution, r.period_error,
+                 r.nfev, r.nsteps, r.warnings, r.t_final, b(r.y_final), r.linear_period, r.amplitude, r.rtol, r.mode,
+                 r.coordinate_name, r.error))
 
 
 def test_run_figures_from_floats_across_distinct_scenes_equal_each_scene_alone():
@@ -333,3 +335,24 @@ def test_joint_runs_with_a_non_finite_run_fall_back_to_run_by_run(monkeypatch):
     assert len(calls) == 6  # three joint, then three alone
     assert any("not finite" in w for w in runs[1].warnings), runs[1].warnings
     assert _figures(runs[0]) == _figures(clean[0]) and _figures(runs[2]) == _figures(clean[2])
+
+
+def test_given_starts_taken_whole_or_by_the_runs_that_run():
+    """``simulate_batch(..., starts=)`` takes the given start poses as they
+    are when every run runs, in order, and only the rows of the runs that
+    run otherwise (a bad mode in the middle, ``errors="return"``): either
+    way each run's figures are those of the runs solving their own starts."""
+    from bifilar.analysis.simulate import checked_start_poses
+
+    boat = _scene("solar_boat")
+    rest = rest_pose(boat)
+    ms = linear_modes(boat, rest)
+    modes = [m for m in ms.modes if m.period][:3]
+    sp = checked_start_poses(boat, rest, modes, 0.05)
+    labels = [m.label for m in modes]
+    kw = dict(amplitude=0.05, periods=1.5, rtol=1e-8, rests=[rest] * 3, modes=[ms] * 3, errors="return")
+    for lab in (labels, [labels[0], "no such mode", labels[2]]):
+        own = simulate_batch([boat] * 3, mode=lab, **kw)
+        given = simulate_batch([boat] * 3, mode=lab, starts=sp, **kw)
+        assert [_figures(r) for r in own] == [_figures(r) for r in given]
+        assert (own[1].error is None) == (lab is labels)

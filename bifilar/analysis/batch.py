@@ -352,8 +352,9 @@ def simulate_batch(
             if starts is None:
                 sp = _start_poses([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable], sub_md,
                                   amps[[k for k, _, _ in runnable]])
-            else:
-                sp = starts.take([k for k, _, _ in runnable])
+            else:  # (every start, in order: as given, without take's copies)
+                ks = [k for k, _, _ in runnable]
+                sp = starts if ks == list(range(len(starts.feasible))) else starts.take(ks)
             ok = sp.feasible
             if not np.all(ok):
                 for jr, ((k, _, md), good) in enumerate(zip(runnable, ok)):
