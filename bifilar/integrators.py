@@ -166,8 +166,10 @@ def poly_root_unit(P: np.ndarray, v0: np.ndarray, v1: np.ndarray, iters: int = 3
     d = P.shape[0] - 1
     dP = P[1:] * np.arange(1, d + 1)[:, None]
     if P.shape[1] <= SCALAR_ROOTS:
-        return np.array([_root_unit_scalar(P[:, j].tolist(), dP[:, j].tolist(), float(v0[j]), float(v1[j]), iters)
-                         for j in range(P.shape[1])], float)
+        # each root's coefficients as lists of floats in one tolist a matrix (not two a root)
+        return np.array([_root_unit_scalar(p, dp, a, b, iters) for p, dp, a, b in
+                         zip(P.T.tolist(), dP.T.tolist(), np.asarray(v0, float).tolist(), np.asarray(v1, float).tolist())],
+                        float)
     a = np.zeros(P.shape[1])
     b = np.ones(P.shape[1])
     den = v1 - v0
@@ -212,13 +214,21 @@ def _root_unit_scalar(p: list, dp: list, v0: float, v1: float, iters: int) -> fl
     den = v1 - v0
     x = min(max(-v0 / den if den != 0 else 0.5, 0.0), 1.0)
     inf = float("inf")
+    seven = len(p) == 8  # sampled_crossings' degree: Horner's steps written out (no loop), the same operations
+    if seven:
+        p0, p1, p2, p3, p4, p5, p6, p7 = p
+        d0, d1, d2, d3, d4, d5, d6 = dp
     for _ in range(iters):
-        v = 0.0
-        for cf in reversed(p):
-            v = v * x + cf
-        dv = 0.0
-        for cf in reversed(dp):
-            dv = dv * x + cf
+        if seven:
+            v = ((((((((0.0 * x + p7) * x + p6) * x + p5) * x + p4) * x + p3) * x + p2) * x + p1) * x + p0)
+            dv = (((((((0.0 * x + d6) * x + d5) * x + d4) * x + d3) * x + d2) * x + d1) * x + d0)
+        else:
+            v = 0.0
+            for cf in reversed(p):
+                v = v * x + cf
+            dv = 0.0
+            for cf in reversed(dp):
+                dv = dv * x + cf
         if v < 0:
             a = x
         if v >= 0:

@@ -765,8 +765,11 @@ def support(parts, direction) -> Union[float, np.ndarray]:
     if D.ndim != 2 or D.shape[1] != 3:
         raise ValueError(f"direction must have shape (3,) or (k, 3), got {d.shape}")
     best = np.full(D.shape[0], -np.inf)
+    frames: dict = {}  # rotation -> the directions in that part frame: once for the parts that share it
     for p in parts:
-        local = D @ p.rotation_matrix  # rows: R^T d, part-frame components
+        local = frames.get(p.rotation)
+        if local is None:
+            local = frames[p.rotation] = D @ p.rotation_matrix  # rows: R^T d, part-frame components
         h = D @ p.position_array + p.geometry.local_support(local)
         best = np.maximum(best, h)
     return float(best[0]) if single else best

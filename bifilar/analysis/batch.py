@@ -51,7 +51,9 @@ Units SI, world frame z up, as everywhere in the package.
 
 from __future__ import annotations
 
+import math
 import time
+import weakref
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
@@ -350,8 +352,9 @@ def simulate_batch(
             if starts is None:
                 sp = _start_poses([scenes[k] for k, _, _ in runnable], [rs[j] for _, j, _ in runnable], sub_md,
                                   amps[[k for k, _, _ in runnable]])
-            else:
-                sp = starts.take([k for k, _, _ in runnable])
+            else:  # (every start, in order: as given, without take's copies)
+                ks = [k for k, _, _ in runnable]
+                sp = starts if ks == list(range(len(starts.feasible))) else starts.take(ks)
             ok = sp.feasible
             if not np.all(ok):
                 for jr, ((k, _, md), good) in enumerate(zip(runnable, ok)):
@@ -433,6 +436,31 @@ def _shifted_params(scenes, com0: np.ndarray) -> mx.RigParams:
     return mx.RigParams(**{**{k: getattr(P, k) for k in P.__dataclass_fields__}, "anchors": P.anchors - com0[:, None, :]})
 
 
+_SCENE_PARAMS: dict = {}
+"""id(scene) -> (a weak reference to the scene, {its rest CoM's bytes: the
+float parameters ``take(0)`` of :func:`_shifted_params`}): what
+:func:`_scene_by_scene` gives the runs of one scene and rest pose, kept
+while the scene lives, so a sweep point's later calls (its amplitude laws'
+runs of its scene after its own runs) take the same parameters and so the
+kernels compiled on them (one build a point fewer; a point builds its
+scene anew, so nothing is shared between points).  Rows of one scene and
+rest CoM are the same values whatever batch they were taken from
+(tests/test_runs27.py); the entry goes with its scene."""
+
+
+def _scene_params(scene, com_bytes: bytes, build):
+    """The float parameters of ``scene`` about the rest CoM ``com_bytes``
+    (:data:`_SCENE_PARAMS`), ``build()``'s the first time."""
+    key = id(scene)
+    entry = _SCENE_PARAMS.get(key)
+    if entry is None or entry[0]() is not scene:
+        entry = _SCENE_PARAMS[key] = (weakref.ref(scene, lambda _, k=key: _SCENE_PARAMS.pop(k, None)), {})
+    got = entry[1].get(com_bytes)
+    if got is None:
+        got = entry[1][com_bytes] = build()
+    return got
+
+
 def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest_point, progress, method,
                     health, y0) -> list[SceneRun]:
     """A small group (fewer than :data:`SMALL_BATCH` runs) run by run, each
@@ -453,6 +481,7 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     groups: dict = {}  # (scene, rest CoM) -> its runs
     for j in range(Bn):
         groups.setdefault((id(scenes[j]), np.asarray(rests[j].com, float).tobytes()), []).append(j)
+    keys = {js[0]: key[1] for key, js in groups.items()}  # a group's first run -> its rest CoM's bytes
     low = LowestPoint(scenes, np.array([r.com for r in rests])) if (lowest_point and health) else None
     if len(groups) > 1 and method == "lsoda" and not spp and not health:
         # runs of several scenes whose periods only are read (a point's amplitude laws' stepped scenes): each
@@ -460,7 +489,8 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
         Pg = _shifted_params(scenes, np.array([r.com for r in rests], float))
         P1: list = [None] * Bn
         for js in groups.values():
-            p1 = Pg.take(js[0])  # (a scene's rows: the same values; one kernel for its runs)
+            # (a scene's rows: the same values; one kernel for its runs, and for its runs in earlier calls)
+            p1 = _scene_params(scenes[js[0]], keys[js[0]], lambda j=js[0]: Pg.take(j))
             for j in js:
                 P1[j] = p1
         try:
@@ -475,7 +505,8 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
     done = 0
     for js in groups.values():
         Pg = _shifted_params([scenes[j] for j in js], np.array([rests[j].com for j in js], float))
-        P0, P1 = Pg.take([0]), Pg.take(0)  # one run's (rows of one scene and rest: the same values)
+        # one run's (rows of one scene and rest: the same values; the float ones as earlier calls took them)
+        P0, P1 = Pg.take([0]), _scene_params(scenes[js[0]], keys[js[0]], lambda: Pg.take(0))
 
         def run(ii, params, joint=False):
             ii = list(ii)
@@ -498,8 +529,11 @@ def _scene_by_scene(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, l
         if progress is not None:
             progress(done / Bn, 1.0)
     if low is not None:
-        for r, s_, lz in zip(out, scenes, low.z):
-            r.lowest_z_min, r.depth_max = float(lz), float(s_.ceiling_z - lz)
+        ceilings: dict = {}  # each scene's ceiling_z, once
+        for r, s_, lz in zip(out, scenes, low.z.tolist()):
+            if id(s_) not in ceilings:
+                ceilings[id(s_)] = s_.ceiling_z
+            r.lowest_z_min, r.depth_max = lz, ceilings[id(s_)] - lz
     return out
 
 
@@ -594,32 +628,42 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
         _health_at_dense_samples(obs, P, L2, n)
     runtime = (time.perf_counter() - t_start) / Bn
     lz = lowest.z if lowest is not None else np.full(Bn, np.nan)  # running minimum over the steps / samples
+    # the per-run figures below from Python floats (tolist: each element's value, without a numpy scalar's
+    # indexing and conversion per figure and run; docs/design.md, "runs27"): the same operations on the same doubles
+    amp_l, Lmax_l, Tref_l, rt_l = amps.tolist(), Lmax.tolist(), T_ref.tolist(), rt.tolist()
+    E0_l, dE_l, viol_l, tfin_l, lz_l = obs.E0.tolist(), obs.dE.tolist(), obs.viol.tolist(), obs.t_final.tolist(), lz.tolist()
+    slack_l, status_l = obs.slack_t.tolist(), np.asarray(status).tolist()
+    nfev_l, nsteps_l = ([int(v) for v in np.asarray(x).tolist()] for x in (nfev, nsteps))
+    com_pad = np.zeros((Bn, 13))  # each run's rest CoM, padded to a state: its absolute positions
+    com_pad[:, :3] = com0
+    ceilings: dict = {}  # each scene's ceiling_z, once
     out = []
     for b in range(Bn):
-        tc = timed_crossings(np.array(obs.cross[b]), float(amps[b]), mds[b].dominant, float(Lmax[b]))
+        amp, dom, lmax = amp_l[b], mds[b].dominant, Lmax_l[b]
+        tc = timed_crossings(np.array(obs.cross[b]), amp, dom, lmax)
         period, pstd = measured_period(tc)
-        small = small_amplitude_period(float(amps[b]), mds[b].dominant, float(Lmax[b]), float(T_ref[b]))
-        E0 = obs.E0[b]
-        drift = (float(obs.dE[b] / abs(E0)) if E0 != 0 and not untimed(float(amps[b]), mds[b].dominant, float(Lmax[b]))
+        small = small_amplitude_period(amp, dom, lmax, Tref_l[b])
+        E0 = E0_l[b]
+        drift = (dE_l[b] / abs(E0) if E0 != 0 and not untimed(amp, dom, lmax)
                  else float("nan"))  # relative to no oscillation energy (or one at rounding): undefined
         # simulate's health figures: a few float operations on what the run measured
-        res_ = drift_floor(P.mass[b], P.gravity[b], P.anchors[b], E0) if np.isfinite(drift) else float("nan")
+        res_ = drift_floor(P.mass[b], P.gravity[b], P.anchors[b], E0) if math.isfinite(drift) else float("nan")
         perr = (period_accuracy(period if small is None else small[0], "auto" if method == "lsoda" else method,
-                                float(rt[b]), float(amps[b]), mds[b].dominant, float(Lmax[b]),
-                                linear_period=float(T_ref[b]), drift=drift)[0] if health else float("nan"))
-        slack = [(i + 1, float(obs.slack_t[b, i])) for i in range(n) if np.isfinite(obs.slack_t[b, i])]
+                                rt_l[b], amp, dom, lmax, linear_period=Tref_l[b], drift=drift)[0]
+                if health else float("nan"))
+        slack = [(i + 1, v) for i, v in enumerate(slack_l[b]) if math.isfinite(v)]
         warnings = [] if small is None else [small[1]]
         if small is not None:
             period = small[0]
         for w_, ts_ in slack:
             warnings.append(f"WIRE {w_} GOES SLACK at t = {ts_:.4g} s (tension {obs.Tmin[b, w_ - 1]:.3g} N): "
                             "the motion after that is not physical; reduce the amplitude")
-        if status[b] == 1:
-            warnings.append(f"run stopped at t = {obs.t_final[b]:.4g} s because a wire went slack")
-        if status[b] == -1:
+        if status_l[b] == 1:
+            warnings.append(f"run stopped at t = {tfin_l[b]:.4g} s because a wire went slack")
+        if status_l[b] == -1:
             warnings.append(f"integration failed: {msgs.get(b, '')}")
         if period is None:
-            warnings.append(no_period_warning(float(amps[b]), status[b] == 1))
+            warnings.append(no_period_warning(amp, status_l[b] == 1))
         t_s = y_s = T_s = None
         if obs.samples is not None and keep_samples:
             parts = obs.samples[b]
@@ -633,19 +677,22 @@ def _run_group(scenes, rests, mds, amps, pers, rtol, atol, on_slack, spp, lowest
                 if obs.sample_tensions is not None:
                     T_s = (np.ascontiguousarray(obs.sample_tensions[b][0]) if one
                            else np.concatenate(obs.sample_tensions[b]))
-        if obs.viol[b] > 1e-6 * Lmax[b]:
+        if viol_l[b] > 1e-6 * lmax:
             # judged at the state of the largest error, the last one and the samples where the run kept them
-            seen = np.stack([obs.y_viol[b], obs.y_final[b]]) + np.concatenate([com0[b], np.zeros(10)])
+            seen = np.stack([obs.y_viol[b], obs.y_final[b]]) + com_pad[b]
             seen = seen if y_s is None else np.concatenate([seen, y_s])
-            warnings.insert(len(warnings) - (period is None), violation_warning(scenes[b], seen, float(obs.viol[b])))
+            warnings.insert(len(warnings) - (period is None), violation_warning(scenes[b], seen, viol_l[b]))
+        sid = id(scenes[b])
+        if sid not in ceilings:
+            ceilings[sid] = scenes[b].ceiling_z
         out.append(SceneRun(
-            period=period, period_std=pstd, crossings=tc, linear_period=float(T_ref[b]),
-            max_constraint_violation=float(obs.viol[b]), energy_drift=drift,
+            period=period, period_std=pstd, crossings=tc, linear_period=Tref_l[b],
+            max_constraint_violation=viol_l[b], energy_drift=drift,
             tension_min=obs.Tmin[b].copy(), tension_max=obs.Tmax[b].copy(), slack=slack,
-            lowest_z_min=float(lz[b]), depth_max=float(scenes[b].ceiling_z - lz[b]),
-            mode=mds[b].label, amplitude=float(amps[b]), coordinate_name=COMPONENTS[mds[b].dominant],
-            rtol=float(rt[b]), nfev=int(nfev[b]), nsteps=int(nsteps[b]), runtime=runtime, t=t_s, y=y_s, tensions=T_s,
-            t_final=float(obs.t_final[b]), y_final=obs.y_final[b] + np.concatenate([com0[b], np.zeros(10)]),
+            lowest_z_min=lz_l[b], depth_max=ceilings[sid] - lz_l[b],
+            mode=mds[b].label, amplitude=amp, coordinate_name=COMPONENTS[dom],
+            rtol=rt_l[b], nfev=nfev_l[b], nsteps=nsteps_l[b], runtime=runtime, t=t_s, y=y_s, tensions=T_s,
+            t_final=tfin_l[b], y_final=obs.y_final[b] + com_pad[b],
             warnings=warnings, method=_METHOD_NAME[method], energy_drift_resolution=res_, period_error=perr,
         ))
     return out

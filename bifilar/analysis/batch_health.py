@@ -43,7 +43,8 @@ class LowestPoint:
         for b, s in enumerate(self.scenes):
             if s.support is not None:
                 groups.setdefault(id(s.support), (s.support, []))[1].append(b)
-        self.groups = [(f, np.array(bs)) for f, bs in groups.values()]
+        # (f, its scenes' indices, whether they are all the batch's: every row then, without np.isin's search)
+        self.groups = [(f, np.array(bs), len(bs) == len(self.scenes)) for f, bs in groups.values()]
         self._zmin = np.full(len(self.scenes), np.inf)
         self._buf: list = []
         self._rows = 0
@@ -83,8 +84,8 @@ class LowestPoint:
         att = np.broadcast_to(self.att[0], (len(idx),) + self.att.shape[1:]) if one else self.att[idx]
         # attachment points and the CoM (origin; in the hull of the mass: Scene.body_support)
         h = np.maximum(row_max(np.einsum("rnk,rk->rn", att, down)), 0.0)
-        for f, bs in self.groups:
-            if one:
+        for f, bs, every in self.groups:
+            if one or every:  # every row is this support function's (a sweep point's runs of one body)
                 h = np.maximum(h, np.asarray(f(down), float))
                 continue
             rows = np.nonzero(np.isin(idx, bs))[0]

@@ -188,9 +188,14 @@ def _close(obs: Health, tt, y_last, stop_tau, T_ref, pers, status, cross_cols, c
     obs.y_final[:] = y_last
     cols = np.concatenate(cross_cols) if cross_cols else np.zeros(0, int)
     tcs = np.concatenate(cross_t) if cross_t else np.zeros(0)
-    for b in range(len(T_ref)):
-        sel = tcs[cols == b]
-        obs.cross[b] = list(np.sort(sel[sel <= stop_tau[b] + 1e-12]) * T_ref[b])
+    # every run's crossings up to its end, in time order, scaled to seconds, in one pass of array operations
+    # (each element's comparison and product as run by run; a run's times sorted as np.sort sorts them)
+    keep = tcs <= stop_tau[cols] + 1e-12
+    cols, tcs = cols[keep], tcs[keep]
+    order = np.lexsort((tcs, cols))
+    cols, secs = cols[order], tcs[order] * T_ref[cols[order]]
+    for b, part in enumerate(np.split(secs, np.searchsorted(cols, np.arange(1, len(T_ref))))):
+        obs.cross[b] = part  # (an array: the run's SceneRun takes it as its crossings)
         if stop_tau[b] < pers[b] - 1e-12 and status[b] == 0:
             status[b] = 1
 
@@ -225,22 +230,28 @@ def _lsoda_joint(P1, ys0, T_ref, pers, rtol: float, at, spp: int, obs: Health, c
     if not 0 < K_total <= _window_samples(spp, 1):
         raise _NotJoint
     if per_run:
-        kernels: dict = {}
-        fs = [kernels.setdefault(id(p), (p, mx.compiled_kernel(p, signature="odeint")))[1] for p in P1]
+        kernels: dict = {}  # id -> (its parameters, kept alive while the id is a key; its kernel), one a scene
+        for p in P1:
+            if id(p) not in kernels:
+                kernels[id(p)] = (p, mx.compiled_kernel(p, signature="odeint"))
+        fs = [kernels[id(p)][1] for p in P1]
         kx = None
     else:
         f, kx = _one_scene_kernels(P1)
         fs = [f] * Bn
     Ys = np.empty((K_total + 1, Bn, 13))
     nfe, nst = np.zeros(Bn, int), np.zeros(Bn, int)
-    for b, f in enumerate(fs):
-        Y, info = odeint(f, ys0[b].copy(), taus * float(T_ref[b]), rtol=rtol, atol=np.ascontiguousarray(at[:, b]),
-                         full_output=True, mxstep=100000, ml=12, mu=12)
-        if info["message"] != "Integration successful." or not np.all(np.isfinite(Y)):
+    atT = np.ascontiguousarray(at.T)  # each run's tolerances, a contiguous row (the column's values)
+    for b, f in enumerate(fs):  # (odeint copies the start state)
+        Y, info = odeint(f, ys0[b], taus * float(T_ref[b]), rtol=rtol, atol=atT[b], full_output=True, mxstep=100000,
+                         ml=12, mu=12)
+        if info["message"] != "Integration successful.":
             raise _NotJoint
         Ys[:, b] = Y
         nfe[b] = int(info["nfe"][-1]) if len(info["nfe"]) else 0
         nst[b] = int(info["nst"][-1]) if len(info["nst"]) else 0
+    if not np.all(np.isfinite(Ys)):  # every run's samples at once (nothing is recorded before this)
+        raise _NotJoint
     stop_tau = pers.astype(float).copy()
     cross_cols: list = []
     cross_t: list = []

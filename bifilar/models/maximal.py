@@ -647,9 +647,9 @@ elimination in the kernel; more wires go through :func:`_min_norm`."""
 def _zero_set(vals: dict) -> frozenset:
     out = set()
     for k, v in vals.items():
-        if k in _NEVER_ZERO or k.startswith(("L2", "hbL")):
-            continue  # never drop these (a zero would be a degenerate scene anyway)
-        if (v == 0) if type(v) is float else np.all(np.asarray(v) == 0):  # (a single scene's floats: no numpy call)
+        # (a single scene's floats: no numpy call; the value first, so that a nonzero one -- most -- costs no name test)
+        if ((v == 0) if type(v) is float else np.all(np.asarray(v) == 0)) and not (
+                k in _NEVER_ZERO or k.startswith(("L2", "hbL"))):  # never drop these (a zero: a degenerate scene)
             out.add(k)
     return frozenset(out)
 
@@ -724,6 +724,11 @@ def compiled_kernel(P: "RigParams", stabilise: bool = True, extras: bool = False
     return cache[key]
 
 
+_KEPT_NAMES: dict = {}
+"""(wire count, zero set) -> the C kernel's parameter names in order (those of
+:func:`_param_names` not in the zero set), once a pattern and process."""
+
+
 def _native_odeint(P: "RigParams", cache: dict, key: tuple, ticks):
     """odeint's kernel of ``P`` compiled as C (:mod:`.native_kernel`), or None
     (not built yet, disabled, unavailable, more than MAX_ELIMINATION_WIRES
@@ -738,8 +743,11 @@ def _native_odeint(P: "RigParams", cache: dict, key: tuple, ticks):
         return None
     from . import native_kernel
 
+    names = _KEPT_NAMES.get((n, zero))
+    if names is None:
+        names = _KEPT_NAMES[(n, zero)] = [p for p in _param_names(n) if p not in zero]
     f = native_kernel.odeint_kernel((n, zero), lambda: kernel_statements(n, zero, True, False),
-                                    lambda: [vals[p] for p in _param_names(n) if p not in zero], ticks,
+                                    lambda: [vals[p] for p in names], ticks,
                                     reference=lambda: compiled_kernel(P, signature="odeint", native=False))
     if f is not None and ticks is None:
         cache[key + ("native",)] = f
