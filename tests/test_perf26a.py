@@ -93,7 +93,8 @@ def test_start_poses_from_kept_geometry_equal_computing_it_again(monkeypatch):
     def again():
         with monkeypatch.context() as m:
             m.setattr(spm, "_kkt", lambda rig, x0, x, mu, Winv, at=None: real_kkt(rig, x0, x, mu, Winv))
-            m.setattr(spm, "_closest", lambda rig, x0, x, Winv, iters, at=None: real_closest(rig, x0, x, Winv, iters))
+            m.setattr(spm, "_closest", lambda rig, x0, x, Winv, iters, at=None, geometry=None:
+                      real_closest(rig, x0, x, Winv, iters, geometry=geometry))  # (geometry: start27's, passed on)
             m.setattr(spm, "edge_ratio", lambda rig, x, hold, at_rest=None: real_edge(rig, x, hold))
             return spm.start_poses([sc] * len(mds), [r] * len(mds), mds, a)
 

@@ -150,11 +150,14 @@ class _Rig:
         self.L = np.array([s.lengths for s in scenes], float)
         self.Lmax = self.L.max(axis=1)
         m = np.array([s.mass for s in scenes], float)
-        # one eigvalsh a distinct scene (a point's rows repeat its scene: 4 distinct of its 9), the same numbers
-        ibar: dict = {}
+        # the distinct scenes' eigenvalues in one eigvalsh call (a point's rows repeat its scene: 4 distinct of its
+        # 9; LAPACK solves each matrix of a stack alone, and a row's mean is the 3-term sum of one scene's: the
+        # same numbers as a call a scene, tests/test_start27.py)
+        first: dict = {}
         for s in scenes:
-            if id(s) not in ibar:
-                ibar[id(s)] = np.linalg.eigvalsh(s.inertia).mean()
+            first.setdefault(id(s), s)
+        stack = np.array([s.inertia for s in first.values()], float).reshape(-1, 3, 3)
+        ibar = dict(zip(first, np.linalg.eigvalsh(stack).mean(axis=1)))
         Ibar = np.array([ibar[id(s)] for s in scenes], float)
         self.W = np.concatenate([np.repeat(m[:, None], 3, 1), np.repeat(Ibar[:, None], 3, 1)], axis=1)
         self.com0 = np.array([r.com for r in rests], float)
@@ -186,9 +189,11 @@ class _Rig:
         wxd = _cross(w, d)  # np.cross's products and differences, without its axis handling
         return np.concatenate([d, np.einsum("bni,bij->bnj", wxd, left_jacobian(x[:, 3:]))], axis=-1)
 
-    def residual(self, x: np.ndarray) -> np.ndarray:
-        """max_i | |d_i| - L_i | / L_max (B,)."""
-        d, _, _ = self.wires(x)
+    def residual(self, x: np.ndarray, d: np.ndarray | None = None) -> np.ndarray:
+        """max_i | |d_i| - L_i | / L_max (B,); ``d`` the wire vectors at x if
+        known (:meth:`wires`' values there: the same residual)."""
+        if d is None:
+            d, _, _ = self.wires(x)
         return np.abs(np.linalg.norm(d, axis=2) - self.L).max(axis=1) / self.Lmax
 
 
@@ -316,7 +321,7 @@ def _mu_hessian(rig: _Rig, x: np.ndarray, mu: np.ndarray, scale: np.ndarray) -> 
 
 
 def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: int,
-             at: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+             at: tuple | None = None, geometry: list | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Newton's method on the first-order conditions of the closest pose
     (module doc) from poses x on the wires; constraint Hessians by central
     differences of the analytic Jacobian (their error, ~1e-10, slows the
@@ -325,7 +330,9 @@ def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: 
     (:func:`_to_wires`' ``geometry``).  Each row's wires at its pose are
     kept from where they were computed (the start, :func:`_to_wires` after
     each step), not computed again for the next step's conditions: row by
-    row the same values (tests/test_perf26a.py).  Returns (x, converged)."""
+    row the same values (tests/test_perf26a.py).  ``geometry`` (a list), if
+    given, is set to ``[d, w, phi]`` at the returned poses (each row's as
+    kept).  Returns (x, converged)."""
     B = len(x)
     x = x.copy()
     scale = _scale(rig)
@@ -370,29 +377,39 @@ def _closest(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, iters: 
         mu[ii[on]] = mu[ii[on]] + step[on, 6:]
         conv[ii[small]] = True
         active[ii[small | ~on]] = False
+    if geometry is not None:
+        geometry[:] = [d, w, phi]
     return x, conv
 
 
 def _solve(rig: _Rig, x0: np.ndarray, x: np.ndarray, Winv: np.ndarray, worst: np.ndarray | None = None,
-           residual: list | None = None):
+           at: list | None = None):
     """Closest poses to x0 on the wires, from x: onto the wires, then Newton.
     Returns (x, converged, on the wires within :data:`FEASIBLE_TOL`: where
     dependent wires make the constraints singular, Gauss-Newton can stop a
     hair off them, e.g. 2e-11 of the length for a four-wire rectangle
     twisted by 0.01 rad); ``worst`` as in :func:`_to_wires` (the path onto
-    the wires from x); ``residual`` (a list), if given, is set to ``[the
-    residual (B,) of :meth:`_Rig.residual` at the returned poses]``."""
+    the wires from x); ``at`` (a list), if given, is set to ``[residual
+    (B,) of :meth:`_Rig.residual`, d, w]`` at the returned poses.  The
+    residual is taken from the wires each row's pose was last put on (its
+    :func:`_to_wires` or :func:`_closest` geometry), not computed again:
+    row by row the same values (tests/test_start27.py)."""
     geo: list = []
     x, on = _to_wires(rig, x, Winv, ITERATIONS, worst, geo)
     out = x.copy()
+    d, w = geo[0], geo[1]
     conv = np.zeros(len(x), bool)
     ii = np.nonzero(on)[0]
     if len(ii):
-        xc, cc = _closest(rig.take(ii), x0[ii], x[ii], Winv[ii], ITERATIONS, tuple(a[ii] for a in geo))
+        got: list = []
+        xc, cc = _closest(rig.take(ii), x0[ii], x[ii], Winv[ii], ITERATIONS, tuple(a[ii] for a in geo),
+                          geometry=got)
         out[ii], conv[ii] = xc, cc
-    res = rig.residual(out)
-    if residual is not None:
-        residual[:] = [res]
+        d, w = d.copy(), w.copy()
+        d[ii], w[ii] = got[0], got[1]
+    res = rig.residual(out, d)
+    if at is not None:
+        at[:] = [res, d, w]
     return out, conv, res <= FEASIBLE_TOL
 
 
@@ -492,21 +509,21 @@ def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray,
     with coordinate ``hold`` (B,) fixed; returns (x, residual (B,) relative,
     gap (B,) m: where no start is on the wires, the least-squares minimum of
     max_i | |d_i| - L_i | near the end of the branch, else 0).  ``at_rest``
-    (a list), if given, is set to ``[d, w, G]`` at rest (x = 0), what
-    :func:`edge_ratio` needs too."""
+    (a list), if given, is set to ``[d, w, G, at_x]``: d, w and G at rest
+    (x = 0), what :func:`edge_ratio` needs too, and ``at_x`` (d, w) at the
+    returned poses where the direct solve gave every one of them (else
+    None)."""
     B = len(x0)
     Winv = 1.0 / rig.W
     Winv[np.arange(B), hold] = 0.0
     worst = np.ones(rig.L.shape)
     got: list = []
     x, conv, on = _solve(rig, x0, x0, Winv, worst, got)
-    res = got[0]
+    res, at_x = got[0], (got[1], got[2])
     # read past the eigenvalues of wires dependent at rest (four vertical ones: one at rounding there, ~1e-10 a
     # little way off; RANK_TOL as in edge_ratio)
     d, w, _ = rig.wires(np.zeros_like(x0))
     G = rig.jacobian(np.zeros_like(x0), d, w)
-    if at_rest is not None:
-        at_rest[:] = [d, w, G]
     ev = np.linalg.eigvalsh((G * Winv[:, None, :]) @ np.swapaxes(G, 1, 2))
     worst = worst[np.arange(B), np.sum(ev <= RANK_TOL * ev[:, -1:], axis=1)]
     gap = np.zeros(B)
@@ -538,6 +555,9 @@ def solve_start_poses(rig: _Rig, x0: np.ndarray, hold: np.ndarray,
                 gap[b] = (res if near else float(one.residual(xe[j][None, :])[0])) * float(rig.Lmax[b])
                 gap[b] = max(gap[b], 2.0 * FEASIBLE_TOL * float(rig.Lmax[b]))
         res = rig.residual(x)  # (else x is _solve's: its residual as it gave it)
+        at_x = None
+    if at_rest is not None:
+        at_rest[:] = [d, w, G, at_x]
     feasible = (gap == 0.0) & (res <= FEASIBLE_TOL)
     return x, res, np.where(feasible, 0.0, np.where(gap > 0.0, gap, res * rig.Lmax))
 
@@ -566,6 +586,7 @@ def start_poses(scenes: Sequence[Scene], rests: Sequence[RestPose], modes, ampli
             one = rig.take(np.array([b]))
             x[b], held[b] = _onto_held(scenes[b], one, x[b], int(hold[b]))
             res[b] = float(one.residual(x[b][None])[0])
+            rest_geometry[3] = None  # (a pose moved: the starts' wires computed again)
         gap = np.where((held <= FEASIBLE_TOL * rig.Lmax) & (res <= FREE_TOL), 0.0, gap)
     edge = edge_ratio(rig, x, hold, rest_geometry)
     com, R = rig.pose(x)
@@ -668,12 +689,14 @@ def edge_ratio(rig: "_Rig", x: np.ndarray, hold: np.ndarray, at_rest: list | Non
     determined (the multipliers' matrix is singular).  ``at_rest``: [d, w,
     G] at rest (x = 0) if known (:func:`solve_start_poses`' ``at_rest``);
     the rest's and the starts' matrices then go through one SVD call (each
-    matrix's singular values its own: the same values)."""
+    matrix's singular values its own: the same values); a fourth item, if
+    not None, is (d, w) at x (the wires where the solver left the starts:
+    the same values as computed again, tests/test_start27.py)."""
     B = len(x)
     lever = np.maximum(np.max(np.linalg.norm(rig.p, axis=2), axis=1), 1e-300)  # (B,)
 
     def singular(xx, geo=None):
-        d, w, _ = rig.wires(xx)
+        d, w, _ = rig.wires(xx) if geo is None or len(geo) < 4 or geo[3] is None else (*geo[3], None)
         G = rig.jacobian(xx, d, w)
         k = 1
         if geo is not None:  # rest rows first

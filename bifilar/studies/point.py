@@ -675,14 +675,18 @@ def _finish(res: dict, pre: _Prepared, sims: dict, st: SweepSettings, screen: bo
         from ..analysis.modes import modes_of_inertia
 
         at = modes_of_inertia(scene, rest)
+    from ..estimation.sensitivity import period_matcher
+
     ladder = _Ladder(scene, rest, pre.at)
+    matched = period_matcher(ms) if chosen else None  # (one for every component's linear estimate)
     for comp, k in chosen.items():
         e = res["components"][comp]
         T_lin = float(periods[k])
         T_nl = sims[k].period if k in sims else None
         T_ref = T_nl if T_nl is not None else T_lin
         bias, bnotes = ladder.biases(comp, labels[k], T_ref, e["axis_vertical"])
-        I_lin = linear_estimate(scene, comp, k, T_ref, ms, rest, sens.column(comp)[k], float(periods[k]), at=at)
+        I_lin = linear_estimate(scene, comp, k, T_ref, ms, rest, sens.column(comp)[k], float(periods[k]), at=at,
+                                matched=matched)
         bias["linear"] = (I_lin - e["value"]) / e["value"] if I_lin is not None and e["value"] else None
         e.update(nonlinear_period=T_nl, bias=bias, bias_reference="nonlinear" if T_nl else "linear",
                  bias_notes=bnotes)

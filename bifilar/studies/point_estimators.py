@@ -17,7 +17,7 @@ from .settings import _IDX
 
 
 def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slope: float,
-                    T0: float | None = None, at=None) -> float | None:
+                    T0: float | None = None, at=None, matched=None) -> float | None:
     """The exact linear model's estimate of ``comp`` (kg m^2): the value for
     which the linear period of mode ``k`` of ``modes`` (tracked by MAC, rest
     poses warm-started from ``rest``) equals ``T_target`` (s), the other
@@ -29,13 +29,16 @@ def linear_estimate(scene, comp: str, k: int, T_target: float, modes, rest, slop
     (:func:`~bifilar.analysis.modes.modes_of_inertia`).  ``at``: that
     function for ``scene`` if already built (``rest`` then is the scene's
     own rest pose, used as it is: one build serves every component of a
-    sweep point)."""
+    sweep point).  ``matched``: :func:`~bifilar.estimation.sensitivity.
+    period_matcher` of ``modes`` if already built (one serves every
+    component: the same numbers)."""
     from ..analysis.equilibrium import rest_pose
     from ..analysis.modes import modes_of_inertia
     from ..estimation.sensitivity import perturb, period_matcher
 
     I0 = float(scene.inertia[_IDX[comp]])
-    matched = period_matcher(modes)
+    if matched is None:
+        matched = period_matcher(modes)
     try:
         if at is None:
             at = modes_of_inertia(scene, rest_pose(scene, guess=rest, local_only=True))
@@ -81,6 +84,7 @@ class _Ladder:
         self.inv = inv if inv is not None and hasattr(inv, "ThesisModel") else None
         self._Hanging = Hanging
         self._hm = None
+        self._scale = None  # the largest principal moment (kg m^2): the thesis rung's scale, one a point
 
     def small_angle(self, comp: str, T: float) -> float:
         """Estimate of ``comp`` (kg m^2): the formula gives the moment about the
@@ -114,8 +118,10 @@ class _Ladder:
             hm = self._hm
             tm = inv.ThesisModel(hm, hm.mode_index(mode_label, "mode"), comp)
             lo, hi = inv.physical_interval(self.scene.inertia, comp)
-            scale = float(np.max(np.linalg.eigvalsh(self.scene.inertia)))
-            x = inv.solve_scalar(tm.period, T, float(self.scene.inertia[_IDX[comp]]), lo, hi, scale, "mode", comp)
+            if self._scale is None:
+                self._scale = float(np.max(np.linalg.eigvalsh(self.scene.inertia)))
+            x = inv.solve_scalar(tm.period, T, float(self.scene.inertia[_IDX[comp]]), lo, hi, self._scale, "mode",
+                                 comp)
             return float(x), f"linearisation {tm.which} of thesis section 7.1"
         except inv.NotApplicable as exc:
             return None, str(exc)
