@@ -82,19 +82,32 @@ def test_a_reason_is_cut_to_exactly_note_chars_with_an_ellipsis():
     assert no_sigma_reason({"sigma_unavailable": longer}) == ": " + "y" * 155 + "..."
 
 
-def test_the_linear_caution_names_only_a_component_the_plan_predicts():
+def test_the_linear_caution_names_the_largest_factor_among_the_plans_components():
     """``point_hangings.linear_caution``: Izz's variance at the point is 90 %
-    second order (its own sigma 1 / sqrt(0.1) = 3.16x its linear one) but
-    the plan has no figure for it; Ixx, in the plan, 50 % (1.41x, above
-    LINEAR_CAUTION 1.1): the caution names Ixx at 1.41x, not Izz.  Kills
-    point_hangings 5 (``c not in accuracy or not s -> and``: the worst
-    factor taken over components the plan does not predict)."""
+    second order (its own sigma 1 / sqrt(0.1) = 3.16x its linear one), Ixx's
+    50 % (1.41x, above LINEAR_CAUTION 1.1); Iyy, in the plan, has no sigma
+    at the point and Ixy no shares (a point from before them): both passed
+    over.  Without Izz in the plan the caution names Ixx at 1.41x; with it,
+    Izz (the largest factor, listed first); a component wholly second order
+    (linear sigma 0) is named (an infinite factor), not a ZeroDivisionError.
+    Kills point_hangings 5 (``not s or rel is None -> and``: Ixy's missing
+    share read, a TypeError), 6 (``rel is None or not isfinite -> and``:
+    ``isfinite(None)``), 18 (the factor compared with the worst one's
+    relative sigma: the last above 1.1 named) and 12 (``lin > 0 ->
+    >=``)."""
     from bifilar.studies.point_hangings import linear_caution
 
     point = {"components": {"Izz": {"rel_sigma": 0.25, "shares": {"second_order": 0.9}},
-                            "Ixx": {"rel_sigma": 0.1, "shares": {"second_order": 0.5}}}}
-    line = linear_caution(point, {"accuracy": {"Ixx": 0.07}}, "the recommended point")
+                            "Ixx": {"rel_sigma": 0.1, "shares": {"second_order": 0.5}},
+                            "Iyy": {"rel_sigma": None, "shares": {"second_order": 0.5}},
+                            "Ixy": {"rel_sigma": 0.2}}}
+    plan = {"accuracy": {"Ixx": 0.07, "Iyy": 0.1, "Ixy": 0.1}}
+    line = linear_caution(point, plan, "the recommended point")
     assert "of Ixx's variance" in line and f"({1 / math.sqrt(0.5):.3g}x)" in line and "Izz" not in line
+    line = linear_caution(point, {"accuracy": {**plan["accuracy"], "Izz": 0.03}}, "the recommended point")
+    assert "of Izz's variance" in line and f"({1 / math.sqrt(0.1):.3g}x)" in line
+    point["components"]["Ixx"]["shares"]["second_order"] = 1.0
+    assert "of Ixx's variance" in linear_caution(point, plan, "the recommended point")
 
 
 # ---------------------------------------------------------------------------
@@ -399,8 +412,10 @@ def test_a_components_near_hold_bias_is_its_periods_bias_times_its_derivative(tw
     m^2/s (twin26's tests use 1, where a product and a quotient agree) is
     ``4 b``: refused just below ``4 |b| / 0.1`` of sigma, kept just above (5 %),
     the text quoting ``4 |b|`` (to 1 %: the model's elastic periods and the
-    hand-differenced springs' are 0.4 % apart in this bias).  Kills elastic_split 165 (``bias * dI_dT ->
-    /``)."""
+    hand-differenced springs' are 0.4 % apart in this bias).  Where
+    ``per_mode`` does not apply nothing is refused here ("{} where per_mode
+    does not apply").  Kills elastic_split 165 (``bias * dI_dT -> /``) and
+    164 (``not per_mode or not chosen -> and``)."""
     from types import SimpleNamespace
 
     from bifilar.estimation.elastic_split import component_refusals
@@ -415,7 +430,11 @@ def test_a_components_near_hold_bias_is_its_periods_bias_times_its_derivative(tw
         budget = SimpleNamespace(dI_dT=4.0, value_sigma=factor * 4.0 * abs(b) / 0.1)
         got = component_refusals(risks, sc, rest, ms, {"Iyy": k}, {"Iyy": budget})
         assert ("Iyy" in got) == refused, (factor, got)
-    text = component_refusals(risks, sc, rest, ms, {"Iyy": k}, {"Iyy": SimpleNamespace(dI_dT=4.0, value_sigma=abs(b))})
+    tiny = {"Iyy": SimpleNamespace(dI_dT=4.0, value_sigma=abs(b))}  # the bias 4 sigma
+    # where per_mode does not apply (no draw near the rule, or a crossing: the rig's own refusal) none is refused here
+    assert component_refusals(_risks(), sc, rest, ms, {"Iyy": k}, tiny) == {}
+    assert component_refusals(_risks(p_held=0.2, p_near=0.3), sc, rest, ms, {"Iyy": k}, tiny) == {}
+    text = component_refusals(risks, sc, rest, ms, {"Iyy": k}, tiny)
     quoted = float(text["Iyy"].split("moves Iyy by ")[1].split(" ")[0])
     assert quoted == pytest.approx(4.0 * abs(b), rel=1e-2)  # the model's springs vs the hand ones: 0.4 % apart
 
