@@ -40,10 +40,13 @@ def linear_caution(point: dict, plan_doc: dict, what: str) -> str | None:
     if worst is None:
         return None
     c, f, rel, lin, s = worst
+    # all of the variance second order: no linear sigma to compare with, so no factor ("infx") is printed
+    versus = (f"against +- {100 * lin:.3g} % linear ({f:.3g}x)" if math.isfinite(f)
+              else "where the linear terms give none")
     return (f"{what}: the multi-hanging plan's sigmas are linear (no second-order check), but here second-order "
             f"terms (inputs whose effect is not linear over their uncertainty, e.g. a shallow CoM) make "
-            f"{100 * s:.3g} % of {c}'s variance in the planned hanging: +- {100 * rel:.3g} % against +- "
-            f"{100 * lin:.3g} % linear ({f:.3g}x); the plan's figures can be as optimistic")
+            f"{100 * s:.3g} % of {c}'s variance in the planned hanging: +- {100 * rel:.3g} % {versus}; "
+            f"the plan's figures can be as optimistic")
 
 
 @dataclass
