@@ -1,0 +1,55 @@
+"""Trust audit, session 27 (docs/design.md, "audit27, session 27"): what
+its closed loops and machine checks found, pinned cheaply.  The audit's
+draws stay in its throw-away harness; the cases' configs are in
+tests/data/audit27/."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data" / "audit27"
+
+
+def _imports_bifilar(node: ast.AST) -> bool:
+    if isinstance(node, ast.ImportFrom):
+        return (node.module or "").split(".")[0] == "bifilar" and node.level == 0
+    if isinstance(node, ast.Import):
+        return any(a.name.split(".")[0] == "bifilar" for a in node.names)
+    return False
+
+
+def _is_path_insert(node: ast.AST) -> bool:
+    """A module-level ``sys.path.insert(0, ...)``."""
+    return (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)
+            and ast.unparse(node.value.func) == "sys.path.insert"
+            and ast.unparse(node.value.args[0]) == "0")
+
+
+def test_every_script_that_imports_bifilar_imports_this_tree():
+    """`python scripts/X.py` puts scripts/, not the repository, first on
+    sys.path, so a script that imports bifilar without inserting the
+    repository's root first measures the copy installed in site-packages
+    (the developers' guide runs every script so; the machine this audit ran
+    on has such a copy).  fit_real_data.py (which writes docs/real_data.md),
+    tension_std_coverage.py, bench_symcheck.py and bench_timebase.py did:
+    their figures were the installed copy's.  A script whose code (not a
+    string run in a child with its own PYTHONPATH) imports bifilar must
+    insert a path at module level before its first module-level bifilar
+    import; one that imports it only inside functions, somewhere (those
+    that pick the tree, --package-dir / --tree, do it in the function).
+    Without the four inserts this fails naming the four (ran)."""
+    bad = []
+    for path in sorted((ROOT / "scripts").glob("*.py")):
+        tree = ast.parse(path.read_text())
+        if not any(_imports_bifilar(n) for n in ast.walk(tree)):
+            continue
+        inserts = [n for n in ast.walk(tree) if _is_path_insert(n)]
+        first_insert = next((i for i, n in enumerate(tree.body) if _is_path_insert(n)), len(tree.body))
+        first_top = next((i for i, n in enumerate(tree.body) if _imports_bifilar(n)), None)
+        # module-level imports need a module-level insert before them; imports inside functions an
+        # insert somewhere (module level, or the function that picks the tree: --package-dir, --tree)
+        if not inserts or (first_top is not None and first_top < first_insert):
+            bad.append(path.name)
+    assert bad == []
