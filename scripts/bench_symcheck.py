@@ -21,10 +21,12 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this tree's bifilar, not an installed copy
 CASES = [("thesis plate torsion", "thesis_plate_rest.yaml", "torsion", 0.05, 10),
          ("Solar Boat torsion", "solar_boat.yaml", "torsion", 0.05, 10),
          ("thesis plate swing-y 1.5 m (unstable)", "thesis_plate_rest.yaml", "swing-y", 1.5, 17)]

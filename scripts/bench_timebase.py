@@ -23,9 +23,13 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's bifilar, not an installed copy
 
 FS = 30.0
 #: (label, period s, cycles, noise rad, share of frames dropped, seed)

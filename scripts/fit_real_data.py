@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's bifilar, not an installed copy
+
 from bifilar.estimation.signal import fit_period, period_from_crossings, read_signal
 from bifilar.figures import new_figure, plot_fit, save
 

@@ -33,10 +33,13 @@ import math
 import sys
 import time
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 from scipy.linalg import toeplitz
 from scipy.signal import lfilter
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's bifilar, not an installed copy
 
 from bifilar.analysis.equilibrium import rest_pose
 from bifilar.analysis.modes import linear_modes

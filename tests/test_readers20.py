@@ -17,8 +17,9 @@ from click.testing import CliRunner
 from bifilar.cli import main
 from bifilar.estimation.signal import fit_period, read_signal
 from bifilar.estimation.signal_clip import find_soft_clipping
+from conftest import SHARED
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+DATA = SHARED / "data"
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 DRONE = CONFIGS / "drone_parallel.yaml"
 T_DRONE = 1.8800643384877211  # the drone's linear torsion period, s (`bifilar modes`)
