@@ -116,6 +116,41 @@ def bench_plan(repeats: int = 3, tree: Path | None = None) -> dict:
     return {"plan_cpu_s": statistics.median(cpu), "plan_wall_s": statistics.median(wall), "evaluations": evals}
 
 
+_YARDSTICK = """
+import json, statistics, sys, time
+sys.path.insert(0, ".")
+from bifilar.analysis.equilibrium import rest_pose
+from bifilar.analysis.modes import linear_modes
+from bifilar.config import read_yaml, scene_from_dict
+out = {}
+for case, path in json.loads(sys.argv[1]).items():
+    scene = scene_from_dict(read_yaml(path), warn=False)
+    linear_modes(scene, rest_pose(scene))  # warm-up (imports)
+    cpu = []
+    for _ in range(int(sys.argv[2])):
+        c0 = time.process_time()
+        linear_modes(scene, rest_pose(scene))
+        cpu.append(time.process_time() - c0)
+    out[case] = statistics.median(cpu)
+print(json.dumps(out))
+"""
+
+
+def bench_yardstick(tree: Path, repeats: int = 20) -> dict:
+    """Issue 14's yardstick as it was filed: one rest pose + linear modes solve
+    (``linear_modes(scene, rest_pose(scene))``, CPU s, median of ``repeats``)
+    of each :data:`CASES` config, by the code of ``tree`` (a ``git archive`` of
+    the revision the issue was filed against), in a fresh process.  The
+    issue's "at most 3x one naive rest-pose + modes solve" is read against
+    this: the solve of today (:func:`bench`'s ``rest_and_modes_cpu_s``) got
+    ~10x cheaper through the issue's own work, so a ratio to it measures that
+    work twice."""
+    cases = {case: str(Path("configs") / path.name) for case, (path, _) in CASES.items()}
+    r = subprocess.run([sys.executable, "-c", _YARDSTICK, json.dumps(cases), str(repeats)], cwd=tree,
+                       env={**os.environ, "PYTHONPATH": str(tree)}, capture_output=True, text=True, check=True)
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
 def bench_sweep_cli(repeats: int = 3, tree: Path | None = None) -> dict:
     """CPU s a point of ``bifilar sweep configs/solar_boat.yaml`` over :data:`GRID`
     (28 points) as a user runs it, in fresh processes from ``tree`` (default this

@@ -216,6 +216,7 @@ def issue14(quick: bool, before: str | None) -> dict:
     out["sweep_cli_before"] = bench_sweep.bench_sweep_cli(srep, Path(pkg)) if pkg else None
     out["plan"] = bench_sweep.bench_plan(srep)
     out["plan_before"] = bench_sweep.bench_plan(srep, Path(pkg)) if pkg else None
+    out["yardstick_before"] = bench_sweep.bench_yardstick(Path(pkg), 5 if quick else 20) if pkg else None
     if tmp:
         tmp.cleanup()
     return out
@@ -297,11 +298,21 @@ def _sweep_section(i: dict) -> list[str]:
              "uncertainty budget, nonlinear runs, estimator biases), in one process, CPU median; beside one rest "
              "pose + linear modes solve of the same scene.  Target: a point about 10-15 ms (issue 14: \"at most 3x "
              "one naive rest-pose + modes solve\", ~5 ms when it was filed).\n")
-    L.append("| case | ms a point (CPU) | points/s | rest pose + modes (ms) | ratio |")
-    L.append("| --- | --- | --- | --- | --- |")
+    yb = i.get("yardstick_before") or {}
+    L.append(f"| case | ms a point (CPU) | points/s | rest pose + modes now (ms) | ratio | the same solve at "
+             f"`{i['before_rev']}` (ms) | ratio to it |")
+    L.append("| --- | --- | --- | --- | --- | --- | --- |")
     for case, r in i["sweep_points"].items():
+        y = yb.get(case)
         L.append(f"| {case} | {1e3 * r['point_cpu_s']:.1f} | {r['points_per_s_cpu']:.0f} | "
-                 f"{1e3 * r['rest_and_modes_cpu_s']:.2f} | {r['ratio_to_rest_and_modes']:.0f}x |")
+                 f"{1e3 * r['rest_and_modes_cpu_s']:.2f} | {r['ratio_to_rest_and_modes']:.0f}x | "
+                 + (f"{1e3 * y:.2f} | {r['point_cpu_s'] / y:.1f}x |" if y else "- | - |"))
+    L.append("\nIssue 14 states the target as \"at most 3x the cost of one naive rest-pose + modes solve (about "
+             "10-15 ms; now ~25x)\"; its own figures (a point 125 ms, ~25x) put that solve at ~5 ms on the machine "
+             "it was filed on, which is neither today's solve of the same scene (the fourth column: the issue's own "
+             f"work made it cheaper) nor revision `{i['before_rev']}`'s (the sixth: the same call by that code, "
+             "`bench_sweep.bench_yardstick`, on this machine and config).  The project reads the target by its "
+             "absolute figure, about 10-15 ms a point; both ratios are given so that neither reading is hidden.\n")
     L.append("\nAs a user runs them, fresh processes of each tree (`bench_sweep.bench_sweep_cli`, `bench_plan`): "
              "`bifilar sweep configs/solar_boat.yaml --param spacing=1:4:7 --param length=2:5:4 --json` (28 "
              "points; CPU a point = (28-point sweep - 1-point sweep) / 27, start-up cancelled) and "
