@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError, InputError
+from .crossing_partner import partner_hint
 from .fit_check import (EDGE_Z, _input_columns, fit_statistics, input_fit_check, label_index, labelled_periods,
                         prior_fit_hint, unstated_amplitude_variance)
 from .problem import _IDX, Problem, admissible, admissible_interval
@@ -136,6 +137,7 @@ class ScalarScan:
             i = label_index(s, self.m.label)
             self.lab[q] = -1 if i is None else i
         self.diagonal = _IDX[self.name][0] == _IDX[self.name][1]
+        self.switches = None  # set by attainable()
 
     def _modes(self, xs) -> list:
         from ..analysis.batch import modes_batch
@@ -267,6 +269,7 @@ class ScalarScan:
         admissible interval, ascending; gaps where the label jumps between
         modes (the switch located by bisection)."""
         xs, segs = self.xs, []
+        self.switches = []  # (xa, xb, k before, k after, T before, T after): where the label jumps
         run = None  # [k, Tmin, Tmax]
         for q in range(len(xs)):
             k = int(self.lab[q])
@@ -287,11 +290,13 @@ class ScalarScan:
                     else:
                         xb = xm
                 Ta = self.period(xa, run[0])
+                run_k = run[0]
                 if np.isfinite(Ta):
                     run[1], run[2] = min(run[1], Ta), max(run[2], Ta)
                 segs.append(run)
                 run = [k, T, T]
                 Tb = self.period(xb, k)
+                self.switches.append((xa, xb, run_k, k, Ta, Tb))
                 if np.isfinite(Tb):
                     run[1], run[2] = min(T, Tb), max(T, Tb)
                 continue
@@ -309,7 +314,13 @@ class ScalarScan:
                 merged.append([a, b])
         return [(a, b) for a, b in merged]
 
-    def range_message(self, target: float) -> str:
+    def range_message(self, target: float, exact: bool = False) -> str:
+        """Why no physical value gives the labelled mode the period
+        ``target`` (s): the range (s) its period spans, its gaps where the
+        label passes to another mode, and, for a ``target`` inside such a gap,
+        the partner label (:func:`~bifilar.estimation.crossing_partner.partner_hint`; ``exact``: ``target`` is
+        the measured period itself, so the partner reading's root is what
+        ``invert`` answers)."""
         rng = self.attainable()
         what = f"the mode labelled '{self.m.label}'"
         where = (f"{self.name} anywhere in its physical range, {self.lo:.6g} to {self.hi:.6g} kg m^2 (positive "
@@ -321,7 +332,7 @@ class ScalarScan:
         if len(rng) > 1:
             gaps = ", ".join(f"{a[1]:.9g} s .. {b[0]:.9g} s" for a, b in zip(rng, rng[1:]))
             msg += f" except {gaps} (the label passes to another mode there: two modes exchange character)"
-        return msg + f" with {where}"
+        return msg + f" with {where}" + partner_hint(self, target, exact)
 
 
 def scalar_roots(pb: Problem, target: float | None = None, extra_var=None) -> list[Root]:
@@ -329,6 +340,7 @@ def scalar_roots(pb: Problem, target: float | None = None, extra_var=None) -> li
     Raises InputError naming the period's field, with the attainable range,
     when there is none.  ``extra_var``: as for :meth:`ScalarScan.edge_root`."""
     m = pb.measurements[0]
+    exact = target is None or float(target) == m.period
     target = m.period if target is None else float(target)
     scan = ScalarScan(pb)
     xs = scan.roots(target)
@@ -337,7 +349,7 @@ def scalar_roots(pb: Problem, target: float | None = None, extra_var=None) -> li
     x = scan.edge_root(target, m.std, extra_var)
     if x is not None:
         return [Root(np.array([x]), edge=True)]
-    raise InputError(m.field, scan.range_message(target) + _triangle_hint(scan, target)
+    raise InputError(m.field, scan.range_message(target, exact) + _triangle_hint(scan, target)
                      + _input_hint(scan, target) + slip_hint(target, scan.attainable()))
 
 
