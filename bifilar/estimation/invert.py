@@ -743,7 +743,10 @@ def _near_hold_refusal(pb, near: dict, gain: np.ndarray, std: np.ndarray) -> str
     (hangings ``near`` {index: risks}): each measured period of those hangings
     biased by its mode's :func:`~bifilar.estimation.elastic_split.near_hold_biases`
     (s), carried into the unknowns by the gain ``gain`` (P, K; dp = G dT) and
-    set against their stds ``std`` (SI); None where none exceeds its share."""
+    set against their stds ``std`` (SI); None where none exceeds its share.
+    Several hangings: every one near the rule is named (their biases act
+    together), the drawn-config figures quoted being the nearest one's
+    (largest ``p_near``)."""
     from .elastic_split import near_hold_biases, near_hold_refusal
 
     dT = np.zeros(len(pb.measurements))
@@ -754,9 +757,19 @@ def _near_hold_refusal(pb, near: dict, gain: np.ndarray, std: np.ndarray) -> str
                 if m.hanging == h:
                     dT[k] = b[pb.mode_index[k]]
     bias = gain @ dT
-    where = len(pb.models) > 1
+    # the figures quoted (share of the drawn configs near the rule, directions held) are the nearest
+    # hanging's; every hanging near the rule is named, since the bias is theirs together
+    risks = max(near.values(), key=lambda r: r.p_near)
+    names = [f"'{pb.models[h].hanging.name}'" for h in near]
+    if len(pb.models) == 1:
+        where = ""
+    elif len(names) == 1:
+        where = f"hanging {names[0]}: "
+    else:
+        nearest = next(n for h, n in zip(near, names) if near[h] is risks)
+        where = f"hangings {', '.join(names[:-1])} and {names[-1]} (figures of {nearest}, the nearest): "
     for i, name in enumerate(pb.unknowns):
-        text = near_hold_refusal(next(iter(near.values())), name, float(bias[i]), float(std[i]))
+        text = near_hold_refusal(risks, name, float(bias[i]), float(std[i]))
         if text is not None:
-            return (f"hanging '{pb.models[next(iter(near))].hanging.name}': " if where else "") + text
+            return where + text
     return None
