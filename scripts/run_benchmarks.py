@@ -515,7 +515,7 @@ def main(argv=None) -> None:
                     help="git revision for the 'before' figures of issue 14 ('' to skip)")
     ap.add_argument("--issue14-only", action="store_true",
                     help="measure only the issue-14 figures (start-up, batches, simulate, sensitivities, sweep "
-                         "points, plan) and replace that section of the page, keeping the rest (~5 min)")
+                         "points, plan) and replace that section of the page, keeping the rest (~2 min idle)")
     args = ap.parse_args(argv)
     if args.issue14_only:
         i14 = issue14(args.quick, args.before or None)
