@@ -10,7 +10,7 @@ the default health and lowest point.  Reported: wall and CPU time per scene
 before the run is reported too).  Issue 14's targets: per-scene cost at
 10 000 scenes no higher than at 1000, peak memory below 250 MB.
 
-Usage: python scripts/bench_batch_memory.py [--sizes 1000 10000] [--repeat 3] [--json]
+Usage: python scripts/bench_batch_memory.py [--sizes 1000 10000] [--repeat 3] [--chunk N] [--json]
 """
 
 from __future__ import annotations
@@ -27,10 +27,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _child(n: int, repeat: int, package_dir: str | None = None) -> dict:
+def _child(n: int, repeat: int, package_dir: str | None = None, chunk: int | None = None) -> dict:
     sys.path.insert(0, str(ROOT / "scripts"))
     sys.path.insert(0, str(package_dir or ROOT))
     from bifilar.analysis import batch as bt  # first: the package's other modules then come from the same place
+    if chunk:
+        bt.CHUNK = chunk
 
     from bench_targets import monte_carlo
 
@@ -61,11 +63,14 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def measure(sizes=(1000, 10000), repeat: int = 3, package_dir: str | None = None) -> list[dict]:
-    """One fresh process per size; ``package_dir``: the ``bifilar`` to run (e.g. an older revision)."""
+def measure(sizes=(1000, 10000), repeat: int = 3, package_dir: str | None = None,
+            chunk: int | None = None) -> list[dict]:
+    """One fresh process per size; ``package_dir``: the ``bifilar`` to run (e.g. an older revision);
+    ``chunk``: the engine's ``batch.CHUNK`` (scenes a chunk) instead of the package's."""
     out = []
     for n in sizes:
         extra = ["--package-dir", str(package_dir)] if package_dir else []
+        extra += ["--chunk", str(chunk)] if chunk else []
         r = subprocess.run([sys.executable, __file__, "--child", str(n), "--repeat", str(repeat), *extra],
                            capture_output=True, text=True, check=True, cwd=ROOT)
         out.append(json.loads(r.stdout.strip().splitlines()[-1]))
@@ -78,12 +83,13 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--child", type=int, default=None, help=argparse.SUPPRESS)
     ap.add_argument("--package-dir", default=None, help="run the bifilar package found in this directory")
+    ap.add_argument("--chunk", type=int, default=None, help="the engine's batch.CHUNK instead of the package's")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args()
     if a.child is not None:
-        print(json.dumps(_child(a.child, a.repeat, a.package_dir)))
+        print(json.dumps(_child(a.child, a.repeat, a.package_dir, a.chunk)))
         return
-    res = measure(a.sizes, a.repeat, a.package_dir)
+    res = measure(a.sizes, a.repeat, a.package_dir, a.chunk)
     if a.json:
         print(json.dumps(res))
         return

@@ -415,9 +415,11 @@ the processor's cache and cost more per scene (docs/performance.md,
 ``scripts/bench_batch_memory.py``); memory stays bounded too.  1500, not
 session 6's 2000: a chunk's DOP853 working set is ~39 kB a scene (10 torsion
 periods of the thesis plate at rtol 1e-9), and at 2000 the 10 000-scene
-benchmark peaked at 244-247 MB on an AMD EPYC (issue 14's limit 250 MB),
-at 1500 at 222 MB, with the per-scene CPU within the load's noise
-(session 27, docs/performance.md)."""
+benchmark peaked at 242-247 MB on an AMD EPYC, 3-8 MB under issue 14's
+250 MB limit; at 1500 at 220-221 MB, for ~11 % more CPU a scene (0.57 ->
+0.63-0.64 ms, still below the 1000-scene 0.75 ms the same target compares
+with): ``python scripts/bench_batch_memory.py --sizes 10000 --chunk N``,
+session 27, docs/performance.md."""
 
 
 HEALTH_SAMPLES = 64
