@@ -48,7 +48,6 @@ import numpy as np
 from ..errors import BifilarError
 from ..scene import scene_with
 from .measurements import COM_UNKNOWNS
-from .mirror_points import mirror_images
 from .problem import Problem
 from .sensitivity import mac_match, mac_matches, n_modes, perturb
 from .uncertainty import LinearBudget, covariance_of
@@ -385,41 +384,29 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
         # rest-pose search; not treated yet (TODO issue 10, docs/invert.md)
         keys = []
     h_ = SIGMA_POINT
-    points = {(key, sgn): [(key, sgn * h_ * ctx.sigmas[key])] for key in keys for sgn in (1, -1)}
+    sol = _solve_points(pb, ctx, p_hat, r_hat, {(key, sgn): [(key, sgn * h_ * ctx.sigmas[key])]
+                                                for key in keys for sgn in (1, -1)})
     p0 = np.asarray(p_hat, float)
+    failed, surrogate = [], {}
+    for key in keys:
+        pp, pm = sol[(key, 1)], sol[(key, -1)]
+        if pp is None or pm is None:
+            failed.append(key)
+            continue
+        surrogate[key] = ((pp - pm) / (2 * h_) + ctx.factor_shift.get(key, 0.0), (pp + pm - 2 * p0) / 6)
     std1 = lin.std
-
-    def judge(sol):
-        failed, surrogate = [], {}
-        for key in keys:
-            pp, pm = sol[(key, 1)], sol[(key, -1)]
-            if pp is None or pm is None:
-                failed.append(key)
-                continue
-            surrogate[key] = ((pp - pm) / (2 * h_) + ctx.factor_shift.get(key, 0.0), (pp + pm - 2 * p0) / 6)
-        contrib = {k: v for k, v in lin.contributions.items() if k not in surrogate}
-        offset = np.zeros(len(pb.unknowns))
-        for key, (a, b) in surrogate.items():
-            contrib[key] = a
-            contrib[f"{key} (2nd order)"] = math.sqrt(2) * b
-            offset = offset + b
-        var2 = sum((np.asarray(c) ** 2 for c in contrib.values()), np.zeros(len(offset))) + offset ** 2
-        with np.errstate(invalid="ignore", divide="ignore"):
-            change = np.abs(np.sqrt(var2) / std1 - 1)
-            off_rel = np.abs(offset) / std1
-        return failed, surrogate, contrib, offset, bool(np.all(change < LINEAR_ENOUGH) and np.all(off_rel < OFFSET_ENOUGH))
-
-    # a symmetric rig's mirror-image sigma points are taken from their images for the verdict; only a
-    # "linear" verdict with no point lost is kept from them (its values never reach the output), else
-    # the images are computed as every point is (mirror_points)
-    image = mirror_images(pb, ctx, keys)
-    sol = _solve_points(pb, ctx, p_hat, r_hat, {pid: mv for pid, mv in points.items() if pid not in image})
-    failed, surrogate, contrib, offset, linear = judge({**sol, **{pid: sol[src] for pid, src in image.items()}})
-    if image and (failed or not linear):
-        sol.update(_solve_points(pb, ctx, p_hat, r_hat, {pid: points[pid] for pid in image}))
-        failed, surrogate, contrib, offset, linear = judge(sol)
+    contrib = {k: v for k, v in lin.contributions.items() if k not in surrogate}
+    offset = np.zeros(len(pb.unknowns))
+    for key, (a, b) in surrogate.items():
+        contrib[key] = a
+        contrib[f"{key} (2nd order)"] = math.sqrt(2) * b
+        offset = offset + b
+    var2 = sum((np.asarray(c) ** 2 for c in contrib.values()), np.zeros(len(offset))) + offset ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        change = np.abs(np.sqrt(var2) / std1 - 1)
+        off_rel = np.abs(offset) / std1
     ctx.cross = {}
-    if linear:
+    if np.all(change < LINEAR_ENOUGH) and np.all(off_rel < OFFSET_ENOUGH):
         contrib, offset = dict(lin.contributions), np.zeros(len(offset))
         ctx.surrogate = {}
     else:
