@@ -1,0 +1,151 @@
+"""Session 28 (runs28): the sweep's own work per point, against the path it
+replaces, bit for bit (docs/design.md, "runs28, session 28"):
+
+* ``jsonable.to_jsonable``'s dispatch on the exact types of a point's values
+  (float, dict, list, bool, str, None) against the isinstance chain it
+  was before (copied here), on random nested documents of every type the
+  package hands it (numpy scalars and arrays, subclasses of float, int,
+  dict and str, an IntEnum, tuples, NaN, infinities, signed zeros) and on
+  a real sweep point: the same output, value, type and bits, everywhere.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import math
+import random
+from collections import OrderedDict
+
+import numpy as np
+
+from bifilar.jsonable import to_jsonable
+
+
+def _old_to_jsonable(x):
+    """``to_jsonable`` as it was before session 28."""
+    if isinstance(x, dict):
+        return {str(k): _old_to_jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_old_to_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _old_to_jsonable(x.tolist())
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        x = float(x)
+        return x if math.isfinite(x) else None
+    return x
+
+
+class _F(float):
+    pass
+
+
+class _I(int):
+    pass
+
+
+class _S(str):
+    pass
+
+
+class _D(dict):
+    pass
+
+
+class _E(enum.IntEnum):
+    A = 1
+
+
+def _same(a, b, path="doc"):
+    """Exact equality of two converted documents: types, keys, bits."""
+    assert type(a) is type(b), (path, type(a), type(b))
+    if isinstance(a, dict):
+        assert list(a) == list(b), path
+        for k in a:
+            _same(a[k], b[k], f"{path}.{k}")
+    elif isinstance(a, list):
+        assert len(a) == len(b), path
+        for i, (u, v) in enumerate(zip(a, b)):
+            _same(u, v, f"{path}[{i}]")
+    elif isinstance(a, float):
+        assert a.hex() == b.hex(), (path, a, b)  # -0.0 and 0.0 apart
+    else:
+        assert a is b or a == b, (path, a, b)
+
+
+_FLOATS = [0.0, -0.0, 1.5, -2.25e-300, 5e-324, 1e308, math.inf, -math.inf, math.nan]
+
+
+def _leaf(rng: random.Random):
+    f = rng.choice(_FLOATS + [rng.uniform(-1e3, 1e3)])
+    return rng.choice([
+        f, _F(f), np.float64(f), np.float32(f if math.isfinite(f) and abs(f) < 1e30 else math.nan), np.float16(1.5),
+        rng.randint(-5, 5), _I(3), np.int64(7), np.int8(-2), np.uint32(9),
+        True, False, np.bool_(True), np.bool_(False),
+        "text", _S("sub"), None, _E.A,
+        np.array([f, 1.0, -0.0]), np.array([[1, 2], [3, 4]]), np.array([True, False]), np.zeros(0),
+        np.float64(f).item(), complex(1, 2)])
+
+
+def _doc(rng: random.Random, depth: int = 0):
+    if depth > 3 or rng.random() < 0.3:
+        return _leaf(rng)
+    kind = rng.choice(["dict", "list", "tuple", "subdict", "ordered"])
+    items = [_doc(rng, depth + 1) for _ in range(rng.randint(0, 5))]
+    if kind == "list":
+        return items
+    if kind == "tuple":
+        return tuple(items)
+    keys = [rng.choice(["a", "b", 1, 2.5, None, True, ("t", 1), _S("k")]) for _ in items]
+    pairs = list(zip(keys, items))
+    return {"dict": dict, "subdict": _D, "ordered": OrderedDict}[kind](pairs)
+
+
+def test_to_jsonable_dispatch_is_the_old_rule_bit_for_bit():
+    rng = random.Random(28)
+    for _ in range(3000):
+        d = _doc(rng)
+        _same(to_jsonable(d), _old_to_jsonable(d))
+
+
+def test_to_jsonable_of_a_sweep_point_is_the_old_rule_and_its_json():
+    """A real point's dict (numpy-laden, as ``evaluate_point`` builds it
+    before converting) converts to the same document and the same JSON text."""
+    from bifilar.config import read_yaml
+    from bifilar.studies import point as pt
+    from bifilar.studies import sweep as sw
+
+    from conftest import CONFIGS
+
+    cfg = read_yaml(CONFIGS / "thesis_plate_rest.yaml")
+    st = sw.resolve_settings(cfg, tensions=False)
+    seen = []
+    real = pt._plain
+
+    def keep(x):
+        seen.append(x)
+        return real(x)
+
+    pt._plain = keep
+    try:
+        sw.evaluate_point(cfg, "thesis_plate_rest.yaml", {"spacing": 2.0}, st)
+    finally:
+        pt._plain = real
+    raw = seen[-1]
+    assert raw["valid"] is True
+
+    def kinds(x):
+        if isinstance(x, dict):
+            return set().union({type(x)}, *map(kinds, x.values()))
+        if isinstance(x, (list, tuple)):
+            return set().union({type(x)}, *map(kinds, x))
+        return {type(x)}
+
+    assert kinds(raw) & {np.ndarray, np.float64}  # the dict before conversion: numpy inside
+    new, old = to_jsonable(raw), _old_to_jsonable(raw)
+    _same(new, old)
+    assert json.dumps(new, allow_nan=False) == json.dumps(old, allow_nan=False)
