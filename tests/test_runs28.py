@@ -6,7 +6,13 @@ replaces, bit for bit (docs/design.md, "runs28, session 28"):
   was before (copied here), on random nested documents of every type the
   package hands it (numpy scalars and arrays, subclasses of float, int,
   dict and str, an IntEnum, tuples, NaN, infinities, signed zeros) and on
-  a real sweep point: the same output, value, type and bits, everywhere.
+  a real sweep point: the same output, value, type and bits, everywhere;
+* a law's ``dr/dI`` run again at a tighter rtol
+  (``point_amplitude._refine_dr_dI``) from the start poses the point
+  solved already (``_known_starts``) against solving them again: the
+  points' JSON bit for bit, and each start taken against ``start_poses``
+  of that row alone (two Solar Boat points whose refined mode is the
+  first and the second of the point's runs).
 """
 
 from __future__ import annotations
@@ -18,6 +24,8 @@ import random
 from collections import OrderedDict
 
 import numpy as np
+
+import pytest
 
 from bifilar.jsonable import to_jsonable
 
@@ -149,3 +157,46 @@ def test_to_jsonable_of_a_sweep_point_is_the_old_rule_and_its_json():
     new, old = to_jsonable(raw), _old_to_jsonable(raw)
     _same(new, old)
     assert json.dumps(new, allow_nan=False) == json.dumps(old, allow_nan=False)
+
+
+def _fields(sp):
+    from bifilar.analysis.start_pose import StartPoses
+
+    return [np.asarray(getattr(sp, f)).tobytes() for f in StartPoses.__dataclass_fields__]
+
+
+@pytest.mark.parametrize("params", [{"spacing": 3.5, "length": 5.0}, {"spacing": 4.0, "length": 2.0}])
+def test_refine_starts_where_the_point_started_bit_for_bit(params):
+    from bifilar.analysis.start_pose import start_poses
+    from bifilar.config import read_yaml
+    from bifilar.studies import point_amplitude as pa
+    from bifilar.studies import sweep as sw
+
+    from conftest import CONFIGS
+
+    cfg = read_yaml(CONFIGS / "solar_boat.yaml")
+    st = sw.resolve_settings(cfg)
+    real = pa._known_starts
+    seen = []
+
+    def keep(pre, law, rows):
+        sp = real(pre, law, rows)
+        seen.append((pre, law, rows, sp))
+        return sp
+
+    pa._known_starts = keep
+    try:
+        taken = json.dumps(sw.evaluate_point(cfg, "solar_boat.yaml", params, st))
+        pa._known_starts = lambda pre, law, rows: None  # the path before: simulate_batch solves them again
+        solved = json.dumps(sw.evaluate_point(cfg, "solar_boat.yaml", params, st))
+    finally:
+        pa._known_starts = real
+    assert len(seen) == 1 and seen[0][3] is not None  # the point refines a law, from the starts it has
+    assert taken == solved
+    pre, law, rows, sp = seen[0]
+    assert len(sp.feasible) == 2 * len(rows)
+    for i, (k, j) in enumerate(rows):  # each row against its own solve (scene, rest, mode, amplitude)
+        label = pre.labels[k]
+        alone = start_poses([pre.scene, law.scenes[j]], [pre.rest, pre.rest],
+                            [pre.ms.modes[k], law.mode_sets[j].get(label)], pre.amplitude)
+        assert _fields(sp.take([2 * i, 2 * i + 1])) == _fields(alone)
