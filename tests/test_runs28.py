@@ -200,3 +200,34 @@ def test_refine_starts_where_the_point_started_bit_for_bit(params):
         alone = start_poses([pre.scene, law.scenes[j]], [pre.rest, pre.rest],
                             [pre.ms.modes[k], law.mode_sets[j].get(label)], pre.amplitude)
         assert _fields(sp.take([2 * i, 2 * i + 1])) == _fields(alone)
+
+
+def test_bench_grid_points_counts_the_refining_points():
+    """``bench_sweep.py --grid-points`` (the split of the whole sweep's CPU a
+    point, docs/performance.md): its points with a third call of the
+    batched engine are exactly those whose law's ``dr/dI`` was run again
+    (counted here independently, by ``_refine_dr_dI``'s start poses), and
+    the engine is given back unwrapped."""
+    import sys
+    from pathlib import Path
+
+    import bifilar.analysis.batch as batch
+    from bifilar.studies import point_amplitude as pa
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    import bench_sweep
+
+    real_batch, real_known = batch.simulate_batch, pa._known_starts
+    refined = []
+    pa._known_starts = lambda pre, law, rows: refined.append(len(rows)) or real_known(pre, law, rows)
+    try:
+        r = bench_sweep.bench_grid_points(1)
+    finally:
+        pa._known_starts = real_known
+    assert batch.simulate_batch is real_batch
+    assert r["grid_points"] == 28 and len(r["grid_point_cpu_s"]) == 28
+    by = r["grid_by_engine_calls"]
+    assert set(by) <= {"2", "3"} and sum(v["points"] for v in by.values()) == 28
+    # the warm-up and the one timed round each refine the same points (the default point refines none)
+    assert len(refined) == 2 * by.get("3", {"points": 0})["points"] and by["3"]["points"] > 0
+    assert 0 < r["json_cpu_s_a_point"] < r["default_point_cpu_s"]
