@@ -20,6 +20,7 @@ from __future__ import annotations
 import enum
 import json
 import math
+import os
 import random
 from collections import OrderedDict
 
@@ -215,7 +216,14 @@ def test_bench_grid_points_counts_the_refining_points():
     from bifilar.studies import point_amplitude as pa
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-    import bench_sweep
+    had = os.environ.get("BIFILAR_NATIVE")
+    try:
+        import bench_sweep  # (sets BIFILAR_NATIVE=sync where unset: not left to the tests after this one)
+    finally:
+        if had is None:
+            os.environ.pop("BIFILAR_NATIVE", None)
+        else:
+            os.environ["BIFILAR_NATIVE"] = had
 
     real_batch, real_known = batch.simulate_batch, pa._known_starts
     refined = []
