@@ -16,10 +16,15 @@ does) against all in one batch, with whether each scene's figures are
 bit-for-bit the same whatever else shares its batch (what ``--workers``
 and ``--resume`` need).
 
-    python scripts/bench_sweep.py [--repeats 5] [--json FILE] [--no-plan] [--engines] [--parts]
+    python scripts/bench_sweep.py [--repeats 5] [--json FILE] [--no-plan] [--engines] [--parts] [--grid-points]
+    python scripts/bench_sweep.py --grid-points --other DIR [--rounds 3] [--repeats 5]
 
 ``--parts``: where one point's CPU goes (its sensitivity, the honest
 sigma with its sigma points, the nonlinear runs, the biases).
+``--grid-points``: each of the whole sweep's points alone beside the
+default point, and the JSON a point adds (:func:`bench_grid_points`);
+with ``--other DIR`` only that, for this checkout's bifilar and DIR's, in
+fresh processes alternating (:func:`bench_grid_points_ab`).
 
 Medians of CPU time (the load-robust measure; wall clock alongside).
 Deterministic points, so every repeat does the same work.
@@ -39,7 +44,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+# the checkout whose bifilar is measured: this one, or another's for --grid-points --other (its children); the
+# configs are always this checkout's
+PACKAGE = Path(os.environ.get("BENCH_SWEEP_PACKAGE", ROOT))
+sys.path.insert(0, str(PACKAGE))
 # odeint's C kernel (bifilar.models.native_kernel) built in the foreground on the warm-up, so the timed
 # repeats measure the steady state; BIFILAR_NATIVE=0 in the environment measures the Python kernel
 os.environ.setdefault("BIFILAR_NATIVE", "sync")
@@ -197,6 +205,104 @@ def bench_grid(repeats: int = 3) -> dict:
             "sweep_point_cpu_s": cpu / len(grid)}
 
 
+def bench_grid_points(repeats: int = 5) -> dict:
+    """Where the whole sweep's CPU a point (:func:`bench_sweep_cli`) parts from
+    the single point's (:func:`bench`): each of the :data:`GRID` sweep's 28
+    points and the default Solar Boat point (``spacing = 3``) timed alone
+    in one warm process, round after round (the default point first in
+    each round, so that the load moves both alike), CPU medians of
+    ``repeats`` a point; the calls of the batched engine a point makes
+    (2: its own runs and its amplitude laws'; 3 where a law's ``dr/dI`` is
+    run again at a tighter rtol, ``point_amplitude._refine_dr_dI``); and
+    what ``sweep --json`` adds a point: its points made plain
+    (``to_jsonable``) and written (``json.dumps``), CPU ms a point."""
+    from bifilar.analysis import batch
+    from bifilar.jsonable import to_jsonable
+
+    path, params = CASES["Solar Boat"]
+    cfg = read_yaml(path)
+    st = sw.resolve_settings(cfg)
+    grid = _grid(cfg, path)
+    todo = [dict(params)] + grid
+    calls = [0]
+    real = batch.simulate_batch
+
+    def counted(*a, **k):
+        calls[0] += 1
+        return real(*a, **k)
+
+    cpu: list = [[] for _ in todo]
+    ncalls = [0] * len(todo)
+    points = []
+    batch.simulate_batch = counted
+    try:
+        for p in todo:  # warm-up (imports, compiled kernels of every pattern)
+            sw.evaluate_point(cfg, str(path), p, st)
+        gc.collect()
+        for _ in range(repeats):
+            points = []
+            for i, p in enumerate(todo):
+                calls[0] = 0
+                c0 = time.process_time()
+                points.append(sw.evaluate_point(cfg, str(path), p, st))
+                cpu[i].append(time.process_time() - c0)
+                ncalls[i] = calls[0]
+    finally:
+        batch.simulate_batch = real
+    med = [statistics.median(c) for c in cpu]
+    js = []
+    for _ in range(repeats):
+        c0 = time.process_time()
+        json.dumps(to_jsonable({"points": points[1:]}), allow_nan=False)
+        js.append((time.process_time() - c0) / len(grid))
+    by_calls: dict = {}
+    for m, n in zip(med[1:], ncalls[1:]):
+        by_calls.setdefault(str(n), []).append(m)
+    return {"default_point_cpu_s": med[0], "grid_points": len(grid),
+            "grid_point_mean_cpu_s": statistics.mean(med[1:]),
+            "grid_by_engine_calls": {k: {"points": len(v), "mean_cpu_s": statistics.mean(v)}
+                                     for k, v in sorted(by_calls.items())},
+            "grid_point_cpu_s": {sw.point_key(p): m for p, m in zip(grid, med[1:])},
+            "json_cpu_s_a_point": statistics.median(js)}
+
+
+def bench_grid_points_ab(other: Path, rounds: int = 3, repeats: int = 5) -> dict:
+    """:func:`bench_grid_points` of this checkout's bifilar and of ``other``'s
+    (a checkout, e.g. ``git worktree add --detach DIR main``), each in a
+    fresh process running this script (so the same harness and configs),
+    the two alternating over ``rounds`` (the first tree of a round
+    alternating too); returns {tree: [each round's result]}."""
+    trees = {"this": ROOT, "other": Path(other).resolve()}
+    out: dict = {k: [] for k in trees}
+    for r in range(rounds):
+        for label in (["this", "other"] if r % 2 == 0 else ["other", "this"]):
+            env = {**os.environ, "BENCH_SWEEP_PACKAGE": str(trees[label])}
+            res = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--grid-points-child", "--repeats",
+                                  str(repeats)], env=env, cwd=ROOT, capture_output=True, text=True, check=True)
+            doc = json.loads(res.stdout.strip().splitlines()[-1])
+            if not Path(doc["package"]).resolve().is_relative_to(trees[label]):
+                raise RuntimeError(f"measured {doc['package']}, not {trees[label]}")
+            out[label].append(doc)
+            print(f"[round {r + 1}, {label} {trees[label]}] " + _grid_points_line(doc), flush=True)
+    return out
+
+
+def _refine_excess(gp: dict) -> float | None:
+    """CPU s the points with a third engine call cost above the others (None: no such point)."""
+    by = gp["grid_by_engine_calls"]
+    return by["3"]["mean_cpu_s"] - by["2"]["mean_cpu_s"] if "3" in by and "2" in by else None
+
+
+def _grid_points_line(gp: dict) -> str:
+    ex = _refine_excess(gp)
+    return (f"the default point (spacing = 3) {1e3 * gp['default_point_cpu_s']:.2f} ms, the {gp['grid_points']} "
+            f"points of the sweep {1e3 * gp['grid_point_mean_cpu_s']:.2f} ms on average ("
+            + ", ".join(f"{v['points']} with {k} calls of the batched engine {1e3 * v['mean_cpu_s']:.2f}"
+                        for k, v in gp["grid_by_engine_calls"].items())
+            + (f"; a point with 3 calls {1e3 * ex:.2f} ms above the others" if ex is not None else "")
+            + f"); sweep --json's to_jsonable + json.dumps {1e3 * gp['json_cpu_s_a_point']:.3f} ms a point")
+
+
 def _run_figures(r) -> tuple:
     return (r.period, r.crossings.tobytes(), r.tension_min.tobytes(), r.tension_max.tobytes(), r.depth_max,
             r.max_constraint_violation, r.energy_drift)
@@ -348,7 +454,34 @@ def main(argv=None) -> int:
     ap.add_argument("--no-plan", action="store_true", help="leave out the plan timing")
     ap.add_argument("--engines", action="store_true", help="also measure batching across the sweep's points")
     ap.add_argument("--parts", action="store_true", help="also time the parts of one point")
+    ap.add_argument("--grid-points", action="store_true",
+                    help="also time each point of the 28-point sweep alone beside the default point, and the "
+                         "JSON a sweep point adds (where the whole sweep's CPU a point parts from one point's)")
+    ap.add_argument("--other", type=Path, default=None,
+                    help="with --grid-points: also another checkout's bifilar, in fresh processes alternating with "
+                         "this one's (--rounds); only that is measured")
+    ap.add_argument("--rounds", type=int, default=3, help="rounds of --other (default 3)")
+    ap.add_argument("--grid-points-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.grid_points_child:  # one tree's figures for --other (BENCH_SWEEP_PACKAGE names the tree)
+        import bifilar
+
+        print(json.dumps({"package": bifilar.__file__, **bench_grid_points(args.repeats)}))
+        return 0
+    if args.other is not None:
+        if not args.grid_points:
+            ap.error("--other goes with --grid-points")
+        ab = bench_grid_points_ab(args.other, args.rounds, args.repeats)
+        for label, docs in ab.items():
+            ex = [e for e in map(_refine_excess, docs) if e is not None]
+            print(f"{label} ({len(docs)} rounds, medians): the default point "
+                  f"{1e3 * statistics.median(d['default_point_cpu_s'] for d in docs):.2f} ms, the sweep's mean point "
+                  f"{1e3 * statistics.median(d['grid_point_mean_cpu_s'] for d in docs):.2f} ms"
+                  + (f", a point with 3 engine calls {1e3 * statistics.median(ex):.2f} ms above the others" if ex else "")
+                  + f", the JSON {1e3 * statistics.median(d['json_cpu_s_a_point'] for d in docs):.3f} ms a point")
+        if args.json:
+            Path(args.json).write_text(json.dumps(ab, indent=1), encoding="utf-8")
+        return 0
     res = bench(args.repeats)
     print(f"BIFILAR_NATIVE={os.environ['BIFILAR_NATIVE']} (odeint's C kernel: 0 = off)")
     for name, r in res.items():
@@ -378,6 +511,9 @@ def main(argv=None) -> int:
         for case, r in res["parts"].items():
             print(f"{case} point, {1e3 * r['point_cpu_s']:.1f} ms CPU (median), where it goes (mean ms): "
                   + "; ".join(f"{k.strip()} {1e3 * r.get(k, 0.0):.1f}" for k in dict.fromkeys(k for k, _, _ in PARTS)))
+    if args.grid_points:
+        res["grid_points"] = gp = bench_grid_points(args.repeats)
+        print(f"Solar Boat, each point alone (CPU medians of {args.repeats}): " + _grid_points_line(gp))
     if not args.no_plan:
         res["plan"] = p = bench_plan(args.repeats)
         print(f"Solar Boat 2-parameter plan: {p['plan_cpu_s']:.2f} s CPU ({p['plan_wall_s']:.2f} s wall), "

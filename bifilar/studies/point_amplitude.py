@@ -205,15 +205,16 @@ def _refine_dr_dI(out: dict, pre: "_Prepared", law: _LawRuns, comps: list, st: S
             redo.append((n, c, k, tight))
     if not redo:
         return
-    scenes, labels, mss = [], [], []
+    scenes, labels, mss, rows = [], [], [], []
     for n, _, k, _ in redo:
         scenes += [pre.scene, law.scenes[len(law.modes) + n]]
         labels += [pre.labels[k]] * 2
         mss += [pre.ms, law.mode_sets[len(law.modes) + n]]
+        rows.append((k, len(law.modes) + n))
     try:
         runs = simulate_batch(scenes, mode=labels, amplitude=pre.amplitude, periods=st.periods,
                               rtol=min(t for *_, t in redo), rests=[pre.rest] * len(scenes), modes=mss,
-                              errors="return", health=False)
+                              errors="return", health=False, starts=_known_starts(pre, law, rows))
     except BifilarError:
         return
     for i, (_, c, _, _) in enumerate(redo):
@@ -222,6 +223,28 @@ def _refine_dr_dI(out: dict, pre: "_Prepared", law: _LawRuns, comps: list, st: S
             continue
         dr = (step.period / step.linear_period - own.period / own.linear_period) / law.h
         out[c] = (out[c][0], dr)
+
+
+def _known_starts(pre: "_Prepared", law: _LawRuns, rows: list):
+    """The start poses of :func:`_refine_dr_dI`'s runs, in its order, where the
+    point solved them already (``StartPoses``, SI, world frame), else None
+    (``simulate_batch`` then solves them).  ``rows``: per component (the
+    mode index k of the point's own run, the row j of its stepped run in
+    ``law``).  The own run again at a tighter rtol starts where the point's
+    run of mode k started (row ``pre.runs.index(k)`` of ``pre.starts``:
+    the same scene, rest pose, mode and amplitude), the stepped one where
+    the law's run of that scene did (row j of ``law.starts``); both were
+    solved in the point's one call, whose rows are solved independently, so
+    each is what a call of its own gives (tests/test_point_cost.py): the
+    same bits as the 2-row solve they replace (~1.3 ms; docs/design.md,
+    "runs28, session 28").  None where the law was planned without the
+    point's runs (no ``law.starts``)."""
+    if pre.starts is None or law.starts is None or any(k not in pre.runs for k, _ in rows):
+        return None
+    from ..analysis.start_pose import StartPoses
+
+    return StartPoses.concat([part for k, j in rows
+                              for part in (pre.starts.take([pre.runs.index(k)]), law.starts.take([j]))])
 
 
 LAW_SAMPLES = 64
