@@ -12,7 +12,8 @@ reproduce its periods can be matched with the words that say so.
 
 Prints one JSON document: per component the truth, z = (estimate - truth)
 / std (mean, sd, range), the coverage of the printed ``interval_95`` with
-its binomial se, the misses below / above, the median std; the refusals
+its binomial se, the misses below / above, the median std and the median
+width of the printed interval (after any cut at the physical limit); the refusals
 (first 90 characters of each message, counted), the warnings (first 80),
 and the CPU seconds.
 
@@ -92,7 +93,7 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int) -> dict:
                   "z_range": [float(z.min()), float(z.max())], "coverage": cov,
                   "se": float(np.sqrt(max(cov * (1 - cov), 0.0475) / n)),
                   "miss_low": int(np.sum(tv[c] < lo)), "miss_high": int(np.sum(tv[c] > hi)),
-                  "median_std": float(np.median(s))}
+                  "median_std": float(np.median(s)), "median_width": float(np.median(hi - lo))}
     out["cpu_s"] = round(time.process_time() - t0, 1)
     return out
 

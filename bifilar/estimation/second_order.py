@@ -29,8 +29,9 @@ grid through which the biquadratic in ``(z_i, z_j)`` is exact, and its
 interactions (``z_i z_j``, ``z_i^2 z_j``, ``z_i z_j^2``, ``z_i^2 z_j^2``:
 the wheel's sideways CoM times the attachments' y errors and times the
 CoM depth's) enter the budget in orthonormal Hermite terms
-(:func:`_pair_terms`).  The 95 % interval is symmetrised against the
-reversed skew of a truth at the response's extremum (:func:`interval_95`).
+(:func:`_pair_terms`).  The 95 % interval holds both the symmetrised
+model (a truth at the response's extremum reverses the skew) and the
+model's own equal tails (a skewed monotone response; :func:`interval_95`).
 Inputs whose sigma points cannot hang at all
 (a knife-edge: the CoM exactly on the attachment line) are *degenerate*
 and returned to the caller, which lists them; a scene with a neutral mode
