@@ -68,8 +68,6 @@ def _descending_scan(period=1.85):
     period jumps DOWN over 1.8 .. 1.9 s.  Mode 2 carries 'swing-x' past the
     switch (its partner); mode 3 carried 'swing-y' before it, which has no
     root.  The swing-x reading's root is 0.15 kg m^2."""
-    from bifilar.estimation.crossing_partner import partner_hint  # noqa: F401  (import checked here)
-
     sets = {0.1: _Set(["a", "b", "torsion", "swing-y"]), 0.2: _Set(["a", "b", "swing-x", "torsion"])}
     return _Scan([(0.1, 0.2, 2, 3, 1.9, 1.8)], sets, {"swing-x": [0.15]}, _Meas("torsion", period, 0.0005))
 
@@ -77,8 +75,8 @@ def _descending_scan(period=1.85):
 def test_a_gap_the_labelled_period_jumps_down_over_names_the_partner():
     """The documented rule: a target strictly between the labelled periods
     either side of a switch lies in its gap, whichever way the period jumps.
-    a03 (label27's tests) has only upward jumps (torsion 1.8745 -> 1.8840 s
-    as Izz grows), so the upper bound ``max(T before, T after)`` was never
+    label27's tests use a03 at a gap its torsion jumps UP over (1.8745 ->
+    1.8840 s as Izz grows), so the upper bound ``max(T before, T after)`` was never
     the period before the switch.  Here it jumps down, 1.9 -> 1.8 s: 1.85 s
     lies in the gap (swing-x named, its root 0.15 kg m^2 given: exact), 1.95
     and 1.75 s do not ("").  Kills crossing_partner 9 (``max(sw[4], sw[5])
