@@ -182,7 +182,8 @@ def _leakage(Xs, d, P, s2: float, sc, iw: int, f: float) -> dict:
 
     ``Xs``: the fit's free Jacobian columns and the tied term's two (cos,
     sin) last, each divided by its norm ``sc``; ``d`` the linearised step on
-    the residuals in those columns, ``P = (Xs^T Xs)^+``, ``s2`` the residual
+    the residuals in those columns, ``P = (Xs^T Xs)^+`` (its blocks give the
+    regression below without another solve), ``s2`` the residual
     variance ([y]^2, serial factor applied), ``iw`` omega1's column, ``f =
     2 pi / omega1^2`` (s^2/rad, ``dT = -f d omega1``).  An unfitted term
     ``a cos + b sin`` moves omega1 by its projection on the fit's columns:
@@ -202,7 +203,8 @@ def _leakage(Xs, d, P, s2: float, sc, iw: int, f: float) -> dict:
     Returns ``leakage`` (s, ``LEAK_PHASE |L| sqrt(max(|c|^2 - tr Cov c,
     0))``), ``leakage_per_amplitude`` (s/[y], ``|L|``) and
     ``amplitude_noise`` ([y], ``sqrt(tr Cov c)``)."""
-    per = f * np.linalg.lstsq(Xs[:, :-2], Xs[:, -2:], rcond=None)[0][iw] * sc[-2:] / sc[iw]
+    # the regression of the tied columns on the fit's, (J^T J)^-1 J^T H = -P_JH P_HH^-1 (block inverse of P)
+    per = f * (P[iw, -2:] @ np.linalg.inv(P[-2:, -2:])) * sc[-2:] / sc[iw]
     c = d[-2:] / sc[-2:]
     var = s2 * float(np.sum(np.diag(P)[-2:] / sc[-2:] ** 2))
     L = float(np.hypot(*per))
