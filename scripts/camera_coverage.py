@@ -1,5 +1,6 @@
 """Coverage of `bifilar period`'s 95 % interval on KTH-like camera records
-(dev tool; docs/design.md "camera23, session 23" and "camera26, session 26").
+(dev tool; docs/design.md "camera23, session 23", "camera26, session 26" and
+"camera28, session 28").
 
 Draws ``tests/test_readers20._camera_like(seed, dur)`` (a laser dot seen by a
 240 fps camera: the torsion, its 2nd and 3rd harmonics, the ~2 s swing
@@ -69,7 +70,8 @@ def one(seed: int, dur: float) -> dict:
     return {"seed": seed, "dur": dur, "model": fit.model, "T": T, "period": fit.period, "std": fit.std,
             "q": q, "z": (fit.period - T) / fit.std, "term": fit.uncertainty.get("second_harmonic", 0.0),
             "shift": h2.get("period_shift"), "shift_noise": h2.get("shift_noise"),
-            "h2_amplitude": h2.get("amplitude"), "sep": (2 / d["T2"] - 1 / d["T1"]) * dur,
+            "h2_amplitude": h2.get("amplitude"), "floor": h2.get("floor"), "leakage": h2.get("leakage"),
+            "sep": (2 / d["T2"] - 1 / d["T1"]) * dur,
             **{k: d[k] for k in ("A1", "A2", "B2")}}
 
 
