@@ -1,0 +1,161 @@
+"""partner28, session 28 (docs/design.md, "partner28, session 28"): a period
+refused because it lies in an avoided crossing's gap, timed with a stated
+amplitude, names the value the partner label's reading gives at that
+amplitude -- invert's own answer to that reading, run for the refusal --
+where label27 could name only the label (the partner's amplitude factor is
+another mode's).  Audit27's case a03 (tests/data/audit27/a03_drawn.yaml,
+truth Izz 0.1023 kg m^2).  Every named value is checked by routes that do
+not go through the refusal: the partner command's own answer, and
+``simulate`` of the config at that value, whose period at the amplitude must
+be the measured one.  ~15 s CPU."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import yaml
+from click.testing import CliRunner
+
+from bifilar.cli import main
+
+DATA = Path(__file__).resolve().parent / "data" / "audit27"
+DRAWN = str(DATA / "a03_drawn.yaml")
+T_MEAS = 1.88117  # s: the truth's torsion period in audit27's a03, timed at 0.5 ms
+AMP = "0.05"  # rad: the release amplitude stated (times the mode's normalised shape; rz is its largest here)
+TRUTH = 0.1023  # kg m^2
+
+
+def _invert(config: str, period: str, *extra: str):
+    return CliRunner().invoke(main, ["invert", config, "--period", period, "--solve-for", "Izz", *extra])
+
+
+def _named(stderr: str, label: str, period: str) -> float:
+    """The Izz (kg m^2) the refusal says the partner reading gives at the stated amplitude."""
+    hit = re.search(rf"--period {label}={re.escape(period)}\+-0\.0005\), which at the same amplitude \({AMP}\) "
+                    r"gives Izz = ([0-9.e+-]+) kg m\^2 \(invert's answer to that reading", stderr)
+    assert hit, stderr
+    return float(hit.group(1))
+
+
+def _simulated_period(tmp_path, izz: float, mode: str) -> float:
+    """``bifilar simulate`` of a03_drawn with Izz = ``izz``: the mean period
+    (s) of ``mode`` released at the stated amplitude over the 10 cycles the
+    nonlinear method simulates for a --period."""
+    cfg = yaml.safe_load(Path(DRAWN).read_text())
+    cfg["body"]["inertia"]["tensor"][2][2] = izz
+    path = tmp_path / f"a03_{mode}.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    r = CliRunner().invoke(main, ["simulate", str(path), "--mode", mode, "--amplitude", AMP, "--periods", "10",
+                                  "--json"])
+    assert r.exit_code == 0, r.stderr
+    return json.loads(r.stdout)["period"]
+
+
+def test_with_an_amplitude_the_refusal_names_the_partner_readings_answer(tmp_path):
+    """The a03 draw's torsion period at 0.05 rad is refused (exit 2, one
+    line) and names 'swing-x' with the Izz its reading gives at the same
+    amplitude.  Checked three ways, none through the refusal: (a) `invert
+    --period swing-x=... --amplitude 0.05` answers that value (6 digits) and
+    its 95 % interval holds the truth; (b) `simulate` of the config at the
+    named value, swing-x released at 0.05 rad, has the measured period to
+    2e-6 s -- the printed value's rounding (half a unit of its 6th digit,
+    5e-7 kg m^2) times the swing-x period's slope in Izz (1.3 s per kg m^2
+    here) is 6.6e-7 s, and 2e-6 s is 1/250 of the timing std; the linear
+    root label27 names without an amplitude (0.101431) misses by ~2e-4 s;
+    (c) it is not that linear root.  Without the change the message names
+    no value and this fails (ran)."""
+    r = _invert(DRAWN, f"torsion={T_MEAS}+-0.0005", "--amplitude", AMP)
+    assert r.exit_code == 2
+    assert r.stderr.startswith("error: --period: no physical Izz gives a period of")
+    assert "the mode labelled 'swing-x' carries it across" in r.stderr and "check the inputs" in r.stderr
+    assert r.stderr.count("\n") == 1
+    named = _named(r.stderr, "swing-x", str(T_MEAS))
+    assert "largest component" not in r.stderr  # rz is the largest of both modes' shapes here: no caution
+
+    p = _invert(DRAWN, f"swing-x={T_MEAS}+-0.0005", "--amplitude", AMP, "--json")
+    assert p.exit_code == 0, p.stderr
+    izz = json.loads(p.stdout)["inertia"]["Izz"]
+    assert f"{izz['value']:.6g}" == f"{named:.6g}"
+    lo, hi = izz["interval_95"]
+    assert lo < TRUTH < hi
+
+    assert abs(_simulated_period(tmp_path, named, "swing-x") - T_MEAS) < 2e-6
+    assert abs(named - 0.101431) > 1e-4
+
+
+def test_a_partner_whose_shape_peaks_in_another_coordinate_is_named_with_that_caution(tmp_path):
+    """At a03's other gap (1.6753 .. 1.6787 s) the partner is 'roll', whose
+    normalised shape peaks in rx where the torsion's peaks in rz: the same
+    number 0.05 is another motion there, and the refusal says so beside
+    the value, which `simulate` of roll at 0.05 at the named Izz checks as
+    above (roll's slope here, 1.2 s per kg m^2, keeps the 2e-6 s bound).
+    Without the caution clause this fails (ran)."""
+    r = _invert(DRAWN, "torsion=1.677+-0.0005", "--amplitude", AMP)
+    assert r.exit_code == 2
+    named = _named(r.stderr, "roll", "1.677")
+    assert ("whose largest component is rz for 'torsion' and rx for 'roll' here: an amplitude read in rz is not "
+            "that mode's A") in r.stderr
+    assert abs(_simulated_period(tmp_path, named, "roll") - 1.677) < 2e-6
+
+
+#: refusals with an amplitude of periods in no gap: one config with gaps whose period is below them all, one with none
+UNCHANGED = [("a03_drawn.yaml", "torsion=0.8+-0.0005"), ("a02_heavy3.yaml", "torsion=9+-0.0005")]
+
+
+def test_an_amplitude_refusal_outside_every_gap_keeps_its_message_and_runs_no_reading(monkeypatch):
+    """A period in no gap, with an amplitude: the message equals, word for
+    word, the one the path before gives (the partner clause switched off),
+    and no partner reading is run (it would cost a full inversion).  Made
+    to run the reading for any refusal with an amplitude, this fails (ran)."""
+    import bifilar.estimation.crossing_partner as cp
+    import bifilar.estimation.roots as roots
+
+    calls = []
+    real = cp.amplitude_reading
+
+    def counted(ms, run):
+        f = real(ms, run)
+        return None if f is None else (lambda lab: calls.append(lab) or f(lab))
+
+    monkeypatch.setattr("bifilar.estimation.invert.amplitude_reading", counted)
+    got = {}
+    for key in UNCHANGED:
+        r = _invert(str(DATA / key[0]), key[1], "--amplitude", AMP)
+        assert r.exit_code == 2
+        got[key] = r.stderr.strip()
+    assert calls == []
+    assert "two modes exchange character" in got[UNCHANGED[0]]
+    monkeypatch.setattr(roots, "partner_hint", lambda *a, **k: "")
+    for key in UNCHANGED:
+        assert got[key] == _invert(str(DATA / key[0]), key[1], "--amplitude", AMP).stderr.strip()
+
+
+def test_a_refused_partner_reading_is_said_refused_and_a_reading_runs_no_reading_of_its_own():
+    """The reading's refusal is quoted (its first clause), not turned into a
+    value; and inside a reading no further reading is made (the partner's
+    partner is the label refused: without the guard a refusal of both would
+    recurse).  Removing the guard, this fails (ran)."""
+    from bifilar.estimation import crossing_partner as cp
+    from bifilar.estimation import stated_inputs as sti
+    from bifilar.estimation.problem import build_problem
+    from bifilar.estimation.roots import ScalarScan
+    from bifilar.estimation.uncertainty import default_uncertainty
+
+    ms = sti.measurement_set(DRAWN, None, ["Izz"], {}, None, [("torsion", T_MEAS, 0.0005)], (), (),
+                             {None: (0.05, None)})
+    scan = ScalarScan(build_problem(ms, ["Izz"], default_uncertainty(ms.uncertainty)))
+    msg = cp.partner_hint(scan, 1.8808, reading=lambda lab: (None, f"--period: no physical Izz for '{lab}'; more"))
+    assert msg.endswith("which at the same amplitude (0.05) is refused as well (--period: no physical Izz for "
+                        "'swing-x')")
+
+    inner = []
+    outer = cp.amplitude_reading(ms, lambda g: inner.append(cp.amplitude_reading(g, None)) or _raise())
+    assert outer("swing-x")[0] is None and inner == [None]
+
+
+def _raise():
+    from bifilar.errors import InputError
+
+    raise InputError("--period", "refused")
