@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError, InputError
-from .crossing_partner import partner_hint
+from .crossing_partner import partner_hint, surface_hint
 from .fit_check import (EDGE_Z, _input_columns, fit_statistics, input_fit_check, label_index, labelled_periods,
                         prior_fit_hint, unstated_amplitude_variance)
 from .problem import _IDX, Problem, admissible, admissible_interval
@@ -730,8 +730,10 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None, p
     nonlinear method).  ``extra_var``: a callable giving the (K,) variance
     (s^2) of the targets from the stated amplitudes' uncertainty, counted
     where a misfit or an edge is checked (:meth:`ScalarScan.edge_root`).
-    ``partner``: one period's avoided-crossing refusal with an amplitude
-    (:meth:`ScalarScan.range_message`)."""
+    ``partner``: the partner reading of a refusal whose period lies in an
+    avoided crossing's gap (:func:`~bifilar.estimation.crossing_partner.partner_reading`;
+    one period: :meth:`ScalarScan.range_message`, several:
+    :func:`~bifilar.estimation.crossing_partner.surface_hint`)."""
     K, P = len(pb.measurements), len(pb.unknowns)
     if K == 1 and P == 1 and pb.unknowns[0] in _IDX:
         return scalar_roots(pb, None if targets is None else float(targets[0]), extra_var, partner)
@@ -750,7 +752,9 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None, p
                      f"no physical tensor reproduces the measured periods: the best admissible fit ({vals}) "
                      f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); "
                      + prior_fit_hint(pb, best["p"], z, extra_var=best.get("extra_var"), amp_var=best.get("amp_var"))
-                     + _loose_hint(pb) + _sampled_slip(pb, k))
+                     + _loose_hint(pb) + _sampled_slip(pb, k)
+                     + surface_hint(pb, best["p"], z, [m.period for m in pb.measurements] if targets is None
+                                    else targets, partner))
 
 
 def separating_measurement(pbs: list, roots: list, sigma: float) -> dict | None:
