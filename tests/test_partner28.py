@@ -243,10 +243,12 @@ def test_a_partner_timed_too_is_named_as_the_two_labels_swapped(tmp_path):
     assert abs(T["swing-x"] - T_MEAS) < 1e-6 and abs(T["torsion"] - 1.87458) < 1e-6
 
 
-#: refusals of several periods in no gap: a config with gaps (the torsion fitting, swing-y and roll off, the largest
-#: residual swing-y's: the torsion's own line has a gap at 1.86 s far from the fit) and one with none
-UNCHANGED_MULTI = [("a03_drawn.yaml", ("torsion=1.86+-0.0005", ROLL.replace("1.62931", "1.7"), "swing-y=2.2+-0.0005"),
-                    ("Izz", "Ixx")),
+#: refusals of several periods whose named one lies in no gap on the best fit's lines: a config with gaps (torsion
+#: fitting, swing-y and roll off, the largest residual swing-y's; the torsion's Ixx line has a gap at 1.86 s far from
+#: the fit), the same with swing-y 2.0181 s (in the jump of its switch along Ixx, but reached elsewhere on that
+#: line) and a config with no gap
+UNCHANGED_MULTI = [("a03_drawn.yaml", ("torsion=1.86+-0.0005", ROLL, "swing-y=2.2+-0.0005"), ("Izz", "Ixx")),
+                   ("a03_drawn.yaml", (f"torsion={T_MEAS}+-0.0005", "swing-y=2.0181+-0.0005"), ("Izz", "Ixx")),
                    ("a02_heavy3.yaml", ("torsion=0.7+-0.0005", "swing-x=1.5+-0.0005"), ("Izz", "Ixx"))]
 
 
@@ -254,9 +256,10 @@ def test_a_multi_refusal_in_no_gap_of_its_named_period_keeps_its_message(monkeyp
     """Only the measurement the refusal names (the largest residual) is
     scanned, and only a line on which its label cannot reach the period:
     where that is not so the message equals, word for word, the one with
-    the clause switched off, and no reading is run.  Scanning every
-    measurement instead, the first case names the torsion's far gap and
-    this fails (ran)."""
+    the clause switched off, and no reading is run.  Without the line's
+    root check the second case says, falsely, that no Ixx gives swing-y
+    2.0181 s, and this fails (ran); without it and scanning every
+    measurement, the first names the torsion's far gap (ran)."""
     import bifilar.estimation.crossing_partner as cp
     import bifilar.estimation.roots as roots
 
