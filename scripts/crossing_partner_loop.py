@@ -16,7 +16,8 @@ default relative std).
 Prints one JSON document: answered / refused, the labels named (per draw,
 the timed modes' labels as given again), how many partner readings were
 answered, how many of their 95 % intervals hold the truth's values (kg m^2;
-all of them, and per component), how many estimates equal the values the
+all of them, and per component; the misses' sides and the mean and sd of
+(estimate - truth) / std), how many estimates equal the values the
 refusal named (to their 6 printed digits), the refusals naming none and the
 partner readings refused (first 300 / 200 characters), and the CPU seconds.
 
@@ -89,7 +90,9 @@ def run(path: str, modes: list, draws: int, seed: int, amplitude: float = 0.0, c
     out = {"config": path, "modes": modes, "components": list(comps), "amplitude": amplitude, "truth_periods": T,
            "draws": draws, "seed": seed, "answered": 0, "refused": 0, "named": {}, "partner_answered": 0,
            "partner_covered": 0, "partner_covered_each": dict.fromkeys(comps, 0), "named_value_matches": 0,
+           "partner_misses": {c: {"interval_above_truth": 0, "interval_below_truth": 0} for c in comps},
            "unnamed": [], "partner_refused": [], "partner_refused_said": 0, "partner_failed_at": []}
+    zs: dict = {}
     t0 = time.process_time()
     for d in range(draws):
         sc = measured_scene(truth, rng, unc)
@@ -118,11 +121,19 @@ def run(path: str, modes: list, draws: int, seed: int, amplitude: float = 0.0, c
             continue
         out["partner_answered"] += 1
         cov = [bool(lo <= t <= hi) for (lo, hi), t in zip(r.interval, tv)]
+        for c, v, sd, (lo, hi), t in zip(comps, r.values, r.budget.std, r.interval, tv):
+            zs.setdefault(c, []).append(float((v - t) / sd) if sd > 0 else float("nan"))
+            side = "interval_above_truth" if t < lo else "interval_below_truth" if t > hi else None
+            if side:
+                out["partner_misses"][c][side] += 1
         out["partner_covered"] += int(all(cov))
         for c, ok in zip(comps, cov):
             out["partner_covered_each"][c] += int(ok)
         out["named_value_matches"] += int(vals is not None and all(
             f"{float(v):.6g}" == f"{vals.get(c, float('nan')):.6g}" for c, v in zip(r.names, r.values)))
+    # the partner readings' (estimate - truth) / std per component: mean, sd, and the misses' sides
+    out["partner_z"] = {c: {"mean": round(float(np.nanmean(z)), 3), "sd": round(float(np.nanstd(z)), 3)}
+                        for c, z in zs.items()}
     out["cpu_s"] = round(time.process_time() - t0, 1)
     return out
 

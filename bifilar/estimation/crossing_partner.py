@@ -11,9 +11,11 @@ their motion there).  :func:`partner_hint` names it for the refusal and,
 when certain, what reading the period under its label gives: without an
 amplitude factor the root of that label's linear period (what ``invert``
 answers then), with a stated amplitude ``invert``'s own answer to that
-reading, run for the refusal (:func:`amplitude_reading`: the amplitude
+reading, run for the refusal (:func:`partner_reading`: the amplitude
 factor is the partner mode's, so the timed label's target does not carry
-over; docs/design.md, "partner28, session 28").
+over).  With several unknowns or periods, :func:`surface_hint` names such
+a gap on a line through the best fit and that reading's answer
+(docs/design.md, "partner28, session 28").
 
 Units: periods in s, inertia components in kg m^2 (reference body axes).
 """
