@@ -91,6 +91,7 @@ from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_period
 from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
                             with_prior_curvature)
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
+from .crossing_partner import partner_reading
 from .roots import Root, find_roots
 from .roots import separating_measurement
 from .signal_alias import check_signal_aliases
@@ -143,6 +144,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     ConvergenceError : a solver failed.
     """
     t0 = time.perf_counter()
+    given = ms  # as called: a refused period's partner reading re-runs it relabelled (crossing_partner)
     method = method or ms.method or "auto"
     if method not in ("auto",) + METHODS:
         raise InputError("--method", f"unknown method {method!r}; choose auto, {', '.join(METHODS)}")
@@ -218,7 +220,12 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
         targets0 = np.array([m.period for m in pb.measurements]) / r0
         amp_var0 = lambda: _target_amplitude_variance(pb, pb.prior, r0, rtol, unc_all)  # noqa: E731
     if physical_only:
-        roots = find_roots(pb, targets0, amp_var0)
+        # a period in an avoided crossing's gap (at a stated amplitude, or one of several): the refusal names the
+        # partner label's answer, this function's own on the relabelled measurements (docs/design.md,
+        # "partner28, session 28"); run only where a refusal asks for it
+        partner = partner_reading(given, lambda g: invert(g, method=method, solve_for=list(pb.unknowns), unc=unc,
+                                                           monte_carlo=0, ladder=False, rtol=rtol))
+        roots = find_roots(pb, targets0, amp_var0, partner)
     else:
         roots = [Root(solve_linear(pb, targets0))]
     past_edge = physical_only and scalar and bool(roots[0].edge)  # a limit set by stated priors: not clamped

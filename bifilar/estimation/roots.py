@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError, InputError
-from .crossing_partner import partner_hint
+from .crossing_partner import partner_hint, surface_hint
 from .fit_check import (EDGE_Z, _input_columns, fit_statistics, input_fit_check, label_index, labelled_periods,
                         prior_fit_hint, unstated_amplitude_variance)
 from .problem import _IDX, Problem, admissible, admissible_interval
@@ -314,13 +314,14 @@ class ScalarScan:
                 merged.append([a, b])
         return [(a, b) for a, b in merged]
 
-    def range_message(self, target: float, exact: bool = False) -> str:
+    def range_message(self, target: float, exact: bool = False, partner=None) -> str:
         """Why no physical value gives the labelled mode the period
         ``target`` (s): the range (s) its period spans, its gaps where the
         label passes to another mode, and, for a ``target`` inside such a gap,
         the partner label (:func:`~bifilar.estimation.crossing_partner.partner_hint`; ``exact``: ``target`` is
         the measured period itself, so the partner reading's root is what
-        ``invert`` answers)."""
+        ``invert`` answers; ``partner``: with an amplitude, the partner reading's answer,
+        :func:`~bifilar.estimation.crossing_partner.amplitude_reading`)."""
         rng = self.attainable()
         what = f"the mode labelled '{self.m.label}'"
         where = (f"{self.name} anywhere in its physical range, {self.lo:.6g} to {self.hi:.6g} kg m^2 (positive "
@@ -332,13 +333,14 @@ class ScalarScan:
         if len(rng) > 1:
             gaps = ", ".join(f"{a[1]:.9g} s .. {b[0]:.9g} s" for a, b in zip(rng, rng[1:]))
             msg += f" except {gaps} (the label passes to another mode there: two modes exchange character)"
-        return msg + f" with {where}" + partner_hint(self, target, exact)
+        return msg + f" with {where}" + partner_hint(self, target, exact, partner)
 
 
-def scalar_roots(pb: Problem, target: float | None = None, extra_var=None) -> list[Root]:
+def scalar_roots(pb: Problem, target: float | None = None, extra_var=None, partner=None) -> list[Root]:
     """Roots of one inertia unknown from one period (module docstring).
     Raises InputError naming the period's field, with the attainable range,
-    when there is none.  ``extra_var``: as for :meth:`ScalarScan.edge_root`."""
+    when there is none.  ``extra_var``: as for :meth:`ScalarScan.edge_root`;
+    ``partner``: as for :meth:`ScalarScan.range_message`."""
     m = pb.measurements[0]
     exact = target is None or float(target) == m.period
     target = m.period if target is None else float(target)
@@ -349,7 +351,7 @@ def scalar_roots(pb: Problem, target: float | None = None, extra_var=None) -> li
     x = scan.edge_root(target, m.std, extra_var)
     if x is not None:
         return [Root(np.array([x]), edge=True)]
-    raise InputError(m.field, scan.range_message(target, exact) + _triangle_hint(scan, target)
+    raise InputError(m.field, scan.range_message(target, exact, partner) + _triangle_hint(scan, target)
                      + _input_hint(scan, target) + slip_hint(target, scan.attainable()))
 
 
@@ -718,7 +720,7 @@ def _edge_in_full_metric(pb: Problem, q: dict, targets, amp_var, extra_var) -> N
         q["chi2"], q["test"] = fit_statistics(z, len(pb.unknowns))[1:]
 
 
-def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) -> list[Root]:
+def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None, partner=None) -> list[Root]:
     """Every admissible solution of the linear model for the measured
     periods (module docstring), ascending; raises InputError (no admissible
     tensor reproduces the periods: the message names the attainable range
@@ -727,10 +729,14 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) -
     ones; the measured ones divided by the amplitude factors for the
     nonlinear method).  ``extra_var``: a callable giving the (K,) variance
     (s^2) of the targets from the stated amplitudes' uncertainty, counted
-    where a misfit or an edge is checked (:meth:`ScalarScan.edge_root`)."""
+    where a misfit or an edge is checked (:meth:`ScalarScan.edge_root`).
+    ``partner``: the partner reading of a refusal whose period lies in an
+    avoided crossing's gap (:func:`~bifilar.estimation.crossing_partner.partner_reading`;
+    one period: :meth:`ScalarScan.range_message`, several:
+    :func:`~bifilar.estimation.crossing_partner.surface_hint`)."""
     K, P = len(pb.measurements), len(pb.unknowns)
     if K == 1 and P == 1 and pb.unknowns[0] in _IDX:
-        return scalar_roots(pb, None if targets is None else float(targets[0]), extra_var)
+        return scalar_roots(pb, None if targets is None else float(targets[0]), extra_var, partner)
     roots, best = multi_roots(pb, targets, extra_var)
     if roots:
         return roots
@@ -746,7 +752,9 @@ def find_roots(pb: Problem, targets: np.ndarray | None = None, extra_var=None) -
                      f"no physical tensor reproduces the measured periods: the best admissible fit ({vals}) "
                      f"leaves normalised residuals {zs} sigma, failing the fit check ({best['test']}); "
                      + prior_fit_hint(pb, best["p"], z, extra_var=best.get("extra_var"), amp_var=best.get("amp_var"))
-                     + _loose_hint(pb) + _sampled_slip(pb, k))
+                     + _loose_hint(pb) + _sampled_slip(pb, k)
+                     + surface_hint(pb, best["p"], z, [m.period for m in pb.measurements] if targets is None
+                                    else targets, partner))
 
 
 def separating_measurement(pbs: list, roots: list, sigma: float) -> dict | None:
