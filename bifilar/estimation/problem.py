@@ -351,7 +351,13 @@ class Problem:
         return out
 
     def jacobian(self, p, rel_step: float = 1e-6) -> np.ndarray:
-        """(K, P) d T_lin / d p by central differences."""
+        """(K, P) d T_lin / d p (s per unit of each unknown) by central
+        differences; one-sided, into the side where the modes can be
+        solved, for an unknown whose step to one side gives a mass matrix that
+        is not positive definite (``p`` on the physical set's edge, the
+        Gauss-Newton solver's edge search: the step leaves the set there).
+        Raises :class:`numpy.linalg.LinAlgError` where neither side can be
+        solved."""
         p = np.asarray(p, float)
         sc = self.scales()
         J = np.empty((len(self.measurements), len(p)))
@@ -359,8 +365,21 @@ class Problem:
             h = rel_step * sc[j]
             e = np.zeros_like(p)
             e[j] = h
-            J[:, j] = (self.linear_periods(p + e) - self.linear_periods(p - e)) / (2 * h)
+            try:
+                J[:, j] = (self.linear_periods(p + e) - self.linear_periods(p - e)) / (2 * h)
+            except np.linalg.LinAlgError:
+                J[:, j] = self._one_sided(p, e, h)
         return J
+
+    def _one_sided(self, p, e, h: float) -> np.ndarray:
+        """(K,) d T_lin / d p_j by a forward difference ``(T(p + e) - T(p)) /
+        h``, or the backward one where the forward step's modes cannot be
+        solved (a mass matrix that is not positive definite)."""
+        T0 = self.linear_periods(p)
+        try:
+            return (self.linear_periods(p + e) - T0) / h
+        except np.linalg.LinAlgError:
+            return (T0 - self.linear_periods(p - e)) / h
 
 
 def build_problem(ms: MeasurementSet, solve_for: list | None = None, unc: dict | None = None,
