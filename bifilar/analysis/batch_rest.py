@@ -64,6 +64,12 @@ def _groups(scenes: Sequence[Scene]) -> list[list[int]]:
     return [out[n] for n in sorted(out)]
 
 
+def _mixed(scenes: Sequence[Scene]) -> bool:
+    """Whether ``scenes`` have more than one wire count (:func:`_groups`
+    would give several groups), without grouping them."""
+    return len({s.lengths.shape[0] for s in scenes}) > 1
+
+
 def _per_group(fn, scenes, *lists, **kw) -> list:
     """Apply ``fn(sub_scenes, *sub_lists, **kw) -> list`` per wire-count group
     and reassemble the results in input order (lists may be None)."""
@@ -302,7 +308,7 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     scenes = list(scenes)
     if not scenes:
         return []
-    if len(_groups(scenes)) > 1:
+    if _mixed(scenes):
         return _per_group(lambda sc: rest_poses(sc, errors=errors), scenes)
     out = [None] * len(scenes)
     a, p, L, m, g, I = _stack(scenes)
@@ -338,7 +344,7 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
             dk = Deferred(s, (com[k].copy(), R[k].copy()) if from_rigid[k] else None)
             out[k] = dk if defer else dk.settle(errors)
     if geometry is not None:
-        geometry.append(BatchGeometry(scenes, out, ok, (a, p, L, m, g, I), R, d, w, G, dn, N, full))
+        geometry.append(BatchGeometry(scenes, out, ok, (a, p, L, m, g, I), R, d, w, G, dn, N, full, T))
     return out
 
 
@@ -353,10 +359,11 @@ class BatchGeometry:
     taken from the batch's own Newton run (not a ``rest_pose`` fallback):
     :meth:`matches`."""
 
-    def __init__(self, scenes, rests, ok, stacked, R, d, w, G, dn, N, full):
+    def __init__(self, scenes, rests, ok, stacked, R, d, w, G, dn, N, full, T=None):
         self.scenes, self.rests, self.ok = list(scenes), list(rests), ok
         self.stacked, self.R, self.d, self.w, self.G, self.dn = stacked, R, d, w, G, dn
         self.N, self.full = N, full
+        self.T = T  # the wire tensions (B, n) whose rows each pose's ``tensions`` copies
 
     def matches(self, scenes: Sequence[Scene], rests: Sequence[RestPose]) -> bool:
         """Whether ``scenes`` and ``rests`` are this batch's, all of them, in
@@ -472,11 +479,12 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose], lazy: bool =
     scenes = list(scenes)
     if not scenes:
         return []
-    if len(_groups(scenes)) > 1:
+    if _mixed(scenes):
         return _per_group(lambda sc, rs: modes_batch(sc, rs, lazy), scenes, list(rests))
+    T = None
     if geometry is not None and geometry.matches(scenes, rests):
         (a, p, L, m, g, I), R, d, w, G, dn = geometry.stacked, geometry.R, geometry.d, geometry.w, geometry.G, geometry.dn
-        N, full = geometry.N, geometry.full
+        N, full, T = geometry.N, geometry.full, geometry.T
     else:
         a, p, L, m, g, I = _stack(scenes)
         com = np.array([r.com for r in rests])
@@ -486,7 +494,7 @@ def modes_batch(scenes: Sequence[Scene], rests: Sequence[RestPose], lazy: bool =
         N, full = _null_space(G, m, I, R)
     if G.shape[1] > MAX_ELIMINATION_WIRES:  # elastic wires: linear_modes, whose rank rule knows the stiffness
         full = full & np.array([s.stiffness is None for s in scenes])
-    lam = np.array([r.tensions for r in rests]) / dn
+    lam = (np.array([r.tensions for r in rests]) if T is None else T) / dn
     M = _mass_matrix(m, I, R)
     Nt = np.swapaxes(N, 1, 2)
     Kr = Nt @ _hessian(d, w, lam) @ N

@@ -421,7 +421,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
         extra["model bias"] = np.abs(np.asarray(p_hat) - rungs[best]["p"])
     tn = [f"timing[{lab}]" for lab in labels]
     budget = propagate(list(pb.unknowns), Jp, sig, Jx, in_names, in_sig, extra=extra, timing_names=tn,
-                       timing_dof=[m.dof for m in pb.measurements])
+                       timing_dof=[m.dof for m in pb.measurements], gain=G)  # (G: gain_matrix of the same Jp, sig)
     shift, gain = {}, G
     if method == "nonlinear" and laws is not None and any(law is not None for law in laws):
         if any(law is not None and law.dr_dp is not None and law.dr_dx is None for law in laws):

@@ -174,7 +174,9 @@ def _settle(points: dict, jobs: dict, rests: dict, res: dict) -> None:
     the input whichever that verdict is, so it is never read (:data:`SKIPPED`)."""
     from ..analysis.batch_rest import Deferred
 
-    failed = {pid for pid, hits in res.items() if any(v is None for v in hits.values())}
+    if not any(isinstance(r, Deferred) for rs in rests.values() for r in rs):
+        return  # nothing deferred (the common case): no verdict to decide, none to skip
+    failed = {pid for pid, hits in res.items() if None in hits.values()}
     pending = []
     order = {pid: n for n, pid in enumerate(points)}
     for h, rs in rests.items():
@@ -280,7 +282,7 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
             res[pid][h] = o
             if ck is not None and r is not SKIPPED:
                 cache[ck] = o
-    whole = {pid: hits for pid, hits in res.items() if all(v is not None for v in hits.values())}
+    whole = {pid: hits for pid, hits in res.items() if None not in hits.values()}  # (hits: tuples or None)
     done = _one_step(pb, ctx, p_hat, r_hat, whole)
     return {pid: (done[pid] if pid in done else _resolve(pb, ctx, p_hat, r_hat, points[pid], hits))
             if pid in whole else None for pid, hits in res.items()}
@@ -302,7 +304,9 @@ def _one_step(pb: Problem, ctx: BudgetContext, p_hat, r_hat, hits_of: dict) -> d
         ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
         idx = [ctx.match[h][pb.mode_index[k]] for k in ks]
         rows = [q for q, pid in enumerate(pids) if h in hits_of[pid]]
-        T[np.ix_(rows, ks)] = r[ks] * np.array([hits_of[pids[q]][h][0][idx] for q in rows])
+        # each row's periods (every one in the base modes' order, as long) stacked, then the measured columns:
+        # the same numbers as each row's own ``T[idx]``
+        T[np.ix_(rows, ks)] = r[ks] * np.array([hits_of[pids[q]][h][0] for q in rows])[:, idx]
     with np.errstate(invalid="ignore"):
         ok = np.all(np.isfinite(T), axis=1) & (np.max(np.abs(T / ctx.T_hat - 1), axis=1) < 1e-2)
     inc = (ctx.T_hat ** 2 - T ** 2) / (2 * ctx.T_hat)
@@ -371,6 +375,47 @@ def _pair_terms(pb: Problem, ctx: BudgetContext, p_hat, r_hat, sol: dict, contri
     return offset
 
 
+def _sequential_sum(rows: np.ndarray) -> np.ndarray:
+    """(P,) ``rows`` (n, P) added in order from zeros, ``((0 + r_0) + r_1) + ...``:
+    the sums a Python loop ``acc = acc + r`` (or ``sum(rows, zeros)``)
+    forms, the same bits (an accumulate is sequential by definition, where
+    ``rows.sum(axis=0)`` may add pairwise)."""
+    return np.add.accumulate(np.concatenate([np.zeros((1,) + rows.shape[1:]), rows]), axis=0)[-1]
+
+
+def _surrogates(pp: list, pm: list, p0: np.ndarray, shift: list, P: int):
+    """(a (n, P), b (n, P), sum of b in order (P,)) of :func:`second_order`'s
+    quadratics of n inputs from their re-solved sigma points ``pp``, ``pm``
+    ((P,) each), the estimate ``p0`` and each input's ``factor_shift`` (a
+    (P,) array or 0.0): ``a = (p_+ - p_-) / (2 sqrt 3) + shift``, ``b = (p_+ +
+    p_- - 2 p) / 6``, each input's row the numbers of that expression on
+    its own arrays (elementwise), computed for all rows at once."""
+    if not pp:
+        return np.zeros((0, P)), np.zeros((0, P)), np.zeros(P)
+    PP, PM = np.array(pp, float).reshape(-1, P), np.array(pm, float).reshape(-1, P)
+    S = np.zeros(PP.shape)  # (x + 0.0 is x + 0.0 whether the 0.0 is a float or an array's)
+    for n, x in enumerate(shift):
+        if not (isinstance(x, float) and x == 0.0 and math.copysign(1.0, x) > 0):
+            S[n] = x
+    a = (PP - PM) / (2 * SIGMA_POINT) + S
+    b = (PP + PM - 2 * p0) / 6
+    return a, b, _sequential_sum(b)
+
+
+def _sum_of_squares(values, P: int) -> np.ndarray:
+    """(P,) ``sum(c ** 2 for c in values)`` from zeros in order (the same
+    bits as that loop), the squares of all (P,) terms at once; a term of
+    another shape (a scalar) by the loop."""
+    vals = list(values)
+    try:
+        X = np.array(vals, float)
+    except ValueError:  # terms of different shapes
+        X = None
+    if X is not None and X.shape == (len(vals), P):
+        return _sequential_sum(X ** 2)
+    return sum((np.asarray(c) ** 2 for c in vals), np.zeros(P))
+
+
 def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudget) -> tuple[LinearBudget, list]:
     """The sigma-point check of the linear budget (module docstring), and
     the unstated-amplitude terms of ``ctx.amplitude``.
@@ -388,21 +433,20 @@ def second_order(pb: Problem, p_hat, r_hat, ctx: BudgetContext, lin: LinearBudge
     sol = _solve_points(pb, ctx, p_hat, r_hat, {(key, sgn): [(key, sgn * h_ * ctx.sigmas[key])]
                                                 for key in keys for sgn in (1, -1)})
     p0 = np.asarray(p_hat, float)
-    failed, surrogate = [], {}
-    for key in keys:
-        pp, pm = sol[(key, 1)], sol[(key, -1)]
-        if pp is None or pm is None:
-            failed.append(key)
-            continue
-        surrogate[key] = ((pp - pm) / (2 * h_) + ctx.factor_shift.get(key, 0.0), (pp + pm - 2 * p0) / 6)
+    failed = [key for key in keys if sol[(key, 1)] is None or sol[(key, -1)] is None]
+    good = [key for key in keys if key not in set(failed)] if failed else keys
+    P = len(pb.unknowns)
+    # every input's quadratic at once: the same elementwise arithmetic on stacked rows (:func:`_surrogates`)
+    a_all, b_all, offset = _surrogates([sol[(key, 1)] for key in good], [sol[(key, -1)] for key in good], p0,
+                                       [ctx.factor_shift.get(key, 0.0) for key in good], P)
+    surrogate = {key: (a_all[n], b_all[n]) for n, key in enumerate(good)}
     std1 = lin.std
     contrib = {k: v for k, v in lin.contributions.items() if k not in surrogate}
-    offset = np.zeros(len(pb.unknowns))
-    for key, (a, b) in surrogate.items():
-        contrib[key] = a
-        contrib[f"{key} (2nd order)"] = math.sqrt(2) * b
-        offset = offset + b
-    var2 = sum((np.asarray(c) ** 2 for c in contrib.values()), np.zeros(len(offset))) + offset ** 2
+    sb_all = math.sqrt(2) * b_all
+    for n, key in enumerate(good):
+        contrib[key] = a_all[n]
+        contrib[f"{key} (2nd order)"] = sb_all[n]
+    var2 = _sum_of_squares(contrib.values(), P) + offset ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         change = np.abs(np.sqrt(var2) / std1 - 1)
         off_rel = np.abs(offset) / std1

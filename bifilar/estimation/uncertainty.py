@@ -374,7 +374,7 @@ def gain_matrix(Jp: np.ndarray, sigma: np.ndarray) -> np.ndarray:
 
 def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np.ndarray,
               input_names: list[str], input_sigmas: np.ndarray, extra: dict | None = None,
-              timing_names: list[str] | None = None, timing_dof=None) -> LinearBudget:
+              timing_names: list[str] | None = None, timing_dof=None, gain: np.ndarray | None = None) -> LinearBudget:
     """Linear propagation (module docstring).
 
     Parameters
@@ -389,11 +389,13 @@ def propagate(names: list[str], Jp: np.ndarray, period_sigma: np.ndarray, Jx: np
     timing_names : names of the K timing terms (default ``timing[k]``).
     timing_dof : (K,) degrees of freedom of each period's sigma (default:
         all infinite; ``n - 1`` for a period from ``n`` timed trials).
+    gain : :func:`gain_matrix` ``(Jp, period_sigma)`` if the caller has it
+        (the same numbers: budget._budget's).
     """
     Jp = np.atleast_2d(np.asarray(Jp, float))
     K = Jp.shape[0]
     sig = np.asarray(period_sigma, float)
-    G = gain_matrix(Jp, sig)
+    G = gain_matrix(Jp, sig) if gain is None else gain
     contrib: dict[str, np.ndarray] = {}
     sigmas: dict[str, float] = {}
     tn = timing_names or [f"timing[{k}]" for k in range(K)]
