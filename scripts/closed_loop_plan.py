@@ -41,16 +41,22 @@ from bifilar.studies import sweep as sw  # noqa: E402
 from bifilar.studies.shorthands import apply_params  # noqa: E402
 
 
-def measured_scene(truth, rng, unc):
+def measured_scene(truth, rng, unc, errors: dict | None = None):
     """The scene an experimenter writes down: every measured input of the
     budget (:func:`~bifilar.estimation.sensitivity.measured_inputs`) off by a
     normal error of its declared std (tests/conftest.py draws the same
-    errors array by array)."""
+    errors array by array).  ``errors``, if given, receives each input's
+    error in its own standard uncertainties, ``{input: (measured - true) /
+    std}`` (scripts/crossing_partner_budget.py compares the estimate's error
+    with the budget's model at these)."""
     s = truth
     for name in measured_inputs(truth):
         sd = input_sigma(truth, name, unc)
         if sd > 0:
-            s = perturb(s, name, rng.normal(0.0, sd))
+            e = rng.normal(0.0, sd)
+            s = perturb(s, name, e)
+            if errors is not None:
+                errors[name] = e / sd
     return s
 
 

@@ -138,13 +138,19 @@ def run(path: str, modes: list, draws: int, seed: int, amplitude: float = 0.0, c
     return out
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def loop_arguments(description: str, modes: str = "torsion", components: str = "Izz") -> argparse.ArgumentParser:
+    """The a03 loops' common options (this script's, and crossing_partner_budget.py's)."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("config", nargs="?", default=str(ROOT / "tests" / "data" / "audit27" / "a03_neardegen.yaml"))
-    ap.add_argument("--modes", default="torsion", help="the timed modes, comma-separated (the first is a03's torsion)")
-    ap.add_argument("--components", default="Izz", help="the unknowns, comma-separated")
+    ap.add_argument("--modes", default=modes, help="the timed modes, comma-separated (the first is a03's torsion)")
+    ap.add_argument("--components", default=components, help="the unknowns, comma-separated")
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--seed", type=int, default=4)
+    return ap
+
+
+def main() -> None:
+    ap = loop_arguments(__doc__.split("\n\n")[0])
     ap.add_argument("--amplitude", type=float, default=0.0, help="the stated release amplitude (default 0: linear)")
     a = ap.parse_args()
     print(json.dumps(run(a.config, a.modes.split(","), a.draws, a.seed, a.amplitude, a.components.split(",")),

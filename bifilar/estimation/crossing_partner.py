@@ -35,6 +35,12 @@ from .fit_check import label_index
 #: the partner label but runs no reading of its own (the partner's partner is the label refused)
 _IN_READING: ContextVar[bool] = ContextVar("bifilar_partner_reading", default=False)
 
+#: what several unknowns' partner reading cannot promise (docs/design.md, "cross28, session 28"): its
+#: intervals are a budget at the inputs as written, and the truth lies across the reading's jump
+ACROSS = ("; its 95 % intervals cannot be trusted here: if the inputs' errors moved the crossing past the timed "
+          "oscillation, the truth lies across the jump the answer makes where the label passes, which a budget at "
+          "the inputs as written does not hold")
+
 
 def partner_reading(ms, run):
     """The partner reading of a refused measurement set ``ms``
@@ -290,4 +296,4 @@ def _surface_message(pb, p, k: int, name: str, g: _Gap, target: float, reading) 
     vals = ", ".join(f"{n} = {v:.6g} kg m^2" for n, v in zip(res.names, res.values))
     more = (f"; the first of {len(res.roots)} tensors that reproduce them, listed by that command"
             if len(res.roots) > 1 else "")
-    return msg + f"; read so{same} the periods give {vals} (invert's answer to that reading, run here{more})"
+    return msg + f"; read so{same} the periods give {vals} (invert's answer to that reading, run here{more}){ACROSS}"
