@@ -296,10 +296,17 @@ def _columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None, K: int, 
         degenerate += [d for n in failed
                        for d in ([n] if n.startswith("com.") or n in ("mass", "gravity", "stiffness") else
                                  [key for key, _ in links.of(h, n)])]
+        whole = None not in row.values()
+        if whole:  # every measurement's mode matched: its entries taken at once (the same products)
+            ka, ra = np.array(ks, int), np.array([row[k] for k in ks], int)
+            rk = r[ka]
         for j, n in enumerate(sens.names):
             col = np.zeros(K)
-            for k in ks:
-                col[k] = (sens.jacobian[row[k], j] if row[k] is not None else np.nan) * r[k]
+            if whole:
+                col[ka] = sens.jacobian[ra, j] * rk
+            else:
+                for k in ks:
+                    col[k] = (sens.jacobian[row[k], j] if row[k] is not None else np.nan) * r[k]
             if n.startswith("com."):
                 # shared: a CoM shift in the reference frame (com_h = R com_ref)
                 ax = "xyz".index(n[-1])
