@@ -296,8 +296,10 @@ def _columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None, K: int, 
         degenerate += [d for n in failed
                        for d in ([n] if n.startswith("com.") or n in ("mass", "gravity", "stiffness") else
                                  [key for key, _ in links.of(h, n)])]
-        whole = None not in row.values()
-        if whole:  # every measurement's mode matched: its entries taken at once (the same products)
+        # several entries, every measurement's mode matched: taken at once (the same products; for
+        # one or two, the loop's scalar products cost less than the indexing)
+        whole = len(ks) > 2 and None not in row.values()
+        if whole:
             ka, ra = np.array(ks, int), np.array([row[k] for k in ks], int)
             rk = r[ka]
         for j, n in enumerate(sens.names):
