@@ -228,8 +228,7 @@ def amplitude_systematic(pb: Problem, p_hat, r_hat, ctx: BudgetContext, rtol: fl
     return out
 
 
-def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = None, rows=None,
-                  shared: SceneInputs | None = None):
+def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = None, rows=None):
     """The input sensitivities of the measured periods at the unknowns
     ``vals``: ({input key: (K,) dT_k/dx, s per SI unit, times the amplitude
     factor ``r[k]``}, {key: standard uncertainty}, degenerate keys (no
@@ -239,31 +238,9 @@ def input_columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None = No
     ``mass``, ``gravity`` and ``com.*`` shared by every hanging, a CoM shift
     in the reference frame).  ``rows(h, modes, match, k)``: the index in
     hanging ``h``'s modes of measurement ``k``'s mode (default: the base
-    mode ``pb.mode_index[k]`` tracked by MAC).  ``shared``: the scene's
-    :class:`SceneInputs` (:func:`scene_inputs` of the same hanging models,
-    unknowns ``vals`` and ``unc``); where it applies (:meth:`SceneInputs.rows`)
-    the columns are its all-modes columns' rows, the same numbers as the
-    loop below gives (docs/design.md, "budget28, session 28")."""
+    mode ``pb.mode_index[k]`` tracked by MAC)."""
     K = len(pb.measurements)
     r = np.asarray(r, float)
-    idx = shared.rows(pb, vals, r, unc) if shared is not None and rows is None else None
-    if idx is not None:
-        cols = {key: v[idx] for key, v in shared.columns.items()}
-        return (cols, dict(shared.sigmas), list(shared.degenerate), list(shared.scenes), list(shared.rests),
-                list(shared.modes), list(shared.matches))
-
-    def measured_rows(h, ms_h, match):  # {measurement k of hanging h: its row in the hanging's modes}
-        ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
-        return {k: (match[pb.mode_index[k]] if rows is None else rows(h, ms_h, match, k)) for k in ks}
-
-    return _columns(pb, vals, r, unc, cache, K, measured_rows)
-
-
-def _columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None, K: int, rows_of):
-    """:func:`input_columns` with (K,) columns whose entry ``k`` of hanging
-    ``h`` is the modes' row ``rows_of(h, modes, match)[k]`` (None: NaN)
-    times ``r[k]``: the measured periods' (``input_columns``), or every mode
-    of the one hanging (:func:`scene_inputs`)."""
     cols: dict[str, np.ndarray] = {}
     sigmas: dict[str, float] = {}
     degenerate: list[str] = []
@@ -276,8 +253,7 @@ def _columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None, K: int, 
         rests.append(rest)
         modes.append(ms_h)
         matches.append(match)
-        row = rows_of(h, ms_h, match)
-        ks = list(row)
+        ks = [k for k, m in enumerate(pb.measurements) if m.hanging == h]
         if not ks:
             continue
         names = [n for n in measured_inputs(scene) if not n.startswith("com.")]
@@ -296,19 +272,11 @@ def _columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None, K: int, 
         degenerate += [d for n in failed
                        for d in ([n] if n.startswith("com.") or n in ("mass", "gravity", "stiffness") else
                                  [key for key, _ in links.of(h, n)])]
-        # several entries, every measurement's mode matched: taken at once (the same products; for
-        # one or two, the loop's scalar products cost less than the indexing)
-        whole = len(ks) > 2 and None not in row.values()
-        if whole:
-            ka, ra = np.array(ks, int), np.array([row[k] for k in ks], int)
-            rk = r[ka]
+        row = {k: (match[pb.mode_index[k]] if rows is None else rows(h, ms_h, match, k)) for k in ks}
         for j, n in enumerate(sens.names):
             col = np.zeros(K)
-            if whole:
-                col[ka] = sens.jacobian[ra, j] * rk
-            else:
-                for k in ks:
-                    col[k] = (sens.jacobian[row[k], j] if row[k] is not None else np.nan) * r[k]
+            for k in ks:
+                col[k] = (sens.jacobian[row[k], j] if row[k] is not None else np.nan) * r[k]
             if n.startswith("com."):
                 # shared: a CoM shift in the reference frame (com_h = R com_ref)
                 ax = "xyz".index(n[-1])
@@ -329,66 +297,6 @@ def _columns(pb: Problem, vals: dict, r, unc: dict, cache: dict | None, K: int, 
                     sigmas[key] = input_sigma(scene, n, unc)
     degenerate = [d for d in dict.fromkeys(degenerate) if d not in solved_com]
     return cols, sigmas, degenerate, scenes, rests, modes, matches
-
-
-class SceneInputs:
-    """The half of :func:`input_columns` that is the same for every
-    measured mode of one scene (one hanging): its scene, rest pose, modes
-    and base-mode match, the inputs' standard uncertainties (SI) and
-    degenerate keys, and each input key's (M,) column over all M modes of
-    the hanging (dT_m/dx, s per SI unit).  Built by :func:`scene_inputs` for
-    budgets of several unknowns (or modes) of the same scene
-    (:func:`bifilar.estimation.honest.honest_stds`), each of which then
-    takes its measured modes' rows.  A row of an all-modes column is the
-    same float as the per-measurement loop's entry: each is ``J[m, j] *
-    1.0`` times the same link factors, added in the same order
-    (elementwise, no reduction), which holds where every amplitude factor
-    ``r`` is exactly 1 (:meth:`rows` checks it)."""
-
-    def __init__(self, pb: Problem, vals: dict, unc: dict, cache: dict | None):
-        hm = pb.models[0]
-        self.models, self.links, self.unc = pb.models, pb.links, dict(unc)
-        self.solved_com = {n for n in pb.unknowns if n in COM_UNKNOWNS}
-        self.key = scene_key(hm.scene(vals))
-        M = len(hm.modes0.modes)  # (the scene's modes: the base modes' count)
-
-        def every_mode(h, ms_h, match):  # {mode m: row m} of the one hanging
-            return {m: m for m in range(M)} if h == 0 else {}
-
-        (self.columns, self.sigmas, self.degenerate, self.scenes, self.rests, self.modes,
-         self.matches) = _columns(pb, vals, np.ones(M), unc, cache, M, every_mode)
-
-    def rows(self, pb: Problem, vals: dict, r, unc: dict):
-        """(K,) row of each measurement of ``pb`` in :attr:`columns`, or
-        None where these inputs are not ``pb``'s at ``vals`` (other hanging
-        models or links, another scene, ``unc`` or solved CoM, an amplitude
-        factor not exactly 1, a mode without a match): the caller then
-        computes its own."""
-        if (pb.models is not self.models or len(pb.models) != 1 or pb.links is not self.links
-                or not np.all(np.asarray(r) == 1.0) or not _same(unc, self.unc)
-                or {n for n in pb.unknowns if n in COM_UNKNOWNS} != self.solved_com
-                or scene_key(pb.models[0].scene(vals)) != self.key):
-            return None
-        match = self.matches[0]
-        idx = [match[pb.mode_index[k]] for k in range(len(pb.measurements))]
-        return None if any(i is None for i in idx) else np.array(idx, int)
-
-
-def _same(a: dict, b: dict) -> bool:
-    """Whether the uncertainty dicts ``a`` and ``b`` are equal (an array
-    value, whose ``==`` has no single truth value: not taken as equal)."""
-    try:
-        return bool(a == b)
-    except ValueError:
-        return False
-
-
-def scene_inputs(pb: Problem, vals: dict, unc: dict, cache: dict | None = None) -> SceneInputs | None:
-    """:class:`SceneInputs` of ``pb``'s one hanging at the unknowns ``vals``
-    (SI) with input uncertainties ``unc``, for :func:`input_columns`'s
-    ``shared`` (via :func:`_budget`'s ``inputs``); None with several
-    hangings (their columns are summed across hangings: not shared)."""
-    return SceneInputs(pb, vals, unc, cache) if len(pb.models) == 1 else None
 
 
 def _unknowns_jacobian(pb: Problem, p_hat, cache: dict | None = None) -> np.ndarray:
@@ -480,17 +388,14 @@ def _with_factor_gain(budget: LinearBudget, Jp, T_lin, laws, sig, s_amp, timing_
 
 
 def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | None = None, laws=None,
-            rtol: float = 1e-10, inputs: SceneInputs | None = None):
+            rtol: float = 1e-10):
     """Linear budget at the estimate; returns (LinearBudget, degenerate
     inputs, T_lin at p_hat, BudgetContext for :func:`second_order`).
     ``cache``: a dict shared by budgets of other unknowns at the same
     scenes (:attr:`BudgetContext.cache`), or None.  ``laws``: the amplitude
     law of each measurement with a stated amplitude (nonlinear method;
     :func:`stated_amplitude_period_std`; their ``dr_dx`` measured here,
-    :func:`~bifilar.estimation.factor_inputs.factor_input_derivatives`, runs at ``rtol``).
-    ``inputs``: :func:`scene_inputs` of the same hanging models at ``p_hat``
-    with the same ``unc`` (the input columns' per-scene half, shared by
-    budgets of several unknowns of one scene), or None."""
+    :func:`~bifilar.estimation.factor_inputs.factor_input_derivatives`, runs at ``rtol``)."""
     K = len(pb.measurements)
     vals = pb.values(p_hat)
     T_lin = pb.linear_periods(p_hat)
@@ -498,8 +403,7 @@ def _budget(pb: Problem, p_hat, r_hat, method, rungs, best, unc, cache: dict | N
     Jp = J_lin * r_hat[:, None]
     sig = np.array([m.std for m in pb.measurements])
     multi = len(pb.models) > 1
-    cols, sigmas, degenerate, scenes, rests, modes, matches = input_columns(pb, vals, r_hat, unc, cache,
-                                                                           shared=inputs)
+    cols, sigmas, degenerate, scenes, rests, modes, matches = input_columns(pb, vals, r_hat, unc, cache)
     in_names = list(cols)
     Jx = np.column_stack([cols[n] for n in in_names]) if in_names else np.zeros((K, 0))
     in_sig = np.array([sigmas[n] for n in in_names])

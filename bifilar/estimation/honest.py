@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BifilarError, ConvergenceError
-from .budget import LINEAR_ENOUGH, component_std, scene_inputs
+from .budget import LINEAR_ENOUGH, component_std
 
 
 def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitude: float | None = 0.0,
@@ -63,7 +63,7 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
     cache: dict = {}
     if sens is not None:
         _seed_sensitivity(cache, scene, sens)
-    ms = models = links = shared = None
+    ms = models = links = None
     for (comp, mode), fb in zip(requests, fallbacks):
         try:
             if ms is None:
@@ -87,12 +87,8 @@ def honest_stds(scene, requests, unc: dict, timing: float | None = None, amplitu
             pb.unc = unc_all
             p = pb.prior
             r = np.ones(1)
-            if shared is None and len(requests) > 1:
-                # the input columns of every mode, once for all components (budget.SceneInputs;
-                # a component whose problem they are not, by its own: SceneInputs.rows)
-                shared = scene_inputs(pb, pb.values(p), unc_all, cache)
             budget, _, degenerate, *_ = full_budget(pb, p, r, "linear", {"linear": {"p": p, "r": r}}, "linear",
-                                                    unc_all, rtol, cache=cache, inputs=shared)
+                                                    unc_all, rtol, cache=cache)
             links = pb._links
             sd = np.nan if degenerate else float(budget.std[0])
             if not np.isfinite(sd):

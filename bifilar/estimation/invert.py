@@ -677,8 +677,7 @@ def _amplitude_variance(pb: Problem, p, laws, method: str, unc: dict) -> np.ndar
 
 
 def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dict, rtol: float,
-                cache: dict | None = None, laws=None, prior_stated: bool | None = None, linear_only: bool = False,
-                inputs=None):
+                cache: dict | None = None, laws=None, prior_stated: bool | None = None, linear_only: bool = False):
     """The budget every answer (the chosen root and any further one) gets:
     the linear budget (:func:`~bifilar.estimation.budget._budget`), the
     systematic term of an unstated amplitude, and second-order propagation
@@ -690,10 +689,8 @@ def full_budget(pb: Problem, p, r, method: str, rungs: dict, best: str, unc: dic
     ``prior_stated``: not None, the components not solved for are budgeted
     (``bctx.prior``, :mod:`~bifilar.estimation.prior_inertia`; whether the
     user stated ``inertia``); None (a planner's std): left out.
-    ``linear_only``: no second-order pass (no std is given: a drawn-rig refusal, elastic_split).
-    ``inputs``: the input columns' per-scene half shared by budgets of one
-    scene (:func:`~bifilar.estimation.budget.scene_inputs`), or None."""
-    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws, rtol, inputs)
+    ``linear_only``: no second-order pass (no std is given: a drawn-rig refusal, elastic_split)."""
+    budget, degenerate, T_lin, bctx = _budget(pb, p, r, method, rungs, best, unc, cache, laws, rtol)
     if prior_stated is not None:
         bctx.prior = prior_terms(pb, p, r, T_lin, bctx, unc, prior_stated, laws, rtol)
         budget = with_prior(budget, bctx.prior)
