@@ -12,7 +12,7 @@ included.  And the reason no rule balanced a01's tails: a draw whose
 measured CoM lies 2 stds (4 mm) shallower than the truth is refused (the
 torsion/roll exchange), its mirror 2 stds deeper is answered with the truth
 more than 2 stds below the estimate, so the answered draws lack the
-high side's far tail.  ~1 s CPU.
+high side's far tail.  ~3 s CPU.
 """
 
 from __future__ import annotations
