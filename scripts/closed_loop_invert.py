@@ -109,14 +109,20 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int, keep: list |
     return out
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def loop_arguments(description: str) -> argparse.ArgumentParser:
+    """The closed loop's command line (config, --modes, --components,
+    --draws, --seed), shared with scripts/interval_rules_compare.py."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("config")
     ap.add_argument("--modes", default="torsion", help="mode labels timed, comma-separated")
     ap.add_argument("--components", default="Izz", help="unknowns, comma-separated")
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--seed", type=int, default=1)
-    a = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    a = loop_arguments(__doc__.split("\n\n")[0]).parse_args()
     print(json.dumps(run(a.config, a.modes.split(","), a.components.split(","), a.draws, a.seed), indent=1))
 
 

@@ -37,7 +37,6 @@ answered sample's censoring).  One unknown (the first of ``--components``).
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -49,7 +48,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this tree's bifi
 
 import bifilar.estimation.invert as _invert  # noqa: E402
 from bifilar.estimation.budget import model_samples  # noqa: E402
-from closed_loop_invert import run  # noqa: E402
+from closed_loop_invert import loop_arguments, run  # noqa: E402
 
 #: the profile's radius: sqrt of chi2_1's 95 % point (a linear model's +- 1.96 std)
 RADIUS = 1.959963984540054
@@ -226,12 +225,7 @@ def compare(path: str, modes: list, comps: list, draws: int, seed: int, samples:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("config")
-    ap.add_argument("--modes", default="torsion", help="mode labels timed, comma-separated")
-    ap.add_argument("--components", default="Izz", help="unknowns, comma-separated (the first is compared)")
-    ap.add_argument("--draws", type=int, default=200)
-    ap.add_argument("--seed", type=int, default=1)
+    ap = loop_arguments(__doc__.split("\n\n")[0] + "  The first of --components is compared.")
     ap.add_argument("--samples", type=int, default=4000, help="model samples for the equal and hull rules")
     a = ap.parse_args()
     print(json.dumps(compare(a.config, a.modes.split(","), a.components.split(","), a.draws, a.seed, a.samples),
