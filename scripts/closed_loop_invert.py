@@ -51,7 +51,13 @@ def linear_periods(scene) -> dict:
     return {m.label: m.period for m in linear_modes(scene, rest_pose(scene)).modes}
 
 
-def run(path: str, modes: list, comps: list, draws: int, seed: int) -> dict:
+def run(path: str, modes: list, comps: list, draws: int, seed: int, keep: list | None = None) -> dict:
+    """The closed loop's summary (module docstring).  ``keep``, if given,
+    receives a dict a draw, in order: ``errors`` (each measured input's
+    drawn error in its own stds, :func:`closed_loop_plan.measured_scene`)
+    and either ``refused`` (the message) or ``result`` (invert's answer);
+    scripts/interval_rules_compare.py reads the second-order models of the
+    answers from it."""
     cfg = read_yaml(path)
     truth = scene_from_dict(cfg, warn=False)
     T = linear_periods(truth)
@@ -60,7 +66,8 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int) -> dict:
     rng = np.random.default_rng(seed)
     rows, refusals, warns, t0 = [], {}, {}, time.process_time()
     for _ in range(draws):
-        sc = measured_scene(truth, rng, unc)
+        errs: dict = {}
+        sc = measured_scene(truth, rng, unc, errs)
         meas = [Measurement(m, T[m] + rng.normal(0, unc["timing"]), unc["timing"], "period", "--period",
                             amplitude=0.0) for m in modes]
         ms = MeasurementSet([Hanging("reference", sc, np.eye(3))], meas)
@@ -69,7 +76,11 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int) -> dict:
             r = invert(ms, solve_for=comps, ladder=False)
         except BifilarError as e:
             refusals[str(e)[:90]] = refusals.get(str(e)[:90], 0) + 1
+            if keep is not None:
+                keep.append({"errors": errs, "refused": str(e)})
             continue
+        if keep is not None:
+            keep.append({"errors": errs, "result": r})
         for w in r.warnings:
             warns[w[:80]] = warns.get(w[:80], 0) + 1
         row = {}
@@ -98,14 +109,20 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int) -> dict:
     return out
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def loop_arguments(description: str) -> argparse.ArgumentParser:
+    """The closed loop's command line (config, --modes, --components,
+    --draws, --seed), shared with scripts/interval_rules_compare.py."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("config")
     ap.add_argument("--modes", default="torsion", help="mode labels timed, comma-separated")
     ap.add_argument("--components", default="Izz", help="unknowns, comma-separated")
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--seed", type=int, default=1)
-    a = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    a = loop_arguments(__doc__.split("\n\n")[0]).parse_args()
     print(json.dumps(run(a.config, a.modes.split(","), a.components.split(","), a.draws, a.seed), indent=1))
 
 

@@ -73,31 +73,9 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
         q = np.quantile(np.asarray(mc_samples, float), [0.025, 0.975], axis=0)
         lo, hi = np.minimum(lo, q[0]), np.maximum(hi, q[1])
     elif skewed:
-        from scipy import stats
-
         rng = np.random.default_rng(20261123)
         N = _SURROGATE_SAMPLES
-        err = np.zeros((N, len(p)))
-        skip = set(ctx.surrogate) | {f"amplitude[{lab}]" for lab in ctx.amplitude} | {"offset"} | set(quad)
-        for k, c in budget.contributions.items():
-            if k in skip or k.endswith("(2nd order)"):
-                continue
-            nu = budget.dof.get(k, math.inf)
-            if math.isfinite(nu):
-                # stratified Student variates (one per probability stratum, in
-                # random order): the heavy tail of 1-2 dof is sampled evenly
-                # (plain draws: ~5 % error in the 97.5 % quantile for nu = 1)
-                z = stats.t.ppf((rng.permutation(N) + rng.uniform(size=N)) / N, nu)
-            else:
-                z = rng.standard_normal(N)
-            err += z[:, None] * np.asarray(c)[None, :]
-        zs = {}
-        for key, (a, b) in ctx.surrogate.items():
-            z = zs[key] = rng.standard_normal(N)[:, None]
-            err += a[None, :] * z + b[None, :] * z * z
-        for (ki, kj), (k11, k21, k12, k22) in ctx.cross.items():
-            zi, zj = zs[ki], zs[kj]
-            err += zi * zj * (k11 + k21 * zi + k12 * zj + k22 * zi * zj)
+        err = model_samples(budget, ctx, rng, N, skip=set(quad))
         amp = np.zeros_like(err)
         for lab, D in ctx.amplitude.items():
             u = rng.uniform(0.0, 1.0, N)[:, None] ** 2
@@ -120,6 +98,43 @@ def interval_95(p_hat, budget: LinearBudget, ctx: BudgetContext | None, mc_sampl
             q = np.array([np.minimum(q[0], q0[0]), np.maximum(q[1], q0[1])])
         lo, hi = p + q[0], p + q[1]
     return np.column_stack([lo, hi])
+
+
+def model_samples(budget: LinearBudget, ctx: BudgetContext, rng, n: int, skip=()) -> np.ndarray:
+    """(n, P) samples of the inputs' second-order error model (SI, the
+    truth minus the estimate as built about the measured inputs, no random
+    sign): each linear term's coefficient times a normal variate (a term
+    with ``nu`` finite dof: a stratified Student variate), each
+    second-order input's ``a z + b z^2`` (``ctx.surrogate``) and the pairs'
+    interactions (``ctx.cross``), drawn from ``rng`` in that order.  Left
+    out: an unstated amplitude's terms, the mean offset, every ``(2nd
+    order)`` contribution (the surrogate holds them) and the keys of
+    ``skip`` (a stated prior's).  :func:`interval_95` draws its samples so;
+    scripts/interval_rules_compare.py reads the same model."""
+    from scipy import stats
+
+    err = np.zeros((n, len(budget.std)))
+    skip = set(ctx.surrogate) | {f"amplitude[{lab}]" for lab in ctx.amplitude} | {"offset"} | set(skip)
+    for k, c in budget.contributions.items():
+        if k in skip or k.endswith("(2nd order)"):
+            continue
+        nu = budget.dof.get(k, math.inf)
+        if math.isfinite(nu):
+            # stratified Student variates (one per probability stratum, in
+            # random order): the heavy tail of 1-2 dof is sampled evenly
+            # (plain draws: ~5 % error in the 97.5 % quantile for nu = 1)
+            z = stats.t.ppf((rng.permutation(n) + rng.uniform(size=n)) / n, nu)
+        else:
+            z = rng.standard_normal(n)
+        err += z[:, None] * np.asarray(c)[None, :]
+    zs = {}
+    for key, (a, b) in ctx.surrogate.items():
+        z = zs[key] = rng.standard_normal(n)[:, None]
+        err += a[None, :] * z + b[None, :] * z * z
+    for (ki, kj), (k11, k21, k12, k22) in ctx.cross.items():
+        zi, zj = zs[ki], zs[kj]
+        err += zi * zj * (k11 + k21 * zi + k12 * zj + k22 * zi * zj)
+    return err
 
 
 def _readings_quantiles(mirrored, post, rest, both: bool) -> np.ndarray:
