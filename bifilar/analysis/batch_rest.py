@@ -120,9 +120,13 @@ def _hessian(d, w, lam):
 # --------------------------------------------------------------------------
 # rest poses
 # --------------------------------------------------------------------------
-def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
+def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40, native=True):
     """Newton on grad V + G^T lam = 0, phi = 0 for every scene (damped like
-    the single-scene solver).  Returns com, R, lam, kkt residual (B,)."""
+    the single-scene solver).  Returns com, R, lam, kkt residual (B,).
+    ``native``: each pass but the attitude update by the compiled pass of
+    :mod:`.newton_kernel` where it is there (the same bits; a pass it
+    declines is numpy's), False: numpy only, or a function standing for
+    the compiled ``nstep`` (its load check)."""
     Bn, n = L.shape
     gradV = np.zeros((Bn, 6))
     gradV[:, 2] = m * g
@@ -130,7 +134,21 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
     Lmax = L.max(axis=1)
     active = np.ones(Bn, bool)
     res = np.full(Bn, np.inf)
+    run = None
+    if native is not False:
+        from . import newton_kernel
+
+        com, R, lam = (np.ascontiguousarray(x, float) for x in (com, R, lam))
+        args = (active, *(np.ascontiguousarray(x, float) for x in (a, p, L, fscale, Lmax)), com, R, lam, res)
+        run = newton_kernel.pass_for(*args) if native is True else newton_kernel._runner(native, *args)
     for _ in range(iters):
+        if run is not None:
+            k, rv, jj = run()
+            if k == 0:
+                break
+            if k > 0:
+                R[jj] = rotvec_to_matrix(rv) @ R[jj]
+                continue
         ii = np.nonzero(active)[0]
         if not len(ii):
             break
@@ -162,12 +180,28 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
     # the final residual of the scenes that moved after their last one (a converged scene stopped where its
     # residual was taken: the same expressions on the same rows, so the same bits; every scene of a sigma-point
     # batch converges in 3 steps, and this pass was the fifth of its 5 constraint passes)
+    if run is not None and run(final=True)[0] == 0:
+        return com, R, lam, res
     ii = np.nonzero(active)[0]
     if len(ii):
         d, w, G, phi = _constraints(a, p, L, com, R, ii)
         r1 = gradV[ii] + np.einsum("bni,bn->bi", G, lam[ii])
         res[ii] = np.maximum(np.abs(r1).max(axis=1) / fscale[ii], np.abs(phi).max(axis=1) / Lmax[ii] ** 2)
     return com, R, lam, res
+
+
+def newton_start(a, p, L, m, g):
+    """(com (B, 3), R (B, 3, 3), multipliers (B, n)): where :func:`rest_poses`
+    starts Newton for scenes with the stacked anchors a, attachments p
+    (B, n, 3), lengths L (B, n), masses m and gravities g (B,) (SI, world
+    frame z up): :func:`rest_pose`'s start pose, the identity attitude and
+    the least-squares multipliers there (as ``_newton_kkt``)."""
+    com = start_coms(a, p, L)
+    R = np.broadcast_to(np.eye(3), (len(m), 3, 3)).copy()
+    _, _, G0 = _jacobian(a, p, com, R)
+    gradV = np.zeros((len(m), 6))
+    gradV[:, 2] = m * g
+    return com, R, -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)
 
 
 def _null_space(G: np.ndarray, m: np.ndarray, I: np.ndarray, R: np.ndarray):
@@ -314,12 +348,7 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     a, p, L, m, g, I = _stack(scenes)
     # Newton from rest_pose's start pose (not from a guess: a rig with two stable equilibria would end at
     # the one nearer the guess, so a sweep's answer would depend on its order; tests/test_multi_equilibria.py)
-    com = start_coms(a, p, L)
-    R = np.broadcast_to(np.eye(3), (len(scenes), 3, 3)).copy()
-    _, _, G0 = _jacobian(a, p, com, R)
-    gradV = np.zeros((len(scenes), 6))
-    gradV[:, 2] = m * g
-    lam = -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)  # least squares, as _newton_kkt
+    com, R, lam = newton_start(a, p, L, m, g)
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
     R, d, w, G, dn, T, N, full, ok = _accepted(a, p, L, m, g, I, com, R, lam, kkt)
     # the single path's acceptance rule for its Newton start (rest_pose's stage 2) beside _accepted's: a turn of
