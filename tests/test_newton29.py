@@ -23,7 +23,7 @@ from test_native_kernel import CONFIGS, _fresh, needs_cc
 @pytest.fixture
 def kernel(monkeypatch, tmp_path_factory):
     """This module's process state emptied, the suite's kept cache, ``BIFILAR_NATIVE=sync``; the loaded
-    ``nstep`` (checked for 2..5 wires)."""
+    library (its ``nstep``, ``jacobians``, ``hessians``; checked for 2 wires)."""
     import os
     _fresh(monkeypatch, os.environ["BIFILAR_CACHE_DIR"])
     monkeypatch.setattr(nwk, "_lib", [])
@@ -75,7 +75,7 @@ def test_compiled_pass_equals_numpy_pass_bit_for_bit_on_random_rigs(kernel):
     stepped = 0
     for _ in range(100):
         n, B = int(rng.integers(2, 6)), int(rng.choice([1, 2, 5, 17, 36]))
-        ref, got, ran = _both(kernel, *_arrays(rng, B, n))
+        ref, got, ran = _both(kernel.nstep, *_arrays(rng, B, n))
         for x, y in zip(ref, got):
             assert np.array_equal(_bits(x), _bits(y))
         stepped += sum(k > 0 for k in ran)
@@ -120,7 +120,7 @@ def test_a_declined_pass_is_numpys_and_the_loop_goes_on(kernel):
 
     def flaky(*args):
         calls[0] += 1
-        return -2 if calls[0] % 2 else kernel(*args)
+        return -2 if calls[0] % 2 else kernel.nstep(*args)
     for n in (2, 3, 4):
         ref, got, ran = _both(flaky, *_arrays(rng, 9, n))
         assert -2 in ran and any(k > 0 for k in ran)
@@ -129,20 +129,54 @@ def test_a_declined_pass_is_numpys_and_the_loop_goes_on(kernel):
 
 
 @needs_cc
+def test_jacobians_and_hessians_equal_numpys_bit_for_bit(kernel):
+    """batch_rest._jacobian and _hessian by the library (what _accepted, modes_batch and newton_start call)
+    against _jacobian_numpy and _hessian_numpy on random rigs at random poses, batches of 1-36; an array
+    that is not plain float64 (a transposed view, complex) gets None: numpy's."""
+    from bifilar.rotations import rotvec_to_matrix
+
+    rng = np.random.default_rng(2929)
+    for _ in range(60):
+        n, B = int(rng.integers(2, 6)), int(rng.choice([1, 2, 7, 36]))
+        a, p, L, m, g = _arrays(rng, B, n)
+        com = rng.normal(size=(B, 3))
+        R = np.ascontiguousarray(rotvec_to_matrix(rng.normal(size=(B, 3))))
+        lam = rng.normal(size=(B, n))
+        ref, got = br._jacobian_numpy(a, p, com, R), nwk.jacobians(a, p, com, R)
+        ref += (br._hessian_numpy(ref[0], ref[1], lam),)
+        got += (nwk.hessians(got[0], got[1], lam),)
+        for x, y in zip(ref, got):
+            assert np.array_equal(_bits(x), _bits(y))
+    assert nwk.hessians(ref[0], ref[1], np.asfortranarray(lam) if B > 1 else lam + 0j) is None
+    assert nwk.jacobians(a, p, com, np.swapaxes(R, 1, 2)) is None
+
+
+@needs_cc
 def test_load_check_refuses_a_library_that_differs_or_never_steps(kernel):
-    """_agrees: the real library passes on 2-5 wires; one whose CoM step is off by an ulp, or one that
-    declines every pass (it would prove nothing), is refused."""
+    """_agrees: the real library passes on 2-5 wires; one whose CoM step is off by an ulp, one that
+    declines every pass (it would prove nothing), or one whose Hessian is off by an ulp, is refused."""
+    from types import SimpleNamespace
+
     for n in (2, 3, 4, 5):
         assert nwk._agrees(kernel, n)
 
     def off_by_an_ulp(*args):
-        k = kernel(*args)
+        k = kernel.nstep(*args)
         if k > 0:
             com = np.ctypeslib.as_array((np.ctypeslib.ctypes.c_double * 3).from_address(args[8]))
             com[0] = np.nextafter(com[0], np.inf)
         return k
-    assert not nwk._agrees(off_by_an_ulp, 3)
-    assert not nwk._agrees(lambda *args: -2, 3)
+
+    def hessian_off(B, n, d, w, lam, H):
+        r = kernel.hessians(B, n, d, w, lam, H)
+        h = np.ctypeslib.as_array((np.ctypeslib.ctypes.c_double * 36).from_address(H))
+        h[7] = np.nextafter(h[7], np.inf)
+        return r
+    lib = dict(nstep=kernel.nstep, jacobians=kernel.jacobians, hessians=kernel.hessians)
+    assert nwk._agrees(SimpleNamespace(**lib), 3)
+    assert not nwk._agrees(SimpleNamespace(**{**lib, "nstep": off_by_an_ulp}), 3)
+    assert not nwk._agrees(SimpleNamespace(**{**lib, "nstep": lambda *args: -2}), 3)
+    assert not nwk._agrees(SimpleNamespace(**{**lib, "hessians": hessian_off}), 3)
 
 
 def test_numpy_pass_without_a_compiler_or_when_off(monkeypatch, tmp_path, capfd):

@@ -38,6 +38,7 @@ from ..rotations import cross, matrix_to_quat, rotvec_to_matrix, skew_of
 from ..scene import Scene, lowest_point_z
 from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, START_BOX, RestPose, canonical_attitude, knife_edge_axes,
                           line_turns, multiplier_matrix, near_dependent, rest_pose, start_coms)
+from . import newton_kernel
 from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry", "Deferred"]
@@ -85,15 +86,24 @@ _cross = cross  # cross products over the last axis: np.cross's values, without 
 
 
 def _jacobian(a, p, com, R):
-    """Wire vectors d, lever arms w = R p (B, n, 3) and G = [d, w x d] (B, n, 6)."""
+    """Wire vectors d, lever arms w = R p (B, n, 3) and G = [d, w x d] (B, n, 6)
+    of the stacked anchors a, attachments p, CoMs com and attitudes R (SI,
+    world frame): :mod:`.newton_kernel`'s compiled loop where it is there,
+    else :func:`_jacobian_numpy` (the same bits)."""
+    got = newton_kernel.jacobians(a, p, com, R)
+    return _jacobian_numpy(a, p, com, R) if got is None else got
+
+
+def _jacobian_numpy(a, p, com, R):
+    """:func:`_jacobian` in numpy (the reference; the Newton pass's own)."""
     w = np.einsum("bij,bnj->bni", R, p)
     d = com[:, None, :] + w - a
     return d, w, np.concatenate([d, _cross(w, d)], axis=-1)
 
 
 def _constraints(a, p, L, com, R, ii):
-    """d, w, G (as :func:`_jacobian`) and phi = (|d|^2 - L^2)/2 (k, n) for the scenes ``ii``."""
-    d, w, G = _jacobian(a[ii], p[ii], com[ii], R[ii])
+    """d, w, G (as :func:`_jacobian`) and phi = (|d|^2 - L^2)/2 (k, n) for the scenes ``ii`` (numpy's)."""
+    d, w, G = _jacobian_numpy(a[ii], p[ii], com[ii], R[ii])
     return d, w, G, 0.5 * (np.einsum("bni,bni->bn", d, d) - L[ii] ** 2)
 
 
@@ -102,7 +112,16 @@ _skew = skew_of  # cross-product matrices (..., 3, 3) in v's dtype, written entr
 
 def _hessian(d, w, lam):
     """sum_i lam_i H_i (B, 6, 6): the constraint Hessians of
-    :func:`~bifilar.analysis.equilibrium.constraint_hessians`, weighted."""
+    :func:`~bifilar.analysis.equilibrium.constraint_hessians`, weighted
+    (wire vectors d, lever arms w (B, n, 3), multipliers lam (B, n); SI):
+    :mod:`.newton_kernel`'s compiled loop where it is there, else
+    :func:`_hessian_numpy` (the same bits)."""
+    got = newton_kernel.hessians(d, w, lam)
+    return _hessian_numpy(d, w, lam) if got is None else got
+
+
+def _hessian_numpy(d, w, lam):
+    """:func:`_hessian` in numpy (the reference; the Newton pass's own)."""
     W = _skew(w)  # (B, n, 3, 3)
     eye = np.eye(3)
     dw = np.einsum("bni,bni->bn", d, w)
@@ -136,8 +155,6 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40, native=True):
     res = np.full(Bn, np.inf)
     run = None
     if native is not False:
-        from . import newton_kernel
-
         com, R, lam = (np.ascontiguousarray(x, float) for x in (com, R, lam))
         args = (active, *(np.ascontiguousarray(x, float) for x in (a, p, L, fscale, Lmax)), com, R, lam, res)
         run = newton_kernel.pass_for(*args) if native is True else newton_kernel._runner(native, *args)
@@ -162,7 +179,7 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40, native=True):
         keep = ~conv
         ii, d, w, G, phi, r1 = ii[keep], d[keep], w[keep], G[keep], phi[keep], r1[keep]
         K = np.zeros((len(ii), 6 + n, 6 + n))
-        K[:, :6, :6] = _hessian(d, w, lam[ii])
+        K[:, :6, :6] = _hessian_numpy(d, w, lam[ii])
         K[:, :6, 6:] = np.swapaxes(G, 1, 2)
         K[:, 6:, :6] = G
         rhs = -np.concatenate([r1, phi], axis=1)

@@ -90,6 +90,82 @@ static double absmax(const double *v, long k) {
     return r;
 }
 
+/* batch_rest._jacobian of one scene: lever arms w = R p (einsum bij,bnj->bni), wire vectors d = (com + w) - a,
+   G = [d, cross(w, d)] (n rows) */
+static void jacobian1(long n, const double *ab, const double *pb, const double *Rb, const double *cb,
+                      double (*w)[3], double (*d)[3], double (*G)[6]) {
+    for (long j = 0; j < n; j++) {
+        for (int i = 0; i < 3; i++)
+            w[j][i] = dot3(Rb + 3 * i, pb + 3 * j);
+        for (int i = 0; i < 3; i++)
+            d[j][i] = (cb[i] + w[j][i]) - ab[3 * j + i];
+        for (int i = 0; i < 3; i++)
+            G[j][i] = d[j][i];
+        G[j][3] = w[j][1] * d[j][2] - w[j][2] * d[j][1];
+        G[j][4] = w[j][2] * d[j][0] - w[j][0] * d[j][2];
+        G[j][5] = w[j][0] * d[j][1] - w[j][1] * d[j][0];
+    }
+}
+
+/* batch_rest._hessian of one scene: sum_i lam_i H_i (6, 6) from d, w (n, 3) and the multipliers lb (n,) */
+static void hessian1(long n, const double (*d)[3], const double (*w)[3], const double *lb, double H[6][6]) {
+    double ls = lb[0], E1[3][3], E2[3][3], dw[MAXW], W[MAXW][3][3], Hrr[MAXW][3][3];
+    for (long j = 1; j < n; j++)
+        ls = ls + lb[j];                                                /* lam.sum(axis=1) */
+    for (long j = 0; j < n; j++) {
+        const double *v = w[j];
+        W[j][0][0] = 0.0; W[j][0][1] = -v[2]; W[j][0][2] = v[1];
+        W[j][1][0] = v[2]; W[j][1][1] = 0.0; W[j][1][2] = -v[0];
+        W[j][2][0] = -v[1]; W[j][2][1] = v[0]; W[j][2][2] = 0.0;
+        dw[j] = dot3(d[j], w[j]);
+        for (int i = 0; i < 3; i++)
+            for (int c = 0; c < 3; c++) {
+                double ww = 0.0;                                        /* einsum bnij,bnjk->bnik */
+                for (int q = 0; q < 3; q++)
+                    ww = ww + W[j][i][q] * W[j][q][c];
+                Hrr[j][i][c] = (-ww + 0.5 * (d[j][i] * w[j][c] + w[j][i] * d[j][c])) - dw[j] * (i == c ? 1.0 : 0.0);
+            }
+    }
+    for (int i = 0; i < 3; i++)
+        for (int c = 0; c < 3; c++) {
+            double e1 = 0.0, e2 = 0.0;                                  /* einsum bn,bnij->bij */
+            for (long j = 0; j < n; j++) {
+                e1 = e1 + lb[j] * W[j][i][c];
+                e2 = e2 + lb[j] * Hrr[j][i][c];
+            }
+            E1[i][c] = e1;
+            E2[i][c] = e2;
+        }
+    for (int i = 0; i < 3; i++)
+        for (int c = 0; c < 3; c++) {
+            H[i][c] = ls * (i == c ? 1.0 : 0.0);
+            H[i][3 + c] = -E1[i][c];
+            H[3 + i][c] = E1[i][c];
+            H[3 + i][3 + c] = E2[i][c];
+        }
+}
+
+/* _jacobian and _hessian of B scenes (the arrays C-contiguous: a, p, d, w (B, n, 3), com (B, 3), R (B, 3, 3),
+   G (B, n, 6), lam (B, n), H (B, 6, 6)); 0, or -1 (n too large) */
+long jacobians(long B, long n, const double *a, const double *p, const double *com, const double *R,
+               double *d, double *w, double *G) {
+    if (n < 1 || n > MAXW)
+        return -1;
+    for (long b = 0; b < B; b++)
+        jacobian1(n, a + b * n * 3, p + b * n * 3, R + b * 9, com + b * 3, (double (*)[3])(w + b * n * 3),
+                  (double (*)[3])(d + b * n * 3), (double (*)[6])(G + b * n * 6));
+    return 0;
+}
+
+long hessians(long B, long n, const double *d, const double *w, const double *lam, double *H) {
+    if (n < 1 || n > MAXW)
+        return -1;
+    for (long b = 0; b < B; b++)
+        hessian1(n, (const double (*)[3])(d + b * n * 3), (const double (*)[3])(w + b * n * 3), lam + b * n,
+                 (double (*)[6])(H + b * 36));
+    return 0;
+}
+
 /* One pass of batch_rest._newton_batch's loop over the scenes with active[b] != 0 (B scenes, n wires; a, p
    (B, n, 3), L (B, n), mg = m g (B,), Lmax (B,), com (B, 3), R (B, 3, 3), lam (B, n), res (B,), all
    C-contiguous doubles; SI, world frame).  Each active scene's residual goes to res; a converged one (res <
@@ -128,18 +204,9 @@ long nstep(long B, long n, unsigned char *active, const double *a, const double 
         if (!active[b])
             continue;
         nact++;
-        for (long j = 0; j < n; j++) {
-            for (int i = 0; i < 3; i++)
-                w[j][i] = dot3(Rb + 3 * i, pb + 3 * j);                 /* einsum bij,bnj->bni */
-            for (int i = 0; i < 3; i++)
-                d[j][i] = (cb[i] + w[j][i]) - ab[3 * j + i];
-            for (int i = 0; i < 3; i++)
-                G[j][i] = d[j][i];
-            G[j][3] = w[j][1] * d[j][2] - w[j][2] * d[j][1];            /* cross(w, d) */
-            G[j][4] = w[j][2] * d[j][0] - w[j][0] * d[j][2];
-            G[j][5] = w[j][0] * d[j][1] - w[j][1] * d[j][0];
+        jacobian1(n, ab, pb, Rb, cb, w, d, G);
+        for (long j = 0; j < n; j++)
             phi[j] = 0.5 * (dot3(d[j], d[j]) - Lb[j] * Lb[j]);
-        }
         for (int i = 0; i < 6; i++) {                                   /* gradV + einsum bni,bn->bi */
             double e = 0.0;
             for (long j = 0; j < n; j++)
@@ -158,41 +225,8 @@ long nstep(long B, long n, unsigned char *active, const double *a, const double 
         /* K = [[H, G^T], [G, 0]] column-major in numpy's solve buffer; H as batch_rest._hessian */
         double *A = gbuf, *rhs = gbuf + N * N, step[MAXN];
         lint *ipiv = (lint *)(gbuf + N * N + N), nn = (lint)N, one = 1, info = 0;
-        double H[6][6], ls = lb[0], E1[3][3], E2[3][3], dw[MAXW];
-        double W[MAXW][3][3], Hrr[MAXW][3][3];
-        for (long j = 1; j < n; j++)
-            ls = ls + lb[j];
-        for (long j = 0; j < n; j++) {
-            double *v = w[j];
-            W[j][0][0] = 0.0; W[j][0][1] = -v[2]; W[j][0][2] = v[1];
-            W[j][1][0] = v[2]; W[j][1][1] = 0.0; W[j][1][2] = -v[0];
-            W[j][2][0] = -v[1]; W[j][2][1] = v[0]; W[j][2][2] = 0.0;
-            dw[j] = dot3(d[j], w[j]);
-            for (int i = 0; i < 3; i++)
-                for (int c = 0; c < 3; c++) {
-                    double ww = 0.0;
-                    for (int q = 0; q < 3; q++)
-                        ww = ww + W[j][i][q] * W[j][q][c];
-                    Hrr[j][i][c] = (-ww + 0.5 * (d[j][i] * w[j][c] + w[j][i] * d[j][c])) - dw[j] * (i == c ? 1.0 : 0.0);
-                }
-        }
-        for (int i = 0; i < 3; i++)
-            for (int c = 0; c < 3; c++) {
-                double e1 = 0.0, e2 = 0.0;
-                for (long j = 0; j < n; j++) {
-                    e1 = e1 + lb[j] * W[j][i][c];
-                    e2 = e2 + lb[j] * Hrr[j][i][c];
-                }
-                E1[i][c] = e1;
-                E2[i][c] = e2;
-            }
-        for (int i = 0; i < 3; i++)
-            for (int c = 0; c < 3; c++) {
-                H[i][c] = ls * (i == c ? 1.0 : 0.0);
-                H[i][3 + c] = -E1[i][c];
-                H[3 + i][c] = E1[i][c];
-                H[3 + i][3 + c] = E2[i][c];
-            }
+        double H[6][6];
+        hessian1(n, (const double (*)[3])d, (const double (*)[3])w, lb, H);
         for (long c = 0; c < N; c++)
             for (long r = 0; r < N; r++) {
                 double v;
@@ -252,7 +286,7 @@ out:
 """
 """``nstep``'s C source (``@LINT@``: LAPACK's integer type, ``@MAXW@``: :data:`MAX_WIRES`, ``@ABIV@``)."""
 
-ABI_VERSION = 1
+ABI_VERSION = 2
 """``nstep_abi()``'s answer (with :data:`ABI` in the hash)."""
 
 log = nk.log
@@ -273,14 +307,10 @@ def pass_for(active, a, p, L, mg, Lmax, com, R, lam, res):
     place by each run, so they must stay the same objects.  Never raises:
     any error is a debug record and None."""
     try:
-        n = L.shape[1]
-        if nk.mode() == "off" or n > MAX_WIRES:
+        lib = _library(L.shape[1])
+        if lib is None:
             return None
-        func = _kernel(n)
-        if func is None:
-            return None
-        _gesv()
-        return _runner(func, active, a, p, L, mg, Lmax, com, R, lam, res)
+        return _runner(lib.nstep, active, a, p, L, mg, Lmax, com, R, lam, res)
     except Exception as exc:  # noqa: BLE001 - an accelerator: the numpy pass is always there
         log.debug("newton kernel: %s: %s", type(exc).__name__, exc)
         _lib[:] = [nk._Pattern("", "newton", "failed")]
@@ -306,7 +336,7 @@ def _runner(func, active, a, p, L, mg, Lmax, com, R, lam, res):
 
 
 def _kernel(n: int):
-    """The loaded ``nstep`` (checked for ``n`` wires), or None."""
+    """The loaded library (:class:`_Lib`, checked for ``n`` wires), or None."""
     pat = nk.ready_pattern(_lib, lambda: _start(nk.mode()))
     if pat is None:
         return None
@@ -367,16 +397,76 @@ def _start(m: str) -> "nk._Pattern":
     return nk._find(pat, cc[0], m)
 
 
+class _Lib:
+    """The loaded library's three functions (ctypes): ``nstep``, ``jacobians``, ``hessians``."""
+
+    def __init__(self, lib):
+        import ctypes
+        P, L = ctypes.c_void_p, ctypes.c_long
+        self.nstep, self.jacobians, self.hessians = lib.nstep, lib.jacobians, lib.hessians
+        for f, args in ((self.nstep, [L, L] + [P] * 12 + [L, P]), (self.jacobians, [L, L] + [P] * 7),
+                        (self.hessians, [L, L] + [P] * 4)):
+            f.restype, f.argtypes = L, args
+
+
 def _open(pat):
-    """The library's ``nstep`` as a ctypes function (OSError: another layout)."""
+    """The library at ``pat.path`` as a :class:`_Lib` (OSError: another layout)."""
     import ctypes
     lib = ctypes.CDLL(pat.path)
     if lib.nstep_abi() != ABI_VERSION:
         raise OSError("layout differs")
-    f = lib.nstep
-    f.restype = ctypes.c_long
-    f.argtypes = [ctypes.c_long, ctypes.c_long] + [ctypes.c_void_p] * 12 + [ctypes.c_long, ctypes.c_void_p]
-    return f
+    return _Lib(lib)
+
+
+def _plain(*arrays) -> bool:
+    """Every array a C-contiguous float64 ndarray (what the C functions read)."""
+    return all(type(x) is np.ndarray and x.dtype == np.float64 and x.flags.c_contiguous for x in arrays)
+
+
+def jacobians(a, p, com, R):
+    """:func:`~bifilar.analysis.batch_rest._jacobian` (d, w, G of scenes with
+    anchors a, body attachments p (B, n, 3), CoMs com (B, 3), attitudes R
+    (B, 3, 3); SI, world frame) by the library, the same bits; None where
+    it is not there or an array is not plain float64 (numpy's then)."""
+    if not _plain(a, p, com, R) or a.ndim != 3 or a.shape != p.shape or a.shape[2] != 3 \
+            or com.shape != (a.shape[0], 3) or R.shape != (a.shape[0], 3, 3):
+        return None
+    lib = _library(a.shape[1])
+    if lib is None:
+        return None
+    B, n = a.shape[:2]
+    d, w, G = np.empty((B, n, 3)), np.empty((B, n, 3)), np.empty((B, n, 6))
+    if lib.jacobians(B, n, a.ctypes.data, p.ctypes.data, com.ctypes.data, R.ctypes.data, d.ctypes.data, w.ctypes.data,
+                     G.ctypes.data):
+        return None
+    return d, w, G
+
+
+def hessians(d, w, lam):
+    """:func:`~bifilar.analysis.batch_rest._hessian` (sum_i lam_i H_i (B, 6, 6)
+    from wire vectors d and lever arms w (B, n, 3), multipliers lam (B, n);
+    SI) by the library, the same bits; None as :func:`jacobians`."""
+    if not _plain(d, w, lam) or d.ndim != 3 or d.shape != w.shape or lam.shape != d.shape[:2]:
+        return None
+    lib = _library(d.shape[1])
+    if lib is None:
+        return None
+    H = np.empty((d.shape[0], 6, 6))
+    if lib.hessians(d.shape[0], d.shape[1], d.ctypes.data, w.ctypes.data, lam.ctypes.data, H.ctypes.data):
+        return None
+    return H
+
+
+def _library(n: int):
+    """The checked library for ``n`` wires, or None (off, too many wires, not there)."""
+    try:
+        if n > MAX_WIRES or nk.mode() == "off":
+            return None
+        return _kernel(n)
+    except Exception as exc:  # noqa: BLE001 - an accelerator: numpy is always there
+        log.debug("newton kernel: %s: %s", type(exc).__name__, exc)
+        _lib[:] = [nk._Pattern("", "newton", "failed")]
+        return None
 
 
 def check_batch(n: int):
@@ -393,19 +483,31 @@ def check_batch(n: int):
     return a, p, L, 2.0 + k[:, 0], np.full(8, 9.81)
 
 
-def _agrees(func, n: int) -> bool:
-    """``func``'s passes and the numpy passes give every scene of
-    :func:`check_batch` the same CoM, attitude, multipliers and residual
-    bit for bit (and it stepped at all: a library that always declines
-    proves nothing)."""
+def _agrees(lib, n: int) -> bool:
+    """The library's Newton passes (``lib.nstep``) and the numpy passes give
+    every scene of :func:`check_batch` the same CoM, attitude, multipliers
+    and residual bit for bit (and it stepped at all: a library that always
+    declines proves nothing); its ``jacobians`` and ``hessians`` equal
+    numpy's (``_jacobian``, ``_hessian_numpy``) at the start poses and at
+    those ends."""
     from . import batch_rest as br
     a, p, L, m, g = check_batch(n)
     ran: list = []
 
     def counted(*args):
-        k = func(*args)
+        k = lib.nstep(*args)
         ran.append(k)
         return k
-    outs = [br._newton_batch(a, p, L, m, g, *br.newton_start(a, p, L, m, g), native=f) for f in (False, counted)]
+    start = br.newton_start(a, p, L, m, g)
+    outs = [br._newton_batch(a, p, L, m, g, *(x.copy() for x in start), native=f) for f in (False, counted)]
+    pairs = list(zip(*outs))
+    for com, R, lam in (start, outs[0][:3]):
+        d, w, G = br._jacobian_numpy(a, p, com, R)
+        H = np.empty((len(m), 6, 6))
+        mine = (np.empty_like(d), np.empty_like(w), np.empty_like(G))
+        lib.jacobians(len(m), n, a.ctypes.data, p.ctypes.data, com.ctypes.data, R.ctypes.data,
+                      *(x.ctypes.data for x in mine))
+        lib.hessians(len(m), n, d.ctypes.data, w.ctypes.data, lam.ctypes.data, H.ctypes.data)
+        pairs += list(zip((d, w, G, br._hessian_numpy(d, w, lam)), (*mine, H)))
     return any(k > 0 for k in ran) and all(np.array_equal(np.asarray(x).view(np.int64), np.asarray(y).view(np.int64))
-                                           for x, y in zip(*outs))
+                                           for x, y in pairs)
