@@ -11,7 +11,10 @@ detection, flags without contraction or fast-math, private cache
 directory, lock, atomic publish and ``.failed`` marker; built in the
 background, in the foreground under ``BIFILAR_NATIVE=sync``, never under
 ``BIFILAR_NATIVE=0``), loaded through :mod:`ctypes` and called once a
-pass.  The numpy pass stays and is the reference.
+pass.  The numpy pass stays and is the reference.  The same library's
+``jacobians`` and ``hessians`` give :func:`~bifilar.analysis.batch_rest.
+_jacobian` and ``_hessian`` of many scenes (the acceptance checks', the
+modes' and the start pose's), the same bits as their numpy bodies.
 
 Bit for bit the numpy pass's numbers:
 
