@@ -38,6 +38,7 @@ from ..rotations import cross, matrix_to_quat, rotvec_to_matrix, skew_of
 from ..scene import Scene, lowest_point_z
 from .equilibrium import (LINE_TURN_TOL, MIN_WIRE_SLOPE, NEWTON_START_MAX_TURN, START_BOX, RestPose, canonical_attitude, knife_edge_axes,
                           line_turns, multiplier_matrix, near_dependent, rest_pose, start_coms)
+from . import newton_kernel
 from .modes import LazyModeSet, ModeSet, mode_sets, plain_order, unit_shapes
 
 __all__ = ["rest_poses", "modes_batch", "rest_and_modes", "BatchGeometry", "Deferred"]
@@ -85,15 +86,24 @@ _cross = cross  # cross products over the last axis: np.cross's values, without 
 
 
 def _jacobian(a, p, com, R):
-    """Wire vectors d, lever arms w = R p (B, n, 3) and G = [d, w x d] (B, n, 6)."""
+    """Wire vectors d, lever arms w = R p (B, n, 3) and G = [d, w x d] (B, n, 6)
+    of the stacked anchors a, attachments p, CoMs com and attitudes R (SI,
+    world frame): :mod:`.newton_kernel`'s compiled loop where it is there,
+    else :func:`_jacobian_numpy` (the same bits)."""
+    got = newton_kernel.jacobians(a, p, com, R)
+    return _jacobian_numpy(a, p, com, R) if got is None else got
+
+
+def _jacobian_numpy(a, p, com, R):
+    """:func:`_jacobian` in numpy (the reference; the Newton pass's own)."""
     w = np.einsum("bij,bnj->bni", R, p)
     d = com[:, None, :] + w - a
     return d, w, np.concatenate([d, _cross(w, d)], axis=-1)
 
 
 def _constraints(a, p, L, com, R, ii):
-    """d, w, G (as :func:`_jacobian`) and phi = (|d|^2 - L^2)/2 (k, n) for the scenes ``ii``."""
-    d, w, G = _jacobian(a[ii], p[ii], com[ii], R[ii])
+    """d, w, G (as :func:`_jacobian`) and phi = (|d|^2 - L^2)/2 (k, n) for the scenes ``ii`` (numpy's)."""
+    d, w, G = _jacobian_numpy(a[ii], p[ii], com[ii], R[ii])
     return d, w, G, 0.5 * (np.einsum("bni,bni->bn", d, d) - L[ii] ** 2)
 
 
@@ -102,7 +112,16 @@ _skew = skew_of  # cross-product matrices (..., 3, 3) in v's dtype, written entr
 
 def _hessian(d, w, lam):
     """sum_i lam_i H_i (B, 6, 6): the constraint Hessians of
-    :func:`~bifilar.analysis.equilibrium.constraint_hessians`, weighted."""
+    :func:`~bifilar.analysis.equilibrium.constraint_hessians`, weighted
+    (wire vectors d, lever arms w (B, n, 3), multipliers lam (B, n); SI):
+    :mod:`.newton_kernel`'s compiled loop where it is there, else
+    :func:`_hessian_numpy` (the same bits)."""
+    got = newton_kernel.hessians(d, w, lam)
+    return _hessian_numpy(d, w, lam) if got is None else got
+
+
+def _hessian_numpy(d, w, lam):
+    """:func:`_hessian` in numpy (the reference; the Newton pass's own)."""
     W = _skew(w)  # (B, n, 3, 3)
     eye = np.eye(3)
     dw = np.einsum("bni,bni->bn", d, w)
@@ -120,9 +139,13 @@ def _hessian(d, w, lam):
 # --------------------------------------------------------------------------
 # rest poses
 # --------------------------------------------------------------------------
-def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
+def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40, native=True):
     """Newton on grad V + G^T lam = 0, phi = 0 for every scene (damped like
-    the single-scene solver).  Returns com, R, lam, kkt residual (B,)."""
+    the single-scene solver).  Returns com, R, lam, kkt residual (B,).
+    ``native``: each pass but the attitude update by the compiled pass of
+    :mod:`.newton_kernel` where it is there (the same bits; a pass it
+    declines is numpy's), False: numpy only, or a function standing for
+    the compiled ``nstep`` (its load check)."""
     Bn, n = L.shape
     gradV = np.zeros((Bn, 6))
     gradV[:, 2] = m * g
@@ -130,7 +153,19 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
     Lmax = L.max(axis=1)
     active = np.ones(Bn, bool)
     res = np.full(Bn, np.inf)
+    run = None
+    if native is not False:
+        com, R, lam = (np.ascontiguousarray(x, float) for x in (com, R, lam))
+        args = (active, *(np.ascontiguousarray(x, float) for x in (a, p, L, fscale, Lmax)), com, R, lam, res)
+        run = newton_kernel.pass_for(*args) if native is True else newton_kernel._runner(native, *args)
     for _ in range(iters):
+        if run is not None:
+            k, rv, jj = run()
+            if k == 0:
+                break
+            if k > 0:
+                R[jj] = rotvec_to_matrix(rv) @ R[jj]
+                continue
         ii = np.nonzero(active)[0]
         if not len(ii):
             break
@@ -144,7 +179,7 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
         keep = ~conv
         ii, d, w, G, phi, r1 = ii[keep], d[keep], w[keep], G[keep], phi[keep], r1[keep]
         K = np.zeros((len(ii), 6 + n, 6 + n))
-        K[:, :6, :6] = _hessian(d, w, lam[ii])
+        K[:, :6, :6] = _hessian_numpy(d, w, lam[ii])
         K[:, :6, 6:] = np.swapaxes(G, 1, 2)
         K[:, 6:, :6] = G
         rhs = -np.concatenate([r1, phi], axis=1)
@@ -162,12 +197,28 @@ def _newton_batch(a, p, L, m, g, com, R, lam, iters: int = 40):
     # the final residual of the scenes that moved after their last one (a converged scene stopped where its
     # residual was taken: the same expressions on the same rows, so the same bits; every scene of a sigma-point
     # batch converges in 3 steps, and this pass was the fifth of its 5 constraint passes)
+    if run is not None and run(final=True)[0] == 0:
+        return com, R, lam, res
     ii = np.nonzero(active)[0]
     if len(ii):
         d, w, G, phi = _constraints(a, p, L, com, R, ii)
         r1 = gradV[ii] + np.einsum("bni,bn->bi", G, lam[ii])
         res[ii] = np.maximum(np.abs(r1).max(axis=1) / fscale[ii], np.abs(phi).max(axis=1) / Lmax[ii] ** 2)
     return com, R, lam, res
+
+
+def newton_start(a, p, L, m, g):
+    """(com (B, 3), R (B, 3, 3), multipliers (B, n)): where :func:`rest_poses`
+    starts Newton for scenes with the stacked anchors a, attachments p
+    (B, n, 3), lengths L (B, n), masses m and gravities g (B,) (SI, world
+    frame z up): :func:`rest_pose`'s start pose, the identity attitude and
+    the least-squares multipliers there (as ``_newton_kkt``)."""
+    com = start_coms(a, p, L)
+    R = np.broadcast_to(np.eye(3), (len(m), 3, 3)).copy()
+    _, _, G0 = _jacobian(a, p, com, R)
+    gradV = np.zeros((len(m), 6))
+    gradV[:, 2] = m * g
+    return com, R, -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)
 
 
 def _null_space(G: np.ndarray, m: np.ndarray, I: np.ndarray, R: np.ndarray):
@@ -314,12 +365,7 @@ def rest_poses(scenes: Sequence[Scene], guess: RestPose | Sequence[RestPose] | N
     a, p, L, m, g, I = _stack(scenes)
     # Newton from rest_pose's start pose (not from a guess: a rig with two stable equilibria would end at
     # the one nearer the guess, so a sweep's answer would depend on its order; tests/test_multi_equilibria.py)
-    com = start_coms(a, p, L)
-    R = np.broadcast_to(np.eye(3), (len(scenes), 3, 3)).copy()
-    _, _, G0 = _jacobian(a, p, com, R)
-    gradV = np.zeros((len(scenes), 6))
-    gradV[:, 2] = m * g
-    lam = -np.einsum("bij,bj->bi", np.linalg.pinv(np.swapaxes(G0, 1, 2)), gradV)  # least squares, as _newton_kkt
+    com, R, lam = newton_start(a, p, L, m, g)
     com, R, lam, kkt = _newton_batch(a, p, L, m, g, com, R, lam)
     R, d, w, G, dn, T, N, full, ok = _accepted(a, p, L, m, g, I, com, R, lam, kkt)
     # the single path's acceptance rule for its Newton start (rest_pose's stage 2) beside _accepted's: a turn of

@@ -245,12 +245,8 @@ def _call_type(func, values: list):
     """The call extension's type ``K``, or None (off, not built yet, no
     Python headers, failed); checked on first use against the ctypes ``f``
     of ``func`` with ``values``, bit for bit at two states."""
-    if not _call:
-        _call.append(_start_call(nk.mode()))
-    pat = _call[0]
-    if pat.state == "building":
-        nk._poll(pat)
-    if pat.state != "ready":
+    pat = nk.ready_pattern(_call, lambda: _start_call(nk.mode()))
+    if pat is None:
         return None
     if not pat.checked:
         pat.checked = True

@@ -214,6 +214,18 @@ def _odeint_kernel(key, statements, values, ticks, reference):
     return _wrap(pat.func, values(), ticks)
 
 
+def ready_pattern(slot: list, start):
+    """The :class:`_Pattern` in ``slot`` (a list of one, filled by ``start()``
+    on the first call of a process), polled while it builds; it where it
+    is ready (loaded), else None."""
+    if not slot:
+        slot.append(start())
+    pat = slot[0]
+    if pat.state == "building":
+        _poll(pat)
+    return pat if pat.state == "ready" else None
+
+
 def _start(key, statements, m: str) -> _Pattern:
     """Find the pattern's library: load it, or start (or wait for) its build."""
     cc = _compiler()
