@@ -321,15 +321,17 @@ def _surface_message(pb, p, k: int, name: str, g: _Gap, target: float, reading) 
 NEAR_REL = 0.05
 
 
-def across_gap(pb, p, r=None) -> dict | None:
+def across_gap(pb, p, targets) -> dict | None:
     """Whether an answer's period reads across an avoided crossing: the
     partner reading a refusal names (:func:`surface_hint`), given directly.
     ``pb``: the answer's problem (built at the estimate ``p``, SI: its
-    modes are those at ``p``), ``r``: the amplitude factors (K,) of its
-    measurements (None: 1).  For each measurement of label L whose sorted
-    mode at ``p`` has an adjacent mode (label N) within :data:`NEAR_REL` of
-    its period (none: nothing is scanned), the period over its amplitude
-    factor is read under N along each inertia unknown's line through ``p``
+    modes are those at ``p``), ``targets``: the labelled modes' linear
+    periods at ``p`` (K,), s (what the answer reproduces: the period over
+    its amplitude factor; on the edge of the physical set, where no tensor
+    reproduces it exactly, the edge's).  For each measurement of label L
+    whose sorted mode at ``p`` has an adjacent mode (label N) within
+    :data:`NEAR_REL` of its period (none: nothing is scanned), its target
+    is read under N along each inertia unknown's line through ``p``
     (:func:`_line_gaps`): where no value on a line gives N that period and
     it lies in N's jump at a label switch that L carries it across, the
     command with L in place of N is the one a refusal would have named L
@@ -344,7 +346,6 @@ def across_gap(pb, p, r=None) -> dict | None:
 
     if _IN_READING.get() or any(n not in _IDX for n in pb.unknowns):  # a refusal's reading says it already
         return None
-    r = np.ones(len(pb.measurements)) if r is None else np.asarray(r, float)
     for k, m in enumerate(pb.measurements):
         modes, i = pb.models[m.hanging].modes0.modes, pb.mode_index[k]
         T = modes[i].period
@@ -352,7 +353,7 @@ def across_gap(pb, p, r=None) -> dict | None:
                 and abs(modes[j].period - T) <= NEAR_REL * max(T, modes[j].period) and modes[j].label != m.label]
         for lab in near:
             m2 = dataclasses.replace(m, label=lab, details=copy.deepcopy(m.details), secondary=None, hidden=[])
-            target = float(m.period / r[k])
+            target = float(targets[k])
             for _, name, _, _, g in _line_gaps(pb, p, m2, target):
                 if g.found.get(m.label):
                     return _across_finding(pb, p, m, lab, name, g, target)

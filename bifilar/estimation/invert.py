@@ -357,7 +357,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
     warnings += _close_timed_modes(pb, p_hat) + _turned_hangings(pb)
     # several periods or unknowns: the answer a refusal's partner reading names, given directly (cross29)
-    across = across_gap(pb, p_hat, r_hat) if physical_only and not scalar else None
+    across = across_gap(pb, p_hat, T_lin_hat) if physical_only and not scalar else None
     if across is not None:
         warnings.append(across["warning"])
     if fit["birge_factor"] > 1.0:
