@@ -19,7 +19,11 @@ answered, how many of their 95 % intervals hold the truth's values (kg m^2;
 all of them, and per component; the misses' sides and the mean and sd of
 (estimate - truth) / std), how many estimates equal the values the
 refusal named (to their 6 printed digits), the refusals naming none and the
-partner readings refused (first 300 / 200 characters), and the CPU seconds.
+partner readings refused (first 300 / 200 characters), and the CPU seconds;
+and under ``caution``, for the direct answers and the partner readings with
+a std, how many carry invert's across-the-crossing caution
+(``across_crossing``, docs/design.md "cross29, session 29") and how many
+intervals hold the truth among those with and without it.
 
     python scripts/crossing_partner_loop.py --draws 200 --seed 4
     python scripts/crossing_partner_loop.py --draws 200 --seed 4 --amplitude 0.05
@@ -43,6 +47,7 @@ sys.path.insert(0, str(ROOT))  # this tree's bifilar, not an installed copy
 from bifilar.analysis.simulate import simulate  # noqa: E402
 from bifilar.config import read_yaml, scene_from_dict  # noqa: E402
 from bifilar.errors import BifilarError  # noqa: E402
+from bifilar.estimation.crossing_partner import NEAR_REL  # noqa: E402
 from bifilar.estimation.invert import invert  # noqa: E402
 from bifilar.estimation.measurements import DEFAULT_CYCLES, Hanging, Measurement, MeasurementSet  # noqa: E402
 from bifilar.estimation.uncertainty import default_uncertainty  # noqa: E402
@@ -79,6 +84,27 @@ def _named(msg: str, labels: list, periods: list, comps: list):
     return None
 
 
+def _caution(c: dict, r, tv: list) -> None:
+    """Count answer ``r`` in ``c`` (docs/design.md, "cross29, session 29"): whether it carries the
+    across-the-crossing caution (``r.across_crossing``) and, if it has a std, whether each 95 % interval holds
+    the truth ``tv`` (kg m^2), split by caution."""
+    if r.std_unavailable is not None:
+        return
+    c["with_std"] += 1
+    pb = r.problem
+    close = False
+    for k, m in enumerate(pb.measurements):  # a timed mode with an adjacent one within NEAR_REL at the estimate
+        md, i = pb.models[m.hanging].modes0.modes, pb.mode_index[k]
+        close |= any(0 <= j < len(md) and md[i].period and md[j].period and
+                     abs(md[j].period - md[i].period) <= NEAR_REL * max(md[i].period, md[j].period) for j in (i - 1, i + 1))
+    c["rows"].append({"edge": bool(r.roots[0]["edge"]), "close": bool(close), "cautioned": r.across_crossing is not None,
+                      "covered": [bool(lo <= t <= hi) for (lo, hi), t in zip(r.interval, tv)]})
+    c["cautioned"] += int(r.across_crossing is not None)
+    key = "covered_cautioned" if r.across_crossing is not None else "covered_uncautioned"
+    for comp, (lo, hi), t in zip(c[key], r.interval, tv):
+        c[key][comp] += int(lo <= t <= hi)
+
+
 def run(path: str, modes: list, draws: int, seed: int, amplitude: float = 0.0, comps=("Izz",)) -> dict:
     cfg = read_yaml(path)
     truth = scene_from_dict(cfg, warn=False)
@@ -91,15 +117,18 @@ def run(path: str, modes: list, draws: int, seed: int, amplitude: float = 0.0, c
            "draws": draws, "seed": seed, "answered": 0, "refused": 0, "named": {}, "partner_answered": 0,
            "partner_covered": 0, "partner_covered_each": dict.fromkeys(comps, 0), "named_value_matches": 0,
            "partner_misses": {c: {"interval_above_truth": 0, "interval_below_truth": 0} for c in comps},
-           "unnamed": [], "partner_refused": [], "partner_refused_said": 0, "partner_failed_at": []}
+           "unnamed": [], "partner_refused": [], "partner_refused_said": 0, "partner_failed_at": [],
+           "caution": {kind: {"with_std": 0, "cautioned": 0, "covered_cautioned": dict.fromkeys(comps, 0),
+                              "covered_uncautioned": dict.fromkeys(comps, 0), "rows": []} for kind in ("answer", "partner")}}
     zs: dict = {}
     t0 = time.process_time()
     for d in range(draws):
         sc = measured_scene(truth, rng, unc)
         Tm = [t + rng.normal(0, unc["timing"]) for t in T]
         try:
-            _invert(sc, modes, Tm, unc, amplitude, comps)
+            r = _invert(sc, modes, Tm, unc, amplitude, comps)
             out["answered"] += 1
+            _caution(out["caution"]["answer"], r, tv)
             continue
         except BifilarError as e:
             msg = str(e)
@@ -120,6 +149,7 @@ def run(path: str, modes: list, draws: int, seed: int, amplitude: float = 0.0, c
                 out["partner_failed_at"].append({"draw": d, "periods": Tm, "labels": labs})
             continue
         out["partner_answered"] += 1
+        _caution(out["caution"]["partner"], r, tv)
         cov = [bool(lo <= t <= hi) for (lo, hi), t in zip(r.interval, tv)]
         for c, v, sd, (lo, hi), t in zip(comps, r.values, r.budget.std, r.interval, tv):
             zs.setdefault(c, []).append(float((v - t) / sd) if sd > 0 else float("nan"))

@@ -15,7 +15,9 @@ reading, run for the refusal (:func:`partner_reading`: the amplitude
 factor is the partner mode's, so the timed label's target does not carry
 over).  With several unknowns or periods, :func:`surface_hint` names such
 a gap on a line through the best fit and that reading's answer
-(docs/design.md, "partner28, session 28").
+(docs/design.md, "partner28, session 28"); :func:`across_gap` finds, in an
+answer, that it *is* such a reading given directly, whose intervals the
+refusal says cannot be trusted (docs/design.md, "cross29, session 29").
 
 Units: periods in s, inertia components in kg m^2 (reference body axes).
 """
@@ -234,21 +236,40 @@ def surface_hint(pb, p, z, targets, reading=None) -> str:
     line is named as an exchange of character only.  ``""`` when the
     unknowns include a CoM coordinate (the rest pose moves with it: not
     scanned) or no period lies in such a gap."""
-    from .measurements import MeasurementSet
-    from .problem import _IDX, build_problem
-    from .roots import ScalarScan
+    from .problem import _IDX
 
     if any(n not in _IDX for n in pb.unknowns):
         return ""
-    I_p = pb.models[0].inertia_ref(pb.values(p))
-    hangs = [dataclasses.replace(hm.hanging, scene=dataclasses.replace(hm.hanging.scene, inertia=hm.R @ I_p @ hm.R.T))
-             for hm in pb.models]
-    rests = [hm.rest0 for hm in pb.models]
     z = np.asarray(z, float)
     if not np.any(np.isfinite(z)):
         return ""
     k = int(np.nanargmax(np.where(np.isfinite(z), np.abs(z), -1.0)))  # the measurement the refusal names
-    m, target, gaps = pb.measurements[k], float(targets[k]), []
+    m, target = pb.measurements[k], float(targets[k])
+    gaps = [(not g.found[g.lab], abs(0.5 * (g.xa + g.xb) - p[i]) / (b - a), i, name, g)
+            for i, name, a, b, g in _line_gaps(pb, p, m, target)]
+    if not gaps:  # a partner with a root on its line first, then the switch nearest the best fit
+        return ""
+    _, _, _, name, g = min(gaps, key=lambda t: t[:3])
+    return _surface_message(pb, p, k, name, g, target, reading)
+
+
+def _line_gaps(pb, p, m, target: float):
+    """For measurement ``m`` (its label as given) of ``pb`` at the unknowns
+    ``p`` (SI; inertia components only): each line along one inertia
+    unknown, the others held at ``p``, on which no value gives ``m``'s
+    label the period ``target`` (s) and ``target`` lies in the jump at one
+    of its label switches (:func:`_gap_partner`): ``(i, name, a, b, gap)``
+    with the line's admissible ends ``a``, ``b`` (kg m^2).  A line whose
+    scan cannot be built is skipped.  Shared by :func:`surface_hint` (a
+    refusal's best fit) and :func:`across_gap` (an answer)."""
+    from .measurements import MeasurementSet
+    from .problem import build_problem
+    from .roots import ScalarScan
+
+    I_p = pb.models[0].inertia_ref(pb.values(p))
+    hangs = [dataclasses.replace(hm.hanging, scene=dataclasses.replace(hm.hanging.scene, inertia=hm.R @ I_p @ hm.R.T))
+             for hm in pb.models]
+    rests = [hm.rest0 for hm in pb.models]
     for i, name in enumerate(pb.unknowns):
         try:
             scan = ScalarScan(build_problem(MeasurementSet(hangs, [m], rig=pb.rig), [name], pb.unc, rests=rests))
@@ -256,12 +277,8 @@ def surface_hint(pb, p, z, targets, reading=None) -> str:
             g = None if scan.roots(target) else _gap_partner(scan, target)
         except (BifilarError, np.linalg.LinAlgError):
             continue
-        if g is not None:  # a partner with a root on its line first, then the switch nearest the best fit
-            gaps.append((not g.found[g.lab], abs(0.5 * (g.xa + g.xb) - p[i]) / (scan.b - scan.a), i, name, g))
-    if not gaps:
-        return ""
-    _, _, _, name, g = min(gaps, key=lambda t: t[:3])
-    return _surface_message(pb, p, k, name, g, target, reading)
+        if g is not None:
+            yield i, name, scan.a, scan.b, g
 
 
 def _surface_message(pb, p, k: int, name: str, g: _Gap, target: float, reading) -> str:
@@ -297,3 +314,64 @@ def _surface_message(pb, p, k: int, name: str, g: _Gap, target: float, reading) 
     more = (f"; the first of {len(res.roots)} tensors that reproduce them, listed by that command"
             if len(res.roots) > 1 else "")
     return msg + f"; read so{same} the periods give {vals} (invert's answer to that reading, run here{more}){ACROSS}"
+
+
+#: an answer's timed mode whose adjacent sorted modes' periods are all farther than this relative difference
+#: (of the longer) is not scanned for a crossing by :func:`across_gap` (docs/design.md, "cross29, session 29")
+NEAR_REL = 0.05
+
+
+def across_gap(pb, p, targets) -> dict | None:
+    """Whether an answer's period reads across an avoided crossing: the
+    partner reading a refusal names (:func:`surface_hint`), given directly.
+    ``pb``: the answer's problem (built at the estimate ``p``, SI: its
+    modes are those at ``p``), ``targets``: the labelled modes' linear
+    periods at ``p`` (K,), s (what the answer reproduces: the period over
+    its amplitude factor; on the edge of the physical set, where no tensor
+    reproduces it exactly, the edge's).  For each measurement of label L
+    whose sorted mode at ``p`` has an adjacent mode (label N) within
+    :data:`NEAR_REL` of its period (none: nothing is scanned), its target
+    is read under N along each inertia unknown's line through ``p``
+    (:func:`_line_gaps`): where no value on a line gives N that period and
+    it lies in N's jump at a label switch that L carries it across, the
+    command with L in place of N is the one a refusal would have named L
+    for, and this answer is that reading (docs/design.md, "cross29,
+    session 29"): its 95 % intervals are a budget at the inputs as
+    written, which does not hold the jump the reading makes where the
+    label passes.  Returns the first such finding, {``mode``, ``hanging``,
+    ``period`` (s), ``partner``, ``unknown``, ``switch_at`` (kg m^2),
+    ``gap`` ([s, s]), ``warning``}, or None.  Not scanned (None) when the
+    unknowns include a CoM coordinate (as :func:`surface_hint`)."""
+    from .problem import _IDX
+
+    if _IN_READING.get() or any(n not in _IDX for n in pb.unknowns):  # a refusal's reading says it already
+        return None
+    for k, m in enumerate(pb.measurements):
+        modes, i = pb.models[m.hanging].modes0.modes, pb.mode_index[k]
+        T = modes[i].period
+        near = [modes[j].label for j in (i - 1, i + 1) if 0 <= j < len(modes) and T and modes[j].period
+                and abs(modes[j].period - T) <= NEAR_REL * max(T, modes[j].period) and modes[j].label != m.label]
+        for lab in near:
+            m2 = dataclasses.replace(m, label=lab, details=copy.deepcopy(m.details), secondary=None, hidden=[])
+            target = float(targets[k])
+            for _, name, _, _, g in _line_gaps(pb, p, m2, target):
+                if g.found.get(m.label):
+                    return _across_finding(pb, p, m, lab, name, g, target)
+    return None
+
+
+def _across_finding(pb, p, m, lab: str, name: str, g: _Gap, target: float) -> dict:
+    """:func:`across_gap`'s finding and its warning's words."""
+    hang = pb.models[m.hanging].hanging.name
+    where = f"hanging '{hang}': " if len(pb.models) > 1 else ""
+    others = ", ".join(f"{n} = {v:.6g}" for n, v in zip(pb.unknowns, p) if n != name)
+    at = f" with {others} as here" if others else ""
+    what = f"{target:.9g} s" + (" (the period over its amplitude factor)" if target != m.period else "")
+    text = (f"{where}the period timed as '{m.label}' ({what}) lies in an avoided crossing's gap: no {name}{at} gives "
+            f"the mode labelled '{lab}' that period, which jumps over {min(g.Ta, g.Tb):.9g} s .. "
+            f"{max(g.Ta, g.Tb):.9g} s where {name} passes {0.5 * (g.xa + g.xb):.6g} kg m^2, and '{m.label}' "
+            f"carries it across (the two modes exchange character near here): this answer is the reading that "
+            f"invert's refusal of the period as '{lab}' names{ACROSS}")
+    return {"mode": m.label, "hanging": hang, "period": float(m.period), "partner": lab, "unknown": name,
+            "switch_at": float(0.5 * (g.xa + g.xb)), "gap": [float(min(g.Ta, g.Tb)), float(max(g.Ta, g.Tb))],
+            "warning": text}

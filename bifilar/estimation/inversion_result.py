@@ -70,6 +70,9 @@ class InversionResult:
     #: the components not solved for (:class:`~bifilar.estimation.prior_inertia.PriorInertia`): priors,
     #: their stated uncertainty and the unknowns' sensitivity to them
     prior_inertia: object = field(default=None, repr=False)
+    #: a period read across an avoided crossing, its intervals not to be trusted
+    #: (:func:`~bifilar.estimation.crossing_partner.across_gap`), or None
+    across_crossing: dict | None = None
 
     @property
     def std(self) -> np.ndarray:
@@ -151,6 +154,7 @@ class InversionResult:
             "degenerate_inputs": self.degenerate_inputs,
             "monte_carlo": self.monte_carlo.to_json() if self.monte_carlo is not None else None,
             "std_unavailable": self.std_unavailable,
+            "across_crossing": self.across_crossing,
             "prior_inertia": self.prior_inertia.to_json(self.std) if self.prior_inertia is not None else None,
             # which rig inputs the hangings share (one error for all of them) and under which model
             "rig": self.problem.links.to_json() if self.problem is not None else None,

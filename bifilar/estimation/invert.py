@@ -91,7 +91,7 @@ from .fit_check import (EDGE_Z, fit_statistics, input_fit_check, labelled_period
 from .prior_inertia import (past_limit_warning, past_prior_edge, prior_terms, prior_warning, with_prior,
                             with_prior_curvature)
 from .inversion_curves import inversion_curves  # noqa: F401  (re-exported: the CLI's --plot)
-from .crossing_partner import partner_reading
+from .crossing_partner import across_gap, partner_reading
 from .roots import Root, find_roots
 from .roots import separating_measurement
 from .signal_alias import check_signal_aliases
@@ -356,6 +356,10 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                             f"{n} {budget.std[i]:.3g} (linear {std_lin[i]:.3g})" for i, n in enumerate(pb.unknowns)))
     warnings += parts_prior_warnings(described, pb.unknowns, p_hat)
     warnings += _close_timed_modes(pb, p_hat) + _turned_hangings(pb)
+    # several periods or unknowns: the answer a refusal's partner reading names, given directly (cross29)
+    across = across_gap(pb, p_hat, T_lin_hat) if physical_only and not scalar else None
+    if across is not None:
+        warnings.append(across["warning"])
     if fit["birge_factor"] > 1.0:
         warnings.append(birge_note(fit["birge_factor"], fit))
     # -- ladder rows ------------------------------------------------------
@@ -415,6 +419,7 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
                           _assumed(unc_all), degenerate, warnings, notes, problem=pb,
                           sims=(est_nl.sims if est_nl is not None else []), amplitude_laws=list(laws or []))
     res.input_factor_shift = dict(bctx.factor_shift)
+    res.across_crossing = across
     res.prior_inertia = bctx.prior
     res.notes += slack_notes
     if elastic_refusal is not None:
