@@ -6,7 +6,7 @@ errors known, the budget's own error model would have held the truth in
 inputs, jumps where the crossing passes the timed oscillation; the refusal
 selects exactly the draws whose truth lies across that jump, and a budget
 built at the inputs as written cannot hold it.  So the refusal now says its
-reading's intervals cannot be trusted there.  ~8 s CPU."""
+reading's intervals hold only if the labels are right.  ~8 s CPU."""
 
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ def test_several_unknowns_partner_reading_says_its_intervals_cannot_be_trusted()
     assert r.exit_code == 2 and r.stderr.count("\n") == 1
     said = r.stderr.split("(invert's answer to that reading, run here)", 1)
     assert len(said) == 2, r.stderr
-    assert said[1].startswith("; its 95 % intervals cannot be trusted here: if the inputs' errors moved the "
-                              "crossing past the timed oscillation, the truth lies across the jump the answer "
+    assert said[1].startswith("; its 95 % intervals hold only if the labels are right: if the inputs' "
+                              "errors moved the crossing past the timed oscillation, the truth lies across the jump the answer "
                               "makes where the label passes"), r.stderr
 
 

@@ -74,8 +74,8 @@ def test_the_direct_partner_command_says_its_intervals_cannot_be_trusted(tmp_pat
     assert got["gap"][0] < TORSION < got["gap"][1]
     w = [x for x in doc["warnings"] if "avoided crossing's gap" in x]
     assert w == [got["warning"]] and got["warning"] in " ".join(r.stderr.split())
-    assert "invert's refusal of the period as 'torsion' names; its 95 % intervals cannot be trusted here" in w[0]
-    assert w[0].endswith(crossing_partner.ACROSS[len("; its 95 % intervals cannot be trusted here"):])
+    assert "invert's refusal of the period as 'torsion' names; its 95 % intervals hold only if the labels are right" in w[0]
+    assert w[0].endswith(crossing_partner.ACROSS[len("; its 95 % intervals hold only if the labels are right"):])
 
     x = got["switch_at"]
     below, above = _modes(tmp_path, ixx, x * (1 - 1e-4)), _modes(tmp_path, ixx, x * (1 + 1e-4))

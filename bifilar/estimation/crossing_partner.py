@@ -16,8 +16,8 @@ factor is the partner mode's, so the timed label's target does not carry
 over).  With several unknowns or periods, :func:`surface_hint` names such
 a gap on a line through the best fit and that reading's answer
 (docs/design.md, "partner28, session 28"); :func:`across_gap` finds, in an
-answer, that it *is* such a reading given directly, whose intervals the
-refusal says cannot be trusted (docs/design.md, "cross29, session 29").
+answer, that it *is* such a reading given directly, whose intervals hold
+only if the labels are right (docs/design.md, "cross29, session 29").
 
 Units: periods in s, inertia components in kg m^2 (reference body axes).
 """
@@ -38,10 +38,11 @@ from .fit_check import label_index
 _IN_READING: ContextVar[bool] = ContextVar("bifilar_partner_reading", default=False)
 
 #: what several unknowns' partner reading cannot promise (docs/design.md, "cross28, session 28"): its
-#: intervals are a budget at the inputs as written, and the truth lies across the reading's jump
-ACROSS = ("; its 95 % intervals cannot be trusted here: if the inputs' errors moved the crossing past the timed "
-          "oscillation, the truth lies across the jump the answer makes where the label passes, which a budget at "
-          "the inputs as written does not hold")
+#: intervals are a budget at the inputs as written, and the truth may lie across the reading's jump (a
+#: conditional: cross29 measured such readings covering off the physical set's edge, not on it)
+ACROSS = ("; its 95 % intervals hold only if the labels are right: if the inputs' errors moved the crossing past "
+          "the timed oscillation, the truth lies across the jump the answer makes where the label passes, which a "
+          "budget at the inputs as written does not hold")
 
 
 def partner_reading(ms, run):
