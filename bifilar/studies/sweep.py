@@ -256,6 +256,16 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and keeps finished points
 
 
+def _evaluate_chunk(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings,
+                    screen: bool = False) -> list[dict]:
+    """:func:`evaluate_point` of each point of ``grid`` (a worker's task),
+    several together in :func:`~bifilar.analysis.shared_batch.run_together`
+    (their shared batches: the same figures as each alone)."""
+    if screen or len(grid) == 1:
+        return [evaluate_point(base_cfg, source, p, settings, screen=screen) for p in grid]
+    return run_together([partial(evaluate_point, base_cfg, source, p, settings) for p in grid])
+
+
 #: points of a one-process sweep evaluated together, their sigma points and start poses each in one batch
 #: (:func:`~bifilar.analysis.shared_batch.run_together`): the batch's fixed cost a point is ~1/16 of
 #: one point's, and the progress and journal lag a chunk by at most this many points
@@ -268,7 +278,9 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
     """Evaluate every point of ``grid`` (list of {param: value}); returns the
     point dicts in grid order.
 
-    workers : processes (``concurrent.futures.ProcessPoolExecutor``) when > 1.
+    workers : processes (``concurrent.futures.ProcessPoolExecutor``) when > 1,
+        each task a chunk of points evaluated together (at most
+        :data:`SHARED_CHUNK`, two chunks a worker at least; a screen one point).
     journal : append each finished point to this JSON-lines file; with
         ``resume`` the points already in it are reused (same params -> same
         result) instead of recomputed.
@@ -335,17 +347,22 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
         else:
             from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-            ex = ProcessPoolExecutor(max_workers=effective_workers(workers, len(todo)), initializer=_ignore_sigint)
+            nw = effective_workers(workers, len(todo))
+            # a worker's points in chunks sharing their batches, as in one process; two chunks a worker at least,
+            # so that the last ones balance (a screen: one point a task)
+            size = 1 if screen else max(1, min(SHARED_CHUNK, len(todo) // (2 * nw)))
+            ex = ProcessPoolExecutor(max_workers=nw, initializer=_ignore_sigint)
             try:
-                pending = {ex.submit(evaluate_point, base_cfg, source, grid[i], settings, screen=screen): i
-                           for i in todo}
+                pending = {ex.submit(_evaluate_chunk, base_cfg, source, [grid[i] for i in todo[j:j + size]], settings,
+                                     screen): todo[j:j + size] for j in range(0, len(todo), size)}
                 while pending:
                     ready, _ = wait(pending, return_when=FIRST_COMPLETED)
                     for f in ready:
-                        i = pending.pop(f)
-                        if stop_after is not None and new >= stop_after:
-                            raise SweepInterrupted(finished, total)
-                        record(i, f.result())
+                        chunk = pending.pop(f)
+                        for i, point in zip(chunk, f.result()):
+                            if stop_after is not None and new >= stop_after:
+                                raise SweepInterrupted(finished, total)
+                            record(i, point)
             finally:
                 ex.shutdown(wait=True, cancel_futures=True)
     except SweepInterrupted:
