@@ -7,8 +7,8 @@ stacked arrays: ~0.9 ms and ~1.1 ms a Solar Boat point, docs/design.md
 
 How.  :func:`run_together` runs each evaluation (a whole sweep point,
 :func:`bifilar.studies.point.evaluate_point`) in a thread of its own, one
-thread at a time (a turn handed over by a condition: never two running,
-so what each does happens in its own order alone).  Where an evaluation
+thread at a time (a turn handed over by one event a thread: never two
+running, so what each does happens in its own order alone).  Where an evaluation
 reaches a shareable call it asks :func:`shared` and parks; when every
 evaluation has parked or finished, the parked requests of each kind are
 solved in one batch (:data:`SOLVERS`) and each evaluation resumes with
@@ -47,31 +47,43 @@ class _Aborted(BaseException):
 
 
 class _Turns:
-    """Who runs: ``turn`` is an evaluation's index or ``MAIN``; parked
-    requests {index: (kind, payload)} and their answers."""
+    """Who runs: evaluation ``i`` while its event ``go[i]`` is set, the
+    calling thread while ``back`` is (one event a thread, so a hand-over
+    wakes only the thread it is for); parked requests {index: (kind,
+    payload)} and their answers."""
 
-    MAIN = -1
-
-    def __init__(self):
-        self.cv = threading.Condition()
-        self.turn = self.MAIN
+    def __init__(self, n: int):
+        self.go = [threading.Event() for _ in range(n)]
+        self.back = threading.Event()
         self.parked: dict[int, tuple] = {}
         self.answers: dict[int, object] = {}
         self.abort = False
 
-    def wait_turn(self, i: int) -> None:  # (holding cv)
-        while self.turn != i and not self.abort:
-            self.cv.wait()
+    def wait_turn(self, i: int) -> None:
+        self.go[i].wait()
         if self.abort:
             raise _Aborted()
 
+    def hand_back(self, i: int) -> None:
+        self.go[i].clear()
+        self.back.set()
+
     def park(self, i: int, request: tuple):
-        with self.cv:
-            self.parked[i] = request
-            self.turn = self.MAIN
-            self.cv.notify_all()
-            self.wait_turn(i)
-            return self.answers.pop(i)
+        self.parked[i] = request
+        self.hand_back(i)
+        self.wait_turn(i)
+        return self.answers.pop(i)
+
+    def step(self, i: int) -> None:
+        """Let evaluation ``i`` run until it parks or finishes."""
+        self.back.clear()
+        self.go[i].set()
+        self.back.wait()
+
+    def stop(self) -> None:
+        self.abort = True
+        for g in self.go:
+            g.set()
 
 
 def shared(kind: str, payload):
@@ -165,7 +177,7 @@ def run_together(fns: Sequence[Callable[[], object]], on_done: Callable[[int, ob
     included) is raised here, after stopping the others (each at its next
     request); so is a KeyboardInterrupt of the calling thread."""
     n = len(fns)
-    turns = _Turns()
+    turns = _Turns(n)
     out: list = [None] * n
     done = [False] * n
     failed: list = []
@@ -173,25 +185,18 @@ def run_together(fns: Sequence[Callable[[], object]], on_done: Callable[[int, ob
     def body(i: int) -> None:
         _local.turns, _local.index = turns, i
         try:
-            with turns.cv:
-                turns.wait_turn(i)
+            turns.wait_turn(i)
             out[i] = fns[i]()
         except _Aborted:
             pass
         except BaseException as exc:  # noqa: BLE001 - handed to the calling thread, raised there
             failed.append(exc)
         finally:
-            with turns.cv:
-                done[i] = True
-                turns.turn = turns.MAIN
-                turns.cv.notify_all()
+            done[i] = True
+            turns.hand_back(i)
 
     def step(i: int) -> None:
-        with turns.cv:
-            turns.turn = i
-            turns.cv.notify_all()
-            while turns.turn != turns.MAIN:
-                turns.cv.wait()
+        turns.step(i)
         if failed:
             raise failed[0]
         if done[i] and on_done is not None:
@@ -217,9 +222,7 @@ def run_together(fns: Sequence[Callable[[], object]], on_done: Callable[[int, ob
                 del turns.parked[i]
                 step(i)
     except BaseException:
-        with turns.cv:
-            turns.abort = True
-            turns.cv.notify_all()
+        turns.stop()
         raise
     for t in threads:
         t.join()
