@@ -342,9 +342,9 @@ def bench_engines() -> dict:
     jobs, sigma = [], []
     real = budget._hanging_periods
 
-    def record(scenes, rest, base_modes):
+    def record(scenes, rest, base_modes, *more):  # (more: the poses, batch geometry and mode sets if computed)
         sigma.append((list(scenes), rest))
-        return real(scenes, rest, base_modes)
+        return real(scenes, rest, base_modes, *more)
 
     budget._hanging_periods = record
     try:
