@@ -22,7 +22,10 @@ and ``--resume`` need).
 ``--parts``: where one point's CPU goes (its sensitivity, the honest
 sigma with its sigma points, the nonlinear runs, the biases).
 ``--grid-points``: each of the whole sweep's points alone beside the
-default point, and the JSON a point adds (:func:`bench_grid_points`);
+default point, the whole sweep as ``run_sweep`` evaluates it (one
+process: its points in chunks sharing their sigma-point batch, checked
+bit for bit against each point alone), and the JSON a point adds
+(:func:`bench_grid_points`);
 with ``--other DIR`` only that, for this checkout's bifilar and DIR's, in
 fresh processes alternating (:func:`bench_grid_points_ab`).
 
@@ -215,7 +218,11 @@ def bench_grid_points(repeats: int = 5) -> dict:
     (2: its own runs and its amplitude laws'; 3 where a law's ``dr/dI`` is
     run again at a tighter rtol, ``point_amplitude._refine_dr_dI``); and
     what ``sweep --json`` adds a point: its points made plain
-    (``to_jsonable``) and written (``json.dumps``), CPU ms a point."""
+    (``to_jsonable``) and written (``json.dumps``), CPU ms a point; and,
+    in each round after the points alone, the 28 points by ``run_sweep``
+    (one process, no journal; since sigbatch29 in chunks whose sigma
+    points share one batch), CPU a point, its points checked to be each
+    point's own JSON, byte for byte (raises otherwise)."""
     from bifilar.analysis import batch
     from bifilar.jsonable import to_jsonable
 
@@ -232,12 +239,14 @@ def bench_grid_points(repeats: int = 5) -> dict:
         return real(*a, **k)
 
     cpu: list = [[] for _ in todo]
+    whole: list = []  # the 28 points as the sweep evaluates them (run_sweep, one process), CPU s a point
     ncalls = [0] * len(todo)
     points = []
     batch.simulate_batch = counted
     try:
         for p in todo:  # warm-up (imports, compiled kernels of every pattern)
             sw.evaluate_point(cfg, str(path), p, st)
+        sw.run_sweep(cfg, str(path), grid, st)
         gc.collect()
         for _ in range(repeats):
             points = []
@@ -247,6 +256,11 @@ def bench_grid_points(repeats: int = 5) -> dict:
                 points.append(sw.evaluate_point(cfg, str(path), p, st))
                 cpu[i].append(time.process_time() - c0)
                 ncalls[i] = calls[0]
+            c0 = time.process_time()
+            swept = sw.run_sweep(cfg, str(path), grid, st)
+            whole.append((time.process_time() - c0) / len(grid))
+            if json.dumps(to_jsonable(swept)) != json.dumps(to_jsonable(points[1:])):
+                raise RuntimeError("run_sweep's points are not each point's own, bit for bit")
     finally:
         batch.simulate_batch = real
     med = [statistics.median(c) for c in cpu]
@@ -259,7 +273,7 @@ def bench_grid_points(repeats: int = 5) -> dict:
     for m, n in zip(med[1:], ncalls[1:]):
         by_calls.setdefault(str(n), []).append(m)
     return {"default_point_cpu_s": med[0], "grid_points": len(grid),
-            "grid_point_mean_cpu_s": statistics.mean(med[1:]),
+            "grid_point_mean_cpu_s": statistics.mean(med[1:]), "sweep_point_cpu_s": statistics.median(whole),
             "grid_by_engine_calls": {k: {"points": len(v), "mean_cpu_s": statistics.mean(v)}
                                      for k, v in sorted(by_calls.items())},
             "grid_point_cpu_s": {sw.point_key(p): m for p, m in zip(grid, med[1:])},
@@ -300,7 +314,9 @@ def _grid_points_line(gp: dict) -> str:
             + ", ".join(f"{v['points']} with {k} calls of the batched engine {1e3 * v['mean_cpu_s']:.2f}"
                         for k, v in gp["grid_by_engine_calls"].items())
             + (f"; a point with 3 calls {1e3 * ex:.2f} ms above the others" if ex is not None else "")
-            + f"); sweep --json's to_jsonable + json.dumps {1e3 * gp['json_cpu_s_a_point']:.3f} ms a point")
+            + f"); sweep --json's to_jsonable + json.dumps {1e3 * gp['json_cpu_s_a_point']:.3f} ms a point"
+            + (f"; the sweep (run_sweep, one process) {1e3 * gp['sweep_point_cpu_s']:.2f} ms a point"
+               if "sweep_point_cpu_s" in gp else ""))
 
 
 def _run_figures(r) -> tuple:
@@ -326,9 +342,9 @@ def bench_engines() -> dict:
     jobs, sigma = [], []
     real = budget._hanging_periods
 
-    def record(scenes, rest, base_modes):
+    def record(scenes, rest, base_modes, *more):  # (more: the poses, batch geometry and mode sets if computed)
         sigma.append((list(scenes), rest))
-        return real(scenes, rest, base_modes)
+        return real(scenes, rest, base_modes, *more)
 
     budget._hanging_periods = record
     try:
@@ -476,7 +492,8 @@ def main(argv=None) -> int:
             ex = [e for e in map(_refine_excess, docs) if e is not None]
             print(f"{label} ({len(docs)} rounds, medians): the default point "
                   f"{1e3 * statistics.median(d['default_point_cpu_s'] for d in docs):.2f} ms, the sweep's mean point "
-                  f"{1e3 * statistics.median(d['grid_point_mean_cpu_s'] for d in docs):.2f} ms"
+                  f"{1e3 * statistics.median(d['grid_point_mean_cpu_s'] for d in docs):.2f} ms, the whole sweep "
+                  f"(run_sweep) {1e3 * statistics.median(d['sweep_point_cpu_s'] for d in docs):.2f} ms a point"
                   + (f", a point with 3 engine calls {1e3 * statistics.median(ex):.2f} ms above the others" if ex else "")
                   + f", the JSON {1e3 * statistics.median(d['json_cpu_s_a_point'] for d in docs):.3f} ms a point")
         if args.json:

@@ -236,6 +236,7 @@ def test_bench_grid_points_counts_the_refining_points():
     assert r["grid_points"] == 28 and len(r["grid_point_cpu_s"]) == 28
     by = r["grid_by_engine_calls"]
     assert set(by) <= {"2", "3"} and sum(v["points"] for v in by.values()) == 28
-    # the warm-up and the one timed round each refine the same points (the default point refines none)
-    assert len(refined) == 2 * by.get("3", {"points": 0})["points"] and by["3"]["points"] > 0
+    # the warm-up and the one timed round each refine the same points (the default point refines none), each
+    # twice since sigbatch29: its points alone and the whole sweep by run_sweep
+    assert len(refined) == 4 * by.get("3", {"points": 0})["points"] and by["3"]["points"] > 0
     assert 0 < r["json_cpu_s_a_point"] < r["default_point_cpu_s"]

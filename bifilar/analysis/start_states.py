@@ -16,6 +16,7 @@ from ..models import maximal as mx
 from ..scene import Scene
 from .equilibrium import RestPose
 from .modes import Mode
+from .shared_batch import shared
 from .start_pose import StartPoses, refusal, start_poses
 
 
@@ -109,10 +110,14 @@ def checked_start_poses(scene: Scene, rest: RestPose, modes: list[Mode], amplitu
             break
     n = len(modes)
     if more is not None and beyond is None and n and len(more[0]):
-        sp = start_poses([scene] * n + list(more[0]), [rest] * n + list(more[1]), list(modes) + list(more[2]),
-                         np.r_[np.full(n, float(amplitude)), np.asarray(more[3], float)])
+        job = ([scene] * n + list(more[0]), [rest] * n + list(more[1]), list(modes) + list(more[2]),
+               np.r_[np.full(n, float(amplitude)), np.asarray(more[3], float)])
     else:
-        sp = start_poses([scene] * n, [rest] * n, modes, amplitude) if modes else None
+        job = ([scene] * n, [rest] * n, list(modes), np.full(n, float(amplitude))) if modes else None
+    # in a batch shared with other sweep points where there is one (rows solved independently: the same numbers)
+    sp = None if job is None else shared("start poses", job)
+    if sp is None and job is not None:
+        sp = start_poses(*job)
     for j, mode in enumerate(modes):
         if not sp.feasible[j]:
             raise refusal(scene, mode, amplitude, float(sp.gap[j]), **sp.off_wires(j))

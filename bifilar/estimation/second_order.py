@@ -130,7 +130,7 @@ def _perturbed_scene(pb: Problem, h: int, scene, moves):
     return scene
 
 
-def _hanging_periods(scenes, rest, base_modes, rests=None, geo=None) -> list:
+def _hanging_periods(scenes, rest, base_modes, rests=None, geo=None, mss=None) -> list:
     """(periods, scene, rest, modes, col) of each scene, ``col`` the index of
     each of ``base_modes`` in its modes (MAC); rest poses by the batched
     Newton from the start pose, where that is not accepted from ``rest``
@@ -138,7 +138,9 @@ def _hanging_periods(scenes, rest, base_modes, rests=None, geo=None) -> list:
     where neither is; None where the scene cannot hang.  Batched engine.
     ``rests``, ``geo``: the scenes' rest poses (a pose, an exception, or
     :data:`SKIPPED`: not needed, None here) and batch geometry if already
-    computed (:func:`_solve_points`)."""
+    computed (:func:`_solve_points`); ``mss``: the mode sets of all the
+    scenes if already computed (a batch shared with other sweep points,
+    :func:`~bifilar.analysis.shared_batch.shared`: every pose given)."""
     from ..analysis.batch import modes_batch, rest_poses
     from .montecarlo import _modes_or_none
 
@@ -150,8 +152,9 @@ def _hanging_periods(scenes, rest, base_modes, rests=None, geo=None) -> list:
     if not good:
         return out
     # lazy: most sigma points need only their periods and shapes (the Mode objects when _resolve reads them)
-    mss = _modes_or_none(lambda s, r: modes_batch(s, r, lazy=True, geometry=geo[0] if geo else None),
-                         [scenes[q] for q in good], [rests[q] for q in good])
+    if mss is None:
+        mss = _modes_or_none(lambda s, r: modes_batch(s, r, lazy=True, geometry=geo[0] if geo else None),
+                             [scenes[q] for q in good], [rests[q] for q in good])
     kept = [(q, ms) for q, ms in zip(good, mss) if ms is not None and n_modes(ms) == len(base_modes.modes)]
     for (q, ms), col in zip(kept, mac_matches(base_modes, [ms for _, ms in kept])):
         P = getattr(ms, "periods", None)  # a LazyModeSet's (all finite: no neutral mode)
@@ -267,18 +270,25 @@ def _solve_points(pb: Problem, ctx: BudgetContext, p_hat, r_hat, points: dict) -
             else:
                 jobs[h].append((pid, _perturbed_scene(pb, h, ctx.scenes[h], moves), ck))
     from ..analysis.batch import rest_poses
+    from ..analysis.shared_batch import shared
 
-    rests, geos = {}, {}
+    rests, geos, mss = {}, {}, {}
+    busy = [h for h, jl in jobs.items() if jl]
+    # one hanging's scenes: solved in a batch shared with other sweep points where there is one (the same numbers)
+    both = shared("sigma points", [j[1] for j in jobs[busy[0]]]) if len(busy) == 1 else None
+    if both is not None:
+        rests[busy[0]], mss[busy[0]] = both
+        geos[busy[0]] = None
     for h, jl in jobs.items():
-        if jl:
+        if jl and h not in rests:
             geos[h] = []
             rests[h] = rest_poses([j[1] for j in jl], ctx.rests[h], errors="return", geometry=geos[h],
                                   near=ctx.rests[h], defer=True)
     _settle(points, jobs, rests, res)
     for h, rs in rests.items():
         jl = jobs[h]
-        for (pid, _, ck), o, r in zip(jl, _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h], rs, geos[h]),
-                                      rs):
+        outs = _hanging_periods([j[1] for j in jl], ctx.rests[h], ctx.modes[h], rs, geos[h], mss.get(h))
+        for (pid, _, ck), o, r in zip(jl, outs, rs):
             res[pid][h] = o
             if ck is not None and r is not SKIPPED:
                 cache[ck] = o

@@ -76,11 +76,13 @@ import hashlib
 import json
 import math
 import os
+from functools import partial
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from ..analysis.shared_batch import run_together
 from ..errors import InputError
 from .point import (IDENTIFIABLE_MIN, TURN_MAX, _Ladder, _nonlinear_runs, _one_line, _plain,  # noqa: F401
                     evaluate_point, evaluate_points, linear_estimate, point_sensitivity, predicted_budget, rig_of,
@@ -254,13 +256,31 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and keeps finished points
 
 
+def _evaluate_chunk(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings,
+                    screen: bool = False) -> list[dict]:
+    """:func:`evaluate_point` of each point of ``grid`` (a worker's task),
+    several together in :func:`~bifilar.analysis.shared_batch.run_together`
+    (their shared batches: the same figures as each alone)."""
+    if screen or len(grid) == 1:
+        return [evaluate_point(base_cfg, source, p, settings, screen=screen) for p in grid]
+    return run_together([partial(evaluate_point, base_cfg, source, p, settings) for p in grid])
+
+
+#: points of a one-process sweep evaluated together, their sigma points and start poses each in one batch
+#: (:func:`~bifilar.analysis.shared_batch.run_together`): the batch's fixed cost a point is ~1/16 of
+#: one point's, and the progress and journal lag a chunk by at most this many points
+SHARED_CHUNK = 16
+
+
 def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings, *, workers: int = 1,
               journal: Path | None = None, resume: bool = False, progress: Callable[[int, int], None] | None = None,
               stop_after: int | None = None, screen: bool = False) -> list[dict]:
     """Evaluate every point of ``grid`` (list of {param: value}); returns the
     point dicts in grid order.
 
-    workers : processes (``concurrent.futures.ProcessPoolExecutor``) when > 1.
+    workers : processes (``concurrent.futures.ProcessPoolExecutor``) when > 1,
+        each task a chunk of points evaluated together (at most
+        :data:`SHARED_CHUNK`, two chunks a worker at least; a screen one point).
     journal : append each finished point to this JSON-lines file; with
         ``resume`` the points already in it are reused (same params -> same
         result) instead of recomputed.
@@ -269,6 +289,11 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
     screen : the cheap points of a planner's search (``evaluate_point(..., screen=True)``;
         not for a journal, whose points are full); in one process, their
         nonlinear runs in one batch (:func:`~bifilar.studies.point.evaluate_points`).
+    With one worker, the points are evaluated in chunks of :data:`SHARED_CHUNK`
+    whose sigma points and runs' start poses are each solved in one batch
+    (:func:`~bifilar.analysis.shared_batch.run_together`: each point's
+    figures the same bits as evaluated alone; progress and the journal move
+    as each point of a chunk finishes, after the chunk's shared batches).
     Raises :class:`SweepInterrupted` on Ctrl-C too; finished points are in the journal.
     """
     if screen and journal is not None:
@@ -303,24 +328,41 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
                                                       screen=True)):
                 record(i, point)
         elif workers <= 1 or len(todo) <= 1:
-            for i in todo:
+            j = 0
+            while j < len(todo):
                 if stop_after is not None and new >= stop_after:
                     raise SweepInterrupted(finished, total)
-                record(i, evaluate_point(base_cfg, source, grid[i], settings, screen=screen))
+                # (a screen has no sigma points: one at a time)
+                size = 1 if screen else SHARED_CHUNK if stop_after is None else min(SHARED_CHUNK, stop_after - new)
+                chunk = todo[j:j + size]
+                j += len(chunk)
+                if len(chunk) == 1:
+                    record(chunk[0], evaluate_point(base_cfg, source, grid[chunk[0]], settings, screen=screen))
+                else:
+                    # a chunk's points together, their sigma points' rest poses and modes, and their runs' start
+                    # poses, each in one batch: each point's figures the same bits as alone
+                    # (bifilar.analysis.shared_batch)
+                    run_together([partial(evaluate_point, base_cfg, source, grid[i], settings) for i in chunk],
+                                 on_done=lambda n, point, chunk=chunk: record(chunk[n], point))
         else:
             from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-            ex = ProcessPoolExecutor(max_workers=effective_workers(workers, len(todo)), initializer=_ignore_sigint)
+            nw = effective_workers(workers, len(todo))
+            # a worker's points in chunks sharing their batches, as in one process; two chunks a worker at least,
+            # so that the last ones balance (a screen: one point a task)
+            size = 1 if screen else max(1, min(SHARED_CHUNK, len(todo) // (2 * nw)))
+            ex = ProcessPoolExecutor(max_workers=nw, initializer=_ignore_sigint)
             try:
-                pending = {ex.submit(evaluate_point, base_cfg, source, grid[i], settings, screen=screen): i
-                           for i in todo}
+                pending = {ex.submit(_evaluate_chunk, base_cfg, source, [grid[i] for i in todo[j:j + size]], settings,
+                                     screen): todo[j:j + size] for j in range(0, len(todo), size)}
                 while pending:
                     ready, _ = wait(pending, return_when=FIRST_COMPLETED)
                     for f in ready:
-                        i = pending.pop(f)
-                        if stop_after is not None and new >= stop_after:
-                            raise SweepInterrupted(finished, total)
-                        record(i, f.result())
+                        chunk = pending.pop(f)
+                        for i, point in zip(chunk, f.result()):
+                            if stop_after is not None and new >= stop_after:
+                                raise SweepInterrupted(finished, total)
+                            record(i, point)
             finally:
                 ex.shutdown(wait=True, cancel_futures=True)
     except SweepInterrupted:
