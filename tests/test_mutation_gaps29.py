@@ -167,3 +167,89 @@ def test_the_harmonic_term_is_the_largest_over_the_further_modes_in_either_order
     assert a > 0 and b == pytest.approx(a, rel=1e-6)
     assert ha["frequency"] == pytest.approx(1.24, rel=1e-12) == hb["frequency"]
     assert ha["floor"] == hb["floor"] == sh.NOISE_FLOOR
+
+
+# ---------------------------------------------------------------------------
+# estimation/second_order.py (fixed28: the stacked surrogates)
+# ---------------------------------------------------------------------------
+
+def test_an_input_whose_sigma_point_fails_on_either_side_alone_is_returned_as_failed(monkeypatch):
+    """second_order returns "the keys whose sigma points cannot hang": an
+    input fails when either of its two sigma points does.  Three inputs of
+    one unknown: 'a' with its +sigma point unsolvable, 'b' its -sigma point,
+    'c' both solved on an exactly linear response (p = p0 +- sqrt(3) c, the
+    linear budget's contribution c = 2e-3: no 2nd order, so the linear budget
+    itself comes back, identical).  ``_solve_points`` is replaced by that
+    table (the sigma points' solves are not what is tested).  Kills
+    second_order 221 (``or -> and``: 'a' and 'b' taken as solved, their None
+    stacked) and 222 (the -1 side read as the +1 side: 'b' taken as solved)."""
+    from bifilar.estimation import second_order as so
+    from bifilar.estimation.uncertainty import LinearBudget
+
+    p0, c = np.array([0.1]), 2e-3
+    h = so.SIGMA_POINT
+    table = {("a", 1): None, ("a", -1): p0 - h * c, ("b", 1): p0 + h * c, ("b", -1): None,
+             ("c", 1): p0 + h * c, ("c", -1): p0 - h * c}
+    monkeypatch.setattr(so, "_solve_points", lambda pb, ctx, p_hat, r_hat, points: {k: table[k] for k in points})
+    ctx = types.SimpleNamespace(inputs=["a", "b", "c"], sigmas={"a": 1.0, "b": 1.0, "c": 1.0}, modes=[],
+                                factor_shift={}, amplitude={}, cross=None, surrogate=None, nonlinear=None)
+    contrib = {"a": np.array([1e-3]), "b": np.array([1e-3]), "c": np.array([c])}
+    lin = LinearBudget(["Izz"], np.array([[sum(float(v[0]) ** 2 for v in contrib.values())]]), contrib)
+    got, failed = so.second_order(types.SimpleNamespace(unknowns=["Izz"]), p0, None, ctx, lin)
+    assert failed == ["a", "b"]
+    assert got is lin and ctx.surrogate == {}
+
+
+# ---------------------------------------------------------------------------
+# studies/point_amplitude.py (runs28: the refining rerun's known starts)
+# ---------------------------------------------------------------------------
+
+def test_the_refining_rerun_takes_known_starts_only_where_both_sides_solved_them():
+    """_known_starts' documented rule: the start poses where the point
+    solved them already, None where it did not -- the point's own
+    (``pre.starts``) or the law's (``law.starts``, a law planned without the
+    point's runs) -- so that simulate_batch solves them.  Either one missing
+    gives None, not a half-built list.  Kills point_amplitude 86 (the first
+    ``or -> and``: ``pre.starts`` None read through)."""
+    from bifilar.studies import point_amplitude as pa
+
+    class Starts:  # a StartPoses stand-in that says when it is read
+        def take(self, rows):
+            raise AssertionError("read")
+
+    rows = [(0, 3)]
+    assert pa._known_starts(types.SimpleNamespace(starts=None, runs=[0]), types.SimpleNamespace(starts=Starts()),
+                            rows) is None
+    assert pa._known_starts(types.SimpleNamespace(starts=Starts(), runs=[0]), types.SimpleNamespace(starts=None),
+                            rows) is None
+    assert pa._known_starts(types.SimpleNamespace(starts=Starts(), runs=[1]), types.SimpleNamespace(starts=Starts()),
+                            rows) is None  # mode 0's own run not among the point's runs
+
+
+def test_the_second_order_std_counts_the_mean_offset_squared(monkeypatch):
+    """The sigma-point check's variance (module docstring): each input's
+    linear term ``a`` and 2nd-order term ``sqrt(2) b`` in quadrature, plus
+    the mean offset ``(sum b)^2``: one input with ``a`` = 1.008923e-3 and
+    ``b`` = 0.095e-3 (its sigma points ``p0 +- sqrt(3) a + 3 b``) against a
+    linear contribution of 1e-3 gives ``a^2 + 3 b^2`` = 1.045e-6, a std
+    1.02225e-3: 2.2 % above the linear one, past LINEAR_ENOUGH (2 %), with
+    the offset 0.095 std under OFFSET_ENOUGH (0.1).  So the budget comes
+    back second-order, with that std (by hand) and the offset as a term.
+    ``_pair_terms`` (the cross terms, which need a real problem) is
+    replaced by zeros.  Kills second_order 230 (``+ offset ** 2 -> -``: 1.027e-6,
+    1.3 % above, and the linear budget comes back)."""
+    from bifilar.estimation import second_order as so
+    from bifilar.estimation.uncertainty import LinearBudget
+
+    p0, a, b = np.array([0.1]), 1.008923e-3, 0.095e-3
+    h = so.SIGMA_POINT
+    table = {("c", 1): p0 + h * a + 3 * b, ("c", -1): p0 - h * a + 3 * b}
+    monkeypatch.setattr(so, "_solve_points", lambda pb, ctx, p_hat, r_hat, points: {k: table[k] for k in points})
+    monkeypatch.setattr(so, "_pair_terms", lambda pb, ctx, p_hat, r_hat, sol, contrib, std1: np.zeros(1))
+    ctx = types.SimpleNamespace(inputs=["c"], sigmas={"c": 1.0}, modes=[], factor_shift={}, amplitude={},
+                                cross=None, surrogate=None, nonlinear=None)
+    lin = LinearBudget(["Izz"], np.array([[1e-6]]), {"c": np.array([1e-3])})
+    got, failed = so.second_order(types.SimpleNamespace(unknowns=["Izz"]), p0, None, ctx, lin)
+    assert failed == [] and got is not lin and list(ctx.surrogate) == ["c"]
+    assert math.sqrt(got.covariance[0, 0]) == pytest.approx(math.sqrt(a * a + 3 * b * b), rel=1e-9)
+    assert got.contributions["offset"][0] == pytest.approx(b, rel=1e-9)
