@@ -125,6 +125,24 @@ def test_of_two_lines_with_a_gap_the_one_nearest_the_best_fit_relative_to_its_in
     assert msg.startswith(f"; at the best fit no {want} gives the mode labelled 'torsion' 1.88117 s"), msg
 
 
+
+def test_several_unknowns_whose_partner_reading_is_refused_quote_its_first_clause():
+    """_surface_message: where the partner reading of several unknowns is
+    refused, the refusal says so and quotes that refusal's first clause
+    (no value, and no ACROSS caution: there is no answer to distrust).  The
+    a03 gap of tests/test_partner28.py's exchange-only test, its partner
+    given a root on the line this time.  Kills crossing_partner 49 (the
+    clause's ``+ -> -``: a TypeError), a line no test ran (uncovered)."""
+    from bifilar.estimation import crossing_partner as cp
+
+    pb, p = _two_unknowns()
+    g = cp._Gap(0.1024, 0.1025, 1.8745, 1.8840, ["swing-x"], {"swing-x": [0.1011]}, {"swing-x": None})
+    msg = cp._surface_message(pb, p, 0, "Izz", g, T_TORSION, lambda rl: (None, "--period: no tensor here; more"))
+    assert msg.endswith(f"(--period swing-x={T_TORSION}+-0.0005); read so, they are refused as well "
+                        "(--period: no tensor here)")
+    assert cp.ACROSS not in msg
+
+
 # ---------------------------------------------------------------------------
 # estimation/signal_harmonic2.py (camera28)
 # ---------------------------------------------------------------------------
