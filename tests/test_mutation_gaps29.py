@@ -218,6 +218,36 @@ def test_an_input_whose_sigma_point_fails_on_either_side_alone_is_returned_as_fa
     assert got is lin and ctx.surrogate == {}
 
 
+
+# ---------------------------------------------------------------------------
+# estimation/budget.py (shift28: interval_95's hull of its two readings)
+# ---------------------------------------------------------------------------
+
+def test_the_unstated_amplitudes_term_keeps_its_sign_in_both_readings():
+    """interval_95: "the unstated amplitude's term keeps its sign" (an
+    assumed release distribution, independent of the inputs), in the
+    mirrored reading and in the one as built alike.  One second-order input
+    too small to matter (a = 1e-9, b = 0) beside an unstated amplitude's
+    term ``D u``, u = U^2 with U uniform on (0, 1) (no law: the quadratic
+    weight): the interval is then that term's own 2.5-97.5 % quantiles,
+    ``D 0.025^2 .. D 0.975^2`` (0.000625 D .. 0.9506 D), all on D's side.
+    The 20000 samples put U's 2.5 % point within ~4 % (its sampling std
+    sqrt(0.025 0.975 / 20000) = 0.0011), so the lower end within 1e-3 D of
+    0 and the upper within 1 %.  Kills budget 61 (``post + rest -> post -
+    rest``: the as-built reading's term flipped, the lower end -0.95 D)."""
+    from bifilar.estimation.budget import BudgetContext, interval_95
+    from bifilar.estimation.uncertainty import LinearBudget, covariance_of
+
+    A, B, D = np.array([1e-9]), np.array([0.0]), np.array([2e-3])
+    contrib = {"com.z": A, "com.z (2nd order)": math.sqrt(2) * B, "amplitude[torsion]": D * math.sqrt(4 / 45)}
+    budget = LinearBudget(["Izz"], covariance_of(contrib, 1), contrib)
+    ctx = BudgetContext(["com.z"], {"com.z": 1.0}, np.ones((1, 1)), np.ones(1), [], [], [], [], [],
+                        surrogate={"com.z": (A, B)}, amplitude={"torsion": D})
+    lo, hi = interval_95(np.zeros(1), budget, ctx)[0]
+    assert abs(lo - D[0] * 0.025 ** 2) < 1e-3 * D[0], lo
+    assert hi == pytest.approx(D[0] * 0.975 ** 2, rel=0.01)
+
+
 # ---------------------------------------------------------------------------
 # studies/point_amplitude.py (runs28: the refining rerun's known starts)
 # ---------------------------------------------------------------------------
