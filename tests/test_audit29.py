@@ -35,7 +35,7 @@ def test_a_com_height_solved_with_ixx_reproduces_the_periods_and_covers_the_draw
     ``sensitivity.perturb``'s ``com.z``: put back into the drawn config that
     way (an independent re-solve by ``linear_modes``) it reproduces both
     periods to far below their 0.5 ms, and its interval holds the truth,
-    minus the drawn CoM error (the audit's 200-draw loop: coverage in
+    minus the drawn CoM error (the audit's loop of such draws: coverage in
     docs/design.md).  With the sign of the shift flipped in
     ``problem.HangingModel.scene`` (attachments + R d) the re-solve misses
     the roll period by 1.7 ms, 3.4 timing stds (ran)."""
