@@ -39,6 +39,7 @@ from bifilar.config import read_yaml, scene_from_dict  # noqa: E402
 from bifilar.errors import BifilarError  # noqa: E402
 from bifilar.estimation.invert import invert  # noqa: E402
 from bifilar.estimation.measurements import Hanging, Measurement, MeasurementSet  # noqa: E402
+from bifilar.estimation.sensitivity import input_sigma, perturb  # noqa: E402
 from bifilar.estimation.uncertainty import default_uncertainty  # noqa: E402
 from closed_loop_plan import measured_scene  # noqa: E402
 
@@ -62,12 +63,15 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int, keep: list |
     truth = scene_from_dict(cfg, warn=False)
     T = linear_periods(truth)
     unc = default_uncertainty(dict(cfg.get("uncertainty") or {}))
-    tv = {c: float(truth.inertia[INDEX[c]]) for c in comps}
+    tv = {c: float(truth.inertia[INDEX[c]]) for c in comps if c in INDEX}
     rng = np.random.default_rng(seed)
     rows, refusals, warns, t0 = [], {}, {}, time.process_time()
     for _ in range(draws):
         errs: dict = {}
         sc = measured_scene(truth, rng, unc, errs)
+        for c in comps:  # a CoM unknown's truth: the shift that undoes the drawn CoM error (m)
+            if c not in INDEX:
+                tv[c] = -errs.get(c, 0.0) * input_sigma(truth, c, unc)
         meas = [Measurement(m, T[m] + rng.normal(0, unc["timing"]), unc["timing"], "period", "--period",
                             amplitude=0.0) for m in modes]
         ms = MeasurementSet([Hanging("reference", sc, np.eye(3))], meas)
@@ -87,23 +91,36 @@ def run(path: str, modes: list, comps: list, draws: int, seed: int, keep: list |
         inertia = sc.inertia.copy()
         for c in comps:
             i = list(r.names).index(c)
-            row[c] = (float(r.values[i]), float(r.std[i]), *map(float, r.interval[i]))
-            a, b = INDEX[c]
-            inertia[a, b] = inertia[b, a] = r.values[i]
-        Tm = linear_periods(sc.with_changes(inertia=inertia))
+            row[c] = (float(r.values[i]), float(r.std[i]), *map(float, r.interval[i]), tv[c])
+            if c in INDEX:
+                a, b = INDEX[c]
+                inertia[a, b] = inertia[b, a] = r.values[i]
+        solved = sc.with_changes(inertia=inertia)
+        for c in comps:
+            if c not in INDEX:
+                solved = perturb(solved, c, float(r.values[list(r.names).index(c)]))
+        Tm = linear_periods(solved)
         row["resid"] = max(abs(Tm[m] - x.period) / unc["timing"] for m, x in zip(modes, meas))
+        row["warned"] = [w[:60] for w in r.warnings]
         rows.append(row)
     out = {"config": path, "modes": modes, "draws": draws, "seed": seed, "answered": len(rows),
            "refused": sum(refusals.values()), "refusals": refusals, "warnings": warns,
-           "max_resid_over_timing": max((r["resid"] for r in rows), default=None)}
+           "max_resid_over_timing": max((r["resid"] for r in rows), default=None),
+           # answers more than 3 timing stds off their periods, the worst 8, with the words each got
+           "off_answers": [(round(r["resid"], 2), r["warned"]) for r in
+                           sorted((r for r in rows if r["resid"] > 3), key=lambda r: -r["resid"])[:8]],
+           "off_count": sum(r["resid"] > 3 for r in rows)}
     for c in comps:
-        a = np.array([r[c] for r in rows if np.isfinite(r[c][1])]).reshape(-1, 4)
-        v, s, lo, hi = a.T
-        z, cov, n = (v - tv[c]) / s, float(np.mean((lo <= tv[c]) & (tv[c] <= hi))), len(a)
-        out[c] = {"truth": tv[c], "with_std": n, "z_mean": float(z.mean()), "z_sd": float(z.std(ddof=1)),
+        a = np.array([r[c] for r in rows if np.isfinite(r[c][1])]).reshape(-1, 5)
+        if not len(a):  # no answer with a std: the refusals and warnings say why
+            out[c] = {"truth": tv.get(c), "with_std": 0}
+            continue
+        v, s, lo, hi, t = a.T
+        z, cov, n = (v - t) / s, float(np.mean((lo <= t) & (t <= hi))), len(a)
+        out[c] = {"truth": tv[c] if c in INDEX else "minus each draw's CoM error", "with_std": n, "z_mean": float(z.mean()), "z_sd": float(z.std(ddof=1)),
                   "z_range": [float(z.min()), float(z.max())], "coverage": cov,
                   "se": float(np.sqrt(max(cov * (1 - cov), 0.0475) / n)),
-                  "miss_low": int(np.sum(tv[c] < lo)), "miss_high": int(np.sum(tv[c] > hi)),
+                  "miss_low": int(np.sum(t < lo)), "miss_high": int(np.sum(t > hi)),
                   "median_std": float(np.median(s)), "median_width": float(np.median(hi - lo))}
     out["cpu_s"] = round(time.process_time() - t0, 1)
     return out

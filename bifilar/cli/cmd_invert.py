@@ -279,7 +279,7 @@ def _render(ms, res) -> None:
         for g, (sh, c) in res.budget.grouped(i).items():
             bt.add_row(esc(g), f"{sh:.1%}", fmt(c, 3))
         sh = res.budget.shares(i)
-        top = sorted(sh, key=lambda k: -sh[k])[:3]
+        top = res.budget.ranked(i, 3)
         bt.caption = "largest single inputs: " + esc(", ".join(f"{k} {sh[k]:.1%}" for k in top))
         con.print(bt)
     if len(res.names) > 1:

@@ -110,7 +110,7 @@ class InversionResult:
         budget = {}
         for i, n in enumerate(self.names):
             sh = self.budget.shares(i)
-            top = sorted(sh, key=lambda k: -sh[k])[:12]
+            top = self.budget.ranked(i, 12)
             budget[n] = {
                 "groups": {g: {"share": s, "std": c} for g, (s, c) in self.budget.grouped(i).items()},
                 "inputs": {k: {"share": sh[k], "std": float(abs(self.budget.contributions[k][i])),

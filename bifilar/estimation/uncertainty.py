@@ -286,6 +286,29 @@ def combined_dof(terms) -> float:
 # linear propagation
 # ---------------------------------------------------------------------------
 
+#: relative difference below which two inputs' shares of a variance are a
+#: tie: the input sensitivities are forward differences good to ~1e-6 of
+#: themselves (docs/invert.md, "Uncertainty"), so shares closer than that are
+#: not told apart by the computation; kernels move them by ~1e-10 .. 1e-7
+SHARE_TIE = 1e-6
+
+
+def ranked_by_share(shares: dict, n: int | None = None) -> list:
+    """The keys of ``shares`` ({input: share}), largest share first, the
+    first ``n``; a run of neighbours each within :data:`SHARE_TIE` (relative)
+    of the previous is a tie, ranked by name, so that rounding cannot swap
+    an input with its equal (nor pick which of two equal inputs is cut)."""
+    order = sorted(shares, key=lambda k: -shares[k])
+    out, run = [], []
+    for k in order:
+        if run and abs(shares[run[-1]] - shares[k]) > SHARE_TIE * abs(shares[run[-1]]):
+            out += sorted(run)
+            run = []
+        run.append(k)
+    out += sorted(run)
+    return out if n is None else out[:n]
+
+
 @dataclass
 class LinearBudget:
     """Linear uncertainty of the unknowns ``names`` (see module docstring).
@@ -349,6 +372,14 @@ class LinearBudget:
         """{input: fraction of var(p_i)}."""
         var = self.covariance[i, i]
         return {k: (float(c[i] ** 2 / var) if var > 0 else 0.0) for k, c in self.contributions.items()}
+
+    def ranked(self, i: int, n: int | None = None) -> list:
+        """The inputs by their share of var(p_i), largest first, the first
+        ``n`` of them.  Shares equal to :data:`SHARE_TIE` relative (an
+        input and its mirror image on a symmetric rig) are a tie, ranked by
+        name: their order in floating point is rounding, which a BLAS
+        kernel changes (docs/design.md, "audit29, session 29")."""
+        return ranked_by_share(self.shares(i), n)
 
     def grouped(self, i: int) -> dict:
         """{group: (share of var(p_i), standard contribution)} over :data:`GROUPS`."""
