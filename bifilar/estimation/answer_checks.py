@@ -172,3 +172,34 @@ def monotonic_warnings(pb: Problem, est) -> list[str]:
                    "runs of the fixed point T = T_lin r, which did not settle; there may be more): the period cannot "
                    "tell them apart at this amplitude; release at a smaller amplitude")
     return out
+
+
+#: the mode that turns a hanging's body about each reference axis (:mod:`~bifilar.analysis.modes`' labels)
+TURNING_MODE = {"Ixx": "roll", "Iyy": "pitch", "Izz": "torsion"}
+
+
+def unmeasured_warning(pb: Problem, std) -> str | None:
+    """The warning of an answer whose inertia unknowns the periods do not
+    measure: those whose std (kg m^2, the answer's whole budget) exceeds
+    the config's largest principal moment (:meth:`~bifilar.estimation.
+    problem.Problem.scales`), so that their 95 % intervals are the physical
+    limits rather than a measurement (audit29's b06: a trifilar's torsion and
+    two swings for Ixx, Iyy, Izz, stds 23, 16 and 0.77 kg m^2 for a largest
+    moment of 0.52).  None where every inertia std is within that scale or
+    not finite (a std that cannot be given says why elsewhere).  CoM
+    unknowns are not judged here (their scale, 1 % of the longest wire, is
+    a resolution, not a physical range)."""
+    sc = pb.scales()
+    loose = [(n, float(s), float(c)) for n, s, c in zip(pb.unknowns, np.asarray(std, float), sc)
+             if not n.startswith("com.") and np.isfinite(s) and s > c]
+    if not loose:
+        return None
+    names = ", ".join(f"{n} (std {s:.3g} kg m^2)" for n, s, _ in loose)
+    timed = {m.label for m in pb.measurements}
+    turn = ", ".join(f"{TURNING_MODE[n]} for {n}" for n, _, _ in loose
+                    if n in TURNING_MODE and TURNING_MODE[n] not in timed)
+    turn = f" ({turn})" if turn else ""
+    return (f"the periods do not measure {names}: each std exceeds the config's largest principal moment "
+            f"({loose[0][2]:.3g} kg m^2), so the 95 % interval is the physical range, not a measurement; measure "
+            f"them and solve for fewer components, or time modes that turn the body about their axes{turn} or add "
+            f"a hanging turned so that such a mode moves them")

@@ -101,7 +101,7 @@ from .solve import measured_factor
 from .amplitude_runs import per_call_runs
 from .answer_checks import (AMPLITUDE_CONTRADICTION_RATIO, AMPLITUDE_CONTRADICTION_Z,  # noqa: F401
                             irregular_warnings, monotonic_warnings, refuse_amplitude_the_record_contradicts,
-                            refuse_unreachable_record_amplitudes)
+                            refuse_unreachable_record_amplitudes, unmeasured_warning)
 from .sensitivity import DEFAULT_STIFFNESS_REL
 from .uncertainty import default_uncertainty
 from ..models.kane_mapping import KaneMapping, kane_mapping  # noqa: F401
@@ -360,6 +360,9 @@ def invert(ms: MeasurementSet, *, method: str | None = None, solve_for: list | N
     across = across_gap(pb, p_hat, T_lin_hat) if physical_only and not scalar else None
     if across is not None:
         warnings.append(across["warning"])
+    w = unmeasured_warning(pb, budget.std)
+    if w:
+        warnings.append(w)
     if fit["birge_factor"] > 1.0:
         warnings.append(birge_note(fit["birge_factor"], fit))
     # -- ladder rows ------------------------------------------------------
