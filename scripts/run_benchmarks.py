@@ -212,8 +212,10 @@ def issue14(quick: bool, before: str | None) -> dict:
     out["sensitivity"] = bench_sensitivity.measure(2 if quick else 5)
     srep = 1 if quick else 3
     out["sweep_points"] = bench_sweep.bench(5 if quick else 15)
-    out["sweep_cli"] = bench_sweep.bench_sweep_cli(srep)
-    out["sweep_cli_before"] = bench_sweep.bench_sweep_cli(srep, Path(pkg)) if pkg else None
+    # a difference of two ~1 s processes (28 points - 1), +-1-2 ms a point between single pairs: 7 pairs
+    crep = 1 if quick else 7
+    out["sweep_cli"] = bench_sweep.bench_sweep_cli(crep)
+    out["sweep_cli_before"] = bench_sweep.bench_sweep_cli(crep, Path(pkg)) if pkg else None
     out["plan"] = bench_sweep.bench_plan(srep)
     out["plan_before"] = bench_sweep.bench_plan(srep, Path(pkg)) if pkg else None
     out["yardstick_before"] = bench_sweep.bench_yardstick(Path(pkg), 5 if quick else 20) if pkg else None
