@@ -3,6 +3,7 @@ example files, which have their own tests)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from dataclasses import replace
@@ -152,3 +153,19 @@ def one_error_line(res, field: str) -> str:
     assert len(err) == 1 and err[0].startswith(f"error: {field}: "), res.stderr
     assert "Traceback" not in res.stderr and res.stdout == ""
     return err[0]
+
+
+@contextlib.contextmanager
+def in_tmpdir():
+    """Run the block in a fresh temporary directory (the working directory
+    while it runs, removed after): click's ``CliRunner.isolated_filesystem``,
+    which click 8.3 deprecates, for tests that invoke the CLI on relative
+    file names."""
+    old = os.getcwd()
+    with tempfile.TemporaryDirectory() as d:
+        os.chdir(d)
+        try:
+            yield Path(d)
+        finally:
+            os.chdir(old)
+

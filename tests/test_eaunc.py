@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from test_estimation_audit16 import _heavy
+from conftest import in_tmpdir
 
 EA = 1.0e5
 
@@ -150,7 +151,7 @@ def test_tensions_compares_the_motion_with_the_loaded_wires():
     import yaml
 
     runner = CliRunner()
-    with runner.isolated_filesystem():
+    with in_tmpdir():
         with open("soft.yaml", "w") as f:
             yaml.safe_dump(cfg, f)
         r = runner.invoke(main, ["tensions", "soft.yaml", "--periods", "1", "--json"])

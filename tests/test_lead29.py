@@ -17,11 +17,12 @@ from bifilar.cli import main
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 from audit29_cases import B06_YAML  # noqa: E402
+from conftest import in_tmpdir  # noqa: E402
 
 
 def _invert(cfg_text: str, args: list) -> dict:
     runner = CliRunner()
-    with runner.isolated_filesystem():
+    with in_tmpdir():
         Path("c.yaml").write_text(cfg_text)
         r = runner.invoke(main, ["invert", "c.yaml", *args, "--json"])
     assert r.exit_code == 0, r.stderr

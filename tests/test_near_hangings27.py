@@ -16,6 +16,7 @@ import pytest
 from click.testing import CliRunner
 
 from test_teeth26a import _cfg, _swing_x
+from conftest import in_tmpdir
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +31,7 @@ def refusal():
                          "measurements": [{"mode": "swing-x", "period": float(T), "std": 0.005, "amplitude": 0}]}
                         for name in ("first", "second")]}
     runner = CliRunner()
-    with runner.isolated_filesystem():
+    with in_tmpdir():
         with open("m.yaml", "w") as f:
             yaml.safe_dump(doc, f)
         r = runner.invoke(main, ["invert", "--measurements", "m.yaml", "--no-ladder", "--json"])

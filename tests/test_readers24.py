@@ -23,7 +23,7 @@ from bifilar.cli import main
 from bifilar.estimation.signal import SignalError, fit_period, read_signal
 from bifilar.estimation.signal_crossings import MAX_LOST_CYCLES, period_from_crossings
 
-from conftest import SHARED
+from conftest import SHARED, in_tmpdir
 
 
 def _gated_sine(t_end: float, gaps, noise: float = 0.0, zeta: float = 0.0):
@@ -93,7 +93,7 @@ def test_period_refuses_the_crossing_fallback_and_the_cross_check_drops_it(monke
 
     monkeypatch.setattr(M, "_solve", boom)
     path = "rec.csv"
-    with CliRunner().isolated_filesystem():
+    with in_tmpdir():
         np.savetxt(path, np.c_[t, y], delimiter=",", header="t,y", comments="")
         for extra in ([], ["--json"]):
             r = CliRunner().invoke(main, ["period", path, *extra])

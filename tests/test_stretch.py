@@ -22,6 +22,7 @@ import pytest
 from click.testing import CliRunner
 
 from test_estimation_audit16 import _heavy
+from conftest import in_tmpdir
 
 EA = 1.0e5
 
@@ -132,7 +133,7 @@ def test_invert_closes_the_loop_with_the_default_stds(n, amplitude):
     import yaml
 
     runner = CliRunner()
-    with runner.isolated_filesystem():
+    with in_tmpdir():
         with open("h.yaml", "w") as f:
             yaml.safe_dump(_heavy(n, 200.0, EA), f)
         r = runner.invoke(main, ["invert", "h.yaml", "--period", f"torsion={T!r}", "--amplitude", str(amplitude),

@@ -26,6 +26,7 @@ from click.testing import CliRunner
 
 from test_estimation_audit16 import _heavy
 from test_stretch import EA, _spring_periods
+from conftest import in_tmpdir
 
 INWARD = 0.75  # attachments' radius / anchors' (0.3 m / 0.4 m)
 
@@ -68,7 +69,7 @@ def _invert(T: float, timing: float) -> tuple[int, dict]:
     from bifilar.cli import main
 
     runner = CliRunner()
-    with runner.isolated_filesystem():
+    with in_tmpdir():
         with open("h.yaml", "w") as f:
             yaml.safe_dump(_cfg(), f)
         r = runner.invoke(main, ["invert", "h.yaml", "--period", f"swing-x={T!r}+-{timing}", "--amplitude", "0",
