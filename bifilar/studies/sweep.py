@@ -257,13 +257,21 @@ def _ignore_sigint() -> None:
 
 
 def _evaluate_chunk(base_cfg: dict, source: str, grid: list[dict], settings: SweepSettings,
-                    screen: bool = False) -> list[dict]:
-    """:func:`evaluate_point` of each point of ``grid`` (a worker's task),
-    several together in :func:`~bifilar.analysis.shared_batch.run_together`
-    (their shared batches: the same figures as each alone)."""
+                    screen: bool = False, on_done: Callable[[int, dict], None] | None = None) -> list[dict]:
+    """:func:`evaluate_point` of each point of ``grid`` (a chunk of a sweep,
+    or a worker's task), several together in
+    :func:`~bifilar.analysis.shared_batch.run_together` (their shared
+    batches: the same figures as each alone; a screen, which has no sigma
+    points, or a lone point: one at a time).  ``on_done(n, point)`` as each
+    point ``grid[n]`` finishes."""
     if screen or len(grid) == 1:
-        return [evaluate_point(base_cfg, source, p, settings, screen=screen) for p in grid]
-    return run_together([partial(evaluate_point, base_cfg, source, p, settings) for p in grid])
+        out = []
+        for n, p in enumerate(grid):
+            out.append(evaluate_point(base_cfg, source, p, settings, screen=screen))
+            if on_done is not None:
+                on_done(n, out[-1])
+        return out
+    return run_together([partial(evaluate_point, base_cfg, source, p, settings) for p in grid], on_done=on_done)
 
 
 #: points of a one-process sweep evaluated together, their sigma points and start poses each in one batch
@@ -336,14 +344,10 @@ def run_sweep(base_cfg: dict, source: str, grid: list[dict], settings: SweepSett
                 size = 1 if screen else SHARED_CHUNK if stop_after is None else min(SHARED_CHUNK, stop_after - new)
                 chunk = todo[j:j + size]
                 j += len(chunk)
-                if len(chunk) == 1:
-                    record(chunk[0], evaluate_point(base_cfg, source, grid[chunk[0]], settings, screen=screen))
-                else:
-                    # a chunk's points together, their sigma points' rest poses and modes, and their runs' start
-                    # poses, each in one batch: each point's figures the same bits as alone
-                    # (bifilar.analysis.shared_batch)
-                    run_together([partial(evaluate_point, base_cfg, source, grid[i], settings) for i in chunk],
-                                 on_done=lambda n, point, chunk=chunk: record(chunk[n], point))
+                # a chunk's points together, their sigma points' rest poses and modes, and their runs' start
+                # poses, each in one batch: each point's figures the same bits as alone
+                _evaluate_chunk(base_cfg, source, [grid[i] for i in chunk], settings, screen,
+                                on_done=lambda n, point, chunk=chunk: record(chunk[n], point))
         else:
             from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
